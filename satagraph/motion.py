@@ -1,0 +1,170 @@
+"""A motion clip: a skeleton plus per-frame local rotations and translations."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+import torch
+
+from satagraph.ops.fk import forward_kinematics
+from satagraph.skeleton import Skeleton
+
+
+@dataclass
+class CanonicalTransform:
+    r"""What canonicalisation did to a motion, so that results can be written
+    back in the source's own frame and units.
+
+    A canonical point ``p_c`` relates to the source point ``p_s`` by
+    ``p_c = scale * (R @ p_s) + t``, with ``R = yaw @ up``.
+
+    Args:
+        up_axis (str): Up axis detected (or given) in the source, e.g. ``"+Y"``.
+        up_rotation (np.ndarray): Rotation taking the source up axis to +Y.
+        yaw (float): Rotation about +Y (radians) applied after :obj:`up_rotation`
+            so that the character faces +Z at frame 0.
+        translation (np.ndarray): Translation (canonical units) applied last.
+        scale (float): Source units to metres.
+        source_fps (float): Frame rate of the source.
+        removed_root (str, optional): Name of a motionless root above the
+            moving root that canonicalisation removed.
+        removed_root_offset (np.ndarray, optional): That root's offset and
+            constant translation, for writing back.
+    """
+
+    up_axis: str = "+Y"
+    up_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    yaw: float = 0.0
+    translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    scale: float = 1.0
+    source_fps: float = 30.0
+    removed_root: Optional[str] = None
+    removed_root_offset: Optional[np.ndarray] = None
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """The full rotation ``yaw @ up`` from source to canonical axes."""
+        c, s = np.cos(self.yaw), np.sin(self.yaw)
+        yaw = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        return yaw @ self.up_rotation
+
+    def to_dict(self) -> dict:
+        """Plain-Python summary (for reports, JSON and checkpoints)."""
+        return {
+            "up_axis": self.up_axis,
+            "yaw_degrees": float(np.degrees(self.yaw)),
+            "translation": [float(v) for v in self.translation],
+            "scale": float(self.scale),
+            "source_fps": float(self.source_fps),
+            "removed_root": self.removed_root,
+        }
+
+
+@dataclass
+class Motion:
+    r"""Local joint transforms over time for one :class:`Skeleton`.
+
+    Args:
+        skeleton (Skeleton): The skeleton.
+        rotations (np.ndarray): Local rotation matrices per frame and joint.
+        translations (np.ndarray): Local translation per frame and joint: the
+            rest offset, or the value of the joint's position channels; the
+            root's is its position in the world.
+        fps (float): Frames per second.
+        transform (CanonicalTransform, optional): Set by canonicalisation.
+        raw_channels (np.ndarray, optional): Channel values exactly as read
+            from a BVH file; the writer uses them verbatim while they are
+            present. Anything that changes the motion drops them.
+        source (str, optional): Path of the file the motion came from.
+
+    Shapes:
+        - **rotations**: :math:`(T, J, 3, 3)`
+        - **translations**: :math:`(T, J, 3)`
+    """
+
+    skeleton: Skeleton
+    rotations: np.ndarray
+    translations: np.ndarray
+    fps: float = 30.0
+    transform: Optional[CanonicalTransform] = None
+    raw_channels: Optional[np.ndarray] = None
+    source: Optional[str] = None
+
+    def __post_init__(self) -> None:
+        num = self.skeleton.num_joints
+        self.rotations = np.asarray(self.rotations, dtype=np.float64)
+        self.translations = np.asarray(self.translations, dtype=np.float64)
+        if self.rotations.ndim != 4 or self.rotations.shape[1:] != (num, 3, 3):
+            raise ValueError(f"Motion: rotations must be [T, {num}, 3, 3], "
+                             f"got {list(self.rotations.shape)}")
+        if self.translations.shape != (self.num_frames, num, 3):
+            raise ValueError(f"Motion: translations must be "
+                             f"[{self.num_frames}, {num}, 3], got "
+                             f"{list(self.translations.shape)}")
+        if not self.fps > 0:
+            raise ValueError(f"Motion: fps must be positive, got {self.fps}")
+
+    @property
+    def num_frames(self) -> int:
+        """Number of frames :math:`T`."""
+        return self.rotations.shape[0]
+
+    @property
+    def num_joints(self) -> int:
+        """Number of joints :math:`J` (end sites included)."""
+        return self.skeleton.num_joints
+
+    @property
+    def duration(self) -> float:
+        """Length in seconds."""
+        return self.num_frames / self.fps
+
+    @property
+    def root_translation(self) -> np.ndarray:
+        """Root position per frame, :math:`(T, 3)`."""
+        return self.translations[:, 0]
+
+    def __repr__(self) -> str:
+        return (f"Motion(frames={self.num_frames}, joints={self.num_joints}, "
+                f"fps={self.fps:g})")
+
+    def global_transforms(self) -> tuple:
+        """Global rotations :math:`(T, J, 3, 3)` and positions
+        :math:`(T, J, 3)` by forward kinematics, vectorised over frames."""
+        rot, pos = forward_kinematics(
+            torch.from_numpy(self.rotations),
+            torch.from_numpy(self.translations),
+            torch.from_numpy(self.skeleton.parents),
+        )
+        return rot.numpy(), pos.numpy()
+
+    def global_positions(self) -> np.ndarray:
+        """Global joint positions :math:`(T, J, 3)` by forward kinematics."""
+        return self.global_transforms()[1]
+
+    def height(self) -> float:
+        """Character height: the larger vertical (+Y) extent of the rest pose
+        and of the first frame (rest poses are not always upright)."""
+        extent = float(np.ptp(self.skeleton.rest_positions()[:, 1]))
+        if self.num_frames:
+            first = self.slice(0, 1).global_positions()[0]
+            extent = max(extent, float(np.ptp(first[:, 1])))
+        return extent
+
+    def with_(self, **changes) -> "Motion":
+        """A copy with some fields replaced; drops :obj:`raw_channels` unless
+        given."""
+        fields = dict(skeleton=self.skeleton, rotations=self.rotations,
+                      translations=self.translations, fps=self.fps,
+                      transform=self.transform, raw_channels=None,
+                      source=self.source)
+        fields.update(changes)
+        return Motion(**fields)
+
+    def slice(self, start: int, stop: int) -> "Motion":
+        """Frames ``start:stop``."""
+        raw = None if self.raw_channels is None else self.raw_channels[start:stop]
+        return self.with_(rotations=self.rotations[start:stop],
+                          translations=self.translations[start:stop],
+                          raw_channels=raw)

@@ -1,0 +1,71 @@
+"""Forward kinematics over a parent array (torch, batched, differentiable)."""
+from __future__ import annotations
+
+from typing import List, Optional, Tuple
+
+import torch
+from torch import Tensor
+
+
+def fk_levels(parent: Tensor) -> List[Tensor]:
+    r"""Joint indices grouped by depth, root level first.
+
+    Works on the concatenated joints of several skeletons: every entry of
+    :obj:`parent` is a global index, ``-1`` marks a root. Parents must come
+    before their children.
+
+    Shapes:
+        - **parent**: :math:`(N,)`
+    """
+    parent = parent.cpu().long()
+    depth = torch.zeros_like(parent)
+    for j in range(parent.numel()):  # cheap: one pass over joints, not frames
+        p = int(parent[j])
+        if p >= j:
+            raise ValueError("fk_levels: parents must come before children")
+        if p >= 0:
+            depth[j] = depth[p] + 1
+    return [torch.nonzero(depth == d).flatten() for d in range(int(depth.max()) + 1)]
+
+
+def forward_kinematics(
+    rotation: Tensor,
+    offset: Tensor,
+    parent: Tensor,
+    levels: Optional[List[Tensor]] = None,
+) -> Tuple[Tensor, Tensor]:
+    r"""Global rotations and positions from local rotations and offsets.
+
+    The joints of several different skeletons may be concatenated along the
+    joint dimension (their parents given as global indices): all of them are
+    processed at once, one level of depth at a time.
+
+    Args:
+        rotation (Tensor): Local rotation matrices.
+        offset (Tensor): Local translations (rest offsets, or per-frame
+            translations; the root's is its global position).
+        parent (Tensor): Parent index per joint, ``-1`` for roots.
+        levels (list[Tensor], optional): Precomputed :func:`fk_levels`.
+
+    Shapes:
+        - **rotation**: :math:`(*, N, 3, 3)`
+        - **offset**: :math:`(*, N, 3)` or :math:`(N, 3)`
+        - **parent**: :math:`(N,)`
+        - **output**: global rotations :math:`(*, N, 3, 3)` and positions
+          :math:`(*, N, 3)`
+    """
+    if levels is None:
+        levels = fk_levels(parent)
+    parent = parent.to(rotation.device)
+    offset = offset.to(rotation.dtype).expand(*rotation.shape[:-2], 3)
+    glob_rot = rotation
+    glob_pos = offset
+    for idx in levels[1:]:
+        idx = idx.to(rotation.device)
+        par = parent[idx]
+        prot = glob_rot[..., par, :, :]
+        new_rot = prot @ rotation[..., idx, :, :]
+        new_pos = glob_pos[..., par, :] + (prot @ offset[..., idx, :, None])[..., 0]
+        glob_rot = glob_rot.index_copy(-3, idx, new_rot)
+        glob_pos = glob_pos.index_copy(-2, idx, new_pos)
+    return glob_rot, glob_pos
