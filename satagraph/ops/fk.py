@@ -7,25 +7,33 @@ import torch
 from torch import Tensor
 
 
-def fk_levels(parent: Tensor) -> List[Tensor]:
+def fk_levels(parent: Tensor, depth: Optional[Tensor] = None) -> List[Tensor]:
     r"""Joint indices grouped by depth, root level first.
 
-    Works on the concatenated joints of several skeletons: every entry of
-    :obj:`parent` is a global index, ``-1`` marks a root. Parents must come
-    before their children.
+    Works on the concatenated joints of several skeletons (or of many frames):
+    every entry of :obj:`parent` is a global index, ``-1`` marks a root.
+    Parents must come before their children. Passing :obj:`depth` (known from
+    the skeletons) avoids a pass over the joints.
 
     Shapes:
         - **parent**: :math:`(N,)`
+        - **depth**: :math:`(N,)`, optional
     """
-    parent = parent.cpu().long()
-    depth = torch.zeros_like(parent)
-    for j in range(parent.numel()):  # cheap: one pass over joints, not frames
-        p = int(parent[j])
-        if p >= j:
+    if depth is None:
+        parent = parent.cpu().long()
+        if (parent >= torch.arange(parent.numel())).any():
             raise ValueError("fk_levels: parents must come before children")
-        if p >= 0:
-            depth[j] = depth[p] + 1
-    return [torch.nonzero(depth == d).flatten() for d in range(int(depth.max()) + 1)]
+        has_parent = parent >= 0
+        depth = torch.zeros_like(parent)
+        while True:  # one vectorised step per level of the deepest chain
+            new = torch.where(has_parent, depth[parent.clamp(min=0)] + 1, 0)
+            if torch.equal(new, depth):
+                break
+            depth = new
+    depth = depth.cpu().long()
+    order = torch.argsort(depth, stable=True)
+    counts = torch.bincount(depth).tolist()
+    return [idx for idx in torch.split(order, counts) if idx.numel()]
 
 
 def forward_kinematics(
