@@ -1,7 +1,9 @@
 """BVH reader for any dialect: channel layouts, rotation orders, line endings."""
 from __future__ import annotations
 
+import io
 import os
+import re
 import warnings
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple, Union
@@ -77,6 +79,7 @@ class _HeaderParser:
         self.header = _Header(path)
         self.stack: List[int] = []  # open joint indices
         self.pending: Optional[int] = None  # joint waiting for its '{'
+        self.names: set = set()
 
     def error(self, lineno: int, msg: str) -> BVHError:
         return BVHError(self.path, lineno, msg)
@@ -145,15 +148,16 @@ class _HeaderParser:
                              "(unbalanced braces?)")
         parent = self.stack[-1] if self.stack else -1
         if kind == "END":
-            name = _unique(f"{joints[parent].name}_end", joints)
+            name = _unique(f"{joints[parent].name}_end", self.names)
         else:
             if name.endswith("{"):
                 name, tail = name[:-1].strip(), "{"
             if not name:
                 raise self.error(lineno, f"{kind} without a name")
-            if any(j.name == name for j in joints):
+            if name in self.names:
                 raise self.error(lineno, f"duplicate joint name {name!r}")
         joints.append(_Joint(name, parent, lineno, end_site=kind == "END"))
+        self.names.add(name)
         self.pending = len(joints) - 1
         if tail == "{":
             self._open_brace(lineno)
@@ -191,8 +195,7 @@ class _HeaderParser:
         joint.channels = _parse_channels(self.path, lineno, tokens)
 
 
-def _unique(name: str, joints: List[_Joint]) -> str:
-    names = {j.name for j in joints}
+def _unique(name: str, names: set) -> str:
     out, k = name, 1
     while out in names:
         k += 1
@@ -200,67 +203,86 @@ def _unique(name: str, joints: List[_Joint]) -> str:
     return out
 
 
-def _frame_header(path: str, lines: List[str], start: int) -> Tuple[int, float, int]:
-    """Parse 'Frames:' and 'Frame Time:' after MOTION; returns (frames,
-    frame time, index of the first data line)."""
+_MOTION = re.compile(r"^[ \t]*MOTION[ \t]*\r?$", re.M | re.I)
+
+
+def _next_line(text: str, pos: int) -> Tuple[str, int]:
+    end = text.find("\n", pos)
+    end = len(text) if end < 0 else end
+    return text[pos:end], end + 1
+
+
+def _frame_header(path: str, text: str, pos: int, lineno: int) -> Tuple[int, float, int, int]:
+    """Parse 'Frames:' and 'Frame Time:' after MOTION, starting at offset
+    :obj:`pos` (line :obj:`lineno`); returns (frames, frame time, offset and
+    line number of the first data line)."""
     found = {}
-    i = start
-    while i < len(lines) and len(found) < 2:
-        line = lines[i].strip()
-        i += 1
+    while len(found) < 2:
+        if pos >= len(text):
+            raise BVHError(path, lineno, "truncated MOTION section: missing "
+                           "'Frames:' or 'Frame Time:'")
+        raw, pos = _next_line(text, pos)
+        lineno += 1
+        line = raw.strip()
         if not line:
             continue
         key, sep, value = line.partition(":")
         key = " ".join(key.split()).lower()
         if not sep or key not in ("frames", "frame time"):
-            raise BVHError(path, i, f"expected 'Frames:' and 'Frame Time:', "
-                           f"found {line!r}")
+            raise BVHError(path, lineno, f"expected 'Frames:' and 'Frame Time:', "
+                           f"found {line[:40]!r}")
         try:
             found[key] = float(value) if key == "frame time" else int(value)
         except ValueError:
-            raise BVHError(path, i, f"bad value in {line!r}") from None
-    if len(found) < 2:
-        raise BVHError(path, len(lines), "truncated MOTION section: missing "
-                       "'Frames:' or 'Frame Time:'")
-    if found["frames"] < 0:
-        raise BVHError(path, start + 1, "negative frame count")
-    if not (np.isfinite(found["frame time"]) and found["frame time"] > 0):
-        raise BVHError(path, start + 1, "Frame Time must be positive")
-    return found["frames"], found["frame time"], i
+            raise BVHError(path, lineno, f"bad value in {line!r}") from None
+        if key == "frames" and found[key] < 0:
+            raise BVHError(path, lineno, "negative frame count")
+        if key == "frame time" and not (np.isfinite(found[key]) and found[key] > 0):
+            raise BVHError(path, lineno, "Frame Time must be positive")
+    return found["frames"], found["frame time"], pos, lineno
 
 
-def _locate_bad_frame(path: str, lines: List[str], first: int, frames: int,
+def _locate_bad_frame(path: str, text: str, lineno: int, frames: int,
                       width: int) -> BVHError:
     """Slow path used only to name the line of a malformed frame."""
     count = 0
-    for i in range(first, len(lines)):
-        tokens = lines[i].split()
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        tokens = line.split()
         if not tokens:
             continue
         if count == frames:
-            return BVHError(path, i + 1, f"more frame lines than 'Frames: {frames}'")
+            return BVHError(path, lineno + i + 1,
+                            f"more frame lines than 'Frames: {frames}'")
         if len(tokens) != width:
-            return BVHError(path, i + 1, f"frame {count} has {len(tokens)} "
-                            f"values, expected {width}")
-        values = _floats(path, i + 1, tokens, f"frame {count}")
-        del values
+            return BVHError(path, lineno + i + 1, f"frame {count} has "
+                            f"{len(tokens)} values, expected {width}")
+        _floats(path, lineno + i + 1, tokens, f"frame {count}")
         count += 1
-    return BVHError(path, len(lines), f"truncated MOTION section: 'Frames: "
-                    f"{frames}' but only {count} frame lines")
+    return BVHError(path, lineno + len(lines), f"truncated MOTION section: "
+                    f"'Frames: {frames}' but only {count} frame lines")
 
 
-def _parse_frames(path: str, lines: List[str], first: int, frames: int,
+def _parse_frames(path: str, text: str, lineno: int, frames: int,
                   width: int) -> np.ndarray:
-    text = "\n".join(lines[first:])
+    """Parse the frame lines (C parser of numpy); on any problem, find and
+    name the offending line."""
+    if width == 0:  # a skeleton without channels: frame lines are empty
+        return np.zeros((frames, 0))
+    if frames == 0:
+        if text.strip():
+            raise _locate_bad_frame(path, text, lineno, frames, width)
+        return np.zeros((0, width))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            flat = np.array(text.split(), dtype=np.float64)
+            data = np.loadtxt(io.StringIO(text), dtype=np.float64, ndmin=2,
+                              comments=None)
         except ValueError:
-            raise _locate_bad_frame(path, lines, first, frames, width) from None
-    if flat.size != frames * width or not np.isfinite(flat).all():
-        raise _locate_bad_frame(path, lines, first, frames, width)
-    return flat.reshape(frames, width)
+            raise _locate_bad_frame(path, text, lineno, frames, width) from None
+    if data.shape != (frames, width) or not np.isfinite(data).all():
+        raise _locate_bad_frame(path, text, lineno, frames, width)
+    return data
 
 
 def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) -> Motion:
@@ -321,11 +343,13 @@ def read_bvh(path: PathLike) -> Motion:
             text = f.read().decode("utf-8", errors="replace")
     except OSError as err:
         raise BVHError(path, 0, f"cannot read file: {err.strerror}") from None
-    lines = text.splitlines()
     if not text.strip():
         raise BVHError(path, 1, "empty file")
-    header = _HeaderParser(path, lines).run()
-    frames, frame_time, first = _frame_header(path, lines, header.motion_line)
+    match = _MOTION.search(text)
+    head_end = match.end() + 1 if match else len(text)
+    header = _HeaderParser(path, text[:head_end].splitlines()).run()
+    frames, frame_time, pos, lineno = _frame_header(
+        path, text, head_end, header.motion_line)
     width = sum(len(j.channels) for j in header.joints)
-    data = _parse_frames(path, lines, first, frames, width)
+    data = _parse_frames(path, text[pos:], lineno, frames, width)
     return _to_motion(path, header, data, frame_time)

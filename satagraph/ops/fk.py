@@ -66,8 +66,25 @@ def forward_kinematics(
         levels = fk_levels(parent)
     parent = parent.to(rotation.device)
     offset = offset.to(rotation.dtype).expand(*rotation.shape[:-2], 3)
-    glob_rot = rotation
-    glob_pos = offset
+    needs_grad = torch.is_grad_enabled() and (rotation.requires_grad
+                                              or offset.requires_grad)
+    if needs_grad:
+        return _fk_functional(rotation, offset, parent, levels)
+    glob_rot, glob_pos = rotation.clone(), offset.clone()
+    for idx in levels[1:]:
+        idx = idx.to(rotation.device)
+        par = parent[idx]
+        prot = glob_rot[..., par, :, :]
+        glob_rot[..., idx, :, :] = prot @ rotation[..., idx, :, :]
+        glob_pos[..., idx, :] = glob_pos[..., par, :] + (
+            prot @ offset[..., idx, :, None])[..., 0]
+    return glob_rot, glob_pos
+
+
+def _fk_functional(rotation: Tensor, offset: Tensor, parent: Tensor,
+                   levels: List[Tensor]) -> Tuple[Tensor, Tensor]:
+    """Out-of-place FK for autograd."""
+    glob_rot, glob_pos = rotation, offset
     for idx in levels[1:]:
         idx = idx.to(rotation.device)
         par = parent[idx]

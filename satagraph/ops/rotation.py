@@ -31,15 +31,16 @@ def axis_angle_matrix(angle: Tensor, axis: str) -> Tensor:
         - **angle**: :math:`(*)` in radians
         - **output**: :math:`(*, 3, 3)`
     """
+    i = _AXES.index(axis)
+    a, b = (i + 1) % 3, (i + 2) % 3
     c, s = torch.cos(angle), torch.sin(angle)
-    one, zero = torch.ones_like(angle), torch.zeros_like(angle)
-    if axis == "X":
-        rows = [one, zero, zero, zero, c, -s, zero, s, c]
-    elif axis == "Y":
-        rows = [c, zero, s, zero, one, zero, -s, zero, c]
-    else:
-        rows = [c, -s, zero, s, c, zero, zero, zero, one]
-    return torch.stack(rows, dim=-1).reshape(*angle.shape, 3, 3)
+    out = angle.new_zeros(*angle.shape, 3, 3)
+    out[..., i, i] = 1.0
+    out[..., a, a] = c
+    out[..., a, b] = -s
+    out[..., b, a] = s
+    out[..., b, b] = c
+    return out
 
 
 def euler_to_matrix(angle: Tensor, order: str) -> Tensor:
