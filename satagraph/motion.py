@@ -27,10 +27,9 @@ class CanonicalTransform:
         translation (np.ndarray): Translation (canonical units) applied last.
         scale (float): Source units to metres.
         source_fps (float): Frame rate of the source.
-        removed_root (str, optional): Name of a motionless root above the
-            moving root that canonicalisation removed.
-        removed_root_offset (np.ndarray, optional): That root's offset and
-            constant translation, for writing back.
+        removed_root (dict, optional): A motionless root above the moving
+            root that canonicalisation removed (name, channels, offset,
+            constant rotation and translation), for writing back.
     """
 
     up_axis: str = "+Y"
@@ -39,8 +38,7 @@ class CanonicalTransform:
     translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
     scale: float = 1.0
     source_fps: float = 30.0
-    removed_root: Optional[str] = None
-    removed_root_offset: Optional[np.ndarray] = None
+    removed_root: Optional[dict] = None
 
     @property
     def rotation(self) -> np.ndarray:
@@ -57,7 +55,7 @@ class CanonicalTransform:
             "translation": [float(v) for v in self.translation],
             "scale": float(self.scale),
             "source_fps": float(self.source_fps),
-            "removed_root": self.removed_root,
+            "removed_root": (self.removed_root or {}).get("name"),
         }
 
 
