@@ -1,0 +1,258 @@
+r"""Lossless motion features in the character's facing frame (SAME layout).
+
+Per joint and frame (``dynamic``, :data:`DYNAMIC_LAYOUT`): 6D local rotation
+``q`` (the root's relative to the facing frame :math:`F_t`), position ``x``
+in :math:`F_t`, position relative to the parent ``x_rel`` in :math:`F_t`,
+rotation velocity ``v_q`` (6D of :math:`R_{t-1}^\top R_t`), velocity ``v_x``
+in :math:`F_t` (units per second) and contact ``c``. Per frame: root
+features ``r`` = (yaw velocity, x velocity, z velocity in :math:`F_{t-1}`,
+root height), velocities per second. Static per joint: ``X_l`` (rest offset
+from the parent) and ``X_g`` (rest position relative to the root); per bone:
+(depth, reverse depth) of its child joint.
+
+:math:`F_t` is the rotation about +Y by the yaw of the root's facing axis
+(the root-local axis that points to +Z at frame 0 of a canonical motion),
+placed at the root's ground projection. The first frame's ``r`` is taken
+relative to the world origin, so integration restores the trajectory.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Dict, Optional
+
+import numpy as np
+import torch
+
+from satagraph.data.clip import MotionClip
+from satagraph.motion import CanonicalTransform, Motion
+from satagraph.ops.fk import forward_kinematics
+from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
+from satagraph.skeleton import Skeleton
+
+#: Column ranges of the per-joint dynamic features.
+DYNAMIC_LAYOUT: Dict[str, slice] = {
+    "q": slice(0, 6), "x": slice(6, 9), "x_rel": slice(9, 12),
+    "v_q": slice(12, 18), "v_x": slice(18, 21), "c": slice(21, 22),
+}
+DYNAMIC_CHANNELS = 22
+STATIC_CHANNELS = 6
+ROOT_CHANNELS = 4
+
+#: Contact thresholds as fractions of the character height: SAME's 5 cm and
+#: 0.4 m/s for a 1.75 m human.
+CONTACT_HEIGHT = 0.05 / 1.75
+CONTACT_SPEED = 0.4 / 1.75
+
+
+@dataclass
+class MotionFeatures:
+    r"""Features of one motion (numpy, float64). See the module docstring.
+
+    Shapes:
+        - **x_local**, **x_global**: :math:`(J, 3)`
+        - **edge_attr**: :math:`(2(J-1), 2)`
+        - **q**, **v_q**: :math:`(T, J, 6)`
+        - **x**, **x_rel**, **v_x**: :math:`(T, J, 3)`
+        - **r**: :math:`(T, 4)`
+        - **c**: :math:`(T, J)`
+        - **facing_axis**: :math:`(3,)`
+    """
+
+    skeleton: Skeleton
+    fps: float
+    height: float
+    x_local: np.ndarray
+    x_global: np.ndarray
+    edge_attr: np.ndarray
+    q: np.ndarray
+    x: np.ndarray
+    x_rel: np.ndarray
+    v_q: np.ndarray
+    v_x: np.ndarray
+    r: np.ndarray
+    c: np.ndarray
+    facing_axis: np.ndarray
+    transform: Optional[CanonicalTransform] = None
+
+    @property
+    def num_frames(self) -> int:
+        return self.q.shape[0]
+
+    @property
+    def dynamic(self) -> np.ndarray:
+        """Per-joint features in :data:`DYNAMIC_LAYOUT` order,
+        :math:`(T, J, 22)`."""
+        return np.concatenate([self.q, self.x, self.x_rel, self.v_q, self.v_x,
+                               self.c[..., None]], axis=-1)
+
+    @property
+    def static(self) -> np.ndarray:
+        """``[X_l, X_g]`` per joint, :math:`(J, 6)`."""
+        return np.concatenate([self.x_local, self.x_global], axis=-1)
+
+    def to_clip(self, start: int = 0, stop: Optional[int] = None,
+                semantic: Optional[torch.Tensor] = None,
+                meta: Optional[dict] = None) -> MotionClip:
+        """Frames ``start:stop`` as a float32 :class:`MotionClip`."""
+        sl = slice(start, stop)
+        num = self.skeleton.num_joints
+        return MotionClip(
+            dynamic=torch.from_numpy(self.dynamic[sl]).float(),
+            root=torch.from_numpy(self.r[sl]).float(),
+            static=torch.from_numpy(self.static).float(),
+            semantic=(semantic.float() if semantic is not None
+                      else torch.zeros(num, 0)),
+            parents=torch.from_numpy(self.skeleton.parents),
+            edge_attr=torch.from_numpy(self.edge_attr).float(),
+            meta=dict(meta or {}, height=self.height, start=start),
+        )
+
+
+def _yaw(theta: np.ndarray) -> np.ndarray:
+    c, s = np.cos(theta), np.sin(theta)
+    out = np.zeros(theta.shape + (3, 3))
+    out[..., 0, 0], out[..., 0, 2] = c, s
+    out[..., 1, 1] = 1.0
+    out[..., 2, 0], out[..., 2, 2] = -s, c
+    return out
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def _facing(root_rot: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Yaw angle per frame of the root's facing axis."""
+    fwd = root_rot @ axis
+    return np.arctan2(fwd[:, 0], fwd[:, 2])
+
+
+def _to_6d(rot: np.ndarray) -> np.ndarray:
+    return matrix_to_rotation_6d(torch.from_numpy(rot)).numpy()
+
+
+def _root_features(theta: np.ndarray, origin: np.ndarray, height: np.ndarray,
+                   fps: float) -> np.ndarray:
+    prev_theta = np.concatenate([[0.0], theta[:-1]])
+    prev_origin = np.concatenate([np.zeros((1, 3)), origin[:-1]])
+    delta = np.einsum("tji,tj->ti", _yaw(prev_theta), origin - prev_origin)
+    return np.stack([_wrap(theta - prev_theta) * fps, delta[:, 0] * fps,
+                     delta[:, 2] * fps, height], axis=1)
+
+
+def _contacts(pos: np.ndarray, speed: np.ndarray, char_height: float,
+              contact_height: float, contact_speed: float) -> np.ndarray:
+    low = pos[..., 1] < contact_height * char_height
+    slow = speed < contact_speed * char_height
+    slow[0] = True  # no velocity at frame 0: the height test alone
+    return (low & slow).astype(np.float64)
+
+
+def motion_to_features(
+    motion: Motion,
+    contact_height: float = CONTACT_HEIGHT,
+    contact_speed: float = CONTACT_SPEED,
+    facing_axis: Optional[np.ndarray] = None,
+) -> MotionFeatures:
+    r"""Compute the features of a (canonical) motion.
+
+    Args:
+        motion (Motion): A motion, +Y up; canonicalise it first
+            (:func:`satagraph.data.canonicalize`) so that frame 0 faces +Z.
+        contact_height (float, optional): Contact height threshold as a
+            fraction of the character height.
+        contact_speed (float, optional): Contact speed threshold in character
+            heights per second.
+        facing_axis (np.ndarray, optional): Root-local facing axis; by default
+            the one pointing to +Z at frame 0.
+    """
+    skel, fps = motion.skeleton, motion.fps
+    glob_rot, pos = motion.global_transforms()
+    root_rot = motion.rotations[:, 0]
+    if facing_axis is None:
+        facing_axis = (root_rot[0].T @ np.array([0.0, 0.0, 1.0])
+                       if motion.num_frames else np.array([0.0, 0.0, 1.0]))
+    theta = _facing(root_rot, facing_axis)
+    inv = _yaw(theta).transpose(0, 2, 1)
+    origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
+    x = np.einsum("tij,tkj->tki", inv, pos - origin[:, None])
+    x_rel = np.einsum("tij,tkj->tki", inv, pos - pos[:, np.maximum(skel.parents, 0)])
+    x_rel[:, 0] = x[:, 0]
+    local = motion.rotations.copy()
+    local[:, 0] = inv @ root_rot
+    prev = np.concatenate([local[:1], local[:-1]])
+    disp = np.concatenate([np.zeros_like(pos[:1]), pos[1:] - pos[:-1]]) * fps
+    height = motion.height()
+    return MotionFeatures(
+        skeleton=skel, fps=fps, height=height,
+        x_local=skel.offsets.copy(), x_global=skel.rest_positions(),
+        edge_attr=skel.edge_attr.astype(np.float64),
+        q=_to_6d(local), x=x, x_rel=x_rel,
+        v_q=_to_6d(prev.transpose(0, 1, 3, 2) @ local),
+        v_x=np.einsum("tij,tkj->tki", inv, disp),
+        r=_root_features(theta, origin, pos[:, 0, 1], fps),
+        c=_contacts(pos, np.linalg.norm(disp, axis=-1), height,
+                    contact_height, contact_speed),
+        facing_axis=np.asarray(facing_axis, dtype=np.float64),
+        transform=motion.transform,
+    )
+
+
+def integrate_root(r: np.ndarray, fps: float) -> tuple:
+    r"""Facing yaw :math:`(T,)` and ground origin :math:`(T, 3)` per frame
+    from root features, starting from the world origin."""
+    theta = np.cumsum(r[:, 0] / fps)
+    prev_theta = np.concatenate([[0.0], theta[:-1]])
+    local = np.stack([r[:, 1], np.zeros(len(r)), r[:, 2]], axis=1) / fps
+    origin = np.cumsum(np.einsum("tij,tj->ti", _yaw(prev_theta), local), axis=0)
+    return theta, origin
+
+
+def features_to_motion(
+    features: MotionFeatures,
+    q: Optional[np.ndarray] = None,
+    r: Optional[np.ndarray] = None,
+    skeleton: Optional[Skeleton] = None,
+    use_positions: bool = True,
+) -> Motion:
+    r"""Rebuild a :class:`Motion` from features.
+
+    Rotations come from ``q`` and the root trajectory from ``r`` (either may
+    be given separately, e.g. a decoder's predictions); the other joints use
+    their rest offsets, except joints with position channels, whose
+    per-frame translations are recovered from ``x`` when
+    :obj:`use_positions` is set (this makes the round trip lossless).
+
+    Shapes:
+        - **q**: :math:`(T, J, 6)`, optional
+        - **r**: :math:`(T, 4)`, optional
+    """
+    skel = skeleton or features.skeleton
+    q = features.q if q is None else q
+    r = features.r if r is None else r
+    theta, origin = integrate_root(r, features.fps)
+    face = _yaw(theta)
+    rot = rotation_6d_to_matrix(torch.from_numpy(np.asarray(q, np.float64))).numpy()
+    rot[:, 0] = face @ rot[:, 0]
+    trans = np.broadcast_to(skel.offsets, rot.shape[:2] + (3,)).copy()
+    trans[:, 0] = origin + np.array([0.0, 1.0, 0.0]) * r[:, 3:4]
+    motion = Motion(skel, rot, trans, fps=features.fps, transform=features.transform)
+    moving = np.flatnonzero(skel.has_position_channels[1:]) + 1
+    if use_positions and len(moving) and q is features.q:
+        motion = _restore_translations(motion, features.x, face, origin, moving)
+    return motion
+
+
+def _restore_translations(motion: Motion, x: np.ndarray, face: np.ndarray,
+                          origin: np.ndarray, joints: np.ndarray) -> Motion:
+    """Local translations of :obj:`joints` from their positions ``x``."""
+    glob_rot, _ = forward_kinematics(torch.from_numpy(motion.rotations),
+                                     torch.from_numpy(motion.translations),
+                                     torch.from_numpy(motion.skeleton.parents))
+    glob_rot = glob_rot.numpy()
+    pos = np.einsum("tij,tkj->tki", face, x) + origin[:, None]
+    par = motion.skeleton.parents[joints]
+    trans = motion.translations.copy()
+    trans[:, joints] = np.einsum("tkji,tkj->tki", glob_rot[:, par],
+                                 pos[:, joints] - pos[:, par])
+    return motion.with_(translations=trans)

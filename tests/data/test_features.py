@@ -1,0 +1,98 @@
+"""Motion features: layout, invariances and the lossless round trip."""
+import glob
+
+import numpy as np
+import pytest
+
+from satagraph.data.canonical import canonicalize
+from satagraph.data.features import (DYNAMIC_CHANNELS, DYNAMIC_LAYOUT,
+                                     features_to_motion, integrate_root,
+                                     motion_to_features)
+from satagraph.io import read_bvh
+
+
+def _all_files(shared_data):
+    files = sorted(glob.glob(str(shared_data / "*" / "*.bvh")))
+    assert len(files) == 247
+    return files
+
+
+def test_lossless_on_every_real_file(shared_data):
+    """BVH -> canonical -> features -> motion reproduces global positions to
+    1e-4 of the character height on every file in ../shared/data."""
+    for path in _all_files(shared_data):
+        motion = canonicalize(read_bvh(path), fps=None)
+        feats = motion_to_features(motion)
+        back = features_to_motion(feats)
+        err = np.abs(back.global_positions() - motion.global_positions()).max()
+        assert err <= 1e-4 * feats.height, (path, err / feats.height)
+
+
+@pytest.fixture(scope="module")
+def dog_features(shared_data):
+    motion = canonicalize(read_bvh(shared_data / "dog" / "D1_001_KAN01_001.bvh"))
+    return motion, motion_to_features(motion)
+
+
+def test_layout_and_shapes(dog_features):
+    motion, feats = dog_features
+    T, J = motion.num_frames, motion.num_joints
+    assert feats.dynamic.shape == (T, J, DYNAMIC_CHANNELS)
+    assert feats.r.shape == (T, 4) and feats.static.shape == (J, 6)
+    assert feats.edge_attr.shape == (2 * (J - 1), 2)
+    dyn = feats.dynamic
+    np.testing.assert_array_equal(dyn[..., DYNAMIC_LAYOUT["x"]], feats.x)
+    np.testing.assert_array_equal(dyn[..., DYNAMIC_LAYOUT["c"]][..., 0], feats.c)
+    clip = feats.to_clip(10, 74)
+    assert clip.dynamic.shape == (64, J, DYNAMIC_CHANNELS)
+    assert clip.root.shape == (64, 4)
+
+
+def test_root_in_facing_frame(dog_features):
+    """The root sits at (0, h, 0) of its facing frame; frame 0 faces +Z at
+    the origin, so the first yaw velocity and xz velocity are zero."""
+    _, feats = dog_features
+    np.testing.assert_allclose(feats.x[:, 0, [0, 2]], 0, atol=1e-9)
+    np.testing.assert_allclose(feats.x[:, 0, 1], feats.r[:, 3])
+    np.testing.assert_allclose(feats.r[0, :3], 0, atol=1e-9)
+
+
+def test_features_invariant_to_world_yaw_and_position(dog_features):
+    """Rotating and moving the whole motion about +Y changes only r[0]."""
+    motion, feats = dog_features
+    c, s = np.cos(0.7), np.sin(0.7)
+    yaw = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    rot = motion.rotations.copy()
+    rot[:, 0] = yaw @ rot[:, 0]
+    trans = motion.translations.copy()
+    trans[:, 0] = trans[:, 0] @ yaw.T + np.array([3.0, 0.0, -2.0])
+    moved = motion_to_features(motion.with_(rotations=rot, translations=trans),
+                               facing_axis=feats.facing_axis)
+    for key in ("q", "x", "x_rel", "v_q", "v_x", "c"):
+        np.testing.assert_allclose(getattr(moved, key), getattr(feats, key),
+                                   atol=1e-8, err_msg=key)
+    np.testing.assert_allclose(moved.r[1:], feats.r[1:], atol=1e-8)
+
+
+def test_integrate_root_inverts_root_features(dog_features):
+    motion, feats = dog_features
+    _, origin = integrate_root(feats.r, feats.fps)
+    np.testing.assert_allclose(origin[:, [0, 2]],
+                               motion.translations[:, 0, [0, 2]], atol=1e-9)
+
+
+def test_contacts_scale_with_height(dog_features):
+    motion, feats = dog_features
+    assert 0.05 < feats.c.mean() < 0.6  # paws touch the ground some of the time
+    strict = motion_to_features(motion, contact_height=-1.0)
+    assert strict.c.sum() == 0
+    loose = motion_to_features(motion, contact_height=10.0, contact_speed=1e3)
+    assert loose.c.min() == 1
+
+
+def test_velocities_match_positions(dog_features):
+    motion, feats = dog_features
+    pos = motion.global_positions()
+    speed = np.linalg.norm(pos[1:] - pos[:-1], axis=-1) * motion.fps
+    np.testing.assert_allclose(np.linalg.norm(feats.v_x[1:], axis=-1), speed,
+                               atol=1e-8)
