@@ -82,8 +82,12 @@ class MotionFeatures:
     def dynamic(self) -> np.ndarray:
         """Per-joint features in :data:`DYNAMIC_LAYOUT` order,
         :math:`(T, J, 22)`."""
-        return np.concatenate([self.q, self.x, self.x_rel, self.v_q, self.v_x,
-                               self.c[..., None]], axis=-1)
+        return self.dynamic_slice(slice(None))
+
+    def dynamic_slice(self, frames: slice) -> np.ndarray:
+        """:attr:`dynamic` for some frames only."""
+        parts = [self.q, self.x, self.x_rel, self.v_q, self.v_x, self.c[..., None]]
+        return np.concatenate([p[frames] for p in parts], axis=-1)
 
     @property
     def static(self) -> np.ndarray:
@@ -97,7 +101,7 @@ class MotionFeatures:
         sl = slice(start, stop)
         num = self.skeleton.num_joints
         return MotionClip(
-            dynamic=torch.from_numpy(self.dynamic[sl]).float(),
+            dynamic=torch.from_numpy(self.dynamic_slice(sl)).float(),
             root=torch.from_numpy(self.r[sl]).float(),
             static=torch.from_numpy(self.static).float(),
             semantic=(semantic.float() if semantic is not None

@@ -1,0 +1,108 @@
+"""Parse + FK + features over a BVH folder, against pybvh on the files it reads.
+
+Usage: ``python benchmarks/pipeline.py [--data ../shared/data] [--repeat 3]``.
+Prints a markdown table and writes it to ``benchmarks/results/pipeline.md``
+(and ``.json``). pybvh is a benchmark-only dependency (``pip install
+satagraph[bench]``); without it the comparison rows are left out.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import warnings
+from pathlib import Path
+from typing import Callable, List, Tuple
+
+from satagraph.data.canonical import canonicalize
+from satagraph.data.features import motion_to_features
+from satagraph.io import read_bvh
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _ours_parse_fk(path: str) -> int:
+    motion = read_bvh(path)
+    return motion.global_positions().shape[0] * motion.num_joints
+
+
+def _ours_full(path: str) -> int:
+    motion = canonicalize(read_bvh(path))
+    motion_to_features(motion)
+    return motion.num_frames * motion.num_joints
+
+
+def _pybvh_parse_fk(path: str) -> int:
+    import pybvh
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pos = pybvh.read_bvh_file(path).node_positions()
+    return pos.shape[0] * pos.shape[1]
+
+
+def _readable_by_pybvh(files: List[str]) -> List[str]:
+    ok = []
+    for f in files:
+        try:
+            _pybvh_parse_fk(f)
+            ok.append(f)
+        except Exception:  # pybvh rejects 6-channel joints, among others
+            pass
+    return ok
+
+
+def _time(fn: Callable[[str], int], files: List[str], repeat: int) -> Tuple[float, int]:
+    best, count = float("inf"), 0
+    for _ in range(repeat):
+        start = time.perf_counter()
+        count = sum(fn(f) for f in files)
+        best = min(best, time.perf_counter() - start)
+    return best, count
+
+
+def main(argv: List[str] = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    parser.add_argument("--repeat", type=int, default=3,
+                        help="best of this many runs per row")
+    args = parser.parse_args(argv)
+    files = sorted(str(p) for p in Path(args.data).glob("**/*.bvh"))
+    if not files:
+        raise SystemExit(f"no .bvh files under {args.data}")
+    size = sum(Path(f).stat().st_size for f in files) / 2**20
+    rows = []
+    t, jf = _time(_ours_full, files, 1)
+    rows.append(("satagraph parse+FK+canonical+features", len(files), jf, t))
+    t, jf = _time(_ours_parse_fk, files, args.repeat)
+    rows.append(("satagraph parse+FK", len(files), jf, t))
+    try:
+        import pybvh  # noqa: F401
+        common = _readable_by_pybvh(files)
+    except ImportError:
+        common = []
+    if common:
+        t_ours, jf = _time(_ours_parse_fk, common, args.repeat)
+        t_ref, jf_ref = _time(_pybvh_parse_fk, common, args.repeat)
+        rows.append(("satagraph parse+FK (files pybvh reads)", len(common), jf, t_ours))
+        rows.append(("pybvh parse+FK (files pybvh reads)", len(common), jf_ref, t_ref))
+    lines = [f"Data: {args.data} ({len(files)} files, {size:.0f} MiB), one process.",
+             "", "| pipeline | files | joint-frames | seconds | joint-frames/s |",
+             "|---|---:|---:|---:|---:|"]
+    for name, n, jf, t in rows:
+        lines.append(f"| {name} | {n} | {jf:,} | {t:.2f} | {jf / t / 1e6:.2f} M |")
+    result = {"rows": [dict(zip(("name", "files", "joint_frames", "seconds"), r))
+                       for r in rows]}
+    if common:
+        ratio = (rows[2][2] / rows[2][3]) / (rows[3][2] / rows[3][3])
+        lines += ["", f"satagraph / pybvh parse+FK throughput ratio: {ratio:.2f}x"]
+        result["ratio_vs_pybvh"] = ratio
+    table = "\n".join(lines)
+    print(table)
+    out = ROOT / "benchmarks" / "results"
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "pipeline.md").write_text(table + "\n")
+    (out / "pipeline.json").write_text(json.dumps(result, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,50 @@
+"""Experiment configs: omegaconf YAML with dotted command-line overrides,
+turned into plain containers before they reach the modules."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any, Dict, Sequence
+
+from omegaconf import OmegaConf
+
+ROOT = Path(__file__).resolve().parents[1]
+EXPERIMENTS = ROOT / "experiments"
+
+
+def config_path(name: str) -> Path:
+    """A config file by path, or by name in ``experiments/`` (``tiny``,
+    ``sata_vae.yaml``)."""
+    path = Path(name)
+    if path.is_file():
+        return path
+    for candidate in (EXPERIMENTS / name, EXPERIMENTS / f"{name}.yaml"):
+        if candidate.is_file():
+            return candidate
+    known = ", ".join(sorted(p.stem for p in EXPERIMENTS.glob("*.yaml")))
+    raise FileNotFoundError(f"config {name!r} not found (a path, or one of: {known})")
+
+
+def _load(path: Path):
+    cfg = OmegaConf.load(path)
+    bases = cfg.pop("defaults", []) or []
+    return OmegaConf.merge(*[_load(path.parent / f"{b}.yaml") for b in bases], cfg)
+
+
+def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
+    r"""Load a YAML config (with ``defaults: [base, ...]`` inheritance from
+    the same folder) and apply ``key.sub=value`` overrides."""
+    path = config_path(name)
+    for item in overrides:
+        if "=" not in item:
+            raise ValueError(f"override {item!r} is not of the form key=value")
+    merged = OmegaConf.merge(_load(path), OmegaConf.from_dotlist(list(overrides)))
+    out = OmegaConf.to_container(merged, resolve=True)
+    if not out.get("name"):
+        out["name"] = path.stem
+    return out
+
+
+def expand_path(value: str) -> str:
+    """User and environment variables expanded."""
+    return os.path.expandvars(os.path.expanduser(value))

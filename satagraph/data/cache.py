@@ -1,0 +1,109 @@
+"""Processed-feature cache: one ``.npz`` per (file, preprocessing config),
+written atomically, loaded without pickle."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+import warnings
+from pathlib import Path
+from typing import Dict, Optional
+
+import numpy as np
+
+from satagraph.data.features import MotionFeatures
+from satagraph.motion import CanonicalTransform
+from satagraph.skeleton import Skeleton
+
+#: Bump when the feature definition changes: old cache entries are ignored.
+FEATURE_VERSION = 1
+
+_ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
+           "r", "c", "facing_axis")
+
+
+def default_cache_dir() -> Path:
+    """``$SATAGRAPH_CACHE`` or ``~/.cache/satagraph``."""
+    return Path(os.environ.get("SATAGRAPH_CACHE", "~/.cache/satagraph")).expanduser()
+
+
+def cache_key(path: str, config: Dict) -> str:
+    """Key from the file's identity (path, size, mtime) and the config."""
+    st = os.stat(path)
+    blob = json.dumps([os.path.abspath(path), st.st_size, st.st_mtime_ns,
+                       config, FEATURE_VERSION], sort_keys=True)
+    return hashlib.sha1(blob.encode()).hexdigest()
+
+
+def _pack(feats: MotionFeatures) -> Dict[str, np.ndarray]:
+    skel = feats.skeleton
+    out = {k: getattr(feats, k) for k in _ARRAYS}
+    out.update(names=np.array(skel.names), parents=skel.parents, offsets=skel.offsets,
+               channels=np.array([" ".join(c) for c in skel.channels]),
+               end_site=skel.end_site, fps=np.array(feats.fps),
+               height=np.array(feats.height))
+    tf = feats.transform
+    if tf is not None:
+        out.update(tf_up_axis=np.array(tf.up_axis), tf_up_rotation=tf.up_rotation,
+                   tf_yaw=np.array(tf.yaw), tf_translation=tf.translation,
+                   tf_scale=np.array(tf.scale), tf_source_fps=np.array(tf.source_fps))
+        if tf.removed_root:
+            rr = tf.removed_root
+            out.update(rr_name=np.array(rr["name"]),
+                       rr_channels=np.array(" ".join(rr["channels"])),
+                       rr_offset=rr["offset"], rr_rotation=rr["rotation"],
+                       rr_translation=rr["translation"])
+    return out
+
+
+def _unpack(data) -> MotionFeatures:
+    skel = Skeleton(names=[str(n) for n in data["names"]], parents=data["parents"],
+                    offsets=data["offsets"],
+                    channels=[tuple(str(c).split()) for c in data["channels"]],
+                    end_site=data["end_site"])
+    transform = None
+    if "tf_up_axis" in data:
+        removed = None
+        if "rr_name" in data:
+            removed = {"name": str(data["rr_name"]),
+                       "channels": tuple(str(data["rr_channels"]).split()),
+                       "offset": data["rr_offset"], "rotation": data["rr_rotation"],
+                       "translation": data["rr_translation"]}
+        transform = CanonicalTransform(
+            up_axis=str(data["tf_up_axis"]), up_rotation=data["tf_up_rotation"],
+            yaw=float(data["tf_yaw"]), translation=data["tf_translation"],
+            scale=float(data["tf_scale"]), source_fps=float(data["tf_source_fps"]),
+            removed_root=removed)
+    return MotionFeatures(skeleton=skel, fps=float(data["fps"]),
+                          height=float(data["height"]), transform=transform,
+                          **{k: data[k] for k in _ARRAYS})
+
+
+def load_cached(cache_dir: Path, key: str) -> Optional[MotionFeatures]:
+    """Cached features, or ``None`` (a corrupt entry is removed with a
+    warning)."""
+    path = Path(cache_dir) / f"{key}.npz"
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return _unpack(data)
+    except Exception as err:  # corrupt or from an incompatible version
+        warnings.warn(f"ignoring unreadable cache entry {path}: {err}")
+        path.unlink(missing_ok=True)
+        return None
+
+
+def store_cached(cache_dir: Path, key: str, feats: MotionFeatures) -> None:
+    """Write an entry atomically (temp file + rename)."""
+    cache_dir = Path(cache_dir)
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=cache_dir)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **_pack(feats))
+        os.replace(tmp, cache_dir / f"{key}.npz")
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

@@ -1,0 +1,131 @@
+"""Lightning data module: one or several motion datasets trained jointly."""
+from __future__ import annotations
+
+from collections import Counter
+from typing import Callable, Dict, List, Optional, Sequence, Union
+
+import lightning as L
+import torch
+from torch.utils.data import DataLoader, WeightedRandomSampler
+
+from satagraph.data.collate import collate_clips
+from satagraph.data.dataset import MotionDataset, load_features
+from satagraph.data.normalizer import FeatureNormalizer
+from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
+
+
+def semantic_embedder(encoder: Optional[str] = "offline",
+                      cache_dir: Optional[str] = None,
+                      dictionary: Optional[str] = None) -> Optional[Callable]:
+    r"""A function ``skeleton -> [J, D_t]`` from the semantic tag pipeline:
+    ``"offline"`` (default, no weights), ``"t5:/path/to/t5"`` for a local T5,
+    or ``None``/``"none"`` for no semantic features."""
+    if encoder in (None, "none", ""):
+        return None
+    from satagraph.data.semantics import (OfflineTextEncoder, T5TextEncoder,
+                                          embed_skeleton)
+    if encoder == "offline":
+        text_encoder = OfflineTextEncoder()
+    elif str(encoder).startswith("t5:"):
+        text_encoder = T5TextEncoder(str(encoder)[3:])
+    else:
+        raise ValueError(f"unknown semantic encoder {encoder!r}: use 'offline', "
+                         "'t5:/path/to/t5' or 'none'")
+    kwargs = {"dictionary": dictionary} if dictionary else {}
+
+    def embed(skeleton):
+        return embed_skeleton(skeleton, encoder=text_encoder, cache_dir=cache_dir,
+                              **kwargs)
+    return embed
+
+
+class MotionDataModule(L.LightningDataModule):
+    r"""Windows of motion from one or several BVH folders or manifests.
+
+    Clips of different skeletons share a batch without padding (see
+    :func:`~satagraph.data.collate_clips`). Normalisation statistics come
+    from the training split only and are handed to the model
+    (:attr:`normalizer`), which keeps them in its checkpoint.
+
+    Args:
+        sources: A folder, a manifest TSV, a ``{"path", "dataset",
+            "exclude"}`` dict, or a list of these.
+        window (int): Frames per training window.
+        stride (int): Frames between training window starts.
+        eval_stride (int, optional): Stride for validation/test windows
+            (defaults to :obj:`window`).
+        batch_size (int): Windows per batch.
+        balanced (bool): Sample training windows so that every (dataset,
+            skeleton) group is drawn equally often.
+        preprocessing (dict, optional): Overrides of
+            :data:`~satagraph.data.dataset.DEFAULT_PREPROCESSING`.
+        semantic_encoder (str, optional): See :func:`semantic_embedder`.
+        cache_dir (str, optional): Cache folder (processed features and
+            embeddings).
+        num_workers (int): DataLoader workers.
+        max_files (int, optional): Use at most this many files per split
+            (quick experiments).
+    """
+
+    def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
+                 eval_stride: Optional[int] = None, batch_size: int = 32,
+                 balanced: bool = True, preprocessing: Optional[Dict] = None,
+                 semantic_encoder: Optional[str] = "offline",
+                 cache_dir: Optional[str] = None, num_workers: int = 0,
+                 max_files: Optional[int] = None, seed: int = 0) -> None:
+        super().__init__()
+        self.sources, self.window, self.stride = sources, window, stride
+        self.eval_stride = eval_stride or window
+        self.batch_size, self.balanced = batch_size, balanced
+        self.preprocessing, self.cache_dir = dict(preprocessing or {}), cache_dir
+        self.semantic_encoder, self.num_workers = semantic_encoder, num_workers
+        self.max_files, self.seed = max_files, seed
+        self.datasets: Dict[str, MotionDataset] = {}
+        self.normalizer = FeatureNormalizer()
+
+    def _files(self, split: str, files: List[MotionFile]) -> List[MotionFile]:
+        chosen = select(files, split)
+        return chosen[: self.max_files] if self.max_files else chosen
+
+    def setup(self, stage: Optional[str] = None) -> None:
+        if self.datasets:
+            return
+        files = resolve_sources(self.sources)
+        embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
+        for split in SPLITS:
+            chosen = self._files(split, files)
+            feats = load_features(chosen, self.preprocessing, self.cache_dir)
+            stride = self.stride if split == "train" else self.eval_stride
+            self.datasets[split] = MotionDataset(chosen, feats, embed, self.window, stride)
+        if not len(self.datasets["train"]):
+            raise ValueError(f"no training windows in {self.sources!r}")
+        self.normalizer.fit(self.datasets["train"].features)
+
+    @property
+    def semantic_channels(self) -> int:
+        """Width of the semantic embedding (0 without one)."""
+        ds = self.datasets["train"]
+        return ds[0].semantic.shape[1]
+
+    def _loader(self, split: str, shuffle: bool) -> DataLoader:
+        ds = self.datasets[split]
+        sampler = None
+        if shuffle and self.balanced:
+            groups = [ds.group(i) for i in range(len(ds))]
+            counts = Counter(groups)
+            weights = torch.tensor([1.0 / counts[g] for g in groups], dtype=torch.double)
+            gen = torch.Generator().manual_seed(self.seed)
+            sampler = WeightedRandomSampler(weights, len(ds), generator=gen)
+        return DataLoader(ds, batch_size=self.batch_size,
+                          shuffle=shuffle and sampler is None, sampler=sampler,
+                          collate_fn=collate_clips, num_workers=self.num_workers,
+                          persistent_workers=self.num_workers > 0)
+
+    def train_dataloader(self) -> DataLoader:
+        return self._loader("train", True)
+
+    def val_dataloader(self) -> DataLoader:
+        return self._loader("val", False)
+
+    def test_dataloader(self) -> DataLoader:
+        return self._loader("test", False)

@@ -1,0 +1,89 @@
+"""Where motion files come from: folders and manifests, with splits."""
+from __future__ import annotations
+
+import csv
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, List, Optional, Sequence, Union
+
+SPLITS = ("train", "val", "test")
+
+
+@dataclass(frozen=True)
+class MotionFile:
+    r"""One BVH file with its dataset, skeleton id and split."""
+
+    path: str
+    dataset: str
+    skeleton: str
+    split: str
+
+
+def _hash_split(name: str, val: float = 0.1, test: float = 0.1) -> str:
+    """Deterministic split from the file name (for folders without one)."""
+    u = int(hashlib.sha1(name.encode()).hexdigest()[:8], 16) / 0xFFFFFFFF
+    return "test" if u < test else "val" if u < test + val else "train"
+
+
+def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
+    r"""Rows of a manifest TSV with at least the columns ``path`` (relative
+    to the manifest's folder) and ``split``; ``dataset`` and ``skeleton``
+    are used when present."""
+    path = Path(path)
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f, delimiter="\t"))
+    if not rows or "path" not in rows[0] or "split" not in rows[0]:
+        raise ValueError(f"{path}: a manifest needs 'path' and 'split' columns")
+    out = []
+    for row in rows:
+        name = row.get("dataset") or dataset or path.parent.name
+        if dataset and name != dataset:
+            continue
+        out.append(MotionFile(str(path.parent / row["path"]), name,
+                              row.get("skeleton") or name, row["split"]))
+    return out
+
+
+def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
+    r"""BVH files under a folder. A ``manifest.tsv`` in the folder (or in a
+    parent folder that lists this one) gives the splits; otherwise files are
+    split 80/10/10 by a hash of their name."""
+    path = Path(path)
+    for manifest in (path / "manifest.tsv", path.parent / "manifest.tsv"):
+        if manifest.is_file():
+            rows = [r for r in read_manifest(manifest)
+                    if Path(r.path).resolve().is_relative_to(path.resolve())]
+            if rows:
+                return [MotionFile(r.path, dataset or r.dataset, r.skeleton, r.split)
+                        for r in rows]
+    files = sorted(path.rglob("*.bvh")) + sorted(path.rglob("*.BVH"))
+    if not files:
+        raise FileNotFoundError(f"{path}: no .bvh files found")
+    name = dataset or path.name
+    return [MotionFile(str(f), name, name, _hash_split(f.name)) for f in files]
+
+
+def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
+    r"""Files from one or several sources: a folder, a manifest path, or a
+    dict ``{"path": ..., "dataset": ..., "exclude": [...]}``. A manifest with
+    a ``dataset`` key keeps only that dataset."""
+    if isinstance(sources, (str, os.PathLike)) or isinstance(sources, dict):
+        sources = [sources]
+    files: List[MotionFile] = []
+    for src in sources:
+        spec = dict(src) if isinstance(src, dict) else {"path": str(src)}
+        path = Path(os.path.expanduser(str(spec["path"])))
+        if not path.exists():
+            raise FileNotFoundError(f"motion source not found: {path}")
+        found = (read_manifest(path, spec.get("dataset")) if path.is_file()
+                 else scan_folder(path, spec.get("dataset")))
+        exclude = set(spec.get("exclude") or ())
+        files += [f for f in found if f.dataset not in exclude and f.split != "parser_test"]
+    return files
+
+
+def select(files: Iterable[MotionFile], split: str) -> List[MotionFile]:
+    """Files of one split."""
+    return [f for f in files if f.split == split]

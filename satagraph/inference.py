@@ -1,0 +1,120 @@
+"""Sliding-window reconstruction and retargeting onto any skeleton."""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable, List, Optional, Tuple
+
+import numpy as np
+import torch
+
+from satagraph.data.canonical import canonicalize, decanonicalize
+from satagraph.data.clip import MotionClip
+from satagraph.data.collate import collate_clips
+from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
+from satagraph.motion import Motion
+
+
+def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tuple[int, int, int]]:
+    r"""Windows covering a clip as ``(start, stop, keep_from)``: each later
+    window's first :obj:`overlap` frames are cropped (``keep_from`` is the
+    first frame of the window that is kept). A clip shorter than a window
+    is one window."""
+    if overlap >= window:
+        raise ValueError(f"overlap ({overlap}) must be smaller than window ({window})")
+    if num_frames <= window:
+        return [(0, num_frames, 0)]
+    plan, start, covered = [], 0, 0
+    while covered < num_frames:
+        start = min(start, num_frames - window)
+        plan.append((start, start + window, covered))
+        covered = start + window
+        start = covered - overlap
+    return plan
+
+
+def target_clip(feats: MotionFeatures, num_frames: int,
+                semantic: Optional[torch.Tensor]) -> MotionClip:
+    """A clip of the target skeleton with its static features and no motion."""
+    num = feats.skeleton.num_joints
+    return MotionClip(dynamic=torch.zeros(num_frames, num, DYNAMIC_CHANNELS),
+                      root=torch.zeros(num_frames, 4),
+                      static=torch.from_numpy(feats.static).float(),
+                      semantic=(semantic.float() if semantic is not None
+                                else torch.zeros(num, 0)),
+                      parents=torch.from_numpy(feats.skeleton.parents),
+                      edge_attr=torch.from_numpy(feats.edge_attr).float(),
+                      meta={"height": feats.height})
+
+
+def static_features(motion: Motion) -> MotionFeatures:
+    """Features of a target motion (only its static part is used)."""
+    return motion_to_features(motion if motion.num_frames else motion.with_(
+        rotations=np.broadcast_to(np.eye(3), (1, motion.num_joints, 3, 3)).copy(),
+        translations=motion.skeleton.offsets[None].copy()))
+
+
+@torch.no_grad()
+def transfer(module, source: MotionFeatures, target: MotionFeatures,
+             semantic: Optional[Callable] = None, window: int = 64,
+             overlap: int = 16, batch_size: int = 16) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Encode :obj:`source` window by window and decode onto :obj:`target`'s
+    skeleton. Returns physical ``q [T, J_t, 6]``, ``r [T, 4]`` and contact
+    probabilities ``c [T, J_t]`` for every source frame."""
+    module.eval()
+    sem_s = semantic(source.skeleton) if semantic else None
+    sem_t = semantic(target.skeleton) if semantic else None
+    plan = window_plan(source.num_frames, window, overlap)
+    qs, rs, cs = [], [], []
+    device = next(module.parameters()).device
+    for i in range(0, len(plan), batch_size):
+        chunk = plan[i:i + batch_size]
+        src = collate_clips([source.to_clip(a, b, sem_s) for a, b, _ in chunk]).to(device)
+        tgt = collate_clips([target_clip(target, b - a, sem_t) for a, b, _ in chunk]).to(device)
+        out = module(src, tgt)
+        num = target.skeleton.num_joints
+        q = out["q"].view(-1, num, 6).cpu().double()
+        c = torch.sigmoid(out["c"]).view(-1, num).cpu().double()
+        r = out["r"].cpu().double()
+        offset = 0
+        for a, b, keep in chunk:
+            sl = slice(offset + keep - a, offset + b - a)
+            qs.append(q[sl]), rs.append(r[sl]), cs.append(c[sl])
+            offset += b - a
+    return (torch.cat(qs).numpy(), torch.cat(rs).numpy(), torch.cat(cs).numpy())
+
+
+def retarget_motion(module, source: Motion, target: Motion,
+                    semantic: Optional[Callable] = None, window: int = 64,
+                    overlap: int = 16, fps: Optional[float] = None) -> Motion:
+    r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
+
+    The result is in the target's own axes, units, rest pose, joint order and
+    channel layout (motionless helper roots included), at the source's frame
+    rate, and follows the source's root path from the target's start
+    position.
+
+    Args:
+        module: A trained :class:`~satagraph.lightning.MotionAutoencoderModule`.
+        source (Motion): The motion to transfer (as read from a file).
+        target (Motion): A motion (or zero-frame skeleton) of the target rig.
+        semantic (Callable, optional): Skeleton -> semantic embedding, the
+            one used in training.
+        window (int): Frames per window.
+        overlap (int): Frames shared by consecutive windows.
+        fps (float, optional): Feature frame rate (the model's, default 30).
+    """
+    fps = fps or float(getattr(module, "fps", 30.0))
+    src = motion_to_features(canonicalize(source, fps=fps))
+    tgt_canon = canonicalize(target, fps=fps)
+    tgt = static_features(tgt_canon)
+    q, r, _ = transfer(module, src, tgt, semantic, window, overlap)
+    out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
+    canon = features_to_motion(out_feats, q=q, r=r, use_positions=False)
+    return decanonicalize(canon, tgt_canon.transform, fps=source.fps)
+
+
+def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
+                       window: int = 64, overlap: int = 16) -> Motion:
+    """Encode and decode a motion on its own skeleton."""
+    return retarget_motion(module, motion, motion, semantic, window, overlap)
+

@@ -1,0 +1,187 @@
+"""LightningModules for motion autoencoders (SATA-VAE, SATA-RVQ, baselines)."""
+from __future__ import annotations
+
+import copy
+from typing import Any, Dict, Optional
+
+import lightning as L
+import torch
+from torch import Tensor, nn
+
+from satagraph.data.features import DYNAMIC_LAYOUT
+from satagraph.data.normalizer import FeatureNormalizer
+from satagraph.metrics import motion_metrics
+from satagraph.ops.motion_batch import batch_global_motion
+
+DEFAULT_OPTIM: Dict[str, float] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
+                                   "floor": 0.01, "grad_clip": 0.5}
+
+
+def lr_factor(epoch: int, warmup_epochs: int, decay: float, floor: float) -> float:
+    r"""The SATA schedule: linear warm-up over :obj:`warmup_epochs`, then
+    ``decay ** epoch`` (after warm-up), never below :obj:`floor`."""
+    if epoch < warmup_epochs:
+        return (epoch + 1) / warmup_epochs
+    return max(floor, decay ** (epoch - warmup_epochs))
+
+
+class MotionAutoencoderModule(L.LightningModule):
+    r"""Base LightningModule for topology-agnostic motion autoencoders.
+
+    Subclasses choose the network in :meth:`build_model` and may override
+    the documented hooks:
+
+    - :meth:`encode` ``(batch) -> dict`` (``"z"`` and auxiliary terms),
+    - :meth:`decode` ``(z, target) -> dict`` of normalised predictions
+      ``q [N, 6]``, ``r [G, 4]``, ``c [N, 1]`` (contact logits),
+    - :meth:`compute_losses` ``(out, batch) -> dict`` with ``"loss"``,
+    - :meth:`configure_optimizers` (Adam, warm-up, exponential decay with
+      a floor: :func:`lr_factor`).
+
+    Batches are :class:`~satagraph.data.FrameBatch` objects with physical
+    (unnormalised) features; the module normalises inputs with its
+    :attr:`normalizer` (fitted on the training split by the data module and
+    stored in the checkpoint) and denormalises predictions before losses and
+    metrics.
+
+    Args:
+        model (dict): Keyword arguments of the network.
+        loss (dict, optional): Loss weights (see :mod:`satagraph.losses`).
+        optim (dict, optional): ``lr``, ``warmup_epochs``, ``decay``,
+            ``floor``, ``grad_clip``.
+        fps (float): Frame rate of the features.
+        meta (dict, optional): What inference needs to know about the data
+            (``semantic_encoder``, ``window``, ``module``), kept in the
+            checkpoint.
+    """
+
+    def __init__(self, model: Dict[str, Any], loss: Optional[Dict[str, float]] = None,
+                 optim: Optional[Dict[str, float]] = None, fps: float = 30.0,
+                 meta: Optional[Dict[str, Any]] = None) -> None:
+        super().__init__()
+        self.save_hyperparameters()
+        self.optim = dict(DEFAULT_OPTIM, **(optim or {}))
+        self.fps = fps
+        self.meta = dict(meta or {})
+        self.normalizer = FeatureNormalizer()
+        self.model = self.build_model(**model)
+        self.criterion = self.build_loss(**(loss or {}))
+
+    # ------------------------------------------------------------ hooks
+    def build_model(self, **kwargs: Any) -> nn.Module:
+        """The network; subclasses override."""
+        raise NotImplementedError
+
+    def build_loss(self, **weights: float) -> nn.Module:
+        """The loss; weights from the config."""
+        from satagraph.losses import MotionLoss
+        return MotionLoss(**weights)
+
+    def encode(self, batch) -> Dict[str, Tensor]:
+        """Latents of a (normalised) batch: ``{"z": [G, D], ...}``."""
+        return self.model.encode(batch)
+
+    def decode(self, z: Tensor, target) -> Dict[str, Tensor]:
+        """Normalised predictions on the target skeletons' frame graphs."""
+        return self.model.decode(z, target)
+
+    def forward(self, batch, target=None) -> Dict[str, Tensor]:
+        """Encode :obj:`batch`, decode on :obj:`target` (default: itself).
+        Both are physical batches; predictions come back physical."""
+        source = self.normalize_batch(batch)
+        target = source if target is None else self.normalize_batch(target)
+        enc = self.encode(source)
+        out = dict(enc, **self.decode(enc["z"], target))
+        return self.denormalize_output(out)
+
+    # --------------------------------------------------- normalisation
+    def setup(self, stage: str) -> None:
+        dm = getattr(self.trainer, "datamodule", None) if self._trainer else None
+        if not bool(self.normalizer.fitted) and dm is not None:
+            self.normalizer.load_state_dict(dm.normalizer.state_dict())
+
+    def normalize_batch(self, batch):
+        """A shallow copy of :obj:`batch` with normalised features."""
+        out = copy.copy(batch)
+        norm = self.normalizer
+        out.x = norm.normalize(batch.x, "dynamic")
+        out.root = norm.normalize(batch.root, "root")
+        out.joint_static = norm.normalize(batch.joint_static, "static")
+        return out
+
+    def denormalize_output(self, out: Dict[str, Tensor]) -> Dict[str, Tensor]:
+        out = dict(out)
+        out["q_norm"], out["r_norm"] = out["q"], out["r"]
+        out["q"] = self.normalizer.denormalize(out["q"], "dynamic", DYNAMIC_LAYOUT["q"])
+        out["r"] = self.normalizer.denormalize(out["r"], "root")
+        return out
+
+    # ----------------------------------------------------------- steps
+    def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
+        """Named loss terms and their weighted sum under ``"loss"``."""
+        return self.criterion(out, batch, self.normalizer, fps=self.fps)
+
+    def _step(self, batch, stage: str) -> Tensor:
+        out = self(batch)
+        losses = self.compute_losses(out, batch)
+        size = len(batch.meta)
+        self.log_dict({f"{stage}/{k}": v.detach() for k, v in losses.items()},
+                      batch_size=size, prog_bar=False, on_epoch=True,
+                      on_step=stage == "train", sync_dist=stage != "train")
+        self.log(f"{stage}_loss", losses["loss"].detach(), batch_size=size,
+                 prog_bar=True, on_epoch=True, sync_dist=stage != "train")
+        if stage != "train":
+            metrics = self.metrics(out, batch)
+            self.log_dict({f"{stage}/{k}": v.mean() for k, v in metrics.items()},
+                          batch_size=size, on_epoch=True, sync_dist=True)
+        return losses["loss"]
+
+    def training_step(self, batch, batch_idx: int) -> Tensor:
+        return self._step(batch, "train")
+
+    def validation_step(self, batch, batch_idx: int) -> Tensor:
+        return self._step(batch, "val")
+
+    def test_step(self, batch, batch_idx: int) -> Tensor:
+        return self._step(batch, "test")
+
+    @torch.no_grad()
+    def metrics(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
+        """Per-clip metrics of a (physical) prediction against the batch."""
+        q_true = batch.x[:, DYNAMIC_LAYOUT["q"]]
+        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch, self.fps)
+        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch, self.fps)
+        return motion_metrics(local_p, pos_p, local_t, pos_t, batch)
+
+    def configure_optimizers(self):
+        opt = torch.optim.Adam(self.parameters(), lr=self.optim["lr"])
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda e: lr_factor(
+            e, int(self.optim["warmup_epochs"]), self.optim["decay"], self.optim["floor"]))
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "epoch"}}
+
+
+class SATAVAEModule(MotionAutoencoderModule):
+    r"""SATA with a 128-D Gaussian bottleneck (paper section 4.1)."""
+
+    def build_model(self, **kwargs: Any) -> nn.Module:
+        from satagraph.nn import SATA
+        return SATA(**dict({"bottleneck": "vae"}, **kwargs))
+
+
+class SATARVQModule(MotionAutoencoderModule):
+    r"""SATA with a residual vector quantiser (6 x 1024 codes, 256-D)."""
+
+    def build_model(self, **kwargs: Any) -> nn.Module:
+        from satagraph.nn import SATA
+        return SATA(**dict({"bottleneck": "rvq"}, **kwargs))
+
+    @torch.no_grad()
+    def codes(self, batch) -> Tensor:
+        """Code indices per frame, ``[G, Q]``, for generators."""
+        return self.encode(self.normalize_batch(batch))["codes"]
+
+
+def count_parameters(module: nn.Module) -> int:
+    """Number of trainable parameters."""
+    return sum(p.numel() for p in module.parameters() if p.requires_grad)
+
