@@ -48,7 +48,7 @@ def build_module(cfg: Dict[str, Any], dm: Optional[MotionDataModule] = None):
     name = cfg.get("module", "vae")
     data = cfg["data"]
     meta = {"module": name, "semantic_encoder": data.get("semantic_encoder", "offline"),
-            "window": int(data.get("window", 64))}
+            "window": int(data.get("window", 64)), "data": data}
     module = module_class(name)(
         model=model, loss=cfg.get("loss"), optim=cfg.get("optim"),
         fps=float((data.get("preprocessing") or {}).get("fps", 30.0)), meta=meta)

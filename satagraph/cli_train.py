@@ -1,0 +1,154 @@
+"""``satagraph train | reconstruct | retarget | eval`` subcommands."""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from collections import defaultdict
+from typing import Dict, List
+
+import torch
+
+
+def add_train_parsers(sub) -> None:
+    """Register the model subcommands on an argparse subparsers object."""
+    p = sub.add_parser("train", help="train a model from a config",
+                       description="Train from an omegaconf YAML config in experiments/ "
+                       "(or a path), with dotted overrides, e.g. "
+                       "`satagraph train tiny trainer.max_epochs=2 data.batch_size=8`.")
+    p.add_argument("config", help="config name (tiny, sata_vae, ...) or path")
+    p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
+    p.add_argument("--resume", action="store_true",
+                   help="continue from the run's last checkpoint")
+    p.add_argument("--init-from", metavar="CKPT",
+                   help="start from another run's weights (fine-tuning)")
+    p.set_defaults(func=run_train)
+
+    p = sub.add_parser("reconstruct", help="encode and decode a BVH on its own skeleton",
+                       description="Sliding-window reconstruction of IN.bvh into OUT.bvh.")
+    _common(p)
+    p.add_argument("input", metavar="IN.bvh")
+    p.add_argument("output", metavar="OUT.bvh")
+    p.set_defaults(func=run_reconstruct)
+
+    p = sub.add_parser("retarget", help="transfer a motion onto another skeleton",
+                       description="Retarget SOURCE.bvh onto TARGET.bvh's skeleton (any "
+                       "species); OUT.bvh is in the target's axes, units and channel layout "
+                       "at the source's frame rate.")
+    _common(p)
+    p.add_argument("source", metavar="SOURCE.bvh")
+    p.add_argument("--target", required=True, metavar="TARGET.bvh")
+    p.add_argument("output", metavar="OUT.bvh")
+    p.set_defaults(func=run_retarget)
+
+    p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
+                       description="Evaluate JR, RT, JP, FS, GP per dataset on a split.")
+    p.add_argument("--ckpt", required=True)
+    p.add_argument("--split", default="test", choices=["train", "val", "test"])
+    p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
+    p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
+    p.add_argument("--max-batches", type=int, default=None)
+    p.set_defaults(func=run_eval)
+
+
+def _common(p) -> None:
+    p.add_argument("--ckpt", required=True, help="a checkpoint from `satagraph train`")
+    p.add_argument("--window", type=int, default=64)
+    p.add_argument("--overlap", type=int, default=16)
+
+
+def run_train(args) -> int:
+    from satagraph.config import load_config
+    from satagraph.train import train
+    cfg = load_config(args.config, args.overrides)
+    start = time.time()
+    module, dm, trainer, run_dir = train(cfg, resume=args.resume, init_from=args.init_from)
+    ckpt = trainer.checkpoint_callback
+    print(f"trained {cfg['name']} for {trainer.current_epoch} epochs in "
+          f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
+          f"(best: {ckpt.best_model_path or 'n/a'}, last: {ckpt.last_model_path})")
+    return 0
+
+
+def _load(args):
+    from satagraph.data.datamodule import semantic_embedder
+    from satagraph.train import load_module
+    module = load_module(args.ckpt)
+    return module, semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+
+
+def run_reconstruct(args) -> int:
+    from satagraph.inference import reconstruct_motion
+    from satagraph.io import read_bvh, write_bvh
+    module, embed = _load(args)
+    motion = read_bvh(args.input)
+    out = reconstruct_motion(module, motion, embed, args.window, args.overlap)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
+    return 0
+
+
+def run_retarget(args) -> int:
+    from satagraph.inference import retarget_motion
+    from satagraph.io import read_bvh, write_bvh
+    module, embed = _load(args)
+    source, target = read_bvh(args.source), read_bvh(args.target)
+    out = retarget_motion(module, source, target, embed, args.window, args.overlap)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
+          f"{out.num_joints}-joint skeleton of {args.target}")
+    return 0
+
+
+def evaluate(module, loader, max_batches=None) -> Dict[str, Dict[str, float]]:
+    """Mean metrics per dataset (and ``all``) over a data loader."""
+    sums: Dict[str, Dict[str, float]] = defaultdict(lambda: defaultdict(float))
+    counts: Dict[str, int] = defaultdict(int)
+    module.eval()
+    with torch.no_grad():
+        for i, batch in enumerate(loader):
+            if max_batches is not None and i >= max_batches:
+                break
+            metrics = module.metrics(module(batch), batch)
+            for k, meta in enumerate(batch.meta):
+                for group in (meta.get("dataset", "?"), "all"):
+                    counts[group] += 1
+                    for name, values in metrics.items():
+                        sums[group][name] += float(values[k])
+    return {g: {n: v / counts[g] for n, v in m.items()} | {"clips": counts[g]}
+            for g, m in sums.items()}
+
+
+def format_table(results: Dict[str, Dict[str, float]]) -> str:
+    """Markdown table: one row per dataset (JP/RT also in cm)."""
+    cols = ["JR", "RT", "JP", "RT_h", "JP_h", "FS", "GP", "RE"]
+    lines = ["| dataset | clips | JR (rad) | RT (cm) | JP (cm) | RT/H | JP/H | FS (cm) "
+             "| GP (cm) | RE |", "|---" * 10 + "|"]
+    for name in sorted(results, key=lambda g: (g == "all", g)):
+        r = results[name]
+        vals = [r[c] * (100 if c in ("RT", "JP", "FS", "GP") else 1) for c in cols]
+        lines.append(f"| {name} | {r['clips']} | " + " | ".join(f"{v:.4f}" for v in vals) + " |")
+    return "\n".join(lines)
+
+
+def run_eval(args) -> int:
+    from satagraph.data.datamodule import MotionDataModule
+    from satagraph.train import load_module
+    module = load_module(args.ckpt)
+    data = dict(module.meta.get("data") or {})
+    if args.data:
+        data["sources"] = args.data
+    if not data.get("sources"):
+        raise ValueError("the checkpoint does not name its data: pass --data")
+    dm = MotionDataModule(**data)
+    dm.setup("test")
+    loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)
+    results = evaluate(module, loader, args.max_batches)
+    print(format_table(results))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=2)
+    return 0
+
+
+__all__: List[str] = ["add_train_parsers", "evaluate", "format_table"]

@@ -1,0 +1,88 @@
+"""Sources, processed-feature cache, windows and the normaliser."""
+import os
+
+import numpy as np
+import pytest
+import torch
+
+from satagraph.data.cache import load_cached, store_cached
+from satagraph.data.dataset import (MotionDatasetError, load_features,
+                                    preprocess_file, window_starts,
+                                    DEFAULT_PREPROCESSING)
+from satagraph.data.normalizer import FeatureNormalizer
+from satagraph.data.sources import resolve_sources, scan_folder, select
+
+
+def test_window_starts_cover_clip():
+    assert window_starts(10, 64, 32) == [0]
+    assert window_starts(64, 64, 32) == [0]
+    starts = window_starts(150, 64, 32)
+    assert starts[0] == 0 and starts[-1] + 64 == 150
+    assert all(b - a <= 32 for a, b in zip(starts, starts[1:]))
+
+
+def test_manifest_sources_and_splits(shared_data):
+    files = resolve_sources(str(shared_data / "manifest.tsv"))
+    assert len(files) == 244  # parser_test fixtures are left out
+    assert {f.dataset for f in files} == {"bandai", "cmu", "ccbase", "dog"}
+    dog = scan_folder(shared_data / "dog")
+    assert len(dog) == 34 and len(select(dog, "test")) == 10
+    only_dog = resolve_sources({"path": str(shared_data / "manifest.tsv"),
+                                "dataset": "dog"})
+    assert len(only_dog) == 34
+    with pytest.raises(FileNotFoundError, match="not found"):
+        resolve_sources("/nonexistent/folder")
+
+
+def test_cache_round_trip_and_corruption(shared_data, tmp_path):
+    path = str(shared_data / "bandai" / "dataset-1_bow_active_001.bvh")
+    feats = preprocess_file(path, DEFAULT_PREPROCESSING)
+    store_cached(tmp_path, "k", feats)
+    back = load_cached(tmp_path, "k")
+    assert back.skeleton.names == feats.skeleton.names
+    assert back.skeleton.channels == feats.skeleton.channels
+    np.testing.assert_array_equal(back.q, feats.q)
+    assert back.transform.removed_root["name"] == "joint_Root"
+    assert not [p for p in os.listdir(tmp_path) if p.startswith(".tmp")]
+    (tmp_path / "k.npz").write_bytes(b"garbage")
+    with pytest.warns(UserWarning, match="unreadable cache"):
+        assert load_cached(tmp_path, "k") is None
+    assert not (tmp_path / "k.npz").exists()
+
+
+def test_bad_files_reported_together_and_not_cached(shared_data, tmp_path):
+    good = resolve_sources(str(shared_data / "cmu"))[:1]
+    bad_dir = tmp_path / "bad"
+    bad_dir.mkdir()
+    (bad_dir / "a.bvh").write_text("HIERARCHY\nROOT x\n{\n")
+    (bad_dir / "b.bvh").write_text("")
+    bad = resolve_sources(str(bad_dir))
+    cache = tmp_path / "cache"
+    with pytest.raises(MotionDatasetError) as err:
+        load_features(good + bad, cache_dir=str(cache))
+    msg = str(err.value)
+    assert "2 of 3" in msg and "a.bvh" in msg and "b.bvh" in msg
+    assert len(list((cache / "processed").glob("*.npz"))) == 1  # the good one
+
+
+def test_cache_keyed_by_config(shared_data, tmp_path):
+    files = resolve_sources(str(shared_data / "cmu"))[:1]
+    a = load_features(files, {"fps": 30.0}, cache_dir=str(tmp_path))[0]
+    b = load_features(files, {"fps": 15.0}, cache_dir=str(tmp_path))[0]
+    assert a.fps == 30 and b.fps == 15
+    assert len(list((tmp_path / "processed").glob("*.npz"))) == 2
+
+
+def test_normalizer_fit_and_inverse(shared_data, tmp_path):
+    files = resolve_sources(str(shared_data / "cmu"))[:2]
+    feats = load_features(files, cache_dir=str(tmp_path))
+    norm = FeatureNormalizer().fit(feats)
+    x = torch.from_numpy(np.concatenate([f.dynamic.reshape(-1, 22) for f in feats])).float()
+    z = norm.normalize(x, "dynamic")
+    assert z[:, :21].mean(0).abs().max() < 1e-3
+    torch.testing.assert_close(z[:, 21], x[:, 21])  # contacts stay raw
+    torch.testing.assert_close(norm.denormalize(z, "dynamic"), x, atol=1e-4, rtol=1e-4)
+    state = norm.state_dict()
+    other = FeatureNormalizer()
+    other.load_state_dict(state)
+    assert bool(other.fitted)
