@@ -4,10 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from collections import defaultdict
-from typing import Dict, List
-
-import torch
+from typing import List
 
 
 def add_train_parsers(sub) -> None:
@@ -48,6 +45,9 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
     p.add_argument("--max-batches", type=int, default=None)
+    p.add_argument("--retarget", action="store_true",
+                   help="also the retarget error onto bone-scaled copies of each "
+                   "split file's skeleton (paired ground truth)")
     p.set_defaults(func=run_eval)
 
 
@@ -100,39 +100,9 @@ def run_retarget(args) -> int:
     return 0
 
 
-def evaluate(module, loader, max_batches=None) -> Dict[str, Dict[str, float]]:
-    """Mean metrics per dataset (and ``all``) over a data loader."""
-    sums: Dict[str, Dict[str, float]] = defaultdict(lambda: defaultdict(float))
-    counts: Dict[str, int] = defaultdict(int)
-    module.eval()
-    with torch.no_grad():
-        for i, batch in enumerate(loader):
-            if max_batches is not None and i >= max_batches:
-                break
-            metrics = module.metrics(module(batch), batch)
-            for k, meta in enumerate(batch.meta):
-                for group in (meta.get("dataset", "?"), "all"):
-                    counts[group] += 1
-                    for name, values in metrics.items():
-                        sums[group][name] += float(values[k])
-    return {g: {n: v / counts[g] for n, v in m.items()} | {"clips": counts[g]}
-            for g, m in sums.items()}
-
-
-def format_table(results: Dict[str, Dict[str, float]]) -> str:
-    """Markdown table: one row per dataset (JP/RT also in cm)."""
-    cols = ["JR", "RT", "JP", "RT_h", "JP_h", "FS", "GP", "RE"]
-    lines = ["| dataset | clips | JR (rad) | RT (cm) | JP (cm) | RT/H | JP/H | FS (cm) "
-             "| GP (cm) | RE |", "|---" * 10 + "|"]
-    for name in sorted(results, key=lambda g: (g == "all", g)):
-        r = results[name]
-        vals = [r[c] * (100 if c in ("RT", "JP", "FS", "GP") else 1) for c in cols]
-        lines.append(f"| {name} | {r['clips']} | " + " | ".join(f"{v:.4f}" for v in vals) + " |")
-    return "\n".join(lines)
-
-
 def run_eval(args) -> int:
-    from satagraph.data.datamodule import MotionDataModule
+    from satagraph.data.datamodule import MotionDataModule, semantic_embedder
+    from satagraph.evaluation import evaluate, format_table, retarget_errors
     from satagraph.train import load_module
     module = load_module(args.ckpt)
     data = dict(module.meta.get("data") or {})
@@ -145,10 +115,17 @@ def run_eval(args) -> int:
     loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)
     results = evaluate(module, loader, args.max_batches)
     print(format_table(results))
+    if args.retarget:
+        embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+        errors = retarget_errors(module, dm.datasets[args.split].files, embed)
+        print("\n| dataset | retarget error (x1000 / H^2) |\n|---|---|")
+        for name, value in sorted(errors.items(), key=lambda kv: (kv[0] == "all", kv[0])):
+            print(f"| {name} | {value:.3f} |")
+            results.setdefault(name, {})["retarget"] = value
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=2)
     return 0
 
 
-__all__: List[str] = ["add_train_parsers", "evaluate", "format_table"]
+__all__: List[str] = ["add_train_parsers"]
