@@ -11,6 +11,12 @@ from satagraph.ops.fk import forward_kinematics
 from satagraph.skeleton import Skeleton
 
 
+def _tensor(array: np.ndarray) -> torch.Tensor:
+    """A tensor sharing memory with :obj:`array`, or with a copy when the
+    array is read-only (e.g. a broadcast view), which torch cannot share."""
+    return torch.from_numpy(array if array.flags.writeable else array.copy())
+
+
 @dataclass
 class CanonicalTransform:
     r"""What canonicalisation did to a motion, so that results can be written
@@ -131,9 +137,9 @@ class Motion:
         """Global rotations :math:`(T, J, 3, 3)` and positions
         :math:`(T, J, 3)` by forward kinematics, vectorised over frames."""
         rot, pos = forward_kinematics(
-            torch.from_numpy(self.rotations),
-            torch.from_numpy(self.translations),
-            torch.from_numpy(self.skeleton.parents),
+            _tensor(self.rotations),
+            _tensor(self.translations),
+            _tensor(self.skeleton.parents),
         )
         return rot.numpy(), pos.numpy()
 

@@ -237,7 +237,8 @@ def _frame_header(path: str, text: str, pos: int, lineno: int) -> Tuple[int, flo
             raise BVHError(path, lineno, f"bad value in {line!r}") from None
         if key == "frames" and found[key] < 0:
             raise BVHError(path, lineno, "negative frame count")
-        if key == "frame time" and not (np.isfinite(found[key]) and found[key] > 0):
+        if key == "frame time" and not (np.isfinite(found[key]) and found[key] > 0
+                                        and np.isfinite(1.0 / found[key])):
             raise BVHError(path, lineno, "Frame Time must be positive")
     return found["frames"], found["frame time"], pos, lineno
 
@@ -315,7 +316,7 @@ def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) 
         angles = np.radians(data[:, np.array(cols)])  # [T, n, 3]
         rot[:, idx] = euler_to_matrix(torch.from_numpy(angles), order).numpy()
     fps = 1.0 / frame_time
-    if abs(fps - round(fps)) < 1e-2 * max(1.0, fps / 100):
+    if round(fps) >= 1 and abs(fps - round(fps)) < 1e-2 * max(1.0, fps / 100):
         fps = float(round(fps))
     return Motion(skeleton, rot, trans, fps=fps, raw_channels=data, source=path)
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from typing import List, Union
 
@@ -58,7 +59,8 @@ def channel_values(motion: Motion) -> np.ndarray:
         order = skel.rotation_orders[j]
         euler = None
         if order:
-            rad = matrix_to_euler(torch.from_numpy(motion.rotations[:, j]), order)
+            rot = np.array(motion.rotations[:, j])  # writable copy for torch
+            rad = matrix_to_euler(torch.from_numpy(rot), order)
             euler = np.degrees(np.unwrap(rad.numpy(), axis=0))
         for c in chans:
             if c.endswith("position"):
@@ -68,6 +70,17 @@ def channel_values(motion: Motion) -> np.ndarray:
     if not columns:
         return np.zeros((motion.num_frames, 0))
     return np.stack(columns, axis=1)
+
+
+def _file_mode(path: str) -> int:
+    """Permissions for the output: those of the file being replaced, else
+    the default for new files (0666 less the umask)."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
@@ -90,9 +103,11 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     header += ["MOTION", f"Frames: {motion.num_frames}",
                f"Frame Time: {1.0 / motion.fps:.8f}"]
     directory = os.path.dirname(os.path.abspath(path))
+    mode = _file_mode(path)
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".bvh", dir=directory)
     try:
         with os.fdopen(fd, "w", newline="\n") as f:
+            os.fchmod(f.fileno(), mode)  # mkstemp makes 0600 files
             f.write("\n".join(header) + "\n")
             if values.size:
                 np.savetxt(f, values, fmt=f"%.{max(precision, 6)}f")

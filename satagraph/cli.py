@@ -1,0 +1,339 @@
+r"""The ``satagraph`` command line.
+
+Every subcommand is registered by a small ``add_<name>_parser(subparsers)``
+function that sets ``func`` (a function of the parsed arguments returning
+an exit code or ``None``) with :meth:`~argparse.ArgumentParser.set_defaults`.
+Subcommands living in other modules are listed in :data:`OPTIONAL_COMMANDS`
+and registered when their module imports.
+
+Exit codes: 0 on success, 2 on bad usage or bad input (a malformed BVH file,
+a missing file, an unwritable output): one line ``satagraph: error: ...`` on
+stderr, no traceback (``--traceback`` shows it).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+import tempfile
+from collections import Counter
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from satagraph import __version__
+from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.motion import Motion
+
+PROG = "satagraph"
+UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+
+#: Subcommands defined in other modules: ``(module, parser function)``.
+#: A module that does not exist (yet) is skipped silently.
+OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
+    ("satagraph.cli_tags", "add_tags_parser"),
+    ("satagraph.cli_train", "add_train_parsers"),
+)
+
+Subparsers = argparse._SubParsersAction  # what add_subparsers() returns
+
+
+class CommandError(Exception):
+    """A user-facing failure: printed as one line, exit code 2."""
+
+
+# ------------------------------------------------------------------ helpers
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
+    return value
+
+
+def _up_axis(text: str) -> str:
+    """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
+    axis = text.strip().upper()
+    axis = axis if axis[:1] in ("+", "-") else "+" + axis
+    if axis not in UP_AXES:
+        raise argparse.ArgumentTypeError(
+            f"must be one of {', '.join(UP_AXES)}: {text!r}")
+    return axis
+
+
+def _write(motion: Motion, path: str) -> None:
+    try:
+        write_bvh(motion, path)
+    except OSError as err:
+        raise CommandError(f"cannot write {path}: "
+                           f"{err.strerror or err}") from err
+
+
+def _first_pose(motion: Motion) -> np.ndarray:
+    """Global joint positions of frame 0 (the rest pose without frames)."""
+    if motion.num_frames == 0:
+        return motion.skeleton.rest_positions()
+    return motion.slice(0, 1).global_positions()[0]
+
+
+def _largest_extent_axis(motion: Motion) -> str:
+    """Fallback up axis: the axis along which frame 0 is most extended,
+    signed towards the side of the root (hips are above the middle)."""
+    pos = _first_pose(motion)
+    i = int(np.argmax(np.ptp(pos, axis=0)))
+    middle = 0.5 * (pos[:, i].max() + pos[:, i].min())
+    return ("+" if pos[0, i] >= middle else "-") + "XYZ"[i]
+
+
+def detect_up_axis(motion: Motion) -> str:
+    """The up axis (``"+Y"``, ``"-Z"``, ...) by
+    :func:`satagraph.data.canonical.detect_up_axis` (joint names, then the
+    axis of largest extent), or by the largest extent alone when that
+    module is unavailable."""
+    try:
+        from satagraph.data.canonical import detect_up_axis as detect
+    except ImportError:
+        return _largest_extent_axis(motion)
+    return detect(motion)
+
+
+def describe(motion: Motion, path: str) -> Dict[str, Any]:
+    """Summary of a motion as plain Python values (what ``inspect`` shows).
+
+    ``height`` is the extent along the detected up axis (file units) of the
+    rest pose or of frame 0, whichever is larger.
+    """
+    skel = motion.skeleton
+    up = detect_up_axis(motion)
+    axis = "XYZ".index(up[1])
+    height = max(float(np.ptp(skel.rest_positions()[:, axis])),
+                 float(np.ptp(_first_pose(motion)[:, axis])))
+    layout = Counter(len(c) for c in skel.channels)
+    return {
+        "file": path,
+        "root": skel.names[0],
+        "joints": skel.num_joints,
+        "joints_without_end_sites": int((~skel.end_site).sum()),
+        "end_sites": int(skel.end_site.sum()),
+        "frames": motion.num_frames,
+        "fps": float(motion.fps),
+        "duration": float(motion.duration),
+        "up_axis": up,
+        "height": height,
+        "max_depth": int(skel.depth.max()),
+        "rotation_orders": dict(sorted(Counter(
+            o for o in skel.rotation_orders if o).items())),
+        "channel_layout": {str(k): layout[k] for k in sorted(layout)},
+        "position_channel_joints": int(skel.has_position_channels.sum()),
+        "channels_per_frame": skel.num_channels,
+    }
+
+
+def format_table(info: Dict[str, Any]) -> str:
+    """The human-readable form of :func:`describe`."""
+    orders = ", ".join(f"{o} x{n}" for o, n in info["rotation_orders"].items())
+    layout = info["channel_layout"]
+    channels = ", ".join(
+        f"{n} joint{'s' * (n != 1)} with {k}" for k, n in layout.items())
+    rows = [
+        ("file", info["file"]),
+        ("root", info["root"]),
+        ("joints", f"{info['joints']} ({info['joints_without_end_sites']} "
+                   f"without end sites)"),
+        ("end sites", info["end_sites"]),
+        ("frames", info["frames"]),
+        ("fps", f"{info['fps']:g}"),
+        ("duration", f"{info['duration']:.3f} s"),
+        ("up axis", info["up_axis"]),
+        ("height", f"{info['height']:.4g} (file units)"),
+        ("depth", info["max_depth"]),
+        ("rotation orders", orders or "none"),
+        ("channels", f"{info['channels_per_frame']} per frame: {channels}"),
+        ("position channels", f"on {info['position_channel_joints']} joint(s)"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+# ------------------------------------------------------------------ inspect
+def run_inspect(args: argparse.Namespace) -> int:
+    """Print the summary of a BVH file."""
+    info = describe(read_bvh(args.file), str(args.file))
+    print(json.dumps(info, indent=2) if args.json else format_table(info))
+    return 0
+
+
+def add_inspect_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
+    """Register ``satagraph inspect FILE [--json]``."""
+    parser = subparsers.add_parser(
+        "inspect", help="summarise a BVH file",
+        description="Summarise a BVH file: joints and end sites, frames, "
+        "frame rate, duration, detected up axis, height (file units, along "
+        "the up axis), Euler rotation orders and channel layout.",
+        epilog="example: satagraph inspect walk.bvh --json")
+    parser.add_argument("file", help="the .bvh file")
+    parser.add_argument("--json", action="store_true",
+                        help="print a JSON object instead of a table")
+    parser.set_defaults(func=run_inspect)
+    return parser
+
+
+# ------------------------------------------------------------------ convert
+def run_convert(args: argparse.Namespace) -> int:
+    """Re-write a BVH file, optionally resampled and/or canonicalised."""
+    if args.up_axis and not args.canonical:
+        raise CommandError("--up-axis needs --canonical")
+    motion = read_bvh(args.input)
+    notes = []
+    if args.canonical:
+        from satagraph.data.canonical import canonicalize
+        motion = canonicalize(motion, fps=args.fps, up_axis=args.up_axis)
+        tf = motion.transform
+        notes.append("canonical" if tf is None else
+                     f"canonical: source up axis {tf.up_axis}, "
+                     f"scale {tf.scale:g} to metres")
+    elif args.fps:
+        from satagraph.data.canonical import resample
+        motion = resample(motion, args.fps)
+    _write(motion, args.output)
+    note = f" ({'; '.join(notes)})" if notes else ""
+    print(f"wrote {args.output}: {motion.num_frames} frames at "
+          f"{motion.fps:g} fps, {motion.num_joints} joints{note}")
+    return 0
+
+
+def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
+    """Register ``satagraph convert IN OUT [--fps N] [--canonical]``."""
+    parser = subparsers.add_parser(
+        "convert", help="re-write a BVH file (resample, canonicalise)",
+        description="Read a BVH file and write it again in a standard "
+        "layout. Without options the channel values are kept exactly. "
+        "--fps resamples (slerp for rotations); --canonical brings the "
+        "motion to +Y up, facing +Z, root at the origin, metres (and "
+        "removes a motionless extra root joint). The output is replaced "
+        "atomically, so IN and OUT may be the same file.",
+        epilog="example: satagraph convert in.bvh out.bvh --fps 30 --canonical")
+    parser.add_argument("input", help="the .bvh file to read")
+    parser.add_argument("output", help="the .bvh file to write")
+    parser.add_argument("--fps", type=_positive_float, default=None,
+                        help="resample to this frame rate")
+    parser.add_argument("--canonical", action="store_true",
+                        help="canonicalise (Y up, facing +Z, metres)")
+    parser.add_argument("--up-axis", type=_up_axis, default=None,
+                        metavar="AXIS", help="with --canonical: the source's "
+                        "up axis (+X, -X, +Y, -Y, +Z, -Z; a bare letter means "
+                        "+), when detection guesses wrong")
+    parser.set_defaults(func=run_convert)
+    return parser
+
+
+# --------------------------------------------------------------------- demo
+def run_demo(args: argparse.Namespace) -> int:
+    """Write the built-in example walk and inspect it."""
+    from satagraph.data.examples import example_motion
+
+    motion = example_motion()
+    with tempfile.TemporaryDirectory(prefix="satagraph-demo-") as tmp:
+        path = args.output or str(Path(tmp) / "example_walk.bvh")
+        _write(motion, path)
+        print(f"satagraph demo: wrote the built-in example walk "
+              f"({motion.skeleton.num_joints} joints, {motion.num_frames} "
+              f"frames at {motion.fps:g} fps) to {path}")
+        print(f"$ satagraph inspect {path}")
+        return run_inspect(argparse.Namespace(file=path, json=args.json))
+
+
+def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
+    """Register ``satagraph demo``."""
+    parser = subparsers.add_parser(
+        "demo", help="run on a built-in example (no data needed)",
+        description="Generate a small built-in biped walk (7 joints, 3 end "
+        "sites, 60 frames at 30 fps), write it as a BVH file (in a temporary "
+        "folder unless --output is given) and inspect it.")
+    parser.add_argument("--output", default=None,
+                        help="keep the example BVH file at this path")
+    parser.add_argument("--json", action="store_true",
+                        help="print the summary as JSON")
+    parser.set_defaults(func=run_demo)
+    return parser
+
+
+# ------------------------------------------------------------------- parser
+def _warn(message: str) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+def _add_optional_parsers(subparsers: Subparsers) -> None:
+    """Register the subcommands of :data:`OPTIONAL_COMMANDS` whose module
+    imports. A parser left without ``func`` gets the module's
+    ``run_<name>`` function."""
+    for module_name, function in OPTIONAL_COMMANDS:
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as err:
+            if err.name != module_name:
+                _warn(f"{module_name} unavailable ({err})")
+            continue
+        except Exception as err:  # a broken plugin must not break the rest
+            _warn(f"{module_name} failed to import ({type(err).__name__}: {err})")
+            continue
+        before = set(subparsers.choices)
+        getattr(module, function)(subparsers)
+        for name in sorted(set(subparsers.choices) - before):
+            parser = subparsers.choices[name]
+            run = getattr(module, f"run_{name.replace('-', '_')}", None)
+            if parser.get_default("func") is None and run is not None:
+                parser.set_defaults(func=run)
+
+
+PARSERS: List[Callable[[Subparsers], Any]] = [
+    add_inspect_parser, add_convert_parser, add_demo_parser]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand."""
+    parser = argparse.ArgumentParser(
+        prog=PROG, description="Topology-agnostic character motion: BVH "
+        "tools for any skeleton. Run 'satagraph COMMAND --help' for details.")
+    parser.add_argument("-V", "--version", action="version",
+                        version=f"{PROG} {__version__}")
+    parser.add_argument("--traceback", action="store_true",
+                        help="show the full traceback on errors")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers.required = True
+    for add in PARSERS:
+        add(subparsers)
+    _add_optional_parsers(subparsers)
+    return parser
+
+
+def _message(err: BaseException) -> str:
+    if isinstance(err, OSError) and err.filename is not None:
+        return f"{err.filename}: {err.strerror or err}"
+    return str(err)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the ``satagraph`` command; returns the exit code.
+
+    Args:
+        argv (list[str], optional): Arguments (default: ``sys.argv[1:]``).
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        code = args.func(args)
+    except (BVHError, CommandError, OSError, ValueError) as err:
+        if args.traceback:
+            raise
+        print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
+        return 2
+    return int(code or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,175 @@
+"""Shared fixtures: the real BVH data folder, its manifest, cached reads and
+small hand-built skeletons and motions."""
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+import pytest
+import torch
+
+from satagraph.io import read_bvh
+from satagraph.motion import Motion
+from satagraph.ops.rotation import euler_to_matrix
+from satagraph.skeleton import Skeleton
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DATA_ENV = "SATAGRAPH_DATA"
+SKIP_MESSAGE = ("../shared/data not found: real-data tests need the shared BVH "
+                "files (set SATAGRAPH_DATA)")
+ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
+
+
+# ----------------------------------------------------------------- real data
+def data_dir() -> Optional[Path]:
+    """The shared data folder, or ``None`` when it is missing."""
+    path = Path(os.environ.get(DATA_ENV) or REPO_ROOT.parent / "shared" / "data")
+    return path if (path / "manifest.tsv").is_file() else None
+
+
+def _read_manifest(root: Path) -> List[Dict[str, str]]:
+    with open(root / "manifest.tsv", newline="") as f:
+        return list(csv.DictReader(f, delimiter="\t"))
+
+
+def _representatives(rows: List[Dict[str, str]]) -> List[Dict[str, str]]:
+    """The shortest file of each skeleton id (keeps round trips fast)."""
+    best: Dict[str, Dict[str, str]] = {}
+    for row in rows:
+        cur = best.get(row["skeleton"])
+        if cur is None or int(row["frames"]) < int(cur["frames"]):
+            best[row["skeleton"]] = row
+    return list(best.values())
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    """Parametrise ``manifest_row`` over every file of the manifest and
+    ``skeleton_row`` over one file per skeleton id."""
+    wanted = [n for n in ("manifest_row", "skeleton_row")
+              if n in metafunc.fixturenames]
+    if not wanted:
+        return
+    root = data_dir()
+    rows = _read_manifest(root) if root is not None else []
+    for name in wanted:
+        chosen = rows if name == "manifest_row" else _representatives(rows)
+        if not chosen:
+            metafunc.parametrize(name, [pytest.param(
+                None, marks=pytest.mark.skip(reason=SKIP_MESSAGE))])
+        else:
+            metafunc.parametrize(name, chosen, ids=[r["path"] for r in chosen])
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """Path of the shared data folder (``../shared/data`` or
+    ``$SATAGRAPH_DATA``); skips the test when it is missing."""
+    root = data_dir()
+    if root is None:
+        pytest.skip(SKIP_MESSAGE)
+    return root
+
+
+@pytest.fixture(scope="session")
+def manifest(shared_data: Path) -> List[Dict[str, str]]:
+    """Rows of ``manifest.tsv`` as dicts (path, dataset, skeleton, fps, ...)."""
+    return _read_manifest(shared_data)
+
+
+@pytest.fixture(scope="session")
+def read_real(shared_data: Path) -> Callable[[str], Motion]:
+    """Read a file of the shared data folder by its manifest path, once per
+    session. Callers must not modify the returned motion."""
+    cache: Dict[str, Motion] = {}
+
+    def read(rel_path: str) -> Motion:
+        if rel_path not in cache:
+            cache[rel_path] = read_bvh(shared_data / rel_path)
+        return cache[rel_path]
+
+    return read
+
+
+# -------------------------------------------------------------- synthetic
+def _tiny_skeleton() -> Skeleton:
+    r"""A 10-joint biped-like tree (3 end sites)::
+
+        0 Hips
+        +-- 1 Spine -- 2 Head -- 3 Head_end*
+        +-- 4 LeftLeg -- 5 LeftFoot -- 6 LeftFoot_end*
+        +-- 7 RightLeg -- 8 RightFoot -- 9 RightFoot_end*
+    """
+    names = ["Hips", "Spine", "Head", "Head_end", "LeftLeg", "LeftFoot",
+             "LeftFoot_end", "RightLeg", "RightFoot", "RightFoot_end"]
+    parents = np.array([-1, 0, 1, 2, 0, 4, 5, 0, 7, 8])
+    offsets = np.array([
+        [0.0, 90.0, 0.0], [0.0, 20.0, 0.0], [0.0, 30.0, 1.0], [0.0, 10.0, 0.0],
+        [10.0, -5.0, 0.0], [0.0, -80.0, 0.0], [0.0, -5.0, 12.0],
+        [-10.0, -5.0, 0.0], [0.0, -80.0, 0.0], [0.0, -5.0, 12.0]])
+    pos = ("Xposition", "Yposition", "Zposition")
+    rot = {o: tuple(f"{a}rotation" for a in o) for o in ORDERS}
+    channels = [pos + rot["ZXY"], rot["XYZ"], rot["XZY"], (), pos + rot["YXZ"],
+                rot["YZX"], (), rot["ZYX"], rot["ZXY"], ()]
+    end_site = np.array([n.endswith("_end") for n in names])
+    return Skeleton(names, parents, offsets, channels, end_site)
+
+
+@pytest.fixture
+def tiny_skeleton() -> Skeleton:
+    """A hand-built 10-joint skeleton with every Euler order, 3- and
+    6-channel joints and 3 end sites."""
+    return _tiny_skeleton()
+
+
+def _random_motion(skeleton: Skeleton, num_frames: int = 8, fps: float = 30.0,
+                   seed: int = 0) -> Motion:
+    """A motion with random rotations (Euler angles away from gimbal lock)
+    and random values on every position channel; no raw channels."""
+    gen = np.random.default_rng(seed)
+    num = skeleton.num_joints
+    angles = gen.uniform(-np.pi, np.pi, size=(num_frames, num, 3))
+    angles[..., 1] = gen.uniform(-1.3, 1.3, size=(num_frames, num))
+    rot = np.broadcast_to(np.eye(3), (num_frames, num, 3, 3)).copy()
+    trans = np.broadcast_to(skeleton.offsets, (num_frames, num, 3)).copy()
+    for j, order in enumerate(skeleton.rotation_orders):
+        if order:
+            rot[:, j] = euler_to_matrix(torch.from_numpy(angles[:, j]), order).numpy()
+        if skeleton.has_position_channels[j]:
+            trans[:, j] = skeleton.offsets[j] + gen.normal(0, 5, (num_frames, 3))
+    return Motion(skeleton, rot, trans, fps=fps)
+
+
+@pytest.fixture
+def random_motion() -> Callable[..., Motion]:
+    """Factory ``random_motion(skeleton, num_frames=8, fps=30.0, seed=0)``."""
+    return _random_motion
+
+
+@pytest.fixture
+def tiny_motion(tiny_skeleton: Skeleton) -> Motion:
+    """A seeded 8-frame random motion of :func:`tiny_skeleton`."""
+    return _random_motion(tiny_skeleton, num_frames=8, seed=0)
+
+
+def _assert_same_hierarchy(a: Skeleton, b: Skeleton, atol: float = 1e-6) -> None:
+    assert a.names == b.names
+    np.testing.assert_array_equal(a.parents, b.parents)
+    np.testing.assert_allclose(a.offsets, b.offsets, rtol=1e-5, atol=atol)
+    assert a.channels == b.channels
+    np.testing.assert_array_equal(a.end_site, b.end_site)
+
+
+@pytest.fixture
+def assert_same_hierarchy() -> Callable[[Skeleton, Skeleton], None]:
+    """Checker: same names, parents, offsets, channels and end sites."""
+    return _assert_same_hierarchy
+
+
+@pytest.fixture(autouse=True)
+def _seed() -> None:
+    """Every test starts from the same random state."""
+    np.random.seed(0)
+    torch.manual_seed(0)

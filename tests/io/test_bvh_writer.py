@@ -1,0 +1,302 @@
+"""BVH writer: round trips on real and synthetic motions, format, atomicity."""
+from __future__ import annotations
+
+import os
+import re
+import stat
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import satagraph.io.bvh_writer as bvh_writer
+from satagraph.io import channel_values, read_bvh, write_bvh
+from satagraph.motion import Motion
+from satagraph.skeleton import Skeleton
+
+
+def _extent(positions: np.ndarray) -> float:
+    return float(np.ptp(positions.reshape(-1, 3), axis=0).max())
+
+
+def assert_same_positions(a: Motion, b: Motion) -> None:
+    """Global positions agree to 1e-6 of the motion's spatial extent."""
+    pa, pb = a.global_positions(), b.global_positions()
+    assert pa.shape == pb.shape
+    tol = 1e-6 * max(1.0, _extent(pa))
+    np.testing.assert_allclose(pb, pa, rtol=1e-5, atol=tol)
+
+
+def listing(folder: Path) -> list:
+    return sorted(p.name for p in folder.iterdir())
+
+
+# --------------------------------------------------------------- real files
+def test_roundtrip_raw_channels(skeleton_row, read_real, tmp_path,
+                                assert_same_hierarchy):
+    motion = read_real(skeleton_row["path"])
+    out = tmp_path / "out.bvh"
+    write_bvh(motion, out)
+    again = read_bvh(out)
+    assert_same_hierarchy(motion.skeleton, again.skeleton)
+    assert again.num_frames == motion.num_frames == int(skeleton_row["frames"])
+    assert again.fps == pytest.approx(motion.fps, rel=1e-6)
+    assert np.allclose(again.raw_channels, motion.raw_channels, rtol=1e-5, atol=1e-6)
+
+
+def test_roundtrip_without_raw_channels(skeleton_row, read_real, tmp_path,
+                                        assert_same_hierarchy):
+    """Channel values re-derived from the rotations (Euler angles may differ
+    by multiples of 360 degrees): compare what they mean, by FK."""
+    motion = read_real(skeleton_row["path"]).slice(0, 120).with_()
+    assert motion.raw_channels is None
+    out = tmp_path / "derived.bvh"
+    write_bvh(motion, out)
+    again = read_bvh(out)
+    assert_same_hierarchy(motion.skeleton, again.skeleton)
+    assert again.num_frames == motion.num_frames
+    np.testing.assert_allclose(again.rotations, motion.rotations, atol=1e-6)
+    np.testing.assert_allclose(again.translations, motion.translations,
+                               rtol=1e-5, atol=1e-6)
+    assert_same_positions(motion, again)
+
+
+@pytest.mark.skipif(not os.environ.get("SATAGRAPH_FULL_TESTS"),
+                    reason="slow (~30 s): set SATAGRAPH_FULL_TESTS=1 to "
+                    "round-trip every file of the manifest")
+def test_roundtrip_every_file(manifest, read_real, tmp_path):
+    for row in manifest:
+        motion = read_real(row["path"])
+        write_bvh(motion, tmp_path / "a.bvh")
+        assert np.allclose(read_bvh(tmp_path / "a.bvh").raw_channels,
+                           motion.raw_channels, rtol=1e-5, atol=1e-6), row["path"]
+        write_bvh(motion.with_(), tmp_path / "b.bvh")
+        assert_same_positions(motion, read_bvh(tmp_path / "b.bvh"))
+
+
+def test_manifest_fps_survives_roundtrip(read_real, tmp_path):
+    for path, fps in [("cmu/01_01.bvh", 120.0), ("fixtures/test3.bvh", 24.0),
+                      ("ccbase/006_01.bvh", 60.0)]:
+        motion = read_real(path).slice(0, 5)
+        write_bvh(motion, tmp_path / "fps.bvh")
+        assert read_bvh(tmp_path / "fps.bvh").fps == fps
+
+
+# ---------------------------------------------------------------- synthetic
+def test_roundtrip_synthetic(tiny_motion, tmp_path, assert_same_hierarchy):
+    out = tmp_path / "tiny.bvh"
+    write_bvh(tiny_motion, out)
+    again = read_bvh(out)
+    assert_same_hierarchy(tiny_motion.skeleton, again.skeleton)
+    np.testing.assert_allclose(again.rotations, tiny_motion.rotations, atol=1e-6)
+    np.testing.assert_allclose(again.translations, tiny_motion.translations,
+                               atol=1e-6)
+    # Written values read back and re-written are stable.
+    write_bvh(again, tmp_path / "again.bvh")
+    assert (tmp_path / "again.bvh").read_text() == out.read_text()
+
+
+def test_channel_values_layout(tiny_motion):
+    values = channel_values(tiny_motion)
+    skel = tiny_motion.skeleton
+    assert values.shape == (tiny_motion.num_frames, skel.num_channels)
+    # Root position channels come first, verbatim.
+    np.testing.assert_allclose(values[:, :3], tiny_motion.translations[:, 0])
+    # Raw channels, when present, are used verbatim.
+    raw = np.arange(values.size, dtype=float).reshape(values.shape)
+    assert channel_values(tiny_motion.with_(raw_channels=raw)) is raw
+
+
+def test_position_channels_in_any_order(tmp_path, random_motion):
+    skel = Skeleton(
+        names=["root", "child", "child_end"], parents=np.array([-1, 0, 1]),
+        offsets=np.array([[0, 0, 0], [1, 2, 3], [0, 1, 0]], dtype=float),
+        channels=[("Zposition", "Xposition", "Yposition", "Yrotation",
+                   "Xrotation", "Zrotation"),
+                  ("Yrotation", "Zposition", "Xrotation", "Yposition",
+                   "Zrotation", "Xposition"), ()],
+        end_site=np.array([False, False, True]))
+    motion = random_motion(skel, num_frames=5, seed=3)
+    write_bvh(motion, tmp_path / "order.bvh")
+    again = read_bvh(tmp_path / "order.bvh")
+    assert again.skeleton.channels == skel.channels
+    np.testing.assert_allclose(again.translations, motion.translations, atol=1e-6)
+    np.testing.assert_allclose(again.rotations, motion.rotations, atol=1e-6)
+
+
+def test_odd_names_roundtrip(tiny_skeleton, random_motion, tmp_path,
+                             assert_same_hierarchy):
+    names = list(tiny_skeleton.names)
+    names[0], names[1], names[2] = "mixamorig:Hips", "spine.001", "Head Top"
+    names[3] = "Head Top_end"
+    skel = tiny_skeleton.replace(names=names)
+    motion = random_motion(skel, num_frames=3)
+    write_bvh(motion, tmp_path / "names.bvh")
+    again = read_bvh(tmp_path / "names.bvh")
+    assert_same_hierarchy(skel, again.skeleton)
+
+
+def test_zero_frames_roundtrip(tiny_motion, tmp_path, assert_same_hierarchy):
+    empty = tiny_motion.slice(0, 0)
+    for motion in (empty, empty.with_(raw_channels=np.zeros((0, 0)))):
+        write_bvh(motion, tmp_path / "empty.bvh")
+        text = (tmp_path / "empty.bvh").read_text()
+        assert "Frames: 0" in text
+        again = read_bvh(tmp_path / "empty.bvh")
+        assert again.num_frames == 0
+        assert_same_hierarchy(tiny_motion.skeleton, again.skeleton)
+
+
+def test_single_joint_roundtrip(tmp_path):
+    skel = Skeleton(["only"], np.array([-1]), np.zeros((1, 3)),
+                    [("Xposition", "Yposition", "Zposition")])
+    trans = np.random.default_rng(0).normal(size=(4, 1, 3))
+    motion = Motion(skel, np.broadcast_to(np.eye(3), (4, 1, 3, 3)), trans, fps=50)
+    write_bvh(motion, tmp_path / "one.bvh")
+    again = read_bvh(tmp_path / "one.bvh")
+    np.testing.assert_allclose(again.translations, trans, atol=1e-6)
+    assert again.fps == 50
+
+
+def test_root_without_channels_rejected(tiny_skeleton, tmp_path):
+    channels = [()] + list(tiny_skeleton.channels[1:])
+    skel = tiny_skeleton.replace(channels=channels)
+    motion = Motion(skel, np.broadcast_to(np.eye(3), (1, 10, 3, 3)),
+                    skel.offsets[None], fps=30)
+    with pytest.raises(ValueError, match="root joint needs channels"):
+        write_bvh(motion, tmp_path / "x.bvh")
+    assert listing(tmp_path) == []
+
+
+# ------------------------------------------------------------------ format
+def test_output_format(tiny_motion, tmp_path):
+    out = tmp_path / "fmt.bvh"
+    write_bvh(tiny_motion, out)
+    raw = out.read_bytes()
+    assert b"\r" not in raw
+    lines = raw.decode().splitlines()
+    assert lines[0] == "HIERARCHY"
+    assert lines[1].startswith("ROOT Hips")
+    motion_at = lines.index("MOTION")
+    assert lines[motion_at + 1] == f"Frames: {tiny_motion.num_frames}"
+    assert re.fullmatch(r"Frame Time: 0\.0333333\d*", lines[motion_at + 2])
+    frames = lines[motion_at + 3:]
+    assert len(frames) == tiny_motion.num_frames
+    for line in frames:
+        tokens = line.split()
+        assert len(tokens) == tiny_motion.skeleton.num_channels
+        assert all(re.fullmatch(r"-?\d+\.\d{6,}", t) for t in tokens), line
+    for line in lines[:motion_at]:
+        if line.strip().startswith("OFFSET"):
+            assert all(re.fullmatch(r"-?\d+\.\d{6,}", t) for t in line.split()[1:])
+    assert "End Site" in raw.decode()
+
+
+def test_precision_argument(tiny_motion, tmp_path):
+    write_bvh(tiny_motion, tmp_path / "p.bvh", precision=9)
+    frame = (tmp_path / "p.bvh").read_text().splitlines()[-1].split()
+    assert all(len(t.split(".")[1]) == 9 for t in frame)
+    write_bvh(tiny_motion, tmp_path / "q.bvh", precision=2)  # floor of 6
+    frame = (tmp_path / "q.bvh").read_text().splitlines()[-1].split()
+    assert all(len(t.split(".")[1]) == 6 for t in frame)
+
+
+def test_new_file_mode_follows_umask(tiny_motion, tmp_path):
+    out = tmp_path / "mode.bvh"
+    old = os.umask(0o022)
+    try:
+        write_bvh(tiny_motion, out)
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o644
+    out.chmod(0o600)
+    write_bvh(tiny_motion, out)  # overwriting keeps the file's mode
+    assert stat.S_IMODE(out.stat().st_mode) == 0o600
+
+
+# --------------------------------------------------------------- atomicity
+def test_failure_before_writing_leaves_nothing(tiny_motion, tmp_path, monkeypatch):
+    def boom(motion):
+        raise RuntimeError("no values")
+
+    monkeypatch.setattr(bvh_writer, "channel_values", boom)
+    with pytest.raises(RuntimeError, match="no values"):
+        write_bvh(tiny_motion, tmp_path / "x.bvh")
+    assert listing(tmp_path) == []
+
+
+def test_failure_mid_write_keeps_old_file(tiny_motion, tmp_path, monkeypatch):
+    out = tmp_path / "clip.bvh"
+    out.write_text("old content\n")
+
+    def partial_savetxt(f, values, fmt):
+        f.write("0.000000 1.000000\n")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(bvh_writer.np, "savetxt", partial_savetxt)
+    with pytest.raises(OSError, match="No space left"):
+        write_bvh(tiny_motion, out)
+    assert out.read_text() == "old content\n"
+    assert listing(tmp_path) == ["clip.bvh"]
+
+
+def test_failure_on_replace_removes_temp(tiny_motion, tmp_path, monkeypatch):
+    def fail(src, dst):
+        raise PermissionError(13, "Permission denied", dst)
+
+    monkeypatch.setattr(bvh_writer.os, "replace", fail)
+    with pytest.raises(PermissionError):
+        write_bvh(tiny_motion, tmp_path / "clip.bvh")
+    assert listing(tmp_path) == []
+
+
+def test_parent_is_a_file(tiny_motion, tmp_path):
+    (tmp_path / "afile").write_text("not a folder")
+    with pytest.raises(OSError):
+        write_bvh(tiny_motion, tmp_path / "afile" / "out.bvh")
+    assert listing(tmp_path) == ["afile"]
+    assert (tmp_path / "afile").read_text() == "not a folder"
+
+
+def test_target_is_a_directory(tiny_motion, tmp_path):
+    (tmp_path / "out.bvh").mkdir()
+    with pytest.raises(OSError):
+        write_bvh(tiny_motion, tmp_path / "out.bvh")
+    assert listing(tmp_path) == ["out.bvh"]
+    assert listing(tmp_path / "out.bvh") == []
+
+
+def test_missing_parent_folder(tiny_motion, tmp_path):
+    with pytest.raises(FileNotFoundError):
+        write_bvh(tiny_motion, tmp_path / "nope" / "out.bvh")
+    assert listing(tmp_path) == []
+
+
+def test_overwrite_is_atomic_replace(tiny_motion, tmp_path, monkeypatch):
+    out = tmp_path / "clip.bvh"
+    write_bvh(tiny_motion.slice(0, 2), out)
+    first = out.read_text()
+    # A hard link to the old file keeps the old content: the new file was
+    # moved into place, not written over the old one.
+    os.link(out, tmp_path / "old_link.bvh")
+    calls = []
+    real_replace = os.replace
+
+    def spy(src, dst):
+        calls.append((os.fspath(src), os.fspath(dst)))
+        assert Path(src).parent == out.parent and Path(src).stat().st_size > 0
+        real_replace(src, dst)
+
+    monkeypatch.setattr(bvh_writer.os, "replace", spy)
+    write_bvh(tiny_motion, out)
+    assert len(calls) == 1 and calls[0][1] == str(out)
+    assert (tmp_path / "old_link.bvh").read_text() == first
+    assert out.read_text() != first
+    assert read_bvh(out).num_frames == tiny_motion.num_frames
+    assert listing(tmp_path) == ["clip.bvh", "old_link.bvh"]
+
+
+def test_accepts_str_and_pathlike(tiny_motion, tmp_path):
+    write_bvh(tiny_motion, str(tmp_path / "a.bvh"))
+    write_bvh(tiny_motion, tmp_path / "b.bvh")
+    assert (tmp_path / "a.bvh").read_text() == (tmp_path / "b.bvh").read_text()
