@@ -1,0 +1,198 @@
+"""Batching clips of any skeletons and lengths into frame graphs."""
+from __future__ import annotations
+
+from typing import Dict, List, NamedTuple, Tuple
+
+import torch
+from torch import Tensor
+from torch_geometric.data import Batch
+
+from satagraph.data.clip import MotionClip
+from satagraph.data.frame_graph import FrameGraph, joint_depth
+
+
+class FrameBatch(Batch):
+    r"""Frame graphs of several clips (mixed skeletons and lengths, no
+    padding), as one disconnected graph, with the context that temporal
+    layers, forward kinematics and losses need.
+
+    Built by :func:`collate_clips`. Nodes are ordered clip after clip, then
+    frame, then joint: node ``= clip_offset + t * J_s + j``. A *stream* is one
+    joint of one clip over time (``stream = stream_offset_s + j``). Every
+    frame of every clip is one graph, so :obj:`batch`, :obj:`ptr`,
+    :obj:`num_graphs` refer to frames, and :meth:`get_example` /
+    :meth:`to_data_list` give back :class:`~satagraph.data.FrameGraph`
+    objects (keys ``x, edge_index, edge_attr, root, root_node, node_depth,
+    frame_time``) equal to those of
+    :meth:`~torch_geometric.data.Batch.from_data_list`. Index-valued keys
+    hold global indices into this batch (``-1`` where none).
+
+    With :math:`B` clips of :math:`T_s` frames and :math:`J_s` joints:
+    :math:`N = \sum_s T_s J_s` nodes, :math:`E = \sum_s 2 T_s (J_s - 1)`
+    edges, :math:`G = \sum_s T_s` frame graphs, :math:`S = \sum_s J_s`
+    streams.
+
+    Attributes:
+        num_streams (int): :math:`S`, a Python int (no device sync).
+        max_time (int): :math:`\max_s T_s`, a Python int.
+        meta (list[dict]): The clips' :attr:`MotionClip.meta`.
+
+    Shapes:
+        - **x**: :math:`(N, F_d)` dynamic features
+        - **edge_index**: :math:`(2, E)` bones within each frame
+        - **edge_attr**: :math:`(E, 2)` (depth, reverse depth)
+        - **batch**: :math:`(N,)` frame graph of each node
+        - **ptr**: :math:`(G + 1,)` first node of each frame graph
+        - **root**: :math:`(G, 4)` root features per frame
+        - **root_node**: :math:`(G,)` node of each frame's root
+        - **frame_clip**: :math:`(G,)` clip of each frame graph
+        - **frame_time**: :math:`(G,)` frame index within its clip
+        - **node_stream**: :math:`(N,)` stream of each node
+        - **node_time**: :math:`(N,)` frame index within its clip
+        - **node_parent**: :math:`(N,)` parent node in the same frame
+          (``-1`` for roots)
+        - **node_depth**: :math:`(N,)` bones to the root
+        - **joint_static**: :math:`(S, F_s)` ``[X_l, X_g]`` per stream
+        - **joint_semantic**: :math:`(S, D_t)` ``X_t`` per stream
+        - **stream_parent**: :math:`(S,)` parent stream (``-1`` for roots)
+        - **stream_depth**: :math:`(S,)` bones to the root
+        - **stream_clip**: :math:`(S,)` clip of each stream
+        - **clip_num_frames**: :math:`(B,)` :math:`T_s`
+        - **clip_num_joints**: :math:`(B,)` :math:`J_s`
+    """
+
+
+class _Group(NamedTuple):
+    """Clips sharing a skeleton and a length."""
+    members: List[int]
+    num_frames: int
+    parents: Tensor
+    edge_index: Tensor
+    depth: Tensor
+
+
+def _groups(clips: List[MotionClip]) -> List[_Group]:
+    """Clips grouped by (skeleton, length), in order of first appearance."""
+    groups: Dict[Tuple, _Group] = {}
+    for i, clip in enumerate(clips):
+        key = (clip.num_frames, tuple(clip.parents.tolist()))
+        if key not in groups:
+            parents = clip.parents.long()
+            groups[key] = _Group([], clip.num_frames, parents, clip.edge_index,
+                                 joint_depth(parents))
+        groups[key].members.append(i)
+    return list(groups.values())
+
+
+def _exclusive_cumsum(values: List[int]) -> Tensor:
+    out = torch.tensor([0] + values[:-1])
+    return out.cumsum(0)
+
+
+def _group_blocks(group: _Group, node_offset: Tensor, frame_offset: Tensor,
+                  stream_offset: Tensor) -> Dict[str, Tensor]:
+    """Node and edge attributes of every clip of a group, one row per clip.
+
+    Templates cover one clip (frame after frame); offsets (one per member)
+    make them global."""
+    num_joints, num_frames = group.parents.numel(), group.num_frames
+    time = torch.arange(num_frames).repeat_interleave(num_joints)
+    joint = torch.arange(num_joints).repeat(num_frames)
+    first = time * num_joints  # first node of the frame, within the clip
+    parent = group.parents[joint]
+    bones = group.edge_index.view(2, 1, -1 if num_joints > 1 else 0)
+    edges = bones + first[::num_joints].view(1, -1, 1)
+    size = len(group.members)
+    return {
+        "batch": frame_offset.view(-1, 1) + time,
+        "node_stream": stream_offset.view(-1, 1) + joint,
+        "node_time": time.expand(size, -1),
+        "node_parent": torch.where(parent < 0, -1, node_offset.view(-1, 1)
+                                   + (first + parent)),
+        "node_depth": group.depth[joint].expand(size, -1),
+        "edge_index": node_offset.view(-1, 1, 1) + edges.reshape(1, 2, -1),
+        "stream_depth": group.depth.expand(size, -1),
+    }
+
+
+def _node_edge_attrs(out: FrameBatch, clips: List[MotionClip], frames: List[int],
+                     joints: List[int]) -> None:
+    """Per-node attributes and bones, built per group and put in clip order."""
+    offsets = {
+        "node": _exclusive_cumsum([t * j for t, j in zip(frames, joints)]),
+        "frame": _exclusive_cumsum(frames), "stream": _exclusive_cumsum(joints),
+    }
+    pieces: Dict[str, List[Tensor]] = {}
+    for group in _groups(clips):
+        idx = torch.tensor(group.members)
+        blocks = _group_blocks(group, offsets["node"][idx], offsets["frame"][idx],
+                               offsets["stream"][idx])
+        for key, block in blocks.items():
+            rows = pieces.setdefault(key, [None] * len(clips))
+            for i, row in zip(group.members, block.unbind(0)):
+                rows[i] = row
+    for key, rows in pieces.items():
+        setattr(out, key, torch.cat(rows, dim=-1))
+    out.edge_attr = torch.cat([c.edge_attr.repeat(t, 1) for c, t in zip(clips, frames)])
+
+
+def _frame_stream_attrs(out: FrameBatch, clips: List[MotionClip],
+                        num_frames: Tensor, num_joints: Tensor) -> None:
+    """Per-frame-graph and per-stream attributes."""
+    clip = torch.arange(len(clips))
+    out.frame_clip = clip.repeat_interleave(num_frames)
+    out.frame_time = (torch.arange(out.frame_clip.numel())
+                      - (num_frames.cumsum(0) - num_frames)[out.frame_clip])
+    sizes = num_joints[out.frame_clip]
+    out.ptr = torch.cat([sizes.new_zeros(1), sizes.cumsum(0)])
+    out.root_node = out.ptr[:-1]
+    out.stream_clip = clip.repeat_interleave(num_joints)
+    local = torch.cat([c.parents for c in clips]).long()
+    offset = (num_joints.cumsum(0) - num_joints)[out.stream_clip]
+    out.stream_parent = torch.where(local < 0, -1, local + offset)
+    out.joint_static = torch.cat([c.static for c in clips])
+    out.joint_semantic = torch.cat([c.semantic for c in clips])
+
+
+def _separation(out: FrameBatch, num_graphs: int) -> None:
+    """What :meth:`Batch.get_example` needs to give back frame graphs."""
+    graphs = torch.arange(num_graphs + 1)
+    bones = (out.ptr[1:] - out.ptr[:-1] - 1) * 2
+    edge_ptr = torch.cat([bones.new_zeros(1), bones.cumsum(0)])
+    out._num_graphs = num_graphs
+    out._slice_dict = {
+        "x": out.ptr, "edge_index": edge_ptr, "edge_attr": edge_ptr,
+        "root": graphs, "root_node": graphs, "node_depth": out.ptr,
+        "frame_time": graphs,
+    }
+    out._inc_dict = {key: None for key in out._slice_dict}
+    out._inc_dict["edge_index"] = out._inc_dict["root_node"] = out.ptr[:-1]
+
+
+def collate_clips(clips: List[MotionClip]) -> FrameBatch:
+    r"""Batches clips of any skeletons and lengths into frame graphs,
+    vectorised (no loop over frames, no padding).
+
+    Args:
+        clips (list[MotionClip]): Clips on the CPU; joint 0 is the root of
+            each skeleton.
+
+    Returns:
+        FrameBatch: see :class:`FrameBatch` for the attributes.
+    """
+    if not clips:
+        raise ValueError("collate_clips: no clips")
+    frames = [c.num_frames for c in clips]
+    joints = [c.num_joints for c in clips]
+    num_frames, num_joints = torch.tensor(frames), torch.tensor(joints)
+
+    out = FrameBatch(_base_cls=FrameGraph)
+    out.x = torch.cat([c.dynamic.reshape(-1, c.dynamic.shape[-1]) for c in clips])
+    out.root = torch.cat([c.root for c in clips])
+    out.num_streams, out.max_time = sum(joints), max(frames)
+    out.clip_num_frames, out.clip_num_joints = num_frames, num_joints
+    out.meta = [c.meta for c in clips]
+    _frame_stream_attrs(out, clips, num_frames, num_joints)
+    _node_edge_attrs(out, clips, frames, joints)
+    _separation(out, sum(frames))
+    return out

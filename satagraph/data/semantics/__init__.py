@@ -1,0 +1,147 @@
+"""Semantic joint tags: canonical functional descriptions and their embeddings.
+
+The pipeline of SATA (paper section 3.2, appendix C.3), offline:
+
+1. :func:`describe_joints` turns raw joint names into canonical,
+   taxonomy-neutral descriptions by rules (:mod:`.rules`), then applies a
+   user dictionary and sparse anchor tags (:mod:`.user`).
+2. :func:`build_prompt` / :func:`import_answer` (:mod:`.prompt`) let a user
+   run the paper's Figure 6 prompt in any language model and import the JSON
+   answer as a dictionary.
+3. :func:`embed_skeleton` embeds the descriptions with a
+   :class:`TextEncoder` (:class:`OfflineTextEncoder` by default, or a local
+   :class:`T5TextEncoder`) through a disk cache (:mod:`.cache`): the
+   semantic features X_t, one row per joint.
+
+Example::
+
+    from satagraph.io import read_bvh
+    from satagraph.data.semantics import describe_joints, embed_skeleton
+
+    skeleton = read_bvh("walk.bvh").skeleton
+    describe_joints(skeleton)        # ["pelvis, hips root ...", ...]
+    x_t = embed_skeleton(skeleton)   # Tensor [J, 256]
+"""
+from __future__ import annotations
+
+import os
+from typing import List, Optional, Sequence, Union
+
+from torch import Tensor
+
+from satagraph.data.semantics._files import SemanticsError, write_json_atomic
+from satagraph.data.semantics.cache import (EmbeddingCache, clear_memory,
+                                            default_cache_dir)
+from satagraph.data.semantics.encoders import (OfflineTextEncoder,
+                                               T5TextEncoder, TextEncoder)
+from satagraph.data.semantics.prompt import (build_prompt, import_answer,
+                                             load_reference_vocab,
+                                             parse_answer)
+from satagraph.data.semantics.rules import describe_structure
+from satagraph.data.semantics.user import (AnchorsLike, DictionaryLike,
+                                           apply_user, check_anchor_names,
+                                           load_dictionary, normalize_anchors,
+                                           parse_anchor, validate_dictionary)
+from satagraph.skeleton import Skeleton
+
+PathLike = Union[str, "os.PathLike[str]"]
+_DEFAULT_ENCODER: Optional[TextEncoder] = None
+
+
+def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
+                    anchors: AnchorsLike = None) -> List[str]:
+    """One canonical functional description per joint (end sites included).
+
+    Rules first (see :mod:`satagraph.data.semantics.rules`), then the
+    dictionary, then anchor tags and their propagation along chains (see
+    :mod:`satagraph.data.semantics.user` for the exact precedence and
+    propagation rule). Never returns an empty string; unknown names get a
+    cleaned form plus their structural role.
+
+    Args:
+        skeleton: The skeleton.
+        dictionary: Raw name -> description, as a mapping or a JSON file.
+        anchors: Sparse tags, as ``{name: tag}`` or ``["NAME=TAG", ...]``.
+
+    Returns:
+        list[str]: ``skeleton.num_joints`` descriptions.
+
+    Raises:
+        SemanticsError: Invalid dictionary or anchors (the message names the
+            file or key).
+    """
+    names = tuple(skeleton.names)
+    parents = tuple(int(p) for p in skeleton.parents.tolist())
+    end_site = tuple(bool(e) for e in skeleton.end_site.tolist())
+    rules = describe_structure(names, parents, end_site)
+    table = load_dictionary(dictionary)
+    tags = normalize_anchors(anchors)
+    check_anchor_names(tags, names)
+    if not table and not tags:
+        return list(rules.descriptions)
+    return apply_user(names, parents, end_site, rules, table, tags)
+
+
+def default_encoder() -> TextEncoder:
+    """The shared default encoder, ``OfflineTextEncoder(256)``.
+
+    Returns:
+        TextEncoder: The encoder.
+    """
+    global _DEFAULT_ENCODER
+    if _DEFAULT_ENCODER is None:
+        _DEFAULT_ENCODER = OfflineTextEncoder()
+    return _DEFAULT_ENCODER
+
+
+def embed_texts(texts: Sequence[str], encoder: Optional[TextEncoder] = None,
+                cache_dir: Optional[PathLike] = None, use_cache: bool = True
+                ) -> Tensor:
+    """Embed texts through the disk cache.
+
+    Args:
+        texts: N texts.
+        encoder: Text encoder (default :func:`default_encoder`).
+        cache_dir: Cache directory (default ``$SATAGRAPH_CACHE`` or
+            ``~/.cache/satagraph/embeddings``).
+        use_cache: ``False`` to call the encoder directly.
+
+    Returns:
+        Tensor: float32 ``[N, D]``.
+    """
+    encoder = encoder or default_encoder()
+    if not use_cache:
+        return encoder.encode(list(texts)).float().cpu()
+    return EmbeddingCache(cache_dir).embed(encoder, list(texts))
+
+
+def embed_skeleton(skeleton: Skeleton, encoder: Optional[TextEncoder] = None,
+                   cache_dir: Optional[PathLike] = None,
+                   dictionary: DictionaryLike = None,
+                   anchors: AnchorsLike = None, use_cache: bool = True
+                   ) -> Tensor:
+    """Semantic features X_t of a skeleton: embedded joint descriptions.
+
+    Args:
+        skeleton: The skeleton.
+        encoder: Text encoder (default ``OfflineTextEncoder(256)``).
+        cache_dir: Embedding cache directory (see :func:`embed_texts`).
+        dictionary: Raw name -> description overrides (mapping or JSON file).
+        anchors: Sparse anchor tags (``{name: tag}`` or ``["NAME=TAG"]``).
+        use_cache: ``False`` to bypass the disk cache.
+
+    Returns:
+        Tensor: float32 ``[J, D]``, one row per joint (end sites included).
+    """
+    texts = describe_joints(skeleton, dictionary=dictionary, anchors=anchors)
+    return embed_texts(texts, encoder, cache_dir, use_cache)
+
+
+__all__ = [
+    "describe_joints", "embed_skeleton", "embed_texts", "default_encoder",
+    "TextEncoder", "OfflineTextEncoder", "T5TextEncoder", "EmbeddingCache",
+    "default_cache_dir", "clear_memory", "build_prompt", "parse_answer",
+    "import_answer", "load_reference_vocab", "load_dictionary",
+    "validate_dictionary", "normalize_anchors", "parse_anchor",
+    "write_json_atomic", "SemanticsError",
+]

@@ -1,0 +1,215 @@
+"""collate_clips: frame graphs of mixed skeletons and lengths."""
+from __future__ import annotations
+
+import copy
+import pickle
+from typing import List, Sequence, Tuple
+
+import pytest
+import torch
+from torch_geometric.data import Batch
+
+from satagraph.data import FrameBatch, FrameGraph, collate_clips
+from satagraph.data.clip import MotionClip
+from satagraph.ops.fk import fk_levels, forward_kinematics
+from satagraph.ops.rotation import rotation_6d_to_matrix
+
+SPECS = ((5, 3), (12, 7), (5, 4), (1, 2))  # (joints, frames); 1-joint has no bones
+
+
+def random_parents(num_joints: int, gen: torch.Generator) -> torch.Tensor:
+    """A random tree: parents[j] uniform in [0, j), root -1."""
+    par = [-1] + [int(torch.randint(0, j, (1,), generator=gen)) for j in range(1, num_joints)]
+    return torch.tensor(par)
+
+
+def random_clip(num_joints: int, num_frames: int, gen: torch.Generator,
+                parents: torch.Tensor = None, dtype=torch.float32) -> MotionClip:
+    parents = random_parents(num_joints, gen) if parents is None else parents
+    return MotionClip(
+        dynamic=torch.randn(num_frames, num_joints, 7, generator=gen, dtype=dtype),
+        root=torch.randn(num_frames, 4, generator=gen, dtype=dtype),
+        static=torch.randn(num_joints, 6, generator=gen, dtype=dtype),
+        semantic=torch.randn(num_joints, 3, generator=gen, dtype=dtype),
+        parents=parents,
+        edge_attr=torch.randn(2 * (num_joints - 1), 2, generator=gen, dtype=dtype),
+        meta={"id": f"{num_joints}x{num_frames}"})
+
+
+def make_clips(specs: Sequence[Tuple[int, int]] = SPECS, seed: int = 0) -> List[MotionClip]:
+    gen = torch.Generator().manual_seed(seed)
+    clips = [random_clip(j, t, gen) for j, t in specs]
+    # A second clip on the first skeleton (shared template).
+    clips.append(random_clip(specs[0][0], 2, gen, parents=clips[0].parents.clone()))
+    return clips
+
+
+def frame_graphs(clips: List[MotionClip]) -> List[FrameGraph]:
+    return [FrameGraph.from_clip(c, t) for c in clips for t in range(c.num_frames)]
+
+
+def depth_of(parents: torch.Tensor) -> torch.Tensor:
+    depth = torch.zeros(parents.numel(), dtype=torch.long)
+    for j in range(1, parents.numel()):
+        depth[j] = depth[parents[j]] + 1
+    return depth
+
+
+@pytest.fixture
+def clips() -> List[MotionClip]:
+    return make_clips()
+
+
+def test_shapes(clips):
+    batch = collate_clips(clips)
+    frames = [c.num_frames for c in clips]
+    joints = [c.num_joints for c in clips]
+    num_nodes = sum(t * j for t, j in zip(frames, joints))
+    num_edges = sum(2 * t * (j - 1) for t, j in zip(frames, joints))
+    num_graphs, num_streams = sum(frames), sum(joints)
+    assert isinstance(batch, FrameBatch) and isinstance(batch, Batch)
+    assert batch.num_graphs == num_graphs and batch.num_nodes == num_nodes
+    assert batch.num_streams == num_streams and isinstance(batch.num_streams, int)
+    assert batch.max_time == max(frames) and isinstance(batch.max_time, int)
+    assert batch.meta == [c.meta for c in clips]
+    expected = {
+        "x": (num_nodes, 7), "edge_index": (2, num_edges), "edge_attr": (num_edges, 2),
+        "batch": (num_nodes,), "ptr": (num_graphs + 1,), "root": (num_graphs, 4),
+        "root_node": (num_graphs,), "frame_clip": (num_graphs,),
+        "frame_time": (num_graphs,), "node_stream": (num_nodes,),
+        "node_time": (num_nodes,), "node_parent": (num_nodes,),
+        "node_depth": (num_nodes,), "joint_static": (num_streams, 6),
+        "joint_semantic": (num_streams, 3), "stream_parent": (num_streams,),
+        "stream_depth": (num_streams,), "stream_clip": (num_streams,),
+        "clip_num_frames": (len(clips),), "clip_num_joints": (len(clips),),
+    }
+    for key, shape in expected.items():
+        assert tuple(batch[key].shape) == shape, key
+        if key not in ("x", "edge_attr", "root", "joint_static", "joint_semantic"):
+            assert batch[key].dtype == torch.long, key
+
+
+def test_matches_from_data_list(clips):
+    batch = collate_clips(clips)
+    graphs = frame_graphs(clips)
+    ref = Batch.from_data_list(graphs)
+    for key in ref.keys():
+        assert torch.equal(batch[key], ref[key]), key
+    assert batch._slice_dict.keys() == ref._slice_dict.keys()
+    for key, value in ref._slice_dict.items():
+        assert torch.equal(batch._slice_dict[key], value), key
+    examples = batch.to_data_list()
+    assert len(examples) == len(graphs)
+    for got, want in zip(examples, graphs):
+        assert isinstance(got, FrameGraph)
+        assert sorted(got.keys()) == sorted(want.keys())
+        for key in want.keys():
+            assert torch.equal(got[key], want[key]), key
+    assert torch.equal(batch[3].edge_index, graphs[3].edge_index)
+
+
+def test_frame_graph_batching_increments(clips):
+    ref = Batch.from_data_list(frame_graphs(clips))
+    assert torch.equal(ref.root_node, ref.ptr[:-1])
+    assert torch.equal(ref.x[ref.root_node], torch.stack([c.dynamic[t, 0] for c in clips
+                                                          for t in range(c.num_frames)]))
+    assert torch.equal(ref.frame_time, torch.cat([torch.arange(c.num_frames) for c in clips]))
+
+
+def test_node_layout(clips):
+    batch = collate_clips(clips)
+    node = stream = graph = 0
+    for s, clip in enumerate(clips):
+        num_frames, num_joints = clip.num_frames, clip.num_joints
+        depth = depth_of(clip.parents)
+        sl = slice(stream, stream + num_joints)
+        assert torch.equal(batch.joint_static[sl], clip.static)
+        assert torch.equal(batch.joint_semantic[sl], clip.semantic)
+        assert torch.equal(batch.stream_depth[sl], depth)
+        assert (batch.stream_clip[sl] == s).all()
+        par = torch.where(clip.parents < 0, -1, clip.parents + stream)
+        assert torch.equal(batch.stream_parent[sl], par)
+        gl = slice(graph, graph + num_frames)
+        assert (batch.frame_clip[gl] == s).all()
+        assert torch.equal(batch.frame_time[gl], torch.arange(num_frames))
+        assert torch.equal(batch.root[gl], clip.root)
+        for t in range(num_frames):
+            ids = node + t * num_joints + torch.arange(num_joints)
+            assert torch.equal(batch.x[ids], clip.dynamic[t])
+            assert torch.equal(batch.node_stream[ids], stream + torch.arange(num_joints))
+            assert (batch.node_time[ids] == t).all()
+            assert (batch.batch[ids] == graph + t).all()
+            assert torch.equal(batch.node_depth[ids], depth)
+            expected = torch.where(clip.parents < 0, -1, clip.parents + ids[0])
+            assert torch.equal(batch.node_parent[ids], expected)
+            assert int(batch.root_node[graph + t]) == ids[0]
+        node += num_frames * num_joints
+        stream += num_joints
+        graph += num_frames
+    assert torch.equal(batch.clip_num_frames, torch.tensor([c.num_frames for c in clips]))
+    assert torch.equal(batch.clip_num_joints, torch.tensor([c.num_joints for c in clips]))
+
+
+def test_edges_within_frames_between_parent_and_child(clips):
+    batch = collate_clips(clips)
+    src, dst = batch.edge_index
+    assert torch.equal(batch.batch[src], batch.batch[dst])
+    parent_of_dst = batch.node_parent[dst] == src
+    parent_of_src = batch.node_parent[src] == dst
+    assert (parent_of_dst ^ parent_of_src).all()
+    # Every bone appears in both directions, once each.
+    bones = set(zip(src.tolist(), dst.tolist()))
+    assert len(bones) == src.numel() and all((d, s) in bones for s, d in bones)
+    child = torch.nonzero(batch.node_parent >= 0).view(-1)
+    assert src.numel() == 2 * child.numel()
+    # edge_attr follows the clip's bone order in every frame.
+    edge = 0
+    for clip in clips:
+        for _ in range(clip.num_frames):
+            num = clip.edge_attr.shape[0]
+            assert torch.equal(batch.edge_attr[edge:edge + num], clip.edge_attr)
+            edge += num
+
+
+def test_device_copy_and_pickle(clips):
+    batch = collate_clips(clips)
+    moved = batch.to("cpu")
+    assert moved.num_streams == batch.num_streams and moved.max_time == batch.max_time
+    assert torch.equal(moved.node_parent, batch.node_parent)
+    shallow = copy.copy(batch)
+    shallow.x = shallow.x * 2
+    assert torch.equal(batch.x * 2, shallow.x)
+    assert torch.equal(shallow.joint_static, batch.joint_static)
+    loaded = pickle.loads(pickle.dumps(batch))
+    assert isinstance(loaded, FrameBatch) and loaded.num_graphs == batch.num_graphs
+    assert loaded.meta == batch.meta and loaded.max_time == batch.max_time
+    assert torch.equal(loaded[2].x, batch[2].x)
+
+
+def test_dataloader_collate_fn(clips):
+    loader = torch.utils.data.DataLoader(clips, batch_size=3, collate_fn=collate_clips)
+    sizes = [b.num_graphs for b in loader]
+    assert sizes == [sum(c.num_frames for c in clips[i:i + 3]) for i in range(0, len(clips), 3)]
+
+
+def test_forward_kinematics_over_batch(clips):
+    batch = collate_clips(clips)
+    gen = torch.Generator().manual_seed(1)
+    rotation = rotation_6d_to_matrix(torch.randn(batch.num_nodes, 6, generator=gen,
+                                                 dtype=torch.float64))
+    offset = batch.joint_static[batch.node_stream, :3].double()
+    levels = fk_levels(batch.node_parent, batch.node_depth)
+    rot, pos = forward_kinematics(rotation, offset, batch.node_parent, levels)
+    node = 0
+    for clip in clips:
+        num = clip.num_frames * clip.num_joints
+        local = rotation[node:node + num].view(clip.num_frames, clip.num_joints, 3, 3)
+        ref_rot, ref_pos = forward_kinematics(local, clip.static[:, :3].double(), clip.parents)
+        torch.testing.assert_close(rot[node:node + num], ref_rot.reshape(num, 3, 3))
+        torch.testing.assert_close(pos[node:node + num], ref_pos.reshape(num, 3))
+        node += num
+
+
+def test_empty_raises():
+    with pytest.raises(ValueError):
+        collate_clips([])
