@@ -35,6 +35,8 @@ UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
     ("satagraph.cli_tags", "add_tags_parser"),
     ("satagraph.cli_train", "add_train_parsers"),
+    ("satagraph.cli_zoo", "add_zoo_parser"),
+    ("satagraph.cli_render", "add_render_parser"),
 )
 
 Subparsers = argparse._SubParsersAction  # what add_subparsers() returns

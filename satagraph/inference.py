@@ -12,6 +12,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
 from satagraph.motion import Motion
+from satagraph.ops.rotation import matrix_to_quaternion, quaternion_slerp, quaternion_to_matrix
 
 
 def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tuple[int, int, int]]:
@@ -59,8 +60,20 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
              overlap: int = 16, batch_size: int = 16) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Encode :obj:`source` window by window and decode onto :obj:`target`'s
     skeleton. Returns physical ``q [T, J_t, 6]``, ``r [T, 4]`` and contact
-    probabilities ``c [T, J_t]`` for every source frame."""
+    probabilities ``c [T, J_t]`` for every source frame. The module is run
+    in evaluation mode and given back in the mode it was in."""
+    was_training = module.training
     module.eval()
+    try:
+        return _transfer(module, source, target, semantic, window, overlap, batch_size)
+    finally:
+        module.train(was_training)
+
+
+def _transfer(module, source: MotionFeatures, target: MotionFeatures,
+              semantic: Optional[Callable], window: int, overlap: int,
+              batch_size: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The window loop of :func:`transfer`."""
     sem_s = semantic(source.skeleton) if semantic else None
     sem_t = semantic(target.skeleton) if semantic else None
     plan = window_plan(source.num_frames, window, overlap)
@@ -89,9 +102,9 @@ def retarget_motion(module, source: Motion, target: Motion,
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
-    channel layout (motionless helper roots included), at the source's frame
-    rate, and follows the source's root path from the target's start
-    position.
+    channel layout (motionless helper roots included), has the source's frame
+    rate and number of frames, and follows the source's root path from the
+    target's start position.
 
     Args:
         module: A trained :class:`~satagraph.lightning.MotionAutoencoderModule`.
@@ -110,7 +123,34 @@ def retarget_motion(module, source: Motion, target: Motion,
     q, r, _ = transfer(module, src, tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     canon = features_to_motion(out_feats, q=q, r=r, use_positions=False)
+    canon = resample_frames(canon, source.fps, source.num_frames)
     return decanonicalize(canon, tgt_canon.transform, fps=source.fps)
+
+
+def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
+    r"""Exactly :obj:`num_frames` frames at :obj:`fps` from time 0 (slerp for
+    rotations, linear interpolation for translations); frames past the end
+    of :obj:`motion` hold its last frame.
+
+    Resampling a clip to the model's rate and back can lose the last source
+    frames (a 100-frame 60 fps clip has 50 frames at 30 fps, which give 99
+    at 60 fps); this gives the source's frame count back.
+    """
+    if num_frames < 1 or motion.num_frames < 1:
+        raise ValueError(f"cannot resample {motion.num_frames} frames to {num_frames}")
+    if motion.num_frames == num_frames and abs(motion.fps - fps) < 1e-9:
+        return motion
+    last = motion.num_frames - 1
+    times = np.minimum(np.arange(num_frames) * (motion.fps / fps), last)
+    lo = np.minimum(np.floor(times).astype(np.int64), max(last - 1, 0))
+    hi = np.minimum(lo + 1, last)
+    w = times - lo
+    quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
+    weight = torch.from_numpy(w)[:, None].expand(num_frames, motion.num_joints)
+    rot = quaternion_to_matrix(quaternion_slerp(quat[lo], quat[hi], weight)).numpy()
+    t0, t1 = motion.translations[lo], motion.translations[hi]
+    trans = t0 + w[:, None, None] * (t1 - t0)
+    return motion.with_(rotations=rot, translations=trans, fps=float(fps))
 
 
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,

@@ -1,12 +1,14 @@
 """Build the data module, model and trainer from a config, and train."""
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
 
 import lightning as L
 import torch
 
+from satagraph.config import expand_path
 from satagraph.data.datamodule import MotionDataModule
 from satagraph.lightning import SATARVQModule, SATAVAEModule
 
@@ -90,6 +92,28 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
                      callbacks=callbacks, **opts)
 
 
+def init_weights(module: L.LightningModule, ckpt: str) -> None:
+    """Load another run's weights into :obj:`module` for fine-tuning; the
+    module keeps its own normaliser (the new data's). Warns about weights
+    the checkpoint lacks or has in excess (e.g. another bottleneck)."""
+    state = torch.load(ckpt, map_location="cpu", weights_only=True)["state_dict"]
+    state = {k: v for k, v in state.items() if not k.startswith("normalizer.")}
+    result = module.load_state_dict(state, strict=False)
+    missing = [k for k in result.missing_keys if not k.startswith("normalizer.")]
+    if missing or result.unexpected_keys:
+        warnings.warn(f"--init-from {ckpt}: {len(missing)} weights not in the checkpoint "
+                      f"(kept at initialisation: {missing[:5]}), "
+                      f"{len(result.unexpected_keys)} unused "
+                      f"({result.unexpected_keys[:5]})", stacklevel=2)
+
+
+def _spawns_workers(trainer: L.Trainer) -> bool:
+    """Whether :meth:`~lightning.pytorch.Trainer.fit` pickles its arguments
+    into new processes (``strategy="ddp_spawn"``)."""
+    launcher = getattr(trainer.strategy, "launcher", None)
+    return getattr(launcher, "_start_method", None) in ("spawn", "forkserver")
+
+
 def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = None,
           **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
     r"""Train a model from a config dict (see ``experiments/``).
@@ -103,20 +127,22 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     Returns:
         The trained module, the data module, the trainer and the run folder.
     """
+    run_dir = Path(expand_path(cfg.get("output_dir") or f"runs/{cfg['name']}"))
+    last = run_dir / "checkpoints" / "last.ckpt"
+    if resume and not last.is_file():
+        raise FileNotFoundError(f"--resume: no checkpoint at {last}")
     L.seed_everything(int(cfg.get("seed", 0)), workers=True)
-    run_dir = Path(cfg.get("output_dir") or f"runs/{cfg['name']}")
     dm = build_datamodule(cfg)
     dm.setup("fit")
     module = build_module(cfg, dm)
     if init_from:
-        state = torch.load(init_from, map_location="cpu", weights_only=True)["state_dict"]
-        state = {k: v for k, v in state.items() if not k.startswith("normalizer.")}
-        module.load_state_dict(state, strict=False)
+        init_weights(module, init_from)
     trainer = build_trainer(cfg, run_dir, **trainer_overrides)
-    last = run_dir / "checkpoints" / "last.ckpt"
-    if resume and not last.is_file():
-        raise FileNotFoundError(f"--resume: no checkpoint at {last}")
-    trainer.fit(module, datamodule=dm, ckpt_path=str(last) if resume else None)
+    # Spawned workers get the data module pickled: hand them one that is not
+    # set up (its datasets hold the semantic embedder, a closure); each worker
+    # sets it up from the feature cache.
+    fit_dm = build_datamodule(cfg) if _spawns_workers(trainer) else dm
+    trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if resume else None)
     return module, dm, trainer, run_dir
 
 

@@ -1,11 +1,17 @@
-"""Skeleton augmentation that yields paired ground truth for retargeting."""
+"""Skeleton augmentation: bone scaling (with paired ground truth for
+retargeting), left/right mirroring and topology changes (drop a leaf chain,
+merge two trunk segments, split a bone), and :class:`SkeletonAugment`, which
+applies them at random on the fly."""
 from __future__ import annotations
 
-from typing import Tuple
+import re
+from dataclasses import dataclass, field
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from satagraph.motion import Motion
+from satagraph.skeleton import Skeleton
 
 
 def scale_bones(motion: Motion, low: float = 0.8, high: float = 1.2,
@@ -56,3 +62,307 @@ def paired(motion: Motion, seed: int = 0, low: float = 0.8,
            high: float = 1.2) -> Tuple[Motion, Motion]:
     """(source, scaled ground truth) pair for retargeting evaluation."""
     return motion, scale_bones(motion, low, high, seed)
+
+
+# ------------------------------------------------------------- mirroring
+_SIDE_WORDS = {"Left": "Right", "Right": "Left", "left": "right",
+               "right": "left", "LEFT": "RIGHT", "RIGHT": "LEFT"}
+_SIDE_LETTERS = {"L": "R", "R": "L", "l": "r", "r": "l"}
+# A side word anywhere, or a side letter standing alone (``l_hip``,
+# ``thigh.L``, ``LHipJoint``) or closing a name (``HipL``).
+_SIDE_PATTERN = re.compile(
+    r"LEFT|RIGHT|Left|Right|left|right"
+    r"|(?<![A-Za-z])[LRlr](?![a-z])|(?<=[a-z])[LR]$")
+
+
+def swap_side(name: str) -> str:
+    """``"LeftUpLeg"`` -> ``"RightUpLeg"``, ``"thigh.L"`` -> ``"thigh.R"``,
+    ``"l_hip"`` -> ``"r_hip"``; names without a side come back unchanged."""
+    def swap(match: re.Match) -> str:
+        text = match.group(0)
+        return _SIDE_WORDS.get(text) or _SIDE_LETTERS[text]
+    return _SIDE_PATTERN.sub(swap, name)
+
+
+def mirror_pairs(skeleton: Skeleton) -> np.ndarray:
+    r"""Index of each joint's mirror counterpart (itself for joints without
+    a side or whose counterpart is missing).
+
+    Shapes:
+        - **output**: :math:`(J,)`
+    """
+    index = {n: i for i, n in enumerate(skeleton.names)}
+    out = np.arange(skeleton.num_joints)
+    for i, name in enumerate(skeleton.names):
+        other = index.get(swap_side(name))
+        if other is not None and swap_side(skeleton.names[other]) == name:
+            out[i] = other
+    return out
+
+
+def mirror(motion: Motion, axis: int = 0) -> Motion:
+    r"""Mirror a motion across the plane normal to :obj:`axis` (0: the
+    character's left-right axis X of a canonical motion), swapping left and
+    right joints by name.
+
+    Global positions become the reflected originals, with the data of
+    ``LeftFoot`` and ``RightFoot`` exchanged; joint order and names are
+    kept, so mirroring twice gives the original motion back.
+
+    Args:
+        motion (Motion): The motion.
+        axis (int): Axis reflected (0, 1 or 2).
+    """
+    reflect = np.eye(3)
+    reflect[axis, axis] = -1.0
+    skel = motion.skeleton
+    pair = mirror_pairs(skel)
+    parents = pair[np.maximum(skel.parents[pair], 0)]
+    parents[0] = -1
+    if not np.array_equal(parents, skel.parents):
+        raise ValueError("mirror: left and right joints are not symmetric "
+                         "in the hierarchy")
+    new = skel.replace(offsets=skel.offsets[pair] @ reflect,
+                       channels=[skel.channels[j] for j in pair],
+                       end_site=skel.end_site[pair])
+    rot = reflect @ motion.rotations[:, pair] @ reflect
+    trans = motion.translations[:, pair] @ reflect
+    return motion.with_(skeleton=new, rotations=rot, translations=trans)
+
+
+# ------------------------------------------------------- topology changes
+def _rebuild(motion: Motion, keep: List[int], parents: List[int],
+             offsets: np.ndarray, rotations: np.ndarray,
+             translations: np.ndarray, channels: list,
+             names: Optional[List[str]] = None) -> Motion:
+    """A motion on the joints :obj:`keep` (old indices, in the new order)
+    with new parents (new indices) and data."""
+    skel = motion.skeleton
+    new = Skeleton(names=names or [skel.names[j] for j in keep],
+                   parents=np.array(parents), offsets=offsets,
+                   channels=channels, end_site=skel.end_site[keep])
+    return motion.with_(skeleton=new, rotations=rotations,
+                        translations=translations)
+
+
+def _subset(motion: Motion, keep: List[int]) -> Motion:
+    skel = motion.skeleton
+    sub = skel.subset(keep)
+    return motion.with_(skeleton=sub, rotations=motion.rotations[:, keep],
+                        translations=motion.translations[:, keep])
+
+
+def leaf_chains(skeleton: Skeleton, max_length: int = 3) -> List[List[int]]:
+    """For every leaf, the joints of its unbranched chain (leaf last, at
+    most :obj:`max_length`, never the root)."""
+    out = []
+    for leaf in np.flatnonzero(skeleton.is_leaf):
+        chain = [int(leaf)]
+        p = int(skeleton.parents[leaf])
+        while (p > 0 and len(chain) < max_length
+               and len(skeleton.children[p]) == 1):
+            chain.insert(0, p)
+            p = int(skeleton.parents[p])
+        out.append(chain)
+    return out
+
+
+def drop_leaf_chain(motion: Motion, seed: int = 0, max_length: int = 3) -> Motion:
+    r"""Remove a random leaf chain (up to :obj:`max_length` joints of an
+    unbranched chain ending in a leaf: a tail tip, toes, a head end).
+    The remaining joints keep their global positions exactly.
+
+    Args:
+        motion (Motion): The motion.
+        seed (int): Random seed.
+        max_length (int): Longest chain removed.
+    """
+    rng = np.random.default_rng(seed)
+    chains = [c for c in leaf_chains(motion.skeleton, max_length)
+              if len(c) < motion.num_joints]
+    if not chains:
+        return motion
+    drop = set(chains[int(rng.integers(len(chains)))][-int(
+        rng.integers(1, max_length + 1)):])
+    keep = [j for j in range(motion.num_joints) if j not in drop]
+    return _subset(motion, keep)
+
+
+_TRUNK = re.compile(r"spine|neck|tail|back|chest|torso|vertebra|abdomen|"
+                    r"thorax|lumbar|body", re.IGNORECASE)
+
+
+def merge_candidates(skeleton: Skeleton) -> List[int]:
+    """Joints that can be merged into their parent: trunk joints (spine,
+    neck, tail, ... by name) with a trunk or root parent and children."""
+    names, parents = skeleton.names, skeleton.parents
+    return [j for j in range(1, skeleton.num_joints)
+            if _TRUNK.search(names[j]) and skeleton.children[j]
+            and all(skeleton.channels[c] for c in skeleton.children[j])
+            and (parents[j] == 0 or _TRUNK.search(names[parents[j]]))]
+
+
+def merge_segments(motion: Motion, seed: int = 0) -> Motion:
+    r"""Merge two consecutive spine / neck / tail segments by removing the
+    joint between them (see :func:`merge_candidates`).
+
+    The removed joint's children hang from its parent: their rest offsets
+    add up and their local rotations absorb the removed joint's. They get
+    position channels carrying the per-frame offset, so every remaining
+    joint keeps its global position and rotation exactly.
+
+    Args:
+        motion (Motion): The motion.
+        seed (int): Random seed.
+    """
+    skel = motion.skeleton
+    options = merge_candidates(skel)
+    if not options:
+        return motion
+    j = options[int(np.random.default_rng(seed).integers(len(options)))]
+    rot, trans = motion.rotations.copy(), motion.translations.copy()
+    offsets, channels = skel.offsets.copy(), list(skel.channels)
+    for c in skel.children[j]:
+        offsets[c] = skel.offsets[j] + skel.offsets[c]
+        trans[:, c] = trans[:, j] + np.einsum("tij,tj->ti", rot[:, j], trans[:, c])
+        rot[:, c] = rot[:, j] @ rot[:, c]
+        if channels[c] and not skel.has_position_channels[c]:
+            channels[c] = ("Xposition", "Yposition", "Zposition") + channels[c]
+    keep = [k for k in range(skel.num_joints) if k != j]
+    remap = {old: new for new, old in enumerate(keep)}
+    parents = [-1 if k == 0 else remap[skel.parents[k] if skel.parents[k] != j
+                                       else skel.parents[j]] for k in keep]
+    return _rebuild(motion, keep, parents, offsets[keep], rot[:, keep],
+                    trans[:, keep], [channels[k] for k in keep])
+
+
+def insert_joint(motion: Motion, seed: int = 0, low: float = 0.3,
+                 high: float = 0.7) -> Motion:
+    r"""Split a random bone in two by inserting a joint at a fraction
+    (uniform in ``[low, high]``) of its length. The new joint has no
+    rotation of its own (identity), so every original joint keeps its
+    global position and rotation exactly.
+
+    The new joint is named after the bone's child with a ``_split`` suffix
+    and has the rotation channels of the bone's parent.
+
+    Args:
+        motion (Motion): The motion.
+        seed (int): Random seed.
+        low (float): Smallest fraction.
+        high (float): Largest fraction.
+    """
+    skel = motion.skeleton
+    rng = np.random.default_rng(seed)
+    bones = [c for c in range(1, skel.num_joints)
+             if np.linalg.norm(skel.offsets[c]) > 1e-8
+             and not skel.has_position_channels[c]]
+    if not bones:
+        return motion
+    c = bones[int(rng.integers(len(bones)))]
+    frac = rng.uniform(low, high)
+    p = int(skel.parents[c])
+    order = list(range(c)) + [-1] + list(range(c, skel.num_joints))
+    old_to_new = {old: new for new, old in enumerate(order) if old >= 0}
+    parents = [-1 if k == 0 else old_to_new[p] if k == -1 else c if k == c
+               else old_to_new[skel.parents[k]] for k in order]
+    return _insert(motion, order, parents, c, frac)
+
+
+def _insert(motion: Motion, order: List[int], parents: List[int], c: int,
+            frac: float) -> Motion:
+    """Data of :func:`insert_joint` (``-1`` in :obj:`order` is the new joint)."""
+    skel = motion.skeleton
+    p = int(skel.parents[c])
+    src = [k if k >= 0 else c for k in order]
+    offsets = skel.offsets[src].copy()
+    trans = motion.translations[:, src].copy()
+    rot = motion.rotations[:, src].copy()
+    at = order.index(-1)
+    offsets[at] = frac * skel.offsets[c]
+    offsets[at + 1] = (1 - frac) * skel.offsets[c]
+    trans[:, at] = frac * motion.translations[:, c]
+    trans[:, at + 1] = (1 - frac) * motion.translations[:, c]
+    rot[:, at] = np.eye(3)
+    names = [skel.names[k] for k in src]
+    names[at] = _unique(f"{skel.names[c]}_split", skel.names)
+    channels = [skel.channels[k] for k in src]
+    channels[at] = tuple(ch for ch in skel.channels[p] if ch.endswith(
+        "rotation")) or ("Zrotation", "Xrotation", "Yrotation")
+    end_site = skel.end_site[src].copy()
+    end_site[at] = False
+    new = Skeleton(names=names, parents=np.array(parents), offsets=offsets,
+                   channels=channels, end_site=end_site)
+    return motion.with_(skeleton=new, rotations=rot, translations=trans)
+
+
+def _unique(name: str, names: Sequence[str]) -> str:
+    taken, out, k = set(names), name, 2
+    while out in taken:
+        out, k = f"{name}{k}", k + 1
+    return out
+
+
+# --------------------------------------------------------- on the fly
+@dataclass
+class SkeletonAugment:
+    r"""Random skeleton augmentation, applied on the fly.
+
+    Each operation is applied with its probability, in this order: bone
+    scaling (:func:`scale_bones`), mirroring (:func:`mirror`), dropping a
+    leaf chain (:func:`drop_leaf_chain`), merging two trunk segments
+    (:func:`merge_segments`) and inserting a joint (:func:`insert_joint`).
+
+    Args:
+        p_scale (float): Probability of scaling the bones.
+        p_mirror (float): Probability of mirroring.
+        p_drop (float): Probability of dropping a leaf chain.
+        p_merge (float): Probability of merging two trunk segments.
+        p_insert (float): Probability of inserting a joint.
+        scale_range (tuple[float, float]): Per-axis bone scale range.
+        max_drop (int): Longest leaf chain dropped.
+        seed (int, optional): Seed of the generator drawing the decisions
+            (``None``: fresh entropy).
+
+    Example::
+
+        augment = SkeletonAugment(p_mirror=0.5, p_drop=0.2, seed=0)
+        motion = augment(motion)
+    """
+
+    p_scale: float = 0.5
+    p_mirror: float = 0.5
+    p_drop: float = 0.1
+    p_merge: float = 0.1
+    p_insert: float = 0.1
+    scale_range: Tuple[float, float] = (0.8, 1.2)
+    max_drop: int = 2
+    seed: Optional[int] = None
+    rng: np.random.Generator = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        for name in ("p_scale", "p_mirror", "p_drop", "p_merge", "p_insert"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"SkeletonAugment: {name} must be in [0, 1]")
+        self.rng = np.random.default_rng(self.seed)
+
+    def __call__(self, motion: Motion) -> Motion:
+        """An augmented copy of :obj:`motion` (the input is not changed)."""
+        def draw(p: float) -> Optional[int]:
+            seed = int(self.rng.integers(2 ** 31))
+            return seed if self.rng.random() < p else None
+
+        if (s := draw(self.p_scale)) is not None:
+            motion = scale_bones(motion, *self.scale_range, seed=s)
+        if draw(self.p_mirror) is not None:
+            try:
+                motion = mirror(motion)
+            except ValueError:
+                pass  # asymmetric skeleton: leave it
+        if (s := draw(self.p_drop)) is not None:
+            motion = drop_leaf_chain(motion, s, self.max_drop)
+        if (s := draw(self.p_merge)) is not None:
+            motion = merge_segments(motion, s)
+        if (s := draw(self.p_insert)) is not None:
+            motion = insert_joint(motion, s)
+        return motion

@@ -9,9 +9,9 @@ from typing import Optional
 import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
-from torch_geometric.nn import GPSConv
 from torch_geometric.nn.resolver import activation_resolver
 
+from satagraph.nn.frame_gps import FrameGPSConv
 from satagraph.nn.local_conv import accepts_edge_attr, build_local_conv
 from satagraph.ops.temporal import from_temporal_streams, to_temporal_streams
 
@@ -64,7 +64,9 @@ class SpatioTemporalBlock(nn.Module):
 
     Spatial part: :class:`~torch_geometric.nn.conv.GPSConv` (local conv +
     multi-head self-attention within each frame graph, summed, MLP,
-    residuals, node-wise layer norm); bone features (depth, reverse depth)
+    residuals, node-wise layer norm), as
+    :class:`~satagraph.nn.frame_gps.FrameGPSConv` so that the attention runs
+    per skeleton without padding; bone features (depth, reverse depth)
     are embedded to :obj:`channels` by a linear layer for the local convs that
     take edge features. Temporal part: every joint stream is gathered with
     :func:`~satagraph.ops.temporal.to_temporal_streams`, sinusoidal position
@@ -110,7 +112,7 @@ class SpatioTemporalBlock(nn.Module):
     def _spatial(channels: int, conv: Optional[nn.Module], heads: int, dropout: float,
                  attention: bool, act: str) -> Optional[nn.Module]:
         if attention:
-            gps = GPSConv(channels, conv, heads=heads, dropout=dropout, act=act,
+            gps = FrameGPSConv(channels, conv, heads=heads, dropout=dropout, act=act,
                           norm="layer_norm", norm_kwargs={"mode": "node"},
                           attn_type="multihead")
             if conv is None:  # norm1 follows the local conv only: drop the unused
@@ -125,6 +127,8 @@ class SpatioTemporalBlock(nn.Module):
         kwargs = {}
         if self.use_edge_attr:
             kwargs["edge_attr"] = self.edge_lin(frames.edge_attr.to(x.dtype))
+        if isinstance(self.spatial, FrameGPSConv):
+            kwargs["frames"] = frames  # attention per skeleton, without padding
         return self.spatial(x, frames.edge_index, frames.batch, **kwargs)
 
     def temporal_forward(self, x: Tensor, frames) -> Tensor:

@@ -1,0 +1,317 @@
+r"""3D stick-figure rendering of motions with matplotlib (Agg, no display).
+
+Several motions are drawn side by side in panels that share their axes
+limits and camera, on a ground grid at y = 0, with joints in ground contact
+marked. Frames come out as RGB arrays (:func:`render_frames`), and are
+written as a GIF (Pillow), an MP4 (imageio-ffmpeg, which bundles ffmpeg) or
+a still PNG contact sheet.
+
+Example::
+
+    from satagraph.viz import render
+    render([motion, reconstruction], "compare.gif", titles=["in", "out"],
+           sheet="compare.png")
+
+Motions are expected +Y up (canonicalise them first); units are free.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Iterator, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from satagraph.motion import Motion
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Contact thresholds as fractions of the character height (SAME's 5 cm and
+#: 0.4 m/s for a 1.75 m human).
+CONTACT_HEIGHT = 0.05 / 1.75
+CONTACT_SPEED = 0.4 / 1.75
+_BONE_COLOR, _JOINT_COLOR, _CONTACT_COLOR = "#1f4e8c", "#333333", "#e4572e"
+
+
+@dataclass
+class _Track:
+    """What one panel shows: positions, contacts and bone segments."""
+
+    title: str
+    positions: np.ndarray  # (T, J, 3), +Y up
+    contacts: np.ndarray  # (T, J) bool
+    parents: np.ndarray
+
+
+def contacts(motion: Motion, positions: Optional[np.ndarray] = None,
+             height: float = CONTACT_HEIGHT, speed: float = CONTACT_SPEED
+             ) -> np.ndarray:
+    r"""Joints in ground contact: below ``height`` and slower than
+    ``speed`` (both relative to the character height, speed per second).
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`, optional (computed when absent)
+        - **output**: :math:`(T, J)` bool
+    """
+    pos = motion.global_positions() if positions is None else positions
+    size = max(motion.height(), 1e-6)
+    vel = np.diff(pos, axis=0, prepend=pos[:1]) * motion.fps
+    slow = np.linalg.norm(vel, axis=-1) < speed * size
+    slow[0] = True
+    return (pos[..., 1] < height * size) & slow
+
+
+def _tracks(motions: Sequence[Motion], titles: Optional[Sequence[str]]
+            ) -> List[_Track]:
+    if not motions:
+        raise ValueError("render: no motions given")
+    titles = list(titles) if titles is not None else [
+        os.path.basename(m.source or f"motion {i}") for i, m in enumerate(motions)]
+    if len(titles) != len(motions):
+        raise ValueError(f"render: {len(motions)} motions but {len(titles)} titles")
+    out = []
+    for motion, title in zip(motions, titles):
+        if motion.num_frames == 0:
+            raise ValueError(f"render: {title} has no frames")
+        pos = motion.global_positions()
+        out.append(_Track(title, pos, contacts(motion, pos),
+                          motion.skeleton.parents))
+    return out
+
+
+def _limits(tracks: Sequence[_Track], frames: int) -> Tuple[np.ndarray, np.ndarray]:
+    """Shared (low, high) corners over all panels, square on the ground."""
+    pts = np.concatenate([t.positions[:frames].reshape(-1, 3) for t in tracks])
+    low, high = pts.min(axis=0), pts.max(axis=0)
+    low[1] = min(low[1], 0.0)
+    centre = 0.5 * (low + high)
+    half = 0.5 * max(high[0] - low[0], high[2] - low[2], 1e-3) * 1.05
+    top = max(high[1], low[1] + 0.25 * half)
+    return (np.array([centre[0] - half, low[1], centre[2] - half]),
+            np.array([centre[0] + half, top, centre[2] + half]))
+
+
+class _Scene:
+    """A figure with one 3D panel per track and persistent artists."""
+
+    def __init__(self, tracks: Sequence[_Track], frames: int, panel_px: int,
+                 elev: float, azim: float) -> None:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        self.tracks, self.frames = tracks, frames
+        dpi = 80
+        width = 16 * round(panel_px * len(tracks) / 16)
+        height = 16 * round(panel_px / 16)
+        self.figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
+        self.canvas = FigureCanvasAgg(self.figure)
+        low, high = _limits(tracks, frames)
+        self.artists = [self._panel(i, t, low, high, elev, azim)
+                        for i, t in enumerate(tracks)]
+        self.label = self.figure.text(0.01, 0.01, "", fontsize=8,
+                                      color="#555555", animated=True)
+        self.figure.subplots_adjust(left=0, right=1, bottom=0, top=0.94, wspace=0)
+        for i, track in enumerate(tracks):
+            self.figure.text((i + 0.5) / len(tracks), 0.97, track.title,
+                             ha="center", va="top", fontsize=9)
+        self.canvas.draw()  # the static background, once
+        self.background = self.canvas.copy_from_bbox(self.figure.bbox)
+
+    def _panel(self, i: int, track: _Track, low: np.ndarray, high: np.ndarray,
+               elev: float, azim: float) -> tuple:
+        ax = self.figure.add_subplot(1, len(self.tracks), i + 1, projection="3d")
+        # matplotlib's z is up: plot (x, z, y).
+        ax.set_xlim(low[0], high[0])
+        ax.set_ylim(low[2], high[2])
+        ax.set_zlim(low[1], high[1])
+        ax.set_box_aspect((1, 1, (high[1] - low[1]) / (high[0] - low[0])),
+                          zoom=1.4)
+        ax.view_init(elev=elev, azim=azim)
+        ax.set_axis_off()
+        _ground(ax, low, high)
+        bones, = ax.plot([], [], [], color=_BONE_COLOR, lw=2, animated=True)
+        joints, = ax.plot([], [], [], ls="", marker="o", ms=2.5,
+                          color=_JOINT_COLOR, animated=True)
+        touch, = ax.plot([], [], [], ls="", marker="o", ms=6,
+                         color=_CONTACT_COLOR, animated=True)
+        return ax, bones, joints, touch
+
+    def draw(self, frame: int) -> np.ndarray:
+        """Update every panel to :obj:`frame` and return the RGB image
+        (blitting the moving artists over the static background)."""
+        self.canvas.restore_region(self.background)
+        for track, (ax, bones, joints, touch) in zip(self.tracks, self.artists):
+            t = min(frame, len(track.positions) - 1)
+            pos = track.positions[t]
+            seg = _segments(pos, track.parents)
+            bones.set_data_3d(seg[:, 0], seg[:, 2], seg[:, 1])
+            joints.set_data_3d(pos[:, 0], pos[:, 2], pos[:, 1])
+            hit = pos[track.contacts[t]]
+            touch.set_data_3d(hit[:, 0], hit[:, 2], hit[:, 1])
+            for artist in (bones, joints, touch):
+                ax.draw_artist(artist)
+        self.label.set_text(f"frame {frame + 1}/{self.frames}")
+        self.figure.draw_artist(self.label)
+        return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()
+
+
+def _ground(ax, low: np.ndarray, high: np.ndarray, lines: int = 9) -> None:
+    """A grid on y = 0, as one polyline (drawn once)."""
+    xs, zs = np.linspace(low[0], high[0], lines), np.linspace(low[2], high[2], lines)
+    seg = [(v, low[2], v, high[2]) for v in xs] + [(low[0], v, high[0], v) for v in zs]
+    pts = np.array([(a, b, c, d, np.nan, np.nan) for a, b, c, d in seg])
+    x = pts[:, [0, 2, 4]].ravel()
+    z = pts[:, [1, 3, 5]].ravel()
+    ax.plot(x, z, np.where(np.isnan(x), np.nan, 0.0), color="#bbbbbb", lw=0.6)
+
+
+def _segments(pos: np.ndarray, parents: np.ndarray) -> np.ndarray:
+    """Bones as one polyline: (parent, child, NaN) per bone.
+
+    Shapes:
+        - **pos**: :math:`(J, 3)`
+        - **output**: :math:`(3(J-1), 3)`
+    """
+    child = np.arange(1, len(parents))
+    seg = np.full((len(child), 3, 3), np.nan)
+    seg[:, 0], seg[:, 1] = pos[parents[child]], pos[child]
+    return seg.reshape(-1, 3)
+
+
+def render_frames(motions: Sequence[Motion], titles: Optional[Sequence[str]] = None,
+                  max_frames: Optional[int] = None, panel_px: int = 320,
+                  elev: float = 15.0, azim: float = -60.0,
+                  frames: Optional[Sequence[int]] = None) -> Iterator[np.ndarray]:
+    r"""Rendered frames, one RGB image per time step.
+
+    Args:
+        motions (list[Motion]): One motion per panel (+Y up).
+        titles (list[str], optional): Panel titles (default: file names).
+        max_frames (int, optional): Render at most this many frames (the
+            clip is cut, not subsampled).
+        panel_px (int): Panel size in pixels.
+        elev (float): Camera elevation (degrees), the same for every panel.
+        azim (float): Camera azimuth (degrees).
+        frames (list[int], optional): Render only these frame indices.
+
+    Shapes:
+        - **output**: :math:`(H, W, 3)` uint8 per frame
+    """
+    tracks = _tracks(motions, titles)
+    count = frame_count(motions, max_frames)
+    scene = _Scene(tracks, count, panel_px, elev, azim)
+    for t in (range(count) if frames is None else frames):
+        yield scene.draw(int(t))
+
+
+def frame_count(motions: Sequence[Motion], max_frames: Optional[int] = None) -> int:
+    """Frames a rendering of :obj:`motions` has: the longest clip, capped
+    by :obj:`max_frames`; shorter panels hold their last frame."""
+    count = max(m.num_frames for m in motions)
+    return count if max_frames is None else max(1, min(count, int(max_frames)))
+
+
+def save_gif(frames: Sequence[np.ndarray], path: PathLike, fps: float) -> None:
+    """Write RGB frames as a looping GIF (Pillow), atomically."""
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames]
+    duration = max(int(round(1000.0 / fps)), 20)
+    _atomic(path, lambda tmp: images[0].save(
+        tmp, format="GIF", save_all=True, append_images=images[1:],
+        duration=duration, loop=0, optimize=False))
+
+
+def save_mp4(frames: Sequence[np.ndarray], path: PathLike, fps: float) -> None:
+    """Write RGB frames as an H.264 MP4 with the ffmpeg bundled by
+    ``imageio-ffmpeg``, atomically."""
+    import imageio_ffmpeg
+
+    height, width = frames[0].shape[:2]
+
+    def write(tmp: str) -> None:
+        writer = imageio_ffmpeg.write_frames(
+            tmp, (width, height), fps=fps, codec="libx264",
+            pix_fmt_out="yuv420p", macro_block_size=16, quality=7,
+            output_params=["-f", "mp4"], ffmpeg_log_level="error")
+        writer.send(None)
+        for frame in frames:
+            writer.send(np.ascontiguousarray(frame))
+        writer.close()
+
+    _atomic(path, write)
+
+
+def save_sheet(frames: Sequence[np.ndarray], path: PathLike,
+               columns: int = 2) -> None:
+    """Tile RGB frames into one PNG contact sheet, atomically."""
+    from PIL import Image
+
+    h, w = frames[0].shape[:2]
+    rows = -(-len(frames) // columns)
+    sheet = np.full((rows * h, min(columns, len(frames)) * w, 3), 255, np.uint8)
+    for i, frame in enumerate(frames):
+        r, c = divmod(i, columns)
+        sheet[r * h:(r + 1) * h, c * w:(c + 1) * w] = frame
+    _atomic(path, lambda tmp: Image.fromarray(sheet).save(tmp, format="PNG"))
+
+
+def _atomic(path: PathLike, write) -> None:
+    """Run ``write(tmp)`` on a temporary file beside :obj:`path`, then move
+    it into place."""
+    path = os.fspath(path)
+    directory = os.path.dirname(os.path.abspath(path))
+    base, ext = os.path.splitext(os.path.basename(path))
+    tmp = os.path.join(directory, f".{base}.tmp{os.getpid()}{ext}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def sheet_frames(count: int, samples: int = 6) -> List[int]:
+    """Evenly spaced frame indices for a contact sheet."""
+    return sorted({int(round(v)) for v in np.linspace(0, count - 1, min(samples, count))})
+
+
+def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = None,
+           titles: Optional[Sequence[str]] = None, fps: Optional[float] = None,
+           max_frames: Optional[int] = None, sheet: Optional[PathLike] = None,
+           panel_px: int = 320, elev: float = 15.0, azim: float = -60.0) -> int:
+    r"""Render motions side by side to a GIF or MP4 and/or a PNG sheet.
+
+    Args:
+        motions (Motion or list[Motion]): One motion per panel (+Y up).
+        path (str or PathLike, optional): ``.gif`` or ``.mp4`` output.
+        titles (list[str], optional): Panel titles (default: file names).
+        fps (float, optional): Playback rate (default: the first motion's).
+        max_frames (int, optional): Cut the animation to this many frames.
+        sheet (str or PathLike, optional): PNG contact sheet of six evenly
+            spaced frames.
+        panel_px (int): Panel size in pixels.
+        elev (float): Camera elevation (degrees).
+        azim (float): Camera azimuth (degrees).
+
+    Returns:
+        int: The number of animation frames.
+    """
+    motions = [motions] if isinstance(motions, Motion) else list(motions)
+    if path is None and sheet is None:
+        raise ValueError("render: give an output path and/or a sheet path")
+    ext = "" if path is None else os.path.splitext(os.fspath(path))[1].lower()
+    if path is not None and ext not in (".gif", ".mp4"):
+        raise ValueError(f"render: output must be .gif or .mp4, got {os.fspath(path)!r}")
+    fps = float(fps or motions[0].fps)
+    count = frame_count(motions, max_frames)
+    kwargs = dict(titles=titles, max_frames=max_frames, panel_px=panel_px,
+                  elev=elev, azim=azim)
+    if path is not None:
+        frames = list(render_frames(motions, **kwargs))
+        (save_gif if ext == ".gif" else save_mp4)(frames, path, fps)
+    if sheet is not None:
+        picks = sheet_frames(count)
+        save_sheet(list(render_frames(motions, frames=picks, **kwargs)), sheet,
+                   columns=1 if len(motions) > 2 else 2)
+    return count

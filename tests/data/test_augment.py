@@ -1,0 +1,143 @@
+"""Skeleton augmentation: mirroring, bone scaling, topology changes."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satagraph.data.augment import (SkeletonAugment, drop_leaf_chain,
+                                    insert_joint, merge_segments, mirror,
+                                    mirror_pairs, paired, scale_bones,
+                                    swap_side)
+from satagraph.data.examples import example_motion
+from satagraph.data.zoo import generate_clip, zoo_rigs
+from satagraph.io import read_bvh, write_bvh
+
+RIGS = {r.species: r for r in zoo_rigs(seed=0)}
+
+
+@pytest.fixture(scope="module", params=["biped", "quadruped", "hexapod", "snake"])
+def motion(request):
+    return generate_clip(RIGS[request.param], "walk", frames=16, seed=0)
+
+
+def _valid(motion):
+    skel = motion.skeleton
+    assert (skel.parents[1:] < np.arange(1, skel.num_joints)).all()
+    assert skel.parents[0] == -1
+    assert len(set(skel.names)) == skel.num_joints
+    assert (np.linalg.norm(skel.offsets[1:], axis=1) > 1e-9).all()
+    assert np.isfinite(motion.global_positions()).all()
+
+
+def _common(a, b):
+    """Global positions of the joints both motions share (by name)."""
+    names = [n for n in a.skeleton.names if n in b.skeleton.names]
+    ia = [a.skeleton.names.index(n) for n in names]
+    ib = [b.skeleton.names.index(n) for n in names]
+    return a.global_positions()[:, ia], b.global_positions()[:, ib]
+
+
+@pytest.mark.parametrize("name,other", [
+    ("LeftUpLeg", "RightUpLeg"), ("thigh.L", "thigh.R"), ("l_hip", "r_hip"),
+    ("LHipJoint", "RHipJoint"), ("L_Fr_UpLeg", "R_Fr_UpLeg"),
+    ("antenna_r", "antenna_l"), ("HandL", "HandR"), ("Spine1", "Spine1"),
+    ("LowerBack", "LowerBack"), ("Head", "Head"), ("root", "root")])
+def test_swap_side(name, other):
+    assert swap_side(name) == other
+    assert swap_side(other) == name
+
+
+def test_mirror_twice_is_identity(motion):
+    twice = mirror(mirror(motion))
+    assert twice.skeleton.names == motion.skeleton.names
+    assert np.allclose(twice.rotations, motion.rotations)
+    assert np.allclose(twice.translations, motion.translations)
+    assert np.allclose(twice.skeleton.offsets, motion.skeleton.offsets)
+
+
+def test_mirror_reflects_positions(motion):
+    mirrored = mirror(motion)
+    _valid(mirrored)
+    pair = mirror_pairs(motion.skeleton)
+    expected = motion.global_positions()[:, pair] * np.array([-1.0, 1.0, 1.0])
+    assert np.allclose(mirrored.global_positions(), expected, atol=1e-9)
+    sided = sum(swap_side(n) != n for n in motion.skeleton.names)
+    assert (pair != np.arange(len(pair))).sum() == sided  # sides swapped
+
+
+def test_mirror_round_trips_through_bvh(tmp_path):
+    motion = generate_clip(RIGS["biped"], "turn", frames=10, seed=1)
+    write_bvh(mirror(motion), tmp_path / "m.bvh")
+    back = read_bvh(tmp_path / "m.bvh")
+    assert np.allclose(back.global_positions(), mirror(motion).global_positions(),
+                       atol=1e-4)
+
+
+def test_scale_bones_and_paired_keep_rotations(motion):
+    scaled = scale_bones(motion, seed=3)
+    _valid(scaled)
+    assert np.array_equal(scaled.rotations, motion.rotations)
+    assert not np.allclose(scaled.skeleton.offsets, motion.skeleton.offsets)
+    source, target = paired(motion, seed=3)
+    assert source is motion
+    assert np.array_equal(target.rotations, source.rotations)
+    assert target.skeleton.names == source.skeleton.names
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_drop_leaf_chain(motion, seed):
+    dropped = drop_leaf_chain(motion, seed=seed, max_length=3)
+    _valid(dropped)
+    assert 1 <= motion.num_joints - dropped.num_joints <= 3
+    a, b = _common(dropped, motion)
+    assert np.allclose(a, b, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_merge_segments(motion, seed, tmp_path):
+    merged = merge_segments(motion, seed=seed)
+    _valid(merged)
+    assert merged.num_joints == motion.num_joints - 1
+    a, b = _common(merged, motion)
+    assert a.shape[1] == merged.num_joints
+    assert np.allclose(a, b, atol=1e-9)
+    write_bvh(merged, tmp_path / "m.bvh")  # position channels carry the bend
+    back = read_bvh(tmp_path / "m.bvh")
+    assert np.allclose(back.global_positions(), merged.global_positions(),
+                       atol=1e-4)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_insert_joint(motion, seed):
+    split = insert_joint(motion, seed=seed)
+    _valid(split)
+    assert split.num_joints == motion.num_joints + 1
+    a, b = _common(split, motion)
+    assert a.shape[1] == motion.num_joints
+    assert np.allclose(a, b, atol=1e-9)
+    new = next(n for n in split.skeleton.names if n not in motion.skeleton.names)
+    assert new.endswith("_split")
+
+
+def test_skeleton_augment_is_seeded_and_valid():
+    motion = generate_clip(RIGS["quadruped"], "walk", frames=8, seed=0)
+    kwargs = dict(p_scale=1.0, p_mirror=1.0, p_drop=1.0, p_merge=1.0,
+                  p_insert=1.0, seed=7)
+    a, b = SkeletonAugment(**kwargs), SkeletonAugment(**kwargs)
+    outs = [a(motion) for _ in range(3)]
+    for out, again in zip(outs, (b(motion) for _ in range(3))):
+        _valid(out)
+        assert out.skeleton.names == again.skeleton.names
+        assert np.allclose(out.global_positions(), again.global_positions())
+    assert SkeletonAugment(p_scale=0, p_mirror=0, p_drop=0, p_merge=0,
+                           p_insert=0)(motion) is motion
+    with pytest.raises(ValueError):
+        SkeletonAugment(p_mirror=1.5)
+
+
+def test_example_motion_still_works():
+    motion = example_motion(num_frames=5)
+    assert np.allclose(mirror(mirror(motion)).global_positions(),
+                       motion.global_positions())
+    _valid(drop_leaf_chain(motion))
+    _valid(insert_joint(motion))

@@ -1,0 +1,151 @@
+"""``satagraph train | eval`` in-process, and the default offline W&B logger."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any, Dict, List
+
+import numpy as np
+import pytest
+import torch
+
+from satagraph.cli import main
+from satagraph.io import read_bvh
+from satagraph.train import build_logger, train
+
+
+DOG = "dog/D1_010_KAN01_002.bvh"
+HUMAN = "cmu/depressed_18_000.bvh"
+
+
+def _train_args(config_overrides: List[str], run: Path, *extra: str) -> List[str]:
+    return ["--traceback", "train", "tiny", *config_overrides, f"output_dir={run}",
+            "data.max_files=2", "trainer.max_epochs=1", "trainer.limit_train_batches=2",
+            "trainer.limit_val_batches=1", *extra]
+
+
+def _checkpoint(path: Path) -> Dict[str, Any]:
+    return torch.load(path, map_location="cpu", weights_only=True)
+
+
+def _model_weights(ckpt: Dict[str, Any]) -> Dict[str, torch.Tensor]:
+    return {k: v for k, v in ckpt["state_dict"].items() if k.startswith("model.")}
+
+
+def _table_rows(text: str) -> Dict[str, List[str]]:
+    """``dataset -> cells`` of the markdown table printed by ``eval``."""
+    rows = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.startswith("| ") and cells[0] != "dataset":
+            rows[cells[0]] = cells[1:]
+    return rows
+
+
+def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: Path,
+                                         capsys: pytest.CaptureFixture) -> None:
+    run = tmp_path / "run"
+    last = run / "checkpoints" / "last.ckpt"
+    assert main(_train_args(config_overrides, run)) == 0
+    assert "trained tiny for 1 epochs" in capsys.readouterr().out
+    first = _checkpoint(last)
+    assert first["global_step"] == 2
+    assert first["hyper_parameters"]["meta"]["data"]["max_files"] == 2
+
+    # --resume continues from last.ckpt: two more steps, not a restart.
+    assert main(_train_args(config_overrides, run, "trainer.max_epochs=2", "--resume")) == 0
+    assert "trained tiny for 2 epochs" in capsys.readouterr().out
+    resumed = _checkpoint(last)
+    assert resumed["global_step"] == 4 and resumed["epoch"] > first["epoch"]
+
+    # --init-from loads the weights; with lr = 0 they stay exactly as loaded.
+    other = tmp_path / "finetune"
+    args = _train_args(config_overrides, other, "optim.lr=0.0", "--init-from", str(last))
+    assert main(args) == 0
+    capsys.readouterr()
+    tuned = _model_weights(_checkpoint(other / "checkpoints" / "last.ckpt"))
+    source = _model_weights(resumed)
+    assert tuned.keys() == source.keys()
+    for key, value in source.items():
+        torch.testing.assert_close(tuned[key], value, rtol=0, atol=0, msg=key)
+
+    # eval: one row per dataset of the test split, plus "all".
+    table = tmp_path / "table.json"
+    assert main(["--traceback", "eval", "--ckpt", str(last), "--split", "test",
+                 "--json", str(table), "--retarget"]) == 0
+    text = capsys.readouterr().out
+    metrics, retarget = text.split("retarget error")
+    rows = _table_rows(metrics)
+    assert list(rows) == ["bandai", "dog", "all"]
+    assert all(len(cells) == 9 for cells in rows.values())
+    assert int(rows["bandai"][0]) + int(rows["dog"][0]) == int(rows["all"][0]) > 0
+    assert all(math.isfinite(float(v)) for cells in rows.values() for v in cells)
+    errors = _table_rows(retarget)
+    assert list(errors) == ["bandai", "dog", "all"]
+    assert all(float(v[0]) >= 0 and math.isfinite(float(v[0])) for v in errors.values())
+    saved = json.loads(table.read_text())
+    assert set(saved) == {"bandai", "dog", "all"}
+    assert saved["dog"]["clips"] == int(rows["dog"][0])
+    assert saved["all"]["retarget"] == pytest.approx(float(errors["all"][0]), abs=1e-3)
+
+
+def test_resume_without_checkpoint_is_a_usage_error(config_overrides: List[str],
+                                                    tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch,
+                                                    capsys: pytest.CaptureFixture) -> None:
+    monkeypatch.setenv("HOME", str(tmp_path))
+    args = _train_args(config_overrides, Path("~/none"), "--resume")[1:]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    # The message names the expanded run folder ("~" is the user's home).
+    assert f"--resume: no checkpoint at {tmp_path / 'none'}" in err
+
+
+def test_retarget_and_reconstruct_commands(config_overrides: List[str], shared_data: Path,
+                                           tmp_path: Path,
+                                           capsys: pytest.CaptureFixture) -> None:
+    run = tmp_path / "run"
+    assert main(_train_args(config_overrides, run, "trainer.limit_train_batches=1",
+                            "trainer.limit_val_batches=0")) == 0
+    ckpt = str(run / "checkpoints" / "last.ckpt")
+    dog, human = shared_data / DOG, shared_data / HUMAN
+    out = tmp_path / "dog_as_human.bvh"
+    assert main(["--traceback", "retarget", "--ckpt", ckpt, "--window", "32",
+                 "--overlap", "8", str(dog), "--target", str(human), str(out)]) == 0
+    src, tgt, back = read_bvh(dog), read_bvh(human), read_bvh(out)
+    assert back.skeleton.names == tgt.skeleton.names
+    assert back.skeleton.channels == tgt.skeleton.channels
+    assert back.num_frames == src.num_frames and back.fps == pytest.approx(src.fps)
+    out = tmp_path / "human.bvh"
+    assert main(["--traceback", "reconstruct", "--ckpt", ckpt, str(human), str(out)]) == 0
+    back = read_bvh(out)
+    assert back.skeleton.names == tgt.skeleton.names
+    assert back.num_frames == tgt.num_frames and np.isfinite(back.rotations).all()
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_default_wandb_logger_is_offline_under_run_dir(tiny_config: Dict[str, Any],
+                                                       tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    wandb = pytest.importorskip("wandb")
+    env_dir = tmp_path / "wandb_env"
+    for name, value in (("WANDB_MODE", "offline"), ("WANDB_DIR", env_dir),
+                        ("WANDB_CONFIG_DIR", tmp_path / "wandb_config"),
+                        ("WANDB_CACHE_DIR", tmp_path / "wandb_cache"),
+                        ("WANDB_DATA_DIR", tmp_path / "wandb_data"),
+                        ("WANDB_SILENT", "true"), ("WANDB_API_KEY", "")):
+        monkeypatch.setenv(name, str(value))
+    cfg = {k: v for k, v in tiny_config.items() if k != "logger"}
+    run_dir = Path(cfg["output_dir"])
+    logger = build_logger(cfg, run_dir)
+    assert type(logger).__name__ == "WandbLogger"
+    try:
+        train(cfg, max_steps=1, limit_train_batches=1, limit_val_batches=0)
+        runs = list((run_dir / "wandb").glob("offline-run-*"))
+        assert len(runs) == 1, sorted(p.name for p in run_dir.rglob("*"))[:20]
+        assert list(runs[0].glob("run-*.wandb"))
+    finally:
+        wandb.finish()
+    assert not env_dir.exists() or not any(env_dir.rglob("offline-run-*"))

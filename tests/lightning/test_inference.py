@@ -1,0 +1,162 @@
+"""Sliding-window inference and retargeting with a tiny SATA module."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pytest
+import torch
+
+from satagraph.data.canonical import canonicalize
+from satagraph.data.collate import collate_clips
+from satagraph.data.features import motion_to_features
+from satagraph.inference import (reconstruct_motion, resample_frames, retarget_motion,
+                                 target_clip, transfer, window_plan)
+from satagraph.io import read_bvh, write_bvh
+from satagraph.motion import Motion
+
+DOG = "dog/D1_010_KAN01_002.bvh"                # 60 fps
+HUMAN = "cmu/depressed_18_000.bvh"              # 120 fps
+BANDAI = "bandai/dataset-1_dash_normal_001.bvh"  # 30 fps, 20 frames
+
+
+# --------------------------------------------------------------- window plan
+def _kept_frames(plan) -> list:
+    return [f for start, stop, keep in plan for f in range(keep, stop)]
+
+
+@pytest.mark.parametrize("num_frames", [1, 5, 31, 32, 33, 47, 48, 49, 100, 257])
+def test_window_plan_covers_every_frame_once(num_frames: int) -> None:
+    window, overlap = 32, 8
+    plan = window_plan(num_frames, window, overlap)
+    assert _kept_frames(plan) == list(range(num_frames))
+    for start, stop, keep in plan:
+        assert 0 <= start <= keep < stop <= num_frames
+        assert stop - start == min(window, num_frames)
+    # Consecutive windows share at least the overlap (the later one is cropped).
+    for (a0, b0, _), (a1, _, keep1) in zip(plan, plan[1:]):
+        assert keep1 == b0 and b0 - a1 >= overlap
+    if num_frames <= window:
+        assert plan == [(0, num_frames, 0)]
+
+
+def test_window_plan_without_overlap_and_bad_overlap() -> None:
+    assert window_plan(64, 16, 0) == [(0, 16, 0), (16, 32, 16), (32, 48, 32), (48, 64, 48)]
+    with pytest.raises(ValueError, match="overlap"):
+        window_plan(100, 16, 16)
+
+
+def test_resample_frames_hits_exact_count_and_holds_last_frame(tiny_motion: Motion) -> None:
+    motion = tiny_motion                       # 8 frames at 30 fps
+    assert resample_frames(motion, 30.0, 8) is motion
+    up = resample_frames(motion, 60.0, 16)
+    assert up.num_frames == 16 and up.fps == 60.0
+    np.testing.assert_allclose(up.rotations[0:16:2], motion.rotations, atol=1e-6)
+    np.testing.assert_allclose(up.translations[1], motion.translations[:2].mean(0),
+                               atol=1e-9)
+    np.testing.assert_allclose(up.rotations[15], motion.rotations[7], atol=1e-6)
+    longer = resample_frames(motion, 30.0, 10)
+    np.testing.assert_allclose(longer.translations[7:], motion.translations[[7, 7, 7]])
+    rot = up.rotations
+    np.testing.assert_allclose(rot @ np.swapaxes(rot, -1, -2), np.broadcast_to(
+        np.eye(3), rot.shape), atol=1e-6)
+
+
+# -------------------------------------------------------------- sliding window
+@pytest.fixture(scope="module")
+def dog_features(read_real: Callable[[str], Motion]):
+    """Canonical features of a short dog clip (40 frames at 30 fps)."""
+    motion = read_real(DOG).slice(0, 80)
+    return motion_to_features(canonicalize(motion, fps=30.0))
+
+
+def _single_pass(module, feats, embed, start: int, stop: int):
+    sem = embed(feats.skeleton)
+    src = collate_clips([feats.to_clip(start, stop, sem)])
+    tgt = collate_clips([target_clip(feats, stop - start, sem)])
+    with torch.no_grad():
+        return module(src, tgt)
+
+
+def test_window_longer_than_clip_is_one_pass(build_tiny_module: Callable, dog_features,
+                                             embed: Callable) -> None:
+    module = build_tiny_module("vae").eval()
+    num, joints = dog_features.num_frames, dog_features.skeleton.num_joints
+    q, r, c = transfer(module, dog_features, dog_features, embed, window=num + 8, overlap=4)
+    assert q.shape == (num, joints, 6) and r.shape == (num, 4) and c.shape == (num, joints)
+    ref = _single_pass(module, dog_features, embed, 0, num)
+    np.testing.assert_allclose(q, ref["q"].view(num, joints, 6).double().numpy(),
+                               rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(r, ref["r"].double().numpy(), rtol=1e-5, atol=1e-5)
+    probs = torch.sigmoid(ref["c"]).view(num, joints).double().numpy()
+    np.testing.assert_allclose(c, probs, rtol=1e-5, atol=1e-6)
+    assert ((c >= 0) & (c <= 1)).all()
+
+
+def test_sliding_windows_keep_each_window_after_its_overlap(
+        build_tiny_module: Callable, dog_features, embed: Callable) -> None:
+    module = build_tiny_module("vae").eval()
+    num, joints = dog_features.num_frames, dog_features.skeleton.num_joints
+    window, overlap = 16, 4
+    plan = window_plan(num, window, overlap)
+    assert len(plan) >= 3
+    # Small batches: windows are split across several forward passes.
+    q, r, _ = transfer(module, dog_features, dog_features, embed, window, overlap,
+                       batch_size=2)
+    assert q.shape == (num, joints, 6) and np.isfinite(q).all()
+    for start, stop, keep in plan:
+        ref = _single_pass(module, dog_features, embed, start, stop)
+        kept = slice(keep - start, stop - start)
+        np.testing.assert_allclose(
+            q[keep:stop], ref["q"].view(-1, joints, 6)[kept].double().numpy(),
+            rtol=1e-4, atol=1e-5)
+        np.testing.assert_allclose(r[keep:stop], ref["r"][kept].double().numpy(),
+                                   rtol=1e-4, atol=1e-5)
+
+
+def test_transfer_restores_training_mode(build_tiny_module: Callable, dog_features,
+                                         embed: Callable) -> None:
+    module = build_tiny_module("vae").train()
+    transfer(module, dog_features, dog_features, embed, window=16, overlap=4)
+    assert module.training
+
+
+# ------------------------------------------------------------------ retarget
+@pytest.mark.parametrize("source,target,num_frames", [
+    (DOG, HUMAN, 100),      # dog -> human, an even number of 60 fps frames
+    (DOG, BANDAI, 75),
+    (HUMAN, DOG, 90),       # human -> dog, 120 fps
+    (BANDAI, DOG, 20),      # human -> dog, 30 fps
+])
+def test_retarget_writes_target_rig_at_source_timing(
+        source: str, target: str, num_frames: int, build_tiny_module: Callable,
+        read_real: Callable[[str], Motion], embed: Callable, tmp_path: Path,
+        assert_same_hierarchy: Callable) -> None:
+    module = build_tiny_module("vae")
+    src, tgt = read_real(source).slice(0, num_frames), read_real(target)
+    assert src.num_frames == num_frames
+    out = retarget_motion(module, src, tgt, embed, window=16, overlap=4)
+    path = tmp_path / "out.bvh"
+    write_bvh(out, path)
+    back = read_bvh(path)
+    assert_same_hierarchy(back.skeleton, tgt.skeleton, atol=1e-4)
+    assert back.num_frames == src.num_frames
+    assert back.fps == pytest.approx(src.fps, rel=1e-4)
+    assert np.isfinite(back.rotations).all() and np.isfinite(back.translations).all()
+    positions = back.global_positions()
+    assert np.isfinite(positions).all()
+    # The motion stays in the target's units: its size matches the rig's.
+    height = np.ptp(tgt.skeleton.rest_positions(), axis=0).max()
+    assert np.ptp(positions[0], axis=0).max() < 3 * height
+
+
+def test_reconstruct_keeps_skeleton_and_timing(build_tiny_module: Callable,
+                                               read_real: Callable[[str], Motion],
+                                               embed: Callable,
+                                               assert_same_hierarchy: Callable) -> None:
+    module = build_tiny_module("vae")
+    src = read_real(HUMAN).slice(0, 64)
+    out = reconstruct_motion(module, src, embed, window=16, overlap=4)
+    assert_same_hierarchy(out.skeleton, src.skeleton, atol=1e-4)
+    assert out.num_frames == src.num_frames and out.fps == src.fps

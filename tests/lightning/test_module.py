@@ -1,0 +1,171 @@
+"""SATA LightningModules: checkpoints, optimiser schedule and logging."""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Tuple
+
+import lightning as L
+import pytest
+import torch
+from torch.utils.data import DataLoader
+
+from satagraph.data.collate import FrameBatch, collate_clips
+from satagraph.lightning import SATARVQModule, SATAVAEModule, lr_factor
+from satagraph.train import init_weights, load_module
+
+METRICS = ("JR", "RT", "RT_h", "JP", "JP_h", "FS", "GP", "RE")
+
+
+def _quiet_trainer(**kwargs: Any) -> L.Trainer:
+    opts = dict(accelerator="cpu", devices=1, logger=False, enable_checkpointing=False,
+                enable_progress_bar=False, enable_model_summary=False)
+    opts.update(kwargs)
+    return L.Trainer(**opts)
+
+
+def _normalizer_state(module: L.LightningModule) -> Dict[str, torch.Tensor]:
+    return {k: v.clone() for k, v in module.normalizer.state_dict().items()}
+
+
+# ---------------------------------------------------------------- checkpoints
+@pytest.mark.parametrize("name,cls", [("vae", SATAVAEModule), ("rvq", SATARVQModule)])
+def test_checkpoint_round_trip(name: str, cls: type, build_tiny_module: Callable,
+                               datamodule, train_batch: FrameBatch,
+                               tmp_path: Path) -> None:
+    module = build_tiny_module(name)
+    trainer = _quiet_trainer(max_steps=2, limit_val_batches=0)
+    trainer.fit(module, train_dataloaders=datamodule._loader("train", False))
+    path = tmp_path / "model.ckpt"
+    trainer.save_checkpoint(path)
+
+    loaded = load_module(str(path))
+    assert type(loaded) is cls
+    assert loaded.meta["module"] == name and loaded.fps == module.fps
+
+    # Normaliser statistics come from the checkpoint (not the default 0/1).
+    expected = _normalizer_state(module)
+    assert bool(expected["fitted"]) and expected["dynamic_std"].ne(1).any()
+    for key, value in _normalizer_state(loaded).items():
+        torch.testing.assert_close(value, expected[key], rtol=0, atol=0, msg=key)
+
+    module.eval(), loaded.eval()
+    with torch.no_grad():
+        a, b = module(train_batch), loaded(train_batch)
+    assert a.keys() == b.keys()
+    for key in ("q", "r", "c", "z"):
+        assert torch.isfinite(a[key]).all()
+        torch.testing.assert_close(b[key], a[key], rtol=0, atol=0, msg=key)
+
+
+def test_init_weights_loads_network_and_keeps_normalizer(build_tiny_module: Callable,
+                                                        tmp_path: Path) -> None:
+    source = build_tiny_module("vae")
+    with torch.no_grad():
+        for param in source.parameters():
+            param.add_(1.0)
+        source.normalizer.dynamic_mean.add_(5.0)
+    path = tmp_path / "source.ckpt"
+    torch.save({"state_dict": source.state_dict()}, path)
+
+    module = build_tiny_module("vae")
+    own = _normalizer_state(module)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        init_weights(module, str(path))
+    for (name, a), b in zip(module.named_parameters(), source.parameters()):
+        torch.testing.assert_close(a, b, rtol=0, atol=0, msg=name)
+    for key, value in _normalizer_state(module).items():
+        torch.testing.assert_close(value, own[key], rtol=0, atol=0, msg=key)
+
+    # Another bottleneck: the shared weights load, the rest is reported.
+    rvq = build_tiny_module("rvq")
+    with pytest.warns(UserWarning, match="not in the checkpoint"):
+        init_weights(rvq, str(path))
+    torch.testing.assert_close(rvq.model.encoder.state_dict(),
+                               source.model.encoder.state_dict(), rtol=0, atol=0)
+
+
+# ------------------------------------------------------------------ schedule
+def test_lr_factor_warmup_decay_floor() -> None:
+    warm, decay, floor = 4, 0.5, 0.1
+    factors = [lr_factor(e, warm, decay, floor) for e in range(11)]
+    # Linear warm-up reaching 1 at the last warm-up epoch.
+    assert factors[:4] == pytest.approx([0.25, 0.5, 0.75, 1.0])
+    # Exponential decay after warm-up, never below the floor.
+    assert factors[4:8] == pytest.approx([1.0, 0.5, 0.25, 0.125])
+    assert factors[8:] == pytest.approx([floor] * 3)
+    assert all(a >= b for a, b in zip(factors[3:], factors[4:]))
+    assert lr_factor(1000, 30, 0.99, 0.01) == pytest.approx(0.01)
+    assert lr_factor(40, 30, 0.99, 0.01) == pytest.approx(0.99 ** 10)
+    # No warm-up: starts at full rate.
+    assert lr_factor(0, 0, 0.9, 0.01) == pytest.approx(1.0)
+
+
+def test_configure_optimizers_adam_with_schedule(build_tiny_module: Callable) -> None:
+    module = build_tiny_module("vae")
+    module.optim.update(lr=2e-3, warmup_epochs=3, decay=0.5, floor=0.2)
+    conf = module.configure_optimizers()
+    opt, sched = conf["optimizer"], conf["lr_scheduler"]["scheduler"]
+    assert isinstance(opt, torch.optim.Adam)
+    assert conf["lr_scheduler"]["interval"] == "epoch"
+    params = {id(p) for g in opt.param_groups for p in g["params"]}
+    assert params == {id(p) for p in module.parameters()}
+    lrs = []
+    for _ in range(8):
+        lrs.append(opt.param_groups[0]["lr"])
+        opt.step(), sched.step()
+    expected = [2e-3 * lr_factor(e, 3, 0.5, 0.2) for e in range(8)]
+    assert lrs == pytest.approx(expected)
+    assert lrs[0] == pytest.approx(2e-3 / 3) and min(lrs) == pytest.approx(2e-3 * 0.2)
+
+
+# ------------------------------------------------------------------- logging
+def _spy_logs(module: L.LightningModule) -> List[Tuple[str, float, int]]:
+    """Record ``(name, value, batch_size)`` of every ``self.log`` call."""
+    calls: List[Tuple[str, float, int]] = []
+    original = module.log
+
+    def log(name: str, value: Any, *args: Any, **kwargs: Any) -> None:
+        calls.append((name, float(value), kwargs.get("batch_size")))
+        original(name, value, *args, **kwargs)
+
+    module.log = log
+    return calls
+
+
+def _loader(datamodule, split: str, sizes: Tuple[int, ...]) -> DataLoader:
+    """A loader of batches of the given numbers of clips from a split."""
+    ds, start, groups = datamodule.datasets[split], 0, []
+    for size in sizes:
+        groups.append([ds[i] for i in range(start, start + size)])
+        start += size
+    return DataLoader(groups, batch_size=1, collate_fn=lambda g: collate_clips(g[0]))
+
+
+def test_every_term_logged_with_number_of_clips(build_tiny_module: Callable,
+                                                datamodule, train_batch) -> None:
+    module = build_tiny_module("vae")
+    calls = _spy_logs(module)
+    trainer = _quiet_trainer(max_steps=1, limit_val_batches=0)
+    trainer.fit(module, train_dataloaders=_loader(datamodule, "train", (4,)))
+    terms = set(module.compute_losses(module(train_batch), train_batch))
+    assert {"loss", "rotation", "position", "kl"} <= terms
+    train_logged = {n: b for n, _, b in calls if n.startswith("train")}
+    assert set(train_logged) == {f"train/{t}" for t in terms} | {"train_loss"}
+    assert set(train_logged.values()) == {len(train_batch.meta)} == {4}
+    assert {f"train/{t}_step" for t in terms} <= set(trainer.logged_metrics)
+
+    # Validation: uneven batches (3 + 1 clips); epoch values are means
+    # weighted by the number of clips of each batch.
+    calls.clear()
+    trainer = _quiet_trainer()
+    trainer.validate(module, dataloaders=_loader(datamodule, "val", (3, 1)),
+                     verbose=False)
+    names = {f"val/{t}" for t in terms} | {f"val/{m}" for m in METRICS} | {"val_loss"}
+    for name in names:
+        logged = [(v, b) for n, v, b in calls if n == name]
+        assert [b for _, b in logged] == [3, 1], name
+        mean = sum(v * b for v, b in logged) / 4
+        assert float(trainer.callback_metrics[name]) == pytest.approx(mean, rel=1e-5), name
+    assert {n for n, _, _ in calls} == names

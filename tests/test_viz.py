@@ -1,0 +1,97 @@
+"""Rendering: GIF, MP4 and PNG contact sheets, and ``satagraph render``."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+PIL = pytest.importorskip("PIL")
+pytest.importorskip("matplotlib")
+
+from PIL import Image  # noqa: E402
+
+from satagraph.cli import main  # noqa: E402
+from satagraph.data.examples import example_motion  # noqa: E402
+from satagraph.data.zoo import generate_clip, zoo_rigs  # noqa: E402
+from satagraph.io import write_bvh  # noqa: E402
+from satagraph.viz import contacts, frame_count, render, render_frames  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def motions():
+    rigs = zoo_rigs(["quadruped"], seed=0)
+    return [example_motion(num_frames=12),
+            generate_clip(rigs[0], "trot", frames=10, seed=0)]
+
+
+def test_gif_has_one_frame_per_time_step(tmp_path, motions):
+    path = tmp_path / "a.gif"
+    count = render(motions, path, titles=["walk", "dog"], panel_px=160)
+    assert count == 12 == frame_count(motions)
+    with Image.open(path) as gif:
+        assert gif.n_frames == 12
+        assert gif.size == (320, 160)
+        gif.seek(5)
+        assert np.asarray(gif.convert("L")).std() > 5  # not blank
+
+
+def test_max_frames_and_fps(tmp_path, motions):
+    path = tmp_path / "b.gif"
+    assert render(motions, path, fps=10, max_frames=4, panel_px=96) == 4
+    with Image.open(path) as gif:
+        assert gif.n_frames == 4
+        assert gif.info["duration"] == 100
+
+
+def test_mp4(tmp_path, motions):
+    ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    path = tmp_path / "a.mp4"
+    assert render(motions, path, panel_px=160) == 12
+    assert path.stat().st_size > 1000
+    frames, _ = ffmpeg.count_frames_and_secs(str(path))
+    assert frames == 12
+
+
+def test_png_sheet(tmp_path, motions):
+    path = tmp_path / "sheet.png"
+    render(motions, sheet=path, panel_px=128)
+    with Image.open(path) as sheet:
+        assert sheet.format == "PNG"
+        assert sheet.size[0] == 2 * 256 and sheet.size[1] % 128 == 0
+
+
+def test_frames_differ_and_contacts_marked(motions):
+    frames = list(render_frames(motions[:1], panel_px=96, frames=[0, 6]))
+    assert frames[0].shape == (96, 96, 3)
+    assert not np.array_equal(frames[0], frames[1])
+    touch = contacts(motions[0])
+    assert touch.shape == (12, motions[0].num_joints)
+    assert 0 < touch.mean() < 0.5
+
+
+def test_bad_output(tmp_path, motions):
+    with pytest.raises(ValueError):
+        render(motions, tmp_path / "a.avi")
+    with pytest.raises(ValueError):
+        render(motions)
+
+
+def test_render_speed(tmp_path):
+    clip = example_motion(num_frames=60)
+    start = time.perf_counter()
+    render([clip, clip], tmp_path / "fast.gif", panel_px=240)
+    assert time.perf_counter() - start < 20  # blitting, not full redraws
+
+
+def test_cli_render(tmp_path, capsys):
+    bvh = tmp_path / "walk.bvh"
+    write_bvh(example_motion(num_frames=8), bvh)
+    out, sheet = tmp_path / "out.gif", tmp_path / "sheet.png"
+    assert main(["render", str(bvh), str(bvh), str(out), "--png", str(sheet),
+                 "--max-frames", "5"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    with Image.open(out) as gif:
+        assert gif.n_frames == 5
+    assert sheet.stat().st_size > 0
+    assert main(["render", str(bvh), str(tmp_path / "x.txt")]) == 2
