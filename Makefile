@@ -23,6 +23,9 @@ demo: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/pipeline.py
+	$(PY) benchmarks/collate.py
+	$(PY) benchmarks/semantic_alignment.py
+	$(PY) benchmarks/model_cost.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -5,16 +5,9 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
-import torch
 
-from satagraph.ops.fk import forward_kinematics
+from satagraph.ops.fk import forward_kinematics_numpy
 from satagraph.skeleton import Skeleton
-
-
-def _tensor(array: np.ndarray) -> torch.Tensor:
-    """A tensor sharing memory with :obj:`array`, or with a copy when the
-    array is read-only (e.g. a broadcast view), which torch cannot share."""
-    return torch.from_numpy(array if array.flags.writeable else array.copy())
 
 
 @dataclass
@@ -136,16 +129,14 @@ class Motion:
     def global_transforms(self) -> tuple:
         """Global rotations :math:`(T, J, 3, 3)` and positions
         :math:`(T, J, 3)` by forward kinematics, vectorised over frames."""
-        rot, pos = forward_kinematics(
-            _tensor(self.rotations),
-            _tensor(self.translations),
-            _tensor(self.skeleton.parents),
-        )
-        return rot.numpy(), pos.numpy()
+        return forward_kinematics_numpy(self.rotations, self.translations,
+                                        self.skeleton.parents)
 
     def global_positions(self) -> np.ndarray:
         """Global joint positions :math:`(T, J, 3)` by forward kinematics."""
-        return self.global_transforms()[1]
+        return forward_kinematics_numpy(self.rotations, self.translations,
+                                        self.skeleton.parents,
+                                        rotations=False)[1]
 
     def height(self) -> float:
         """Character height: the larger vertical (+Y) extent of the rest pose

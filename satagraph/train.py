@@ -10,9 +10,11 @@ import torch
 
 from satagraph.config import expand_path
 from satagraph.data.datamodule import MotionDataModule
-from satagraph.lightning import SATARVQModule, SATAVAEModule
+from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
+                                 SATAVAEModule)
 
-MODULES = {"vae": SATAVAEModule, "rvq": SATARVQModule}
+MODULES = {"vae": SATAVAEModule, "rvq": SATARVQModule, "same": SAMEModule,
+           "padded_rvq": PaddedRVQModule}
 
 
 def register_module(name: str, cls) -> None:
@@ -23,17 +25,8 @@ def register_module(name: str, cls) -> None:
 def module_class(name: str):
     """The LightningModule class registered under :obj:`name`."""
     if name not in MODULES:
-        _register_baselines()
-    if name not in MODULES:
         raise ValueError(f"unknown module {name!r}; known: {sorted(MODULES)}")
     return MODULES[name]
-
-
-def _register_baselines() -> None:
-    try:  # baselines live in their own modules and may be absent
-        from satagraph.lightning import baselines  # noqa: F401
-    except ImportError:
-        pass
 
 
 def build_datamodule(cfg: Dict[str, Any]) -> MotionDataModule:

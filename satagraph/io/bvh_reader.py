@@ -9,11 +9,9 @@ from dataclasses import dataclass, field
 from typing import List, Optional, Tuple, Union
 
 import numpy as np
-import torch
 
 from satagraph.io.errors import BVHError
 from satagraph.motion import Motion
-from satagraph.ops.rotation import euler_to_matrix
 from satagraph.skeleton import Skeleton
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -286,6 +284,35 @@ def _parse_frames(path: str, text: str, lineno: int, frames: int,
     return data
 
 
+def _euler_to_matrix(angles: np.ndarray, order: str) -> np.ndarray:
+    r"""Numpy twin of :func:`~satagraph.ops.euler_to_matrix` (radians, BVH
+    order of three distinct axes), in closed form.
+
+    ``R_i(a) R_j(b) R_k(c)`` is :math:`P R_x R_y R_z P^T` for the permutation
+    :math:`P` taking ``XYZ`` to ``ijk``, with the angles negated when
+    :math:`P` is odd (a reflection reverses the sense of rotation).
+
+    Shapes:
+        - **angles**: :math:`(*, 3)`
+        - **output**: :math:`(*, 3, 3)`
+    """
+    idx = ["XYZ".index(a) for a in order]
+    sign = 1.0 if order in ("XYZ", "YZX", "ZXY") else -1.0
+    ca, cb, cc = np.moveaxis(np.cos(angles), -1, 0)
+    sa, sb, sc = np.moveaxis(np.sin(angles) * sign, -1, 0)
+    sa_sb, ca_sb = sa * sb, ca * sb
+    entries = (
+        (cb * cc, -cb * sc, sb),
+        (ca * sc + sa_sb * cc, ca * cc - sa_sb * sc, -sa * cb),
+        (sa * sc - ca_sb * cc, sa * cc + ca_sb * sc, ca * cb),
+    )
+    out = np.empty(angles.shape[:-1] + (3, 3))
+    for r, row in enumerate(entries):
+        for c, value in enumerate(row):
+            out[..., idx[r], idx[c]] = value
+    return out
+
+
 def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) -> Motion:
     joints = header.joints
     skeleton = Skeleton(
@@ -297,7 +324,7 @@ def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) 
     )
     num_frames, num = data.shape[0], len(joints)
     trans = np.broadcast_to(skeleton.offsets, (num_frames, num, 3)).copy()
-    rot = np.broadcast_to(np.eye(3), (num_frames, num, 3, 3)).copy()
+    rot = np.empty((num_frames, num, 3, 3))
     by_order: dict = {}
     starts = np.cumsum([0] + [len(j.channels) for j in joints])
     for j, joint in enumerate(joints):
@@ -312,9 +339,12 @@ def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) 
             idx, cols = by_order.setdefault(order, ([], []))
             idx.append(j)
             cols.append(rot_cols)
+    still = np.ones(num, dtype=bool)  # joints without rotation channels
     for order, (idx, cols) in by_order.items():
         angles = np.radians(data[:, np.array(cols)])  # [T, n, 3]
-        rot[:, idx] = euler_to_matrix(torch.from_numpy(angles), order).numpy()
+        rot[:, idx] = _euler_to_matrix(angles, order)
+        still[idx] = False
+    rot[:, still] = np.eye(3)
     fps = 1.0 / frame_time
     if round(fps) >= 1 and abs(fps - round(fps)) < 1e-2 * max(1.0, fps / 100):
         fps = float(round(fps))

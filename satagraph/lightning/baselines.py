@@ -56,11 +56,3 @@ class PaddedRVQModule(MotionAutoencoderModule):
         """Code indices per latent step, ``[K, Q]``."""
         return self.encode(self.normalize_batch(batch))["codes"]
 
-
-def _register() -> None:
-    from satagraph.train import register_module
-    register_module("same", SAMEModule)
-    register_module("padded_rvq", PaddedRVQModule)
-
-
-_register()

@@ -153,3 +153,27 @@ def test_cuda_matches_cpu(tiny_skeleton):
     cpu = forward_kinematics(rotation, offset, parent)
     gpu = forward_kinematics(rotation.cuda(), offset.cuda(), parent)
     torch.testing.assert_close(gpu[1].cpu(), cpu[1])
+
+
+@pytest.mark.parametrize("frames", [0, 1, 7, 1100])
+def test_numpy_fk_matches_torch(tiny_skeleton, frames):
+    from satagraph.ops.fk import forward_kinematics_numpy
+    parent = tiny_skeleton.parents
+    rotation = random_rotation(frames, 10, seed=3)
+    offset = np.broadcast_to(tiny_skeleton.offsets, (frames, 10, 3)).copy()
+    offset[:, 0] += np.random.default_rng(0).normal(size=(frames, 3))  # moving root
+    want_rot, want_pos = forward_kinematics(rotation, torch.from_numpy(offset),
+                                            torch.from_numpy(parent))
+    rot, pos = forward_kinematics_numpy(rotation.numpy(), offset, parent)
+    np.testing.assert_allclose(rot, want_rot.numpy(), atol=1e-12)
+    np.testing.assert_allclose(pos, want_pos.numpy(), atol=1e-10)
+    leaves_skipped, pos2 = forward_kinematics_numpy(rotation.numpy(), offset, parent,
+                                                    rotations=False)
+    np.testing.assert_allclose(pos2, pos, atol=1e-12)
+
+
+def test_numpy_fk_rejects_unordered_parents():
+    from satagraph.ops.fk import forward_kinematics_numpy
+    with pytest.raises(ValueError, match="parents must come before"):
+        forward_kinematics_numpy(np.eye(3)[None, None].repeat(2, 1), np.zeros((1, 2, 3)),
+                                 np.array([1, -1]))

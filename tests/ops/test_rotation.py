@@ -205,3 +205,12 @@ def test_geodesic_angle():
     torch.testing.assert_close(geodesic_angle(matrix, rotated), angle)
     torch.testing.assert_close(geodesic_angle(matrix, matrix),
                                torch.zeros(6, dtype=torch.float64), atol=1e-3, rtol=0)
+
+
+@pytest.mark.parametrize("order", ["XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"])
+def test_reader_numpy_euler_matches_torch(order):
+    from satagraph.io.bvh_reader import _euler_to_matrix
+    from satagraph.ops.rotation import euler_to_matrix
+    angles = np.random.default_rng(1).uniform(-math.pi, math.pi, size=(50, 3))
+    want = euler_to_matrix(torch.from_numpy(angles), order).numpy()
+    np.testing.assert_allclose(_euler_to_matrix(angles, order), want, atol=1e-12)

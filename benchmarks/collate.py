@@ -1,0 +1,103 @@
+"""Collating a batch of clips of mixed skeletons into frame graphs.
+
+Usage: ``python benchmarks/collate.py [--data ../shared/data] [--clips 32]
+[--frames 64] [--repeat 50]``.
+
+Builds real clips from the dog (MANN, 21 joints without end sites) and
+ccbase (100 joints without end sites) files, half of each, interleaved, and
+times :func:`satagraph.data.collate_clips` on them, with one torch thread
+(as in :class:`~torch.utils.data.DataLoader` workers, which set it so) and
+with torch's default thread count (as with ``num_workers=0``). Prints a
+markdown table and writes it to ``benchmarks/results/collate.md`` (and
+``.json``).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+from typing import List, Optional
+
+import torch
+
+from satagraph.data.clip import MotionClip
+from satagraph.data.collate import collate_clips
+from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
+
+ROOT = Path(__file__).resolve().parents[1]
+SOURCES = ("dog", "ccbase")
+
+
+def _clips_from(folder: Path, count: int, frames: int) -> List[MotionClip]:
+    """:obj:`count` windows of :obj:`frames` frames from the files of a
+    folder (a few files, several windows each)."""
+    clips: List[MotionClip] = []
+    for path in sorted(folder.glob("*.bvh")):
+        feats = preprocess_file(str(path), DEFAULT_PREPROCESSING)
+        for start in range(0, feats.num_frames - frames + 1, frames):
+            clips.append(feats.to_clip(start, start + frames,
+                                       meta={"path": str(path)}))
+            if len(clips) == count:
+                return clips
+    raise SystemExit(f"not enough {frames}-frame windows under {folder}")
+
+
+def build_clips(data: Path, count: int, frames: int) -> List[MotionClip]:
+    """Clips alternating between the skeletons of :data:`SOURCES`."""
+    per = [_clips_from(data / name, (count + 1) // 2, frames) for name in SOURCES]
+    mixed = [clip for pair in zip(*per) for clip in pair]
+    return mixed[:count]
+
+
+def time_collate(clips: List[MotionClip], repeat: int,
+                 threads: int) -> List[float]:
+    """Seconds per :func:`collate_clips` call with :obj:`threads` torch
+    threads, after one warm-up call."""
+    torch.set_num_threads(threads)
+    collate_clips(clips)
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        collate_clips(clips)
+        times.append(time.perf_counter() - start)
+    return times
+
+
+def main(argv: Optional[List[str]] = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    parser.add_argument("--clips", type=int, default=32)
+    parser.add_argument("--frames", type=int, default=64)
+    parser.add_argument("--repeat", type=int, default=50)
+    args = parser.parse_args(argv)
+    clips = build_clips(Path(args.data), args.clips, args.frames)
+    batch = collate_clips(clips)
+    joints = sorted({c.num_joints for c in clips})
+    lines = [
+        f"{len(clips)} clips x {args.frames} frames, skeletons of "
+        f"{' and '.join(map(str, joints))} joints (end sites included): "
+        f"{batch.num_nodes:,} nodes, {batch.edge_index.shape[1]:,} edges, "
+        f"{batch.num_graphs:,} frame graphs; {args.repeat} repeats, one process.",
+        "", "| torch threads | median ms | best ms |", "|---|---:|---:|",
+    ]
+    rows = []
+    for threads in sorted({1, torch.get_num_threads()}):
+        times = time_collate(clips, args.repeat, threads)
+        rows.append({"threads": threads, "median_s": statistics.median(times),
+                     "best_s": min(times)})
+        lines.append(f"| {threads} | {rows[-1]['median_s'] * 1e3:.2f} | "
+                     f"{rows[-1]['best_s'] * 1e3:.2f} |")
+    table = "\n".join(lines)
+    print(table)
+    out = ROOT / "benchmarks" / "results"
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "collate.md").write_text(table + "\n")
+    result = {"clips": len(clips), "frames": args.frames, "joints": joints,
+              "nodes": batch.num_nodes, "rows": rows}
+    (out / "collate.json").write_text(json.dumps(result, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
