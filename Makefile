@@ -18,8 +18,12 @@ venv: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2 tests
 
+# The whole pipeline on the procedural zoo in under 10 minutes on a CPU (zoo,
+# training, retargeting, rendering into demo_output/), e.g.
+# make demo DEMO_ARGS="--minutes 2 --output /tmp/demo" or DEMO_ARGS=--quick.
+DEMO_ARGS ?=
 demo: $(STAMP)
-	$(VENV)/bin/satagraph demo
+	$(VENV)/bin/satagraph demo $(DEMO_ARGS)
 
 bench: $(STAMP)
 	$(PY) benchmarks/pipeline.py

@@ -53,8 +53,10 @@ def add_train_parsers(sub) -> None:
 
 def _common(p) -> None:
     p.add_argument("--ckpt", required=True, help="a checkpoint from `satagraph train`")
-    p.add_argument("--window", type=int, default=64)
-    p.add_argument("--overlap", type=int, default=16)
+    p.add_argument("--window", type=int, default=None,
+                   help="frames per window (default: the training window)")
+    p.add_argument("--overlap", type=int, default=None,
+                   help="frames shared by consecutive windows (default: window / 4)")
 
 
 def run_train(args) -> int:

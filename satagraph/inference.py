@@ -54,14 +54,27 @@ def static_features(motion: Motion) -> MotionFeatures:
         translations=motion.skeleton.offsets[None].copy()))
 
 
+def default_windows(module, window: Optional[int] = None,
+                    overlap: Optional[int] = None) -> Tuple[int, int]:
+    """The window the module was trained on (``meta["window"]``, else 64)
+    and a quarter of it as overlap, unless given."""
+    if window is None:
+        window = int((getattr(module, "meta", None) or {}).get("window", 64))
+    return window, window // 4 if overlap is None else overlap
+
+
 @torch.no_grad()
 def transfer(module, source: MotionFeatures, target: MotionFeatures,
-             semantic: Optional[Callable] = None, window: int = 64,
-             overlap: int = 16, batch_size: int = 16) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+             semantic: Optional[Callable] = None, window: Optional[int] = None,
+             overlap: Optional[int] = None,
+             batch_size: int = 16) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Encode :obj:`source` window by window and decode onto :obj:`target`'s
     skeleton. Returns physical ``q [T, J_t, 6]``, ``r [T, 4]`` and contact
     probabilities ``c [T, J_t]`` for every source frame. The module is run
-    in evaluation mode and given back in the mode it was in."""
+    in evaluation mode and given back in the mode it was in. :obj:`window`
+    defaults to the module's training window and :obj:`overlap` to a
+    quarter of the window (see :func:`default_windows`)."""
+    window, overlap = default_windows(module, window, overlap)
     was_training = module.training
     module.eval()
     try:
@@ -97,8 +110,8 @@ def _transfer(module, source: MotionFeatures, target: MotionFeatures,
 
 
 def retarget_motion(module, source: Motion, target: Motion,
-                    semantic: Optional[Callable] = None, window: int = 64,
-                    overlap: int = 16, fps: Optional[float] = None) -> Motion:
+                    semantic: Optional[Callable] = None, window: Optional[int] = None,
+                    overlap: Optional[int] = None, fps: Optional[float] = None) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -112,8 +125,10 @@ def retarget_motion(module, source: Motion, target: Motion,
         target (Motion): A motion (or zero-frame skeleton) of the target rig.
         semantic (Callable, optional): Skeleton -> semantic embedding, the
             one used in training.
-        window (int): Frames per window.
-        overlap (int): Frames shared by consecutive windows.
+        window (int, optional): Frames per window (default: the training
+            window, see :func:`default_windows`).
+        overlap (int, optional): Frames shared by consecutive windows
+            (default: a quarter of the window).
         fps (float, optional): Feature frame rate (the model's, default 30).
     """
     fps = fps or float(getattr(module, "fps", 30.0))
@@ -154,7 +169,8 @@ def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
 
 
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
-                       window: int = 64, overlap: int = 16) -> Motion:
+                       window: Optional[int] = None,
+                       overlap: Optional[int] = None) -> Motion:
     """Encode and decode a motion on its own skeleton."""
     return retarget_motion(module, motion, motion, semantic, window, overlap)
 

@@ -258,7 +258,7 @@ def test_no_command_is_usage_error(capsys):
 
 # --------------------------------------------------------------------- demo
 def test_demo(capsys):
-    code, out, err = run(capsys, "demo")
+    code, out, err = run(capsys, "demo", "--quick")
     assert code == 0 and err == ""
     assert "built-in example walk" in out
     assert "$ satagraph inspect" in out
@@ -268,7 +268,7 @@ def test_demo(capsys):
 
 def test_demo_keeps_output(capsys, tmp_path):
     path = tmp_path / "walk.bvh"
-    code, out, _ = run(capsys, "demo", "--output", str(path), "--json")
+    code, out, _ = run(capsys, "demo", "--quick", "--output", str(path), "--json")
     assert code == 0
     info = json.loads(out[out.index("{"):])
     motion = read_bvh(path)

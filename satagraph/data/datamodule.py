@@ -2,14 +2,14 @@
 from __future__ import annotations
 
 from collections import Counter
-from typing import Callable, Dict, List, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
 
 import lightning as L
 import torch
-from torch.utils.data import DataLoader, WeightedRandomSampler
+from torch.utils.data import DataLoader, RandomSampler, WeightedRandomSampler
 
 from satagraph.data.collate import collate_clips
-from satagraph.data.dataset import MotionDataset, load_features
+from satagraph.data.dataset import EpochSampler, MotionDataset, WindowAugment, load_features
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
 
@@ -65,6 +65,15 @@ class MotionDataModule(L.LightningDataModule):
         num_workers (int): DataLoader workers.
         max_files (int, optional): Use at most this many files per split
             (quick experiments).
+        seed (int): Seed of the balanced sampler and of the augmentation.
+        augment (dict or bool, optional): On-the-fly skeleton augmentation
+            of the training windows (validation and test windows are never
+            augmented): ``None``/``False`` (default, off), ``True`` (the
+            defaults of :data:`~satagraph.data.dataset.AUGMENT_DEFAULTS`) or
+            a dict of some of its keys, e.g. ``{"scale": 0.5, "mirror":
+            0.5, "drop": 0.1, "low": 0.8, "high": 1.2}``. Every window is
+            drawn on a new skeleton per epoch, deterministically given the
+            seed (see :class:`~satagraph.data.dataset.WindowAugment`).
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -72,7 +81,8 @@ class MotionDataModule(L.LightningDataModule):
                  balanced: bool = True, preprocessing: Optional[Dict] = None,
                  semantic_encoder: Optional[str] = "offline",
                  cache_dir: Optional[str] = None, num_workers: int = 0,
-                 max_files: Optional[int] = None, seed: int = 0) -> None:
+                 max_files: Optional[int] = None, seed: int = 0,
+                 augment: Union[None, bool, Mapping[str, Any]] = None) -> None:
         super().__init__()
         self.sources, self.window, self.stride = sources, window, stride
         self.eval_stride = eval_stride or window
@@ -80,6 +90,7 @@ class MotionDataModule(L.LightningDataModule):
         self.preprocessing, self.cache_dir = dict(preprocessing or {}), cache_dir
         self.semantic_encoder, self.num_workers = semantic_encoder, num_workers
         self.max_files, self.seed = max_files, seed
+        self.augment = WindowAugment.from_config(augment, seed, self.preprocessing)
         self.datasets: Dict[str, MotionDataset] = {}
         self.normalizer = FeatureNormalizer()
 
@@ -96,7 +107,9 @@ class MotionDataModule(L.LightningDataModule):
             chosen = self._files(split, files)
             feats = load_features(chosen, self.preprocessing, self.cache_dir)
             stride = self.stride if split == "train" else self.eval_stride
-            self.datasets[split] = MotionDataset(chosen, feats, embed, self.window, stride)
+            augment = self.augment if split == "train" else None
+            self.datasets[split] = MotionDataset(chosen, feats, embed, self.window, stride,
+                                                 augment)
         if not len(self.datasets["train"]):
             raise ValueError(f"no training windows in {self.sources!r}")
         self.normalizer.fit(self.datasets["train"].features)
@@ -116,6 +129,9 @@ class MotionDataModule(L.LightningDataModule):
             weights = torch.tensor([1.0 / counts[g] for g in groups], dtype=torch.double)
             gen = torch.Generator().manual_seed(self.seed)
             sampler = WeightedRandomSampler(weights, len(ds), generator=gen)
+        if shuffle and ds.augment is not None:
+            sampler = EpochSampler(sampler or RandomSampler(
+                ds, generator=torch.Generator().manual_seed(self.seed)))
         return DataLoader(ds, batch_size=self.batch_size,
                           shuffle=shuffle and sampler is None, sampler=sampler,
                           collate_fn=collate_clips, num_workers=self.num_workers,

@@ -1,23 +1,44 @@
 """Windows of motion features from many files and skeletons."""
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import (Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence,
+                    Tuple, Union)
 
+import numpy as np
 import torch
-from torch.utils.data import Dataset
+from torch.utils.data import Dataset, Sampler
 
+from satagraph.data.augment import SkeletonAugment
+from satagraph.data.augment import mirror as mirror_motion
 from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
 from satagraph.data.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.features import CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures, motion_to_features
+from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures,
+                                     features_to_motion, motion_to_features)
 from satagraph.data.sources import MotionFile
 from satagraph.io import BVHError, read_bvh
+from satagraph.skeleton import Skeleton
 
 #: Preprocessing defaults; every key is part of the cache key.
 DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "floor": True,
                                "contact_height": CONTACT_HEIGHT,
                                "contact_speed": CONTACT_SPEED}
+
+#: ``data.augment`` defaults: probabilities of bone scaling, mirroring,
+#: dropping a leaf chain, merging two trunk segments and inserting a joint
+#: (see :class:`~satagraph.data.augment.SkeletonAugment`), the per-axis bone
+#: scale range and the longest leaf chain dropped.
+AUGMENT_DEFAULTS: Dict[str, float] = {"scale": 0.5, "mirror": 0.5, "drop": 0.0,
+                                      "merge": 0.0, "insert": 0.0, "low": 0.8,
+                                      "high": 1.2, "max_drop": 2}
+
+#: Semantic embeddings a dataset keeps (oldest dropped first).
+SEMANTIC_CACHE_SIZE = 4096
+
+#: A window key: an index, or ``(epoch, index)`` (see :class:`EpochSampler`).
+WindowKey = Union[int, Tuple[int, int]]
 
 
 class MotionDatasetError(RuntimeError):
@@ -71,25 +92,126 @@ def window_starts(num_frames: int, window: int, stride: int) -> List[int]:
     return starts
 
 
+def _frames(feats: MotionFeatures, frames: slice) -> MotionFeatures:
+    """The features of some frames only (static parts shared)."""
+    return replace(feats, q=feats.q[frames], x=feats.x[frames],
+                   x_rel=feats.x_rel[frames], v_q=feats.v_q[frames],
+                   v_x=feats.v_x[frames], r=feats.r[frames], c=feats.c[frames])
+
+
+class WindowAugment:
+    r"""On-the-fly skeleton augmentation of feature windows.
+
+    A window is turned back into a motion (losslessly, see
+    :func:`~satagraph.data.features_to_motion`), mirrored and put on a
+    changed skeleton (bone scaling, leaf chain dropped, trunk segments
+    merged, joint inserted; see :class:`~satagraph.data.augment.SkeletonAugment`)
+    and featurised again, static features included. One frame before the
+    window is carried along so that the velocities and root deltas of its
+    first frame are those of the clip. The random draws depend only on
+    ``(seed, epoch, index)``, so a run is reproducible with any number of
+    workers.
+
+    Args:
+        scale (float): Probability of scaling the bones.
+        mirror (float): Probability of mirroring left and right.
+        drop (float): Probability of dropping a leaf chain.
+        merge (float): Probability of merging two trunk segments.
+        insert (float): Probability of inserting a joint.
+        low (float): Smallest per-axis bone scale.
+        high (float): Largest per-axis bone scale.
+        max_drop (int): Longest leaf chain dropped.
+        seed (int): Base seed.
+        contact_height (float): Contact height threshold (see
+            :func:`~satagraph.data.motion_to_features`).
+        contact_speed (float): Contact speed threshold.
+    """
+
+    def __init__(self, scale: float = 0.5, mirror: float = 0.5, drop: float = 0.0,
+                 merge: float = 0.0, insert: float = 0.0, low: float = 0.8,
+                 high: float = 1.2, max_drop: int = 2, seed: int = 0,
+                 contact_height: float = CONTACT_HEIGHT,
+                 contact_speed: float = CONTACT_SPEED) -> None:
+        if not 0.0 <= mirror <= 1.0:
+            raise ValueError("data.augment.mirror must be in [0, 1]")
+        if not 0.0 < low <= high:
+            raise ValueError(f"data.augment: need 0 < low <= high, got {low}, {high}")
+        self.p_mirror, self.seed = float(mirror), int(seed)
+        self.contacts = (float(contact_height), float(contact_speed))
+        self.skeleton_augment = dict(p_scale=float(scale), p_mirror=0.0,
+                                     p_drop=float(drop), p_merge=float(merge),
+                                     p_insert=float(insert), scale_range=(low, high),
+                                     max_drop=int(max_drop))
+        SkeletonAugment(**self.skeleton_augment)  # checks the probabilities
+
+    @classmethod
+    def from_config(cls, spec: Union[None, bool, Mapping[str, Any]], seed: int = 0,
+                    preprocessing: Optional[Mapping[str, Any]] = None
+                    ) -> Optional["WindowAugment"]:
+        r"""The augmentation of a ``data.augment`` config section:
+        ``null``/``false`` (off), ``true`` (:data:`AUGMENT_DEFAULTS`) or a
+        mapping overriding some of its keys."""
+        if spec is None or spec is False:
+            return None
+        spec = {} if spec is True else dict(spec)
+        unknown = sorted(set(spec) - set(AUGMENT_DEFAULTS))
+        if unknown:
+            raise ValueError(f"data.augment: unknown keys {unknown}; known: "
+                             f"{sorted(AUGMENT_DEFAULTS)}")
+        config = dict(DEFAULT_PREPROCESSING, **(preprocessing or {}))
+        return cls(**dict(AUGMENT_DEFAULTS, **spec), seed=seed,
+                   contact_height=config["contact_height"],
+                   contact_speed=config["contact_speed"])
+
+    def __call__(self, feats: MotionFeatures, start: int, stop: int,
+                 epoch: int = 0, index: int = 0) -> Tuple[MotionFeatures, int]:
+        """Augmented features of frames ``start - 1:stop`` (``start:stop``
+        when :obj:`start` is 0) and the position of frame :obj:`start` in
+        them."""
+        lead = 1 if start > 0 else 0
+        motion = features_to_motion(_frames(feats, slice(start - lead, stop)))
+        rng = np.random.default_rng([self.seed, epoch, index])
+        axis = feats.facing_axis
+        if rng.random() < self.p_mirror:
+            try:
+                motion = mirror_motion(motion)
+                axis = axis * np.array([-1.0, 1.0, 1.0])  # the root turns with it
+            except ValueError:
+                pass  # asymmetric skeleton: left as it is
+        augment = SkeletonAugment(**self.skeleton_augment,
+                                  seed=int(rng.integers(2 ** 31)))
+        out = motion_to_features(augment(motion), *self.contacts, facing_axis=axis)
+        return out, lead
+
+
 class MotionDataset(Dataset):
     r"""Fixed-length windows (default 64 frames) of motion features.
+
+    With :obj:`augment`, a window asked for by the key ``(epoch, index)``
+    (what :class:`EpochSampler` yields to the training loader) is drawn on
+    an augmented skeleton seeded by that key (see :class:`WindowAugment`);
+    a plain index always gives the window as it is.
 
     Args:
         files (list[MotionFile]): The files.
         features (list[MotionFeatures]): Their features (see
             :func:`load_features`).
         semantic (Callable, optional): Maps a :class:`~satagraph.Skeleton` to
-            its semantic embedding ``[J, D_t]``; called once per skeleton.
+            its semantic embedding ``[J, D_t]``; called once per skeleton
+            (names and hierarchy).
         window (int): Frames per window.
         stride (int): Frames between window starts.
+        augment (WindowAugment, optional): Skeleton augmentation (training
+            data only).
     """
 
     def __init__(self, files: Sequence[MotionFile], features: Sequence[MotionFeatures],
                  semantic: Optional[Callable] = None, window: int = 64,
-                 stride: int = 32) -> None:
+                 stride: int = 32, augment: Optional[WindowAugment] = None) -> None:
         self.files, self.features = list(files), list(features)
         self.window, self.stride = window, stride
-        self._semantic: Dict[Tuple[str, ...], torch.Tensor] = {}
+        self.augment = augment
+        self._semantic: Dict[Tuple, torch.Tensor] = {}
         self.semantic_fn = semantic
         self.index: List[Tuple[int, int]] = [
             (i, s) for i, f in enumerate(self.features)
@@ -99,10 +221,13 @@ class MotionDataset(Dataset):
         return len(self.index)
 
     def semantic(self, feats: MotionFeatures) -> Optional[torch.Tensor]:
+        """The semantic embedding of a skeleton, computed once per skeleton."""
         if self.semantic_fn is None:
             return None
-        key = tuple(feats.skeleton.names)
+        key = _skeleton_key(feats.skeleton)
         if key not in self._semantic:
+            if len(self._semantic) >= SEMANTIC_CACHE_SIZE:  # augmented skeletons
+                del self._semantic[next(iter(self._semantic))]
             self._semantic[key] = self.semantic_fn(feats.skeleton).float()
         return self._semantic[key]
 
@@ -111,8 +236,44 @@ class MotionDataset(Dataset):
         f = self.files[self.index[idx][0]]
         return f"{f.dataset}/{f.skeleton}"
 
-    def __getitem__(self, idx: int) -> MotionClip:
+    def __getitem__(self, key: WindowKey) -> MotionClip:
+        epoch, idx = key if isinstance(key, tuple) else (None, key)
         i, start = self.index[idx]
         feats, f = self.features[i], self.files[i]
         meta = {"path": f.path, "dataset": f.dataset, "skeleton": f.skeleton}
-        return feats.to_clip(start, start + self.window, self.semantic(feats), meta)
+        if self.augment is None or epoch is None:
+            return feats.to_clip(start, start + self.window, self.semantic(feats), meta)
+        stop = min(start + self.window, feats.num_frames)
+        aug, lead = self.augment(feats, start, stop, epoch, idx)
+        clip = aug.to_clip(lead, None, self.semantic(aug), dict(meta, augmented=True))
+        clip.meta["start"] = start
+        return clip
+
+
+def _skeleton_key(skeleton: Skeleton) -> Tuple:
+    """What the semantic embedding of a skeleton depends on."""
+    return (tuple(skeleton.names), tuple(skeleton.parents.tolist()),
+            tuple(skeleton.end_site.tolist()))
+
+
+class EpochSampler(Sampler):
+    r"""Yields ``(epoch, index)`` keys from another sampler's indices, so
+    that datasets can draw per-epoch augmentation deterministically, in any
+    worker process. Lightning calls :meth:`set_epoch` before every epoch.
+
+    Args:
+        sampler (Sampler): The sampler of indices.
+    """
+
+    def __init__(self, sampler: Sampler) -> None:
+        self.sampler, self.epoch = sampler, 0
+
+    def set_epoch(self, epoch: int) -> None:
+        """The epoch of the next iteration."""
+        self.epoch = int(epoch)
+
+    def __iter__(self) -> Iterator[Tuple[int, int]]:
+        return ((self.epoch, int(i)) for i in self.sampler)
+
+    def __len__(self) -> int:
+        return len(self.sampler)
