@@ -30,7 +30,10 @@ def module_class(name: str):
 
 
 def build_datamodule(cfg: Dict[str, Any]) -> MotionDataModule:
+    """The data module of a config; its sampling and augmentation seed is the
+    run's ``seed`` unless ``data.seed`` sets one."""
     data = dict(cfg["data"])
+    data.setdefault("seed", int(cfg.get("seed", 0)))
     return MotionDataModule(**data)
 
 
