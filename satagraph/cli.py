@@ -37,6 +37,7 @@ OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
     ("satagraph.cli_train", "add_train_parsers"),
     ("satagraph.cli_zoo", "add_zoo_parser"),
     ("satagraph.cli_render", "add_render_parser"),
+    ("satagraph.cli_sweep", "add_sweep_parser"),
 )
 
 Subparsers = argparse._SubParsersAction  # what add_subparsers() returns

@@ -1,0 +1,62 @@
+"""Helpers of benchmarks/throughput.py, scaling.py and compare.py (fast: no
+training or timing runs)."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+import compare  # noqa: E402
+import scaling  # noqa: E402
+import throughput  # noqa: E402
+from satagraph.sweep import SweepRow  # noqa: E402
+
+
+def test_synthetic_tree_batch():
+    feats = scaling.synthetic_features(30, 8, 2)
+    batch = scaling.batch_of(feats, 8)
+    assert batch.clip_num_joints.tolist() == [30, 30]
+    assert int(batch.root.shape[0]) == 16
+    parents = scaling.synthetic_motion(30, 4).skeleton.parents
+    assert parents[0] == -1 and all(0 <= p < j for j, p in enumerate(parents) if j)
+
+
+def test_tiled_motion_and_replace_row():
+    motion = scaling.synthetic_motion(5, 10)
+    tiled = throughput.tiled_motion(motion, 3)
+    assert tiled.num_frames == 30
+    np.testing.assert_allclose(tiled.rotations[10:20], motion.rotations)
+    rows = [{"model": "a", "device": "cpu", "v": 1}, {"model": "b", "device": "cpu"}]
+    out = throughput.replace_row(rows, {"model": "a", "device": "cpu", "v": 2},
+                                 ("model", "device"))
+    assert len(out) == 2 and out[-1]["v"] == 2
+
+
+def test_scaling_table_ratio():
+    rows = [dict(model=m, input={"kind": "synthetic"}, joints=[20, 20], frames=32,
+                 ms_per_frame=t, mb_per_frame=1.0) for m, t in (("SATA", 2.0),
+                                                                ("padded RVQ", 5.0))]
+    text = scaling.table(rows)
+    assert "| 2.50 | 1.00 |" in text
+
+
+def test_compare_tables():
+    metrics = {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}
+    row = SweepRow("SATA-VAE", "sata_vae", params=10, steps=3,
+                   metrics={"dog": dict(metrics, clips=2), "all": dict(metrics, clips=2),
+                            "zero-shot": dict(metrics, clips=4)},
+                   retarget={"internal": 1.5, "internal:dog": 1.5, "zero-shot": 2.0})
+    t1 = compare.table1([row])
+    assert "| dog | SATA-VAE | 2 |" in t1 and "| zero-shot | SATA-VAE | 4 |" in t1
+    t3 = compare.table3([row])
+    assert "| SATA-VAE | 1.500 | 2.000 | 1.500 | n/a |" in t3
+
+
+@pytest.mark.parametrize("size", [64])
+def test_matmul_peak_positive(size):
+    import torch
+    assert throughput.matmul_peak(torch.device("cpu"), size, repeats=1) > 0
