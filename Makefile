@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: venv test demo bench clean
+.PHONY: venv test demo bench sweep clean
 
 $(STAMP): setup.cfg pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -25,11 +25,27 @@ DEMO_ARGS ?=
 demo: $(STAMP)
 	$(VENV)/bin/satagraph demo $(DEMO_ARGS)
 
+# Every benchmark writes its table to benchmarks/results/. Run them on an
+# otherwise idle machine: on 2 cores a second busy process slows torch's
+# thread pool several times over and the ratios stop meaning anything.
 bench: $(STAMP)
 	$(PY) benchmarks/pipeline.py
 	$(PY) benchmarks/collate.py
 	$(PY) benchmarks/semantic_alignment.py
 	$(PY) benchmarks/model_cost.py
+	$(PY) benchmarks/throughput.py
+	$(PY) benchmarks/scaling.py
+	$(PY) benchmarks/compare.py
+
+# The Table-4 ablations and GNN-layer variants, each trained for the same
+# budget (SWEEP_MINUTES) on the same data, compared in sweeps/table4/sweep.md.
+SWEEP_MINUTES ?= 5
+SWEEP_CONFIGS ?= sata_vae ablation_no_gnn ablation_no_spatial_attention ablation_no_temporal \
+	ablation_no_fusion ablation_no_text gnn_gin gnn_gat gnn_gatv2 gnn_gcn gnn_transformer
+SWEEP_ARGS ?=
+sweep: $(STAMP)
+	$(VENV)/bin/satagraph sweep --budget $(SWEEP_MINUTES) --output sweeps/table4 \
+		$(SWEEP_CONFIGS) $(SWEEP_ARGS)
 
 clean:
 	rm -rf $(VENV) build *.egg-info

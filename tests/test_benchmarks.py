@@ -56,7 +56,10 @@ def test_compare_tables():
     assert "| SATA-VAE | 1.500 | 2.000 | 1.500 | n/a |" in t3
 
 
-@pytest.mark.parametrize("size", [64])
-def test_matmul_peak_positive(size):
+def test_matmul_peak_is_best_over_sizes(monkeypatch):
     import torch
-    assert throughput.matmul_peak(torch.device("cpu"), size, repeats=1) > 0
+    cpu = torch.device("cpu")
+    assert throughput._matmul_rate(cpu, 64, 1) > 0
+    rates = {32: 5.0, 64: 9.0, 128: 7.0}
+    monkeypatch.setattr(throughput, "_matmul_rate", lambda dev, size, rep: rates[size])
+    assert throughput.matmul_peak(cpu, (32, 64, 128), repeats=1) == 9.0

@@ -17,6 +17,8 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 from torch_geometric.nn import GPSConv
 
+from satagraph.nn.dropout import fast_dropout
+
 
 def joint_count_groups(frames) -> List[Tuple[int, Optional[Tensor]]]:
     r"""Nodes of a :class:`~satagraph.data.FrameBatch` grouped by the joint
@@ -98,9 +100,10 @@ class FrameGPSConv(GPSConv):
             return super().forward(x, edge_index, batch, **kwargs)
         parts = []
         if self.conv is not None:
-            h = F.dropout(self.conv(x, edge_index, **kwargs), self.dropout, self.training)
+            h = fast_dropout(self.conv(x, edge_index, **kwargs), self.dropout, self.training)
             parts.append(self._norm(self.norm1, h + x, batch))
-        h = F.dropout(frame_self_attention(self.attn, x, frames), self.dropout, self.training)
+        h = fast_dropout(frame_self_attention(self.attn, x, frames), self.dropout,
+                         self.training)
         parts.append(self._norm(self.norm2, h + x, batch))
         out = parts[0] if len(parts) == 1 else parts[0] + parts[1]
         return self._norm(self.norm3, out + self.mlp(out), batch)

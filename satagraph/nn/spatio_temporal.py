@@ -7,10 +7,10 @@ import math
 from typing import Optional
 
 import torch
-import torch.nn.functional as F
 from torch import Tensor, nn
 from torch_geometric.nn.resolver import activation_resolver
 
+from satagraph.nn.dropout import fast_dropout, use_fast_dropout
 from satagraph.nn.frame_gps import FrameGPSConv
 from satagraph.nn.local_conv import accepts_edge_attr, build_local_conv
 from satagraph.ops.temporal import from_temporal_streams, to_temporal_streams
@@ -54,7 +54,7 @@ class LocalSpatialLayer(nn.Module):
 
     def forward(self, x: Tensor, edge_index: Tensor, batch: Optional[Tensor] = None,
                 **kwargs) -> Tensor:
-        h = F.dropout(self.conv(x, edge_index, **kwargs), self.dropout, self.training)
+        h = fast_dropout(self.conv(x, edge_index, **kwargs), self.dropout, self.training)
         h = self.norm1(h + x)
         return self.norm2(h + self.mlp(h))
 
@@ -107,6 +107,7 @@ class SpatioTemporalBlock(nn.Module):
         self.spatial = self._spatial(channels, conv, heads, dropout, spatial_attention, act)
         self.temporal = nn.TransformerEncoderLayer(
             channels, heads, ff_channels, dropout, batch_first=True) if temporal else None
+        use_fast_dropout(self)  # torch's CPU dropout draws one number per element
 
     @staticmethod
     def _spatial(channels: int, conv: Optional[nn.Module], heads: int, dropout: float,
