@@ -1,6 +1,7 @@
 """Parse + FK + features over a BVH folder, against pybvh on the files it reads.
 
-Usage: ``python benchmarks/pipeline.py [--data ../shared/data] [--repeat 3]``.
+Usage: ``python benchmarks/pipeline.py [--data ../shared/data] [--repeat 3]
+[--threads N]``.
 Prints a markdown table and writes it to ``benchmarks/results/pipeline.md``
 (and ``.json``). pybvh is a benchmark-only dependency (``pip install
 satagraph[bench]``); without it the comparison rows are left out.
@@ -79,7 +80,12 @@ def main(argv: List[str] = None) -> None:
     parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--repeat", type=int, default=3,
                         help="best of this many runs per row")
+    parser.add_argument("--threads", type=int, default=None,
+                        help="torch threads (default: torch's own count); the "
+                             "parse+FK rows use numpy only")
     args = parser.parse_args(argv)
+    if args.threads:
+        torch.set_num_threads(args.threads)
     files = sorted(str(p) for p in Path(args.data).glob("**/*.bvh"))
     if not files:
         raise SystemExit(f"no .bvh files under {args.data}")

@@ -2,19 +2,24 @@
 from __future__ import annotations
 
 import io
+import math
 import os
 import re
 import warnings
 from dataclasses import dataclass, field
-from typing import List, Optional, Tuple, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
+from satagraph.io._floats import parse_decimal_table
 from satagraph.io.errors import BVHError
 from satagraph.motion import Motion
 from satagraph.skeleton import Skeleton
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+#: Joint-frames per step of the Euler angle conversion (small temporaries).
+EULER_CHUNK_JOINT_FRAMES = 1 << 15
 
 _CHANNELS = {f"{a}{k}".lower(): f"{a}{k}" for a in "XYZ"
              for k in ("position", "rotation")}
@@ -39,13 +44,13 @@ class _Header:
 
 def _floats(path: str, lineno: int, tokens: List[str], what: str) -> np.ndarray:
     try:
-        values = np.array([float(t) for t in tokens])
+        values = [float(t) for t in tokens]
     except ValueError:
         raise BVHError(path, lineno, f"non-numeric value in {what}: "
                        f"{' '.join(tokens)!r}") from None
-    if not np.isfinite(values).all():
+    if not all(map(math.isfinite, values)):
         raise BVHError(path, lineno, f"non-finite value in {what}")
-    return values
+    return np.array(values)
 
 
 def _parse_channels(path: str, lineno: int, tokens: List[str]) -> Tuple[str, ...]:
@@ -125,7 +130,7 @@ class _HeaderParser:
             self._offset(lineno, line.split()[1:])
         elif upper == "CHANNELS":
             self._channels(lineno, line.split()[1:])
-        elif set(line) <= set("{} \t"):
+        elif not line.strip("{} \t"):  # only braces
             for ch in line:
                 if ch == "{":
                     self._open_brace(lineno)
@@ -262,54 +267,131 @@ def _locate_bad_frame(path: str, text: str, lineno: int, frames: int,
                     f"'Frames: {frames}' but only {count} frame lines")
 
 
-def _parse_frames(path: str, text: str, lineno: int, frames: int,
-                  width: int) -> np.ndarray:
-    """Parse the frame lines (C parser of numpy); on any problem, find and
-    name the offending line."""
+def _parse_frames(path: str, text: str, pos: int, raw: Optional[bytes], lineno: int,
+                  frames: int, width: int) -> np.ndarray:
+    """Parse the frame lines, from offset :obj:`pos` of :obj:`text` (and of
+    :obj:`raw`, the file's bytes, when given: they align with the text):
+    the vectorised fast path for plain decimals, else the C parser of numpy;
+    on any problem, find and name the offending line."""
     if width == 0:  # a skeleton without channels: frame lines are empty
         return np.zeros((frames, 0))
     if frames == 0:
-        if text.strip():
-            raise _locate_bad_frame(path, text, lineno, frames, width)
+        if text[pos:].strip():
+            raise _locate_bad_frame(path, text[pos:], lineno, frames, width)
         return np.zeros((0, width))
+    data = parse_decimal_table(raw[pos:] if raw is not None else text[pos:].encode(),
+                               frames, width)
+    if data is not None:
+        return data
+    body = text[pos:]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            data = np.loadtxt(io.StringIO(text), dtype=np.float64, ndmin=2,
+            data = np.loadtxt(io.StringIO(body), dtype=np.float64, ndmin=2,
                               comments=None)
         except ValueError:
-            raise _locate_bad_frame(path, text, lineno, frames, width) from None
+            raise _locate_bad_frame(path, body, lineno, frames, width) from None
     if data.shape != (frames, width) or not np.isfinite(data).all():
-        raise _locate_bad_frame(path, text, lineno, frames, width)
+        raise _locate_bad_frame(path, body, lineno, frames, width)
     return data
 
 
-def _euler_to_matrix(angles: np.ndarray, order: str) -> np.ndarray:
-    r"""Numpy twin of :func:`~satagraph.ops.euler_to_matrix` (radians, BVH
-    order of three distinct axes), in closed form.
+def _euler_components(angles: np.ndarray, order: str) -> np.ndarray:
+    r"""Rotation matrices of intrinsic Euler angles (radians, BVH order of
+    three distinct axes), component-major, in closed form.
 
     ``R_i(a) R_j(b) R_k(c)`` is :math:`P R_x R_y R_z P^T` for the permutation
     :math:`P` taking ``XYZ`` to ``ijk``, with the angles negated when
     :math:`P` is odd (a reflection reverses the sense of rotation).
 
     Shapes:
+        - **angles**: :math:`(3, *)`
+        - **output**: :math:`(3, 3, *)`
+    """
+    idx = ["XYZ".index(a) for a in order]
+    shape, angles = angles.shape[1:], angles.reshape(3, -1)
+    ca, cb, cc = np.cos(angles)
+    sin = np.sin(angles)
+    if order not in ("XYZ", "YZX", "ZXY"):
+        np.negative(sin, out=sin)
+    sa, sb, sc = sin
+    out = np.empty((3, 3, angles.shape[1]))
+    e = [[out[idx[r], idx[c]] for c in range(3)] for r in range(3)]
+    tmp, sa_sb, ca_sb = np.empty_like(ca), sa * sb, ca * sb
+    np.multiply(cb, cc, out=e[0][0])
+    np.negative(np.multiply(cb, sc, out=e[0][1]), out=e[0][1])
+    e[0][2][...] = sb
+    np.add(np.multiply(ca, sc, out=e[1][0]), np.multiply(sa_sb, cc, out=tmp), out=e[1][0])
+    np.subtract(np.multiply(ca, cc, out=e[1][1]), np.multiply(sa_sb, sc, out=tmp),
+                out=e[1][1])
+    np.negative(np.multiply(sa, cb, out=e[1][2]), out=e[1][2])
+    np.subtract(np.multiply(sa, sc, out=e[2][0]), np.multiply(ca_sb, cc, out=tmp),
+                out=e[2][0])
+    np.add(np.multiply(sa, cc, out=e[2][1]), np.multiply(ca_sb, sc, out=tmp), out=e[2][1])
+    np.multiply(ca, cb, out=e[2][2])
+    return out.reshape((3, 3) + shape)
+
+
+def _euler_to_matrix(angles: np.ndarray, order: str) -> np.ndarray:
+    r"""Numpy twin of :func:`~satagraph.ops.euler_to_matrix` (radians, BVH
+    order of three distinct axes), in closed form.
+
+    Shapes:
         - **angles**: :math:`(*, 3)`
         - **output**: :math:`(*, 3, 3)`
     """
-    idx = ["XYZ".index(a) for a in order]
-    sign = 1.0 if order in ("XYZ", "YZX", "ZXY") else -1.0
-    ca, cb, cc = np.moveaxis(np.cos(angles), -1, 0)
-    sa, sb, sc = np.moveaxis(np.sin(angles) * sign, -1, 0)
-    sa_sb, ca_sb = sa * sb, ca * sb
-    entries = (
-        (cb * cc, -cb * sc, sb),
-        (ca * sc + sa_sb * cc, ca * cc - sa_sb * sc, -sa * cb),
-        (sa * sc - ca_sb * cc, sa * cc + ca_sb * sc, ca * cb),
-    )
-    out = np.empty(angles.shape[:-1] + (3, 3))
-    for r, row in enumerate(entries):
-        for c, value in enumerate(row):
-            out[..., idx[r], idx[c]] = value
+    out = _euler_components(np.moveaxis(angles, -1, 0), order)
+    return np.moveaxis(out, (0, 1), (-2, -1))
+
+
+@dataclass
+class _ChannelMap:
+    """Where the channels of the frame lines go: position channels as
+    (joint, axis, column) triples, rotation channels as column triples
+    grouped by rotation order."""
+    pos_joint: List[int] = field(default_factory=list)
+    pos_axis: List[int] = field(default_factory=list)
+    pos_column: List[int] = field(default_factory=list)
+    rotations: Dict[str, Tuple[List[int], List[List[int]]]] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, joints: List[_Joint]) -> "_ChannelMap":
+        out, column = cls(), 0
+        for j, joint in enumerate(joints):
+            order, cols = "", []
+            for name in joint.channels:
+                if name.endswith("position"):
+                    out.pos_joint.append(j)
+                    out.pos_axis.append("XYZ".index(name[0]))
+                    out.pos_column.append(column)
+                else:
+                    order, cols = order + name[0], cols + [column]
+                column += 1
+            if cols:
+                idx, all_cols = out.rotations.setdefault(order, ([], []))
+                idx.append(j)
+                all_cols.append(cols)
+        return out
+
+
+def _local_rotations(data: np.ndarray, channels: _ChannelMap,
+                     num_joints: int) -> np.ndarray:
+    """Local rotation matrices ``[T, J, 3, 3]`` (identity for joints without
+    rotation channels), built for all the joints of one rotation order at
+    once, a block of frames at a time (small temporaries)."""
+    num_frames = data.shape[0]
+    out = np.empty((num_frames, num_joints, 3, 3))
+    still = np.ones(num_joints, dtype=bool)
+    for order, (idx, cols) in channels.rotations.items():
+        cols = np.array(cols).T  # [3, n]
+        step = max(1, EULER_CHUNK_JOINT_FRAMES // len(idx))
+        for start in range(0, num_frames, step):
+            part = slice(start, start + step)
+            angles = data[part].T[cols]  # [3, n, frames]
+            np.radians(angles, out=angles)
+            out[part, idx] = _euler_components(angles, order).transpose(3, 2, 0, 1)
+        still[idx] = False
+    out[:, still] = np.eye(3)
     return out
 
 
@@ -322,29 +404,11 @@ def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) 
         channels=[j.channels for j in joints],
         end_site=np.array([j.end_site for j in joints]),
     )
-    num_frames, num = data.shape[0], len(joints)
-    trans = np.broadcast_to(skeleton.offsets, (num_frames, num, 3)).copy()
-    rot = np.empty((num_frames, num, 3, 3))
-    by_order: dict = {}
-    starts = np.cumsum([0] + [len(j.channels) for j in joints])
-    for j, joint in enumerate(joints):
-        rot_cols, order = [], ""
-        for k, c in enumerate(joint.channels, start=starts[j]):
-            if c.endswith("position"):
-                trans[:, j, "XYZ".index(c[0])] = data[:, k]
-            else:
-                rot_cols.append(k)
-                order += c[0]
-        if rot_cols:
-            idx, cols = by_order.setdefault(order, ([], []))
-            idx.append(j)
-            cols.append(rot_cols)
-    still = np.ones(num, dtype=bool)  # joints without rotation channels
-    for order, (idx, cols) in by_order.items():
-        angles = np.radians(data[:, np.array(cols)])  # [T, n, 3]
-        rot[:, idx] = _euler_to_matrix(angles, order)
-        still[idx] = False
-    rot[:, still] = np.eye(3)
+    channels = _ChannelMap.of(joints)
+    trans = np.empty((data.shape[0], len(joints), 3))
+    trans[...] = skeleton.offsets
+    trans[:, channels.pos_joint, channels.pos_axis] = data[:, channels.pos_column]
+    rot = _local_rotations(data, channels, len(joints))
     fps = 1.0 / frame_time
     if round(fps) >= 1 and abs(fps - round(fps)) < 1e-2 * max(1.0, fps / 100):
         fps = float(round(fps))
@@ -371,9 +435,10 @@ def read_bvh(path: PathLike) -> Motion:
     path = os.fspath(path)
     try:
         with open(path, "rb") as f:
-            text = f.read().decode("utf-8", errors="replace")
+            raw = f.read()
     except OSError as err:
         raise BVHError(path, 0, f"cannot read file: {err.strerror}") from None
+    text = raw.decode("utf-8", errors="replace")
     if not text.strip():
         raise BVHError(path, 1, "empty file")
     match = _MOTION.search(text)
@@ -382,5 +447,6 @@ def read_bvh(path: PathLike) -> Motion:
     frames, frame_time, pos, lineno = _frame_header(
         path, text, head_end, header.motion_line)
     width = sum(len(j.channels) for j in header.joints)
-    data = _parse_frames(path, text[pos:], lineno, frames, width)
+    aligned = raw if len(raw) == len(text) else None  # one byte per character
+    data = _parse_frames(path, text, pos, aligned, lineno, frames, width)
     return _to_motion(path, header, data, frame_time)

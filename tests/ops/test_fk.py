@@ -172,6 +172,39 @@ def test_numpy_fk_matches_torch(tiny_skeleton, frames):
     np.testing.assert_allclose(pos2, pos, atol=1e-12)
 
 
+@pytest.mark.parametrize("moving", ["root", "every joint"])
+def test_numpy_fk_in_steps_with_moving_offsets(tiny_skeleton, monkeypatch, moving):
+    """Several steps over frames; per-frame offsets on children (position
+    channels) as well as constant ones."""
+    from satagraph.ops import fk
+    monkeypatch.setattr(fk, "FK_CHUNK_JOINT_FRAMES", 70)  # 7 frames a step
+    parent, frames = tiny_skeleton.parents, 50
+    rotation = random_rotation(frames, 10, seed=4)
+    offset = np.broadcast_to(tiny_skeleton.offsets, (frames, 10, 3)).copy()
+    joints = 1 if moving == "root" else 10
+    offset[:, :joints] += np.random.default_rng(1).normal(size=(frames, joints, 3))
+    want_rot, want_pos = forward_kinematics(rotation, torch.from_numpy(offset),
+                                            torch.from_numpy(parent))
+    rot, pos = fk.forward_kinematics_numpy(rotation.numpy(), offset, parent)
+    np.testing.assert_allclose(rot, want_rot.numpy(), atol=1e-12)
+    np.testing.assert_allclose(pos, want_pos.numpy(), atol=1e-10)
+    none, pos2 = fk.forward_kinematics_numpy(rotation.numpy(), offset, parent,
+                                             rotations=False)
+    assert none is None
+    np.testing.assert_allclose(pos2, pos, atol=1e-12)
+
+
+def test_numpy_fk_several_roots():
+    from satagraph.ops.fk import forward_kinematics_numpy
+    parent = np.array([-1, 0, 1, -1, 3, 3, 5])
+    rotation = random_rotation(6, 7, seed=5).numpy()
+    offset = np.random.default_rng(2).normal(size=(6, 7, 3))
+    want_rot, want_pos = reference_fk(rotation, offset, parent)
+    rot, pos = forward_kinematics_numpy(rotation, offset, parent)
+    np.testing.assert_allclose(rot, want_rot, atol=1e-12)
+    np.testing.assert_allclose(pos, want_pos, atol=1e-12)
+
+
 def test_numpy_fk_rejects_unordered_parents():
     from satagraph.ops.fk import forward_kinematics_numpy
     with pytest.raises(ValueError, match="parents must come before"):
