@@ -25,6 +25,7 @@ import numpy as np
 
 from satagraph import __version__
 from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
 
 PROG = "satagraph"
@@ -405,6 +406,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    retain_freed_memory()  # batches of frame graphs: no page faults per call
     try:
         code = args.func(args)
     except (BVHError, CommandError, OSError, ValueError) as err:
