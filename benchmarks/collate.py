@@ -29,7 +29,6 @@ from satagraph.memory import retain_freed_memory
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = ("dog", "ccbase")
-THREADS = torch.get_num_threads()
 
 
 def _clips_from(folder: Path, count: int, frames: int) -> List[MotionClip]:
@@ -67,6 +66,17 @@ def time_collate(clips: List[MotionClip], repeat: int,
     return times
 
 
+def time_rows(clips: List[MotionClip], repeat: int, thread_counts: List[int],
+              allocator: str) -> List[dict]:
+    """Median and best collate time for each torch thread count."""
+    rows = []
+    for threads in thread_counts:
+        times = time_collate(clips, repeat, threads)
+        rows.append({"allocator": allocator, "threads": threads,
+                     "median_s": statistics.median(times), "best_s": min(times)})
+    return rows
+
+
 def main(argv: Optional[List[str]] = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
@@ -84,17 +94,13 @@ def main(argv: Optional[List[str]] = None) -> None:
         f"{batch.num_graphs:,} frame graphs; {args.repeat} repeats, one process.",
         "", "| allocator | torch threads | median ms | best ms |", "|---|---:|---:|---:|",
     ]
-    rows = []
+    thread_counts = sorted({1, torch.get_num_threads()})
     # glibc defaults first: retain_freed_memory cannot be undone in-process.
-    for allocator in ("glibc default", "retain_freed_memory"):
-        if allocator != "glibc default" and not retain_freed_memory():
-            break
-        for threads in sorted({1, THREADS}):
-            times = time_collate(clips, args.repeat, threads)
-            rows.append({"allocator": allocator, "threads": threads,
-                         "median_s": statistics.median(times), "best_s": min(times)})
-            lines.append(f"| {allocator} | {threads} | {rows[-1]['median_s'] * 1e3:.2f} | "
-                         f"{rows[-1]['best_s'] * 1e3:.2f} |")
+    rows = time_rows(clips, args.repeat, thread_counts, "glibc default")
+    if retain_freed_memory():
+        rows += time_rows(clips, args.repeat, thread_counts, "retain_freed_memory")
+    lines += [f"| {r['allocator']} | {r['threads']} | {r['median_s'] * 1e3:.2f} | "
+              f"{r['best_s'] * 1e3:.2f} |" for r in rows]
     lines += ["", "retain_freed_memory (satagraph.memory, called by the satagraph "
               "command) keeps freed memory in the process, so large batches do not "
               "page-fault on every call."]

@@ -25,7 +25,6 @@ Writes ``benchmarks/results/compare.md`` (and ``.json``).
 from __future__ import annotations
 
 import argparse
-import json
 from collections import defaultdict
 from dataclasses import asdict
 from pathlib import Path
@@ -33,6 +32,7 @@ from typing import Dict, List, Optional, Sequence
 
 import torch
 
+from results_io import write_results
 from satagraph.data.sources import MotionFile, resolve_sources, select
 from satagraph.sweep import COLUMNS, SweepRow, held_out_loader, run_config, sweep_configs
 
@@ -182,11 +182,8 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
                [m.strip() for m in args.models.split(",")], args.max_batches)
     text = report(rows, args)
     print(text)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text("# Equal-budget comparison\n\n" + text)
-    out.with_suffix(".json").write_text(json.dumps(
-        {"args": vars(args), "rows": [asdict(r) for r in rows]}, indent=1, default=float))
+    write_results(Path(args.out), "Equal-budget comparison", text,
+                  {"args": vars(args), "rows": [asdict(r) for r in rows]})
 
 
 if __name__ == "__main__":

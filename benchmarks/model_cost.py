@@ -26,7 +26,6 @@ markdown table and writes it to ``benchmarks/results/model_cost.md`` (and
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Dict, List, Tuple
 
@@ -34,6 +33,7 @@ import torch
 from torch import nn
 from torch.utils.flop_counter import FlopCounterMode, flop_registry, sdpa_flop_count
 
+from results_io import write_results
 from satagraph.config import load_config
 from satagraph.data import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
@@ -177,10 +177,7 @@ def main() -> None:
     rows = measure(Path(args.data))
     table = markdown(rows)
     print(table)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text("# Model cost\n\n" + table)
-    out.with_suffix(".json").write_text(json.dumps(rows, indent=1))
+    write_results(Path(args.out), "Model cost", table, rows)
 
 
 if __name__ == "__main__":

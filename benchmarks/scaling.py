@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import sys
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
@@ -40,6 +39,7 @@ import numpy as np
 import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results_io import write_results  # noqa: E402
 from throughput import (DATA, build_module, isolated, memory_baseline,  # noqa: E402
                         peak_memory, random_semantic, time_steps, train_step)
 
@@ -213,10 +213,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
               "MB/frame", flush=True)
     text = table(rows) + "\n\n" + notes(args)
     print(text)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text("# Scaling with skeleton size and mixing\n\n" + text)
-    out.with_suffix(".json").write_text(json.dumps(rows, indent=1))
+    write_results(Path(args.out), "Scaling with skeleton size and mixing", text, rows)
 
 
 if __name__ == "__main__":

@@ -57,6 +57,7 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from model_cost import MISSED  # noqa: E402
+from results_io import write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
@@ -375,11 +376,8 @@ def write(out: Path, train_rows: List[Dict], infer_rows: List[Dict], steps: int)
     text = (f"## Training step\n\n{training_table(train_rows)}\n\n"
             + (f"## Inference\n\n{inference_table(infer_rows)}\n\n" if infer_rows else "")
             + notes(steps))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text("# Throughput\n\n" + text)
-    out.with_suffix(".json").write_text(json.dumps(
-        {"training": train_rows, "inference": infer_rows, "torch": torch.__version__},
-        indent=1))
+    write_results(out, "Throughput", text, {"training": train_rows, "inference": infer_rows,
+                                            "torch": torch.__version__})
     return text
 
 

@@ -6,9 +6,7 @@ import pytest
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc mallopt is Linux-only")
 def test_retain_freed_memory_takes_effect_in_a_fresh_process():
-    code = ("from satagraph.memory import retain_freed_memory; import torch;"
-            "ok = retain_freed_memory(); x = torch.ones(2**22); del x;"
-            "print(ok)")
+    code = "from satagraph.memory import retain_freed_memory; print(retain_freed_memory())"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "True"

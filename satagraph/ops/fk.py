@@ -184,8 +184,9 @@ def _fk_plan(parent_bytes: bytes, all_rotations: bool) -> _FKPlan:
     turning = [j for j in order if need[j]]
     slot = {j: i for i, j in enumerate(order)}
     rot_slot = {j: i for i, j in enumerate(turning)}
-    levels, start, rot_start = [], depth.count(0), sum(need[j] for j in order
-                                                       if depth[j] == 0)
+    roots = depth.count(0)
+    root_turning = sum(need[j] for j in order[:roots])
+    levels, start, rot_start = [], roots, root_turning
     for d in range(1, max(depth, default=0) + 1):
         joints = [j for j in order if depth[j] == d]
         rot_stop = rot_start + sum(need[j] for j in joints)
@@ -196,8 +197,7 @@ def _fk_plan(parent_bytes: bytes, all_rotations: bool) -> _FKPlan:
         start, rot_start = start + len(joints), rot_stop
     widest = max([lv.stop - lv.start for lv in levels], default=0)
     return _FKPlan(np.array(order, dtype=np.intp), np.array(turning, dtype=np.intp),
-                   depth.count(0), sum(need[j] for j in order if depth[j] == 0),
-                   tuple(levels), widest)
+                   roots, root_turning, tuple(levels), widest)
 
 
 def _component_major(x: np.ndarray, joints: np.ndarray) -> np.ndarray:
