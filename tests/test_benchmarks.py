@@ -63,3 +63,27 @@ def test_matmul_peak_is_best_over_sizes(monkeypatch):
     rates = {32: 5.0, 64: 9.0, 128: 7.0}
     monkeypatch.setattr(throughput, "_matmul_rate", lambda dev, size, rep: rates[size])
     assert throughput.matmul_peak(cpu, (32, 64, 128), repeats=1) == 9.0
+
+
+def test_retarget_sanity_measures_limb_swing(read_real):
+    """The sanity check's limb ends are the paws / hands and feet, its window
+    is where the dog moves, and it measures limb swing relative to the root:
+    a clip against itself correlates 1, against a time-reversed copy not."""
+    import retarget_sanity
+    dog = read_real("dog/D1_004_KAN01_001.bvh")
+    human = read_real("cmu/01_01.bvh")
+    names = {k: dog.skeleton.names[j] for k, j in retarget_sanity.limb_ends(dog.skeleton).items()}
+    assert names == {"left front": "LeftHand", "right front": "RightHand",
+                     "left hind": "LeftFoot", "right hind": "RightFoot"}
+    assert set(retarget_sanity.limb_ends(human.skeleton)) == set(retarget_sanity.LIMBS)
+    window = retarget_sanity.most_active(dog, 300, 30.0)
+    assert window.num_frames == 300
+    ends = list(retarget_sanity.limb_ends(dog.skeleton).values())
+    opening = retarget_sanity.forward_track(dog.slice(0, 300), 30.0)[:, ends]
+    active = retarget_sanity.forward_track(window, 30.0)[:, ends]
+    assert np.diff(active, axis=0).std() > 3 * np.diff(opening, axis=0).std()
+    same = retarget_sanity.correlations(window, window, 30.0)
+    assert all(abs(c - 1.0) < 1e-9 for c in same.values())
+    reversed_ = window.with_(rotations=window.rotations[::-1].copy(),
+                             translations=window.translations[::-1].copy(), raw_channels=None)
+    assert np.mean(list(retarget_sanity.correlations(window, reversed_, 30.0).values())) < 0.5
