@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/semantic_alignment.py
 	$(PY) benchmarks/model_cost.py
 	$(PY) benchmarks/throughput.py
+	$(PY) benchmarks/compile_step.py
 	$(PY) benchmarks/scaling.py
 	$(PY) benchmarks/compare.py
 

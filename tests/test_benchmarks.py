@@ -87,3 +87,14 @@ def test_retarget_sanity_measures_limb_swing(read_real):
     reversed_ = window.with_(rotations=window.rotations[::-1].copy(),
                              translations=window.translations[::-1].copy(), raw_channels=None)
     assert np.mean(list(retarget_sanity.correlations(window, reversed_, 30.0).values())) < 0.5
+
+
+def test_compile_table_reports_speedup_against_eager():
+    import compile_step
+    rows = [dict(variant="eager", first_s=2.0, best_s=1.0, median_s=1.1, first_loss=3.0,
+                 other_first_s=2.5),
+            dict(variant="compile", first_s=40.0, best_s=0.8, median_s=0.9,
+                 first_loss=3.0 + 1e-6, other_first_s=30.0)]
+    lines = compile_step.table(rows).splitlines()
+    assert "| 1.00x |" in lines[2] and "| 1.25x |" in lines[3] and "+1.00e-06" in lines[3]
+    assert set(compile_step.VARIANTS) == {"eager", "compile", "compile-dynamic"}
