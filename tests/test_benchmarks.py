@@ -83,6 +83,7 @@ def test_retarget_sanity_measures_limb_swing(read_real):
     active = retarget_sanity.forward_track(window, 30.0)[:, ends]
     assert np.diff(active, axis=0).std() > 3 * np.diff(opening, axis=0).std()
     same = retarget_sanity.correlations(window, window, 30.0)
+    same.update({k + " pos": v for k, v in retarget_sanity.correlations(window, window, 30.0, lag=None).items()})
     assert all(abs(c - 1.0) < 1e-9 for c in same.values())
     reversed_ = window.with_(rotations=window.rotations[::-1].copy(),
                              translations=window.translations[::-1].copy(), raw_channels=None)
