@@ -398,6 +398,21 @@ def _message(err: BaseException) -> str:
     return str(err)
 
 
+def parse_args(parser: argparse.ArgumentParser,
+               argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
+    """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
+    (also after an option such as ``--init-from CKPT``, where argparse alone
+    would reject them)."""
+    args, extra = parser.parse_known_args(argv)
+    overrides = [a for a in extra if "=" in a and not a.startswith("-")]
+    if hasattr(args, "overrides") and overrides:
+        args.overrides = list(args.overrides or []) + overrides
+        extra = [a for a in extra if a not in overrides]
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the ``satagraph`` command; returns the exit code.
 
@@ -405,7 +420,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         argv (list[str], optional): Arguments (default: ``sys.argv[1:]``).
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parse_args(parser, argv)
     retain_freed_memory()  # batches of frame graphs: no page faults per call
     try:
         code = args.func(args)

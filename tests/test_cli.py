@@ -355,3 +355,18 @@ def test_python_dash_m(capsys, monkeypatch):
     with pytest.raises(SystemExit) as info:
         runpy.run_module("satagraph", run_name="__main__")
     assert info.value.code == 2
+
+
+def test_overrides_may_follow_options():
+    """``satagraph train CONFIG --init-from CKPT key=value`` keeps the
+    overrides (argparse alone rejects them after the option); anything else
+    left over is still a usage error."""
+    from satagraph.cli import build_parser, parse_args
+    parser = build_parser()
+    args = parse_args(parser, ["train", "tiny", "a.b=1", "--init-from", "x.ckpt", "c=2"])
+    assert args.config == "tiny" and args.init_from == "x.ckpt"
+    assert args.overrides == ["a.b=1", "c=2"]
+    with pytest.raises(SystemExit):
+        parse_args(parser, ["train", "tiny", "--init-from", "x.ckpt", "stray"])
+    with pytest.raises(SystemExit):
+        parse_args(parser, ["inspect", "f.bvh", "a=1"])
