@@ -10,8 +10,10 @@ correlation of the forward positions themselves is shown too: it follows
 slow posture changes (sitting, lying down), not steps.
 
 Two references come from the same run: the same model with its weights
-re-initialised (chance level), and dog -> dog reconstruction (what this model
-reaches when source and target are the same skeleton). Each dog clip is cut
+re-initialised (chance level), and reconstruction on the source's own rig
+(what this model reaches when source and target are the same skeleton).
+``--source`` also takes human clips: human -> human across skeletons is the
+within-species reference. Each source clip is cut
 to its most active window (largest limb-end speed), since the dog test clips
 open with seconds of standing.
 
@@ -119,7 +121,7 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
         src = most_active(read_bvh(path), frames, fps)
         cases = [("trained", module, t) for t in targets]
         cases += [("re-initialised (chance)", control, t) for t in targets]
-        cases.append(("trained, dog -> dog (reconstruction)", module, path))
+        cases.append(("trained, reconstruction (source's own rig)", module, path))
         for name, model, target in cases:
             out = retarget_motion(model, src, read_bvh(target), embed)
             corr = correlations(src, out, fps)
@@ -128,12 +130,12 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
             pos = np.nanmean(list(correlations(src, out, fps, lag=None).values()))
             rows.append(f"| {name} | {path.name} | {target.parent.name}/{target.name} "
                         f"| {cells} | {mean:+.2f} | {pos:+.2f} |")
-    head = ("| model | dog clip | target | " + " | ".join(LIMBS)
+    head = ("| model | source clip | target | " + " | ".join(LIMBS)
             + " | mean | mean, positions |\n|---|---|---|" + "---:|" * (len(LIMBS) + 2))
-    return (f"Dog -> human retargeting, checkpoint `{ckpt}`; Pearson correlation of "
+    return (f"Retargeting onto other rigs, checkpoint `{ckpt}`; Pearson correlation of "
             f"each limb end's forward displacement over {LAG} frames at {fps:g} fps "
             f"(facing frame, relative to the root) per limb and their mean, and the "
-            f"mean correlation of the forward positions themselves; each dog clip's "
+            f"mean correlation of the forward positions themselves; each source clip's "
             f"most active {frames} frames.\n\n"
             + head + "\n" + "\n".join(rows) + "\n")
 
@@ -142,12 +144,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--ckpt", required=True)
     parser.add_argument("--source", nargs="*", type=Path, default=None,
-                        help="dog clips (default: the dog test split's first three)")
+                        help="source clips (default: the dog test split's first three)")
     parser.add_argument("--target", nargs="*", type=Path, default=None,
                         help="human rigs (default: cmu/01_01.bvh, a skeleton held out "
                              "of cpu_joint's training, and a bandai clip)")
     parser.add_argument("--frames", type=int, default=600,
-                        help="frames of each dog clip (its most active window)")
+                        help="frames of each source clip (its most active window)")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
     sources = args.source or _default_sources()
