@@ -1,8 +1,9 @@
 """Does ``torch.compile`` speed up the SATA training step on this machine?
 
 Same input and step as ``benchmarks/throughput.py`` (4 x 64-frame bandai
-windows, normalisation + model + losses + backward + clipping + Adam), run
-in one process for each variant so that the ratios share the machine's state:
+windows, normalisation + model + losses + backward + clipping + Adam); all
+variants run in one process, one after the other, so that the ratios share
+the machine's state:
 
 - ``eager``: the module as trained by ``satagraph train``;
 - ``compile``: every :class:`~satagraph.nn.SpatioTemporalBlock` (where the
@@ -13,9 +14,8 @@ in one process for each variant so that the ratios share the machine's state:
 
 For each: the first (compiling) step's time, best and median of ``--steps``
 steps, the speed-up over eager, the loss difference from eager on the same
-weights, and, for the dynamic variant, the time of a first step on a second
-batch with other skeletons (dog + ccbase), where a specialised graph would
-recompile.
+weights, and the time of a first step on a second batch with other
+skeletons (dog + ccbase), where a specialised graph recompiles.
 
 Usage: ``python benchmarks/compile_step.py [--steps 5] [--config sata_vae]
 [key=value ...]``. Prints a markdown table and writes
@@ -94,12 +94,16 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     parser.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "compile"))
     parser.add_argument("overrides", nargs="*", help="config overrides, key=value")
     args = parser.parse_args(argv)
+    variants = [v for v in args.variants.split(",") if v != "eager"]
+    if set(variants) - set(VARIANTS):
+        parser.error(f"unknown variants {sorted(set(variants) - set(VARIANTS))}; "
+                     f"known: {list(VARIANTS)}")
     torch.manual_seed(0)
     batch, feats = training_batch(training_files(args.data))
     other = second_batch(args.data)
     template = build_module(args.config, feats, args.overrides)
     rows = []
-    for label in ["eager"] + [v for v in args.variants.split(",") if v != "eager"]:
+    for label in ["eager"] + variants:
         rows.append(measure(label, template, batch, other, args.steps))
         print(table(rows).splitlines()[-1], flush=True)
     text = (f"Config `{args.config}` {' '.join(args.overrides)}; CPU, "

@@ -71,34 +71,44 @@ def forward_track(motion, fps: float) -> np.ndarray:
     return feats.x[..., 2]
 
 
-def most_active(motion, frames: int, fps: float):
-    """The :obj:`frames`-long slice of :obj:`motion` whose limb ends move
-    most (summed forward speed)."""
+def limb_tracks(motion, fps: float) -> Dict[str, np.ndarray]:
+    """Forward track :math:`(T,)` of each limb end found on the motion's
+    skeleton, at :obj:`fps`."""
+    track = forward_track(motion, fps)
+    return {limb: track[:, j] for limb, j in limb_ends(motion.skeleton).items()}
+
+
+def most_active(motion, frames: int):
+    """The :obj:`frames`-long slice of :obj:`motion` (at its own frame rate)
+    whose limb ends move most (summed forward speed)."""
     if motion.num_frames <= frames:
         return motion
-    ends = list(limb_ends(motion.skeleton).values())
-    track = forward_track(motion, motion.fps)[:, ends]
-    speed = np.abs(np.diff(track, axis=0)).sum(axis=1)
+    tracks = np.stack(list(limb_tracks(motion, motion.fps).values()), axis=1)
+    speed = np.abs(np.diff(tracks, axis=0)).sum(axis=1)
     window = np.convolve(speed, np.ones(frames - 1), mode="valid")
     start = int(np.argmax(window))
     return motion.slice(start, start + frames)
 
 
-def correlations(source, output, fps: float, lag: Optional[int] = LAG) -> Dict[str, float]:
-    """Per limb, the Pearson correlation of the limb end's forward
-    displacement over :obj:`lag` frames (``None``: of its forward position)
-    between :obj:`source` and :obj:`output`."""
-    src_ends, out_ends = limb_ends(source.skeleton), limb_ends(output.skeleton)
-    a, b = forward_track(source, fps), forward_track(output, fps)
-    frames = min(len(a), len(b))
+def correlate(source: Dict[str, np.ndarray], output: Dict[str, np.ndarray],
+              lag: Optional[int] = LAG) -> Dict[str, float]:
+    """Per limb on both, the Pearson correlation of the tracks'
+    displacements over :obj:`lag` frames (``None``: of the tracks
+    themselves)."""
     out = {}
     for limb in LIMBS:
-        if limb in src_ends and limb in out_ends:
-            x, y = a[:frames, src_ends[limb]], b[:frames, out_ends[limb]]
+        if limb in source and limb in output:
+            frames = min(len(source[limb]), len(output[limb]))
+            x, y = source[limb][:frames], output[limb][:frames]
             if lag:
                 x, y = x[lag:] - x[:-lag], y[lag:] - y[:-lag]
             out[limb] = float(np.corrcoef(x, y)[0, 1])
     return out
+
+
+def correlations(source, output, fps: float, lag: Optional[int] = LAG) -> Dict[str, float]:
+    """:func:`correlate` of the limb tracks of two motions at :obj:`fps`."""
+    return correlate(limb_tracks(source, fps), limb_tracks(output, fps), lag)
 
 
 def reinitialised(module):
@@ -116,20 +126,19 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
     fps = float(getattr(module, "fps", 30.0))
     control = reinitialised(module)
+    rigs = {target: read_bvh(target) for target in targets}
     rows: List[str] = []
     for path in sources:
-        src = most_active(read_bvh(path), frames, fps)
-        cases = [("trained", module, t) for t in targets]
-        cases += [("re-initialised (chance)", control, t) for t in targets]
-        cases.append(("trained, reconstruction (source's own rig)", module, path))
-        for name, model, target in cases:
-            out = retarget_motion(model, src, read_bvh(target), embed)
-            corr = correlations(src, out, fps)
-            cells = " | ".join(f"{corr.get(limb, float('nan')):+.2f}" for limb in LIMBS)
-            mean = np.nanmean(list(corr.values()))
-            pos = np.nanmean(list(correlations(src, out, fps, lag=None).values()))
-            rows.append(f"| {name} | {path.name} | {target.parent.name}/{target.name} "
-                        f"| {cells} | {mean:+.2f} | {pos:+.2f} |")
+        clip = read_bvh(path)
+        src = most_active(clip, frames)
+        src_tracks = limb_tracks(src, fps)
+        cases = [("trained", module, t, rig) for t, rig in rigs.items()]
+        cases += [("re-initialised (chance)", control, t, rig) for t, rig in rigs.items()]
+        cases.append(("trained, reconstruction (source's own rig)", module, path, clip))
+        for name, model, target, rig in cases:
+            out_tracks = limb_tracks(retarget_motion(model, src, rig, embed), fps)
+            rows.append(_row(name, path, target, correlate(src_tracks, out_tracks),
+                             correlate(src_tracks, out_tracks, lag=None)))
     head = ("| model | source clip | target | " + " | ".join(LIMBS)
             + " | mean | mean, positions |\n|---|---|---|" + "---:|" * (len(LIMBS) + 2))
     return (f"Retargeting onto other rigs, checkpoint `{ckpt}`; Pearson correlation of "
@@ -138,6 +147,14 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
             f"mean correlation of the forward positions themselves; each source clip's "
             f"most active {frames} frames.\n\n"
             + head + "\n" + "\n".join(rows) + "\n")
+
+
+def _row(name: str, source: Path, target: Path, steps: Dict[str, float],
+         positions: Dict[str, float]) -> str:
+    cells = " | ".join(f"{steps.get(limb, float('nan')):+.2f}" for limb in LIMBS)
+    return (f"| {name} | {source.name} | {target.parent.name}/{target.name} | {cells} "
+            f"| {np.nanmean(list(steps.values())):+.2f} "
+            f"| {np.nanmean(list(positions.values())):+.2f} |")
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -76,7 +76,7 @@ def test_retarget_sanity_measures_limb_swing(read_real):
     assert names == {"left front": "LeftHand", "right front": "RightHand",
                      "left hind": "LeftFoot", "right hind": "RightFoot"}
     assert set(retarget_sanity.limb_ends(human.skeleton)) == set(retarget_sanity.LIMBS)
-    window = retarget_sanity.most_active(dog, 300, 30.0)
+    window = retarget_sanity.most_active(dog, 300)
     assert window.num_frames == 300
     ends = list(retarget_sanity.limb_ends(dog.skeleton).values())
     opening = retarget_sanity.forward_track(dog.slice(0, 300), 30.0)[:, ends]
