@@ -39,27 +39,16 @@ sys.path.insert(0, str(ROOT))
 from satagraph.data.canonical import canonicalize  # noqa: E402
 from satagraph.data.datamodule import semantic_embedder  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
-from satagraph.data.semantics import describe_joints  # noqa: E402
+from satagraph.data.semantics import LIMBS, limb_ends  # noqa: E402
 from satagraph.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
-LIMBS = ["left front", "right front", "left hind", "right hind"]
 #: Displacement interval (frames at the model's 30 fps, 0.1 s): the stepping
 #: band (1-3 Hz) without frame-to-frame capture and resampling jitter.
 LAG = 3
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
-
-
-def limb_ends(skeleton) -> Dict[str, int]:
-    """Terminal joint of each limb, by description."""
-    found: Dict[str, int] = {}
-    for j, text in enumerate(describe_joints(skeleton)):
-        for limb in LIMBS:
-            if text.startswith(f"{limb} limb terminal segment") and limb not in found:
-                found[limb] = j
-    return found
 
 
 def forward_track(motion, fps: float) -> np.ndarray:

@@ -44,6 +44,16 @@ term                    weight  definition
 ``kl``                  1e-4    KL of the VAE bottleneck (no value in the
                                 papers; a small beta as in motion VAEs)
 ``commit``              0.02    RVQ commitment loss (MoMask's weight)
+``retarget``            0       unpaired cross-skeleton term (off by default):
+                                each clip's latents are also decoded onto
+                                another skeleton of the batch, and the limb
+                                ends' velocities relative to the root (in
+                                heights per frame, x 175) must match the
+                                source's (:func:`limb_velocity_loss`; the
+                                end-effector loss of Aberman et al.'s
+                                skeleton-aware networks across species).
+                                Computed by the LightningModule, which holds
+                                the decoder
 ======================  ======  ==============================================
 """
 from __future__ import annotations
@@ -63,7 +73,7 @@ from satagraph.ops.rotation import rotation_6d_to_matrix, yaw_matrix
 DEFAULT_WEIGHTS: Dict[str, float] = {
     "rotation": 5.0, "position": 0.01, "velocity": 1.0, "root": 10.0, "contact": 1.0,
     "foot_sliding": 6.0, "penetration": 0.1, "smoothness": 0.015, "kl": 1e-4,
-    "commit": 0.02,
+    "commit": 0.02, "retarget": 0.0,
 }
 #: Units per character height of the position terms (SAME's cm, 1.75 m human).
 POSITION_SCALE = 175.0
@@ -136,6 +146,33 @@ def velocity_loss(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
     prev = previous_node(batch)
     diff = (pos_pred - pos_pred[prev]) - (pos_true - pos_true[prev])
     return _masked_mean(diff.pow(2), batch.node_time > 0)
+
+
+def limb_velocity_loss(pos_source: Tensor, pos_target: Tensor, pairing,
+                       scale: float = POSITION_SCALE) -> Tensor:
+    r"""Mean squared difference of the paired limb ends' per-frame
+    displacements in the facing frame, relative to the root, each in
+    :obj:`scale` units per its character's height (unpaired retargeting
+    across skeletons; zero when no limb is paired).
+
+    Args:
+        pos_source (Tensor): Source positions relative to the root's ground
+            projection in the facing frame (the ``x`` features).
+        pos_target (Tensor): The same for the motion decoded on the partner
+            skeletons (:func:`facing_positions`).
+        pairing (Pairing): From :func:`satagraph.data.pairing.partner_batch`.
+
+    Shapes:
+        - **pos_source**: :math:`(N, 3)`, **pos_target**: :math:`(N', 3)`
+        - **output**: scalar
+    """
+    if not pairing.source_nodes.numel():
+        return pos_target.sum() * 0.0
+    src = pos_source[pairing.source_nodes] - pos_source[pairing.source_prev]
+    tgt = pos_target[pairing.target_nodes] - pos_target[pairing.target_prev]
+    src = src.to(tgt.dtype) * (scale / pairing.source_height)[:, None]
+    tgt = tgt * (scale / pairing.target_height)[:, None]
+    return (tgt - src).pow(2).sum(-1).mean()
 
 
 def contact_loss(c_logits: Tensor, c_true: Tensor) -> Tensor:

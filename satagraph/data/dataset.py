@@ -17,6 +17,7 @@ from satagraph.data.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures,
                                      features_to_motion, motion_to_features)
+from satagraph.data.semantics.limbs import limb_end_index
 from satagraph.data.sources import MotionFile
 from satagraph.io import BVHError, read_bvh
 from satagraph.skeleton import Skeleton
@@ -212,6 +213,7 @@ class MotionDataset(Dataset):
         self.window, self.stride = window, stride
         self.augment = augment
         self._semantic: Dict[Tuple, torch.Tensor] = {}
+        self._limbs: Dict[Tuple, Tuple[int, ...]] = {}
         self.semantic_fn = semantic
         self.index: List[Tuple[int, int]] = [
             (i, s) for i, f in enumerate(self.features)
@@ -231,6 +233,17 @@ class MotionDataset(Dataset):
             self._semantic[key] = self.semantic_fn(feats.skeleton).float()
         return self._semantic[key]
 
+    def limb_ends(self, feats: MotionFeatures) -> Tuple[int, ...]:
+        """Terminal joint of each limb of a skeleton (in the order of
+        :data:`~satagraph.data.semantics.LIMBS`, ``-1`` where missing),
+        computed once per skeleton; clips carry it as ``meta["limb_ends"]``."""
+        key = _skeleton_key(feats.skeleton)
+        if key not in self._limbs:
+            if len(self._limbs) >= SEMANTIC_CACHE_SIZE:  # augmented skeletons
+                del self._limbs[next(iter(self._limbs))]
+            self._limbs[key] = tuple(limb_end_index(feats.skeleton))
+        return self._limbs[key]
+
     def group(self, idx: int) -> str:
         """(dataset, skeleton) group of a window, for balanced sampling."""
         f = self.files[self.index[idx][0]]
@@ -242,10 +255,12 @@ class MotionDataset(Dataset):
         feats, f = self.features[i], self.files[i]
         meta = {"path": f.path, "dataset": f.dataset, "skeleton": f.skeleton}
         if self.augment is None or epoch is None:
+            meta["limb_ends"] = self.limb_ends(feats)
             return feats.to_clip(start, start + self.window, self.semantic(feats), meta)
         stop = min(start + self.window, feats.num_frames)
         aug, lead = self.augment(feats, start, stop, epoch, idx)
-        clip = aug.to_clip(lead, None, self.semantic(aug), dict(meta, augmented=True))
+        meta.update(augmented=True, limb_ends=self.limb_ends(aug))
+        clip = aug.to_clip(lead, None, self.semantic(aug), meta)
         clip.meta["start"] = start
         return clip
 

@@ -118,8 +118,34 @@ class MotionAutoencoderModule(L.LightningModule):
 
     # ----------------------------------------------------------- steps
     def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
-        """Named loss terms and their weighted sum under ``"loss"``."""
-        return self.criterion(out, batch, self.normalizer, fps=self.fps)
+        """Named loss terms and their weighted sum under ``"loss"``; with a
+        ``retarget`` weight, also :meth:`retarget_loss` of ``out["z"]``."""
+        losses = self.criterion(out, batch, self.normalizer, fps=self.fps)
+        weight = float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+        if weight > 0 and "z" in out:
+            term = self.retarget_loss(out["z"], batch)
+            if term is not None:
+                losses["retarget"] = term
+                losses["loss"] = losses["loss"] + weight * term
+        return losses
+
+    def retarget_loss(self, z: Tensor, batch) -> Optional[Tensor]:
+        """Unpaired cross-skeleton term: every clip's latents :obj:`z`
+        decoded onto another skeleton of the batch
+        (:func:`~satagraph.data.pairing.partner_batch`, drawn from a
+        generator seeded with the global step) must move the limb ends like
+        the source (:func:`~satagraph.losses.limb_velocity_loss`). ``None``
+        when every clip of the batch has the same skeleton."""
+        from satagraph.data.pairing import partner_batch
+        from satagraph.losses import facing_positions, limb_velocity_loss
+        gen = torch.Generator().manual_seed(int(self.global_step))
+        pairing = partner_batch(batch, gen)
+        if pairing is None:
+            return None
+        target = self.normalize_batch(pairing.target)
+        pred = self.denormalize_output(self.decode(z[pairing.frames], target))
+        pos = facing_positions(pred["q"], pred["r"], pairing.target)
+        return limb_velocity_loss(batch.x[:, DYNAMIC_LAYOUT["x"]], pos, pairing)
 
     def _step(self, batch, stage: str) -> Tensor:
         out = self(batch)

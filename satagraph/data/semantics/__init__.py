@@ -34,6 +34,7 @@ from satagraph.data.semantics.cache import (EmbeddingCache, clear_memory,
                                             default_cache_dir)
 from satagraph.data.semantics.encoders import (OfflineTextEncoder,
                                                T5TextEncoder, TextEncoder)
+from satagraph.data.semantics.limbs import LIMBS, limb_end_index, limb_ends
 from satagraph.data.semantics.prompt import (build_prompt, import_answer,
                                              load_reference_vocab,
                                              parse_answer)
@@ -143,5 +144,5 @@ __all__ = [
     "default_cache_dir", "clear_memory", "build_prompt", "parse_answer",
     "import_answer", "load_reference_vocab", "load_dictionary",
     "validate_dictionary", "normalize_anchors", "parse_anchor",
-    "write_json_atomic", "SemanticsError",
+    "write_json_atomic", "SemanticsError", "LIMBS", "limb_ends", "limb_end_index",
 ]

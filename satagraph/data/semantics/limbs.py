@@ -1,0 +1,46 @@
+"""Limb ends found by their semantic descriptions, on any skeleton.
+
+The four limbs of a tetrapod (``left front``, ``right front``, ``left
+hind``, ``right hind``) end in a hand/front paw or a foot/hind paw. Their
+terminal joints are what unpaired retargeting across species compares
+(:func:`satagraph.losses.limb_velocity_loss`) and what the dog -> human
+sanity check correlates (``benchmarks/retarget_sanity.py``): a human's hand
+and a dog's front paw share the description "left front limb terminal
+segment", whatever their names.
+"""
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Sequence
+
+from satagraph.skeleton import Skeleton
+
+#: The limbs, in the order of :func:`limb_end_index`.
+LIMBS: List[str] = ["left front", "right front", "left hind", "right hind"]
+
+
+def limb_ends(skeleton: Skeleton,
+              descriptions: Optional[Sequence[str]] = None) -> Dict[str, int]:
+    """Terminal joint of each limb the skeleton has, by description (the
+    first joint described as ``"<limb> limb terminal segment"``).
+
+    Args:
+        skeleton: The skeleton.
+        descriptions: Its joint descriptions (default:
+            :func:`~satagraph.data.semantics.describe_joints`).
+    """
+    if descriptions is None:
+        from satagraph.data.semantics import describe_joints
+        descriptions = describe_joints(skeleton)
+    found: Dict[str, int] = {}
+    for j, text in enumerate(descriptions):
+        for limb in LIMBS:
+            if text.startswith(f"{limb} limb terminal segment") and limb not in found:
+                found[limb] = j
+    return found
+
+
+def limb_end_index(skeleton: Skeleton) -> List[int]:
+    """:func:`limb_ends` as a list in the order of :data:`LIMBS` (``-1``
+    for a limb the skeleton lacks)."""
+    found = limb_ends(skeleton)
+    return [found.get(limb, -1) for limb in LIMBS]

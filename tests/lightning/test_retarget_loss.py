@@ -1,0 +1,125 @@
+"""The unpaired cross-skeleton retarget term: pairing clips with other
+skeletons of the batch, the limb-end velocity loss, and its place in the
+LightningModule's losses (real bandai and dog windows)."""
+from __future__ import annotations
+
+import torch
+
+from satagraph.data.collate import collate_clips
+from satagraph.data.features import DYNAMIC_LAYOUT
+from satagraph.data.pairing import choose_partners, partner_batch
+from satagraph.data.semantics import LIMBS
+from satagraph.losses import limb_velocity_loss
+
+
+def _mixed_batch(datamodule, per_group: int = 2):
+    """Training windows of every skeleton group, interleaved."""
+    ds = datamodule.datasets["train"]
+    groups = {}
+    for i in range(len(ds)):
+        groups.setdefault(ds.group(i), []).append(i)
+    picks = [idx for members in zip(*[g[:per_group] for g in groups.values()])
+             for idx in members]
+    return collate_clips([ds[i] for i in picks])
+
+
+def test_dataset_clips_carry_limb_ends_by_description(datamodule):
+    batch = _mixed_batch(datamodule)
+    names = {"bandai": ["Hand_L", "Hand_R", "Foot_L", "Foot_R"],
+             "dog": ["LeftHand", "RightHand", "LeftFoot", "RightFoot"]}
+    ds = datamodule.datasets["train"]
+    for meta in batch.meta:
+        skeleton = next(f.skeleton for f, m in zip(ds.features, ds.files)
+                        if m.path == meta["path"])
+        assert len(meta["limb_ends"]) == len(LIMBS)
+        assert [skeleton.names[j] for j in meta["limb_ends"]] == names[meta["dataset"]]
+
+
+def test_choose_partners_never_pairs_a_skeleton_with_itself():
+    keys = ["a", "b", "a", "c", "b"]
+    partners = choose_partners(keys, torch.Generator().manual_seed(0))
+    assert all(keys[p] != k for k, p in zip(keys, partners))
+    assert choose_partners(["a", "a"]) == [-1, -1]
+
+
+def test_partner_batch_builds_the_partners_rigs_with_the_clips_lengths(datamodule):
+    batch = _mixed_batch(datamodule)
+    pairing = partner_batch(batch, torch.Generator().manual_seed(1))
+    target = pairing.target
+    assert pairing.clips.tolist() == list(range(len(batch.meta)))
+    for k, (i, p) in enumerate(zip(pairing.clips.tolist(), pairing.partners.tolist())):
+        assert batch.meta[i]["dataset"] != batch.meta[p]["dataset"]
+        assert target.clip_num_frames[k] == batch.clip_num_frames[i]
+        assert target.clip_num_joints[k] == batch.clip_num_joints[p]
+        assert torch.equal(target.joint_static[target.stream_clip == k],
+                           batch.joint_static[batch.stream_clip == p])
+        assert torch.equal(target.joint_semantic[target.stream_clip == k],
+                           batch.joint_semantic[batch.stream_clip == p])
+    # z of the paired clips in target order: every target frame has one
+    assert torch.equal(batch.frame_time[pairing.frames], target.frame_time)
+    # limb-end nodes: same limb, consecutive frames, frames t >= 1
+    ends = lambda b, nodes: b.node_stream[nodes] - (b.clip_num_joints.cumsum(0)
+                                                    - b.clip_num_joints)[
+        b.stream_clip[b.node_stream[nodes]]]
+    assert pairing.source_nodes.numel() == 4 * int((batch.clip_num_frames - 1).sum())
+    assert torch.equal(batch.node_time[pairing.source_nodes],
+                       batch.node_time[pairing.source_prev] + 1)
+    assert torch.equal(target.node_time[pairing.target_nodes],
+                       batch.node_time[pairing.source_nodes])
+    src_limbs = ends(batch, pairing.source_nodes)
+    tgt_limbs = ends(target, pairing.target_nodes)
+    limb_of = {}
+    for node, s_joint, t_joint in zip(pairing.source_nodes.tolist(), src_limbs.tolist(),
+                                      tgt_limbs.tolist()):
+        clip = int(batch.stream_clip[batch.node_stream[node]])
+        k = batch.meta[clip]["limb_ends"].index(s_joint)
+        partner = pairing.partners[pairing.clips.tolist().index(clip)]
+        assert batch.meta[partner]["limb_ends"][k] == t_joint
+        limb_of[k] = True
+    assert sorted(limb_of) == [0, 1, 2, 3]
+
+
+def test_partner_batch_is_none_for_one_skeleton(datamodule):
+    ds = datamodule.datasets["train"]
+    same = [i for i in range(len(ds)) if ds.group(i) == ds.group(0)][:3]
+    assert partner_batch(collate_clips([ds[i] for i in same])) is None
+
+
+def test_limb_velocity_loss_is_height_normalised(datamodule):
+    batch = _mixed_batch(datamodule)
+    pairing = partner_batch(batch, torch.Generator().manual_seed(2))
+    x = batch.x[:, DYNAMIC_LAYOUT["x"]]
+    # a target whose limb ends move exactly like the source's, in heights
+    pos = torch.zeros(pairing.target.num_nodes, 3)
+    ratio = (pairing.target_height / pairing.source_height)[:, None]
+    step = (x[pairing.source_nodes] - x[pairing.source_prev]) * ratio
+    order = torch.argsort(pairing.target_nodes)
+    for n, prev, d in zip(pairing.target_nodes[order].tolist(),
+                          pairing.target_prev[order].tolist(), step[order]):
+        pos[n] = pos[prev] + d
+    assert limb_velocity_loss(x, pos, pairing) < 1e-8
+    moved = pos.clone()
+    moved[pairing.target_nodes[0]] += 0.1
+    assert limb_velocity_loss(x, moved, pairing) > 1e-4
+
+
+def test_module_adds_the_weighted_retarget_term_with_gradients(build_tiny_module,
+                                                               datamodule):
+    batch = _mixed_batch(datamodule)
+    module = build_tiny_module("vae")
+    module.train()
+    torch.manual_seed(0)
+    out = module(batch)
+    plain = module.compute_losses(out, batch)
+    assert "retarget" not in plain
+    module.criterion.weights["retarget"] = 0.5
+    losses = module.compute_losses(out, batch)
+    assert losses["retarget"] > 0
+    assert torch.allclose(losses["loss"], plain["loss"] + 0.5 * losses["retarget"])
+    losses["retarget"].backward()
+    for part in (module.model.decoder, module.model.encoder):
+        grads = [p.grad for p in part.parameters() if p.grad is not None]
+        assert grads and any(g.abs().sum() > 0 for g in grads)
+    # same global step, same pairing: the term is reproducible
+    again = module.compute_losses(out, batch)["retarget"]
+    assert torch.equal(again, losses["retarget"])
