@@ -23,3 +23,15 @@ def test_finetune_stage_inherits_cpu_joint():
     assert stage["model"] == base["model"]
     assert stage["loss"]["position"] == 0.005 and base["loss"]["position"] == 0.001
     assert stage["data"] == base["data"]
+
+
+def test_retarget_stage_adds_only_the_cross_skeleton_term():
+    base, stage = load_config("cpu_joint_finetune"), load_config("cpu_joint_retarget")
+    assert stage["loss"] == dict(base["loss"], retarget=0.01)
+    assert stage["model"] == base["model"] and stage["data"] == base["data"]
+
+
+def test_augment_stage_draws_new_rigs_with_new_rest_poses():
+    base, stage = load_config("cpu_joint_retarget"), load_config("cpu_joint_augment")
+    assert stage["loss"] == base["loss"] and stage["model"] == base["model"]
+    assert stage["data"]["augment"]["rest"] > 0

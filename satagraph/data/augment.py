@@ -1,6 +1,7 @@
 """Skeleton augmentation: bone scaling (with paired ground truth for
-retargeting), left/right mirroring and topology changes (drop a leaf chain,
-merge two trunk segments, split a bone), and :class:`SkeletonAugment`, which
+retargeting), left/right mirroring, a new rest pose (the same motion under
+another rest-pose convention), topology changes (drop a leaf chain, merge
+two trunk segments, split a bone), and :class:`SkeletonAugment`, which
 applies them at random on the fly."""
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from typing import List, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph.motion import Motion
+from satagraph.ops.fk import forward_kinematics_numpy
 from satagraph.skeleton import Skeleton
 
 
@@ -62,6 +64,48 @@ def paired(motion: Motion, seed: int = 0, low: float = 0.8,
            high: float = 1.2) -> Tuple[Motion, Motion]:
     """(source, scaled ground truth) pair for retargeting evaluation."""
     return motion, scale_bones(motion, low, high, seed)
+
+
+# ------------------------------------------------------------- rest pose
+def rebase_rest(motion: Motion, frame: int = 0) -> Motion:
+    r"""The same motion on a skeleton whose rest pose is frame
+    :obj:`frame`'s pose, turned to face like frame 0 (the root keeps its
+    world position).
+
+    Rigs differ in their rest-pose convention (T-pose, A-pose, every bone
+    along one axis), so one pose has different local rotations on each.
+    With :math:`A_j` the global rotation of joint :math:`j` in the new rest
+    pose, offsets become :math:`A_{p(j)} o_j` and local rotations
+    :math:`A_{p(j)} R_j A_j^\top` (:math:`A_{p(root)} = I`): global
+    positions are unchanged, and every joint's rotation is the identity at
+    :obj:`frame` except the root's heading change since frame 0.
+
+    Args:
+        motion (Motion): A motion (+Y up) with at least one frame.
+        frame (int): The frame whose pose becomes the rest pose.
+    """
+    if not 0 <= frame < motion.num_frames:
+        raise ValueError(f"rebase_rest: frame {frame} of a {motion.num_frames}-frame motion")
+    parents = motion.skeleton.parents
+    pose = motion.rotations[frame].copy()
+    pose[0] = _heading(motion.rotations[frame, 0] @ motion.rotations[0, 0].T).T @ pose[0]
+    rest = forward_kinematics_numpy(pose[None], motion.translations[frame:frame + 1],
+                                    parents)[0][0]
+    outer = np.where((parents < 0)[:, None, None], np.eye(3),
+                     rest[np.where(parents < 0, 0, parents)])
+    rotations = outer[None] @ motion.rotations @ np.swapaxes(rest, -1, -2)[None]
+    translations = (outer[None] @ motion.translations[..., None])[..., 0]
+    offsets = (outer @ motion.skeleton.offsets[..., None])[..., 0]
+    return motion.with_(skeleton=motion.skeleton.replace(offsets=offsets),
+                        rotations=rotations, translations=translations)
+
+
+def _heading(rotation: np.ndarray) -> np.ndarray:
+    """The rotation about +Y that turns +Z where :obj:`rotation` turns it."""
+    forward = rotation @ np.array([0.0, 0.0, 1.0])
+    angle = np.arctan2(forward[0], forward[2])
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 # ------------------------------------------------------------- mirroring
@@ -311,7 +355,8 @@ class SkeletonAugment:
     Each operation is applied with its probability, in this order: bone
     scaling (:func:`scale_bones`), mirroring (:func:`mirror`), dropping a
     leaf chain (:func:`drop_leaf_chain`), merging two trunk segments
-    (:func:`merge_segments`) and inserting a joint (:func:`insert_joint`).
+    (:func:`merge_segments`), inserting a joint (:func:`insert_joint`) and
+    taking a random frame's pose as the rest pose (:func:`rebase_rest`).
 
     Args:
         p_scale (float): Probability of scaling the bones.
@@ -319,6 +364,7 @@ class SkeletonAugment:
         p_drop (float): Probability of dropping a leaf chain.
         p_merge (float): Probability of merging two trunk segments.
         p_insert (float): Probability of inserting a joint.
+        p_rest (float): Probability of a new rest pose (off by default).
         scale_range (tuple[float, float]): Per-axis bone scale range.
         max_drop (int): Longest leaf chain dropped.
         seed (int, optional): Seed of the generator drawing the decisions
@@ -335,13 +381,14 @@ class SkeletonAugment:
     p_drop: float = 0.1
     p_merge: float = 0.1
     p_insert: float = 0.1
+    p_rest: float = 0.0
     scale_range: Tuple[float, float] = (0.8, 1.2)
     max_drop: int = 2
     seed: Optional[int] = None
     rng: np.random.Generator = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        for name in ("p_scale", "p_mirror", "p_drop", "p_merge", "p_insert"):
+        for name in ("p_scale", "p_mirror", "p_drop", "p_merge", "p_insert", "p_rest"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"SkeletonAugment: {name} must be in [0, 1]")
         self.rng = np.random.default_rng(self.seed)
@@ -365,4 +412,7 @@ class SkeletonAugment:
             motion = merge_segments(motion, s)
         if (s := draw(self.p_insert)) is not None:
             motion = insert_joint(motion, s)
+        if (s := draw(self.p_rest)) is not None and motion.num_frames:
+            frame = int(np.random.default_rng(s).integers(motion.num_frames))
+            motion = rebase_rest(motion, frame)
         return motion

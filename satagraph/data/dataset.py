@@ -33,7 +33,7 @@ DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "floor": True,
 #: scale range and the longest leaf chain dropped.
 AUGMENT_DEFAULTS: Dict[str, float] = {"scale": 0.5, "mirror": 0.5, "drop": 0.0,
                                       "merge": 0.0, "insert": 0.0, "low": 0.8,
-                                      "high": 1.2, "max_drop": 2}
+                                      "high": 1.2, "max_drop": 2, "rest": 0.0}
 
 #: Semantic embeddings a dataset keeps (oldest dropped first).
 SEMANTIC_CACHE_SIZE = 4096
@@ -119,6 +119,9 @@ class WindowAugment:
         drop (float): Probability of dropping a leaf chain.
         merge (float): Probability of merging two trunk segments.
         insert (float): Probability of inserting a joint.
+        rest (float): Probability of taking a random frame's pose as the
+            rest pose (:func:`~satagraph.data.augment.rebase_rest`): the same
+            motion under another rest-pose convention.
         low (float): Smallest per-axis bone scale.
         high (float): Largest per-axis bone scale.
         max_drop (int): Longest leaf chain dropped.
@@ -130,7 +133,7 @@ class WindowAugment:
 
     def __init__(self, scale: float = 0.5, mirror: float = 0.5, drop: float = 0.0,
                  merge: float = 0.0, insert: float = 0.0, low: float = 0.8,
-                 high: float = 1.2, max_drop: int = 2, seed: int = 0,
+                 high: float = 1.2, max_drop: int = 2, rest: float = 0.0, seed: int = 0,
                  contact_height: float = CONTACT_HEIGHT,
                  contact_speed: float = CONTACT_SPEED) -> None:
         if not 0.0 <= mirror <= 1.0:
@@ -141,7 +144,8 @@ class WindowAugment:
         self.contacts = (float(contact_height), float(contact_speed))
         self.skeleton_augment = dict(p_scale=float(scale), p_mirror=0.0,
                                      p_drop=float(drop), p_merge=float(merge),
-                                     p_insert=float(insert), scale_range=(low, high),
+                                     p_insert=float(insert), p_rest=float(rest),
+                                     scale_range=(low, high),
                                      max_drop=int(max_drop))
         SkeletonAugment(**self.skeleton_augment)  # checks the probabilities
 
@@ -181,7 +185,10 @@ class WindowAugment:
                 pass  # asymmetric skeleton: left as it is
         augment = SkeletonAugment(**self.skeleton_augment,
                                   seed=int(rng.integers(2 ** 31)))
-        out = motion_to_features(augment(motion), *self.contacts, facing_axis=axis)
+        augmented = augment(motion)
+        # a new rest pose turns the root's local frame: turn its facing axis too
+        axis = augmented.rotations[0, 0].T @ motion.rotations[0, 0] @ axis
+        out = motion_to_features(augmented, *self.contacts, facing_axis=axis)
         return out, lead
 
 

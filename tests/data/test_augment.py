@@ -6,9 +6,12 @@ import pytest
 
 from satagraph.data.augment import (SkeletonAugment, drop_leaf_chain,
                                     insert_joint, merge_segments, mirror,
-                                    mirror_pairs, paired, scale_bones,
-                                    swap_side)
+                                    mirror_pairs, paired, rebase_rest,
+                                    scale_bones, swap_side)
+from satagraph.data.canonical import canonicalize
+from satagraph.data.dataset import WindowAugment
 from satagraph.data.examples import example_motion
+from satagraph.data.features import motion_to_features
 from satagraph.data.zoo import generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
 
@@ -141,3 +144,44 @@ def test_example_motion_still_works():
                        motion.global_positions())
     _valid(drop_leaf_chain(motion))
     _valid(insert_joint(motion))
+
+
+# ------------------------------------------------------------- rest pose
+def test_rebase_rest_keeps_the_motion_and_takes_the_frames_pose(motion):
+    rebased = rebase_rest(motion, frame=5)
+    _valid(rebased)
+    np.testing.assert_allclose(rebased.global_positions(), motion.global_positions(),
+                               atol=1e-9)
+    # every joint but the root is at rest in the chosen frame
+    np.testing.assert_allclose(rebased.rotations[5, 1:],
+                               np.broadcast_to(np.eye(3), rebased.rotations[5, 1:].shape),
+                               atol=1e-9)
+    # bone lengths are kept; the names and hierarchy too
+    np.testing.assert_allclose(np.linalg.norm(rebased.skeleton.offsets, axis=1),
+                               np.linalg.norm(motion.skeleton.offsets, axis=1), atol=1e-9)
+    assert rebased.skeleton.names == motion.skeleton.names
+    with pytest.raises(ValueError, match="frame 16"):
+        rebase_rest(motion, frame=16)
+
+
+def test_rebase_rest_makes_lying_rest_poses_upright(shared_data):
+    """bandai's rest pose has every bone along one axis (0.13 m tall for a
+    1.33 m character); the rebased rest pose stands like the motion."""
+    walk = canonicalize(read_bvh(shared_data / "bandai" / "dataset-1_walk_normal_001.bvh"),
+                        fps=30).slice(0, 20)
+    rest = rebase_rest(walk, frame=10).skeleton.rest_positions()
+    assert np.ptp(walk.skeleton.rest_positions()[:, 1]) < 0.2 * walk.height()
+    assert np.ptp(rest[:, 1]) == pytest.approx(walk.height(), rel=0.05)
+
+
+def test_window_augment_rest_changes_rotations_not_positions(shared_data):
+    """A new rest-pose convention changes q and the static features; the
+    positions, root features and contacts the model must reproduce stay."""
+    feats = motion_to_features(canonicalize(
+        read_bvh(shared_data / "dog" / "D1_001_KAN01_001.bvh"), fps=30))
+    plain, _ = WindowAugment(scale=0, mirror=0)(feats, 10, 42, 0, 0)
+    rebased, _ = WindowAugment(scale=0, mirror=0, rest=1.0)(feats, 10, 42, 0, 0)
+    for key in ("x", "r", "c"):
+        np.testing.assert_allclose(getattr(rebased, key), getattr(plain, key), atol=1e-8)
+    assert np.abs(rebased.q - plain.q).max() > 0.5
+    assert np.abs(rebased.static - plain.static).max() > 0.1

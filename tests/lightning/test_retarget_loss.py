@@ -23,6 +23,13 @@ def _mixed_batch(datamodule, per_group: int = 2):
     return collate_clips([ds[i] for i in picks])
 
 
+def _local_joint(batch, nodes):
+    """Joint index within its skeleton of each node."""
+    first = batch.clip_num_joints.cumsum(0) - batch.clip_num_joints
+    stream = batch.node_stream[nodes]
+    return stream - first[batch.stream_clip[stream]]
+
+
 def test_dataset_clips_carry_limb_ends_by_description(datamodule):
     batch = _mixed_batch(datamodule)
     names = {"bandai": ["Hand_L", "Hand_R", "Foot_L", "Foot_R"],
@@ -58,16 +65,13 @@ def test_partner_batch_builds_the_partners_rigs_with_the_clips_lengths(datamodul
     # z of the paired clips in target order: every target frame has one
     assert torch.equal(batch.frame_time[pairing.frames], target.frame_time)
     # limb-end nodes: same limb, consecutive frames, frames t >= 1
-    ends = lambda b, nodes: b.node_stream[nodes] - (b.clip_num_joints.cumsum(0)
-                                                    - b.clip_num_joints)[
-        b.stream_clip[b.node_stream[nodes]]]
     assert pairing.source_nodes.numel() == 4 * int((batch.clip_num_frames - 1).sum())
     assert torch.equal(batch.node_time[pairing.source_nodes],
                        batch.node_time[pairing.source_prev] + 1)
     assert torch.equal(target.node_time[pairing.target_nodes],
                        batch.node_time[pairing.source_nodes])
-    src_limbs = ends(batch, pairing.source_nodes)
-    tgt_limbs = ends(target, pairing.target_nodes)
+    src_limbs = _local_joint(batch, pairing.source_nodes)
+    tgt_limbs = _local_joint(target, pairing.target_nodes)
     limb_of = {}
     for node, s_joint, t_joint in zip(pairing.source_nodes.tolist(), src_limbs.tolist(),
                                       tgt_limbs.tolist()):
