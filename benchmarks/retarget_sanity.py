@@ -9,6 +9,14 @@ the model's rate. In step means clearly positive correlations. The
 correlation of the forward positions themselves is shown too: it follows
 slow posture changes (sitting, lying down), not steps.
 
+Which way is forward. The facing frame follows a root-local axis; the
+features take the one that faces +Z at a clip's first frame (from its
+left/right joints), so one unusual first pose (a dog turning its head, a
+retargeted human with crossed arms) turns a whole clip's frame. Here the
+axis is the mean over all frames of the left/right facing direction in the
+root's frame, for the source and the retargeted clip alike; the last column
+shows the first-frame axis for comparison.
+
 Two references come from the same run: the same model with its weights
 re-initialised (chance level), and reconstruction on the source's own rig
 (what this model reaches when source and target are the same skeleton).
@@ -36,7 +44,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.canonical import canonicalize  # noqa: E402
+from satagraph.data.canonical import _lateral_pairs, canonicalize  # noqa: E402
 from satagraph.data.datamodule import semantic_embedder  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.data.semantics import LIMBS, limb_ends  # noqa: E402
@@ -51,19 +59,37 @@ LAG = 3
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
 
 
-def forward_track(motion, fps: float) -> np.ndarray:
-    """Forward coordinate of every joint relative to the root, facing frame,
-    :math:`(T, J)`."""
-    feats = motion_to_features(canonicalize(motion, fps=fps))
+def facing_axis(canonical) -> np.ndarray:
+    """Root-local facing axis of a canonical motion: the mean over its
+    frames of the horizontal forward direction (left/right joint pairs, as
+    :func:`~satagraph.data.canonical.detect_forward`) in the root's frame."""
+    left, right = _lateral_pairs(canonical.skeleton.names)
+    if not left:
+        return None
+    rot, pos = canonical.global_transforms()
+    across = (pos[:, left] - pos[:, right]).mean(1)
+    forward = np.cross(across, np.array([0.0, 1.0, 0.0]))
+    forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-9)
+    axis = np.einsum("tji,tj->i", rot[:, 0], forward)
+    return axis / max(np.linalg.norm(axis), 1e-9)
+
+
+def forward_track(motion, fps: float, first_frame: bool = False) -> np.ndarray:
+    """Forward coordinate of every joint relative to the root in the facing
+    frame of :func:`facing_axis` (with :obj:`first_frame`: of the axis facing
+    +Z at the first frame, as the features), :math:`(T, J)`."""
+    canonical = canonicalize(motion, fps=fps)
+    axis = None if first_frame else facing_axis(canonical)
+    feats = motion_to_features(canonical, facing_axis=axis)
     # ``x`` is placed at the root's ground projection in the facing frame;
     # ``x_rel`` (relative to the parent) would only measure the last bone.
     return feats.x[..., 2]
 
 
-def limb_tracks(motion, fps: float) -> Dict[str, np.ndarray]:
+def limb_tracks(motion, fps: float, first_frame: bool = False) -> Dict[str, np.ndarray]:
     """Forward track :math:`(T,)` of each limb end found on the motion's
-    skeleton, at :obj:`fps`."""
-    track = forward_track(motion, fps)
+    skeleton, at :obj:`fps` (see :func:`forward_track`)."""
+    track = forward_track(motion, fps, first_frame)
     return {limb: track[:, j] for limb, j in limb_ends(motion.skeleton).items()}
 
 
@@ -121,29 +147,36 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
         clip = read_bvh(path)
         src = most_active(clip, frames)
         src_tracks = limb_tracks(src, fps)
+        src_first = limb_tracks(src, fps, first_frame=True)
         cases = [("trained", module, t, rig) for t, rig in rigs.items()]
         cases += [("re-initialised (chance)", control, t, rig) for t, rig in rigs.items()]
         cases.append(("trained, reconstruction (source's own rig)", module, path, clip))
         for name, model, target, rig in cases:
-            out_tracks = limb_tracks(retarget_motion(model, src, rig, embed), fps)
+            out = retarget_motion(model, src, rig, embed)
+            out_tracks = limb_tracks(out, fps)
             rows.append(_row(name, path, target, correlate(src_tracks, out_tracks),
-                             correlate(src_tracks, out_tracks, lag=None)))
+                             correlate(src_tracks, out_tracks, lag=None),
+                             correlate(src_first, limb_tracks(out, fps, first_frame=True))))
     head = ("| model | source clip | target | " + " | ".join(LIMBS)
-            + " | mean | mean, positions |\n|---|---|---|" + "---:|" * (len(LIMBS) + 2))
+            + " | mean | mean, positions | mean, first-frame facing |\n|---|---|---|"
+            + "---:|" * (len(LIMBS) + 3))
     return (f"Retargeting onto other rigs, checkpoint `{ckpt}`; Pearson correlation of "
             f"each limb end's forward displacement over {LAG} frames at {fps:g} fps "
             f"(facing frame, relative to the root) per limb and their mean, and the "
             f"mean correlation of the forward positions themselves; each source clip's "
-            f"most active {frames} frames.\n\n"
+            f"most active {frames} frames. The facing frame's axis is averaged over each "
+            f"clip's frames; the last column takes it from each clip's first frame "
+            f"instead.\n\n"
             + head + "\n" + "\n".join(rows) + "\n")
 
 
 def _row(name: str, source: Path, target: Path, steps: Dict[str, float],
-         positions: Dict[str, float]) -> str:
+         positions: Dict[str, float], reestimated: Dict[str, float]) -> str:
     cells = " | ".join(f"{steps.get(limb, float('nan')):+.2f}" for limb in LIMBS)
+    means = " | ".join(f"{np.nanmean(list(d.values())):+.2f}"
+                       for d in (steps, positions, reestimated))
     return (f"| {name} | {source.name} | {target.parent.name}/{target.name} | {cells} "
-            f"| {np.nanmean(list(steps.values())):+.2f} "
-            f"| {np.nanmean(list(positions.values())):+.2f} |")
+            f"| {means} |")
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
