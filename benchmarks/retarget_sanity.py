@@ -143,6 +143,7 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
     control = reinitialised(module)
     rigs = {target: read_bvh(target) for target in targets}
     rows: List[str] = []
+    means: Dict[tuple, List[float]] = {}
     for path in sources:
         clip = read_bvh(path)
         src = most_active(clip, frames)
@@ -154,9 +155,13 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
         for name, model, target, rig in cases:
             out = retarget_motion(model, src, rig, embed)
             out_tracks = limb_tracks(out, fps)
-            rows.append(_row(name, path, target, correlate(src_tracks, out_tracks),
+            steps = correlate(src_tracks, out_tracks)
+            rows.append(_row(name, path, target, steps,
                              correlate(src_tracks, out_tracks, lag=None),
                              correlate(src_first, limb_tracks(out, fps, first_frame=True))))
+            key = (name, target.parent.name if target == path else
+                   f"{target.parent.name}/{target.name}")
+            means.setdefault(key, []).append(float(np.nanmean(list(steps.values()))))
     head = ("| model | source clip | target | " + " | ".join(LIMBS)
             + " | mean | mean, positions | mean, first-frame facing |\n|---|---|---|"
             + "---:|" * (len(LIMBS) + 3))
@@ -167,7 +172,19 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
             f"most active {frames} frames. The facing frame's axis is averaged over each "
             f"clip's frames; the last column takes it from each clip's first frame "
             f"instead.\n\n"
-            + head + "\n" + "\n".join(rows) + "\n")
+            + head + "\n" + "\n".join(rows) + "\n\n" + summary(means))
+
+
+def summary(means: Dict[tuple, List[float]]) -> str:
+    """Per (model, target): the clips' mean step correlations, their mean
+    and how many are above +0.2."""
+    lines = ["| model | target | clips | mean of clip means | min | max | clips above +0.2 |",
+             "|---|---|---:|---:|---:|---:|---:|"]
+    for (name, target), values in means.items():
+        v = np.array(values)
+        lines.append(f"| {name} | {target} | {len(v)} | {v.mean():+.2f} | {v.min():+.2f} "
+                     f"| {v.max():+.2f} | {(v > 0.2).sum()} |")
+    return "\n".join(lines) + "\n"
 
 
 def _row(name: str, source: Path, target: Path, steps: Dict[str, float],
