@@ -127,3 +127,17 @@ def test_module_adds_the_weighted_retarget_term_with_gradients(build_tiny_module
     # same global step, same pairing: the term is reproducible
     again = module.compute_losses(out, batch)["retarget"]
     assert torch.equal(again, losses["retarget"])
+
+
+def test_single_skeleton_batch_logs_a_zero_retarget_term(build_tiny_module, datamodule):
+    """Every step logs the same keys (distributed runs sync them)."""
+    ds = datamodule.datasets["train"]
+    same = [i for i in range(len(ds)) if ds.group(i) == ds.group(0)][:2]
+    batch = collate_clips([ds[i] for i in same])
+    module = build_tiny_module("vae")
+    module.criterion.weights["retarget"] = 0.5
+    out = module(batch)
+    losses = module.compute_losses(out, batch)
+    assert losses["retarget"] == 0
+    assert torch.equal(losses["loss"], module.criterion(out, batch, module.normalizer,
+                                                        fps=module.fps)["loss"])
