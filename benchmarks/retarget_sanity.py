@@ -36,7 +36,7 @@ import argparse
 import copy
 import sys
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import torch
@@ -44,7 +44,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.canonical import _lateral_pairs, canonicalize  # noqa: E402
+from satagraph.data.canonical import canonicalize, lateral_forward  # noqa: E402
 from satagraph.data.datamodule import semantic_embedder  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.data.semantics import LIMBS, limb_ends  # noqa: E402
@@ -59,16 +59,15 @@ LAG = 3
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
 
 
-def facing_axis(canonical) -> np.ndarray:
+def facing_axis(canonical) -> Optional[np.ndarray]:
     """Root-local facing axis of a canonical motion: the mean over its
-    frames of the horizontal forward direction (left/right joint pairs, as
-    :func:`~satagraph.data.canonical.detect_forward`) in the root's frame."""
-    left, right = _lateral_pairs(canonical.skeleton.names)
-    if not left:
-        return None
+    frames of the horizontal forward direction
+    (:func:`~satagraph.data.canonical.lateral_forward`) in the root's frame;
+    ``None`` (the features' first-frame axis) without left/right pairs."""
     rot, pos = canonical.global_transforms()
-    across = (pos[:, left] - pos[:, right]).mean(1)
-    forward = np.cross(across, np.array([0.0, 1.0, 0.0]))
+    forward = lateral_forward(pos, canonical.skeleton.names, np.array([0.0, 1.0, 0.0]))
+    if forward is None:
+        return None
     forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-9)
     axis = np.einsum("tji,tj->i", rot[:, 0], forward)
     return axis / max(np.linalg.norm(axis), 1e-9)
@@ -78,18 +77,32 @@ def forward_track(motion, fps: float, first_frame: bool = False) -> np.ndarray:
     """Forward coordinate of every joint relative to the root in the facing
     frame of :func:`facing_axis` (with :obj:`first_frame`: of the axis facing
     +Z at the first frame, as the features), :math:`(T, J)`."""
-    canonical = canonicalize(motion, fps=fps)
-    axis = None if first_frame else facing_axis(canonical)
-    feats = motion_to_features(canonical, facing_axis=axis)
+    return _forward_tracks(canonicalize(motion, fps=fps), (not first_frame,))[0]
+
+
+def _forward_tracks(canonical, averaged: Sequence[bool]) -> List[np.ndarray]:
+    """:func:`forward_track` of a canonical motion for each facing choice
+    (``True``: clip-averaged axis, ``False``: first-frame axis)."""
     # ``x`` is placed at the root's ground projection in the facing frame;
     # ``x_rel`` (relative to the parent) would only measure the last bone.
-    return feats.x[..., 2]
+    return [motion_to_features(canonical, facing_axis=facing_axis(canonical) if avg
+                               else None).x[..., 2] for avg in averaged]
 
 
 def limb_tracks(motion, fps: float, first_frame: bool = False) -> Dict[str, np.ndarray]:
     """Forward track :math:`(T,)` of each limb end found on the motion's
     skeleton, at :obj:`fps` (see :func:`forward_track`)."""
-    track = forward_track(motion, fps, first_frame)
+    return _by_limb(motion, forward_track(motion, fps, first_frame))
+
+
+def both_limb_tracks(motion, fps: float) -> Tuple[Dict[str, np.ndarray], Dict[str, np.ndarray]]:
+    """:func:`limb_tracks` with the clip-averaged and with the first-frame
+    facing axis, canonicalising the motion once."""
+    tracks = _forward_tracks(canonicalize(motion, fps=fps), (True, False))
+    return _by_limb(motion, tracks[0]), _by_limb(motion, tracks[1])
+
+
+def _by_limb(motion, track: np.ndarray) -> Dict[str, np.ndarray]:
     return {limb: track[:, j] for limb, j in limb_ends(motion.skeleton).items()}
 
 
@@ -147,18 +160,17 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
     for path in sources:
         clip = read_bvh(path)
         src = most_active(clip, frames)
-        src_tracks = limb_tracks(src, fps)
-        src_first = limb_tracks(src, fps, first_frame=True)
+        src_tracks, src_first = both_limb_tracks(src, fps)
         cases = [("trained", module, t, rig) for t, rig in rigs.items()]
         cases += [("re-initialised (chance)", control, t, rig) for t, rig in rigs.items()]
         cases.append(("trained, reconstruction (source's own rig)", module, path, clip))
         for name, model, target, rig in cases:
-            out = retarget_motion(model, src, rig, embed)
-            out_tracks = limb_tracks(out, fps)
+            out_tracks, out_first = both_limb_tracks(
+                retarget_motion(model, src, rig, embed), fps)
             steps = correlate(src_tracks, out_tracks)
             rows.append(_row(name, path, target, steps,
                              correlate(src_tracks, out_tracks, lag=None),
-                             correlate(src_first, limb_tracks(out, fps, first_frame=True))))
+                             correlate(src_first, out_first)))
             key = (name, target.parent.name if target == path else
                    f"{target.parent.name}/{target.name}")
             means.setdefault(key, []).append(float(np.nanmean(list(steps.values()))))

@@ -109,6 +109,23 @@ def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
     return [p[0] for p in pairs], [p[1] for p in pairs]
 
 
+def lateral_forward(positions: np.ndarray, names: List[str],
+                    up: np.ndarray) -> Optional[np.ndarray]:
+    r"""Forward direction ``across x up`` with ``across`` the mean of
+    left - right over the joint pairs found by name (not normalised);
+    ``None`` for a skeleton without such pairs.
+
+    Shapes:
+        - **positions**: :math:`(..., J, 3)`
+        - **output**: :math:`(..., 3)`
+    """
+    left, right = _lateral_pairs(names)
+    if not left:
+        return None
+    across = (positions[..., left, :] - positions[..., right, :]).mean(-2)
+    return np.cross(across, up)
+
+
 def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
     r"""Horizontal facing direction at frame 0 (unit vector, world axes).
 
@@ -116,12 +133,7 @@ def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
     ``.L``, ``_r``, ...): forward = across x up with across = left - right.
     Falls back to the root's local +Z axis.
     """
-    pos = _first_pose(motion)
-    left, right = _lateral_pairs(motion.skeleton.names)
-    forward = None
-    if left:
-        across = (pos[left] - pos[right]).mean(0)
-        forward = np.cross(across, up)
+    forward = lateral_forward(_first_pose(motion), motion.skeleton.names, up)
     if forward is None or np.linalg.norm(forward - up * forward.dot(up)) < 1e-8:
         root = motion.rotations[0, 0] if motion.num_frames else np.eye(3)
         forward = root[:, 2]

@@ -233,23 +233,15 @@ class MotionDataset(Dataset):
         """The semantic embedding of a skeleton, computed once per skeleton."""
         if self.semantic_fn is None:
             return None
-        key = _skeleton_key(feats.skeleton)
-        if key not in self._semantic:
-            if len(self._semantic) >= SEMANTIC_CACHE_SIZE:  # augmented skeletons
-                del self._semantic[next(iter(self._semantic))]
-            self._semantic[key] = self.semantic_fn(feats.skeleton).float()
-        return self._semantic[key]
+        return _per_skeleton(self._semantic, feats.skeleton,
+                             lambda skeleton: self.semantic_fn(skeleton).float())
 
     def limb_ends(self, feats: MotionFeatures) -> Tuple[int, ...]:
         """Terminal joint of each limb of a skeleton (in the order of
         :data:`~satagraph.data.semantics.LIMBS`, ``-1`` where missing),
         computed once per skeleton; clips carry it as ``meta["limb_ends"]``."""
-        key = _skeleton_key(feats.skeleton)
-        if key not in self._limbs:
-            if len(self._limbs) >= SEMANTIC_CACHE_SIZE:  # augmented skeletons
-                del self._limbs[next(iter(self._limbs))]
-            self._limbs[key] = tuple(limb_end_index(feats.skeleton))
-        return self._limbs[key]
+        return _per_skeleton(self._limbs, feats.skeleton,
+                             lambda skeleton: tuple(limb_end_index(skeleton)))
 
     def group(self, idx: int) -> str:
         """(dataset, skeleton) group of a window, for balanced sampling."""
@@ -270,6 +262,18 @@ class MotionDataset(Dataset):
         clip = aug.to_clip(lead, None, self.semantic(aug), meta)
         clip.meta["start"] = start
         return clip
+
+
+def _per_skeleton(cache: Dict[Tuple, Any], skeleton: Skeleton,
+                  compute: Callable[[Skeleton], Any]) -> Any:
+    """:obj:`compute` of :obj:`skeleton`, once per skeleton key; the oldest
+    of :data:`SEMANTIC_CACHE_SIZE` entries goes first (augmented skeletons)."""
+    key = _skeleton_key(skeleton)
+    if key not in cache:
+        if len(cache) >= SEMANTIC_CACHE_SIZE:
+            del cache[next(iter(cache))]
+        cache[key] = compute(skeleton)
+    return cache[key]
 
 
 def _skeleton_key(skeleton: Skeleton) -> Tuple:

@@ -10,6 +10,7 @@ retargeted motion should move like the source's.
 """
 from __future__ import annotations
 
+from itertools import accumulate
 from typing import List, NamedTuple, Optional
 
 import torch
@@ -47,10 +48,6 @@ class Pairing(NamedTuple):
     target_height: Tensor
 
 
-def _skeleton_keys(batch: FrameBatch, parents: List[List[int]]) -> List[tuple]:
-    return [(str(m.get("skeleton")), tuple(p)) for m, p in zip(batch.meta, parents)]
-
-
 def choose_partners(keys: List[tuple],
                     generator: Optional[torch.Generator] = None) -> List[int]:
     """For each clip, a random clip with another skeleton key (``-1``
@@ -63,23 +60,34 @@ def choose_partners(keys: List[tuple],
     return out
 
 
-def skeleton_clip(batch: FrameBatch, clip: int, num_frames: int,
-                  parents: List[int]) -> MotionClip:
-    """A motionless clip of :obj:`num_frames` frames on the skeleton of the
-    batch's clip :obj:`clip` (static and semantic features, bones, meta)."""
-    streams = (batch.stream_clip == clip).nonzero().view(-1).cpu()
-    num = len(parents)
-    frames = batch.clip_num_frames.cpu()
-    joints = batch.clip_num_joints.cpu()
-    edge_start = int(((joints - 1) * 2 * frames)[:clip].sum())
-    return MotionClip(
-        dynamic=torch.zeros(num_frames, num, DYNAMIC_CHANNELS),
-        root=torch.zeros(num_frames, ROOT_CHANNELS),
-        static=batch.joint_static[streams].detach().cpu().float(),
-        semantic=batch.joint_semantic[streams].detach().cpu().float(),
-        parents=torch.tensor(parents),
-        edge_attr=batch.edge_attr[edge_start:edge_start + 2 * (num - 1)].detach().cpu().float(),
-        meta=dict(batch.meta[clip]))
+class _Rig(NamedTuple):
+    """One clip's skeleton, on the CPU."""
+    static: Tensor
+    semantic: Tensor
+    parents: Tensor
+    edge_attr: Tensor
+
+
+def _rigs(batch: FrameBatch) -> List[_Rig]:
+    """Every clip's skeleton, with one device-to-host copy per attribute."""
+    frames, joints = batch.clip_num_frames.tolist(), batch.clip_num_joints.tolist()
+    static = batch.joint_static.detach().cpu().float().split(joints)
+    semantic = batch.joint_semantic.detach().cpu().float().split(joints)
+    parent = batch.stream_parent.cpu().split(joints)
+    edges = batch.edge_attr.detach().cpu().float().split(
+        [2 * (j - 1) * t for j, t in zip(joints, frames)])
+    starts = list(accumulate([0] + joints[:-1]))
+    return [_Rig(static[k], semantic[k], torch.where(parent[k] < 0, -1, parent[k] - starts[k]),
+                 edges[k][:2 * (joints[k] - 1)]) for k in range(len(joints))]
+
+
+def _motionless(rig: _Rig, num_frames: int, meta: dict) -> MotionClip:
+    """A clip of :obj:`num_frames` frames on :obj:`rig`, without motion."""
+    num = rig.parents.numel()
+    return MotionClip(dynamic=torch.zeros(num_frames, num, DYNAMIC_CHANNELS),
+                      root=torch.zeros(num_frames, ROOT_CHANNELS), static=rig.static,
+                      semantic=rig.semantic, parents=rig.parents,
+                      edge_attr=rig.edge_attr, meta=dict(meta))
 
 
 def partner_batch(batch: FrameBatch,
@@ -98,36 +106,25 @@ def partner_batch(batch: FrameBatch,
     Returns:
         Pairing or None: ``None`` when all clips share one skeleton.
     """
-    parents = _local_parents(batch)
-    partners = choose_partners(_skeleton_keys(batch, parents), generator)
+    rigs = _rigs(batch)
+    keys = [(str(m.get("skeleton")), tuple(r.parents.tolist()))
+            for m, r in zip(batch.meta, rigs)]
+    partners = choose_partners(keys, generator)
     clips = [i for i, p in enumerate(partners) if p >= 0]
     if not clips:
         return None
+    pairs = [partners[i] for i in clips]
     frames = batch.clip_num_frames.tolist()
-    target = collate_clips([skeleton_clip(batch, partners[i], frames[i], parents[partners[i]])
-                            for i in clips]).to(batch.x.device)
-    index = _limb_nodes(batch, target, clips, [partners[i] for i in clips])
     device = batch.x.device
+    target = collate_clips([_motionless(rigs[p], frames[i], batch.meta[p])
+                            for i, p in zip(clips, pairs)]).to(device)
     frame_mask = torch.isin(batch.frame_clip, torch.tensor(clips, device=device))
     return Pairing(target, torch.tensor(clips, device=device),
-                   torch.tensor([partners[i] for i in clips], device=device),
-                   frame_mask.nonzero().view(-1), *[t.to(device) for t in index])
+                   torch.tensor(pairs, device=device), frame_mask.nonzero().view(-1),
+                   *[t.to(device) for t in _limb_nodes(batch, clips, pairs)])
 
 
-def _local_parents(batch: FrameBatch) -> List[List[int]]:
-    """Each clip's parent list (local joint indices)."""
-    joints = batch.clip_num_joints.tolist()
-    parent = batch.stream_parent.cpu()
-    out, start = [], 0
-    for num in joints:
-        local = parent[start:start + num]
-        out.append(torch.where(local < 0, -1, local - start).tolist())
-        start += num
-    return out
-
-
-def _limb_nodes(batch: FrameBatch, target: FrameBatch, clips: List[int],
-                partners: List[int]) -> List[Tensor]:
+def _limb_nodes(batch: FrameBatch, clips: List[int], partners: List[int]) -> List[Tensor]:
     """Node indices (frames ``t >= 1``) and heights of the paired limb ends."""
     frames, joints = batch.clip_num_frames.tolist(), batch.clip_num_joints.tolist()
     src_offset = [0]

@@ -10,7 +10,7 @@ segment", whatever their names.
 """
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List
 
 from satagraph.skeleton import Skeleton
 
@@ -18,21 +18,13 @@ from satagraph.skeleton import Skeleton
 LIMBS: List[str] = ["left front", "right front", "left hind", "right hind"]
 
 
-def limb_ends(skeleton: Skeleton,
-              descriptions: Optional[Sequence[str]] = None) -> Dict[str, int]:
-    """Terminal joint of each limb the skeleton has, by description (the
-    first joint described as ``"<limb> limb terminal segment"``).
-
-    Args:
-        skeleton: The skeleton.
-        descriptions: Its joint descriptions (default:
-            :func:`~satagraph.data.semantics.describe_joints`).
-    """
-    if descriptions is None:
-        from satagraph.data.semantics import describe_joints
-        descriptions = describe_joints(skeleton)
+def limb_ends(skeleton: Skeleton) -> Dict[str, int]:
+    """Terminal joint of each limb the skeleton has: the first joint that
+    :func:`~satagraph.data.semantics.describe_joints` describes as
+    ``"<limb> limb terminal segment"``."""
+    from satagraph.data.semantics import describe_joints  # the package imports this module
     found: Dict[str, int] = {}
-    for j, text in enumerate(descriptions):
+    for j, text in enumerate(describe_joints(skeleton)):
         for limb in LIMBS:
             if text.startswith(f"{limb} limb terminal segment") and limb not in found:
                 found[limb] = j
