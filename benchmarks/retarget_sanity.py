@@ -17,9 +17,14 @@ axis is the mean over all frames of the left/right facing direction in the
 root's frame, for the source and the retargeted clip alike; the last column
 shows the first-frame axis for comparison.
 
-Two references come from the same run: the same model with its weights
-re-initialised (chance level), and reconstruction on the source's own rig
-(what this model reaches when source and target are the same skeleton).
+Three references come from the same run: the same model with its weights
+re-initialised (chance level), the trained retargets scored against another
+source clip (the next one; what a generic gait would reach, so that a high
+score means this clip's own steps), and reconstruction on the source's own
+rig (what this model reaches when source and target are the same skeleton).
+The summary also averages the retargets over the clips whose reconstruction
+is in step: where the model cannot follow a dog's limbs on the dog itself,
+no retarget can.
 ``--source`` also takes human clips: human -> human across skeletons is the
 within-species reference. Each source clip is cut
 to its most active window (largest limb-end speed), since the dog test clips
@@ -157,13 +162,16 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
     rigs = {target: read_bvh(target) for target in targets}
     rows: List[str] = []
     means: Dict[tuple, List[float]] = {}
+    sources_tracks: List[Dict[str, np.ndarray]] = []
+    outputs: Dict[str, List[Dict[str, np.ndarray]]] = {}
     for path in sources:
         clip = read_bvh(path)
         src = most_active(clip, frames)
         src_tracks, src_first = both_limb_tracks(src, fps)
-        cases = [("trained", module, t, rig) for t, rig in rigs.items()]
+        sources_tracks.append(src_tracks)
+        cases = [(TRAINED, module, t, rig) for t, rig in rigs.items()]
         cases += [("re-initialised (chance)", control, t, rig) for t, rig in rigs.items()]
-        cases.append(("trained, reconstruction (source's own rig)", module, path, clip))
+        cases.append((RECONSTRUCTION, module, path, clip))
         for name, model, target, rig in cases:
             out_tracks, out_first = both_limb_tracks(
                 retarget_motion(model, src, rig, embed), fps)
@@ -171,9 +179,15 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
             rows.append(_row(name, path, target, steps,
                              correlate(src_tracks, out_tracks, lag=None),
                              correlate(src_first, out_first)))
-            key = (name, target.parent.name if target == path else
-                   f"{target.parent.name}/{target.name}")
-            means.setdefault(key, []).append(float(np.nanmean(list(steps.values()))))
+            key = (name, _target_name(target, path))
+            means.setdefault(key, []).append(_mean(steps))
+            if name == TRAINED:
+                outputs.setdefault(key[1], []).append(out_tracks)
+    means.update(shuffled(sources_tracks, outputs))
+    return _header(ckpt, fps, frames) + "\n".join(rows) + "\n\n" + summary(means)
+
+
+def _header(ckpt: str, fps: float, frames: int) -> str:
     head = ("| model | source clip | target | " + " | ".join(LIMBS)
             + " | mean | mean, positions | mean, first-frame facing |\n|---|---|---|"
             + "---:|" * (len(LIMBS) + 3))
@@ -183,19 +197,52 @@ def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
             f"mean correlation of the forward positions themselves; each source clip's "
             f"most active {frames} frames. The facing frame's axis is averaged over each "
             f"clip's frames; the last column takes it from each clip's first frame "
-            f"instead.\n\n"
-            + head + "\n" + "\n".join(rows) + "\n\n" + summary(means))
+            f"instead. The summary's shuffled control scores each trained retarget "
+            f"against the next source clip.\n\n" + head + "\n")
+
+
+TRAINED = "trained"
+RECONSTRUCTION = "trained, reconstruction (source's own rig)"
+SHUFFLED = "trained, scored against another source clip (chance)"
+#: A clip counts as reconstructed in step above this mean step correlation.
+IN_STEP = 0.4
+
+
+def _target_name(target: Path, source: Path) -> str:
+    return target.parent.name if target == source else f"{target.parent.name}/{target.name}"
+
+
+def _mean(correlations: Dict[str, float]) -> float:
+    return float(np.nanmean(list(correlations.values())))
+
+
+def shuffled(sources: List[Dict[str, np.ndarray]],
+             outputs: Dict[str, List[Dict[str, np.ndarray]]]) -> Dict[tuple, List[float]]:
+    """The trained retargets scored against the NEXT source clip (cyclic):
+    the level that a generic gait, not this clip's own steps, would reach.
+    Empty with a single source clip."""
+    if len(sources) < 2:
+        return {}
+    return {(SHUFFLED, target): [_mean(correlate(sources[(i + 1) % len(sources)], out))
+                                 for i, out in enumerate(outs)]
+            for target, outs in outputs.items()}
 
 
 def summary(means: Dict[tuple, List[float]]) -> str:
     """Per (model, target): the clips' mean step correlations, their mean
-    and how many are above +0.2."""
-    lines = ["| model | target | clips | mean of clip means | min | max | clips above +0.2 |",
-             "|---|---|---:|---:|---:|---:|---:|"]
+    and how many are above +0.2; for the trained model, also the mean over
+    the clips whose own reconstruction is in step (above :data:`IN_STEP`)."""
+    recon = next((np.array(v) for (name, _), v in means.items() if name == RECONSTRUCTION),
+                 None)
+    lines = ["| model | target | clips | mean of clip means | min | max | clips above +0.2 "
+             f"| mean over clips reconstructed above +{IN_STEP:g} |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
     for (name, target), values in means.items():
         v = np.array(values)
+        good = ("-" if recon is None or name != TRAINED or not (recon > IN_STEP).any()
+                else f"{v[recon > IN_STEP].mean():+.2f} ({(recon > IN_STEP).sum()} clips)")
         lines.append(f"| {name} | {target} | {len(v)} | {v.mean():+.2f} | {v.min():+.2f} "
-                     f"| {v.max():+.2f} | {(v > 0.2).sum()} |")
+                     f"| {v.max():+.2f} | {(v > 0.2).sum()} | {good} |")
     return "\n".join(lines) + "\n"
 
 

@@ -115,3 +115,25 @@ def test_compile_table_reports_speedup_against_eager():
     lines = compile_step.table(rows).splitlines()
     assert "| 1.00x |" in lines[2] and "| 1.25x |" in lines[3] and "+1.00e-06" in lines[3]
     assert set(compile_step.VARIANTS) == {"eager", "compile", "compile-dynamic"}
+
+
+def test_retarget_sanity_shuffled_control_and_conditioned_summary():
+    """The shuffled control scores each retarget against the next source
+    clip: retargets that copy their own source score 1 paired and about 0
+    shuffled; the summary's last column averages the trained rows over the
+    clips whose reconstruction is in step only."""
+    import retarget_sanity as rs
+    rng = np.random.default_rng(0)
+    sources = [{limb: np.cumsum(rng.normal(size=200)) for limb in rs.LIMBS} for _ in range(4)]
+    outs = {"bandai/walk.bvh": [{k: v.copy() for k, v in s.items()} for s in sources]}
+    control = rs.shuffled(sources, outs)[(rs.SHUFFLED, "bandai/walk.bvh")]
+    assert len(control) == 4 and max(abs(c) for c in control) < 0.25
+    assert rs.shuffled(sources[:1], {"t": outs["bandai/walk.bvh"][:1]}) == {}
+    means = {(rs.TRAINED, "bandai/walk.bvh"): [0.8, 0.6, -0.2, 0.0],
+             (rs.RECONSTRUCTION, "dog"): [0.9, 0.5, 0.1, 0.3],
+             (rs.SHUFFLED, "bandai/walk.bvh"): control}
+    lines = rs.summary(means).splitlines()
+    trained = next(line for line in lines if line.startswith(f"| {rs.TRAINED} |"))
+    assert trained.endswith("| +0.30 | -0.20 | +0.80 | 2 | +0.70 (2 clips) |")
+    shuffled_row = next(line for line in lines if line.startswith(f"| {rs.SHUFFLED} |"))
+    assert shuffled_row.endswith("| - |")
