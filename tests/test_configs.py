@@ -35,3 +35,10 @@ def test_augment_stage_draws_new_rigs_with_new_rest_poses():
     base, stage = load_config("cpu_joint_retarget"), load_config("cpu_joint_augment")
     assert stage["loss"] == base["loss"] and stage["model"] == base["model"]
     assert stage["data"]["augment"]["rest"] > 0
+
+
+def test_long_retarget_stage_doubles_the_term_with_a_new_data_order():
+    base, stage = load_config("cpu_joint_retarget"), load_config("cpu_joint_retarget_long")
+    assert stage["loss"] == dict(base["loss"], retarget=0.02)
+    assert stage["model"] == base["model"] and stage["data"] == base["data"]
+    assert stage["seed"] != base.get("seed", 0)
