@@ -10,11 +10,19 @@ Inputs:
   human (22 / 26) and the ccbase rig (100 / 141), ``--frames`` frames each.
 
 Models: SATA-VAE at the paper's sizes (``experiments/sata_vae.yaml``, 256-D
-random semantic embedding), the same SATA with PyG's padded
-:class:`~torch_geometric.nn.conv.GPSConv` attention (every frame padded to the
-batch's largest skeleton; mixed batch only, as a single-skeleton batch has no
-padding), and the padded RVQ-VAE (``experiments/padded_rvq.yaml``, MoMask
-sizes) with ``max_joints = 150`` so that it holds every input.
+random semantic embedding), the padded RVQ-VAE (``experiments/padded_rvq.yaml``,
+MoMask sizes) with ``max_joints = 150`` so that it holds every input, and, on
+the mixed batch only (a single-skeleton batch has no padding), two padded
+variants of the same SATA:
+
+- "PyG padded attention": PyG's :class:`~torch_geometric.nn.conv.GPSConv`
+  attention, which pads every frame to the batch's largest skeleton inside
+  the attention only;
+- "every frame padded": the cost of a model that pads every frame to J_max in
+  every layer, as padded Transformers do (the SATA paper's argument against
+  padding): each clip of the batch is replaced by one of the batch's largest
+  skeleton with the same frame count, so every layer runs on J_max nodes per
+  frame. This is a cost proxy only: its outputs are not used.
 
 A step is normalisation + model + losses + backward + clipping + Adam
 (``throughput.train_step``). Time: best of ``--repeat`` steps after a
@@ -44,10 +52,13 @@ from throughput import (DATA, build_module, isolated, memory_baseline,  # noqa: 
                         peak_memory, random_semantic, time_steps, train_step)
 
 ROOT = Path(__file__).resolve().parents[1]
-#: (label, config, overrides, padded attention).
-MODELS = {"SATA": ("sata_vae", (), False),
-          "SATA, PyG padded attention": ("sata_vae", (), True),
-          "padded RVQ": ("padded_rvq", ("model.max_joints=150",), False)}
+#: label -> (config, overrides, padding mode: "", "attention" or "every frame").
+MODELS = {"SATA": ("sata_vae", (), ""),
+          "SATA, PyG padded attention": ("sata_vae", (), "attention"),
+          "SATA, every frame padded": ("sata_vae", (), "every frame"),
+          "padded RVQ": ("padded_rvq", ("model.max_joints=150",), "")}
+#: Models measured on the mixed batch only.
+MIXED_ONLY = ("SATA, PyG padded attention", "SATA, every frame padded")
 #: Real files of the mixed batch.
 MIXED = ["dog/D1_001_KAN01_001.bvh", "bandai/dataset-1_bow_active_001.bvh",
          "ccbase/006_01.bvh"]
@@ -88,6 +99,13 @@ def mixed_features(data: Path) -> List:
     return [preprocess_file(str(data / p), DEFAULT_PREPROCESSING) for p in MIXED]
 
 
+def padded_to_largest(features: Sequence) -> List:
+    """Every clip replaced by the largest skeleton's: the nodes per frame of
+    a model that pads each frame to J_max."""
+    largest = max(features, key=lambda f: f.skeleton.num_joints)
+    return [largest] * len(features)
+
+
 # ---------------------------------------------------------- measure
 def _padded_gps_forward(self, x, edge_index, batch=None, frames=None, **kwargs):
     """:class:`FrameGPSConv` as plain PyG :class:`GPSConv` (padded attention)."""
@@ -107,12 +125,14 @@ def measure_point(model: str, input_spec: Dict, frames: int, repeat: int = 2,
         feats = mixed_features(Path(data))
     else:
         feats = synthetic_features(input_spec["joints"], frames, input_spec["clips"])
-    config, overrides, padded_attention = MODELS[model]
+    config, overrides, padding = MODELS[model]
+    if padding == "every frame":
+        feats = padded_to_largest(feats)
     module = build_module(config, feats, overrides).to(dev).train()
     batch = batch_of(feats, frames).to(dev)
     opt = torch.optim.Adam(module.parameters(), lr=1e-4)
     patch = (mock.patch.object(FrameGPSConv, "forward", _padded_gps_forward)
-             if padded_attention else contextlib.nullcontext())
+             if padding == "attention" else contextlib.nullcontext())
     with patch:
         base = memory_baseline(dev)
         train_step(module, opt, batch)
@@ -141,8 +161,8 @@ def table(rows: List[Dict]) -> str:
     for m in models:
         head += [f"{m} ms/frame", f"{m} MB/frame"]
     head += ["time padded RVQ / SATA", "memory padded RVQ / SATA"]
-    if "SATA, PyG padded attention" in models:
-        head += ["time PyG padded attn / SATA"]
+    padded = [m for m in MIXED_ONLY if m in models]
+    head += [f"time {m} / SATA" for m in padded]
     lines = ["| " + " | ".join(head) + " |", "|---" + "|---:" * (len(head) - 1) + "|"]
     inputs: Dict[str, Dict[str, Dict]] = {}
     for r in rows:
@@ -156,8 +176,7 @@ def table(rows: List[Dict]) -> str:
                                                    f"{r['mb_per_frame']:.2f}"]
         cells += [_ratio(by_model, "padded RVQ", "ms_per_frame"),
                   _ratio(by_model, "padded RVQ", "mb_per_frame")]
-        if "SATA, PyG padded attention" in models:
-            cells.append(_ratio(by_model, "SATA, PyG padded attention", "ms_per_frame"))
+        cells += [_ratio(by_model, m, "ms_per_frame") for m in padded]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -182,7 +201,10 @@ def notes(args) -> str:
 - SATA: paper sizes (8.47 M parameters with a 256-D semantic embedding),
   padding-free per-frame attention (satagraph.nn.frame_gps). "PyG padded
   attention": the same model through torch_geometric's GPSConv.forward,
-  which pads every frame to the batch's largest skeleton. Padded RVQ:
+  which pads every frame to the batch's largest skeleton in the attention.
+  "Every frame padded": the same model with every clip on the batch's
+  largest skeleton (same frames), the cost of padding each frame to J_max
+  in every layer as padded Transformers do (a cost proxy). Padded RVQ:
   MoMask sizes, max_joints = 150 for every input (its cost per frame does
   not depend on the skeleton).
 - Shared 2-core CPU: compare ratios within one run only.

@@ -44,6 +44,20 @@ def test_scaling_table_ratio():
     assert "| 2.50 | 1.00 |" in text
 
 
+def test_scaling_every_frame_padded_runs_each_clip_on_the_largest_rig():
+    feats = [scaling.synthetic_features(j, 8, 1)[0] for j in (12, 30, 20)]
+    padded = scaling.batch_of(scaling.padded_to_largest(feats), 8)
+    assert padded.clip_num_joints.tolist() == [30, 30, 30]
+    assert int(padded.root.shape[0]) == int(scaling.batch_of(feats, 8).root.shape[0])
+    rows = [dict(model=m, input={"kind": "mixed"}, joints=[27, 26, 141], frames=48,
+                 ms_per_frame=t, mb_per_frame=1.0)
+            for m, t in (("SATA", 2.0), ("padded RVQ", 1.0),
+                         ("SATA, every frame padded", 4.4))]
+    text = scaling.table(rows)
+    assert "time SATA, every frame padded / SATA" in text
+    assert text.splitlines()[-1].endswith("| 0.50 | 1.00 | 2.20 |")
+
+
 def test_compare_tables():
     metrics = {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}
     row = SweepRow("SATA-VAE", "sata_vae", params=10, steps=3,
