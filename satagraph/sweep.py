@@ -266,8 +266,16 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
                          max_batches=max_batches)
         log(f"    {row.steps} steps, train loss {row.train_loss:.4f}")
         rows.append(row)
-    write_results(rows, Path(output), budget_minutes)
+    write_results(rows, Path(output), budget_minutes, overrides,
+                  data=_sources(cfgs[0]) if cfgs else None)
     return rows
+
+
+def _sources(cfg) -> Any:
+    """The data sources every config of a sweep trains on, as plain data."""
+    from omegaconf import OmegaConf
+    sources = cfg["data"].get("sources")
+    return OmegaConf.to_container(sources) if OmegaConf.is_config(sources) else sources
 
 
 # ------------------------------------------------------------- table
@@ -292,18 +300,39 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
     return "\n".join(lines)
 
 
-def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float) -> str:
-    """Write ``sweep.md`` and ``sweep.json``; returns the markdown."""
+def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
+                  overrides: Sequence[str] = (), data: Any = None) -> str:
+    """Write ``sweep.md`` and ``sweep.json``; returns the markdown.
+
+    Args:
+        rows (list[SweepRow]): One per config.
+        output (Path): Output folder.
+        budget_minutes (float): Training budget per config.
+        overrides (list[str]): Overrides applied to every config (recorded).
+        data (Any, optional): The data sources of the sweep (recorded).
+    """
     output.mkdir(parents=True, exist_ok=True)
     text = (f"# Sweep: {len(rows)} configs, {budget_minutes:g} min of training each\n\n"
-            f"{format_sweep(rows)}\n\nMetrics of the final weights on the test split "
-            "(all datasets); RT, JP, FS, GP in cm. Retarget: 1000 x mean squared "
-            "joint error / H^2 onto bone-scaled copies of the test files.\n")
+            f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data)}\n")
     (output / "sweep.md").write_text(text)
     payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
+               "overrides": list(overrides), "data": data,
                "rows": [asdict(r) for r in rows]}
     (output / "sweep.json").write_text(json.dumps(payload, indent=1, default=float))
     return text
+
+
+def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> str:
+    lines = ["Metrics of the final weights on the test split (all datasets); "
+             "RT, JP, FS, GP in cm."]
+    if any(r.retarget for r in rows):
+        lines.append("Retarget: 1000 x mean squared joint error / H^2 onto "
+                     "bone-scaled copies of the test files.")
+    if data is not None:
+        lines.append(f"Data (every config): `{json.dumps(data)}`.")
+    if overrides:
+        lines.append("Overrides (every config): " + " ".join(f"`{o}`" for o in overrides) + ".")
+    return "\n".join(lines)
 
 
 __all__ = ["SweepRow", "split_arguments", "budget_config", "sweep_configs",

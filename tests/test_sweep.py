@@ -55,7 +55,11 @@ def test_sweep_cli_end_to_end(tmp_path):
     assert time.perf_counter() - start < 60
     table = (out / "sweep.md").read_text()
     assert "| tiny |" in table and "| tiny_gin |" in table
-    rows = json.loads((out / "sweep.json").read_text())["rows"]
+    assert "`data.max_files=3`" in table and "Retarget:" not in table
+    payload = json.loads((out / "sweep.json").read_text())
+    assert payload["overrides"][-1] == "data.max_files=3"
+    assert payload["data"] == [str(data_dir())]
+    rows = payload["rows"]
     assert [r["name"] for r in rows] == ["tiny", "tiny_gin"]
     for row in rows:
         assert row["steps"] > 0 and row["params"] > 0
