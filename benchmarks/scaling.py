@@ -126,6 +126,7 @@ def measure_point(model: str, input_spec: Dict, frames: int, repeat: int = 2,
     else:
         feats = synthetic_features(input_spec["joints"], frames, input_spec["clips"])
     config, overrides, padding = MODELS[model]
+    joints = batch_of(feats, frames).clip_num_joints.tolist()
     if padding == "every frame":
         feats = padded_to_largest(feats)
     module = build_module(config, feats, overrides).to(dev).train()
@@ -139,7 +140,6 @@ def measure_point(model: str, input_spec: Dict, frames: int, repeat: int = 2,
         times = time_steps(lambda: train_step(module, opt, batch), dev, repeat)
         memory = peak_memory(dev) - base
     num_frames = int(batch.root.shape[0])
-    joints = batch.clip_num_joints.tolist()
     return dict(model=model, input=input_spec, joints=joints, frames=num_frames,
                 nodes=int(batch.num_nodes), best_s=min(times),
                 ms_per_frame=1000 * min(times) / num_frames,
