@@ -34,7 +34,8 @@ import torch
 
 from results_io import write_results
 from satagraph.data.sources import MotionFile, resolve_sources, select
-from satagraph.sweep import COLUMNS, SweepRow, held_out_loader, run_config, sweep_configs
+from satagraph.sweep import (COLUMNS, TRAILING_STEPS, SweepRow, held_out_loader, run_config,
+                             sweep_configs)
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
@@ -90,7 +91,8 @@ def run(minutes: float, data: Path, held_out: str, paper_sizes: bool,
         row = run_config(cfg, extra_loaders=loaders, retarget_files=files,
                          max_batches=max_batches)
         row.name = label
-        print(f"    {row.steps} steps, final train loss {row.train_loss:.4f}", flush=True)
+        print(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
+              f"{row.train_loss:.4f}", flush=True)
         rows.append(row)
     return rows
 
@@ -134,7 +136,8 @@ def table3(rows: Sequence[SweepRow]) -> str:
 def report(rows: Sequence[SweepRow], args) -> str:
     sizes = "paper sizes" if args.paper_sizes else "REDUCED widths (not the paper's sizes)"
     runs = "\n".join(f"- {r.name}: {r.params / 1e6:.2f} M parameters, {r.steps} steps "
-                     f"in {r.seconds:.0f} s (set-up included), final train loss "
+                     f"in {r.seconds:.0f} s (set-up included), train loss over the last "
+                     f"{TRAILING_STEPS} steps "
                      f"{r.train_loss:.4f}" for r in rows)
     return f"""Budget: {args.minutes:g} min of training per model on CPU, {sizes};
 data: {args.data}/manifest.tsv without {args.held_out}, 32-frame windows, batch 8;

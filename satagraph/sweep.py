@@ -30,6 +30,9 @@ from torch.utils.data import DataLoader
 
 from satagraph.config import load_config
 
+#: Steps the "train loss" column averages (see :class:`TrailingLoss`).
+TRAILING_STEPS = 50
+
 #: Metric columns of the table (name, unit factor, header).
 COLUMNS = (("JR", 1.0, "JR (rad)"), ("RT", 100.0, "RT (cm)"), ("JP", 100.0, "JP (cm)"),
            ("FS", 100.0, "FS (cm)"), ("GP", 100.0, "GP (cm)"))
@@ -46,7 +49,8 @@ class SweepRow:
         steps (int): Optimizer steps done within the budget.
         epochs (int): Epochs started.
         seconds (float): Wall time of the training (set-up included).
-        train_loss (float): Last epoch-mean training loss (``nan`` if none).
+        train_loss (float): Mean training loss over the last
+            :obj:`TRAILING_STEPS` steps (``nan`` if none).
         metrics (dict): ``{dataset: {metric: value, "clips": n}}`` on the
             evaluation split (and extra loaders).
         retarget (dict): Retarget error per dataset (empty when not asked).
@@ -148,26 +152,21 @@ def _label(name: str, extra: Sequence[str], taken: Sequence[str]) -> str:
 
 
 # ---------------------------------------------------------- training
-def _final_train_loss(trainer) -> float:
-    metrics = trainer.callback_metrics
-    for key in ("train_loss_epoch", "train_loss", "train_loss_step"):
-        if key in metrics:
-            return float(metrics[key])
-    return math.nan
-
-
 def train_budgeted(cfg: Dict[str, Any]):
     r"""Train one budgeted config (see :func:`budget_config`).
 
     Returns:
-        The module, the data module, the trainer and the wall time.
+        The module, the data module, the trainer, the wall time and the mean
+        training loss over the last :obj:`TRAILING_STEPS` steps.
     """
+    from satagraph.lightning.trailing_loss import TrailingLoss
     from satagraph.train import train
     budget = timedelta(seconds=float(cfg["_budget_s"]))
     cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
+    trailing = TrailingLoss(TRAILING_STEPS)
     start = time.perf_counter()
-    module, dm, trainer, _ = train(cfg, max_time=budget)
-    return module, dm, trainer, time.perf_counter() - start
+    module, dm, trainer, _ = train(cfg, max_time=budget, callbacks=[trailing])
+    return module, dm, trainer, time.perf_counter() - start, trailing.value
 
 
 def run_config(cfg: Dict[str, Any], eval_split: str = "test",
@@ -189,11 +188,11 @@ def run_config(cfg: Dict[str, Any], eval_split: str = "test",
     """
     from satagraph.evaluation import evaluate
     from satagraph.lightning.autoencoder import count_parameters
-    module, dm, trainer, seconds = train_budgeted(cfg)
+    module, dm, trainer, seconds, train_loss = train_budgeted(cfg)
     row = SweepRow(name=cfg["name"], config=str(cfg.get("_config", cfg["name"])),
                    params=count_parameters(module), steps=int(trainer.global_step),
                    epochs=int(trainer.current_epoch), seconds=seconds,
-                   train_loss=_final_train_loss(trainer), run_dir=cfg["output_dir"])
+                   train_loss=train_loss, run_dir=cfg["output_dir"])
     row.metrics = evaluate(module, dm._loader(eval_split, False), max_batches)
     for label, make_loader in (extra_loaders or {}).items():
         for group, values in evaluate(module, make_loader(module), max_batches).items():
@@ -264,7 +263,8 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         log(f"[{i + 1}/{len(cfgs)}] {cfg['name']}: training for {budget_minutes:g} min")
         row = run_config(cfg, retarget_files={"test": "split"} if retarget else None,
                          max_batches=max_batches)
-        log(f"    {row.steps} steps, train loss {row.train_loss:.4f}")
+        log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
+            f"{row.train_loss:.4f}")
         rows.append(row)
     write_results(rows, Path(output), budget_minutes, overrides,
                   data=_sources(cfgs[0]) if cfgs else None)
@@ -323,8 +323,8 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
 
 
 def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> str:
-    lines = ["Metrics of the final weights on the test split (all datasets); "
-             "RT, JP, FS, GP in cm."]
+    lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
+             "final weights on the test split (all datasets); RT, JP, FS, GP in cm."]
     if any(r.retarget for r in rows):
         lines.append("Retarget: 1000 x mean squared joint error / H^2 onto "
                      "bone-scaled copies of the test files.")
@@ -335,6 +335,6 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> st
     return "\n".join(lines)
 
 
-__all__ = ["SweepRow", "split_arguments", "budget_config", "sweep_configs",
+__all__ = ["SweepRow", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
            "train_budgeted", "run_config", "retarget_table", "held_out_loader",
            "run_sweep", "format_sweep", "write_results"]

@@ -81,7 +81,7 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     opts.setdefault("gradient_clip_val", (cfg.get("optim") or {}).get("grad_clip", 0.5))
     ckpt = ModelCheckpoint(dirpath=str(run_dir / "checkpoints"), save_last=True,
                            monitor=opts.pop("monitor", "val_loss"), mode="min")
-    callbacks = [ckpt]
+    callbacks = [ckpt] + list(opts.pop("callbacks", None) or [])
     if opts.pop("progress", True):
         callbacks.append(RichProgressBar())
     return L.Trainer(default_root_dir=str(run_dir), logger=build_logger(cfg, run_dir),

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 
@@ -63,5 +64,6 @@ def test_sweep_cli_end_to_end(tmp_path):
     assert [r["name"] for r in rows] == ["tiny", "tiny_gin"]
     for row in rows:
         assert row["steps"] > 0 and row["params"] > 0
+        assert math.isfinite(row["train_loss"])
         assert set(row["metrics"]["all"]) >= {"JR", "RT", "JP", "FS", "GP"}
         assert Path(row["run_dir"]).is_dir()

@@ -2,6 +2,7 @@
 from satagraph.lightning.autoencoder import (MotionAutoencoderModule, SATARVQModule,
                                             SATAVAEModule, count_parameters, lr_factor)
 from satagraph.lightning.baselines import PaddedRVQModule, SAMEModule
+from satagraph.lightning.trailing_loss import TrailingLoss
 
 __all__ = ["MotionAutoencoderModule", "SATAVAEModule", "SATARVQModule", "SAMEModule", "PaddedRVQModule",
-           "count_parameters", "lr_factor"]
+           "TrailingLoss", "count_parameters", "lr_factor"]
