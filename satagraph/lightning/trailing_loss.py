@@ -12,7 +12,7 @@ from torch import Tensor
 
 
 class TrailingLoss(L.Callback):
-    r"""Keeps the training loss of the last :obj:`window` optimizer steps.
+    r"""Keeps the training loss of the last :obj:`window` training batches.
 
     An epoch-mean loss is not comparable between runs stopped by a time
     budget: a run that just began a new epoch reports the mean of a few late
@@ -21,7 +21,8 @@ class TrailingLoss(L.Callback):
     no step waits for the device.
 
     Args:
-        window (int): Steps to average. (default: :obj:`50`)
+        window (int): Training batches to average (optimizer steps when
+            gradients are not accumulated). (default: :obj:`50`)
     """
 
     def __init__(self, window: int = 50) -> None:
