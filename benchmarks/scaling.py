@@ -126,11 +126,13 @@ def measure_point(model: str, input_spec: Dict, frames: int, repeat: int = 2,
     else:
         feats = synthetic_features(input_spec["joints"], frames, input_spec["clips"])
     config, overrides, padding = MODELS[model]
-    joints = batch_of(feats, frames).clip_num_joints.tolist()
+    batch = batch_of(feats, frames)
+    joints = batch.clip_num_joints.tolist()
     if padding == "every frame":
         feats = padded_to_largest(feats)
+        batch = batch_of(feats, frames)
     module = build_module(config, feats, overrides).to(dev).train()
-    batch = batch_of(feats, frames).to(dev)
+    batch = batch.to(dev)
     opt = torch.optim.Adam(module.parameters(), lr=1e-4)
     patch = (mock.patch.object(FrameGPSConv, "forward", _padded_gps_forward)
              if padding == "attention" else contextlib.nullcontext())

@@ -266,16 +266,10 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
             f"{row.train_loss:.4f}")
         rows.append(row)
+    # Configs are plain containers (load_config); all share the first's data.
     write_results(rows, Path(output), budget_minutes, overrides,
-                  data=_sources(cfgs[0]) if cfgs else None)
+                  data=cfgs[0]["data"].get("sources") if cfgs else None)
     return rows
-
-
-def _sources(cfg) -> Any:
-    """The data sources every config of a sweep trains on, as plain data."""
-    from omegaconf import OmegaConf
-    sources = cfg["data"].get("sources")
-    return OmegaConf.to_container(sources) if OmegaConf.is_config(sources) else sources
 
 
 # ------------------------------------------------------------- table

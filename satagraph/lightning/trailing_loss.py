@@ -42,7 +42,7 @@ class TrailingLoss(L.Callback):
         """The mean over the kept steps (``nan`` before the first step)."""
         if not self.losses:
             return math.nan
-        return float(torch.stack([x.float().cpu() for x in self.losses]).mean())
+        return torch.stack(list(self.losses)).float().mean().item()
 
 
 __all__ = ["TrailingLoss"]
