@@ -7,12 +7,18 @@ from typing import Callable, Dict, Optional, Sequence
 
 import torch
 
-from satagraph.data.augment import scale_bones
+from satagraph.data.augment import restructure, scale_bones
 from satagraph.data.canonical import canonicalize
 from satagraph.data.features import features_to_motion, motion_to_features
 from satagraph.data.sources import MotionFile
 from satagraph.inference import transfer
 from satagraph.io import read_bvh
+
+#: How each retargeting setting builds the target skeleton and its paired
+#: ground truth from a source motion, ``(motion, low, high, seed) -> Motion``:
+#: "internal" keeps the skeleton's structure and changes its proportions,
+#: "cross" also drops a leaf chain and splits a bone.
+RETARGET_SETTINGS: Dict[str, Callable] = {"internal": scale_bones, "cross": restructure}
 
 
 def evaluate(module, loader, max_batches: Optional[int] = None) -> Dict[str, Dict[str, float]]:
@@ -36,19 +42,36 @@ def evaluate(module, loader, max_batches: Optional[int] = None) -> Dict[str, Dic
 
 def retarget_errors(module, files: Sequence[MotionFile], semantic: Optional[Callable] = None,
                     low: float = 0.8, high: float = 1.2, seed: int = 0,
-                    max_frames: int = 600) -> Dict[str, float]:
-    r"""Retargeting error onto differently proportioned skeletons.
+                    max_frames: int = 600, setting: str = "internal") -> Dict[str, float]:
+    r"""Retargeting error onto skeletons with paired ground truth.
 
-    Each file's motion is retargeted onto a copy of its skeleton with bone
-    lengths scaled per axis in ``[low, high]``; the ground truth is the same
-    local motion on that skeleton (:func:`~satagraph.data.augment.scale_bones`).
-    Returns the mean ``1000 * mean ||p - p_hat||^2 / H^2`` per dataset.
+    Each file's motion is retargeted onto a copy of its skeleton built by
+    :obj:`setting` (see :data:`RETARGET_SETTINGS`: bone lengths scaled per
+    axis in ``[low, high]``, and for ``"cross"`` a leaf chain dropped and a
+    bone split too); the ground truth is the same motion on that skeleton.
+    Returns the mean ``1000 * mean ||p - p_hat||^2 / H^2`` per dataset (and
+    ``"all"``), with :math:`H` the target's height.
+
+    Args:
+        module: A trained autoencoder module.
+        files (list[MotionFile]): The source files.
+        semantic (callable, optional): Semantic embedder of the module.
+        low (float): Smallest per-axis bone scale.
+        high (float): Largest per-axis bone scale.
+        seed (int): Seed of the first file's target (file ``i`` gets
+            ``seed + i``).
+        max_frames (int): Frames of each file used (from the start).
+        setting (str): ``"internal"`` or ``"cross"``.
     """
+    if setting not in RETARGET_SETTINGS:
+        raise ValueError(f"retarget_errors: unknown setting {setting!r}; "
+                         f"known: {sorted(RETARGET_SETTINGS)}")
+    make_target = RETARGET_SETTINGS[setting]
     fps = float(getattr(module, "fps", 30.0))
     sums, counts = defaultdict(float), defaultdict(int)
     for i, f in enumerate(files):
         src = canonicalize(read_bvh(f.path), fps=fps).slice(0, max_frames)
-        gt = scale_bones(src, low, high, seed + i)
+        gt = make_target(src, low, high, seed + i)
         src_f, gt_f = motion_to_features(src), motion_to_features(gt)
         q, r, _ = transfer(module, src_f, gt_f, semantic)
         pred = features_to_motion(replace(gt_f, q=q, r=r), q=q, r=r, use_positions=False)

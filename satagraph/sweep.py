@@ -33,6 +33,9 @@ from satagraph.config import load_config
 #: Steps the "train loss" column averages (see :class:`TrailingLoss`).
 TRAILING_STEPS = 50
 
+#: Retargeting columns of the table (setting: header), as the SATA paper's Table 4.
+RETARGET_HEADERS = {"internal": "retarget int.", "cross": "retarget cross"}
+
 #: Metric columns of the table (name, unit factor, header).
 COLUMNS = (("JR", 1.0, "JR (rad)"), ("RT", 100.0, "RT (cm)"), ("JP", 100.0, "JP (cm)"),
            ("FS", 100.0, "FS (cm)"), ("GP", 100.0, "GP (cm)"))
@@ -53,7 +56,10 @@ class SweepRow:
             :obj:`TRAILING_STEPS` steps (``nan`` if none).
         metrics (dict): ``{dataset: {metric: value, "clips": n}}`` on the
             evaluation split (and extra loaders).
-        retarget (dict): Retarget error per dataset (empty when not asked).
+        retarget (dict): Retarget error ``{setting: {group: value}}``, setting
+            ``"internal"`` or ``"cross"`` (see
+            :data:`~satagraph.evaluation.RETARGET_SETTINGS`), group a file
+            label or ``"label:dataset"`` (empty when not asked).
         run_dir (str): The run folder (checkpoints, CSV logs).
     """
 
@@ -65,7 +71,7 @@ class SweepRow:
     seconds: float = 0.0
     train_loss: float = math.nan
     metrics: Dict[str, Dict[str, float]] = field(default_factory=dict)
-    retarget: Dict[str, float] = field(default_factory=dict)
+    retarget: Dict[str, Dict[str, float]] = field(default_factory=dict)
     run_dir: str = ""
 
 
@@ -202,17 +208,31 @@ def run_config(cfg: Dict[str, Any], eval_split: str = "test",
     return row
 
 
-def retarget_table(module, dm, files: Dict[str, Sequence], split: str) -> Dict[str, float]:
-    r"""Retarget errors (bone-scaled copies, paired ground truth) per label
-    and dataset, ``"label:dataset"`` keys (``"label"`` for all files)."""
+def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
+                   settings: Sequence[str] = ("internal", "cross")
+                   ) -> Dict[str, Dict[str, float]]:
+    r"""Retarget errors (paired ground truth) per setting, label and dataset:
+    ``{setting: {"label": all files, "label:dataset": value}}``.
+
+    Args:
+        module: The trained module.
+        dm: Its data module (for ``"split"``).
+        files (dict): ``{label: files}``; ``"split"`` takes the files of
+            :obj:`split`.
+        split (str): Split whose files ``"split"`` stands for.
+        settings (list[str]): Retargeting settings (see
+            :data:`~satagraph.evaluation.RETARGET_SETTINGS`).
+    """
     from satagraph.data.datamodule import semantic_embedder
     from satagraph.evaluation import retarget_errors
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
-    out = {}
+    out: Dict[str, Dict[str, float]] = {s: {} for s in settings}
     for label, chosen in files.items():
         chosen = dm.datasets[split].files if chosen == "split" else chosen
-        for group, value in retarget_errors(module, chosen, embed).items():
-            out[label if group == "all" else f"{label}:{group}"] = float(value)
+        for setting in settings:
+            errors = retarget_errors(module, chosen, embed, setting=setting)
+            out[setting].update({label if group == "all" else f"{label}:{group}": float(value)
+                                 for group, value in errors.items()})
     return out
 
 
@@ -280,15 +300,15 @@ def _metric(row: SweepRow, group: str, name: str, factor: float) -> str:
 
 def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
     """Table 4 layout: one row per config; metrics of :obj:`group`."""
-    retarget = any(r.retarget for r in rows)
+    settings = [s for s in RETARGET_HEADERS if any(s in r.retarget for r in rows)]
     head = ["config", "params (M)", "steps", "train loss"] + [h for _, _, h in COLUMNS]
-    head += ["retarget"] if retarget else []
+    head += [RETARGET_HEADERS[s] for s in settings]
     lines = ["| " + " | ".join(head) + " |", "|---" + "|---:" * (len(head) - 1) + "|"]
     for r in rows:
         cells = [r.name, f"{r.params / 1e6:.2f}", str(r.steps), f"{r.train_loss:.4f}"]
         cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
-        if retarget:
-            value = r.retarget.get("test", r.retarget.get(group))
+        for setting in settings:
+            value = r.retarget.get(setting, {}).get("test" if group == "all" else f"test:{group}")
             cells.append("-" if value is None else f"{value:.3f}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -320,8 +340,10 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> st
     lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
              "final weights on the test split (all datasets); RT, JP, FS, GP in cm."]
     if any(r.retarget for r in rows):
-        lines.append("Retarget: 1000 x mean squared joint error / H^2 onto "
-                     "bone-scaled copies of the test files.")
+        lines.append("Retarget: 1000 x mean squared joint error / H^2 over the test files; "
+                     "int.: onto bone-scaled copies of each source skeleton; cross: onto "
+                     "copies with a leaf chain dropped, a bone split and bones scaled "
+                     "(paired ground truth from the augmentation).")
     if data is not None:
         lines.append(f"Data (every config): `{json.dumps(data)}`.")
     if overrides:

@@ -63,11 +63,14 @@ def test_compare_tables():
     row = SweepRow("SATA-VAE", "sata_vae", params=10, steps=3,
                    metrics={"dog": dict(metrics, clips=2), "all": dict(metrics, clips=2),
                             "zero-shot": dict(metrics, clips=4)},
-                   retarget={"internal": 1.5, "internal:dog": 1.5, "zero-shot": 2.0})
+                   retarget={"internal": {"test": 1.5, "test:dog": 1.5, "zero-shot": 2.0},
+                             "cross": {"test": 3.0, "test:dog": 3.0, "zero-shot": 4.0}})
     t1 = compare.table1([row])
     assert "| dog | SATA-VAE | 2 |" in t1 and "| zero-shot | SATA-VAE | 4 |" in t1
-    t3 = compare.table3([row])
-    assert "| SATA-VAE | 1.500 | 2.000 | 1.500 | n/a |" in t3
+    t3 = compare.table3([row]).splitlines()
+    assert t3[0] == "| model | setting | dog | all (test) | zero-shot |"
+    assert t3[2:] == ["| SATA-VAE | internal | 1.500 | 1.500 | 2.000 |",
+                      "| SATA-VAE | cross | 3.000 | 3.000 | 4.000 |"]
 
 
 def test_matmul_peak_is_best_over_sizes(monkeypatch):

@@ -11,7 +11,8 @@ import yaml
 
 from satagraph.cli import main
 from satagraph.config import load_config
-from satagraph.sweep import budget_config, split_arguments, sweep_configs
+from satagraph.sweep import (SweepRow, budget_config, format_sweep, split_arguments,
+                             sweep_configs)
 from tests.conftest import data_dir
 
 needs_data = pytest.mark.skipif(data_dir() is None, reason="../shared/data not found")
@@ -43,6 +44,21 @@ def test_sweep_configs_share_data_and_unique_names(tmp_path):
 
 
 @needs_data
+def test_sweep_table_has_internal_and_cross_retarget_columns():
+    """As the SATA paper's Table 4: INT. and CROSS retargeting columns, per
+    evaluation group; a config without retarget errors shows dashes."""
+    metrics = {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}
+    rows = [SweepRow("a", "a", params=10, steps=2, metrics={"all": metrics, "dog": metrics},
+                     retarget={"internal": {"test": 1.5, "test:dog": 1.0},
+                               "cross": {"test": 2.5, "test:dog": 2.0}}),
+            SweepRow("b", "b", params=10, steps=2, metrics={"all": metrics})]
+    lines = format_sweep(rows).splitlines()
+    assert lines[0].endswith("| retarget int. | retarget cross |")
+    assert lines[2].endswith("| 1.500 | 2.500 |") and lines[3].endswith("| - | - |")
+    assert format_sweep(rows, "dog").splitlines()[2].endswith("| 1.000 | 2.000 |")
+    assert "retarget" not in format_sweep(rows[1:])
+
+
 def test_sweep_cli_end_to_end(tmp_path):
     gin = load_config("tiny", ["model.local_conv=gin"])
     gin["name"] = "tiny_gin"

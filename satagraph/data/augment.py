@@ -347,6 +347,33 @@ def _unique(name: str, names: Sequence[str]) -> str:
     return out
 
 
+def restructure(motion: Motion, low: float = 0.8, high: float = 1.2,
+                seed: int = 0) -> Motion:
+    r"""The same motion on a skeleton of another structure and other
+    proportions: a random leaf chain of up to two joints dropped
+    (:func:`drop_leaf_chain`), a random bone split by a new joint
+    (:func:`insert_joint`), then every bone scaled per axis in
+    ``[low, high]`` (:func:`scale_bones`).
+
+    The first two keep every remaining joint's global position exactly and
+    the third keeps the local motion, so the result is the ground truth of
+    retargeting :obj:`motion` onto a differently built skeleton (the
+    "cross" setting of a retargeting table; :func:`scale_bones` alone gives
+    the "internal" one). :func:`merge_segments` is left out: its bent
+    segments carry per-frame offsets, which no rotation-only decoder can
+    reproduce.
+
+    Args:
+        motion (Motion): A motion (+Y up for the height).
+        low (float): Smallest per-axis bone scale.
+        high (float): Largest per-axis bone scale.
+        seed (int): Random seed.
+    """
+    drop, split, scale = (int(s) for s in np.random.default_rng(seed).integers(2 ** 31, size=3))
+    motion = insert_joint(drop_leaf_chain(motion, drop, max_length=2), split)
+    return scale_bones(motion, low, high, scale)
+
+
 # --------------------------------------------------------- on the fly
 @dataclass
 class SkeletonAugment:

@@ -7,7 +7,7 @@ import pytest
 from satagraph.data.augment import (SkeletonAugment, drop_leaf_chain,
                                     insert_joint, merge_segments, mirror,
                                     mirror_pairs, paired, rebase_rest,
-                                    scale_bones, swap_side)
+                                    restructure, scale_bones, swap_side)
 from satagraph.data.canonical import canonicalize
 from satagraph.data.dataset import WindowAugment
 from satagraph.data.examples import example_motion
@@ -120,6 +120,30 @@ def test_insert_joint(motion, seed):
     assert np.allclose(a, b, atol=1e-9)
     new = next(n for n in split.skeleton.names if n not in motion.skeleton.names)
     assert new.endswith("_split")
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_restructure_changes_structure_and_keeps_the_motion(motion, seed):
+    """The cross-setting target: a leaf chain dropped and a bone split, the
+    kept joints with their own local rotations; without bone scaling every
+    kept joint stays exactly where it was (a reachable ground truth)."""
+    target = restructure(motion, seed=seed)
+    _valid(target)
+    names = target.skeleton.names
+    assert sum(n.endswith("_split") for n in names) == 1
+    assert 1 <= len(set(motion.skeleton.names) - set(names)) <= 2
+    kept = [n for n in names if n in motion.skeleton.names]
+    src = motion.skeleton.names
+    assert np.array_equal(target.rotations[:, [names.index(n) for n in kept]],
+                          motion.rotations[:, [src.index(n) for n in kept]])
+    assert not np.allclose(_common(target, motion)[0], _common(target, motion)[1])
+    unscaled = restructure(motion, low=1.0, high=1.0, seed=seed)
+    assert unscaled.skeleton.names == names
+    a, b = _common(unscaled, motion)
+    assert a.shape[1] == len(kept)
+    assert np.allclose(a, b, atol=1e-9)
+    again = restructure(motion, seed=seed)
+    assert np.array_equal(again.global_positions(), target.global_positions())
 
 
 def test_skeleton_augment_is_seeded_and_valid():
