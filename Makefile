@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: venv test demo bench sweep clean
+.PHONY: venv test demo bench scatter sweep clean
 
 $(STAMP): setup.cfg pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -25,10 +25,21 @@ DEMO_ARGS ?=
 demo: $(STAMP)
 	$(VENV)/bin/satagraph demo $(DEMO_ARGS)
 
+# The optional torch-scatter accelerator (the 'scatter' extra; no wheel here,
+# it builds from source in 5-10 minutes). benchmarks/compile_step.py measures
+# the training step with and without it; a failed build leaves it without.
+SCATTER_STAMP := $(VENV)/.scatter
+$(SCATTER_STAMP): $(STAMP)
+	$(PY) -m pip install -q --no-build-isolation 'torch-scatter==2.1.2' || \
+		echo "torch-scatter did not build: compile_step.py measures without it only"
+	touch $(SCATTER_STAMP)
+
+scatter: $(SCATTER_STAMP)
+
 # Every benchmark writes its table to benchmarks/results/. Run them on an
 # otherwise idle machine: on 2 cores a second busy process slows torch's
 # thread pool several times over and the ratios stop meaning anything.
-bench: $(STAMP)
+bench: $(STAMP) $(SCATTER_STAMP)
 	$(PY) benchmarks/pipeline.py
 	$(PY) benchmarks/collate.py
 	$(PY) benchmarks/semantic_alignment.py

@@ -43,7 +43,8 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
     p.add_argument("--output", default="sweeps/latest", metavar="DIR",
                    help="output folder (default sweeps/latest)")
     p.add_argument("--retarget", action="store_true",
-                   help="also the retarget error onto bone-scaled test files")
+                   help="also the retarget error of the test files in the internal "
+                   "(bone-scaled) and cross (restructured) settings")
     p.add_argument("--logger", default="csv",
                    choices=["csv", "tensorboard", "wandb", "none", "config"],
                    help="training logger (default csv; wandb: online, for a wandb "

@@ -126,12 +126,39 @@ def test_retarget_sanity_facing_axis_follows_the_walk(read_real):
 def test_compile_table_reports_speedup_against_eager():
     import compile_step
     rows = [dict(variant="eager", first_s=2.0, best_s=1.0, median_s=1.1, first_loss=3.0,
-                 other_first_s=2.5),
+                 other_first_s=2.5, scatter_ops=0),
             dict(variant="compile", first_s=40.0, best_s=0.8, median_s=0.9,
-                 first_loss=3.0 + 1e-6, other_first_s=30.0)]
+                 first_loss=3.0 + 1e-6, other_first_s=30.0, scatter_ops=0),
+            dict(variant="torch-scatter", first_s=2.0, best_s=1.1, median_s=1.1,
+                 first_loss=3.0, other_first_s=2.5, scatter_ops=7)]
     lines = compile_step.table(rows).splitlines()
     assert "| 1.00x |" in lines[2] and "| 1.25x |" in lines[3] and "+1.00e-06" in lines[3]
-    assert set(compile_step.VARIANTS) == {"eager", "compile", "compile-dynamic"}
+    assert lines[4].startswith("| torch-scatter |") and lines[4].endswith("| 0.91x | +0.00e+00 | 2.50 | 7 |")
+    assert set(compile_step.VARIANTS) == {"eager", "compile", "compile-dynamic", "torch-scatter"}
+
+
+def test_pyg_scatter_switch_is_restored_and_counted_ops_are_real():
+    """The torch-scatter variant flips PyG's call-time switch only inside
+    its block (and refuses when torch-scatter is missing); the op counter
+    counts the operators a step really calls."""
+    import compile_step
+    import torch
+    import torch_geometric.typing as pyg_typing
+    before = pyg_typing.WITH_TORCH_SCATTER
+    with compile_step.pyg_scatter(False):
+        assert pyg_typing.WITH_TORCH_SCATTER is False
+    assert pyg_typing.WITH_TORCH_SCATTER == before
+    if not compile_step.SCATTER_INSTALLED:
+        with pytest.raises(RuntimeError, match="torch-scatter is not installed"):
+            with compile_step.pyg_scatter(True):
+                pass
+    index = torch.tensor([0, 1, 1])
+
+    def step():
+        for _ in range(3):
+            torch.zeros(2).scatter_add_(0, index, torch.ones(3))
+    assert compile_step.op_calls(step, "aten::scatter_add_") == 3
+    assert compile_step.op_calls(step, "torch_scatter::") == 0
 
 
 def test_retarget_sanity_shuffled_control_and_conditioned_summary():
