@@ -181,3 +181,20 @@ def test_retarget_sanity_shuffled_control_and_conditioned_summary():
     assert trained.endswith("| +0.30 | -0.20 | +0.80 | 2 | +0.70 (2 clips) |")
     shuffled_row = next(line for line in lines if line.startswith(f"| {rs.SHUFFLED} |"))
     assert shuffled_row.endswith("| - |")
+
+
+def test_op_counter_sees_torch_scatter_kernels():
+    """Where torch-scatter is installed, the counter sees its operators (so
+    a zero in the table means the step never calls them)."""
+    torch_scatter = pytest.importorskip("torch_scatter",
+                                        reason="torch-scatter not installed (make scatter)")
+    import compile_step
+    import torch
+    from torch_geometric.utils import softmax
+    src, ptr = torch.randn(6, 4, requires_grad=True), torch.tensor([0, 2, 6])
+    assert compile_step.op_calls(lambda: torch_scatter.segment_csr(src, ptr, reduce="max"),
+                                 "torch_scatter::") == 1
+    with compile_step.pyg_scatter(True):
+        assert compile_step.op_calls(lambda: softmax(src, ptr=ptr), "torch_scatter::") >= 1
+    with compile_step.pyg_scatter(False):
+        assert compile_step.op_calls(lambda: softmax(src, ptr=ptr), "torch_scatter::") == 0
