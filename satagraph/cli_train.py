@@ -130,10 +130,10 @@ def _print_retarget(module, files, results: dict) -> None:
     """Retarget error table (internal and cross settings) per dataset; the
     values go into :obj:`results` as ``retarget`` and ``retarget_cross``."""
     from satagraph.data.datamodule import semantic_embedder
-    from satagraph.evaluation import retarget_errors
+    from satagraph.evaluation import retarget_error_table
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
-    internal = retarget_errors(module, files, embed, setting="internal")
-    cross = retarget_errors(module, files, embed, setting="cross")
+    table = retarget_error_table(module, files, embed, settings=("internal", "cross"))
+    internal, cross = table["internal"], table["cross"]
     print("\n| dataset | retarget error internal (x1000 / H^2) | cross (x1000 / H^2) |\n"
           "|---|---|---|")
     for name in sorted(internal, key=lambda g: (g == "all", g)):

@@ -9,10 +9,12 @@ import torch
 
 from satagraph.data.augment import restructure, scale_bones
 from satagraph.data.canonical import canonicalize
-from satagraph.data.features import features_to_motion, motion_to_features
+from satagraph.data.features import (MotionFeatures, features_to_motion,
+                                     motion_to_features)
 from satagraph.data.sources import MotionFile
 from satagraph.inference import transfer
 from satagraph.io import read_bvh
+from satagraph.motion import Motion
 
 #: How each retargeting setting builds the target skeleton and its paired
 #: ground truth from a source motion, ``(motion, low, high, seed) -> Motion``:
@@ -43,14 +45,27 @@ def evaluate(module, loader, max_batches: Optional[int] = None) -> Dict[str, Dic
 def retarget_errors(module, files: Sequence[MotionFile], semantic: Optional[Callable] = None,
                     low: float = 0.8, high: float = 1.2, seed: int = 0,
                     max_frames: int = 600, setting: str = "internal") -> Dict[str, float]:
+    r"""Retargeting error onto skeletons with paired ground truth, in one
+    setting: the mean per dataset (and ``"all"``) of
+    :func:`retarget_error_table` (see there for the arguments)."""
+    return retarget_error_table(module, files, semantic, low, high, seed, max_frames,
+                                (setting,))[setting]
+
+
+def retarget_error_table(module, files: Sequence[MotionFile],
+                         semantic: Optional[Callable] = None, low: float = 0.8,
+                         high: float = 1.2, seed: int = 0, max_frames: int = 600,
+                         settings: Sequence[str] = ("internal", "cross")
+                         ) -> Dict[str, Dict[str, float]]:
     r"""Retargeting error onto skeletons with paired ground truth.
 
     Each file's motion is retargeted onto a copy of its skeleton built by
-    :obj:`setting` (see :data:`RETARGET_SETTINGS`: bone lengths scaled per
+    each setting (see :data:`RETARGET_SETTINGS`: bone lengths scaled per
     axis in ``[low, high]``, and for ``"cross"`` a leaf chain dropped and a
     bone split too); the ground truth is the same motion on that skeleton.
-    Returns the mean ``1000 * mean ||p - p_hat||^2 / H^2`` per dataset (and
-    ``"all"``), with :math:`H` the target's height.
+    Each file is read once for every setting. Returns ``{setting: {group:
+    mean of 1000 * mean ||p - p_hat||^2 / H^2}}`` per dataset and ``"all"``,
+    with :math:`H` the target's height.
 
     Args:
         module: A trained autoencoder module.
@@ -61,26 +76,37 @@ def retarget_errors(module, files: Sequence[MotionFile], semantic: Optional[Call
         seed (int): Seed of the first file's target (file ``i`` gets
             ``seed + i``).
         max_frames (int): Frames of each file used (from the start).
-        setting (str): ``"internal"`` or ``"cross"``.
+        settings (list[str]): Among ``"internal"`` and ``"cross"``.
     """
-    if setting not in RETARGET_SETTINGS:
-        raise ValueError(f"retarget_errors: unknown setting {setting!r}; "
+    unknown = sorted(set(settings) - set(RETARGET_SETTINGS))
+    if unknown:
+        raise ValueError(f"retarget_errors: unknown setting {unknown[0]!r}; "
                          f"known: {sorted(RETARGET_SETTINGS)}")
-    make_target = RETARGET_SETTINGS[setting]
     fps = float(getattr(module, "fps", 30.0))
-    sums, counts = defaultdict(float), defaultdict(int)
+    sums = {s: defaultdict(float) for s in settings}
+    counts: Dict[str, int] = defaultdict(int)
     for i, f in enumerate(files):
         src = canonicalize(read_bvh(f.path), fps=fps).slice(0, max_frames)
-        gt = make_target(src, low, high, seed + i)
-        src_f, gt_f = motion_to_features(src), motion_to_features(gt)
-        q, r, _ = transfer(module, src_f, gt_f, semantic)
-        pred = features_to_motion(replace(gt_f, q=q, r=r), q=q, r=r, use_positions=False)
-        err = ((pred.global_positions() - gt.global_positions()) ** 2).sum(-1).mean()
-        value = 1000 * err / gt_f.height ** 2
+        src_f = motion_to_features(src)
         for group in (f.dataset, "all"):
-            sums[group] += value
             counts[group] += 1
-    return {g: sums[g] / counts[g] for g in sums}
+        for setting in settings:
+            value = _paired_error(module, src_f, RETARGET_SETTINGS[setting](
+                src, low, high, seed + i), semantic)
+            for group in (f.dataset, "all"):
+                sums[setting][group] += value
+    return {s: {g: sums[s][g] / counts[g] for g in counts} for s in settings}
+
+
+def _paired_error(module, source: MotionFeatures, truth: Motion,
+                  semantic: Optional[Callable]) -> float:
+    """``1000 * mean ||p - p_hat||^2 / H^2`` of retargeting :obj:`source`
+    onto :obj:`truth`'s skeleton, against :obj:`truth`."""
+    target = motion_to_features(truth)
+    q, r, _ = transfer(module, source, target, semantic)
+    pred = features_to_motion(replace(target, q=q, r=r), q=q, r=r, use_positions=False)
+    err = ((pred.global_positions() - truth.global_positions()) ** 2).sum(-1).mean()
+    return float(1000 * err / target.height ** 2)
 
 
 def format_table(results: Dict[str, Dict[str, float]]) -> str:

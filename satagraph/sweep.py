@@ -224,14 +224,14 @@ def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
             :data:`~satagraph.evaluation.RETARGET_SETTINGS`).
     """
     from satagraph.data.datamodule import semantic_embedder
-    from satagraph.evaluation import retarget_errors
+    from satagraph.evaluation import retarget_error_table
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
     out: Dict[str, Dict[str, float]] = {s: {} for s in settings}
     for label, chosen in files.items():
         chosen = dm.datasets[split].files if chosen == "split" else chosen
-        for setting in settings:
-            errors = retarget_errors(module, chosen, embed, setting=setting)
-            out[setting].update({label if group == "all" else f"{label}:{group}": float(value)
+        table = retarget_error_table(module, chosen, embed, settings=settings)
+        for setting, errors in table.items():
+            out[setting].update({label if group == "all" else f"{label}:{group}": value
                                  for group, value in errors.items()})
     return out
 

@@ -48,3 +48,18 @@ def test_retarget_errors_of_a_model_per_setting(build_tiny_module, test_files,
     assert cross["all"] != pytest.approx(internal["all"])
     with pytest.raises(ValueError, match="unknown setting 'mixed'"):
         retarget_errors(module, test_files, embed, setting="mixed")
+
+
+def test_error_table_reads_each_file_once_and_agrees_per_setting(build_tiny_module, test_files,
+                                                                 embed: Callable, monkeypatch):
+    module = build_tiny_module()
+    single = {s: retarget_errors(module, test_files, embed, max_frames=48, setting=s)
+              for s in ("internal", "cross")}
+    reads = []
+    real = evaluation.read_bvh
+    monkeypatch.setattr(evaluation, "read_bvh", lambda path: reads.append(path) or real(path))
+    table = evaluation.retarget_error_table(module, test_files, embed, max_frames=48)
+    assert len(reads) == len(test_files)
+    assert set(table) == {"internal", "cross"}
+    for setting, errors in single.items():
+        assert table[setting] == pytest.approx(errors)
