@@ -132,7 +132,7 @@ def _print_retarget(module, files, results: dict) -> None:
     from satagraph.data.datamodule import semantic_embedder
     from satagraph.evaluation import retarget_error_table
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
-    table = retarget_error_table(module, files, embed, settings=("internal", "cross"))
+    table = retarget_error_table(module, files, embed)
     internal, cross = table["internal"], table["cross"]
     print("\n| dataset | retarget error internal (x1000 / H^2) | cross (x1000 / H^2) |\n"
           "|---|---|---|")

@@ -55,7 +55,7 @@ def retarget_errors(module, files: Sequence[MotionFile], semantic: Optional[Call
 def retarget_error_table(module, files: Sequence[MotionFile],
                          semantic: Optional[Callable] = None, low: float = 0.8,
                          high: float = 1.2, seed: int = 0, max_frames: int = 600,
-                         settings: Sequence[str] = ("internal", "cross")
+                         settings: Optional[Sequence[str]] = None
                          ) -> Dict[str, Dict[str, float]]:
     r"""Retargeting error onto skeletons with paired ground truth.
 
@@ -76,11 +76,13 @@ def retarget_error_table(module, files: Sequence[MotionFile],
         seed (int): Seed of the first file's target (file ``i`` gets
             ``seed + i``).
         max_frames (int): Frames of each file used (from the start).
-        settings (list[str]): Among ``"internal"`` and ``"cross"``.
+        settings (list[str], optional): Among ``"internal"`` and ``"cross"``
+            (default: every one of :data:`RETARGET_SETTINGS`).
     """
+    settings = tuple(RETARGET_SETTINGS) if settings is None else tuple(settings)
     unknown = sorted(set(settings) - set(RETARGET_SETTINGS))
     if unknown:
-        raise ValueError(f"retarget_errors: unknown setting {unknown[0]!r}; "
+        raise ValueError(f"retarget_error_table: unknown setting {unknown[0]!r}; "
                          f"known: {sorted(RETARGET_SETTINGS)}")
     fps = float(getattr(module, "fps", 30.0))
     sums = {s: defaultdict(float) for s in settings}

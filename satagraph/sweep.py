@@ -209,7 +209,7 @@ def run_config(cfg: Dict[str, Any], eval_split: str = "test",
 
 
 def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
-                   settings: Sequence[str] = ("internal", "cross")
+                   settings: Optional[Sequence[str]] = None
                    ) -> Dict[str, Dict[str, float]]:
     r"""Retarget errors (paired ground truth) per setting, label and dataset:
     ``{setting: {"label": all files, "label:dataset": value}}``.
@@ -220,18 +220,18 @@ def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
         files (dict): ``{label: files}``; ``"split"`` takes the files of
             :obj:`split`.
         split (str): Split whose files ``"split"`` stands for.
-        settings (list[str]): Retargeting settings (see
-            :data:`~satagraph.evaluation.RETARGET_SETTINGS`).
+        settings (list[str], optional): Retargeting settings (default:
+            every one of :data:`~satagraph.evaluation.RETARGET_SETTINGS`).
     """
     from satagraph.data.datamodule import semantic_embedder
     from satagraph.evaluation import retarget_error_table
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
-    out: Dict[str, Dict[str, float]] = {s: {} for s in settings}
+    out: Dict[str, Dict[str, float]] = {}
     for label, chosen in files.items():
         chosen = dm.datasets[split].files if chosen == "split" else chosen
         table = retarget_error_table(module, chosen, embed, settings=settings)
         for setting, errors in table.items():
-            out[setting].update({label if group == "all" else f"{label}:{group}": value
+            out.setdefault(setting, {}).update({label if group == "all" else f"{label}:{group}": value
                                  for group, value in errors.items()})
     return out
 

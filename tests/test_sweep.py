@@ -43,7 +43,6 @@ def test_sweep_configs_share_data_and_unique_names(tmp_path):
     assert cfgs[0]["output_dir"] != cfgs[1]["output_dir"]
 
 
-@needs_data
 def test_sweep_table_has_internal_and_cross_retarget_columns():
     """As the SATA paper's Table 4: INT. and CROSS retargeting columns, per
     evaluation group; a config without retarget errors shows dashes."""
@@ -59,6 +58,7 @@ def test_sweep_table_has_internal_and_cross_retarget_columns():
     assert "retarget" not in format_sweep(rows[1:])
 
 
+@needs_data
 def test_sweep_cli_end_to_end(tmp_path):
     gin = load_config("tiny", ["model.local_conv=gin"])
     gin["name"] = "tiny_gin"

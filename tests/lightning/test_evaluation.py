@@ -15,9 +15,7 @@ from satagraph.evaluation import retarget_errors
 @pytest.fixture
 def test_files(datamodule: MotionDataModule):
     """One bandai and one dog test file."""
-    dm = datamodule
-    dm.setup("test")
-    return dm.datasets["test"].files
+    return datamodule.datasets["test"].files
 
 
 @pytest.mark.parametrize("setting", ["internal", "cross"])
