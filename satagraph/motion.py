@@ -58,6 +58,41 @@ class CanonicalTransform:
         }
 
 
+@dataclass(frozen=True)
+class RigSettings:
+    r"""How to read a rig, where it is known rather than guessed: its up axis
+    and its units (file units to metres).
+
+    Set from the command line (``--up-axis``, ``--units``), a manifest row
+    or ``data.sources`` entry (``up_axis``, ``scale`` / ``units``), or a
+    file's own declaration (files written by ``satagraph convert
+    --canonical`` declare ``+Y`` and metres). Canonicalisation uses what is
+    set and detects only the rest.
+
+    Args:
+        up_axis (str, optional): ``"+Y"``, ``"-Z"``, ...
+        scale (float or str, optional): File units to metres, or a unit
+            name (``"cm"``, ``"in"``, ...; see
+            :data:`satagraph.data.rig_reading.UNITS`).
+        declared (bool): Whether the file itself declared these (a
+            canonical file), rather than a user.
+    """
+
+    up_axis: Optional[str] = None
+    scale: Optional[object] = None
+    declared: bool = False
+
+    def merged(self, base: Optional["RigSettings"]) -> "RigSettings":
+        """These settings over :obj:`base`: what is unset here comes from
+        :obj:`base` (a user's override over a file's declaration)."""
+        if base is None:
+            return self
+        mine = self.up_axis is not None or self.scale is not None
+        return RigSettings(self.up_axis or base.up_axis,
+                           self.scale if self.scale is not None else base.scale,
+                           self.declared if mine else base.declared)
+
+
 @dataclass
 class Motion:
     r"""Local joint transforms over time for one :class:`Skeleton`.
@@ -74,6 +109,9 @@ class Motion:
             from a BVH file; the writer uses them verbatim while they are
             present. Anything that changes the motion drops them.
         source (str, optional): Path of the file the motion came from.
+        rig (RigSettings, optional): Known up axis and units of the rig
+            (given by a user or declared by the file); canonicalisation
+            guesses only what is not set here.
 
     Shapes:
         - **rotations**: :math:`(T, J, 3, 3)`
@@ -87,6 +125,7 @@ class Motion:
     transform: Optional[CanonicalTransform] = None
     raw_channels: Optional[np.ndarray] = None
     source: Optional[str] = None
+    rig: Optional[RigSettings] = None
 
     def __post_init__(self) -> None:
         num = self.skeleton.num_joints
@@ -153,7 +192,7 @@ class Motion:
         fields = dict(skeleton=self.skeleton, rotations=self.rotations,
                       translations=self.translations, fps=self.fps,
                       transform=self.transform, raw_channels=None,
-                      source=self.source)
+                      source=self.source, rig=self.rig)
         fields.update(changes)
         return Motion(**fields)
 
