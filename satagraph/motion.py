@@ -29,6 +29,9 @@ class CanonicalTransform:
         removed_root (dict, optional): A motionless root above the moving
             root that canonicalisation removed (name, channels, offset,
             constant rotation and translation), for writing back.
+        source_rig (RigSettings, optional): The source's own
+            :class:`RigSettings` (a canonical file's declaration), given
+            back by decanonicalisation.
     """
 
     up_axis: str = "+Y"
@@ -38,6 +41,7 @@ class CanonicalTransform:
     scale: float = 1.0
     source_fps: float = 30.0
     removed_root: Optional[dict] = None
+    source_rig: Optional["RigSettings"] = None
 
     @property
     def rotation(self) -> np.ndarray:

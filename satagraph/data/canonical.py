@@ -8,16 +8,13 @@ from typing import List, Optional, Tuple
 import numpy as np
 import torch
 
-from satagraph.motion import CanonicalTransform, Motion
+from satagraph.motion import CanonicalTransform, Motion, RigSettings
 from satagraph.skeleton import Skeleton
 from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
                                     quaternion_to_matrix)
 
 _AXIS = {"+X": (0, 1.0), "-X": (0, -1.0), "+Y": (1, 1.0), "-Y": (1, -1.0),
          "+Z": (2, 1.0), "-Z": (2, -1.0)}
-_Y_PRIOR = 1.5
-_TOP = re.compile(r"head|neck|skull", re.I)
-_BOTTOM = re.compile(r"foot|toe|paw|hoof|ankle|heel", re.I)
 _SIDE = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)"
                    r"|(?<![A-Za-z])[LR](?=[A-Z])")
 
@@ -48,43 +45,13 @@ def _first_pose(motion: Motion) -> np.ndarray:
     return motion.slice(0, 1).global_positions()[0]
 
 
-def _sample_poses(motion: Motion, count: int) -> np.ndarray:
-    """Global positions of up to :obj:`count` evenly spaced frames."""
-    if motion.num_frames == 0:
-        return motion.skeleton.rest_positions()[None]
-    idx = np.unique(np.linspace(0, motion.num_frames - 1, count).astype(int))
-    sub = motion.with_(rotations=motion.rotations[idx],
-                       translations=motion.translations[idx])
-    return sub.global_positions()
-
-
 def detect_up_axis(motion: Motion) -> str:
-    r"""Guess the up axis of a motion (``"+Y"``, ``"-Z"``, ...).
+    r"""Guess the up axis of a motion (``"+Y"``, ``"-Z"``, ...) from its
+    motion and pose; :func:`~satagraph.data.rig_reading.guess_up_axis` gives
+    the confidence and the evidence too."""
+    from satagraph.data.rig_reading import guess_up_axis
 
-    Uses up to 16 frames spread over the clip (or the rest pose for a
-    skeleton without frames). With foot-like joints (foot, toe, paw, hoof, ankle, heel): the signed
-    axis along which those joints lie furthest below the median joint,
-    relative to the pose's extent (feet are at the bottom of a standing
-    human or quadruped, but spread front to back). Without them: the axis of
-    largest extent, signed towards the side of the head-like joints or the
-    root. Y gets a 1.5x prior, as most BVH files are Y-up. Override it where the guess is wrong.
-    """
-    pos = _first_pose(motion)
-    names = motion.skeleton.names
-    bottom = [i for i, n in enumerate(names) if _BOTTOM.search(n)]
-    extent = np.maximum(np.ptp(pos, axis=0), 1e-9)
-    if bottom:
-        poses = _sample_poses(motion, 16)
-        med = np.median(poses, axis=1)
-        spread = np.maximum(np.ptp(poses, axis=1), 1e-9)
-        score = ((med - poses[:, bottom].mean(1)) / spread).mean(0)
-        prior = np.array([1.0, _Y_PRIOR, 1.0])  # BVH files are mostly +Y up
-        i = int(np.argmax(np.abs(score) * prior))
-        return ("+" if score[i] >= 0 else "-") + "XYZ"[i]
-    i = int(np.argmax(extent))
-    top = [k for k, n in enumerate(names) if _TOP.search(n)] or [0]
-    side = pos[top, i].mean() - 0.5 * (pos[:, i].max() + pos[:, i].min())
-    return ("+" if side >= 0 else "-") + "XYZ"[i]
+    return guess_up_axis(motion).axis
 
 
 def _side(name: str) -> Optional[str]:
@@ -148,17 +115,6 @@ def _orthogonal(up: np.ndarray) -> np.ndarray:
     return vec / np.linalg.norm(vec)
 
 
-def detect_unit_scale(height: float) -> float:
-    r"""Factor from file units to metres, guessed from the character height
-    in file units: centimetres above 30, CMU units (0.0564 m) from 5 to 30,
-    metres below 5."""
-    if height > 30:
-        return 0.01
-    if height > 5:
-        return 0.056444
-    return 1.0
-
-
 def remove_static_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
     r"""Fold a motionless root with a single child into that child.
 
@@ -220,27 +176,33 @@ def canonicalize(
 ) -> Motion:
     r"""Bring a motion into the canonical frame used by the features.
 
-    +Y up (detected unless :obj:`up_axis` is given), the character facing +Z
-    and its root at x = z = 0 at frame 0, the floor (a low percentile of the
-    per-frame lowest joint) at y = 0, metres (guessed from the height unless
-    :obj:`unit_scale` is given), :obj:`fps` frames per second (``None``
-    keeps the source rate). The returned motion's :attr:`~Motion.transform`
-    records what was done; :func:`decanonicalize` undoes it.
+    +Y up, the character facing +Z and its root at x = z = 0 at frame 0,
+    the floor (a low percentile of the per-frame lowest joint) at y = 0,
+    metres, :obj:`fps` frames per second (``None`` keeps the source rate).
+    Up axis and units are :obj:`up_axis` / :obj:`unit_scale` when given,
+    else the motion's :attr:`~Motion.rig` settings (a file's declaration, or
+    overrides from a manifest or the command line), else guessed by
+    :func:`~satagraph.data.rig_reading.read_rig`; a low-confidence or
+    undecided guess warns (:class:`~satagraph.data.rig_reading.RigReadingWarning`).
+    The returned motion's :attr:`~Motion.transform` records what was done;
+    :func:`decanonicalize` undoes it. The result declares itself canonical
+    (:attr:`~Motion.rig`), so it is never re-guessed, also once written.
     """
+    from satagraph.data.rig_reading import read_rig, warn_reading
+
     motion, removed = (remove_static_root(motion) if remove_root
                        else (motion, None))
-    up_name = (up_axis or detect_up_axis(motion)).upper()
-    if up_name not in _AXIS:
-        raise ValueError(f"up_axis must be one of {sorted(_AXIS)}, got {up_axis!r}")
+    reading = read_rig(motion, up_axis, unit_scale)
+    warn_reading(reading, motion.source)
+    up_name = reading.up.axis
     up_rot = _rotation_between(_axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
     moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
     forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
     yaw = float(np.arctan2(-forward[0], forward[2]))  # rotate forward onto +Z
-    scale = unit_scale or detect_unit_scale(moved.height())
     transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
-                                   scale=scale, source_fps=motion.fps,
-                                   removed_root=removed)
-    out = _apply_rotation(motion, transform.rotation, scale, np.zeros(3))
+                                   scale=reading.units.scale, source_fps=motion.fps,
+                                   removed_root=removed, source_rig=motion.rig)
+    out = _apply_rotation(motion, transform.rotation, transform.scale, np.zeros(3))
     shift = np.zeros(3)
     if out.num_frames:
         shift[[0, 2]] = -out.translations[0, 0, [0, 2]]
@@ -248,9 +210,14 @@ def canonicalize(
             lowest = out.global_positions()[:, :, 1].min(axis=1)
             shift[1] = -float(np.percentile(lowest, 2))
     transform.translation = shift
-    out = out.with_(translations=_shift_root(out.translations, shift))
+    out = out.with_(translations=_shift_root(out.translations, shift),
+                    rig=CANONICAL_RIG)
     out.transform = transform
     return resample(out, fps) if fps else out
+
+
+#: What a canonical motion is: +Y up, metres (declared, never re-guessed).
+CANONICAL_RIG = RigSettings("+Y", 1.0, declared=True)
 
 
 def _shift_root(translations: np.ndarray, shift: np.ndarray) -> np.ndarray:
@@ -285,6 +252,7 @@ def decanonicalize(motion: Motion, transform: Optional[CanonicalTransform] = Non
         translations=_shift_root(motion.translations, -tf.translation)),
         tf.rotation.T, 1.0 / tf.scale, np.zeros(3))
     back.transform = None
+    back.rig = tf.source_rig
     back = resample(back, fps or tf.source_fps)
     if tf.removed_root is not None:
         back = _restore_root(back, tf.removed_root)

@@ -26,6 +26,7 @@ declaration) is used as given and never re-guessed.
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Tuple
 
@@ -62,7 +63,7 @@ def normalize_up_axis(text: str) -> str:
     axis = str(text).strip().upper()
     axis = axis if axis[:1] in ("+", "-") else "+" + axis
     if axis not in UP_AXES:
-        raise ValueError(f"up axis must be one of {', '.join(UP_AXES)}, got {text!r}")
+        raise ValueError(f"up_axis must be one of {', '.join(UP_AXES)}, got {text!r}")
     return axis
 
 
@@ -209,21 +210,26 @@ def _rest_cue(pose: np.ndarray, names: List[str], leaves: np.ndarray) -> np.ndar
     Shapes:
         - **pose**: :math:`(J, 3)`
     """
-    extent = np.maximum(np.ptp(pose, axis=0), 1e-9)
+    extent = max(float(np.linalg.norm(np.ptp(pose, axis=0))), 1e-9)
     middle = np.median(pose, axis=0)
     score = np.zeros(3)
     bottom = [i for i, n in enumerate(names) if _BOTTOM.search(n)]
     top = [i for i, n in enumerate(names) if _TOP.search(n)]
     if bottom:
-        score += (middle - pose[bottom].mean(0)) / extent
-    if top:
-        score += (pose[top].mean(0) - middle) / extent
+        score += 2.0 * (middle - pose[bottom].mean(0)) / extent
+    if top:  # weak: heads are in front of most animals, above only some
+        score += 0.5 * (pose[top].mean(0) - middle) / extent
     ends = pose[leaves] if leaves.any() else pose
-    low = (ends - pose.min(0)) < 0.05 * extent
-    high = (pose.max(0) - ends) < 0.05 * extent
-    score += 0.5 * (low.mean(0) - high.mean(0))
+    low = (ends - pose.min(0)) < 0.03 * extent
+    high = (pose.max(0) - ends) < 0.03 * extent
+    score = score + 0.5 * (low.mean(0) - high.mean(0))
     score = np.clip(score, -1.0, 1.0)
-    return np.array([s * v for v in score for s in (1.0, -1.0)])
+    signed = np.array([s * v for v in score for s in (1.0, -1.0)])
+    # joints resting on a plane: the ground under a lying or crouching body
+    lying = np.concatenate([[((pose - pose.min(0)) < 0.03 * extent).mean(0)[i],
+                             ((pose.max(0) - pose) < 0.03 * extent).mean(0)[i]]
+                            for i in range(3)])
+    return signed + lying
 
 
 def guess_up_axis(motion: Motion) -> UpAxisGuess:
@@ -392,6 +398,17 @@ def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
 
 
 # ------------------------------------------------------------------- reading
+class RigReadingWarning(UserWarning):
+    """A rig's up axis or units were guessed with low confidence, or its
+    units could not be decided (the file's own are kept)."""
+
+
+def warn_reading(reading: "RigReading", source: Optional[str] = None) -> None:
+    """Warn (:class:`RigReadingWarning`) about each doubtful part of a reading."""
+    for line in reading.warnings:
+        warnings.warn(f"{source or 'motion'}: {line}", RigReadingWarning, stacklevel=3)
+
+
 @dataclass
 class RigReading:
     r"""How a motion's rig is read: up axis and units, each given, declared

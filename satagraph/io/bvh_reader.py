@@ -13,7 +13,7 @@ import numpy as np
 
 from satagraph.io._floats import parse_decimal_table
 from satagraph.io.errors import BVHError
-from satagraph.motion import Motion
+from satagraph.motion import Motion, RigSettings
 from satagraph.skeleton import Skeleton
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -206,6 +206,10 @@ def _unique(name: str, names: set) -> str:
     return out
 
 
+#: A trailing ``# satagraph: canonical up_axis=+Y scale=1`` line: the file
+#: declares how it is to be read (written by ``satagraph convert --canonical``).
+_DECLARATION = re.compile(r"(?:\r?\n|\r)[ \t]*#[ \t]*satagraph:[ \t]*canonical"
+                          r"[ \t]+up_axis=([+-][XYZ])[ \t]+scale=(\S+)[ \t]*(?:\r?\n|\r)?\s*\Z")
 _MOTION = re.compile(r"^[ \t]*MOTION[ \t]*\r?$", re.M | re.I)
 
 
@@ -441,12 +445,33 @@ def read_bvh(path: PathLike) -> Motion:
     text = raw.decode("utf-8", errors="replace")
     if not text.strip():
         raise BVHError(path, 1, "empty file")
+    aligned = raw if len(raw) == len(text) else None  # one byte per character
+    text, rig = _declaration(path, text)
+    aligned = aligned[:len(text)] if aligned is not None else None
     match = _MOTION.search(text)
     head_end = match.end() + 1 if match else len(text)
     header = _HeaderParser(path, text[:head_end].splitlines()).run()
     frames, frame_time, pos, lineno = _frame_header(
         path, text, head_end, header.motion_line)
     width = sum(len(j.channels) for j in header.joints)
-    aligned = raw if len(raw) == len(text) else None  # one byte per character
     data = _parse_frames(path, text, pos, aligned, lineno, frames, width)
-    return _to_motion(path, header, data, frame_time)
+    motion = _to_motion(path, header, data, frame_time)
+    motion.rig = rig
+    return motion
+
+
+def _declaration(path: str, text: str) -> Tuple[str, Optional[RigSettings]]:
+    """The text without a trailing satagraph declaration, and the settings
+    it declares (``None`` without one)."""
+    match = _DECLARATION.search(text)
+    if match is None:
+        return text, None
+    try:
+        scale = float(match.group(2))
+    except ValueError:
+        scale = float("nan")
+    if not (math.isfinite(scale) and scale > 0):
+        line = text[:match.start()].count("\n") + 2
+        raise BVHError(path, line, f"bad scale in the satagraph declaration: "
+                       f"{match.group(2)!r}")
+    return text[:match.start()] + "\n", RigSettings(match.group(1), scale, declared=True)

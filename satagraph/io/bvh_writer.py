@@ -83,6 +83,16 @@ def _file_mode(path: str) -> int:
         return 0o666 & ~umask
 
 
+def declaration(motion: Motion) -> str:
+    """The trailing line by which a canonical file declares its up axis and
+    units (empty for other motions): readers of this package then never
+    re-guess them; other readers stop after the declared frames."""
+    rig = motion.rig
+    if rig is None or not rig.declared or rig.up_axis is None or rig.scale is None:
+        return ""
+    return f"# satagraph: canonical up_axis={rig.up_axis} scale={float(rig.scale):g}\n"
+
+
 def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     r"""Write a motion as a BVH file.
 
@@ -111,6 +121,7 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
             f.write("\n".join(header) + "\n")
             if values.size:
                 np.savetxt(f, values, fmt=f"%.{max(precision, 6)}f")
+            f.write(declaration(motion))
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
