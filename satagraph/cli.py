@@ -69,6 +69,39 @@ def _up_axis(text: str) -> str:
     return axis
 
 
+def _units(text: str):
+    """A unit name (``cm``, ``in``, ...) or a factor to metres."""
+    from satagraph.data.rig_reading import parse_units
+    try:
+        return parse_units(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
+                      what: str = "the input") -> None:
+    """``--[PREFIX-]up-axis`` and ``--[PREFIX-]units`` (alias
+    ``--[PREFIX-]scale``): how to read a rig where detection guesses
+    wrong. They are used as given, never re-guessed."""
+    dash = f"--{prefix}-" if prefix else "--"
+    parser.add_argument(f"{dash}up-axis", type=_up_axis, default=None,
+                        metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
+                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it")
+    parser.add_argument(f"{dash}units", f"{dash}scale", type=_units, default=None,
+                        metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
+                        "ft, cmu (CMU mocap units), file (keep the file's own) or "
+                        "a factor to metres, instead of guessing them")
+
+
+def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Motion:
+    """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
+    :func:`add_rig_arguments` (the file's own declaration otherwise)."""
+    from satagraph.data.rig_reading import with_rig
+    key = f"{prefix}_" if prefix else ""
+    return with_rig(read_bvh(path), getattr(args, f"{key}up_axis", None),
+                    getattr(args, f"{key}units", None))
+
+
 def _write(motion: Motion, path: str) -> None:
     try:
         write_bvh(motion, path)
@@ -77,45 +110,17 @@ def _write(motion: Motion, path: str) -> None:
                            f"{err.strerror or err}") from err
 
 
-def _first_pose(motion: Motion) -> np.ndarray:
-    """Global joint positions of frame 0 (the rest pose without frames)."""
-    if motion.num_frames == 0:
-        return motion.skeleton.rest_positions()
-    return motion.slice(0, 1).global_positions()[0]
-
-
-def _largest_extent_axis(motion: Motion) -> str:
-    """Fallback up axis: the axis along which frame 0 is most extended,
-    signed towards the side of the root (hips are above the middle)."""
-    pos = _first_pose(motion)
-    i = int(np.argmax(np.ptp(pos, axis=0)))
-    middle = 0.5 * (pos[:, i].max() + pos[:, i].min())
-    return ("+" if pos[0, i] >= middle else "-") + "XYZ"[i]
-
-
-def detect_up_axis(motion: Motion) -> str:
-    """The up axis (``"+Y"``, ``"-Z"``, ...) by
-    :func:`satagraph.data.canonical.detect_up_axis` (joint names, then the
-    axis of largest extent), or by the largest extent alone when that
-    module is unavailable."""
-    try:
-        from satagraph.data.canonical import detect_up_axis as detect
-    except ImportError:
-        return _largest_extent_axis(motion)
-    return detect(motion)
-
-
 def describe(motion: Motion, path: str) -> Dict[str, Any]:
     """Summary of a motion as plain Python values (what ``inspect`` shows).
 
-    ``height`` is the extent along the detected up axis (file units) of the
-    rest pose or of frame 0, whichever is larger.
+    ``rig`` is how the rig is read (:func:`~satagraph.data.rig_reading.read_rig`:
+    up axis and units, each given, declared or guessed, with the confidence
+    and the evidence); ``height`` is the character height in file units
+    along that up axis and ``height_m`` in metres.
     """
+    from satagraph.data.rig_reading import read_rig
     skel = motion.skeleton
-    up = detect_up_axis(motion)
-    axis = "XYZ".index(up[1])
-    height = max(float(np.ptp(skel.rest_positions()[:, axis])),
-                 float(np.ptp(_first_pose(motion)[:, axis])))
+    reading = read_rig(motion)
     layout = Counter(len(c) for c in skel.channels)
     return {
         "file": path,
@@ -126,8 +131,10 @@ def describe(motion: Motion, path: str) -> Dict[str, Any]:
         "frames": motion.num_frames,
         "fps": float(motion.fps),
         "duration": float(motion.duration),
-        "up_axis": up,
-        "height": height,
+        "up_axis": reading.up.axis,
+        "height": reading.units.height,
+        "height_m": reading.units.height * reading.units.scale,
+        "rig": reading.to_dict(),
         "max_depth": int(skel.depth.max()),
         "rotation_orders": dict(sorted(Counter(
             o for o in skel.rotation_orders if o).items())),
@@ -135,6 +142,25 @@ def describe(motion: Motion, path: str) -> Dict[str, Any]:
         "position_channel_joints": int(skel.has_position_channels.sum()),
         "channels_per_frame": skel.num_channels,
     }
+
+
+def _rig_rows(rig: Dict[str, Any]) -> List[Tuple[str, str]]:
+    """The up-axis and unit rows of the ``inspect`` table."""
+    how = rig["up_axis_how"]
+    up = f"{rig['up_axis']} ({how}"
+    if how == "detected":
+        up += f", confidence {rig['up_axis_confidence']:.2f}"
+    rows = [("up axis", up + ")")]
+    for cue, scores in rig["up_axis_evidence"].items():
+        ranked = sorted(scores, key=scores.get, reverse=True)[:3]
+        rows.append((f"  {cue}", ", ".join(f"{a} {scores[a]:.2f}" for a in ranked)))
+    units = ("file units kept (undecided)" if rig["units_how"] == "kept" else
+             f"{rig['units']} ({rig['units_how']}, confidence "
+             f"{rig['units_confidence']:.2f})")
+    rows.append(("units", units if rig["units_how"] == "kept"
+                  else f"{units}: {rig['units_reason']}"))
+    rows += [("WARNING", w) for w in rig["warnings"]]
+    return rows
 
 
 def format_table(info: Dict[str, Any]) -> str:
@@ -152,8 +178,10 @@ def format_table(info: Dict[str, Any]) -> str:
         ("frames", info["frames"]),
         ("fps", f"{info['fps']:g}"),
         ("duration", f"{info['duration']:.3f} s"),
-        ("up axis", info["up_axis"]),
-        ("height", f"{info['height']:.4g} (file units)"),
+        *_rig_rows(info["rig"]),
+        ("height", f"{info['height']:.4g} file units, {info['height_m']:.4g} m"
+                   + (" if the file units were metres" if info["rig"]["units_how"]
+                      == "kept" else "")),
         ("depth", info["max_depth"]),
         ("rotation orders", orders or "none"),
         ("channels", f"{info['channels_per_frame']} per frame: {channels}"),
@@ -166,7 +194,7 @@ def format_table(info: Dict[str, Any]) -> str:
 # ------------------------------------------------------------------ inspect
 def run_inspect(args: argparse.Namespace) -> int:
     """Print the summary of a BVH file."""
-    info = describe(read_bvh(args.file), str(args.file))
+    info = describe(read_with_rig(args.file, args), str(args.file))
     print(json.dumps(info, indent=2) if args.json else format_table(info))
     return 0
 
@@ -176,12 +204,14 @@ def add_inspect_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "inspect", help="summarise a BVH file",
         description="Summarise a BVH file: joints and end sites, frames, "
-        "frame rate, duration, detected up axis, height (file units, along "
-        "the up axis), Euler rotation orders and channel layout.",
+        "frame rate, duration, the up axis (with the confidence and evidence "
+        "of its detection), the units and height, Euler rotation orders and "
+        "channel layout. Doubtful readings are flagged WARNING.",
         epilog="example: satagraph inspect walk.bvh --json")
     parser.add_argument("file", help="the .bvh file")
     parser.add_argument("--json", action="store_true",
                         help="print a JSON object instead of a table")
+    add_rig_arguments(parser)
     parser.set_defaults(func=run_inspect)
     return parser
 
@@ -189,17 +219,16 @@ def add_inspect_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
 # ------------------------------------------------------------------ convert
 def run_convert(args: argparse.Namespace) -> int:
     """Re-write a BVH file, optionally resampled and/or canonicalised."""
-    if args.up_axis and not args.canonical:
-        raise CommandError("--up-axis needs --canonical")
-    motion = read_bvh(args.input)
+    if (args.up_axis or args.units) and not args.canonical:
+        raise CommandError("--up-axis and --units need --canonical")
+    motion = read_with_rig(args.input, args)
     notes = []
     if args.canonical:
         from satagraph.data.canonical import canonicalize
-        motion = canonicalize(motion, fps=args.fps, up_axis=args.up_axis)
+        motion = canonicalize(motion, fps=args.fps)
         tf = motion.transform
-        notes.append("canonical" if tf is None else
-                     f"canonical: source up axis {tf.up_axis}, "
-                     f"scale {tf.scale:g} to metres")
+        notes.append(f"canonical: source up axis {tf.up_axis}, scale {tf.scale:g} "
+                     "to metres; the file declares itself +Y up in metres")
     elif args.fps:
         from satagraph.data.canonical import resample
         motion = resample(motion, args.fps)
@@ -218,7 +247,9 @@ def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "layout. Without options the channel values are kept exactly. "
         "--fps resamples (slerp for rotations); --canonical brings the "
         "motion to +Y up, facing +Z, root at the origin, metres (and "
-        "removes a motionless extra root joint). The output is replaced "
+        "removes a motionless extra root joint) and the output declares "
+        "itself canonical on a last comment line, so that satagraph never "
+        "re-guesses its up axis or units. The output is replaced "
         "atomically, so IN and OUT may be the same file.",
         epilog="example: satagraph convert in.bvh out.bvh --fps 30 --canonical")
     parser.add_argument("input", help="the .bvh file to read")
@@ -227,10 +258,7 @@ def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         help="resample to this frame rate")
     parser.add_argument("--canonical", action="store_true",
                         help="canonicalise (Y up, facing +Z, metres)")
-    parser.add_argument("--up-axis", type=_up_axis, default=None,
-                        metavar="AXIS", help="with --canonical: the source's "
-                        "up axis (+X, -X, +Y, -Y, +Z, -Z; a bare letter means "
-                        "+), when detection guesses wrong")
+    add_rig_arguments(parser, what="the input (with --canonical)")
     parser.set_defaults(func=run_convert)
     return parser
 

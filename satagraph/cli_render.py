@@ -52,13 +52,16 @@ def add_render_parser(subparsers: "argparse._SubParsersAction"
                    help="render at most N frames (the clip is cut)")
     p.add_argument("--raw", action="store_true",
                    help="draw the files as they are (must be +Y up)")
+    from satagraph.cli import add_rig_arguments
+    add_rig_arguments(p, what="every input")
     p.set_defaults(func=run_render)
     return p
 
 
-def _load(path: str, raw: bool) -> Motion:
-    motion = read_bvh(path)
-    if not raw:
+def _load(path: str, args: argparse.Namespace) -> Motion:
+    from satagraph.cli import read_with_rig
+    motion = read_with_rig(path, args)
+    if not args.raw:
         from satagraph.data.canonical import canonicalize
         motion = canonicalize(motion, fps=None)
     return motion
@@ -84,7 +87,7 @@ def run_render(args: argparse.Namespace) -> int:
         raise ValueError(f"--fps must be positive, got {args.fps}")
     if args.max_frames is not None and args.max_frames < 1:
         raise ValueError(f"--max-frames must be at least 1, got {args.max_frames}")
-    motions = [_load(path, args.raw) for path in inputs]
+    motions = [_load(path, args) for path in inputs]
     titles = [os.path.basename(path) for path in inputs]
     start = time.perf_counter()
     count = render(motions, output, titles=titles, fps=args.fps,

@@ -60,6 +60,8 @@ def add_tags_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--anchor", action="append", default=[],
                    metavar="NAME=TAG", help="anchor tag (repeatable)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    from satagraph.cli import add_rig_arguments
+    add_rig_arguments(p)
     p.set_defaults(func=run_tags)
     return p
 
@@ -106,7 +108,8 @@ def _run(args: argparse.Namespace) -> int:
         raise SemanticsError("--reference-vocab needs --prompt")
     if args.import_answer and args.out is None:
         raise SemanticsError("--import needs --out DICT.json")
-    skeleton = read_bvh(args.file).skeleton
+    from satagraph.cli import read_with_rig
+    skeleton = read_with_rig(str(args.file), args).skeleton
     if args.prompt:
         vocab = (load_reference_vocab(args.reference_vocab)
                  if args.reference_vocab else None)

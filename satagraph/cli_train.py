@@ -19,6 +19,7 @@ def add_train_parsers(sub) -> None:
                    help="continue from the run's last checkpoint")
     p.add_argument("--init-from", metavar="CKPT",
                    help="start from another run's weights (fine-tuning)")
+    _data_rig(p)
     p.set_defaults(func=run_train)
 
     p = sub.add_parser("reconstruct", help="encode and decode a BVH on its own skeleton",
@@ -26,6 +27,7 @@ def add_train_parsers(sub) -> None:
     _common(p)
     p.add_argument("input", metavar="IN.bvh")
     p.add_argument("output", metavar="OUT.bvh")
+    _rig(p)
     p.set_defaults(func=run_reconstruct)
 
     p = sub.add_parser("retarget", help="transfer a motion onto another skeleton",
@@ -36,6 +38,8 @@ def add_train_parsers(sub) -> None:
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
+    _rig(p, what="SOURCE.bvh")
+    _rig(p, "target", "TARGET.bvh")
     p.set_defaults(func=run_retarget)
 
     p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
@@ -49,6 +53,7 @@ def add_train_parsers(sub) -> None:
                    help="also the retarget error onto copies of each split file's "
                    "skeleton with paired ground truth: bone-scaled (internal) and "
                    "with a leaf chain dropped, a bone split and bones scaled (cross)")
+    _data_rig(p)
     p.set_defaults(func=run_eval)
 
 
@@ -60,10 +65,30 @@ def _common(p) -> None:
                    help="frames shared by consecutive windows (default: window / 4)")
 
 
+def _rig(p, prefix: str = "", what: str = "the input") -> None:
+    from satagraph.cli import add_rig_arguments
+    add_rig_arguments(p, prefix, what)
+
+
+def _data_rig(p) -> None:
+    _rig(p, what="every data file without its own setting (a manifest's "
+         "up_axis / scale column or a data.sources entry's up_axis / units)")
+
+
+def _rig_overrides(args) -> List[str]:
+    """``--up-axis`` / ``--units`` as ``data.preprocessing`` overrides."""
+    out = []
+    if args.up_axis:
+        out.append(f"data.preprocessing.up_axis={args.up_axis}")
+    if args.units:
+        out.append(f"data.preprocessing.scale={args.units}")
+    return out
+
+
 def run_train(args) -> int:
     from satagraph.config import load_config
     from satagraph.train import train
-    cfg = load_config(args.config, args.overrides)
+    cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
     start = time.time()
     module, dm, trainer, run_dir = train(cfg, resume=args.resume, init_from=args.init_from)
     ckpt = trainer.checkpoint_callback
@@ -82,9 +107,10 @@ def _load(args):
 
 def run_reconstruct(args) -> int:
     from satagraph.inference import reconstruct_motion
-    from satagraph.io import read_bvh, write_bvh
+    from satagraph.io import write_bvh
+    from satagraph.cli import read_with_rig
     module, embed = _load(args)
-    motion = read_bvh(args.input)
+    motion = read_with_rig(args.input, args)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
@@ -93,9 +119,11 @@ def run_reconstruct(args) -> int:
 
 def run_retarget(args) -> int:
     from satagraph.inference import retarget_motion
-    from satagraph.io import read_bvh, write_bvh
+    from satagraph.io import write_bvh
+    from satagraph.cli import read_with_rig
     module, embed = _load(args)
-    source, target = read_bvh(args.source), read_bvh(args.target)
+    source = read_with_rig(args.source, args)
+    target = read_with_rig(args.target, args, "target")
     out = retarget_motion(module, source, target, embed, args.window, args.overlap)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
@@ -113,6 +141,10 @@ def run_eval(args) -> int:
         data["sources"] = args.data
     if not data.get("sources"):
         raise ValueError("the checkpoint does not name its data: pass --data")
+    prep = dict(data.get("preprocessing") or {})
+    prep.update({k: v for k, v in (("up_axis", args.up_axis),
+                                   ("scale", args.units)) if v is not None})
+    data["preprocessing"] = prep
     dm = MotionDataModule(**data)
     dm.setup("test")
     loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)

@@ -13,7 +13,6 @@ from satagraph.data.features import (MotionFeatures, features_to_motion,
                                      motion_to_features)
 from satagraph.data.sources import MotionFile
 from satagraph.inference import transfer
-from satagraph.io import read_bvh
 from satagraph.motion import Motion
 
 #: How each retargeting setting builds the target skeleton and its paired
@@ -88,7 +87,7 @@ def retarget_error_table(module, files: Sequence[MotionFile],
     sums = {s: defaultdict(float) for s in settings}
     counts: Dict[str, int] = defaultdict(int)
     for i, f in enumerate(files):
-        src = canonicalize(read_bvh(f.path), fps=fps).slice(0, max_frames)
+        src = canonicalize(f.read(), fps=fps).slice(0, max_frames)
         src_f = motion_to_features(src)
         for group in (f.dataset, "all"):
             counts[group] += 1

@@ -56,11 +56,12 @@ def test_inspect_table_real_file(capsys, shared_data, manifest):
     assert rows["end sites"] == "5"
     assert rows["frames"] == row["frames"]
     assert rows["fps"] == "30"
-    assert rows["up axis"] == "+Y"
+    assert rows["up axis"].startswith("+Y (detected, confidence")
     assert rows["rotation orders"] == "ZXY x22"
     assert "22 joints with 6" in rows["channels"]
     assert rows["root"] == "joint_Root"
-    assert rows["height"].endswith("(file units)")
+    assert rows["height"].endswith(" m") and "file units, 1." in rows["height"]  # cm
+    assert rows["units"].startswith("cm (human, confidence 0.90")
 
 
 def test_inspect_json_real_file(capsys, shared_data, manifest):
@@ -85,6 +86,13 @@ def test_inspect_json_synthetic(capsys, tiny_file):
     code, out, _ = run(capsys, "inspect", str(tiny_file), "--json")
     assert code == 0
     info = json.loads(out)
+    rig = info.pop("rig")
+    # no hands, not metres-sized, no known exporter: the units are undecided
+    assert rig["units_how"] == "kept" and rig["units"] == "file"
+    assert rig["up_axis_how"] == "detected" and 0.0 <= rig["up_axis_confidence"] <= 1.0
+    assert set(rig["up_axis_evidence"]) >= {"rest"}
+    assert any("units unknown" in w for w in rig["warnings"])
+    assert info.pop("height_m") == pytest.approx(150.0)  # file units kept
     assert info == {
         "file": str(tiny_file), "root": "Hips", "joints": 10,
         "joints_without_end_sites": 7, "end_sites": 3, "frames": 3,
@@ -108,8 +116,6 @@ def test_inspect_detects_z_up(capsys, tiny_skeleton, tmp_path):
     info = json.loads(out)
     assert info["up_axis"] == "+Z"
     assert info["height"] == pytest.approx(150.0)
-    motion = read_bvh(path)
-    assert cli._largest_extent_axis(motion) == "+Z"  # the fallback agrees
 
 
 def test_inspect_table_synthetic(capsys, tiny_file):
@@ -191,7 +197,7 @@ def test_convert_up_axis_needs_canonical(capsys, tiny_file, tmp_path):
     code, _, err = run(capsys, "convert", str(tiny_file), str(tmp_path / "o.bvh"),
                        "--up-axis", "+Z")
     assert code == 2
-    assert err.strip() == "satagraph: error: --up-axis needs --canonical"
+    assert err.strip() == "satagraph: error: --up-axis and --units need --canonical"
     assert not (tmp_path / "o.bvh").exists()
 
 

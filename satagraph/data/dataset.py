@@ -23,7 +23,8 @@ from satagraph.io import BVHError, read_bvh
 from satagraph.skeleton import Skeleton
 
 #: Preprocessing defaults; every key is part of the cache key.
-DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "floor": True,
+DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "scale": None,
+                               "floor": True,
                                "contact_height": CONTACT_HEIGHT,
                                "contact_speed": CONTACT_SPEED}
 
@@ -46,10 +47,22 @@ class MotionDatasetError(RuntimeError):
     """Some files of a dataset could not be processed; lists every one."""
 
 
+def file_config(f: MotionFile, config: Dict) -> Dict:
+    """The preprocessing of one file: :obj:`config` with the file's own up
+    axis and units (manifest or source entry) where it has them."""
+    own = {k: getattr(f, k) for k in ("up_axis", "scale") if getattr(f, k) is not None}
+    return dict(config, **own) if own else config
+
+
 def preprocess_file(path: str, config: Dict) -> MotionFeatures:
-    """Read, canonicalise and featurise one BVH file."""
+    """Read, canonicalise and featurise one BVH file; ``config["up_axis"]``
+    and ``config["scale"]`` (when set) override the file's declaration and
+    detection."""
+    from satagraph.data.rig_reading import parse_units
+    scale = None if config.get("scale") is None else parse_units(config["scale"])
     motion = canonicalize(read_bvh(path), fps=config["fps"],
-                          up_axis=config["up_axis"], floor=config["floor"])
+                          up_axis=config["up_axis"], unit_scale=scale,
+                          floor=config["floor"])
     return motion_to_features(motion, contact_height=config["contact_height"],
                               contact_speed=config["contact_speed"])
 
@@ -68,10 +81,11 @@ def load_features(files: Sequence[MotionFile], config: Optional[Dict] = None,
     iterator = progress(files) if progress else files
     for f in iterator:
         try:
-            key = cache_key(f.path, config)
+            own = file_config(f, config)
+            key = cache_key(f.path, own)
             feats = load_cached(folder, key)
             if feats is None:
-                feats = preprocess_file(f.path, config)
+                feats = preprocess_file(f.path, own)
                 store_cached(folder, key, feats)
             out.append(feats)
         except (BVHError, OSError, ValueError) as err:

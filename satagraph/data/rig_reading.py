@@ -344,7 +344,8 @@ def _limb_sides(names: List[str], word: re.Pattern) -> int:
 def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:
     r"""A human body plan: a head, hands and feet on both sides, nothing a
     human lacks (tail, wings, beak, paws, ...), and an upright pose (the
-    root between 30% and 75% of the height).
+    hips, the first joint with three or more children, between 30% and 75%
+    of the height).
 
     Shapes:
         - **pose_up**: :math:`(J,)` heights of the joints in a pose.
@@ -358,9 +359,10 @@ def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:
     feet = _limb_sides(names, re.compile(r"foot|ankle|toe", re.I))
     if hands < 2 or feet < 2:
         return False
+    hubs = [j for j, c in enumerate(motion.skeleton.children) if len(c) >= 3]
     low, high = float(pose_up.min()), float(pose_up.max())
-    root = (float(pose_up[0]) - low) / max(high - low, 1e-12)
-    return 0.3 <= root <= 0.75
+    hips = (float(pose_up[hubs[0] if hubs else 0]) - low) / max(high - low, 1e-12)
+    return 0.3 <= hips <= 0.75
 
 
 def _height(motion: Motion, up: np.ndarray) -> Tuple[float, np.ndarray]:
@@ -436,12 +438,26 @@ class RigReading:
                 "up_axis_confidence": round(self.up.confidence, 3),
                 "up_axis_evidence": {k: {a: round(x, 3) for a, x in v.items()}
                                      for k, v in self.up.evidence.items()},
-                "scale": self.units.scale, "units": unit_name(self.units.scale),
+                "scale": self.units.scale,
+                "units": "file" if self.units.kept else unit_name(self.units.scale),
                 "units_how": self.units.how,
                 "units_confidence": round(self.units.confidence, 3),
                 "units_reason": self.units.reason,
                 "height_file_units": self.units.height,
                 "warnings": self.warnings}
+
+
+def with_rig(motion: Motion, up_axis: Optional[str] = None,
+             scale=None) -> Motion:
+    r""":obj:`motion` with the given up axis and units (either may be
+    ``None``) set over what it already knows (a file's declaration), so that
+    every later canonicalisation uses them. Validates both."""
+    if up_axis is None and scale is None:
+        return motion
+    settings = RigSettings(None if up_axis is None else normalize_up_axis(up_axis),
+                           None if scale is None else parse_units(scale))
+    return motion.with_(rig=settings.merged(motion.rig),
+                        raw_channels=motion.raw_channels)
 
 
 def read_rig(motion: Motion, up_axis: Optional[str] = None,

@@ -4,7 +4,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterable, List, Optional, Sequence, Union
 
@@ -13,12 +13,40 @@ SPLITS = ("train", "val", "test")
 
 @dataclass(frozen=True)
 class MotionFile:
-    r"""One BVH file with its dataset, skeleton id and split."""
+    r"""One BVH file with its dataset, skeleton id and split, and how to read
+    its rig where that is known (a manifest's ``up_axis`` and ``scale``
+    columns, or a ``data.sources`` entry's ``up_axis`` and ``units`` /
+    ``scale`` keys): these override detection (see
+    :class:`~satagraph.motion.RigSettings`)."""
 
     path: str
     dataset: str
     skeleton: str
     split: str
+    up_axis: Optional[str] = None
+    scale: Optional[float] = None
+
+    def read(self):
+        """The motion, with this file's rig settings attached."""
+        from satagraph.data.rig_reading import with_rig
+        from satagraph.io import read_bvh
+        return with_rig(read_bvh(self.path), self.up_axis, self.scale)
+
+
+def _row_settings(row: dict, where: str) -> dict:
+    """``up_axis`` and ``scale`` of a manifest row or source entry (empty
+    cells and missing keys: not set), validated."""
+    from satagraph.data.rig_reading import normalize_up_axis, parse_units
+    out = {}
+    try:
+        if row.get("up_axis") not in (None, ""):
+            out["up_axis"] = normalize_up_axis(row["up_axis"])
+        units = row.get("scale", row.get("units"))
+        if units not in (None, ""):
+            out["scale"] = parse_units(units)
+    except ValueError as err:
+        raise ValueError(f"{where}: {err}") from None
+    return out
 
 
 def _hash_split(name: str, val: float = 0.1, test: float = 0.1) -> str:
@@ -37,12 +65,13 @@ def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) 
     if not rows or "path" not in rows[0] or "split" not in rows[0]:
         raise ValueError(f"{path}: a manifest needs 'path' and 'split' columns")
     out = []
-    for row in rows:
+    for line, row in enumerate(rows, start=2):
         name = row.get("dataset") or dataset or path.parent.name
         if dataset and name != dataset:
             continue
         out.append(MotionFile(str(path.parent / row["path"]), name,
-                              row.get("skeleton") or name, row["split"]))
+                              row.get("skeleton") or name, row["split"],
+                              **_row_settings(row, f"{path}:{line}")))
     return out
 
 
@@ -56,8 +85,7 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
             rows = [r for r in read_manifest(manifest)
                     if Path(r.path).resolve().is_relative_to(path.resolve())]
             if rows:
-                return [MotionFile(r.path, dataset or r.dataset, r.skeleton, r.split)
-                        for r in rows]
+                return [replace(r, dataset=dataset or r.dataset) for r in rows]
     files = sorted(path.rglob("*.bvh")) + sorted(path.rglob("*.BVH"))
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
@@ -67,8 +95,10 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
     r"""Files from one or several sources: a folder, a manifest path, or a
-    dict ``{"path": ..., "dataset": ..., "exclude": [...]}``. A manifest with
-    a ``dataset`` key keeps only that dataset."""
+    dict ``{"path": ..., "dataset": ..., "exclude": [...], "up_axis": ...,
+    "units": ...}``. A manifest with a ``dataset`` key keeps only that
+    dataset; ``up_axis`` and ``units`` (or ``scale``) apply to every file of
+    the entry that has no setting of its own in its manifest."""
     if isinstance(sources, (str, os.PathLike)) or isinstance(sources, dict):
         sources = [sources]
     files: List[MotionFile] = []
@@ -80,8 +110,16 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         found = (read_manifest(path, spec.get("dataset")) if path.is_file()
                  else scan_folder(path, spec.get("dataset")))
         exclude = set(spec.get("exclude") or ())
-        files += [f for f in found if f.dataset not in exclude and f.split != "parser_test"]
+        settings = _row_settings(spec, f"data.sources entry {spec['path']}")
+        files += [_with_defaults(f, settings) for f in found
+                  if f.dataset not in exclude and f.split != "parser_test"]
     return files
+
+
+def _with_defaults(f: MotionFile, settings: dict) -> MotionFile:
+    """:obj:`f` with the entry's settings where it has none of its own."""
+    missing = {k: v for k, v in settings.items() if getattr(f, k) is None}
+    return replace(f, **missing) if missing else f
 
 
 def select(files: Iterable[MotionFile], split: str) -> List[MotionFile]:

@@ -54,8 +54,9 @@ def test_error_table_reads_each_file_once_and_agrees_per_setting(build_tiny_modu
     single = {s: retarget_errors(module, test_files, embed, max_frames=48, setting=s)
               for s in ("internal", "cross")}
     reads = []
-    real = evaluation.read_bvh
-    monkeypatch.setattr(evaluation, "read_bvh", lambda path: reads.append(path) or real(path))
+    import satagraph.io
+    real = satagraph.io.read_bvh
+    monkeypatch.setattr(satagraph.io, "read_bvh", lambda path: reads.append(path) or real(path))
     table = evaluation.retarget_error_table(module, test_files, embed, max_frames=48)
     assert len(reads) == len(test_files)
     assert set(table) == {"internal", "cross"}
