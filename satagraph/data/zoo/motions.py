@@ -25,7 +25,14 @@ GAITS: Dict[str, Tuple[Dict[str, float], float, float, float, float]] = {
     "hexapod": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5,
                  "R3": 0.5}, 0.55, 0.8, 1.5, 0.2),
     "snake": ({}, 1.0, 1.0, 0.25, 0.0),
+    # Crabs: alternating tripods; spiders: alternating tetrapods.
+    "crab": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5, "R3": 0.5},
+             0.6, 0.7, 1.2, 0.2),
+    "spider": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R4": 0.0, "R1": 0.5, "L2": 0.5,
+                "R3": 0.5, "L4": 0.5}, 0.6, 0.7, 1.4, 0.2),
 }
+GAITS["fowl"] = GAITS["bird"]
+GAITS["longtail"] = GAITS["quadruped"]
 _IDLE_HZ = 0.3
 _PAD_SECONDS = 3.0
 

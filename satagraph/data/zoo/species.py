@@ -1,4 +1,9 @@
-"""Species of the zoo, their skeleton variants and :func:`zoo_rigs`."""
+"""Species of the zoo, their skeleton variants and :func:`zoo_rigs`.
+
+New species only ever go at the END of :data:`SPECIES` and new variants at
+the end of their tuple in :data:`VARIANTS`: rigs are seeded by ``(seed,
+species index, variant index)`` and clips by the rig's position in the
+zoo, so this keeps every existing rig and clip byte-identical."""
 from __future__ import annotations
 
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -6,15 +11,24 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph.data.zoo.bodies import _biped, _bird, _hexapod, _quadruped, _snake
+from satagraph.data.zoo.creatures import _bip01, _crab, _fingerwing, _longtail, _spider
 from satagraph.data.zoo.rigs import ZooRig
 
-SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake")
+#: Body plans: ``fowl`` are birds in exporter dialects (``Bip01_*`` with
+#: legs and wings off one spine joint, finger-named wings), ``longtail`` a
+#: long-tailed quadruped of about 100 joints.
+SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab",
+           "spider", "longtail")
 CLIP_KINDS = {
     "biped": ("walk", "turn", "speed", "idle"),
     "quadruped": ("walk", "trot", "turn", "speed", "idle"),
     "bird": ("walk", "turn", "speed", "idle"),
     "hexapod": ("walk", "turn", "speed", "idle"),
     "snake": ("walk", "turn", "speed", "idle"),
+    "fowl": ("walk", "turn", "speed", "idle"),
+    "crab": ("walk", "turn", "speed", "idle"),
+    "spider": ("walk", "turn", "speed", "idle"),
+    "longtail": ("walk", "trot", "turn", "speed", "idle"),
 }
 
 VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {
@@ -24,9 +38,15 @@ VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {
     "bird": (("mixamo", {}), ("blender", {}), ("smpl", {})),
     "hexapod": (("insect", {}), ("insect_snake", {})),
     "snake": (("snake", {}), ("snake_blender", {}), ("snake_vertebra", {})),
+    "fowl": (("bip01", {}), ("fingerwing", {})),
+    "crab": (("plain", {}), ("abdomen", {"abdomen": True})),
+    "spider": (("plain", {}), ("palps", {"palps": True})),
+    "longtail": (("tail32", {"tail_joints": 32}), ("tail36", {"tail_joints": 36})),
 }
 _BUILDERS = {"biped": _biped, "quadruped": _quadruped, "bird": _bird,
-             "hexapod": _hexapod, "snake": _snake}
+             "hexapod": _hexapod, "snake": _snake, "fowl": _bip01,
+             "crab": _crab, "spider": _spider, "longtail": _longtail}
+_BUILDERS_BY_STYLE = {("fowl", "fingerwing"): _fingerwing}
 
 
 def zoo_rigs(species: Optional[Sequence[str]] = None, seed: int = 0) -> List[ZooRig]:
@@ -49,7 +69,8 @@ def zoo_rigs(species: Optional[Sequence[str]] = None, seed: int = 0) -> List[Zoo
             tag = "" if "tail" not in options else (
                 "-tail" if options["tail"] else "-notail")
             rig_name = f"zoo{seed}-{name}-{style}{tag}"
-            out.append(_BUILDERS[name](style, rng, rig_name, **options))
+            build = _BUILDERS_BY_STYLE.get((name, style), _BUILDERS[name])
+            out.append(build(style, rng, rig_name, **options))
     return out
 
 
