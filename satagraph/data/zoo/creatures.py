@@ -179,7 +179,7 @@ def _spider(label: str, rng: np.random.Generator, name: str,
     """A spider: legs ``Leg_L_01``..``Leg_L_04`` and ``Leg_R_05``..
     ``Leg_R_08`` (front to back), fangs and a two-joint abdomen."""
     b = _Builder(label, rng.choice(["ZXY", "YXZ"]), rng)
-    s = rng.uniform(0.01, 0.15)
+    s = rng.uniform(0.03, 0.2)
     root = b.add("Cephalothorax", -1, (0, 0, 0))
     b.swing(root, amplitude=(1, 1, 1), k=2.0)
     abdomen = _limb(b, root, ("Abdomen_01", "Abdomen_02"),
