@@ -118,7 +118,8 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
     r"""Global rotations :math:`(J, 3, 3)` of a rest pose, relative to the
     motion's current (canonical: +Y up, facing +Z) rest pose.
 
-    ``"apose"`` lowers every limb that sticks out sideways by 40 degrees,
+    ``"apose"`` lowers every limb that sticks out sideways by 40 degrees
+    (at the first joint of a run of sideways bones),
     ``"flat"`` lays the whole rest pose on its back, ``"crouched"`` bends
     every chain of downward bones (hip +30, knee -60, ankle +30 degrees),
     ``"random"`` turns every joint by up to 35 degrees about a random axis.
@@ -130,18 +131,16 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
     rng = np.random.default_rng(seed)
     if pose == "flat":
         local[0] = _rot(0, -np.pi / 2)
+    bones = np.array([_unit(rest[kids[0]] - rest[j]) if len(kids) == 1 else np.zeros(3)
+                      for j, kids in enumerate(skel.children)])
+    sideways = np.abs(bones[:, 0]) > 0.55
     for j in range(skel.num_joints):
-        kids = skel.children[j]
-        if pose == "random" and kids:
+        if pose == "random" and skel.children[j]:
             axis = _unit(rng.normal(size=3))
             local[j] = _axis_angle(axis, rng.uniform(0, np.radians(35)))
-        if len(kids) != 1 or pose not in ("apose", "crouched"):
-            continue
-        bone = _unit(rest[kids[0]] - rest[j])
-        into = _unit(skel.offsets[j]) if j else np.zeros(3)
-        if pose == "apose" and abs(bone[0]) > 0.7 and abs(into[0]) <= 0.7:
-            local[j] = _rot(2, -np.sign(bone[0]) * np.radians(40))
-        elif pose == "crouched" and bone[1] < -0.7:
+        elif pose == "apose" and sideways[j] and not (j and sideways[skel.parents[j]]):
+            local[j] = _rot(2, -np.sign(bones[j, 0]) * np.radians(40))
+        elif pose == "crouched" and bones[j, 1] < -0.7:
             local[j] = _rot(0, np.radians(_crouch_angle(skel, rest, j)))
     positions = np.zeros((1, skel.num_joints, 3))
     return forward_kinematics_numpy(local[None], positions, skel.parents)[0][0]
