@@ -148,7 +148,8 @@ def test_gait_travels_in_step(name):
     slide = np.linalg.norm(np.diff(feet[..., [0, 2]], axis=0), axis=-1)
     assert slide[stance[1:] & stance[:-1]].max() < 1e-5 * height
     assert pos[..., 1].min() > -1e-6 * height
-    travel = np.linalg.norm(motion.root_translation[-1, [0, 2]] - motion.root_translation[0, [0, 2]])
+    root = motion.root_translation[:, [0, 2]]
+    travel = np.linalg.norm(root[-1] - root[0])
     assert travel > 0.5 * height
     down = np.array([[pos[t, group, 1].max() < 1e-6 * height for group in tips]
                      for t in range(motion.num_frames)])

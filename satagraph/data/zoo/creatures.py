@@ -183,7 +183,8 @@ def _spider(label: str, rng: np.random.Generator, name: str,
     root = b.add("Cephalothorax", -1, (0, 0, 0))
     b.swing(root, amplitude=(1, 1, 1), k=2.0)
     abdomen = _limb(b, root, ("Abdomen_01", "Abdomen_02"),
-                    ((0, 0.03 * s, -0.15 * s), (0, 0.02 * s, -0.3 * s)), end=(0, -0.02 * s, -0.2 * s))
+                    ((0, 0.03 * s, -0.15 * s), (0, 0.02 * s, -0.3 * s)),
+                    end=(0, -0.02 * s, -0.2 * s))
     b.swing(abdomen[0], amplitude=(2, 3, 0))
     base = (b.jitter(0.55 * s), b.jitter(0.65 * s), b.jitter(0.35 * s))
     pairs = ((0.08, 55.0, 1.15), (0.03, 20.0, 1.0), (-0.02, -20.0, 0.9), (-0.07, -50.0, 1.05))
@@ -247,7 +248,8 @@ def _longtail(label: str, rng: np.random.Generator, name: str,
     for j in head[:2]:
         b.swing(j, static=(4, 0, 0), amplitude=(2, 3, 0), k=2.0)
     b.swing(head[2], static=(25, 0, 0), amplitude=(3, 0, 0), k=2.0, phase=0.1)
-    _limb(b, head[2], ("Snout",), ((0, -0.03 * size, 0.2 * size),), end=(0, -0.02 * size, 0.1 * size))
+    _limb(b, head[2], ("Snout",), ((0, -0.03 * size, 0.2 * size),),
+          end=(0, -0.02 * size, 0.1 * size))
     jaw = b.add("Jaw", head[2], (0, -0.06 * size, 0.05 * size))
     b.swing(jaw, amplitude=(4, 0, 0), k=2.0)
     b.end(jaw, (0, -0.02 * size, 0.2 * size))
