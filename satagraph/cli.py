@@ -357,8 +357,9 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--config", default="demo",
                         help="training config (default: demo)")
     parser.add_argument("--species", nargs="+", choices=SPECIES, default=None,
-                        metavar="NAME", help="zoo species (default: all; "
-                        "biped, quadruped and bird are always written)")
+                        metavar="NAME", help="zoo species (default: biped, "
+                        "quadruped, bird, hexapod, snake; biped, quadruped and "
+                        "bird are always written)")
     parser.add_argument("--clips", type=_positive_int, default=4,
                         help="zoo clips per skeleton (default: 4)")
     parser.add_argument("--frames", type=_positive_int, default=120,

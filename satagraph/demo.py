@@ -34,6 +34,9 @@ from satagraph.motion import Motion
 
 #: The species the retargeting step needs in the zoo.
 REQUIRED_SPECIES: Tuple[str, ...] = ("biped", "quadruped", "bird")
+#: The zoo species the demo writes by default: the body plans it was tuned
+#: on (the zoo's later species, fowl, crab, spider and longtail, on request).
+DEMO_SPECIES: Tuple[str, ...] = ("biped", "quadruped", "bird", "hexapod", "snake")
 
 
 @dataclass
@@ -46,8 +49,9 @@ class DemoOptions:
             ``None`` keeps the config's (4 minutes).
         data (list[str], optional): Train on these BVH folders / manifests
             instead of the zoo.
-        species (list[str], optional): Zoo species (default: all; biped,
-            quadruped and bird are always written).
+        species (list[str], optional): Zoo species (default:
+            :data:`DEMO_SPECIES`; biped, quadruped and bird are always
+            written).
         clips (int): Zoo clips per skeleton.
         frames (int): Frames per zoo clip.
         seed (int): Zoo seed; also the bone-scaling seed of the rescaled
@@ -130,9 +134,9 @@ class _Progress:
 def write_demo_zoo(folder: Path, options: DemoOptions) -> List[Dict[str, str]]:
     """Step 1: the procedural zoo (always with the species the retargeting
     needs)."""
-    from satagraph.data.zoo import SPECIES, write_zoo
+    from satagraph.data.zoo import write_zoo
 
-    species = list(options.species or SPECIES)
+    species = list(options.species or DEMO_SPECIES)
     species += [s for s in REQUIRED_SPECIES if s not in species]
     return write_zoo(folder, species=species, clips=options.clips,
                      seed=options.seed, frames=options.frames)

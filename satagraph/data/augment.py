@@ -91,6 +91,23 @@ def rebase_rest(motion: Motion, frame: int = 0) -> Motion:
     pose[0] = _heading(motion.rotations[frame, 0] @ motion.rotations[0, 0].T).T @ pose[0]
     rest = forward_kinematics_numpy(pose[None], motion.translations[frame:frame + 1],
                                     parents)[0][0]
+    return set_rest_rotations(motion, rest)
+
+
+def set_rest_rotations(motion: Motion, rest: np.ndarray) -> Motion:
+    r"""The same motion on a skeleton whose rest pose has global joint
+    rotations :obj:`rest` (in the rest frame of the old one).
+
+    Offsets become :math:`A_{p(j)} o_j` and local rotations
+    :math:`A_{p(j)} R_j A_j^\top` (:math:`A_{p(root)} = I`), so every frame
+    keeps its global joint positions (and :math:`G_j A_j^\top` replaces the
+    global rotation :math:`G_j`).
+
+    Args:
+        motion (Motion): The motion.
+        rest (np.ndarray): Global rest rotations :math:`A`, :math:`(J, 3, 3)`.
+    """
+    parents = motion.skeleton.parents
     outer = np.where((parents < 0)[:, None, None], np.eye(3),
                      rest[np.where(parents < 0, 0, parents)])
     rotations = outer[None] @ motion.rotations @ np.swapaxes(rest, -1, -2)[None]
