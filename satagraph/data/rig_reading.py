@@ -361,18 +361,26 @@ def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:
         return False
     hubs = [j for j, c in enumerate(motion.skeleton.children) if len(c) >= 3]
     low, high = float(pose_up.min()), float(pose_up.max())
-    hips = (float(pose_up[hubs[0] if hubs else 0]) - low) / max(high - low, 1e-12)
-    return 0.3 <= hips <= 0.75
+    frac = (pose_up - low) / max(high - low, 1e-12)
+    hands = [j for j, n in enumerate(names) if re.search(r"hand|wrist", n, re.I)]
+    # hips half way up, hands off the ground (a quadruped's front paws are on it)
+    return 0.3 <= frac[hubs[0] if hubs else 0] <= 0.75 and frac[hands].min() > 0.2
 
 
 def _height(motion: Motion, up: np.ndarray) -> Tuple[float, np.ndarray]:
-    """Height (file units) along :obj:`up`: the larger extent of the rest
-    pose and of frame 0, and the heights of the taller pose's joints."""
-    poses = [motion.skeleton.rest_positions() @ up]
-    if motion.num_frames:
-        poses.append(motion.slice(0, 1).global_positions()[0] @ up)
-    pose = max(poses, key=np.ptp)
-    return float(np.ptp(pose)), pose
+    """Height (file units) along :obj:`up`: the median over frames of the
+    pose's extent (rest poses are arbitrary: the rest pose only for a motion
+    without frames), and the joint heights of a pose (frame 0)."""
+    if motion.num_frames == 0:
+        pose = motion.skeleton.rest_positions() @ up
+        return float(np.ptp(pose)), pose
+    poses = _sample(motion)[0] @ up
+    return float(np.median(np.ptp(poses, axis=1))), poses[0]
+
+
+def _size(motion: Motion) -> float:
+    """Body size (file units): the median bounding-box diagonal."""
+    return body_size(_sample(motion)[0])
 
 
 def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
@@ -391,8 +399,9 @@ def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
             conf = 0.9 if len(fits) == 1 else 0.5
             return UnitGuess(UNITS[best], conf, "human", f"a human body plan "
                              f"{height:.4g} units tall", height)
-    if 0.02 <= height <= 4.0:
-        return UnitGuess(1.0, 0.7, "magnitude", f"{height:.3g} units tall: "
+    size = _size(motion)
+    if 0.02 <= size <= 3.5:
+        return UnitGuess(1.0, 0.7, "magnitude", f"{size:.3g} units across: "
                          "only metres make such a size", height)
     return UnitGuess(1.0, 0.0, "kept", f"{height:.4g} units tall, not a human "
                      "and no known exporter: cm, inches or another unit all "

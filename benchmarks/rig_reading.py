@@ -1,0 +1,155 @@
+"""Rig reading benchmark: are up axes and units read right, on every body
+plan and exporter dialect, and is every doubtful reading flagged?
+
+Corpus: the procedural zoo's dialect variants (:func:`satagraph.data.zoo.
+dialect_variants`: every zoo rig -- bipeds, quadrupeds, long-tailed
+quadrupeds, birds in three dialects, hexapods, crabs, spiders, snakes --
+written in each of the six up axes, in m, cm, inches or an arbitrary unit,
+with rest poses that are not T-poses and exporter name noise), each written
+to a BVH file and read back with no manifest; and every file of
+``../shared/data`` (all of them +Y up).
+
+Up axis: right, and flagged when the confidence is low. Units: the height
+after reading (file height x the scale read) against the generator's true
+height (both the median over frames of the vertical extent). Units are *decidable* when the file's unit is a standard one and
+the file says enough: a human body plan (bipeds), a known exporter, or a
+size only metres make (files in metres); elsewhere the file's own units
+must be kept and reported. A failure is a wrong axis, a decidable unit read
+more than 20% off, or an undecidable one guessed confidently and wrong.
+
+Usage::
+
+    .venv/bin/python benchmarks/rig_reading.py [--seeds 0 1] [--data DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import tempfile
+import time
+import warnings
+from collections import defaultdict
+from pathlib import Path
+from typing import Dict, List
+
+from satagraph.data.rig_reading import read_rig
+from satagraph.data.zoo import apply_dialect, dialect_variants, generate_clip
+from satagraph.io import read_bvh, write_bvh
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results_io import write_results  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+RESULTS = REPO / "benchmarks" / "results" / "rig_reading"
+TOLERANCE = 0.2
+STANDARD_UNITS = ("m", "cm", "mm", "in", "ft")
+#: Units the shared data's files must be read in (``kept``: undecidable).
+SHARED_UNITS = {"bandai": "cm", "cmu": "cmu", "ccbase": "cm", "dog": "kept",
+                "fixtures/test3.bvh": "m", "fixtures/test_freebvh.bvh": "cm",
+                "fixtures/test_mocapbank.bvh": "cm"}
+
+
+def _decidable(species: str, unit) -> bool:
+    return unit in STANDARD_UNITS and (species == "biped" or unit == "m")
+
+
+def zoo_rows(seed: int, frames: int, tmp: Path) -> List[Dict]:
+    """One row per dialect variant of the zoo drawn with :obj:`seed`."""
+    rows = []
+    for k, v in enumerate(dialect_variants(seed)):
+        clip = generate_clip(v.rig, v.kind, frames=frames, seed=seed * 1000 + k)
+        motion, scale = apply_dialect(clip, v.dialect, seed=k)
+        path = tmp / f"{seed}_{k}.bvh"
+        write_bvh(motion, path)
+        reading = read_rig(read_bvh(path))
+        height = reading.units.height * reading.units.scale
+        ratio = height / read_rig(clip, "+Y", 1.0).units.height
+        decidable = _decidable(v.rig.species, v.dialect.unit)
+        units_ok = (abs(ratio - 1) <= TOLERANCE if decidable else
+                    reading.units.kept or abs(ratio - 1) <= TOLERANCE)
+        rows.append({"seed": seed, "rig": v.rig.name, "species": v.rig.species,
+                     "kind": v.kind, "dialect": v.dialect.tag,
+                     "up_true": v.dialect.up_axis, "up_read": reading.up.axis,
+                     "confidence": reading.up.confidence,
+                     "flagged": reading.up.low_confidence,
+                     "unit": str(v.dialect.unit), "decidable": decidable,
+                     "units_how": reading.units.how, "height_ratio": ratio,
+                     "units_ok": units_ok})
+    return rows
+
+
+def shared_rows(data: Path) -> List[Dict]:
+    """One row per file of the shared data's manifest."""
+    rows = []
+    with open(data / "manifest.tsv", newline="") as f:
+        for row in csv.DictReader(f, delimiter="\t"):
+            reading = read_rig(read_bvh(data / row["path"]))
+            want = SHARED_UNITS.get(row["path"], SHARED_UNITS.get(row["dataset"]))
+            got = ("kept" if reading.units.kept else
+                   reading.to_dict()["units"])
+            rows.append({"rig": row["path"], "species": row["dataset"],
+                         "up_true": "+Y", "up_read": reading.up.axis,
+                         "confidence": reading.up.confidence,
+                         "flagged": reading.up.low_confidence,
+                         "units_how": reading.units.how, "units": got,
+                         "units_ok": got == want})
+    return rows
+
+
+def _summary(rows: List[Dict], key: str) -> List[List]:
+    groups = defaultdict(list)
+    for r in rows:
+        groups[r[key]].append(r)
+    groups["all"] = rows
+    out = []
+    for name, rs in groups.items():
+        right = sum(r["up_read"] == r["up_true"] for r in rs)
+        flagged = sum(r["flagged"] for r in rs)
+        silent_wrong = sum(r["up_read"] != r["up_true"] and not r["flagged"] for r in rs)
+        dec = [r for r in rs if r.get("decidable", True)]
+        und = [r for r in rs if not r.get("decidable", True)]
+        out.append([name, len(rs), f"{100 * right / len(rs):.1f}%", flagged, silent_wrong,
+                    f"{sum(r['units_ok'] for r in dec)}/{len(dec)}",
+                    f"{sum(r['units_how'] == 'kept' for r in und)}/{len(und)}",
+                    sum(not r["units_ok"] for r in rs)])
+    return out
+
+
+def _table(rows: List[List]) -> str:
+    head = ("| group | files | up axis right | low confidence (flagged) | wrong and "
+            "not flagged | units right where decidable (within 20%) | undecidable: "
+            "file units kept and reported | unit failures |\n|---|---:|---:|---:|---:|"
+            "---:|---:|---:|\n")
+    return head + "\n".join("| " + " | ".join(str(c) for c in r) + " |" for r in rows) + "\n"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    parser.add_argument("--frames", type=int, default=90)
+    parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data")
+    args = parser.parse_args(argv)
+    warnings.simplefilter("ignore")
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        zoo = [r for s in args.seeds for r in zoo_rows(s, args.frames, Path(tmp))]
+    shared = shared_rows(args.data) if (args.data / "manifest.tsv").is_file() else []
+    text = (f"Zoo dialect variants (seeds {args.seeds}, {args.frames} frames each), "
+            "written to BVH and read back without a manifest:\n\n"
+            + _table(_summary(zoo, "species"))
+            + "\nUnits are decidable for standard units on a human body plan or in "
+            "metres; elsewhere the file's own units must be kept and reported.\n")
+    if shared:
+        text += ("\nEvery file of `../shared/data` (expected units: bandai cm, "
+                 "cmu CMU units, ccbase cm, dog kept (undecidable: 45 units tall), "
+                 "fixtures m / cm / cm):\n\n" + _table(_summary(shared, "species")))
+    text += f"\n{len(zoo) + len(shared)} files in {time.perf_counter() - start:.0f} s.\n"
+    print(text)
+    write_results(RESULTS, "Rig reading: up axis and units", text,
+                  {"zoo": zoo, "shared": shared})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
