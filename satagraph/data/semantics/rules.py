@@ -293,6 +293,8 @@ class _Chain:
     spread: float = 0.0  # sideways reach beyond the attachment
     forward: float = 0.0  # where its lowest joint (the foot) is
     lateral: float = 0.0  # sideways position of its farthest joint
+    low_height: float = 0.0  # height of its lowest joint
+    root_height: float = 0.0  # height of its first joint
 
 
 def _subtree(j: int, tree: _Tree) -> List[int]:
@@ -314,6 +316,7 @@ def _chain_facts(chain: _Chain, tree: _Tree, ev: JointEvidence) -> None:
                     or ev.height[low] <= BEARS_WEIGHT_HEIGHT)
     chain.spread = abs(ev.lateral[far]) - (abs(ev.lateral[base]) if base >= 0 else 0.0)
     chain.forward, chain.lateral = ev.forward[low], ev.lateral[far]
+    chain.low_height, chain.root_height = ev.height[low], ev.height[chain.root]
 
 
 def _limb_chains(states: List[_State], tree: _Tree, trunk: List[int],
@@ -371,6 +374,19 @@ def _promote_unnamed_chains(states: List[_State], tree: _Tree,
             states[k].kind, states[k].side = "limb", side
             states[k].info = replace(states[k].info, side=side, limb=(
                 family, frozenset((rank,)), rank))
+
+
+def _plausible(states: List[_State], chains: List[_Chain]) -> bool:
+    """Evidence in a wrong frame (a flat body whose up axis was misjudged)
+    is ignored: every limb chain with a named side must lie on that side,
+    and a weight-bearing chain must hang below where it starts."""
+    for c in chains:
+        side = states[c.root].side
+        if c.real and side and abs(c.lateral) >= 0.02 and \
+                side != ("left" if c.lateral > 0 else "right"):
+            return False
+    return all(c.low_height < c.root_height for c in chains
+               if c.real and c.weight)
 
 
 def _weight_groups(chains: List[_Chain]) -> Dict[int, str]:
@@ -563,7 +579,8 @@ def _number_leg_pairs(states: List[_State], tree: _Tree,
     legs = [c for c in chains if c.real and c.family == "leg"]
     if len(legs) < MIN_LEGS_FOR_PAIRS:
         return
-    geometry = all(c.weight is not None for c in legs)
+    geometry = all(c.weight is not None for c in legs) and \
+        2 * sum(bool(c.weight) for c in legs) >= len(legs)
     sides: Dict[Optional[str], List[_Chain]] = {}
     for c in legs:
         sides.setdefault(states[c.root].side, []).append(c)
@@ -752,6 +769,9 @@ def describe_structure(names: Tuple[str, ...], parents: Tuple[int, ...],
               for j, (n, e) in enumerate(zip(names, end_site))]
     _mark_helpers(states, tree)
     trunk = _trunk_path(states, tree)
+    if evidence is not None and not _plausible(
+            states, _limb_chains(states, tree, trunk, evidence)):
+        evidence = None
     if evidence is not None:
         _promote_unnamed_chains(states, tree, trunk, evidence)
     chains = _limb_chains(states, tree, trunk, evidence)
