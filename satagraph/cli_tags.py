@@ -68,8 +68,9 @@ def add_tags_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--names-only", action="store_true",
                    help="ignore the motion: names and hierarchy only")
-    p.add_argument("--up-axis", choices=("X", "-X", "Y", "-Y", "Z", "-Z"),
-                   help="the file's up axis (default: detected)")
+    p.add_argument("--up-axis", choices=("+X", "-X", "+Y", "-Y", "+Z", "-Z"),
+                   help="the file's up axis for the motion evidence (default: "
+                        "detected; write --up-axis=-Z for a negative axis)")
     p.set_defaults(func=run_tags)
     return p
 
@@ -105,11 +106,8 @@ def format_table(rows: Sequence[dict]) -> str:
 def _evidence(motion, up_axis: Optional[str]):
     """Evidence of the file's motion, canonicalised as the features are
     (``None``, names only, where the motion cannot be canonicalised)."""
-    from satagraph.data.canonical import canonicalize
     try:
-        if motion.num_frames:
-            motion = canonicalize(motion, up_axis=up_axis)
-        return evidence_from_motion(motion, canonical=bool(motion.num_frames))
+        return evidence_from_motion(motion, up_axis=up_axis)
     except ValueError:
         return None
 

@@ -122,23 +122,32 @@ def evidence_from_features(features) -> JointEvidence:
     return joint_evidence(features.x, features.c, features.height)
 
 
-def evidence_from_motion(motion, canonical: bool = False) -> JointEvidence:
+def evidence_from_motion(motion, canonical: bool = False,
+                         up_axis: Optional[str] = None) -> JointEvidence:
     """Evidence of a motion: canonicalised (unless :obj:`canonical`), then
-    featurised, so that any up axis and unit gives the same facts.
+    featurised, so that any up axis and unit gives the same facts. A
+    motionless root that canonicalisation removes gets its child's facts.
 
     Args:
         motion: A :class:`~satagraph.Motion` (a zero-frame motion gives the
             evidence of its rest pose).
         canonical: The motion is canonical already.
+        up_axis: The motion's up axis (``"Y"``, ``"-Z"`` ...; default
+            detected -- give it for flat bodies such as crabs, which the
+            detection may misjudge).
 
     Returns:
-        JointEvidence: The evidence.
+        JointEvidence: The evidence, one entry per joint of
+        ``motion.skeleton``.
     """
     from satagraph.data.canonical import canonicalize
     from satagraph.inference import static_features
+    source = motion if motion.num_frames else _rest(motion)
     if not canonical:
-        motion = canonicalize(motion if motion.num_frames else _rest(motion))
-    return evidence_from_features(static_features(motion))
+        source = canonicalize(source, up_axis=up_axis)
+    feats = static_features(source)
+    return remap_evidence(evidence_from_features(feats), feats.skeleton.names,
+                          motion.skeleton)
 
 
 def _rest(motion):

@@ -185,7 +185,10 @@ def long_tailed_quadruped(tail: int = 32) -> Skeleton:
             for t in range(1, 5):
                 toe = f"{side}{paw}Toe{t}"
                 rows += [(f"{toe}_1", f"{side}{paw}", ((t - 2.5) * 0.01, -top, 0.02)),
-                         (f"{toe}_2", f"{toe}_1", (0.0, 0.0, 0.02))]
+                         (f"{toe}_2", f"{toe}_1", (0.0, 0.0, 0.02)),
+                         (f"{toe}_2_end", f"{toe}_2", (0.0, 0.0, 0.01))]
+    rows += [(f"Tail_{tail:02d}_end", f"Tail_{tail:02d}", (0.0, 0.0, -0.03)),
+             ("Snout_end", "Snout", (0.0, 0.0, 0.03))]
     return build_skeleton(rows)
 
 
