@@ -61,10 +61,6 @@ def rest_evidence(skeleton: Skeleton) -> JointEvidence:
     return joint_evidence(skeleton.rest_positions())
 
 
-def _mirror(x: float, sign: float) -> float:
-    return x * sign
-
-
 def bip01_bird() -> Skeleton:
     """Bird, 3ds Max biped style: legs (``Thigh`` .. ``HorseLink`` ..
     ``Toe0``) and wings (``Clavicle`` .. ``Finger0``) off ``Bip01_Spine``."""

@@ -634,13 +634,13 @@ def _limb_text(s: _State) -> str:
 
 
 def _limb_tip(s: _State) -> str:
-    core = _core(s, _segment_word(s, tip=True))
     if s.helper:
-        return _join(core, HELPER_TEXT[s.helper], "tip")
-    if s.pair:
+        return _join(_core(s, _segment_word(s, tip=True)), HELPER_TEXT[s.helper],
+                     "tip")
+    if s.pair:  # "left front limb terminal tip, first leg pair (foot tip)"
         core = _join(s.side, s.front_hind, "limb", _segment_word(s, True))
         return f"{core} tip, {ordinal(s.pair)} leg pair ({_gloss(s, True)})"
-    return f"{core} tip ({_gloss(s, True)})"
+    return f"{_core(s, _segment_word(s, tip=True))} tip ({_gloss(s, True)})"
 
 
 class _Describer:
