@@ -14,6 +14,16 @@ reported). Encoders: the default offline pipeline (rules + OfflineTextEncoder),
 a baseline that embeds the raw names without rules, and a local T5 with
 ``--t5 PATH``.
 
+Body plans beyond mammals (issue 15): the hand-built rigs of
+:mod:`satagraph.data.semantics.reference_rigs` (a 3ds Max biped bird, also
+with exporter noise in every name, a bird with finger-named wings, a crab, a
+spider, a long-tailed quadruped) against the real humans and the dog:
+bird <-> human (legs to legs, wings to arms), arthropod <-> quadruped (legs to
+legs: a leg segment to the same side's leg segment of the same rank, front
+or hind, any leg pair) and tail / neck / head. Scored with the rules and the
+geometry / motion evidence (real files: their motion; reference rigs: their
+rest pose), the rules on names alone, and the raw-name baseline.
+
 It also times describing and embedding every joint of every skeleton in the
 data with a warm embedding cache (target < 1 s).
 
@@ -37,7 +47,10 @@ import torch
 from satagraph.data.semantics import (OfflineTextEncoder, T5TextEncoder,
                                       TextEncoder, clear_memory,
                                       describe_joints, embed_skeleton,
-                                      embed_texts)
+                                      embed_texts, evidence_from_motion)
+from satagraph.data.semantics.reference_rigs import (REFERENCE_RIGS,
+                                                     rest_evidence,
+                                                     with_exporter_noise)
 from satagraph.data.semantics.lexicon import split_words, strip_prefixes
 from satagraph.data.semantics.lexicon import parse_name
 from satagraph.data.semantics.rules import describe_structure
@@ -107,7 +120,7 @@ LIMBS = {
 }
 _MIRROR = ((re.compile(r"Left"), "Right"), (re.compile(r"_L_"), "_R_"),
            (re.compile(r"_L$"), "_R"), (re.compile(r"\.L$"), ".R"),
-           (re.compile(r"^L(?=[A-Z])"), "R"))
+           (re.compile(r"^L(?=[A-Z])"), "R"), (re.compile(r"^L_"), "R_"))
 
 
 def mirror(name: str) -> str:
@@ -129,6 +142,97 @@ def build_table() -> List[Tuple[str, Dict[str, Tuple[str, ...]]]]:
 
 
 TABLE = build_table()
+
+# ------------------------------------------------- body plans beyond mammals
+BIRDS = ("bird_bip01", "bird_bip01_noise", "bird_fingerwing")
+ARTHROPODS = ("crab", "spider")
+QUADRUPEDS = ("dog", "quadruped_longtail")
+_B = "Bip01_L_"
+_CRAB = [f"leg_L_0{n}" for n in (1, 2, 3)]
+_SPIDER = [f"Leg_L_0{n}" for n in (1, 2, 3, 4)]
+# group -> concept -> skeleton -> acceptable joints (left side; mirrored).
+BODYPLAN = {
+    "wings to arms": {
+        "front girdle": {"bird_bip01": _B + "Clavicle"},
+        "front upper": {"bird_bip01": _B + "UpperArm", "bird_fingerwing": "L_Finger_01"},
+        "front lower": {"bird_bip01": _B + "Forearm", "bird_fingerwing": "L_Finger_02"},
+        "front terminal": {"bird_bip01": _B + "Hand", "bird_fingerwing": "L_Finger_03"},
+    },
+    "legs to legs": {
+        "hind upper": {"bird_bip01": _B + "Thigh", "bird_fingerwing": "thigh_L"},
+        "hind lower": {"bird_bip01": _B + "Calf", "bird_fingerwing": "shin_L"},
+        "hind terminal": {"bird_bip01": _B + "Foot", "bird_fingerwing": "tarsus_L"},
+        "hind toes": {"bird_bip01": _B + "Toe0", "bird_fingerwing": "toe_L"},
+        "leg upper": {"crab": "|".join(_CRAB), "spider": "|".join(_SPIDER),
+                      "dog": "LeftArm|LeftUpLeg",
+                      "quadruped_longtail": "LeftArm|LeftUpLeg"},
+        "leg lower": {"crab": "|".join(f"{c}_02" for c in _CRAB),
+                      "spider": "|".join(f"{c}_1" for c in _SPIDER),
+                      "dog": "LeftForeArm|LeftLeg",
+                      "quadruped_longtail": "LeftForeArm|LeftLeg"},
+        "leg terminal": {"crab": "|".join(f"{c}_03" for c in _CRAB),
+                         "spider": "|".join(f"{c}_2" for c in _SPIDER),
+                         "dog": "LeftHand|LeftFoot",
+                         "quadruped_longtail": "LeftHand|LeftFoot"},
+    },
+    "tail / neck / head": {
+        "tail": {"bird_bip01": "Bip01_Tail|Bip01_Tail1", "dog": "Tail|Tail1",
+                 "quadruped_longtail": "|".join(f"Tail_{i:02d}" for i in range(1, 33))},
+        "neck": {"bird_bip01": "Bip01_Neck|Bip01_Neck1", "bird_fingerwing": "neck_01|neck_02",
+                 "quadruped_longtail": "Neck|Neck1", "dog": "Neck"},
+        "head": {"bird_bip01": "Bip01_Head", "bird_fingerwing": "head",
+                 "quadruped_longtail": "Head", "dog": "Head"},
+    },
+}
+# (pair kind, groups scored, pairs)
+BODYPLAN_PAIRS = [
+    ("bird<->human", ("wings to arms", "legs to legs", "tail / neck / head"),
+     [(b, h) for b in BIRDS for h in HUMANS]),
+    ("arthropod<->quadruped", ("legs to legs",),
+     [(a, q) for a in ARTHROPODS for q in QUADRUPEDS]),
+    ("tail/neck", ("tail / neck / head",),
+     [("bird_bip01", "dog"), ("bird_bip01", "quadruped_longtail"),
+      ("bird_bip01_noise", "dog"), ("quadruped_longtail", "dog"),
+      ("bird_fingerwing", "dog")]),
+]
+_HUMAN_ROWS = {"front girdle", "front upper", "front lower", "front terminal",
+               "hind upper", "hind lower", "hind terminal", "hind toes"}
+
+
+def _mirror_in(key: str, name: str) -> str:
+    """Right-side joint of a left-side joint in skeleton :obj:`key` (the
+    spider numbers its right legs 05 .. 08)."""
+    if key == "spider":
+        return re.sub(r"Leg_L_0(\d)", lambda m: f"Leg_R_0{int(m.group(1)) + 4}", name)
+    return mirror(name)
+
+
+def build_bodyplan_table(noise: Dict[str, str]) -> Dict[str, list]:
+    """Group -> rows (concept, skeleton -> acceptable names), both sides;
+    human columns from :data:`LIMBS` / :data:`CENTRAL`, the noisy bird's
+    from the clean bird's through :obj:`noise` (clean -> noisy name)."""
+    out: Dict[str, list] = {}
+    for group, concepts in BODYPLAN.items():
+        rows = []
+        for concept, cols in concepts.items():
+            cols = dict(cols)
+            if concept in _HUMAN_ROWS:
+                cols.update({h: LIMBS[concept][h] for h in HUMANS
+                             if h in LIMBS[concept]})
+            if concept in CENTRAL:
+                cols.update({h: CENTRAL[concept][h] for h in HUMANS})
+            if "bird_bip01" in cols:  # clean names, made noisy after mirroring
+                cols["bird_bip01_noise"] = cols["bird_bip01"]
+            paired = concept not in ("tail", "neck", "head")
+            sides = (("left", lambda k, n: n), ("right", _mirror_in)) if paired \
+                else (("", lambda k, n: n),)
+            for side, fn in sides:
+                rows.append((f"{side} {concept}".strip(), {
+                    k: tuple(noise.get(fn(k, n), fn(k, n)) if k.endswith("_noise")
+                             else fn(k, n) for n in v.split("|"))
+                    for k, v in cols.items()}))
+        out[group] = rows
+    return out
 
 # Free-text tags (paper Table 11 "Variant A" style labels and user anchor
 # tags) -> acceptable joints. Not identical to any rule description, so this
@@ -153,6 +257,36 @@ QUERIES = {
 }
 
 
+def evaluate_bodyplans(label: str, texts_of, encoder: TextEncoder,
+                       skels: dict, cache_dir: Path, table: Dict[str, list]
+                       ) -> Tuple[List[str], List[str]]:
+    """Markdown rows of the body-plan correspondences for one encoder (one
+    row per rig and kind, over its partners), and the misses."""
+    embs = {k: embed_texts(texts_of(k, s), encoder, cache_dir)
+            for k, s in skels.items()}
+    rows, misses = [], []
+    for kind, groups, pairs in BODYPLAN_PAIRS:
+        rows_of = [r for g in groups for r in table[g]]
+        per_rig: Dict[str, List[int]] = {}
+        for a, b in pairs:
+            c, t, m = score_pair(a, b, skels, embs, rows_of)
+            per_rig.setdefault(a, [0, 0, []])
+            per_rig[a][0] += c
+            per_rig[a][1] += t
+            per_rig[a][2].append(b)
+            misses += [f"[{label}] {x}" for x in m]
+        for rig, (c, t, partners) in per_rig.items():
+            who = partners[0] if len(partners) == 1 else \
+                f"{{{', '.join(partners)}}}"
+            rows.append(f"| {label} | {rig}<->{who} | {kind} | {c}/{t} | "
+                        f"{100 * c / t:.1f}% |")
+        c = sum(v[0] for v in per_rig.values())
+        t = sum(v[1] for v in per_rig.values())
+        rows.append(f"| {label} | **all {kind}** | {kind} | {c}/{t} | "
+                    f"**{100 * c / t:.1f}%** |")
+    return rows, misses
+
+
 def raw_name_texts(skeleton) -> List[str]:
     """Baseline texts: the raw names split into words, no rules."""
     return [" ".join(split_words(strip_prefixes(n))) or n
@@ -166,14 +300,14 @@ def nearest(emb_a: torch.Tensor, emb_b: torch.Tensor) -> torch.Tensor:
     return (a @ b.T).argmax(dim=1)
 
 
-def score_pair(a: str, b: str, skels: dict, embs: dict
+def score_pair(a: str, b: str, skels: dict, embs: dict, table=None
                ) -> Tuple[int, int, List[str]]:
     """Correct / total queries in both directions, and the misses."""
     correct, total, misses = 0, 0, []
     for src, dst in ((a, b), (b, a)):
         names_s, names_d = skels[src].names, skels[dst].names
         nn_idx = nearest(embs[src], embs[dst])
-        for concept, cols in TABLE:
+        for concept, cols in (TABLE if table is None else table):
             if src not in cols or dst not in cols:
                 continue
             for query in cols[src]:
@@ -287,8 +421,8 @@ def _encoders(t5_path: Path = None) -> list:
     return out
 
 
-def _check_table(skels: dict) -> None:
-    for concept, cols in TABLE:
+def _check_table(skels: dict, table=None) -> None:
+    for concept, cols in (TABLE if table is None else table):
         for key, names in cols.items():
             bad = [n for n in names if n not in skels[key].names]
             assert not bad, f"table row {concept!r}: {key} has no {bad}"
@@ -308,13 +442,61 @@ def _timing_lines(data: Path, cache_dir: Path) -> List[str]:
             f"- target < 1 s: {verdict}", ""]
 
 
+def bodyplan_skeletons(motions: dict) -> Tuple[dict, dict, Dict[str, str]]:
+    """Skeletons and evidence of the real files and the reference rigs, and
+    the noisy bird's clean -> noisy joint names."""
+    skels = {k: m.skeleton for k, m in motions.items()}
+    evidence = {k: evidence_from_motion(m) for k, m in motions.items()}
+    refs = {"bird_bip01": REFERENCE_RIGS["bird_bip01"](),
+            "bird_fingerwing": REFERENCE_RIGS["bird_fingerwing"](),
+            "crab": REFERENCE_RIGS["crab"](), "spider": REFERENCE_RIGS["spider"](),
+            "quadruped_longtail": REFERENCE_RIGS["quadruped_longtail"]()}
+    refs["bird_bip01_noise"] = with_exporter_noise(refs["bird_bip01"])
+    noise = dict(zip(refs["bird_bip01"].names, refs["bird_bip01_noise"].names))
+    for k, sk in refs.items():
+        skels[k], evidence[k] = sk, rest_evidence(sk)
+    return skels, evidence, noise
+
+
+def _bodyplan_lines(motions: dict, t5_path: Path, cache_dir: Path
+                    ) -> Tuple[List[str], List[str]]:
+    """The body-plan section of the results and its misses."""
+    skels, evidence, noise = bodyplan_skeletons(motions)
+    table = build_bodyplan_table(noise)
+    for rows in table.values():
+        _check_table(skels, rows)
+    lines = ["", "## Body plans beyond mammals", "",
+             "Reference rigs (`satagraph/data/semantics/reference_rigs.py`, the "
+             "issue 15 rig spec) against the real humans (bandai, cmu, ccbase, "
+             "mixamo, mocapbank, blender) and the dog; `bird_bip01_noise` has an "
+             "exporter suffix on every name (`__x7Q`, `_v2`, `_a1b2c3`). "
+             "Evidence: real files their motion, reference rigs their rest "
+             "pose. Both directions; a row sums a rig over its partners.", "",
+             "| encoder | pairs | kind | correct | accuracy |",
+             "|---|---|---|---|---|"]
+    notes: List[str] = []
+    for label, texts_of, enc in _encoders(t5_path):
+        variants = ([(f"{label[:-1]} + evidence)", lambda k, s, f=texts_of:
+                      f(s, evidence=evidence[k])),
+                     (f"{label[:-1]}, names only)", lambda k, s, f=texts_of: f(s))]
+                    if "no rules" not in label else
+                    [(label, lambda k, s, f=texts_of: f(s))])
+        for name, fn in variants:
+            rows, misses = evaluate_bodyplans(name, fn, enc, skels, cache_dir, table)
+            lines += rows
+            if "no rules" not in name:
+                notes += misses
+    return lines, notes
+
+
 def main(argv: Sequence[str] = None) -> int:
     """Run the benchmark, print the table, write the results file."""
     args = _parse_args(argv)
     if not args.data.is_dir():
         print(f"no data folder {args.data}; pass --data", file=sys.stderr)
         return 2
-    skels = {k: read_bvh(args.data / f).skeleton for k, f in FILES.items()}
+    motions = {k: read_bvh(args.data / f) for k, f in FILES.items()}
+    skels = {k: m.skeleton for k, m in motions.items()}
     _check_table(skels)
     lines = ["# Semantic alignment", "",
              "Nearest joint by cosine of description embeddings, both "
@@ -331,7 +513,10 @@ def main(argv: Sequence[str] = None) -> int:
             lines += rows + [row]
             if "no rules" not in label:  # baselines: too many to list
                 notes += misses + more
+        body, more = _bodyplan_lines(motions, args.t5, Path(tmp))
+        notes += more
         timing = _timing_lines(args.data, Path(tmp) / "timing")
+    lines += body
     lines += ["", "## Misses and notes (rule-based rows)", ""]
     lines += [f"- {n}" for n in notes] + timing
     text = "\n".join(lines)

@@ -3,11 +3,17 @@
 Examples::
 
     satagraph tags walk.bvh                        # table of descriptions
+    satagraph tags walk.bvh --names-only           # names and hierarchy only
     satagraph tags walk.bvh --json                 # the same as JSON
     satagraph tags walk.bvh --anchor Bone.003=tail base --dictionary d.json
     satagraph tags walk.bvh --prompt --out prompt.txt
     satagraph tags walk.bvh --prompt --reference-vocab vocab.json
     satagraph tags walk.bvh --import answer.json --out dict.json
+
+The descriptions use the file's motion as evidence (which chains bear
+weight, spread sideways, lie in front; see
+:mod:`satagraph.data.semantics.evidence`), as training and inference do;
+``--names-only`` reads names and hierarchy alone.
 
 Errors print one line to stderr and return exit code 2.
 """
@@ -20,9 +26,9 @@ from pathlib import Path
 from typing import List, Optional, Sequence
 
 from satagraph.data.semantics import (SemanticsError, build_prompt,
-                                      describe_joints, import_answer,
-                                      load_reference_vocab)
-from satagraph.io import BVHError, read_bvh
+                                      describe_joints, evidence_from_motion,
+                                      import_answer, load_reference_vocab)
+from satagraph.io import BVHError
 from satagraph.skeleton import Skeleton
 
 
@@ -60,8 +66,10 @@ def add_tags_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--anchor", action="append", default=[],
                    metavar="NAME=TAG", help="anchor tag (repeatable)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--names-only", action="store_true",
+                   help="ignore the motion: names and hierarchy only")
     from satagraph.cli import add_rig_arguments
-    add_rig_arguments(p)
+    add_rig_arguments(p, what="the file (for the motion evidence)")
     p.set_defaults(func=run_tags)
     return p
 
@@ -94,6 +102,16 @@ def format_table(rows: Sequence[dict]) -> str:
     return "\n".join(lines)
 
 
+def _evidence(motion):
+    """Evidence of the file's motion, canonicalised as the features are
+    (with the ``--up-axis`` / ``--units`` attached to it; ``None``, names
+    only, where the motion cannot be canonicalised)."""
+    try:
+        return evidence_from_motion(motion)
+    except ValueError:
+        return None
+
+
 def _emit(text: str, out: Optional[Path]) -> None:
     if out is None:
         print(text)
@@ -109,7 +127,8 @@ def _run(args: argparse.Namespace) -> int:
     if args.import_answer and args.out is None:
         raise SemanticsError("--import needs --out DICT.json")
     from satagraph.cli import read_with_rig
-    skeleton = read_with_rig(str(args.file), args).skeleton
+    motion = read_with_rig(str(args.file), args)
+    skeleton = motion.skeleton
     if args.prompt:
         vocab = (load_reference_vocab(args.reference_vocab)
                  if args.reference_vocab else None)
@@ -119,8 +138,9 @@ def _run(args: argparse.Namespace) -> int:
         stored = import_answer(args.import_answer, skeleton, args.out)
         print(f"stored {len(stored)} joint descriptions in {args.out}")
         return 0
+    evidence = None if args.names_only else _evidence(motion)
     texts = describe_joints(skeleton, dictionary=args.dictionary,
-                            anchors=args.anchor)
+                            anchors=args.anchor, evidence=evidence)
     rows = _rows(skeleton, texts)
     text = (json.dumps(rows, indent=2, ensure_ascii=False) if args.json
             else format_table(rows))

@@ -11,6 +11,7 @@ from satagraph.data.canonical import canonicalize, decanonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
+from satagraph.data.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion
 from satagraph.ops.rotation import matrix_to_quaternion, quaternion_slerp, quaternion_to_matrix
 
@@ -87,8 +88,8 @@ def _transfer(module, source: MotionFeatures, target: MotionFeatures,
               semantic: Optional[Callable], window: int, overlap: int,
               batch_size: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The window loop of :func:`transfer`."""
-    sem_s = semantic(source.skeleton) if semantic else None
-    sem_t = semantic(target.skeleton) if semantic else None
+    sem_s = _embed(semantic, source)
+    sem_t = _embed(semantic, target)
     plan = window_plan(source.num_frames, window, overlap)
     qs, rs, cs = [], [], []
     device = next(module.parameters()).device
@@ -109,6 +110,14 @@ def _transfer(module, source: MotionFeatures, target: MotionFeatures,
     return (torch.cat(qs).numpy(), torch.cat(rs).numpy(), torch.cat(cs).numpy())
 
 
+def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torch.Tensor]:
+    """Semantic embedding of a skeleton with the evidence of its features
+    (an embedder without an ``evidence`` keyword gets the skeleton only)."""
+    if semantic is None:
+        return None
+    return call_semantic(semantic, feats.skeleton, evidence_from_features(feats))
+
+
 def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None) -> Motion:
@@ -124,7 +133,9 @@ def retarget_motion(module, source: Motion, target: Motion,
         source (Motion): The motion to transfer (as read from a file).
         target (Motion): A motion (or zero-frame skeleton) of the target rig.
         semantic (Callable, optional): Skeleton -> semantic embedding, the
-            one used in training.
+            one used in training; given the evidence of the source motion
+            and of the target motion (or the target's rest pose) where it
+            takes an ``evidence`` keyword.
         window (int, optional): Frames per window (default: the training
             window, see :func:`default_windows`).
         overlap (int, optional): Frames shared by consecutive windows

@@ -198,3 +198,24 @@ def test_op_counter_sees_torch_scatter_kernels():
         assert compile_step.op_calls(lambda: softmax(src, ptr=ptr), "torch_scatter::") >= 1
     with compile_step.pyg_scatter(False):
         assert compile_step.op_calls(lambda: softmax(src, ptr=ptr), "torch_scatter::") == 0
+
+
+def test_semantic_alignment_bodyplans_without_data():
+    import semantic_alignment as sa
+    from satagraph.data.semantics import OfflineTextEncoder, describe_joints
+    skels, evidence, noise = sa.bodyplan_skeletons({})
+    table = sa.build_bodyplan_table(noise)
+    refs = {k: s for k, s in skels.items() if k in sa.BIRDS + sa.ARTHROPODS
+            + ("quadruped_longtail",)}
+    for rows in table.values():
+        sa._check_table(refs, [(c, {k: v for k, v in cols.items() if k in refs})
+                               for c, cols in rows])
+    assert set(table["wings to arms"][0][1]["bird_bip01_noise"]) == {
+        noise["Bip01_L_Clavicle"]}
+    enc = OfflineTextEncoder()
+    legs = [r for r in table["legs to legs"] if r[0].endswith(("leg upper", "leg lower"))]
+    for fn, want in ((lambda k: describe_joints(skels[k], evidence=evidence[k]), 1.0),
+                     (lambda k: sa.raw_name_texts(skels[k]), 0.5)):
+        embs = {k: enc.encode(fn(k)) for k in ("crab", "quadruped_longtail")}
+        c, t, _ = sa.score_pair("crab", "quadruped_longtail", skels, embs, legs)
+        assert t == 20 and (c == t if want == 1.0 else c < want * t)

@@ -17,9 +17,13 @@ from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
 def semantic_embedder(encoder: Optional[str] = "offline",
                       cache_dir: Optional[str] = None,
                       dictionary: Optional[str] = None) -> Optional[Callable]:
-    r"""A function ``skeleton -> [J, D_t]`` from the semantic tag pipeline:
-    ``"offline"`` (default, no weights), ``"t5:/path/to/t5"`` for a local T5,
-    or ``None``/``"none"`` for no semantic features."""
+    r"""A function ``(skeleton, evidence=None) -> [J, D_t]`` from the
+    semantic tag pipeline: ``"offline"`` (default, no weights),
+    ``"t5:/path/to/t5"`` for a local T5, or ``None``/``"none"`` for no
+    semantic features. ``evidence`` (a
+    :class:`~satagraph.data.semantics.JointEvidence` of the motion, see
+    :func:`~satagraph.data.semantics.evidence_from_features`) lets the rules
+    read legs, wings and leg pairs from what the body does."""
     if encoder in (None, "none", ""):
         return None
     from satagraph.data.semantics import (OfflineTextEncoder, T5TextEncoder,
@@ -33,9 +37,9 @@ def semantic_embedder(encoder: Optional[str] = "offline",
                          "'t5:/path/to/t5' or 'none'")
     kwargs = {"dictionary": dictionary} if dictionary else {}
 
-    def embed(skeleton):
+    def embed(skeleton, evidence=None):
         return embed_skeleton(skeleton, encoder=text_encoder, cache_dir=cache_dir,
-                              **kwargs)
+                              evidence=evidence, **kwargs)
     return embed
 
 

@@ -17,6 +17,8 @@ from satagraph.data.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures,
                                      features_to_motion, motion_to_features)
+from satagraph.data.semantics.evidence import (JointEvidence, call_semantic,
+                                               evidence_from_features, remap_evidence)
 from satagraph.data.semantics.limbs import limb_end_index
 from satagraph.data.sources import MotionFile
 from satagraph.io import BVHError, read_bvh
@@ -220,7 +222,12 @@ class MotionDataset(Dataset):
             :func:`load_features`).
         semantic (Callable, optional): Maps a :class:`~satagraph.Skeleton` to
             its semantic embedding ``[J, D_t]``; called once per skeleton
-            (names and hierarchy).
+            and evidence. An embedder with an ``evidence`` keyword (as
+            :func:`~satagraph.data.datamodule.semantic_embedder` returns)
+            gets the evidence of the window's whole file (which chains bear
+            weight, spread, lie in front; see
+            :mod:`satagraph.data.semantics.evidence`), carried over by joint
+            name to augmented skeletons.
         window (int): Frames per window.
         stride (int): Frames between window starts.
         augment (WindowAugment, optional): Skeleton augmentation (training
@@ -235,6 +242,7 @@ class MotionDataset(Dataset):
         self.augment = augment
         self._semantic: Dict[Tuple, torch.Tensor] = {}
         self._limbs: Dict[Tuple, Tuple[int, ...]] = {}
+        self._evidence: Dict[int, JointEvidence] = {}
         self.semantic_fn = semantic
         self.index: List[Tuple[int, int]] = [
             (i, s) for i, f in enumerate(self.features)
@@ -243,19 +251,33 @@ class MotionDataset(Dataset):
     def __len__(self) -> int:
         return len(self.index)
 
-    def semantic(self, feats: MotionFeatures) -> Optional[torch.Tensor]:
-        """The semantic embedding of a skeleton, computed once per skeleton."""
+    def evidence(self, i: int) -> JointEvidence:
+        """Geometry / motion evidence of file :obj:`i` (its whole motion),
+        computed once."""
+        if i not in self._evidence:
+            self._evidence[i] = evidence_from_features(self.features[i])
+        return self._evidence[i]
+
+    def semantic(self, feats: MotionFeatures,
+                 evidence: Optional[JointEvidence] = None) -> Optional[torch.Tensor]:
+        """The semantic embedding of a skeleton, computed once per skeleton
+        and evidence."""
         if self.semantic_fn is None:
             return None
-        return _per_skeleton(self._semantic, feats.skeleton,
-                             lambda skeleton: self.semantic_fn(skeleton).float())
+        return _per_skeleton(
+            self._semantic, feats.skeleton,
+            lambda skeleton: call_semantic(self.semantic_fn, skeleton, evidence).float(),
+            evidence)
 
-    def limb_ends(self, feats: MotionFeatures) -> Tuple[int, ...]:
+    def limb_ends(self, feats: MotionFeatures,
+                  evidence: Optional[JointEvidence] = None) -> Tuple[int, ...]:
         """Terminal joint of each limb of a skeleton (in the order of
         :data:`~satagraph.data.semantics.LIMBS`, ``-1`` where missing),
-        computed once per skeleton; clips carry it as ``meta["limb_ends"]``."""
+        computed once per skeleton and evidence; clips carry it as
+        ``meta["limb_ends"]``."""
         return _per_skeleton(self._limbs, feats.skeleton,
-                             lambda skeleton: tuple(limb_end_index(skeleton)))
+                             lambda skeleton: tuple(limb_end_index(skeleton, evidence)),
+                             evidence)
 
     def group(self, idx: int) -> str:
         """(dataset, skeleton) group of a window, for balanced sampling."""
@@ -267,22 +289,27 @@ class MotionDataset(Dataset):
         i, start = self.index[idx]
         feats, f = self.features[i], self.files[i]
         meta = {"path": f.path, "dataset": f.dataset, "skeleton": f.skeleton}
+        evidence = self.evidence(i)
         if self.augment is None or epoch is None:
-            meta["limb_ends"] = self.limb_ends(feats)
-            return feats.to_clip(start, start + self.window, self.semantic(feats), meta)
+            meta["limb_ends"] = self.limb_ends(feats, evidence)
+            return feats.to_clip(start, start + self.window,
+                                 self.semantic(feats, evidence), meta)
         stop = min(start + self.window, feats.num_frames)
         aug, lead = self.augment(feats, start, stop, epoch, idx)
-        meta.update(augmented=True, limb_ends=self.limb_ends(aug))
-        clip = aug.to_clip(lead, None, self.semantic(aug), meta)
+        evidence = remap_evidence(evidence, feats.skeleton.names, aug.skeleton)
+        meta.update(augmented=True, limb_ends=self.limb_ends(aug, evidence))
+        clip = aug.to_clip(lead, None, self.semantic(aug, evidence), meta)
         clip.meta["start"] = start
         return clip
 
 
 def _per_skeleton(cache: Dict[Tuple, Any], skeleton: Skeleton,
-                  compute: Callable[[Skeleton], Any]) -> Any:
-    """:obj:`compute` of :obj:`skeleton`, once per skeleton key; the oldest
-    of :data:`SEMANTIC_CACHE_SIZE` entries goes first (augmented skeletons)."""
-    key = _skeleton_key(skeleton)
+                  compute: Callable[[Skeleton], Any],
+                  evidence: Optional[JointEvidence] = None) -> Any:
+    """:obj:`compute` of :obj:`skeleton`, once per skeleton key and evidence
+    (what the descriptions depend on); the oldest of
+    :data:`SEMANTIC_CACHE_SIZE` entries goes first (augmented skeletons)."""
+    key = (_skeleton_key(skeleton), evidence)
     if key not in cache:
         if len(cache) >= SEMANTIC_CACHE_SIZE:
             del cache[next(iter(cache))]

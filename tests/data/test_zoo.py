@@ -48,7 +48,8 @@ def test_quadruped_legs_read_as_front_and_hind_limbs():
         texts = describe_joints(rig.skeleton)
         for leg in rig.legs:
             upper, lower = texts[leg.upper], texts[leg.lower]
-            limb = "front limb" if leg.key[1:] in ("F", "1") else "hind limb"
+            limb = ("front limb" if leg.key[1:] in ("F", "1") else
+                    "middle limb" if leg.key[1:] == "2" else "hind limb")  # leg pairs
             side = "left" if leg.key[0] == "L" else "right"
             assert f"{side} {limb} upper segment" in upper, (rig.name, upper)
             assert f"{side} {limb} lower segment" in lower, (rig.name, lower)

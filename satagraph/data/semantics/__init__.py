@@ -3,8 +3,10 @@
 The pipeline of SATA (paper section 3.2, appendix C.3), offline:
 
 1. :func:`describe_joints` turns raw joint names into canonical,
-   taxonomy-neutral descriptions by rules (:mod:`.rules`), then applies a
-   user dictionary and sparse anchor tags (:mod:`.user`).
+   taxonomy-neutral descriptions by rules (:mod:`.rules`), optionally
+   helped by geometry / motion evidence (:mod:`.evidence`: which chains
+   bear weight, spread sideways, lie in front), then applies a user
+   dictionary and sparse anchor tags (:mod:`.user`).
 2. :func:`build_prompt` / :func:`import_answer` (:mod:`.prompt`) let a user
    run the paper's Figure 6 prompt in any language model and import the JSON
    answer as a dictionary.
@@ -18,9 +20,10 @@ Example::
     from satagraph.io import read_bvh
     from satagraph.data.semantics import describe_joints, embed_skeleton
 
-    skeleton = read_bvh("walk.bvh").skeleton
-    describe_joints(skeleton)        # ["pelvis, hips root ...", ...]
-    x_t = embed_skeleton(skeleton)   # Tensor [J, 256]
+    motion = read_bvh("walk.bvh")
+    describe_joints(motion.skeleton)   # ["pelvis, hips root ...", ...]
+    evidence = evidence_from_motion(motion)  # what the body does
+    x_t = embed_skeleton(motion.skeleton, evidence=evidence)  # [J, 256]
 """
 from __future__ import annotations
 
@@ -34,6 +37,11 @@ from satagraph.data.semantics.cache import (EmbeddingCache, clear_memory,
                                             default_cache_dir)
 from satagraph.data.semantics.encoders import (OfflineTextEncoder,
                                                T5TextEncoder, TextEncoder)
+from satagraph.data.semantics.evidence import (EvidenceLike, JointEvidence,
+                                               as_evidence, call_semantic,
+                                               evidence_from_features,
+                                               evidence_from_motion,
+                                               joint_evidence, remap_evidence)
 from satagraph.data.semantics.limbs import LIMBS, limb_end_index, limb_ends
 from satagraph.data.semantics.prompt import (build_prompt, import_answer,
                                              load_reference_vocab,
@@ -50,7 +58,8 @@ _DEFAULT_ENCODER: Optional[TextEncoder] = None
 
 
 def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
-                    anchors: AnchorsLike = None) -> List[str]:
+                    anchors: AnchorsLike = None,
+                    evidence: EvidenceLike = None) -> List[str]:
     """One canonical functional description per joint (end sites included).
 
     Rules first (see :mod:`satagraph.data.semantics.rules`), then the
@@ -63,6 +72,11 @@ def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
         skeleton: The skeleton.
         dictionary: Raw name -> description, as a mapping or a JSON file.
         anchors: Sparse tags, as ``{name: tag}`` or ``["NAME=TAG", ...]``.
+        evidence: Optional geometry / motion evidence: a
+            :class:`JointEvidence`, motion features, or canonical joint
+            positions ``[T, J, 3]`` / ``[J, 3]`` (+Y up, facing +Z, see
+            :mod:`satagraph.data.semantics.evidence`). ``None``: names and
+            hierarchy only.
 
     Returns:
         list[str]: ``skeleton.num_joints`` descriptions.
@@ -70,11 +84,13 @@ def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
     Raises:
         SemanticsError: Invalid dictionary or anchors (the message names the
             file or key).
+        ValueError: Evidence for another number of joints.
     """
     names = tuple(skeleton.names)
     parents = tuple(int(p) for p in skeleton.parents.tolist())
     end_site = tuple(bool(e) for e in skeleton.end_site.tolist())
-    rules = describe_structure(names, parents, end_site)
+    rules = describe_structure(names, parents, end_site,
+                               as_evidence(evidence, len(names)))
     table = load_dictionary(dictionary)
     tags = normalize_anchors(anchors)
     check_anchor_names(tags, names)
@@ -119,8 +135,8 @@ def embed_texts(texts: Sequence[str], encoder: Optional[TextEncoder] = None,
 def embed_skeleton(skeleton: Skeleton, encoder: Optional[TextEncoder] = None,
                    cache_dir: Optional[PathLike] = None,
                    dictionary: DictionaryLike = None,
-                   anchors: AnchorsLike = None, use_cache: bool = True
-                   ) -> Tensor:
+                   anchors: AnchorsLike = None, use_cache: bool = True,
+                   evidence: EvidenceLike = None) -> Tensor:
     """Semantic features X_t of a skeleton: embedded joint descriptions.
 
     Args:
@@ -130,11 +146,15 @@ def embed_skeleton(skeleton: Skeleton, encoder: Optional[TextEncoder] = None,
         dictionary: Raw name -> description overrides (mapping or JSON file).
         anchors: Sparse anchor tags (``{name: tag}`` or ``["NAME=TAG"]``).
         use_cache: ``False`` to bypass the disk cache.
+        evidence: Geometry / motion evidence (see :func:`describe_joints`).
+            The cache is keyed by the description texts, so evidence that
+            changes a description gets its own embedding.
 
     Returns:
         Tensor: float32 ``[J, D]``, one row per joint (end sites included).
     """
-    texts = describe_joints(skeleton, dictionary=dictionary, anchors=anchors)
+    texts = describe_joints(skeleton, dictionary=dictionary, anchors=anchors,
+                            evidence=evidence)
     return embed_texts(texts, encoder, cache_dir, use_cache)
 
 
@@ -145,4 +165,6 @@ __all__ = [
     "import_answer", "load_reference_vocab", "load_dictionary",
     "validate_dictionary", "normalize_anchors", "parse_anchor",
     "write_json_atomic", "SemanticsError", "LIMBS", "limb_ends", "limb_end_index",
+    "JointEvidence", "joint_evidence", "evidence_from_features",
+    "evidence_from_motion", "remap_evidence", "call_semantic", "as_evidence",
 ]

@@ -9,7 +9,13 @@ hierarchy is taken into account later, in :mod:`.rules`.
 
 Limb segment ranks: 0 girdle (clavicle, shoulder blade, hip bone), 1 upper
 (upper arm, thigh), 2 lower (forearm, shin), 3 terminal (hand, foot, paw),
-4 digit (fingers, toes).
+4 digit (fingers, toes). A digitigrade segment (``HorseLink``,
+tarsometatarsus, cannon bone) has rank 3 without using it up: the foot below
+it is still the terminal segment.
+
+Tokens that are not words -- exporter suffixes such as ``Tail_01__x7Q``,
+version tags ``_v2`` and hashes ``_a1b2c3`` -- are dropped before parsing
+(:func:`drop_noise_tokens`).
 """
 from __future__ import annotations
 
@@ -21,6 +27,10 @@ from typing import Dict, FrozenSet, List, Optional, Tuple
 # (family, candidate ranks, default rank). Family "arm" is a strong hint of a
 # front limb, "leg" a weak hint of a hind limb (the hierarchy may override it).
 LimbWord = Tuple[str, FrozenSet[int], int]
+
+#: Words of a digitigrade segment (bird tarsometatarsus, horse cannon bone).
+DIGITIGRADE_WORDS = frozenset({"horselink", "tarsometatarsus", "metatarsus",
+                               "cannon", "tmt"})
 
 
 def _limb(family: str, ranks: Tuple[int, ...], default: int) -> LimbWord:
@@ -52,12 +62,18 @@ LIMB_WORDS: Dict[str, LimbWord] = {
         "knee", "stifle", "shin", "calf", "lowerleg", "loleg", "tibia",
         "crus", "gaskin")},
     **{w: _limb("leg", (3,), 3) for w in ("ankle", "hock", "tarsus", "heel")},
+    **{w: _limb("leg", (3,), 3) for w in DIGITIGRADE_WORDS},
     "foot": _limb("leg", (3, 4), 3),
     "feet": _limb("leg", (3, 4), 3),
     "paw": _limb("leg", (3,), 3),
     "hoof": _limb("leg", (3,), 3),
     **{w: _limb("leg", (4,), 4) for w in (
         "toe", "toes", "toebase", "ball", "bigtoe")},
+    # claws / pincers of arthropods: a limb of their own off the body (a
+    # claw inside a hand or foot is a digit, see :mod:`.rules`)
+    **{w: _limb("claw", (1, 2, 3), 1) for w in ("claw", "claws", "cheliped")},
+    **{w: _limb("claw", (3,), 3) for w in ("pincer", "pincers", "chela",
+                                           "nipper", "nippers")},
 }
 
 # Digit words -> ordinal, neutral across hands, feet and paws.
@@ -82,6 +98,7 @@ TRUNK_WORDS: Dict[str, str] = {
     **{w: "head" for w in ("head", "skull", "cranium")},
     "headtop": "headtop",
     **{w: "face" for w in ("face", "facial")},
+    **{w: "body" for w in ("body", "carapace", "cephalothorax", "prosoma")},
 }
 
 PART_WORDS: Dict[str, str] = {
@@ -100,6 +117,12 @@ PART_WORDS: Dict[str, str] = {
     **{w: "hair" for w in ("hair", "ponytail", "mane")},
     **{w: "breast" for w in ("breast", "boob")},
     **{w: "ribs" for w in ("rib", "ribs")},
+    **{w: "antenna" for w in ("antenna", "antennae", "antennas", "feeler")},
+    **{w: "eye stalk" for w in ("eyestalk", "ommatophore")},
+    **{w: "fang" for w in ("fang", "fangs", "chelicera", "chelicerae")},
+    **{w: "fin" for w in ("fin", "fins", "flipper")},
+    **{w: "tentacle" for w in ("tentacle", "tentacles")},
+    "whisker": "whisker",
 }
 
 TAIL_WORDS = frozenset({"tail", "tailbone"})
@@ -145,6 +168,8 @@ COMPOUNDS: Dict[Tuple[str, str], str] = {
     ("eye", "lid"): "eyelid", ("eye", "brow"): "eyebrow",
     ("jaw", "root"): "jawroot", ("tail", "bone"): "tailbone",
     ("center", "of"): "center", ("of", "mass"): "com",
+    ("horse", "link"): "horselink", ("eye", "stalk"): "eyestalk",
+    ("tarso", "metatarsus"): "tarsometatarsus",
 }
 
 _PREFIX = re.compile(
@@ -153,13 +178,19 @@ _PREFIX = re.compile(
 _CAMEL = (re.compile(r"([a-z])([A-Z])"), re.compile(r"([A-Z]+)([A-Z][a-z])"),
           re.compile(r"([A-Za-z])(\d)"), re.compile(r"(\d)([A-Za-z])"))
 _SEPARATORS = re.compile(r"[^A-Za-z0-9]+")
+_TOKEN = re.compile(r"[A-Za-z0-9]+")
+_VERSION = re.compile(r"v(?:er|ersion)?\d+")
+_MIXED = re.compile(r"[A-Za-z]\d+[A-Za-z]")
+_HEX = re.compile(r"[0-9a-f]{5,}")
+_ODD_CASE = re.compile(r"[a-z][A-Z][a-z]|[A-Z]{2}[a-z]$|\d[A-Z][a-z]")
+_NUMBER = re.compile(r"\d+")
 
 KNOWN_WORDS = frozenset(
     set(LIMB_WORDS) | set(DIGIT_WORDS) | set(TRUNK_WORDS) | set(PART_WORDS)
     | TAIL_WORDS | set(HELPER_WORDS) | TIP_WORDS | FILLER_WORDS
     | set(SIDE_WORDS) | set(FRONT_HIND_WORDS) | set(POSITION_WORDS)
     | {"back", "hips", "center", "centre", "big", "blade", "fl", "hl", "hr",
-       "bl", "br"}
+       "bl", "br", "wing", "wings", "mid", "middle"}
     | {w for pair in COMPOUNDS for w in pair} | set(COMPOUNDS.values()))
 
 
@@ -186,6 +217,11 @@ class NameInfo:
         helper (str or None): ``twist``, ``ik`` or ``helper``.
         tip (bool): An end/nub/tip word is present.
         unknown (tuple[str, ...]): Words the lexicon does not know.
+        digitigrade (bool): The limb word is a digitigrade segment
+            (``HorseLink``, tarsometatarsus).
+        wing (bool): A wing word is present (a wing is a front limb).
+        number (int or None): The first number in the name (``leg_L_03``:
+            3), used to order otherwise identical chains.
     """
 
     raw: str
@@ -202,6 +238,9 @@ class NameInfo:
     helper: Optional[str]
     tip: bool
     unknown: Tuple[str, ...]
+    digitigrade: bool = False
+    wing: bool = False
+    number: Optional[int] = None
 
     @property
     def has_content(self) -> bool:
@@ -285,6 +324,74 @@ def _merge_compounds(words: List[str]) -> List[str]:
     return out
 
 
+def _letter_runs(token: str) -> List[str]:
+    """Lower-case letter runs of a token, split at camelCase humps."""
+    for pattern in _CAMEL[:2]:
+        token = pattern.sub(r"\1 \2", token)
+    return [w.lower() for w in re.findall(r"[A-Za-z]+", token)]
+
+
+def _is_word(run: str) -> bool:
+    """A known word of three letters or more, or a glue of known words."""
+    if len(run) < 3:
+        return False
+    return run in KNOWN_WORDS or all(w in KNOWN_WORDS for w in _segment(run))
+
+
+def is_noise_token(token: str, suffix: bool = False) -> bool:
+    """Whether a raw name token is not a word: a random ID (``x7Q``), a hash
+    (``a1b2c3``) or a version tag (``v2``). :obj:`suffix` marks the last
+    token after a double separator (``Tail_01__k3Z``), where any token
+    without a real word is an exporter suffix.
+
+    Args:
+        token: An alphanumeric token of a raw name, case kept.
+        suffix: The token ends the name after ``__`` (or ``--``, ``..``).
+
+    Returns:
+        bool: ``True`` when the token should be dropped.
+    """
+    low = token.lower()
+    if _VERSION.fullmatch(low):
+        return True
+    if low.isdigit() or (low in KNOWN_WORDS and not suffix):
+        return False
+    real = any(_is_word(run) for run in _letter_runs(token))
+    if _MIXED.search(token) or _HEX.fullmatch(low):
+        return not real
+    if suffix:
+        return not (real or low in SIDE_WORDS or low in TIP_WORDS) \
+            or bool(_ODD_CASE.search(token))
+    return len(token) <= 4 and bool(_ODD_CASE.search(token)) and not real
+
+
+def drop_noise_tokens(name: str) -> str:
+    """Remove the tokens of a raw name that are not words (see
+    :func:`is_noise_token`), each with the separator before it; namespaces
+    and rig prefixes are kept for :func:`strip_prefixes`.
+
+    Args:
+        name: A raw joint name.
+
+    Returns:
+        str: The name with its word tokens only.
+    """
+    tokens = list(_TOKEN.finditer(name))
+    last = len(tokens) - 1  # the last token before tip words (``_end``)
+    while last > 0 and tokens[last].group().lower() in TIP_WORDS:
+        last -= 1
+    out, pos = [], 0
+    for i, match in enumerate(tokens):
+        gap = name[tokens[i - 1].end():match.start()] if i > 0 else ""
+        suffix = i == last and i > 0 and len(gap) >= 2
+        if is_noise_token(match.group(), suffix):
+            out.append(name[pos:match.start() - len(gap)])
+            pos = match.end()
+    if not out:
+        return name
+    return "".join(out) + name[pos:]
+
+
 @lru_cache(maxsize=16384)
 def parse_name(raw: str) -> NameInfo:
     """Parse one raw joint name (cached; depends only on the name).
@@ -296,12 +403,14 @@ def parse_name(raw: str) -> NameInfo:
         NameInfo: The understood words.
     """
     words: List[str] = []
-    for word in split_words(strip_prefixes(raw)):
+    clean = strip_prefixes(drop_noise_tokens(raw))
+    for word in split_words(clean):
         words.extend(_segment(word))
     words = _merge_compounds([w for w in words if not w.isdigit()])
     words = _expand_combined_sides(words)
     words = [w for w in words if len(w) > 1 or w in SIDE_WORDS]
-    return _classify(raw, tuple(words))
+    number = _NUMBER.search(clean)
+    return _classify(raw, tuple(words), int(number.group()) if number else None)
 
 
 _COMBINED_SIDES = {"fl": ("front", "left"), "fr": ("front", "right"),
@@ -327,7 +436,8 @@ def _pick_limb(words: Tuple[str, ...]) -> Optional[LimbWord]:
     return max(found, key=lambda lw: (min(lw[1]), lw[2])) if found else None
 
 
-def _classify(raw: str, words: Tuple[str, ...]) -> NameInfo:
+def _classify(raw: str, words: Tuple[str, ...],
+              number: Optional[int] = None) -> NameInfo:
     side = next((SIDE_WORDS[w] for w in words if w in SIDE_WORDS), None)
     position = next((POSITION_WORDS[w] for w in words if w in POSITION_WORDS),
                     None)
@@ -346,6 +456,9 @@ def _classify(raw: str, words: Tuple[str, ...]) -> NameInfo:
                         if w not in ("hip", "hipjoint")):
         limb = None  # "CC_Base_Hip": the pelvis, not a limb
     limb = _adjust_limb_for_position(limb, words, position)
+    wing = bool(set(words) & {"wing", "wings"})
+    if wing and limb is None:
+        limb = ("arm", frozenset((1, 2, 3)), 1)  # "Wing_L_01": a whole limb
     digit = _digit(words, limb)
     if digit is not None and limb is not None:
         limb = (_digit_family(words, limb), frozenset((4,)), 4)
@@ -360,7 +473,11 @@ def _classify(raw: str, words: Tuple[str, ...]) -> NameInfo:
         helper=next((HELPER_WORDS[w] for w in words if w in HELPER_WORDS),
                     None),
         tip=bool(set(words) & TIP_WORDS),
-        unknown=tuple(w for w in words if w not in KNOWN_WORDS))
+        unknown=tuple(w for w in words if w not in KNOWN_WORDS),
+        digitigrade=bool(limb and limb[1] == frozenset((3,))
+                         and set(words) & DIGITIGRADE_WORDS
+                         and not set(words) & {"foot", "feet", "paw", "hoof"}),
+        wing=wing, number=number)
 
 
 def _trunk(words: Tuple[str, ...], side: Optional[str], has_limb: bool,

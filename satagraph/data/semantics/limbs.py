@@ -12,27 +12,30 @@ from __future__ import annotations
 
 from typing import Dict, List
 
+from satagraph.data.semantics.evidence import EvidenceLike
 from satagraph.skeleton import Skeleton
 
 #: The limbs, in the order of :func:`limb_end_index`.
 LIMBS: List[str] = ["left front", "right front", "left hind", "right hind"]
 
 
-def limb_ends(skeleton: Skeleton) -> Dict[str, int]:
+def limb_ends(skeleton: Skeleton, evidence: EvidenceLike = None) -> Dict[str, int]:
     """Terminal joint of each limb the skeleton has: the first joint that
-    :func:`~satagraph.data.semantics.describe_joints` describes as
-    ``"<limb> limb terminal segment"``."""
+    :func:`~satagraph.data.semantics.describe_joints` (with the optional
+    geometry / motion :obj:`evidence`) describes as ``"<limb> limb terminal
+    segment"`` (an arthropod's first and last leg pairs are its front and
+    hind limbs)."""
     from satagraph.data.semantics import describe_joints  # the package imports this module
     found: Dict[str, int] = {}
-    for j, text in enumerate(describe_joints(skeleton)):
+    for j, text in enumerate(describe_joints(skeleton, evidence=evidence)):
         for limb in LIMBS:
             if text.startswith(f"{limb} limb terminal segment") and limb not in found:
                 found[limb] = j
     return found
 
 
-def limb_end_index(skeleton: Skeleton) -> List[int]:
+def limb_end_index(skeleton: Skeleton, evidence: EvidenceLike = None) -> List[int]:
     """:func:`limb_ends` as a list in the order of :data:`LIMBS` (``-1``
     for a limb the skeleton lacks)."""
-    found = limb_ends(skeleton)
+    found = limb_ends(skeleton, evidence)
     return [found.get(limb, -1) for limb in LIMBS]
