@@ -104,10 +104,23 @@ def format_table(rows: Sequence[dict]) -> str:
 
 def _evidence(motion):
     """Evidence of the file's motion, canonicalised as the features are
-    (with the ``--up-axis`` / ``--units`` attached to it; ``None``, names
-    only, where the motion cannot be canonicalised)."""
+    (with the ``--up-axis`` / ``--units`` attached to it). ``None`` (names
+    only) where the motion cannot be canonicalised or its up axis is a
+    low-confidence guess, said on stderr: evidence read on the wrong axis
+    would mislead. Units do not matter (evidence is in body heights)."""
+    import sys
+    import warnings
+    from satagraph.data.rig_reading import RigReadingWarning, read_rig
+    up = read_rig(motion).up
+    if up.low_confidence:
+        print(f"satagraph: note: {motion.source}: the up axis is uncertain "
+              f"({up.summary()}); descriptions from names only (pass --up-axis "
+              "to use the motion)", file=sys.stderr)
+        return None
     try:
-        return evidence_from_motion(motion)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RigReadingWarning)
+            return evidence_from_motion(motion)
     except ValueError:
         return None
 

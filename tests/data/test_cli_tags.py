@@ -61,7 +61,9 @@ def bvh(tmp_path) -> Path:
 
 
 def run(capsys, *argv):
-    code = main([str(a) for a in argv])
+    """``satagraph tags`` on the tiny rig, whose still rest pose gives no up
+    axis to be sure of: it is given (see test_uncertain_up_axis_is_said)."""
+    code = main([str(a) for a in argv] + ["--up-axis=+Y"])
     out, err = capsys.readouterr()
     return code, out, err
 
@@ -73,6 +75,14 @@ def test_parser_registers_on_subparsers(bvh):
                               "--anchor", "Bone.001=tail tip segment"])
     assert args.func is run_tags and args.anchor == [
         "Bone=tail base", "Bone.001=tail tip segment"]
+
+
+def test_uncertain_up_axis_is_said_and_names_decide(bvh, capsys):
+    code = main([str(bvh)])
+    out, err = capsys.readouterr()
+    assert code == 0 and err.startswith("satagraph: note: ")
+    assert "the up axis is uncertain" in err and "names only" in err
+    assert out == run(capsys, bvh, "--names-only")[1]
 
 
 def test_table(bvh, capsys):
