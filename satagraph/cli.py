@@ -17,6 +17,7 @@ import importlib
 import json
 import sys
 import tempfile
+import warnings
 from collections import Counter
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
@@ -398,6 +399,11 @@ def _message(err: BaseException) -> str:
     return str(err)
 
 
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """Warnings as one line: ``satagraph: warning: ...``."""
+    return f"{PROG}: warning: {message}\n"
+
+
 def parse_args(parser: argparse.ArgumentParser,
                argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
     """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
@@ -421,6 +427,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """
     parser = build_parser()
     args = parse_args(parser, argv)
+    if not args.traceback:
+        warnings.formatwarning = _format_warning
     retain_freed_memory()  # batches of frame graphs: no page faults per call
     try:
         code = args.func(args)

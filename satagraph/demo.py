@@ -30,6 +30,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, TextIO, Tuple
 import numpy as np
 from omegaconf import OmegaConf
 
+from satagraph.io.files import atomic_write_text
 from satagraph.motion import Motion
 
 #: The species the retargeting step needs in the zoo.
@@ -311,7 +312,7 @@ def _training_note(trainer) -> str:
 
 
 def _write_json(path: Path, value: Dict[str, Any]) -> None:
-    path.write_text(json.dumps(value, indent=2) + "\n")
+    atomic_write_text(path, json.dumps(value, indent=2) + "\n")
 
 
 def format_summary(result: DemoResult) -> str:

@@ -34,6 +34,7 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from satagraph.io import write_bvh
+from satagraph.io.files import atomic_write
 from satagraph.motion import Motion
 from satagraph.skeleton import Skeleton
 
@@ -1033,10 +1034,10 @@ def _write_clip(out: Path, rig: ZooRig, c: int, seed: int, fps: float,
 
 def _write_manifest(path: Path, rows: List[Dict[str, str]]) -> None:
     """Write the manifest atomically."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "w", newline="") as f:
+    def write(f) -> None:
         writer = csv.DictWriter(f, MANIFEST_COLUMNS, delimiter="\t",
                                 lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
-    os.replace(tmp, path)
+
+    atomic_write(path, write, newline="")
