@@ -17,7 +17,8 @@ from satagraph.motion import CanonicalTransform
 from satagraph.skeleton import Skeleton
 
 #: Bump when the feature definition changes: old cache entries are ignored.
-FEATURE_VERSION = 1
+#: 2: files are checked (satagraph.data.validate) before they are cached.
+FEATURE_VERSION = 2
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
            "r", "c", "facing_axis")

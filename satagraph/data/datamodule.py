@@ -1,6 +1,7 @@
 """Lightning data module: one or several motion datasets trained jointly."""
 from __future__ import annotations
 
+import warnings
 from collections import Counter
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
 
@@ -9,7 +10,8 @@ import torch
 from torch.utils.data import DataLoader, RandomSampler, WeightedRandomSampler
 
 from satagraph.data.collate import collate_clips
-from satagraph.data.dataset import EpochSampler, MotionDataset, WindowAugment, load_features
+from satagraph.data.dataset import (ON_ERROR, EpochSampler, MotionDataset, WindowAugment,
+                                    dataset_error, try_load_features)
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
 
@@ -74,6 +76,11 @@ class MotionDataModule(L.LightningDataModule):
             0.5, "drop": 0.1, "low": 0.8, "high": 1.2}``. Every window is
             drawn on a new skeleton per epoch, deterministically given the
             seed (see :class:`~satagraph.data.dataset.WindowAugment`).
+        on_error (str): What to do with files that cannot be processed
+            (malformed, or failing :mod:`~satagraph.data.validate`): every
+            bad file of every split is found first; ``"raise"`` (default)
+            then fails with one error listing them all, ``"skip"`` warns,
+            lists them in :attr:`skipped` and uses the others.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -82,8 +89,14 @@ class MotionDataModule(L.LightningDataModule):
                  semantic_encoder: Optional[str] = "offline",
                  cache_dir: Optional[str] = None, num_workers: int = 0,
                  max_files: Optional[int] = None, seed: int = 0,
-                 augment: Union[None, bool, Mapping[str, Any]] = None) -> None:
+                 augment: Union[None, bool, Mapping[str, Any]] = None,
+                 on_error: str = "raise") -> None:
         super().__init__()
+        if on_error not in ON_ERROR:
+            raise ValueError(f"data.on_error must be one of {ON_ERROR}, got {on_error!r}")
+        self.on_error = on_error
+        #: ``(split, error line)`` of every file left out (``on_error="skip"``).
+        self.skipped: List[str] = []
         self.sources, self.window, self.stride = sources, window, stride
         self.eval_stride = eval_stride or window
         self.batch_size, self.balanced = batch_size, balanced
@@ -103,16 +116,28 @@ class MotionDataModule(L.LightningDataModule):
             return
         files = resolve_sources(self.sources)
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
+        loaded, errors, total = {}, [], 0
         for split in SPLITS:
             chosen = self._files(split, files)
-            feats = load_features(chosen, self.preprocessing, self.cache_dir)
+            kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
+            loaded[split] = (kept, feats)
+            errors += [f"{split}: {e}" for e in bad]
+            total += len(chosen)
+        if errors and self.on_error == "raise":
+            raise dataset_error(errors, total)
+        if errors:
+            self.skipped = errors
+            warnings.warn(f"data.on_error=skip: left out {len(errors)} of {total} motion "
+                          "files:\n" + "\n".join(f"  {e}" for e in errors), stacklevel=2)
+        for split, (kept, feats) in loaded.items():
             stride = self.stride if split == "train" else self.eval_stride
             augment = self.augment if split == "train" else None
-            self.datasets[split] = MotionDataset(chosen, feats, embed, self.window, stride,
+            self.datasets[split] = MotionDataset(kept, feats, embed, self.window, stride,
                                                  augment)
         if not len(self.datasets["train"]):
             raise ValueError(f"no training windows in {self.sources!r}")
-        self.normalizer.fit(self.datasets["train"].features)
+        self.normalizer.fit(self.datasets["train"].features,
+                            [f.path for f in self.datasets["train"].files])
 
     @property
     def semantic_channels(self) -> int:
