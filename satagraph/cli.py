@@ -427,9 +427,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """
     parser = build_parser()
     args = parse_args(parser, argv)
+    retain_freed_memory()  # batches of frame graphs: no page faults per call
+    before = warnings.formatwarning
     if not args.traceback:
         warnings.formatwarning = _format_warning
-    retain_freed_memory()  # batches of frame graphs: no page faults per call
     try:
         code = args.func(args)
     except (BVHError, CommandError, OSError, ValueError) as err:
@@ -437,6 +438,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             raise
         print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = before
     return int(code or 0)
 
 

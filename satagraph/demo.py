@@ -273,7 +273,8 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     with progress.step("train", f"training {cfg['name']} on {', '.join(sources)} "
                        f"(at most {_budget(cfg)})") as step:
         module, trainer = train_demo(cfg)
-        step.written = [trainer.checkpoint_callback.last_model_path]
+        from satagraph.train import last_checkpoint
+        step.written = [last_checkpoint(trainer)]
         step.note = _training_note(trainer)
     with progress.step("retarget", "retargeting a biped walk onto a quadruped, a "
                        "bird and a rescaled human") as step:

@@ -7,11 +7,12 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
 
 import lightning as L
 import torch
-from torch.utils.data import DataLoader, RandomSampler, WeightedRandomSampler
+from torch.utils.data import DataLoader
 
 from satagraph.data.collate import collate_clips
-from satagraph.data.dataset import (ON_ERROR, EpochSampler, MotionDataset, WindowAugment,
-                                    dataset_error, try_load_features)
+from satagraph.data.dataset import (ON_ERROR, MotionDataset, WindowAugment, dataset_error,
+                                    try_load_features)
+from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
 
@@ -67,7 +68,10 @@ class MotionDataModule(L.LightningDataModule):
         num_workers (int): DataLoader workers.
         max_files (int, optional): Use at most this many files per split
             (quick experiments).
-        seed (int): Seed of the balanced sampler and of the augmentation.
+        seed (int): Seed of the training order (drawn per epoch from
+            ``(seed, epoch)``, see
+            :class:`~satagraph.data.sampler.ResumableSampler`) and of the
+            augmentation.
         augment (dict or bool, optional): On-the-fly skeleton augmentation
             of the training windows (validation and test windows are never
             augmented): ``None``/``False`` (default, off), ``True`` (the
@@ -148,19 +152,30 @@ class MotionDataModule(L.LightningDataModule):
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         ds = self.datasets[split]
         sampler = None
-        if shuffle and self.balanced:
-            groups = [ds.group(i) for i in range(len(ds))]
-            counts = Counter(groups)
-            weights = torch.tensor([1.0 / counts[g] for g in groups], dtype=torch.double)
-            gen = torch.Generator().manual_seed(self.seed)
-            sampler = WeightedRandomSampler(weights, len(ds), generator=gen)
-        if shuffle and ds.augment is not None:
-            sampler = EpochSampler(sampler or RandomSampler(
-                ds, generator=torch.Generator().manual_seed(self.seed)))
-        return DataLoader(ds, batch_size=self.batch_size,
-                          shuffle=shuffle and sampler is None, sampler=sampler,
+        if shuffle:
+            weights = None
+            if self.balanced:
+                groups = [ds.group(i) for i in range(len(ds))]
+                counts = Counter(groups)
+                weights = [1.0 / counts[g] for g in groups]
+            sampler = ResumableSampler(len(ds), weights, self.seed,
+                                       keys=ds.augment is not None)
+            self._resume(sampler)
+        # a generator of its own: iterating never draws from the global state
+        gen = torch.Generator().manual_seed(self.seed)
+        return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
                           collate_fn=collate_clips, num_workers=self.num_workers,
-                          persistent_workers=self.num_workers > 0)
+                          persistent_workers=self.num_workers > 0, generator=gen)
+
+    def _resume(self, sampler: ResumableSampler) -> None:
+        """Start the sampler where a resumed run stopped: the position a
+        :class:`~satagraph.lightning.reliability.ResumeCheckpoint` of the
+        trainer restored (epoch, batches done, whether the epoch was done)."""
+        trainer = getattr(self, "trainer", None)
+        for callback in getattr(trainer, "callbacks", None) or []:
+            position = getattr(callback, "resume_position", None)
+            if position is not None and not position["epoch_done"]:
+                sampler.resume(position["epoch"], position["batches"] * self.batch_size)
 
     def train_dataloader(self) -> DataLoader:
         return self._loader("train", True)

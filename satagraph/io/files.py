@@ -19,6 +19,7 @@ import contextlib
 import os
 import re
 import secrets
+import shutil
 import stat
 from pathlib import Path
 from typing import IO, Any, Callable, Iterator, Optional, Union
@@ -242,6 +243,16 @@ def atomic_write(path: PathLike, write: Callable[[IO[Any]], Any], binary: bool =
             raise _renamed(err, os.fspath(path)) from None
 
 
+def keep_copy(path: PathLike, copy: PathLike) -> None:
+    """Make :obj:`copy` an atomic hard link (a copy where links are not
+    supported) of the file :obj:`path`, replacing :obj:`copy`."""
+    with atomic_path(copy, durable=False) as tmp:
+        try:
+            os.link(path, tmp)
+        except OSError:
+            shutil.copyfile(path, tmp)
+
+
 def atomic_write_text(path: PathLike, text: str, create_parent: bool = False) -> None:
     """Write UTF-8 text atomically (see :func:`atomic_write`)."""
     atomic_write(path, lambda f: f.write(text), create_parent=create_parent)
@@ -249,4 +260,4 @@ def atomic_write_text(path: PathLike, text: str, create_parent: bool = False) ->
 
 __all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
            "check_output_path", "atomic_write", "atomic_write_text", "atomic_path",
-           "sweep_stale_temps"]
+           "keep_copy", "sweep_stale_temps"]
