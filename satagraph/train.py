@@ -180,7 +180,10 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         # set up (its datasets hold the semantic embedder, a closure); each worker
         # sets it up from the feature cache.
         fit_dm = build_datamodule(cfg) if _spawns_workers(trainer) else dm
-        trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
+        with warnings.catch_warnings():
+            # the sampler resumes mid-epoch itself (ResumeCheckpoint)
+            warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
+            trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
     return module, dm, trainer, run_dir
 
 

@@ -13,11 +13,11 @@ import os
 import pickle
 import re
 import zipfile
-from typing import Any, Dict, Optional, Sequence, Union
+from typing import Any, Dict, Sequence, Union
 
 import torch
 
-from satagraph.io.files import InputFileError, atomic_path, check_input_file, keep_copy
+from satagraph.io.files import InputFileError, atomic_path, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -32,15 +32,27 @@ def _refused(path: str, err: Exception) -> CheckpointError:
     """The error for a file torch cannot load safely (no advice to load it
     unsafely)."""
     text = str(err)
-    if "Weights only load failed" in text or "weights_only" in text:
-        found = _GLOBAL.search(text)
-        what = f" ({found.group(1)})" if found else ""
+    found = _GLOBAL.search(text)
+    if found:
         return CheckpointError(
-            f"{path}: not a satagraph checkpoint: it holds Python objects{what} that "
-            "safe loading refuses (only tensors and plain containers are loaded)")
-    first = text.strip().splitlines()[0] if text.strip() else type(err).__name__
+            f"{path}: not a satagraph checkpoint: it holds Python objects "
+            f"({found.group(1)}) that safe loading refuses (only tensors and plain "
+            "containers are loaded)")
+    detail = text.split("WeightsUnpickler error:")[-1] if "WeightsUnpickler" in text \
+        else text
+    lines = [x.strip() for x in detail.strip().splitlines() if x.strip()]
+    first = lines[0] if lines else type(err).__name__
+    if "weights_only" in first:
+        first = type(err).__name__
     return CheckpointError(f"{path}: not a readable checkpoint (truncated or another "
                            f"format: {first[:120]})")
+
+
+def _looks_like_torch_file(path: str) -> bool:
+    """A zip archive (torch.save) or a pickle (legacy torch.save)."""
+    with open(path, "rb") as f:
+        head = f.read(2)
+    return head == b"PK" or head[:1] == b"\x80"
 
 
 def load_checkpoint(path: PathLike, map_location: Any = "cpu",
@@ -67,6 +79,9 @@ def load_checkpoint(path: PathLike, map_location: Any = "cpu",
         check_input_file(path, "checkpoint")
     except InputFileError as err:
         raise CheckpointError(str(err)) from None
+    if not _looks_like_torch_file(path):
+        raise CheckpointError(f"{path}: not a readable checkpoint (not a file written "
+                              "by torch.save)")
     try:
         ckpt = torch.load(path, map_location=map_location, weights_only=True)
     except (pickle.UnpicklingError, RuntimeError, EOFError, ValueError, TypeError,
@@ -98,22 +113,15 @@ def check_finite_weights(ckpt: Dict[str, Any], path: PathLike) -> None:
                               "wrote it diverged; use an earlier checkpoint")
 
 
-def save_checkpoint(checkpoint: Dict[str, Any], path: PathLike,
-                    previous: Optional[PathLike] = None) -> None:
-    """Save atomically (fsynced temporary file, then rename); with
-    :obj:`previous`, the file being replaced is first kept under that name,
-    so that a good checkpoint always remains if the new one is damaged.
+def save_checkpoint(checkpoint: Dict[str, Any], path: PathLike) -> None:
+    """Save atomically (fsynced temporary file, then rename).
 
     Args:
         checkpoint: The checkpoint dictionary.
         path: Destination.
-        previous: Where to keep the file being replaced.
     """
-    path = os.fspath(path)
     with atomic_path(path, create_parent=True) as tmp:
         torch.save(checkpoint, tmp)
-        if previous is not None and os.path.isfile(path):
-            keep_copy(path, previous)
 
 
 __all__ = ["CheckpointError", "load_checkpoint", "check_finite_weights", "save_checkpoint"]

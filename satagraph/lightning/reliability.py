@@ -32,9 +32,10 @@ import torch
 from lightning.fabric.plugins.io.torch_io import TorchCheckpointIO
 
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from satagraph.io.files import keep_copy
 
 #: Names of the resume checkpoints in ``<run>/checkpoints``.
-LAST, PREVIOUS = "last.ckpt", "last.prev.ckpt"
+LAST, PREVIOUS, DAMAGED = "last.ckpt", "last.prev.ckpt", "last.damaged.ckpt"
 #: ``nonfinite`` config values.
 NONFINITE_MODES = ("stop", "skip")
 
@@ -51,14 +52,11 @@ class RunLockedError(RuntimeError):
 # ------------------------------------------------------------- safe IO
 class SafeCheckpointIO(TorchCheckpointIO):
     """Lightning checkpoint IO: atomic saves (fsynced temporary file and
-    rename; a ``last.ckpt`` being replaced is kept as ``last.prev.ckpt``),
-    loads with ``weights_only=True`` and clean errors."""
+    rename), loads with ``weights_only=True`` and clean errors."""
 
     def save_checkpoint(self, checkpoint: Dict[str, Any], path: Any,
                         storage_options: Optional[Any] = None) -> None:
-        path = Path(path)
-        previous = path.with_name(PREVIOUS) if path.name == LAST else None
-        save_checkpoint(checkpoint, path, previous=previous)
+        save_checkpoint(checkpoint, path)
 
     def load_checkpoint(self, path: Any, map_location: Optional[Callable] = None,
                         weights_only: Optional[bool] = None) -> Dict[str, Any]:
@@ -188,6 +186,7 @@ class ResumeCheckpoint(L.Callback):
         self._last_time = time.monotonic()
         self._batches_done = 0
         self._epoch_done = False
+        self._saved_step = -1
         self._pending: Optional[Dict[str, Any]] = None
         self.saves = 0
 
@@ -252,10 +251,14 @@ class ResumeCheckpoint(L.Callback):
         self.save(trainer)
 
     def save(self, trainer: L.Trainer) -> None:
-        """Write ``last.ckpt`` (the trainer's :class:`SafeCheckpointIO`
-        keeps the previous one)."""
-        trainer.save_checkpoint(self.last_path)
-        self._last_time = time.monotonic()
+        """Write ``last.ckpt``; the one it replaces becomes
+        ``last.prev.ckpt`` unless it was written at the same step."""
+        step = trainer.global_step
+        if (trainer.is_global_zero and self.last_path.is_file()
+                and step != self._saved_step):
+            keep_copy(self.last_path, self.previous_path)
+        trainer.save_checkpoint(self.last_path, weights_only=False)
+        self._last_time, self._saved_step = time.monotonic(), step
         self.saves += 1
 
 
@@ -282,8 +285,10 @@ def resume_checkpoint(checkpoints: Path) -> Path:
             continue
         if reasons:
             import warnings
-            warnings.warn(f"--resume: {reasons[0]}; resuming from the previous "
-                          f"checkpoint {path}", stacklevel=2)
+            damaged = checkpoints / DAMAGED
+            candidates[0].rename(damaged)  # never rotated over the good one
+            warnings.warn(f"--resume: {reasons[0]} (moved to {damaged}); resuming "
+                          f"from the previous checkpoint {path}", stacklevel=2)
         return path
     raise CheckpointError("--resume: no usable checkpoint: " + "; ".join(reasons))
 
