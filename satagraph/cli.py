@@ -26,6 +26,7 @@ import numpy as np
 
 from satagraph import __version__
 from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.io.files import check_output_path
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
 
@@ -192,7 +193,13 @@ def run_convert(args: argparse.Namespace) -> int:
     """Re-write a BVH file, optionally resampled and/or canonicalised."""
     if args.up_axis and not args.canonical:
         raise CommandError("--up-axis needs --canonical")
+    check_output_path(args.output)
     motion = read_bvh(args.input)
+    if args.canonical or args.fps:  # resampling: bounded memory, a sane skeleton
+        from satagraph.data.validate import check_resample, check_skeleton
+        check_resample(motion, args.input, args.fps)
+        if args.canonical:
+            check_skeleton(motion, args.input)
     notes = []
     if args.canonical:
         from satagraph.data.canonical import canonicalize

@@ -74,6 +74,17 @@ def check_timing(motion: Motion, path: str, fps: Optional[float] = None,
     if motion.num_frames < limits.min_frames:
         raise _error(path, f"{motion.num_frames} frame(s): at least "
                      f"{limits.min_frames} are needed")
+    check_resample(motion, path, fps, limits)
+
+
+def check_resample(motion: Motion, path: str, fps: Optional[float] = None,
+                   limits: MotionLimits = DEFAULT_LIMITS) -> None:
+    """Frame rate range, duration, and the size of the motion resampled to
+    :obj:`fps` (the memory resampling needs), whatever the frame count.
+
+    Raises:
+        MotionValidationError: One line naming :obj:`path`.
+    """
     rate = float(motion.fps)
     if not (limits.min_fps <= rate <= limits.max_fps):
         raise _error(path, f"frame rate {rate:.4g} fps (Frame Time: {1 / rate:.6g} s) "
@@ -82,8 +93,8 @@ def check_timing(motion: Motion, path: str, fps: Optional[float] = None,
                      "the frame rate")
     duration = motion.num_frames / rate
     if duration > limits.max_duration:
-        raise _error(path, f"{duration:.0f} s long; at most "
-                     f"{limits.max_duration:.0f} s are accepted")
+        raise _error(path, f"{duration:.3g} s long (Frame Time: {1 / rate:.6g} s); at "
+                     f"most {limits.max_duration:.0f} s are accepted")
     frames = duration * (fps or rate)
     if frames * motion.num_joints > limits.max_joint_frames:
         raise _error(path, f"{motion.num_joints} joints x {frames:.0f} frames "
@@ -185,5 +196,5 @@ def check_features(feats, path: str) -> None:
 
 
 __all__ = ["MotionValidationError", "MotionLimits", "DEFAULT_LIMITS", "check_motion",
-           "check_timing", "check_skeleton", "check_values", "check_features",
+           "check_timing", "check_resample", "check_skeleton", "check_values", "check_features",
            "skeleton_size"]

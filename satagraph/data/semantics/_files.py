@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 from typing import Any, Callable, Union
 
-from satagraph.io.files import atomic_write
+from satagraph.io.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -57,7 +57,12 @@ def read_json(path: PathLike, what: str) -> Any:
         SemanticsError: The file is missing, unreadable or not JSON.
     """
     try:
+        check_input_file(path, f"{what} file")
         text = Path(path).read_text(encoding="utf-8")
+    except InputFileError as err:
+        if Path(path).is_symlink() or Path(path).exists():
+            raise SemanticsError(str(err)) from None
+        raise SemanticsError(f"{path}: {what} file not found") from None
     except FileNotFoundError:
         raise SemanticsError(f"{path}: {what} file not found") from None
     except (OSError, UnicodeDecodeError) as err:
