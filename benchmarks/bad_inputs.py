@@ -452,6 +452,8 @@ def training_cases(root: Path) -> List[Case]:
              lambda t: ["train", str(_fifo(t / "c.yaml"))], slow=True, timeout=30.0),
         Case("train: override without '='", "training config",
              lambda t: _train(root, t, str(_zoo(root)), "trainer.max_epochs"), slow=True),
+        Case("train: malformed override value", "training config",
+             lambda t: _train(root, t, str(_zoo(root)), "data.batch_size=[1"), slow=True),
         Case("train: unknown module", "training config",
              lambda t: _train(root, t, str(_zoo(root)), "module=transformer"), slow=True),
         Case("train: checkpoint.every_n_steps=0", "training config",
@@ -745,8 +747,11 @@ def _safe_check(check: Callable[[Path], bool], tmp: Path) -> bool:
 
 
 def _error_line(stderr: str) -> str:
-    for line in stderr.splitlines():
+    lines = stderr.splitlines()
+    for i, line in enumerate(lines):
         if re.match(r"^satagraph( \w+)?: error: ", line):
+            if line.endswith(":") and i + 1 < len(lines):  # a list follows
+                return f"{line} {lines[i + 1].strip()}"
             return line
     lines = [x for x in stderr.splitlines() if x.strip()]
     return lines[-1] if lines else ""
@@ -830,7 +835,7 @@ def run_all(cases: Sequence[Case], root: Path, jobs: int = 2) -> List[Result]:
             holder.kill()
 
 
-def format_results(results: Sequence[Result]) -> str:
+def format_results(results: Sequence[Result], root: Optional[Path] = None) -> str:
     """Markdown: counts by outcome, then one row per case."""
     counts = {o: sum(r.outcome == o for r in results) for o in OUTCOMES}
     unexpected = [r for r in results if r.outcome in ("clean error", "handled")
@@ -843,13 +848,21 @@ def format_results(results: Sequence[Result]) -> str:
               f"{len(results) - len(unexpected)} of {len(results)} cases.", "",
               "| # | group | case | expected | outcome | exit | s | message |",
               "|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        if root is not None:
+            r.message = _short(r.message, root)
     for i, r in enumerate(results):
-        message = r.message.replace("|", "\\|")
-        message = re.sub(r"/tmp/[^ :]*/cases/\d+/", "", message)[:150]
+        message = r.message.replace("|", "\\|")[:220]
         lines.append(f"| {i} | {r.case.group} | {r.case.name.replace('|', '/')} | "
                      f"{r.case.expect} | {r.outcome} | {r.code} | {r.seconds:.1f} | "
                      f"{message} |")
     return "\n".join(lines) + "\n"
+
+
+def _short(text: str, root: Path) -> str:
+    """A message with the work folder's paths shortened."""
+    text = re.sub(re.escape(str(root)) + r"/cases/\d+/?", "", text)
+    return text.replace(str(root), "<tmp>")
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -867,7 +880,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         root = args.keep or Path(tmp)
         start = time.monotonic()
         results = run_all(all_cases(root, args.quick), root, args.jobs)
-        text = format_results(results)
+        text = format_results(results, root)
         sys.path.insert(0, str(REPO))
         from satagraph.io.files import atomic_write_text
         atomic_write_text(args.out, f"# Bad inputs\n\n{text}\nTotal "

@@ -158,6 +158,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         The trained module, the data module, the trainer and the run folder.
     """
     run_dir = Path(expand_path(cfg.get("output_dir") or f"runs/{cfg['name']}"))
+    if run_dir.exists() and not run_dir.is_dir():
+        raise ValueError(f"{run_dir}: output_dir is not a folder")
     if resume and not (run_dir / "checkpoints").is_dir():
         raise FileNotFoundError(f"--resume: no checkpoint at "
                                 f"{run_dir / 'checkpoints' / 'last.ckpt'}")
