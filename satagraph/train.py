@@ -1,6 +1,7 @@
 """Build the data module, model and trainer from a config, and train."""
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
 from pathlib import Path
@@ -192,7 +193,6 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
 def _lock(run_dir: Path):
     """:func:`run_lock` in the launching process; processes that Lightning
     starts for distributed training (``LOCAL_RANK`` > 0) share it."""
-    import contextlib
     if int(os.environ.get("LOCAL_RANK", "0") or 0) > 0:
         return contextlib.nullcontext()
     return run_lock(run_dir)

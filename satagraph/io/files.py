@@ -6,8 +6,8 @@ r"""Safe file handling shared by every reader and writer.
   Readers never see a half-written file, a failed write leaves the previous
   file untouched and removes its temporary file, errors name the
   destination (never the temporary file), and temporary files left by a
-  killed process (``kill -9``) are swept by the next write in that folder
-  (:func:`sweep_stale_temps`).
+  killed process (``kill -9``) are swept by the first write of a process in
+  that folder (:func:`sweep_stale_temps`).
 - :func:`check_output_path` checks an output path before any work is done.
 - :func:`check_input_file` refuses what is not a regular file (FIFOs,
   devices, sockets, directories: reading them hangs or never ends) and
@@ -171,6 +171,9 @@ def sweep_stale_temps(directory: PathLike, name: Optional[str] = None) -> int:
     return removed
 
 
+_SWEPT: set = set()
+
+
 def _renamed(err: OSError, path: str) -> OSError:
     """:obj:`err` naming the destination instead of a temporary file."""
     if err.errno:
@@ -195,7 +198,9 @@ def atomic_path(path: PathLike, create_parent: bool = False,
     if create_parent:
         os.makedirs(directory, exist_ok=True)
     name = os.path.basename(path)
-    sweep_stale_temps(directory, name)
+    if directory not in _SWEPT:  # once per folder and process: cheap in big caches
+        sweep_stale_temps(directory)
+        _SWEPT.add(directory)
     ext = os.path.splitext(name)[1]
     tmp = os.path.join(directory, f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp{ext}")
     mode = _file_mode(path)

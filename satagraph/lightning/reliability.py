@@ -23,6 +23,7 @@ import os
 import random
 import socket
 import time
+import warnings
 from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional
 
@@ -126,7 +127,6 @@ class NonFiniteGuard(L.Callback):
 
     def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if self.skipped:
-            import warnings
             warnings.warn(f"nonfinite=skip: skipped {self.skipped} batch(es) with a "
                           "non-finite loss or gradient", stacklevel=2)
 
@@ -284,7 +284,6 @@ def resume_checkpoint(checkpoints: Path) -> Path:
             reasons.append(str(err))
             continue
         if reasons:
-            import warnings
             damaged = checkpoints / DAMAGED
             candidates[0].rename(damaged)  # never rotated over the good one
             warnings.warn(f"--resume: {reasons[0]} (moved to {damaged}); resuming "

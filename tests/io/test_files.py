@@ -66,7 +66,7 @@ def test_stale_temps_of_dead_processes_are_swept(tmp_path: Path) -> None:
     other = tmp_path / ".notes.tmp"
     for p in (stale, live, other):
         p.write_text("x")
-    atomic_write_text(tmp_path / "out.bvh", "data")
+    atomic_write_text(tmp_path / "out.bvh", "data")  # first write in the folder
     assert not stale.exists() and live.exists() and other.exists()
     live.unlink()
     assert sweep_stale_temps(tmp_path) == 0
