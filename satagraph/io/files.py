@@ -97,26 +97,27 @@ def check_output_path(path: PathLike, create_parent: bool = False) -> Path:
     """
     path = Path(path)
     if path.name in ("", ".", ".."):
-        raise OutputPathError(f"{path}: an output file needs a file name")
+        raise OutputPathError(f"cannot write {path}: an output file needs a file name")
     try:
         st = os.stat(path)
     except FileNotFoundError:
         st = None
     except OSError as err:
-        raise OutputPathError(f"{path}: cannot write: {err.strerror or err}") from None
+        raise OutputPathError(f"cannot write {path}: {err.strerror or err}") from None
     if st is not None and not stat.S_ISREG(st.st_mode):
-        raise OutputPathError(f"{path}: is {_kind(st.st_mode)}; give a file path")
+        raise OutputPathError(f"cannot write {path}: it is {_kind(st.st_mode)}; give a "
+                              "file path")
     parent = path.parent if str(path.parent) else Path(".")
     if create_parent and not parent.exists():
         try:
             parent.mkdir(parents=True, exist_ok=True)
         except OSError as err:
-            raise OutputPathError(f"{path}: cannot create its folder: "
+            raise OutputPathError(f"cannot write {path}: cannot create its folder: "
                                   f"{err.strerror or err}") from None
     if not parent.is_dir():
-        raise OutputPathError(f"{path}: folder {parent} does not exist")
+        raise OutputPathError(f"cannot write {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputPathError(f"{path}: folder {parent} is not writable")
+        raise OutputPathError(f"cannot write {path}: folder {parent} is not writable")
     return path
 
 
