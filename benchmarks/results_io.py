@@ -5,10 +5,12 @@ import json
 from pathlib import Path
 from typing import Any
 
+from satagraph.io.files import atomic_write_text
+
 
 def write_results(out: Path, title: str, text: str, data: Any) -> None:
     """Writes ``# title`` and :obj:`text` to ``out.md`` and :obj:`data` to
     ``out.json`` (numbers numpy or torch hands back become floats)."""
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text(f"# {title}\n\n{text}")
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1, default=float))
+    atomic_write_text(out.with_suffix(".md"), f"# {title}\n\n{text}")
+    atomic_write_text(out.with_suffix(".json"), json.dumps(data, indent=1, default=float))

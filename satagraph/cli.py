@@ -17,6 +17,7 @@ import importlib
 import json
 import sys
 import tempfile
+import warnings
 from collections import Counter
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
@@ -25,6 +26,7 @@ import numpy as np
 
 from satagraph import __version__
 from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.io.files import check_output_path
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
 
@@ -221,7 +223,13 @@ def run_convert(args: argparse.Namespace) -> int:
     """Re-write a BVH file, optionally resampled and/or canonicalised."""
     if (args.up_axis or args.units) and not args.canonical:
         raise CommandError("--up-axis and --units need --canonical")
+    check_output_path(args.output)
     motion = read_with_rig(args.input, args)
+    if args.canonical or args.fps:  # resampling: bounded memory, a sane skeleton
+        from satagraph.data.validate import check_resample, check_skeleton
+        check_resample(motion, args.input, args.fps)
+        if args.canonical:
+            check_skeleton(motion, args.input)
     notes = []
     if args.canonical:
         from satagraph.data.canonical import canonicalize
@@ -427,6 +435,11 @@ def _message(err: BaseException) -> str:
     return str(err)
 
 
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """Warnings as one line: ``satagraph: warning: ...``."""
+    return f"{PROG}: warning: {message}\n"
+
+
 def parse_args(parser: argparse.ArgumentParser,
                argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
     """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
@@ -451,6 +464,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = build_parser()
     args = parse_args(parser, argv)
     retain_freed_memory()  # batches of frame graphs: no page faults per call
+    before = warnings.formatwarning
+    if not args.traceback:
+        warnings.formatwarning = _format_warning
     try:
         code = args.func(args)
     except (BVHError, CommandError, OSError, ValueError) as err:
@@ -458,6 +474,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             raise
         print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = before
     return int(code or 0)
 
 

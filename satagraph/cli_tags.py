@@ -29,6 +29,7 @@ from satagraph.data.semantics import (SemanticsError, build_prompt,
                                       describe_joints, evidence_from_motion,
                                       import_answer, load_reference_vocab)
 from satagraph.io import BVHError
+from satagraph.io.files import atomic_write_text
 from satagraph.skeleton import Skeleton
 
 
@@ -129,9 +130,8 @@ def _emit(text: str, out: Optional[Path]) -> None:
     if out is None:
         print(text)
     else:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(text + ("" if text.endswith("\n") else "\n"),
-                       encoding="utf-8")
+        atomic_write_text(out, text + ("" if text.endswith("\n") else "\n"),
+                          create_parent=True)
 
 
 def _run(args: argparse.Namespace) -> int:

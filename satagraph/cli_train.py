@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from typing import List
 
@@ -86,15 +87,25 @@ def _rig_overrides(args) -> List[str]:
 
 
 def run_train(args) -> int:
+    """Train; exit code 1 (one line on stderr) when a non-finite loss or
+    gradient stopped the run, or another run holds the output folder."""
     from satagraph.config import load_config
-    from satagraph.train import train
+    from satagraph.lightning.reliability import RunLockedError, TrainingStopped
+    from satagraph.train import last_checkpoint, train
     cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
     start = time.time()
-    module, dm, trainer, run_dir = train(cfg, resume=args.resume, init_from=args.init_from)
-    ckpt = trainer.checkpoint_callback
+    try:
+        module, dm, trainer, run_dir = train(cfg, resume=args.resume,
+                                             init_from=args.init_from)
+    except (TrainingStopped, RunLockedError) as err:
+        print(f"satagraph: error: {err}", file=sys.stderr)
+        return 1
+    best = trainer.checkpoint_callback.best_model_path
+    skipped = f"; {len(dm.skipped)} bad files left out (skipped_files.txt)" \
+        if dm.skipped else ""
     print(f"trained {cfg['name']} for {trainer.current_epoch} epochs in "
           f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
-          f"(best: {ckpt.best_model_path or 'n/a'}, last: {ckpt.last_model_path})")
+          f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")
     return 0
 
 
@@ -105,12 +116,29 @@ def _load(args):
     return module, semantic_embedder(module.meta.get("semantic_encoder", "offline"))
 
 
+def _read_checked(args, key: str, fps: float, frames: bool = True):
+    """The BVH file ``args.<key>`` with its ``--[target-]up-axis`` /
+    ``--[target-]units``, checked for inference
+    (:mod:`satagraph.data.validate`); :obj:`frames`: also its timing and
+    values (a target needs only its skeleton)."""
+    from satagraph.cli import read_with_rig
+    from satagraph.data.validate import check_motion, check_skeleton
+    path = getattr(args, key)
+    motion = read_with_rig(path, args, "target" if key == "target" else "")
+    if frames:
+        check_motion(motion, path, fps=fps)
+    else:
+        check_skeleton(motion, path)
+    return motion
+
+
 def run_reconstruct(args) -> int:
     from satagraph.inference import reconstruct_motion
     from satagraph.io import write_bvh
-    from satagraph.cli import read_with_rig
+    from satagraph.io.files import check_output_path
+    check_output_path(args.output)
     module, embed = _load(args)
-    motion = read_with_rig(args.input, args)
+    motion = _read_checked(args, "input", module.fps)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
@@ -120,10 +148,11 @@ def run_reconstruct(args) -> int:
 def run_retarget(args) -> int:
     from satagraph.inference import retarget_motion
     from satagraph.io import write_bvh
-    from satagraph.cli import read_with_rig
+    from satagraph.io.files import check_output_path
+    check_output_path(args.output)
     module, embed = _load(args)
-    source = read_with_rig(args.source, args)
-    target = read_with_rig(args.target, args, "target")
+    source = _read_checked(args, "source", module.fps)
+    target = _read_checked(args, "target", module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
@@ -134,7 +163,10 @@ def run_retarget(args) -> int:
 def run_eval(args) -> int:
     from satagraph.data.datamodule import MotionDataModule
     from satagraph.evaluation import evaluate, format_table
+    from satagraph.io.files import atomic_write_text, check_output_path
     from satagraph.train import load_module
+    if args.json:
+        check_output_path(args.json)
     module = load_module(args.ckpt)
     data = dict(module.meta.get("data") or {})
     if args.data:
@@ -153,8 +185,7 @@ def run_eval(args) -> int:
     if args.retarget:
         _print_retarget(module, dm.datasets[args.split].files, results)
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(results, f, indent=2)
+        atomic_write_text(args.json, json.dumps(results, indent=2) + "\n")
     return 0
 
 

@@ -26,7 +26,11 @@ def config_path(name: str) -> Path:
 
 
 def _load(path: Path):
-    cfg = OmegaConf.load(path)
+    try:
+        cfg = OmegaConf.load(path)
+    except Exception as err:  # yaml or omegaconf errors: one line naming the file
+        detail = " ".join(str(err).split())[:200]
+        raise ValueError(f"{path}: not a valid YAML config ({detail})") from None
     bases = cfg.pop("defaults", []) or []
     return OmegaConf.merge(*[_load(path.parent / f"{b}.yaml") for b in bases], cfg)
 
@@ -38,8 +42,15 @@ def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
     for item in overrides:
         if "=" not in item:
             raise ValueError(f"override {item!r} is not of the form key=value")
-    merged = OmegaConf.merge(_load(path), OmegaConf.from_dotlist(list(overrides)))
-    out = OmegaConf.to_container(merged, resolve=True)
+    try:
+        merged = OmegaConf.merge(_load(path), OmegaConf.from_dotlist(list(overrides)))
+        out = OmegaConf.to_container(merged, resolve=True)
+    except ValueError:
+        raise
+    except Exception as err:  # omegaconf: bad override or interpolation
+        detail = " ".join(str(err).split())[:200]
+        raise ValueError(f"{path}: cannot apply the config and its overrides "
+                         f"({detail})") from None
     if not out.get("name"):
         out["name"] = path.stem
     return out

@@ -30,6 +30,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, TextIO, Tuple
 import numpy as np
 from omegaconf import OmegaConf
 
+from satagraph.io.files import atomic_write_text
 from satagraph.motion import Motion
 
 #: The species the retargeting step needs in the zoo.
@@ -276,7 +277,8 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     with progress.step("train", f"training {cfg['name']} on {', '.join(sources)} "
                        f"(at most {_budget(cfg)})") as step:
         module, trainer = train_demo(cfg)
-        step.written = [trainer.checkpoint_callback.last_model_path]
+        from satagraph.train import last_checkpoint
+        step.written = [last_checkpoint(trainer)]
         step.note = _training_note(trainer)
     with progress.step("retarget", "retargeting a biped walk onto a quadruped, a "
                        "bird and a rescaled human") as step:
@@ -315,7 +317,7 @@ def _training_note(trainer) -> str:
 
 
 def _write_json(path: Path, value: Dict[str, Any]) -> None:
-    path.write_text(json.dumps(value, indent=2) + "\n")
+    atomic_write_text(path, json.dumps(value, indent=2) + "\n")
 
 
 def format_summary(result: DemoResult) -> str:

@@ -29,6 +29,7 @@ import torch
 from torch.utils.data import DataLoader
 
 from satagraph.config import load_config
+from satagraph.io.files import atomic_write_text
 
 #: Steps the "train loss" column averages (see :class:`TrailingLoss`).
 TRAILING_STEPS = 50
@@ -328,11 +329,11 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
     output.mkdir(parents=True, exist_ok=True)
     text = (f"# Sweep: {len(rows)} configs, {budget_minutes:g} min of training each\n\n"
             f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data)}\n")
-    (output / "sweep.md").write_text(text)
+    atomic_write_text(output / "sweep.md", text)
     payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
                "overrides": list(overrides), "data": data,
                "rows": [asdict(r) for r in rows]}
-    (output / "sweep.json").write_text(json.dumps(payload, indent=1, default=float))
+    atomic_write_text(output / "sweep.json", json.dumps(payload, indent=1, default=float))
     return text
 
 

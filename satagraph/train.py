@@ -1,6 +1,8 @@
 """Build the data module, model and trainer from a config, and train."""
 from __future__ import annotations
 
+import contextlib
+import os
 import warnings
 from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
@@ -10,8 +12,18 @@ import torch
 
 from satagraph.config import expand_path
 from satagraph.data.datamodule import MotionDataModule
+from satagraph.io.checkpoint import (CheckpointError, check_finite_weights,
+                                     load_checkpoint)
+from satagraph.io.files import atomic_write_text, sweep_stale_temps
 from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
                                  SATAVAEModule)
+from satagraph.lightning.reliability import (LossLog, NonFiniteGuard, ResumeCheckpoint,
+                                             SafeCheckpointIO, resume_checkpoint,
+                                             run_lock)
+
+#: ``checkpoint`` config defaults: ``last.ckpt`` every N steps and/or M
+#: minutes of training (and at every epoch end).
+CHECKPOINT_DEFAULTS: Dict[str, Any] = {"every_n_steps": 500, "every_minutes": 10.0}
 
 MODULES = {"vae": SATAVAEModule, "rvq": SATARVQModule, "same": SAMEModule,
            "padded_rvq": PaddedRVQModule}
@@ -75,24 +87,47 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path):
 
 
 def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Trainer:
+    """The trainer of a config: ``last.ckpt`` by :class:`ResumeCheckpoint`
+    (``checkpoint.every_n_steps`` / ``every_minutes``, and every epoch end),
+    the best ``val_loss`` by :class:`ModelCheckpoint`, non-finite losses and
+    gradients handled by :class:`NonFiniteGuard` (``nonfinite``: ``stop`` or
+    ``skip``), checkpoints written atomically and loaded safely
+    (:class:`SafeCheckpointIO`); ``loss_log: true`` appends every step's
+    loss to ``<run>/losses.tsv`` (:class:`LossLog`)."""
     from lightning.pytorch.callbacks import ModelCheckpoint, RichProgressBar
     opts = dict(cfg.get("trainer") or {})
     opts.update(overrides)
     opts.setdefault("gradient_clip_val", (cfg.get("optim") or {}).get("grad_clip", 0.5))
-    ckpt = ModelCheckpoint(dirpath=str(run_dir / "checkpoints"), save_last=True,
+    folder = run_dir / "checkpoints"
+    spec = dict(CHECKPOINT_DEFAULTS, **(cfg.get("checkpoint") or {}))
+    resume = ResumeCheckpoint(str(folder), spec.get("every_n_steps"),
+                              spec.get("every_minutes"))
+    best = ModelCheckpoint(dirpath=str(folder), save_last=False,
                            monitor=opts.pop("monitor", "val_loss"), mode="min")
-    callbacks = [ckpt] + list(opts.pop("callbacks", None) or [])
+    guard = NonFiniteGuard(cfg.get("nonfinite", "stop"), str(resume.last_path))
+    callbacks = [best, resume, guard] + list(opts.pop("callbacks", None) or [])
+    if cfg.get("loss_log"):
+        callbacks.append(LossLog(str(run_dir / "losses.tsv")))
     if opts.pop("progress", True):
         callbacks.append(RichProgressBar())
+    plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
     return L.Trainer(default_root_dir=str(run_dir), logger=build_logger(cfg, run_dir),
-                     callbacks=callbacks, **opts)
+                     callbacks=callbacks, plugins=plugins, **opts)
+
+
+def last_checkpoint(trainer: L.Trainer) -> str:
+    """The ``last.ckpt`` path of a trainer built by :func:`build_trainer`."""
+    for callback in trainer.callbacks:
+        if isinstance(callback, ResumeCheckpoint):
+            return str(callback.last_path)
+    return trainer.checkpoint_callback.last_model_path
 
 
 def init_weights(module: L.LightningModule, ckpt: str) -> None:
     """Load another run's weights into :obj:`module` for fine-tuning; the
     module keeps its own normaliser (the new data's). Warns about weights
     the checkpoint lacks or has in excess (e.g. another bottleneck)."""
-    state = torch.load(ckpt, map_location="cpu", weights_only=True)["state_dict"]
+    state = load_checkpoint(ckpt)["state_dict"]
     state = {k: v for k, v in state.items() if not k.startswith("normalizer.")}
     result = module.load_state_dict(state, strict=False)
     missing = [k for k in result.missing_keys if not k.startswith("normalizer.")]
@@ -124,27 +159,76 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         The trained module, the data module, the trainer and the run folder.
     """
     run_dir = Path(expand_path(cfg.get("output_dir") or f"runs/{cfg['name']}"))
-    last = run_dir / "checkpoints" / "last.ckpt"
-    if resume and not last.is_file():
-        raise FileNotFoundError(f"--resume: no checkpoint at {last}")
-    L.seed_everything(int(cfg.get("seed", 0)), workers=True)
-    dm = build_datamodule(cfg)
-    dm.setup("fit")
-    module = build_module(cfg, dm)
+    if run_dir.exists() and not run_dir.is_dir():
+        raise ValueError(f"{run_dir}: output_dir is not a folder")
+    if resume and not (run_dir / "checkpoints").is_dir():
+        raise FileNotFoundError(f"--resume: no checkpoint at "
+                                f"{run_dir / 'checkpoints' / 'last.ckpt'}")
     if init_from:
-        init_weights(module, init_from)
-    trainer = build_trainer(cfg, run_dir, **trainer_overrides)
-    # Spawned workers get the data module pickled: hand them one that is not
-    # set up (its datasets hold the semantic embedder, a closure); each worker
-    # sets it up from the feature cache.
-    fit_dm = build_datamodule(cfg) if _spawns_workers(trainer) else dm
-    trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if resume else None)
+        load_checkpoint(init_from)  # a bad file fails before any work
+    if cfg.get("threads"):
+        torch.set_num_threads(int(cfg["threads"]))
+    with _lock(run_dir):
+        last = resume_checkpoint(run_dir / "checkpoints") if resume else None
+        sweep_stale_temps(run_dir / "checkpoints")
+        L.seed_everything(int(cfg.get("seed", 0)), workers=True)
+        dm = build_datamodule(cfg)
+        dm.setup("fit")
+        _record_skipped(dm, run_dir)
+        module = build_module(cfg, dm)
+        if init_from:
+            init_weights(module, init_from)
+        trainer = build_trainer(cfg, run_dir, **trainer_overrides)
+        # Spawned workers get the data module pickled: hand them one that is not
+        # set up (its datasets hold the semantic embedder, a closure); each worker
+        # sets it up from the feature cache.
+        fit_dm = build_datamodule(cfg) if _spawns_workers(trainer) else dm
+        with warnings.catch_warnings():
+            # the sampler resumes mid-epoch itself (ResumeCheckpoint)
+            warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
+            trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
     return module, dm, trainer, run_dir
 
 
+def _lock(run_dir: Path):
+    """:func:`run_lock` in the launching process; processes that Lightning
+    starts for distributed training (``LOCAL_RANK`` > 0) share it."""
+    if int(os.environ.get("LOCAL_RANK", "0") or 0) > 0:
+        return contextlib.nullcontext()
+    return run_lock(run_dir)
+
+
+def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:
+    """Write the files ``data.on_error=skip`` left out to
+    ``<run>/skipped_files.txt`` (one ``split: path: reason`` per line)."""
+    path = run_dir / "skipped_files.txt"
+    if dm.skipped:
+        atomic_write_text(path, "\n".join(dm.skipped) + "\n", create_parent=True)
+
+
 def load_module(ckpt: str, map_location: str = "cpu"):
-    """A trained module from a checkpoint, whatever its class."""
-    hparams = torch.load(ckpt, map_location="cpu", weights_only=True).get("hyper_parameters", {})
+    """A trained module from a checkpoint, whatever its class, loaded safely
+    (``weights_only=True``).
+
+    Raises:
+        CheckpointError: The file is not a satagraph model checkpoint, is
+            damaged, or holds non-finite weights (one line naming it).
+    """
+    data = load_checkpoint(ckpt, require=("state_dict", "hyper_parameters"))
+    hparams = dict(data["hyper_parameters"])
+    if not isinstance(hparams.get("model"), dict):
+        raise CheckpointError(f"{ckpt}: not a satagraph model checkpoint (no model "
+                              "hyperparameters)")
+    check_finite_weights(data, ckpt)
     name = (hparams.get("meta") or {}).get("module", "vae")
     cls = module_class(name)
-    return cls.load_from_checkpoint(ckpt, map_location=map_location)
+    module = cls(**{k: hparams[k] for k in ("model", "loss", "optim", "fps", "meta")
+                    if k in hparams})
+    module.on_load_checkpoint(data)
+    try:
+        module.load_state_dict(data["state_dict"])
+    except RuntimeError as err:
+        first = str(err).strip().splitlines()[0]
+        raise CheckpointError(f"{ckpt}: weights do not fit the {name!r} model its "
+                              f"hyperparameters describe ({first})") from None
+    return module.to(map_location)

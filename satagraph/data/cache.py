@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 import warnings
 from pathlib import Path
 from typing import Dict, Optional
@@ -13,11 +12,13 @@ from typing import Dict, Optional
 import numpy as np
 
 from satagraph.data.features import MotionFeatures
+from satagraph.io.files import atomic_write
 from satagraph.motion import CanonicalTransform
 from satagraph.skeleton import Skeleton
 
 #: Bump when the feature definition changes: old cache entries are ignored.
-FEATURE_VERSION = 1
+#: 2: files are checked (satagraph.data.validate) before they are cached.
+FEATURE_VERSION = 2
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
            "r", "c", "facing_axis")
@@ -99,11 +100,5 @@ def store_cached(cache_dir: Path, key: str, feats: MotionFeatures) -> None:
     """Write an entry atomically (temp file + rename)."""
     cache_dir = Path(cache_dir)
     cache_dir.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=cache_dir)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **_pack(feats))
-        os.replace(tmp, cache_dir / f"{key}.npz")
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(cache_dir / f"{key}.npz", lambda f: np.savez(f, **_pack(feats)),
+                 binary=True, durable=False)

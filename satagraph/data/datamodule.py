@@ -1,15 +1,18 @@
 """Lightning data module: one or several motion datasets trained jointly."""
 from __future__ import annotations
 
+import warnings
 from collections import Counter
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
 
 import lightning as L
 import torch
-from torch.utils.data import DataLoader, RandomSampler, WeightedRandomSampler
+from torch.utils.data import DataLoader
 
 from satagraph.data.collate import collate_clips
-from satagraph.data.dataset import EpochSampler, MotionDataset, WindowAugment, load_features
+from satagraph.data.dataset import (ON_ERROR, MotionDataset, WindowAugment, dataset_error,
+                                    try_load_features)
+from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
 
@@ -69,7 +72,10 @@ class MotionDataModule(L.LightningDataModule):
         num_workers (int): DataLoader workers.
         max_files (int, optional): Use at most this many files per split
             (quick experiments).
-        seed (int): Seed of the balanced sampler and of the augmentation.
+        seed (int): Seed of the training order (drawn per epoch from
+            ``(seed, epoch)``, see
+            :class:`~satagraph.data.sampler.ResumableSampler`) and of the
+            augmentation.
         augment (dict or bool, optional): On-the-fly skeleton augmentation
             of the training windows (validation and test windows are never
             augmented): ``None``/``False`` (default, off), ``True`` (the
@@ -78,6 +84,11 @@ class MotionDataModule(L.LightningDataModule):
             0.5, "drop": 0.1, "low": 0.8, "high": 1.2}``. Every window is
             drawn on a new skeleton per epoch, deterministically given the
             seed (see :class:`~satagraph.data.dataset.WindowAugment`).
+        on_error (str): What to do with files that cannot be processed
+            (malformed, or failing :mod:`~satagraph.data.validate`): every
+            bad file of every split is found first; ``"raise"`` (default)
+            then fails with one error listing them all, ``"skip"`` warns,
+            lists them in :attr:`skipped` and uses the others.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -86,8 +97,14 @@ class MotionDataModule(L.LightningDataModule):
                  semantic_encoder: Optional[str] = "offline",
                  cache_dir: Optional[str] = None, num_workers: int = 0,
                  max_files: Optional[int] = None, seed: int = 0,
-                 augment: Union[None, bool, Mapping[str, Any]] = None) -> None:
+                 augment: Union[None, bool, Mapping[str, Any]] = None,
+                 on_error: str = "raise") -> None:
         super().__init__()
+        if on_error not in ON_ERROR:
+            raise ValueError(f"data.on_error must be one of {ON_ERROR}, got {on_error!r}")
+        self.on_error = on_error
+        #: ``(split, error line)`` of every file left out (``on_error="skip"``).
+        self.skipped: List[str] = []
         self.sources, self.window, self.stride = sources, window, stride
         self.eval_stride = eval_stride or window
         self.batch_size, self.balanced = batch_size, balanced
@@ -107,16 +124,28 @@ class MotionDataModule(L.LightningDataModule):
             return
         files = resolve_sources(self.sources)
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
+        loaded, errors, total = {}, [], 0
         for split in SPLITS:
             chosen = self._files(split, files)
-            feats = load_features(chosen, self.preprocessing, self.cache_dir)
+            kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
+            loaded[split] = (kept, feats)
+            errors += [f"{split}: {e}" for e in bad]
+            total += len(chosen)
+        if errors and self.on_error == "raise":
+            raise dataset_error(errors, total)
+        if errors:
+            self.skipped = errors
+            warnings.warn(f"data.on_error=skip: left out {len(errors)} of {total} motion "
+                          "files:\n" + "\n".join(f"  {e}" for e in errors), stacklevel=2)
+        for split, (kept, feats) in loaded.items():
             stride = self.stride if split == "train" else self.eval_stride
             augment = self.augment if split == "train" else None
-            self.datasets[split] = MotionDataset(chosen, feats, embed, self.window, stride,
+            self.datasets[split] = MotionDataset(kept, feats, embed, self.window, stride,
                                                  augment)
         if not len(self.datasets["train"]):
             raise ValueError(f"no training windows in {self.sources!r}")
-        self.normalizer.fit(self.datasets["train"].features)
+        self.normalizer.fit(self.datasets["train"].features,
+                            [f.path for f in self.datasets["train"].files])
 
     @property
     def semantic_channels(self) -> int:
@@ -127,19 +156,30 @@ class MotionDataModule(L.LightningDataModule):
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         ds = self.datasets[split]
         sampler = None
-        if shuffle and self.balanced:
-            groups = [ds.group(i) for i in range(len(ds))]
-            counts = Counter(groups)
-            weights = torch.tensor([1.0 / counts[g] for g in groups], dtype=torch.double)
-            gen = torch.Generator().manual_seed(self.seed)
-            sampler = WeightedRandomSampler(weights, len(ds), generator=gen)
-        if shuffle and ds.augment is not None:
-            sampler = EpochSampler(sampler or RandomSampler(
-                ds, generator=torch.Generator().manual_seed(self.seed)))
-        return DataLoader(ds, batch_size=self.batch_size,
-                          shuffle=shuffle and sampler is None, sampler=sampler,
+        if shuffle:
+            weights = None
+            if self.balanced:
+                groups = [ds.group(i) for i in range(len(ds))]
+                counts = Counter(groups)
+                weights = [1.0 / counts[g] for g in groups]
+            sampler = ResumableSampler(len(ds), weights, self.seed,
+                                       keys=ds.augment is not None)
+            self._resume(sampler)
+        # a generator of its own: iterating never draws from the global state
+        gen = torch.Generator().manual_seed(self.seed)
+        return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
                           collate_fn=collate_clips, num_workers=self.num_workers,
-                          persistent_workers=self.num_workers > 0)
+                          persistent_workers=self.num_workers > 0, generator=gen)
+
+    def _resume(self, sampler: ResumableSampler) -> None:
+        """Start the sampler where a resumed run stopped: the position a
+        :class:`~satagraph.lightning.reliability.ResumeCheckpoint` of the
+        trainer restored (epoch, batches done, whether the epoch was done)."""
+        trainer = getattr(self, "trainer", None)
+        for callback in getattr(trainer, "callbacks", None) or []:
+            position = getattr(callback, "resume_position", None)
+            if position is not None and not position["epoch_done"]:
+                sampler.resume(position["epoch"], position["batches"] * self.batch_size)
 
     def train_dataloader(self) -> DataLoader:
         return self._loader("train", True)

@@ -21,6 +21,7 @@ from satagraph.data.semantics.evidence import (JointEvidence, call_semantic,
                                                evidence_from_features, remap_evidence)
 from satagraph.data.semantics.limbs import limb_end_index
 from satagraph.data.sources import MotionFile
+from satagraph.data.validate import check_features, check_motion
 from satagraph.io import BVHError, read_bvh
 from satagraph.skeleton import Skeleton
 
@@ -45,8 +46,13 @@ SEMANTIC_CACHE_SIZE = 4096
 WindowKey = Union[int, Tuple[int, int]]
 
 
-class MotionDatasetError(RuntimeError):
-    """Some files of a dataset could not be processed; lists every one."""
+#: ``data.on_error`` values: fail listing every bad file, or train on the rest.
+ON_ERROR = ("raise", "skip")
+
+
+class MotionDatasetError(ValueError):
+    """Some files of a dataset could not be processed; lists every one
+    (with its split) and why."""
 
 
 def file_config(f: MotionFile, config: Dict) -> Dict:
@@ -57,29 +63,41 @@ def file_config(f: MotionFile, config: Dict) -> Dict:
 
 
 def preprocess_file(path: str, config: Dict) -> MotionFeatures:
-    """Read, canonicalise and featurise one BVH file; ``config["up_axis"]``
-    and ``config["scale"]`` (when set) override the file's declaration and
+    """Read, check (:func:`~satagraph.data.validate.check_motion`),
+    canonicalise and featurise one BVH file; ``config["up_axis"]`` and
+    ``config["scale"]`` (when set) override the file's declaration and
     detection."""
     from satagraph.data.rig_reading import parse_units
     scale = None if config.get("scale") is None else parse_units(config["scale"])
-    motion = canonicalize(read_bvh(path), fps=config["fps"],
-                          up_axis=config["up_axis"], unit_scale=scale,
-                          floor=config["floor"])
-    return motion_to_features(motion, contact_height=config["contact_height"],
-                              contact_speed=config["contact_speed"])
+    motion = read_bvh(path)
+    check_motion(motion, path, fps=config["fps"])
+    motion = canonicalize(motion, fps=config["fps"], up_axis=config["up_axis"],
+                          unit_scale=scale, floor=config["floor"])
+    feats = motion_to_features(motion, contact_height=config["contact_height"],
+                               contact_speed=config["contact_speed"])
+    check_features(feats, path)
+    return feats
 
 
-def load_features(files: Sequence[MotionFile], config: Optional[Dict] = None,
-                  cache_dir: Optional[str] = None,
-                  progress: Optional[Callable] = None) -> List[MotionFeatures]:
-    r"""Features of every file, from the cache where possible.
+def _error_text(path: str, err: Exception) -> str:
+    """One line: the error, naming :obj:`path` once."""
+    text = " ".join(str(err).split()) or type(err).__name__
+    return text if text.startswith(path) else f"{path}: {text}"
 
-    All files are tried before failing: the error then lists each bad file
-    and why. Nothing is cached for a bad file.
+
+def try_load_features(files: Sequence[MotionFile], config: Optional[Dict] = None,
+                      cache_dir: Optional[str] = None,
+                      progress: Optional[Callable] = None
+                      ) -> Tuple[List[MotionFile], List[MotionFeatures], List[str]]:
+    r"""Features of every file that can be processed, from the cache where
+    possible, and one line per file that cannot (nothing is cached for it).
+
+    Returns:
+        The good files, their features, and the errors of the others.
     """
     config = dict(DEFAULT_PREPROCESSING, **(config or {}))
     folder = Path(cache_dir or default_cache_dir()) / "processed"
-    out, errors = [], []
+    kept, out, errors = [], [], []
     iterator = progress(files) if progress else files
     for f in iterator:
         try:
@@ -89,12 +107,38 @@ def load_features(files: Sequence[MotionFile], config: Optional[Dict] = None,
             if feats is None:
                 feats = preprocess_file(f.path, own)
                 store_cached(folder, key, feats)
-            out.append(feats)
-        except (BVHError, OSError, ValueError) as err:
-            errors.append(f"  {f.path}: {err}")
+            else:
+                check_features(feats, f.path)
+        except (BVHError, OSError, ValueError, MemoryError) as err:
+            errors.append(_error_text(f.path, err))
+            continue
+        kept.append(f)
+        out.append(feats)
+    return kept, out, errors
+
+
+def dataset_error(errors: Sequence[str], total: int) -> MotionDatasetError:
+    """The error listing every bad file (lines ``split: path: reason``)."""
+    return MotionDatasetError(
+        f"{len(errors)} of {total} motion files could not be processed (set "
+        "data.on_error=skip to train on the others):\n"
+        + "\n".join(f"  {e}" for e in errors))
+
+
+def load_features(files: Sequence[MotionFile], config: Optional[Dict] = None,
+                  cache_dir: Optional[str] = None,
+                  progress: Optional[Callable] = None) -> List[MotionFeatures]:
+    r"""Features of every file, from the cache where possible.
+
+    All files are tried before failing: the error then lists each bad file
+    and why. Nothing is cached for a bad file.
+
+    Raises:
+        MotionDatasetError: Listing every file that cannot be processed.
+    """
+    _, out, errors = try_load_features(files, config, cache_dir, progress)
     if errors:
-        raise MotionDatasetError(f"{len(errors)} of {len(files)} motion files could "
-                                 "not be processed:\n" + "\n".join(errors))
+        raise dataset_error(errors, len(files))
     return out
 
 

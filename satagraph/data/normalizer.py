@@ -2,7 +2,7 @@
 travel inside checkpoints)."""
 from __future__ import annotations
 
-from typing import Dict, Iterable
+from typing import Dict, Iterable, List, Optional, Sequence
 
 import numpy as np
 import torch
@@ -13,6 +13,14 @@ from satagraph.data.features import (DYNAMIC_CHANNELS, DYNAMIC_LAYOUT,
                                      MotionFeatures)
 
 _EPS = 1e-4
+#: Largest accepted mean or standard deviation of any feature channel
+#: (features are in metres, seconds and radians after canonicalisation).
+MAX_STAT = 1e5
+
+
+class NormalizerError(ValueError):
+    """Statistics that would blind or break a model (non-finite or absurd);
+    the message names the file with the most extreme values."""
 
 
 class FeatureNormalizer(nn.Module):
@@ -33,16 +41,29 @@ class FeatureNormalizer(nn.Module):
         self.register_buffer("fitted", torch.zeros((), dtype=torch.bool))
 
     @torch.no_grad()
-    def fit(self, features: Iterable[MotionFeatures]) -> "FeatureNormalizer":
-        """Compute statistics from the (training) features."""
+    def fit(self, features: Iterable[MotionFeatures],
+            names: Optional[Sequence[str]] = None) -> "FeatureNormalizer":
+        """Compute statistics from the (training) features.
+
+        Args:
+            features: The training features.
+            names: Their files, for error messages.
+
+        Raises:
+            NormalizerError: A statistic is non-finite or larger than
+                :data:`MAX_STAT` (one extreme file would blind the model to
+                every other); the message names the most extreme file.
+        """
         feats = list(features)
         if not feats:
             raise ValueError("FeatureNormalizer.fit: no training features")
-        dyn = np.concatenate([f.dynamic.reshape(-1, DYNAMIC_CHANNELS) for f in feats])
-        root = np.concatenate([f.r for f in feats])
-        static = np.concatenate([f.static for f in feats])
-        self.set_stats({"dynamic": _stats(dyn), "root": _stats(root),
-                        "static": _stats(static)})
+        parts = {"dynamic": [f.dynamic.reshape(-1, DYNAMIC_CHANNELS) for f in feats],
+                 "root": [f.r for f in feats], "static": [f.static for f in feats]}
+        stats = {}
+        for name, values in parts.items():
+            stats[name] = _stats(np.concatenate(values))
+            _check_stats(name, stats[name], values, names)
+        self.set_stats(stats)
         return self
 
     @torch.no_grad()
@@ -76,4 +97,23 @@ class FeatureNormalizer(nn.Module):
 
 
 def _stats(values: np.ndarray) -> tuple:
-    return values.mean(0), values.std(0)
+    with np.errstate(all="ignore"):
+        return values.mean(0), values.std(0)
+
+
+def _check_stats(name: str, stats: tuple, values: List[np.ndarray],
+                 names: Optional[Sequence[str]]) -> None:
+    """Raise :class:`NormalizerError` for non-finite or absurd statistics."""
+    mean, std = stats
+    worst = float(np.nan_to_num(np.maximum(np.abs(mean), std), nan=np.inf).max())
+    if worst <= MAX_STAT:
+        return
+    extreme = [float(np.nan_to_num(np.abs(v), nan=np.inf).max()) if v.size else 0.0
+               for v in values]
+    k = int(np.argmax(extreme))
+    where = names[k] if names is not None else f"training file #{k}"
+    raise NormalizerError(
+        f"normalisation statistics of the {name} features are "
+        f"{'non-finite' if not np.isfinite(worst) else f'absurd ({worst:.3g})'}: "
+        f"the most extreme file is {where} (largest |value| {extreme[k]:.3g}); "
+        "fix or leave out that file")

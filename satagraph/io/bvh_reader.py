@@ -13,6 +13,7 @@ import numpy as np
 
 from satagraph.io._floats import parse_decimal_table
 from satagraph.io.errors import BVHError
+from satagraph.io.files import InputFileError, check_input_file
 from satagraph.motion import Motion, RigSettings
 from satagraph.skeleton import Skeleton
 
@@ -432,22 +433,24 @@ def read_bvh(path: PathLike) -> Motion:
         Motion: skeleton, local rotations and translations, frame rate, and
         the raw channel values (so that writing it back is exact).
 
+    Text is UTF-8 (a byte order mark is skipped); a file that is not UTF-8
+    is read as Latin-1 with a :class:`BVHWarning`. Lines may end with
+    ``\n``, ``\r\n`` or ``\r``.
+
     Raises:
         BVHError: naming the file, the line and the problem, for any
-            malformed input.
+            malformed input, and for a path that is not a regular file (a
+            FIFO, a device, a directory).
     """
     path = os.fspath(path)
-    try:
-        with open(path, "rb") as f:
-            raw = f.read()
-    except OSError as err:
-        raise BVHError(path, 0, f"cannot read file: {err.strerror}") from None
-    text = raw.decode("utf-8", errors="replace")
+    raw = _read_bytes(path)
+    text = _decode(path, raw)
     if not text.strip():
         raise BVHError(path, 1, "empty file")
     aligned = raw if len(raw) == len(text) else None  # one byte per character
     text, rig = _declaration(path, text)
-    aligned = aligned[:len(text)] if aligned is not None else None
+    if aligned is not None and len(aligned) != len(text):  # cut at the declaration
+        aligned = aligned[:len(text) - 1] + b"\n"
     match = _MOTION.search(text)
     head_end = match.end() + 1 if match else len(text)
     header = _HeaderParser(path, text[:head_end].splitlines()).run()
@@ -475,3 +478,47 @@ def _declaration(path: str, text: str) -> Tuple[str, Optional[RigSettings]]:
         raise BVHError(path, line, f"bad scale in the satagraph declaration: "
                        f"{match.group(2)!r}")
     return text[:match.start()] + "\n", RigSettings(match.group(1), scale, declared=True)
+
+
+_BOM = b"\xef\xbb\xbf"
+_LONE_CR = re.compile(rb"\r(?!\n)")
+
+
+def _read_bytes(path: str) -> bytes:
+    r"""The bytes of a regular file (FIFOs, devices and directories are
+    refused before opening: reading them hangs or never ends), without a
+    UTF-8 byte order mark, with old Mac line endings (``\r`` alone) turned
+    into ``\n``."""
+    try:
+        check_input_file(path, "BVH file")
+        with open(path, "rb") as f:
+            raw = f.read()
+    except InputFileError as err:
+        message = str(err).split(": ", 1)[1]
+        if not message.startswith("cannot read"):
+            message = f"cannot read: it {message}"
+        raise BVHError(path, 0, message) from None
+    except OSError as err:
+        raise BVHError(path, 0, f"cannot read file: {err.strerror or err}") from None
+    if raw.startswith(_BOM):
+        raw = raw[len(_BOM):]
+    if b"\r" in raw and _LONE_CR.search(raw):
+        raw = _LONE_CR.sub(b"\n", raw)
+    return raw
+
+
+def _decode(path: str, raw: bytes) -> str:
+    """UTF-8 text; a file that is not UTF-8 is read as Latin-1 (every byte
+    one character, so no joint name is lost or merged), with a warning
+    naming the first offending line."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = raw.count(b"\n", 0, err.start) + 1
+        warnings.warn(f"{path}:{line}: not UTF-8; the file is read as Latin-1 "
+                      "(ISO 8859-1)", BVHWarning, stacklevel=3)
+        return raw.decode("latin-1")
+
+
+class BVHWarning(UserWarning):
+    """A BVH file was read with a fallback (e.g. Latin-1 text)."""

@@ -2,13 +2,12 @@
 from __future__ import annotations
 
 import os
-import stat
-import tempfile
 from typing import List, Union
 
 import numpy as np
 import torch
 
+from satagraph.io.files import atomic_write
 from satagraph.motion import Motion
 from satagraph.ops.rotation import matrix_to_euler
 
@@ -20,27 +19,53 @@ def _fmt(values: np.ndarray) -> str:
 
 
 def _hierarchy(motion: Motion) -> List[str]:
+    """The HIERARCHY lines, by an explicit depth-first walk (no recursion:
+    any depth)."""
     skel = motion.skeleton
     lines = ["HIERARCHY"]
-
-    def visit(j: int, depth: int) -> None:
+    children = skel.children
+    stack = [(0, 0, False)]  # (joint, depth, closing)
+    while stack:
+        j, depth, closing = stack.pop()
         pad = "  " * depth
-        if skel.end_site[j] and not skel.children[j] and not skel.channels[j]:
+        if closing:
+            lines.append(f"{pad}}}")
+            continue
+        if skel.end_site[j] and not children[j] and not skel.channels[j]:
             lines.extend([f"{pad}End Site", f"{pad}{{",
                           f"{pad}  OFFSET {_fmt(skel.offsets[j])}", f"{pad}}}"])
-            return
+            continue
         kind = "ROOT" if j == 0 else "JOINT"
         lines.extend([f"{pad}{kind} {skel.names[j]}", f"{pad}{{",
                       f"{pad}  OFFSET {_fmt(skel.offsets[j])}"])
         if skel.channels[j]:
             lines.append(f"{pad}  CHANNELS {len(skel.channels[j])} "
                          + " ".join(skel.channels[j]))
-        for c in skel.children[j]:
-            visit(c, depth + 1)
-        lines.append(f"{pad}}}")
-
-    visit(0, 0)
+        stack.append((j, depth, True))
+        stack.extend((c, depth + 1, False) for c in reversed(children[j]))
     return lines
+
+
+def _check_finite(motion: Motion, values: np.ndarray, path: str) -> None:
+    """Refuse non-finite offsets, channel values or frame rate (a diverged
+    model's output): one line naming the file and the first bad value."""
+    skel = motion.skeleton
+    if not (np.isfinite(motion.fps) and motion.fps > 0):
+        raise ValueError(f"{path}: refusing to write a frame rate of {motion.fps}")
+    bad = ~np.isfinite(skel.offsets)
+    if bad.any():
+        j = int(np.argwhere(bad)[0, 0])
+        raise ValueError(f"{path}: refusing to write non-finite values: OFFSET of "
+                         f"joint {skel.names[j]!r}")
+    bad = ~np.isfinite(values)
+    if bad.any():
+        frame, column = (int(v) for v in np.argwhere(bad)[0])
+        joint = int(np.searchsorted(np.cumsum([len(c) for c in skel.channels]),
+                                    column, side="right"))
+        raise ValueError(f"{path}: refusing to write non-finite values: "
+                         f"{int(bad.sum())} of {values.size} channel values (first: "
+                         f"frame {frame}, joint {skel.names[joint]!r}); the motion "
+                         "is broken (a diverged model?)")
 
 
 def channel_values(motion: Motion) -> np.ndarray:
@@ -72,17 +97,6 @@ def channel_values(motion: Motion) -> np.ndarray:
     return np.stack(columns, axis=1)
 
 
-def _file_mode(path: str) -> int:
-    """Permissions for the output: those of the file being replaced, else
-    the default for new files (0666 less the umask)."""
-    try:
-        return stat.S_IMODE(os.stat(path).st_mode)
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
-
-
 def declaration(motion: Motion) -> str:
     """The trailing line by which a canonical file declares its up axis and
     units (empty for other motions): readers of this package then never
@@ -97,33 +111,33 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     r"""Write a motion as a BVH file.
 
     The file is written to a temporary file beside :obj:`path` and moved into
-    place only when complete, so a failure never leaves a partial file.
+    place only when complete (:func:`~satagraph.io.files.atomic_write`), so
+    a failure never leaves a partial file. Non-finite values are refused.
 
     Args:
         motion (Motion): The motion; joints flagged as end sites with no
             children and no channels are written as ``End Site`` blocks.
         path (str or PathLike): Output path.
         precision (int, optional): Decimals per channel value (at least 6).
+
+    Raises:
+        ValueError: A non-finite offset, channel value or frame rate, or a
+            root without channels (the message names :obj:`path`).
+        OSError: The file cannot be written (names :obj:`path`).
     """
     path = os.fspath(path)
     if motion.skeleton.num_joints and not motion.skeleton.channels[0]:
         raise ValueError(f"{path}: the root joint needs channels to be written")
     values = channel_values(motion)
+    _check_finite(motion, values, path)
     header = _hierarchy(motion)
     header += ["MOTION", f"Frames: {motion.num_frames}",
                f"Frame Time: {1.0 / motion.fps:.8f}"]
-    directory = os.path.dirname(os.path.abspath(path))
-    mode = _file_mode(path)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".bvh", dir=directory)
-    try:
-        with os.fdopen(fd, "w", newline="\n") as f:
-            os.fchmod(f.fileno(), mode)  # mkstemp makes 0600 files
-            f.write("\n".join(header) + "\n")
-            if values.size:
-                np.savetxt(f, values, fmt=f"%.{max(precision, 6)}f")
-            f.write(declaration(motion))
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+
+    def write(f) -> None:
+        f.write("\n".join(header) + "\n")
+        if values.size:
+            np.savetxt(f, values, fmt=f"%.{max(precision, 6)}f")
+        f.write(declaration(motion))
+
+    atomic_write(path, write, newline="\n")

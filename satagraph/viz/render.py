@@ -22,6 +22,7 @@ from typing import Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from satagraph.io.files import atomic_path
 from satagraph.motion import Motion
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -258,17 +259,9 @@ def save_sheet(frames: Sequence[np.ndarray], path: PathLike,
 
 def _atomic(path: PathLike, write) -> None:
     """Run ``write(tmp)`` on a temporary file beside :obj:`path`, then move
-    it into place."""
-    path = os.fspath(path)
-    directory = os.path.dirname(os.path.abspath(path))
-    base, ext = os.path.splitext(os.path.basename(path))
-    tmp = os.path.join(directory, f".{base}.tmp{os.getpid()}{ext}")
-    try:
+    it into place (:func:`satagraph.io.files.atomic_path`)."""
+    with atomic_path(path) as tmp:
         write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def sheet_frames(count: int, samples: int = 6) -> List[int]:

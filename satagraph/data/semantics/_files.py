@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Callable, Union
+
+from satagraph.io.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -18,27 +19,16 @@ class SemanticsError(ValueError):
 
 def write_atomic(path: PathLike, write: Callable[[Any], None],
                  binary: bool = False) -> None:
-    """Write a file through a temporary file in the same folder and
-    :func:`os.replace`, so that readers never see a half-written file.
+    """Write a file through :func:`satagraph.io.files.atomic_write` (a
+    temporary file in the same folder and :func:`os.replace`), so that
+    readers never see a half-written file; the folder is created.
 
     Args:
         path: Destination file.
         write: Called with the open temporary file object.
         binary: Open the temporary file in binary mode.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
-                               dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb" if binary else "w",
-                       **({} if binary else {"encoding": "utf-8"})) as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, write, binary=binary, create_parent=True)
 
 
 def write_json_atomic(path: PathLike, obj: Any) -> None:
@@ -67,7 +57,12 @@ def read_json(path: PathLike, what: str) -> Any:
         SemanticsError: The file is missing, unreadable or not JSON.
     """
     try:
+        check_input_file(path, f"{what} file")
         text = Path(path).read_text(encoding="utf-8")
+    except InputFileError as err:
+        if Path(path).is_symlink() or Path(path).exists():
+            raise SemanticsError(str(err)) from None
+        raise SemanticsError(f"{path}: {what} file not found") from None
     except FileNotFoundError:
         raise SemanticsError(f"{path}: {what} file not found") from None
     except (OSError, UnicodeDecodeError) as err:

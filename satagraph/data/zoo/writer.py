@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import os
+
 import zlib
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Union
@@ -16,6 +16,7 @@ from satagraph.data.zoo.motions import generate_clip
 from satagraph.data.zoo.rigs import ZooRig
 from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.io import write_bvh
+from satagraph.io.files import atomic_write
 from satagraph.motion import Motion
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -154,10 +155,11 @@ def write_dialect_zoo(out_dir: PathLike, variants: Iterable[DialectVariant],
 def _write_manifest(path: Path, rows: List[Dict[str, str]]) -> None:
     """Write the manifest atomically."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "w", newline="") as f:
+
+    def write(f) -> None:
         writer = csv.DictWriter(f, MANIFEST_COLUMNS, delimiter="\t",
                                 lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
-    os.replace(tmp, path)
+
+    atomic_write(path, write, newline="")

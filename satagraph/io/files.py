@@ -1,0 +1,269 @@
+r"""Safe file handling shared by every reader and writer.
+
+- :func:`atomic_write` is the ONE way satagraph writes a file: into a
+  temporary file beside the destination (``.<name>.<pid>.<random>.tmp``),
+  flushed and fsynced, then moved into place with :func:`os.replace`.
+  Readers never see a half-written file, a failed write leaves the previous
+  file untouched and removes its temporary file, errors name the
+  destination (never the temporary file), and temporary files left by a
+  killed process (``kill -9``) are swept by the first write of a process in
+  that folder (:func:`sweep_stale_temps`).
+- :func:`check_output_path` checks an output path before any work is done.
+- :func:`check_input_file` refuses what is not a regular file (FIFOs,
+  devices, sockets, directories: reading them hangs or never ends) and
+  files too large to read into memory.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import secrets
+import shutil
+import stat
+from pathlib import Path
+from typing import IO, Any, Callable, Iterator, Optional, Union
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Largest input file read into memory (bytes).
+MAX_INPUT_BYTES = 4 << 30
+
+#: Temporary files: ``.<destination name>.<pid>.<8 hex>.tmp[.<extension>]``.
+_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[0-9a-f]{8}\.tmp(?:\.[^.]+)?$")
+
+
+class InputFileError(ValueError):
+    """An input path that cannot be read as a file; the message names it."""
+
+
+class OutputPathError(ValueError):
+    """An output path that cannot be written; the message names it."""
+
+
+def _kind(mode: int) -> str:
+    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def check_input_file(path: PathLike, what: str = "file",
+                     max_bytes: int = MAX_INPUT_BYTES) -> os.stat_result:
+    """The :func:`os.stat` of a readable regular file.
+
+    Args:
+        path: The file.
+        what: What it should be, for messages (``"BVH file"``).
+        max_bytes: Largest accepted size.
+
+    Raises:
+        InputFileError: Missing, unreadable, not a regular file (a FIFO, a
+            device such as ``/dev/zero``, a directory) or too large; one
+            line naming :obj:`path`.
+    """
+    try:
+        st = os.stat(path)
+    except OSError as err:
+        raise InputFileError(f"{os.fspath(path)}: cannot read {what}: "
+                             f"{err.strerror or err}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InputFileError(f"{os.fspath(path)}: is {_kind(st.st_mode)}, "
+                             f"not a {what}")
+    if st.st_size > max_bytes:
+        raise InputFileError(f"{os.fspath(path)}: {st.st_size / 2**30:.1f} GiB is "
+                             f"larger than the {max_bytes / 2**30:.0f} GiB a {what} "
+                             "may have")
+    if not os.access(path, os.R_OK):
+        raise InputFileError(f"{os.fspath(path)}: cannot read {what}: permission denied")
+    return st
+
+
+def check_output_path(path: PathLike, create_parent: bool = False) -> Path:
+    """Check, before any work, that :obj:`path` can be written.
+
+    Args:
+        path: The output file.
+        create_parent: Create a missing parent folder (else it must exist).
+
+    Returns:
+        Path: The path.
+
+    Raises:
+        OutputPathError: The path is a directory or another non-regular
+            file, its folder is missing or not writable; one line naming it.
+    """
+    path = Path(path)
+    if path.name in ("", ".", ".."):
+        raise OutputPathError(f"cannot write {path}: an output file needs a file name")
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        st = None
+    except OSError as err:
+        raise OutputPathError(f"cannot write {path}: {err.strerror or err}") from None
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise OutputPathError(f"cannot write {path}: it is {_kind(st.st_mode)}; give a "
+                              "file path")
+    parent = path.parent if str(path.parent) else Path(".")
+    if create_parent and not parent.exists():
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise OutputPathError(f"cannot write {path}: cannot create its folder: "
+                                  f"{err.strerror or err}") from None
+    if not parent.is_dir():
+        raise OutputPathError(f"cannot write {path}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputPathError(f"cannot write {path}: folder {parent} is not writable")
+    return path
+
+
+def _file_mode(path: str) -> int:
+    """Permissions of the file being replaced, else the default for new
+    files (0666 less the umask)."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def sweep_stale_temps(directory: PathLike, name: Optional[str] = None) -> int:
+    """Remove temporary files of :func:`atomic_write` left in
+    :obj:`directory` by processes that no longer run (``kill -9``).
+
+    Args:
+        directory: The folder.
+        name: Only those of this destination file name (default: all).
+
+    Returns:
+        int: How many were removed.
+    """
+    removed = 0
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return 0
+    for entry in entries:
+        match = _TEMP.match(entry.name)
+        if match is None or (name is not None and match["name"] != name):
+            continue
+        if _pid_alive(int(match["pid"])):
+            continue
+        with contextlib.suppress(OSError):
+            os.unlink(entry.path)
+            removed += 1
+    return removed
+
+
+_SWEPT: set = set()
+
+
+def _renamed(err: OSError, path: str) -> OSError:
+    """:obj:`err` naming the destination instead of a temporary file."""
+    if err.errno:
+        return type(err)(err.errno, err.strerror or str(err), path)
+    return OSError(f"{path}: {err}")
+
+
+@contextlib.contextmanager
+def atomic_path(path: PathLike, create_parent: bool = False,
+                durable: bool = True) -> Iterator[str]:
+    """Context manager yielding a temporary path beside :obj:`path`, which
+    replaces :obj:`path` when the block ends without error (for writers
+    that want a path, such as image or video libraries); on error the
+    temporary file is removed and :obj:`path` is left as it was.
+
+    The temporary path ends with :obj:`path`'s extension, for writers that
+    pick a format by extension. With :obj:`durable`, the data reach the
+    disk (fsync) before the rename.
+    """
+    path = os.fspath(path)
+    directory = os.path.dirname(os.path.abspath(path))
+    if create_parent:
+        os.makedirs(directory, exist_ok=True)
+    name = os.path.basename(path)
+    if directory not in _SWEPT:  # once per folder and process: cheap in big caches
+        sweep_stale_temps(directory)
+        _SWEPT.add(directory)
+    ext = os.path.splitext(name)[1]
+    tmp = os.path.join(directory, f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp{ext}")
+    mode = _file_mode(path)
+    try:
+        yield tmp
+        if durable:
+            with open(tmp, "rb+") as f:
+                os.fsync(f.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except OSError as err:
+        raise _renamed(err, path) from None
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+
+
+def atomic_write(path: PathLike, write: Callable[[IO[Any]], Any], binary: bool = False,
+                 encoding: str = "utf-8", newline: Optional[str] = None,
+                 create_parent: bool = False, durable: bool = True) -> None:
+    """Write a file atomically: ``write(f)`` fills an open temporary file
+    beside :obj:`path`, which then replaces :obj:`path`.
+
+    Args:
+        path: Destination file.
+        write: Called with the open temporary file.
+        binary: Open the temporary file in binary mode.
+        encoding: Text encoding (text mode).
+        newline: ``newline`` of :func:`open` (text mode).
+        create_parent: Create a missing parent folder.
+        durable: fsync before the rename (caches that can be rebuilt may
+            skip it).
+
+    Raises:
+        OSError: naming :obj:`path` (never the temporary file); the previous
+            file is left as it was and the temporary file is removed.
+    """
+    kwargs = {} if binary else {"encoding": encoding, "newline": newline}
+    with atomic_path(path, create_parent, durable) as tmp:
+        try:
+            with open(tmp, "wb" if binary else "w", **kwargs) as f:
+                write(f)
+                f.flush()
+        except OSError as err:
+            raise _renamed(err, os.fspath(path)) from None
+
+
+def keep_copy(path: PathLike, copy: PathLike) -> None:
+    """Make :obj:`copy` an atomic hard link (a copy where links are not
+    supported) of the file :obj:`path`, replacing :obj:`copy`."""
+    with atomic_path(copy, durable=False) as tmp:
+        try:
+            os.link(path, tmp)
+        except OSError:
+            shutil.copyfile(path, tmp)
+
+
+def atomic_write_text(path: PathLike, text: str, create_parent: bool = False) -> None:
+    """Write UTF-8 text atomically (see :func:`atomic_write`)."""
+    atomic_write(path, lambda f: f.write(text), create_parent=create_parent)
+
+
+__all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
+           "check_output_path", "atomic_write", "atomic_write_text", "atomic_path",
+           "keep_copy", "sweep_stale_temps"]

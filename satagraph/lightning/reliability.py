@@ -1,0 +1,363 @@
+r"""Training that cannot end green with a broken model, and exact resume.
+
+- :class:`NonFiniteGuard` checks the loss before the backward pass and the
+  gradients before the optimizer step: a non-finite value stops the run
+  (:class:`TrainingStopped`, naming the batch's files; the weights are not
+  updated, so the last checkpoint stays good) or, with ``mode="skip"``,
+  drops that batch's update and counts it.
+- :class:`ResumeCheckpoint` writes ``last.ckpt`` every N steps and/or M
+  minutes and at every epoch end, keeping the previous one as
+  ``last.prev.ckpt``; the checkpoint carries every random state (torch,
+  CUDA, numpy, Python), restored just before the first resumed step, while
+  the loop state in it gives the sampler's position
+  (:class:`~satagraph.data.sampler.ResumableSampler`).
+- :class:`SafeCheckpointIO` saves atomically and loads with
+  ``weights_only=True`` and one-line errors.
+- :func:`run_lock` keeps a second live run out of an ``output_dir``.
+"""
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import random
+import socket
+import time
+import warnings
+from pathlib import Path
+from typing import Any, Callable, Dict, Iterator, List, Optional
+
+import lightning as L
+import numpy as np
+import torch
+from lightning.fabric.plugins.io.torch_io import TorchCheckpointIO
+
+from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from satagraph.io.files import keep_copy
+
+#: Names of the resume checkpoints in ``<run>/checkpoints``.
+LAST, PREVIOUS, DAMAGED = "last.ckpt", "last.prev.ckpt", "last.damaged.ckpt"
+#: ``nonfinite`` config values.
+NONFINITE_MODES = ("stop", "skip")
+
+
+class TrainingStopped(RuntimeError):
+    """Training stopped on a non-finite loss or gradient; one line naming
+    the step, the batch's files and the last good checkpoint."""
+
+
+class RunLockedError(RuntimeError):
+    """Another live run writes to the same ``output_dir``."""
+
+
+# ------------------------------------------------------------- safe IO
+class SafeCheckpointIO(TorchCheckpointIO):
+    """Lightning checkpoint IO: atomic saves (fsynced temporary file and
+    rename), loads with ``weights_only=True`` and clean errors."""
+
+    def save_checkpoint(self, checkpoint: Dict[str, Any], path: Any,
+                        storage_options: Optional[Any] = None) -> None:
+        save_checkpoint(checkpoint, path)
+
+    def load_checkpoint(self, path: Any, map_location: Optional[Callable] = None,
+                        weights_only: Optional[bool] = None) -> Dict[str, Any]:
+        return load_checkpoint(path, map_location=map_location or "cpu", require=(),
+                               what="Lightning checkpoint")
+
+
+# ------------------------------------------------------------ non-finite
+def _batch_files(batch: Any) -> List[str]:
+    meta = getattr(batch, "meta", None) or []
+    return [str(m.get("path", "?")) for m in meta if isinstance(m, dict)]
+
+
+class NonFiniteGuard(L.Callback):
+    r"""Stop (or skip the update) on a non-finite loss or gradient.
+
+    Args:
+        mode (str): ``"stop"`` raises :class:`TrainingStopped` before the
+            weights change; ``"skip"`` clears the gradients of that batch
+            (the optimizer leaves the weights as they are) and counts it in
+            :attr:`skipped`.
+        last_checkpoint (str, optional): Named in the error message.
+    """
+
+    def __init__(self, mode: str = "stop", last_checkpoint: Optional[str] = None) -> None:
+        if mode not in NONFINITE_MODES:
+            raise ValueError(f"nonfinite must be one of {NONFINITE_MODES}, got {mode!r}")
+        self.mode, self.last_checkpoint = mode, last_checkpoint
+        self.skipped = 0
+        self._files: List[str] = []
+        self._bad_loss: Optional[float] = None
+
+    def on_train_batch_start(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                             batch: Any, batch_idx: int) -> None:
+        self._files, self._bad_loss = _batch_files(batch), None
+
+    def on_before_backward(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                           loss: torch.Tensor) -> None:
+        if not bool(torch.isfinite(loss.detach()).all()):
+            self._bad_loss = float(loss.detach().float().sum())
+            if self.mode == "stop":
+                raise self._error(trainer, f"non-finite loss ({self._bad_loss})")
+
+    def on_before_optimizer_step(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                                 optimizer: torch.optim.Optimizer) -> None:
+        params = [p for group in optimizer.param_groups for p in group["params"]
+                  if p.grad is not None]
+        finite = self._bad_loss is None and (not params or bool(torch.isfinite(
+            torch.stack([p.grad.detach().float().sum() for p in params])).all()))
+        if finite:
+            return
+        if self.mode == "stop":
+            raise self._error(trainer, "non-finite gradient")
+        for p in params:
+            p.grad = None
+        self.skipped += 1
+
+    def _error(self, trainer: L.Trainer, what: str) -> TrainingStopped:
+        files = ", ".join(dict.fromkeys(self._files)) or "?"
+        last = self.last_checkpoint
+        keep = (f"; last good checkpoint: {last}" if last and os.path.isfile(last)
+                else "; no checkpoint was written yet")
+        return TrainingStopped(
+            f"training stopped at step {trainer.global_step}: {what} on the batch of "
+            f"{files}; the weights were not updated{keep} (nonfinite=skip skips such "
+            "batches)")
+
+    def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        if self.skipped:
+            warnings.warn(f"nonfinite=skip: skipped {self.skipped} batch(es) with a "
+                          "non-finite loss or gradient", stacklevel=2)
+
+
+# ------------------------------------------------------------ random states
+def rng_states() -> Dict[str, Any]:
+    """Every random state a training step may draw from, in a form that
+    loads with ``weights_only=True``."""
+    kind, keys, pos, has_gauss, gauss = np.random.get_state()
+    states = {"torch": torch.get_rng_state(),
+              "numpy": [kind, torch.from_numpy(keys.astype(np.int64)), int(pos),
+                        int(has_gauss), float(gauss)],
+              "python": random.getstate()}
+    if torch.cuda.is_available() and torch.cuda.is_initialized():
+        states["cuda"] = torch.cuda.get_rng_state_all()
+    return states
+
+
+def set_rng_states(states: Dict[str, Any]) -> None:
+    """Restore what :func:`rng_states` returned."""
+    torch.set_rng_state(states["torch"])
+    kind, keys, pos, has_gauss, gauss = states["numpy"]
+    np.random.set_state((kind, np.asarray(keys, dtype=np.int64).astype(np.uint32),
+                         pos, has_gauss, gauss))
+    version, internal, gauss_next = states["python"]
+    random.setstate((version, tuple(internal), gauss_next))
+    if "cuda" in states and torch.cuda.is_available():
+        torch.cuda.set_rng_state_all(states["cuda"])
+
+
+# ------------------------------------------------------------ checkpoints
+class ResumeCheckpoint(L.Callback):
+    r"""Write ``<dirpath>/last.ckpt`` every :obj:`every_n_steps` training
+    steps and/or :obj:`every_minutes` minutes, and at every epoch end,
+    keeping the one it replaces as ``last.prev.ckpt``.
+
+    Its state in the checkpoint holds every random state (restored at the
+    first training batch after a resume) and the position of the run
+    (epoch, batches done in it, step), which the training sampler resumes
+    from.
+
+    Args:
+        dirpath (str): The checkpoint folder.
+        every_n_steps (int, optional): Steps between checkpoints.
+        every_minutes (float, optional): Minutes between checkpoints.
+    """
+
+    def __init__(self, dirpath: str, every_n_steps: Optional[int] = None,
+                 every_minutes: Optional[float] = None) -> None:
+        if every_n_steps is not None and int(every_n_steps) < 1:
+            raise ValueError(f"checkpoint.every_n_steps must be >= 1, got {every_n_steps}")
+        if every_minutes is not None and not float(every_minutes) > 0:
+            raise ValueError(f"checkpoint.every_minutes must be > 0, got {every_minutes}")
+        self.dirpath = Path(dirpath)
+        self.every_n_steps = int(every_n_steps) if every_n_steps else None
+        self.every_seconds = 60.0 * float(every_minutes) if every_minutes else None
+        self._last_time = time.monotonic()
+        self._batches_done = 0
+        self._epoch_done = False
+        self._saved_step = -1
+        self._pending: Optional[Dict[str, Any]] = None
+        self.saves = 0
+
+    @property
+    def last_path(self) -> Path:
+        return self.dirpath / LAST
+
+    @property
+    def previous_path(self) -> Path:
+        return self.dirpath / PREVIOUS
+
+    @property
+    def state_key(self) -> str:
+        return "ResumeCheckpoint"
+
+    def state_dict(self) -> Dict[str, Any]:
+        trainer = getattr(self, "_trainer", None)
+        epoch = trainer.current_epoch if trainer is not None else 0
+        step = trainer.global_step if trainer is not None else 0
+        total = trainer.num_training_batches if trainer is not None else float("inf")
+        return {"epoch": epoch, "batches": self._batches_done, "step": step,
+                "epoch_done": self._epoch_done or self._batches_done >= total,
+                "rng": rng_states()}
+
+    @property
+    def resume_position(self) -> Optional[Dict[str, Any]]:
+        """``{"epoch", "batches", "epoch_done"}`` of the checkpoint being
+        resumed from (until its first training batch), else ``None``."""
+        if self._pending is None:
+            return None
+        return {k: self._pending[k] for k in ("epoch", "batches", "epoch_done")}
+
+    def load_state_dict(self, state_dict: Dict[str, Any]) -> None:
+        self._pending = state_dict
+
+    def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
+        self._trainer = trainer
+        self._last_time = time.monotonic()
+
+    def on_train_epoch_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        if self._pending is None:
+            self._batches_done, self._epoch_done = 0, False
+
+    def on_train_batch_start(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                             batch: Any, batch_idx: int) -> None:
+        if self._pending is not None:
+            set_rng_states(self._pending["rng"])
+            self._pending = None
+
+    def on_train_batch_end(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                           outputs: Any, batch: Any, batch_idx: int) -> None:
+        self._batches_done = batch_idx + 1
+        due = self.every_n_steps is not None and trainer.global_step % self.every_n_steps == 0
+        if self.every_seconds is not None:
+            late = time.monotonic() - self._last_time >= self.every_seconds
+            due = due or bool(trainer.strategy.broadcast(late, src=0))
+        if due:
+            self.save(trainer)
+
+    def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        self._epoch_done = True
+        self.save(trainer)
+
+    def save(self, trainer: L.Trainer) -> None:
+        """Write ``last.ckpt``; the one it replaces becomes
+        ``last.prev.ckpt`` unless it was written at the same step."""
+        step = trainer.global_step
+        if (trainer.is_global_zero and self.last_path.is_file()
+                and step != self._saved_step):
+            keep_copy(self.last_path, self.previous_path)
+        trainer.save_checkpoint(self.last_path, weights_only=False)
+        self._last_time, self._saved_step = time.monotonic(), step
+        self.saves += 1
+
+
+def resume_checkpoint(checkpoints: Path) -> Path:
+    """The checkpoint ``--resume`` starts from: ``last.ckpt``, or
+    ``last.prev.ckpt`` when the last one is damaged (with a warning).
+
+    Raises:
+        FileNotFoundError: Neither exists.
+        CheckpointError: Neither can be loaded (both reasons given).
+    """
+    candidates = [checkpoints / LAST, checkpoints / PREVIOUS]
+    present = [c for c in candidates if c.exists()]
+    if not present:
+        raise FileNotFoundError(f"--resume: no checkpoint at {candidates[0]}")
+    reasons = []
+    for path in present:
+        try:
+            ckpt = load_checkpoint(path, require=("state_dict", "loops", "optimizer_states"),
+                                   what="resumable training checkpoint")
+            del ckpt
+        except CheckpointError as err:
+            reasons.append(str(err))
+            continue
+        if reasons:
+            damaged = checkpoints / DAMAGED
+            candidates[0].rename(damaged)  # never rotated over the good one
+            warnings.warn(f"--resume: {reasons[0]} (moved to {damaged}); resuming "
+                          f"from the previous checkpoint {path}", stacklevel=2)
+        return path
+    raise CheckpointError("--resume: no usable checkpoint: " + "; ".join(reasons))
+
+
+class LossLog(L.Callback):
+    r"""Append ``step<TAB>loss`` (the exact float) to a file after every
+    training step, flushed at once: a record that survives ``kill -9``. A
+    resumed run appends the steps it replays; the last line of a step
+    counts (:func:`read_loss_log`).
+
+    Args:
+        path (str): The log file (``<run>/losses.tsv``).
+    """
+
+    def __init__(self, path: str) -> None:
+        self.path = Path(path)
+
+    def on_train_batch_end(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                           outputs: Any, batch: Any, batch_idx: int) -> None:
+        loss = outputs.get("loss") if isinstance(outputs, dict) else outputs
+        if loss is None or not trainer.is_global_zero:
+            return
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path, "a") as f:
+            f.write(f"{trainer.global_step}\t{float(loss)!r}\n")
+
+
+def read_loss_log(path: Path) -> Dict[int, float]:
+    """``{step: loss}`` of a :class:`LossLog` file (the last line of each
+    step)."""
+    out: Dict[int, float] = {}
+    for line in Path(path).read_text().splitlines():
+        step, _, loss = line.partition("\t")
+        if loss:
+            out[int(step)] = float(loss)
+    return out
+
+
+# ------------------------------------------------------------ lock
+def _holder(lock: Path) -> str:
+    with contextlib.suppress(OSError):
+        return lock.read_text().strip() or "unknown"
+    return "unknown"
+
+
+@contextlib.contextmanager
+def run_lock(run_dir: Path) -> Iterator[Path]:
+    """Hold ``<run_dir>/.lock`` (an advisory ``flock``: released by the
+    system when the process ends, even by ``kill -9``) while training.
+
+    Raises:
+        RunLockedError: Another live process holds it.
+    """
+    run_dir.mkdir(parents=True, exist_ok=True)
+    lock = run_dir / ".lock"
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise RunLockedError(
+                f"{run_dir}: output_dir is in use by another live run ({_holder(lock)}); "
+                "wait for it or choose another output_dir") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
+        yield lock
+    finally:
+        os.close(fd)
+
+
+__all__ = ["TrainingStopped", "RunLockedError", "SafeCheckpointIO", "NonFiniteGuard",
+           "ResumeCheckpoint", "resume_checkpoint", "run_lock", "LossLog", "read_loss_log", "rng_states",
+           "set_rng_states", "LAST", "PREVIOUS", "NONFINITE_MODES"]

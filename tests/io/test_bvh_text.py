@@ -1,0 +1,94 @@
+"""Text and special files: encodings, BOM, line endings, FIFOs and devices;
+the writer's deep hierarchies and non-finite values."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.io.bvh_reader import BVHWarning
+from satagraph.motion import Motion
+from satagraph.skeleton import Skeleton
+
+TWO = ["HIERARCHY", "ROOT Hips", "{", "  OFFSET 0 0 0",
+       "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation",
+       "  JOINT {a}", "  {", "    OFFSET 0 1 0", "    CHANNELS 3 Zrotation Xrotation Yrotation",
+       "  }", "  JOINT {b}", "  {", "    OFFSET 0 -1 0",
+       "    CHANNELS 3 Zrotation Xrotation Yrotation", "  }", "}", "MOTION",
+       "Frames: 2", "Frame Time: 0.0333333", "0 1 0 0 0 0 10 0 0 0 0 5",
+       "0 1 1 0 0 0 20 0 0 0 0 6"]
+
+
+def _text(a: str = "Spine", b: str = "Leg") -> str:
+    return "\n".join(line.replace("{a}", a).replace("{b}", b) for line in TWO) + "\n"
+
+
+def test_bom_and_cr_only_line_endings(tmp_path: Path) -> None:
+    ref = read_bvh(_write(tmp_path / "ref.bvh", _text().encode()))
+    for name, data in (("bom.bvh", b"\xef\xbb\xbf" + _text().encode()),
+                       ("cr.bvh", _text().replace("\n", "\r").encode()),
+                       ("mixed.bvh", _text().replace("\n", "\r", 5).encode())):
+        motion = read_bvh(_write(tmp_path / name, data))
+        assert motion.skeleton.names == ref.skeleton.names, name
+        np.testing.assert_array_equal(motion.raw_channels, ref.raw_channels)
+
+
+def test_latin1_names_are_kept_distinct_with_a_warning(tmp_path: Path) -> None:
+    data = _text("B\xedceps", "B\xecceps").encode("latin-1")
+    with pytest.warns(BVHWarning, match=r"latin.bvh:6: not UTF-8"):
+        motion = read_bvh(_write(tmp_path / "latin.bvh", data))
+    assert motion.skeleton.names[1:] == ["B\xedceps", "B\xecceps"]
+
+
+def test_utf8_names(tmp_path: Path) -> None:
+    motion = read_bvh(_write(tmp_path / "u.bvh", _text("Wirbels\u00e4ule", "\u811a").encode()))
+    assert motion.skeleton.names[1:] == ["Wirbels\u00e4ule", "\u811a"]
+
+
+@pytest.mark.parametrize("kind", ["fifo", "dir", "dev"])
+def test_special_files_are_refused_up_front(tmp_path: Path, kind: str) -> None:
+    path = {"dir": tmp_path, "dev": Path("/dev/zero")}.get(kind, tmp_path / "p.bvh")
+    if kind == "fifo":
+        os.mkfifo(path)
+    with pytest.raises(BVHError, match="cannot read") as info:
+        read_bvh(path)
+    assert str(info.value).startswith(f"{path}:0: ")
+
+
+def _chain(depth: int) -> Motion:
+    names = [f"j{i}" for i in range(depth)]
+    parents = np.arange(-1, depth - 1)
+    offsets = np.tile([0.0, 1.0, 0.0], (depth, 1))
+    channels = [("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation",
+                 "Yrotation")] + [("Zrotation", "Xrotation", "Yrotation")] * (depth - 1)
+    skel = Skeleton(names, parents, offsets, channels)
+    rot = np.broadcast_to(np.eye(3), (2, depth, 3, 3)).copy()
+    trans = np.broadcast_to(offsets, (2, depth, 3)).copy()
+    return Motion(skel, rot, trans, fps=30.0)
+
+
+def test_writer_has_no_depth_limit(tmp_path: Path) -> None:
+    motion = _chain(3000)  # deeper than Python's recursion limit
+    write_bvh(motion, tmp_path / "deep.bvh")
+    back = read_bvh(tmp_path / "deep.bvh")
+    assert back.skeleton.num_joints == 3000
+    np.testing.assert_array_equal(back.skeleton.parents, motion.skeleton.parents)
+
+
+def test_writer_refuses_non_finite_values(tmp_path: Path) -> None:
+    motion = _chain(3)
+    motion.translations[1, 0, 0] = np.nan
+    path = tmp_path / "nan.bvh"
+    path.write_text("previous")
+    with pytest.raises(ValueError, match=r"nan.bvh: refusing to write non-finite.*frame 1"):
+        write_bvh(motion, path)
+    assert path.read_text() == "previous"
+    assert [p.name for p in tmp_path.iterdir()] == ["nan.bvh"]
+
+
+def _write(path: Path, data: bytes) -> Path:
+    path.write_bytes(data)
+    return path

@@ -1,0 +1,214 @@
+"""Training that cannot end green with a broken model, exact resume after
+``kill -9``, safe loading, one live run per output folder."""
+from __future__ import annotations
+
+import copy
+import os
+import pickle
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any, Dict, List
+
+import pytest
+import torch
+
+from satagraph.cli import main
+from satagraph.config import load_config
+from satagraph.data.zoo import write_zoo
+from satagraph.io.checkpoint import CheckpointError, load_checkpoint
+from satagraph.lightning.reliability import (LAST, PREVIOUS, RunLockedError,
+                                             TrainingStopped, read_loss_log,
+                                             resume_checkpoint, run_lock)
+from satagraph.train import load_module, train
+
+REPO = Path(__file__).resolve().parents[2]
+EVERY = 4  # steps between checkpoints in the resume test
+
+
+@pytest.fixture(scope="module")
+def zoo_overrides(tmp_path_factory: pytest.TempPathFactory) -> List[str]:
+    """Overrides of ``tiny`` for a deterministic CPU run on a small zoo:
+    9 steps per epoch, a checkpoint every :data:`EVERY` steps, one thread,
+    deterministic algorithms, every step's loss logged."""
+    root = tmp_path_factory.mktemp("reszoo")
+    write_zoo(root / "zoo", species=["biped", "quadruped"], clips=3, frames=48)
+    return [f"data.sources=[{root / 'zoo' / 'manifest.tsv'}]",
+            f"data.cache_dir={root / 'cache'}", "data.window=16", "data.stride=16",
+            "data.batch_size=4", "data.max_files=null", "data.augment.scale=0.5",
+            "model.dropout=0.1", "logger.name=none", "trainer.progress=false",
+            "trainer.enable_model_summary=false", "trainer.max_epochs=2",
+            "trainer.limit_train_batches=null", "trainer.limit_val_batches=1",
+            "trainer.num_sanity_val_steps=0", "trainer.deterministic=true", "threads=1",
+            f"checkpoint.every_n_steps={EVERY}", "loss_log=true"]
+
+
+def _kill_at(cmd: List[str], log: Path, step: int, env: Dict[str, str]) -> int:
+    """Run :obj:`cmd`, ``kill -9`` it once :obj:`log` has :obj:`step`
+    lines; returns the last step it logged."""
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and proc.poll() is None:
+        if log.is_file() and len(log.read_text().splitlines()) >= step:
+            break
+        time.sleep(0.02)
+    assert proc.poll() is None, f"the run ended before step {step}: {proc.stderr.read()}"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    return max(read_loss_log(log))
+
+
+def test_kill9_then_resume_gives_the_same_losses(zoo_overrides: List[str],
+                                                 tmp_path: Path) -> None:
+    """A real training process killed at a random step; ``--resume``
+    continues with bit-identical losses, losing at most one checkpoint
+    interval. Deterministic CPU settings: ``threads=1``,
+    ``trainer.deterministic=true`` (and ``OMP_NUM_THREADS=1``)."""
+    reference = load_config("tiny", zoo_overrides + [f"output_dir={tmp_path / 'a'}"])
+    train(reference)
+    full = read_loss_log(tmp_path / "a" / "losses.tsv")
+    assert len(full) == 18
+
+    run = tmp_path / "b"
+    cmd = [sys.executable, "-m", "satagraph.cli", "train", "tiny", *zoo_overrides,
+           f"output_dir={run}"]
+    env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(REPO))
+    kill_step = random.Random().randint(EVERY + 1, len(full) - 2)
+    killed = _kill_at(cmd, run / "losses.tsv", kill_step, env)
+    saved = load_checkpoint(run / "checkpoints" / LAST)["global_step"]
+    assert saved > 0 and 0 <= killed - saved <= EVERY  # at most one interval lost
+
+    assert main(["train", "tiny", *zoo_overrides, f"output_dir={run}", "--resume"]) == 0
+    resumed = read_loss_log(run / "losses.tsv")
+    assert resumed == full, (kill_step, saved)
+
+
+def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
+        tiny_config: Dict[str, Any], monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture) -> None:
+    from satagraph.lightning.autoencoder import MotionAutoencoderModule
+    original = MotionAutoencoderModule.compute_losses
+
+    def poisoned(self, out, batch):
+        losses = original(self, out, batch)
+        if self.global_step >= 2:
+            losses["loss"] = losses["loss"] * float("nan")
+        return losses
+
+    monkeypatch.setattr(MotionAutoencoderModule, "compute_losses", poisoned)
+    cfg = dict(tiny_config, checkpoint={"every_n_steps": 1})
+    with pytest.raises(TrainingStopped, match=r"step 2: non-finite loss.*\.bvh") as info:
+        train(cfg)
+    last = Path(cfg["output_dir"]) / "checkpoints" / LAST
+    assert str(last) in str(info.value)
+    ckpt = load_checkpoint(last)
+    assert ckpt["global_step"] == 2
+    assert all(torch.isfinite(v).all() for v in ckpt["state_dict"].values()
+               if v.is_floating_point())
+
+    # skip: the bad batches are counted, the weights stay finite
+    cfg = dict(copy.deepcopy(tiny_config), nonfinite="skip")
+    cfg["output_dir"] += "-skip"
+    with pytest.warns(UserWarning, match="skipped 2 batch"):
+        module, _, trainer, _ = train(cfg, max_steps=4)
+    assert all(torch.isfinite(p).all() for p in module.parameters())
+
+
+def test_cli_train_exit_code_when_stopped(tiny_config: Dict[str, Any], tmp_path: Path,
+                                          monkeypatch: pytest.MonkeyPatch,
+                                          capsys: pytest.CaptureFixture) -> None:
+    import satagraph.train as train_mod
+
+    def stopped(*args, **kwargs):
+        raise TrainingStopped("training stopped at step 3: non-finite loss")
+
+    monkeypatch.setattr(train_mod, "train", stopped)
+    assert main(["train", "tiny", f"output_dir={tmp_path}"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("satagraph: error: training stopped") and "Traceback" not in err
+
+
+def test_resume_falls_back_from_a_truncated_last_checkpoint(
+        tiny_config: Dict[str, Any]) -> None:
+    cfg = dict(tiny_config, checkpoint={"every_n_steps": 1})
+    train(cfg, max_steps=2)
+    folder = Path(cfg["output_dir"]) / "checkpoints"
+    assert load_checkpoint(folder / PREVIOUS)["global_step"] == 1
+    data = (folder / LAST).read_bytes()
+    (folder / LAST).write_bytes(data[: len(data) // 2])
+    with pytest.warns(UserWarning, match="resuming from the previous"):
+        assert resume_checkpoint(folder) == folder / PREVIOUS
+    assert (folder / "last.damaged.ckpt").is_file() and not (folder / LAST).exists()
+    (folder / LAST).write_bytes(b"")
+    (folder / PREVIOUS).write_bytes(b"")
+    with pytest.raises(CheckpointError, match="no usable checkpoint"):
+        resume_checkpoint(folder)
+
+
+def test_a_live_run_holds_its_output_dir(tmp_path: Path) -> None:
+    with run_lock(tmp_path):
+        with pytest.raises(RunLockedError, match=f"pid {os.getpid()}"):
+            with run_lock(tmp_path):
+                pass
+    with run_lock(tmp_path):  # released: free again
+        pass
+
+
+class _Payload:
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self):
+        return (os.system, (f"touch {self.marker}",))
+
+
+def test_loading_is_safe_and_errors_are_one_line(
+        tiny_config: Dict[str, Any], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture) -> None:
+    monkeypatch.setenv("TORCH_FORCE_NO_WEIGHTS_ONLY_LOAD", "1")
+    marker = tmp_path / "pwned"
+    evil = tmp_path / "evil.ckpt"
+    torch.save({"state_dict": _Payload(marker)}, evil)  # a planted pickle
+    raw = tmp_path / "raw.ckpt"
+    with open(raw, "wb") as f:
+        pickle.dump({"state_dict": _Payload(marker)}, f)
+    good = tmp_path / "good.ckpt"
+    torch.save({"state_dict": {"w": torch.zeros(2)}, "hyper_parameters": {}}, good)
+    truncated = tmp_path / "cut.ckpt"
+    truncated.write_bytes(good.read_bytes()[:100])
+    text = tmp_path / "walk.bvh"
+    text.write_text("HIERARCHY\n")
+    cases = {evil: "safe loading refuses", raw: "not a readable checkpoint", truncated: "not a readable checkpoint",
+             text: "not a readable checkpoint", good: "no model hyperparameters",
+             tmp_path: "is a directory"}
+    for path, words in cases.items():
+        code = main(["reconstruct", "--ckpt", str(path), str(text), str(tmp_path / "o.bvh")])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert err.startswith(f"satagraph: error: {path}") and words in err, err
+        assert "weights_only" not in err and "Traceback" not in err
+    assert not marker.exists()
+
+    # --resume loads the run's own last.ckpt safely too
+    run = Path(tiny_config["output_dir"]) / "checkpoints"
+    run.mkdir(parents=True)
+    (run / LAST).write_bytes(evil.read_bytes())
+    with pytest.raises(CheckpointError, match="safe loading refuses"):
+        train(tiny_config, resume=True)
+    assert not marker.exists()
+
+
+def test_diverged_weights_are_refused(tiny_config: Dict[str, Any], tmp_path: Path) -> None:
+    train(tiny_config, max_steps=1)
+    last = Path(tiny_config["output_dir"]) / "checkpoints" / LAST
+    ckpt = load_checkpoint(last)
+    key = next(k for k, v in ckpt["state_dict"].items() if k.startswith("model."))
+    ckpt["state_dict"][key] = ckpt["state_dict"][key] * float("nan")
+    bad = tmp_path / "nan.ckpt"
+    torch.save(ckpt, bad)
+    with pytest.raises(CheckpointError, match="non-finite"):
+        load_module(str(bad))
