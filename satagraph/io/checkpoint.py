@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import pickle
 import re
+import warnings
 import zipfile
 from typing import Any, Dict, Sequence, Union
 
@@ -83,7 +84,9 @@ def load_checkpoint(path: PathLike, map_location: Any = "cpu",
         raise CheckpointError(f"{path}: not a readable checkpoint (not a file written "
                               "by torch.save)")
     try:
-        ckpt = torch.load(path, map_location=map_location, weights_only=True)
+        with warnings.catch_warnings():  # torch's note on old pickle protocols
+            warnings.filterwarnings("ignore", message="Detected pickle protocol")
+            ckpt = torch.load(path, map_location=map_location, weights_only=True)
     except (pickle.UnpicklingError, RuntimeError, EOFError, ValueError, TypeError,
             AttributeError, ImportError, IndexError, KeyError, OSError,
             zipfile.BadZipFile, UnicodeDecodeError, MemoryError) as err:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-
 import zlib
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Union
