@@ -31,7 +31,6 @@ from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
 
 PROG = "satagraph"
-UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 
 #: Subcommands defined in other modules: ``(module, parser function)``.
 #: A module that does not exist (yet) is skipped silently.
@@ -63,12 +62,11 @@ def _positive_float(text: str) -> float:
 
 def _up_axis(text: str) -> str:
     """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
-    axis = text.strip().upper()
-    axis = axis if axis[:1] in ("+", "-") else "+" + axis
-    if axis not in UP_AXES:
-        raise argparse.ArgumentTypeError(
-            f"must be one of {', '.join(UP_AXES)}: {text!r}")
-    return axis
+    from satagraph.data.rig_reading import normalize_up_axis
+    try:
+        return normalize_up_axis(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def _units(text: str):

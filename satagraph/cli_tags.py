@@ -108,10 +108,9 @@ def _evidence(motion):
     (with the ``--up-axis`` / ``--units`` attached to it). ``None`` (names
     only) where the motion cannot be canonicalised or its up axis is a
     low-confidence guess, said on stderr: evidence read on the wrong axis
-    would mislead. Units do not matter (evidence is in body heights)."""
+    would mislead."""
     import sys
-    import warnings
-    from satagraph.data.rig_reading import RigReadingWarning, read_rig
+    from satagraph.data.rig_reading import read_rig
     up = read_rig(motion).up
     if up.low_confidence:
         print(f"satagraph: note: {motion.source}: the up axis is uncertain "
@@ -119,9 +118,7 @@ def _evidence(motion):
               "to use the motion)", file=sys.stderr)
         return None
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RigReadingWarning)
-            return evidence_from_motion(motion)
+        return evidence_from_motion(motion)
     except ValueError:
         return None
 

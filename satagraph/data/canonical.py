@@ -8,22 +8,14 @@ from typing import List, Optional, Tuple
 import numpy as np
 import torch
 
+from satagraph.data.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
 from satagraph.skeleton import Skeleton
 from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
                                     quaternion_to_matrix)
 
-_AXIS = {"+X": (0, 1.0), "-X": (0, -1.0), "+Y": (1, 1.0), "-Y": (1, -1.0),
-         "+Z": (2, 1.0), "-Z": (2, -1.0)}
 _SIDE = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)"
                    r"|(?<![A-Za-z])[LR](?=[A-Z])")
-
-
-def _axis_vector(axis: str) -> np.ndarray:
-    i, sign = _AXIS[axis]
-    vec = np.zeros(3)
-    vec[i] = sign
-    return vec
 
 
 def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -65,9 +57,11 @@ def _side(name: str) -> Optional[str]:
 
 def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
     """Indices of left joints and their right counterparts (matched by the
-    name with the side marker removed)."""
+    name with the side marker and exporter noise such as ``__x7Q`` removed)."""
+    from satagraph.data.semantics.lexicon import drop_noise_tokens
     stems = {}
-    for i, name in enumerate(names):
+    for i, raw in enumerate(names):
+        name = drop_noise_tokens(raw)
         side = _side(name)
         if side:
             stem = _SIDE.sub("", name, count=1).lower()
@@ -195,7 +189,7 @@ def canonicalize(
     reading = read_rig(motion, up_axis, unit_scale)
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
-    up_rot = _rotation_between(_axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
+    up_rot = _rotation_between(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
     moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
     forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
     yaw = float(np.arctan2(-forward[0], forward[2]))  # rotate forward onto +Z

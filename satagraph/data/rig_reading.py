@@ -133,7 +133,8 @@ class UpAxisGuess:
         return text + ("" if self.moving else "; the clip barely moves: pose cues only")
 
 
-def _axis_vector(axis: str) -> np.ndarray:
+def axis_vector(axis: str) -> np.ndarray:
+    """The unit vector of a signed axis (``"-Z"`` -> ``[0, 0, -1]``)."""
     vec = np.zeros(3)
     vec["XYZ".index(axis[1])] = 1.0 if axis[0] == "+" else -1.0
     return vec
@@ -256,7 +257,7 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
     for k, axis in enumerate(UP_AXES):
         if vel is not None:
             ground, level = _ground_cues(pos[busy], vel[busy], size,
-                                         _axis_vector(axis))
+                                         axis_vector(axis))
             evidence["ground"][axis], evidence["level"][axis] = ground, level
         if root is not None:
             evidence["root"][axis] = float(root["XYZ".index(axis[1])])
@@ -386,7 +387,7 @@ def _size(motion: Motion) -> float:
 def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
     r"""Guess the units of a rig from what its file says (see the module
     docstring), never from a human prior unless the rig is human."""
-    height, pose = _height(motion, _axis_vector(up_axis))
+    height, pose = _height(motion, axis_vector(up_axis))
     dialect = _dialect(motion)
     if dialect is not None:
         label, units = dialect
@@ -485,7 +486,7 @@ def read_rig(motion: Motion, up_axis: Optional[str] = None,
         up = guess_up_axis(motion)
     if scale is not None or rig.scale is not None:
         value = parse_units(scale if scale is not None else rig.scale)
-        height = _height(motion, _axis_vector(up.axis))[0]
+        height = _height(motion, axis_vector(up.axis))[0]
         units = UnitGuess(value, 1.0, "given" if scale is not None else how,
                           "as given" if scale is not None or not rig.declared
                           else "declared by the file", height)

@@ -157,3 +157,24 @@ def test_no_warning_where_nothing_is_guessed() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         canonicalize(with_rig(motion, "+Y", "cm"))
+
+
+@pytest.mark.parametrize("species", ["crab", "fowl", "spider"])
+def test_zoo_body_plans_read_the_same_in_any_dialect(species: str, tmp_path: Path) -> None:
+    from satagraph.data.semantics import describe_joints
+    from satagraph.data.semantics.evidence import evidence_from_motion
+    clip = _clip(species)
+    clean = describe_joints(clip.skeleton, evidence=evidence_from_motion(clip))
+    path = tmp_path / "x.bvh"
+    write_bvh(apply_dialect(clip, Dialect(up_axis="-Z", unit="cm", noise="tag"))[0], path)
+    exported = read_bvh(path)  # detected up axis, undecided units: same evidence
+    assert describe_joints(exported.skeleton,
+                           evidence=evidence_from_motion(exported)) == clean
+    legs = [t for n, t in zip(clip.skeleton.names, clean)
+            if n.lower().startswith("leg") or "thigh" in n.lower()]
+    assert legs and len(set(legs)) == len(legs)  # distinct legs
+    if species != "fowl":  # arthropods: legs, never arms
+        assert not any(w in t for t in clean for w in ("forearm", "wrist", "elbow"))
+    else:
+        wings = [t for n, t in zip(clip.skeleton.names, clean) if "UpperArm" in n]
+        assert all("front limb" in t for t in wings) and wings

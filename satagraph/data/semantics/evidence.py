@@ -143,8 +143,10 @@ def evidence_from_motion(motion, canonical: bool = False,
     from satagraph.data.canonical import canonicalize
     from satagraph.inference import static_features
     source = motion if motion.num_frames else _rest(motion)
-    if not canonical:
-        source = canonicalize(source, up_axis=up_axis)
+    if not canonical:  # evidence is in body heights: the units do not matter
+        known = source.rig is not None and source.rig.scale is not None
+        source = canonicalize(source, up_axis=up_axis,
+                              unit_scale=None if known else 1.0)
     feats = static_features(source)
     return remap_evidence(evidence_from_features(feats), feats.skeleton.names,
                           motion.skeleton)

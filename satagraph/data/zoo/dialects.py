@@ -29,15 +29,16 @@ from typing import Dict, Iterator, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from satagraph.data.augment import rebase_rest, set_rest_rotations
+from satagraph.data.rig_reading import UNITS as READ_UNITS
+from satagraph.data.rig_reading import UP_AXES
 from satagraph.data.zoo.rigs import ZooRig, _rot, _unit
 from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
 
-#: The six up axes a rig may be exported with.
-UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
-#: Named units: metres per file unit.
-UNITS: Dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
+#: The standard units a zoo file may be written in (metres per unit).
+UNITS: Dict[str, float] = {k: v for k, v in READ_UNITS.items()
+                           if k in ("m", "cm", "mm", "in", "ft")}
 #: Rest poses of :func:`change_rest_pose`.
 REST_POSES = ("native", "apose", "flat", "crouched", "random", "frame")
 #: Name-noise styles of :func:`add_name_noise`.
