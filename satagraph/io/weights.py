@@ -227,7 +227,7 @@ def read_weights_metadata(path: PathLike) -> Dict[str, Any]:
 
 def _checked(path: str) -> str:
     try:
-        check_input_file(path, "weights file", max_bytes=_MAX_READ_BYTES)
+        check_input_file(path, "checkpoint or weights file", max_bytes=_MAX_READ_BYTES)
     except InputFileError as err:
         raise CheckpointError(str(err)) from None
     return path
@@ -266,7 +266,7 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[
     """A checkpoint (``torch.save``, loaded with ``weights_only=True``) or a
     weights file, by content; ``"builtin"`` names the package's weights."""
     from satagraph.io.checkpoint import load_checkpoint
-    path = resolve_weights(path)
+    path = _checked(resolve_weights(path))
     if is_weights_file(path):
         return load_weights(path)
     return load_checkpoint(path, require=require)
