@@ -19,7 +19,8 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue from the run's last checkpoint")
     p.add_argument("--init-from", metavar="CKPT",
-                   help="start from another run's weights (fine-tuning)")
+                   help="start from another run's weights (fine-tuning): a checkpoint, "
+                   "a .safetensors weights file or builtin")
     _data_rig(p)
     p.set_defaults(func=run_train)
 
@@ -57,9 +58,32 @@ def add_train_parsers(sub) -> None:
     _data_rig(p)
     p.set_defaults(func=run_eval)
 
+    p = sub.add_parser("export-weights", help="write a trained model as a safetensors "
+                       "weights file", description="Write the weights of RUN (its "
+                       "checkpoints/last.ckpt) or CKPT to OUT.safetensors with everything "
+                       "needed to rebuild the model offline (config, normaliser, semantic "
+                       "encoder, fps, window, training data, provenance). No pickle: "
+                       "the file cannot carry code.")
+    p.add_argument("source", metavar="RUN_OR_CKPT")
+    p.add_argument("output", metavar="OUT.safetensors")
+    p.add_argument("--half", action="store_true",
+                   help="store the network in float16 (the normaliser stays float32)")
+    p.add_argument("--force", action="store_true",
+                   help="write a file over the 8 MB limit")
+    p.add_argument("--training-data", metavar="TEXT",
+                   help="what it was trained on (default: the run's data sources)")
+    p.add_argument("--command", metavar="TEXT", help="the command that trained it")
+    p.add_argument("--minutes", type=float, help="training wall time in minutes")
+    p.add_argument("--machine", metavar="TEXT", help="where it was trained")
+    p.add_argument("--note", metavar="TEXT", help="free-text provenance")
+    p.set_defaults(func=run_export_weights)
+
 
 def _common(p) -> None:
-    p.add_argument("--ckpt", required=True, help="a checkpoint from `satagraph train`")
+    p.add_argument("--ckpt", default="builtin",
+                   help="a checkpoint from `satagraph train`, a .safetensors weights "
+                   "file from `satagraph export-weights`, or builtin (the default: "
+                   "the weights shipped in the package)")
     p.add_argument("--window", type=int, default=None,
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
@@ -186,6 +210,39 @@ def run_eval(args) -> int:
         _print_retarget(module, dm.datasets[args.split].files, results)
     if args.json:
         atomic_write_text(args.json, json.dumps(results, indent=2) + "\n")
+    return 0
+
+
+def _export_source(source: str) -> str:
+    """The checkpoint of ``export-weights``' RUN_OR_CKPT: a run folder gives
+    its ``checkpoints/last.ckpt``."""
+    from pathlib import Path
+    path = Path(source)
+    if path.is_dir():
+        last = path / "checkpoints" / "last.ckpt"
+        if not last.is_file():
+            raise ValueError(f"{source}: a folder without checkpoints/last.ckpt")
+        return str(last)
+    return source
+
+
+def run_export_weights(args) -> int:
+    from satagraph import __version__
+    from satagraph.io.files import check_output_path
+    from satagraph.io.weights import save_weights
+    from satagraph.train import load_module
+    check_output_path(args.output)
+    source = _export_source(args.source)
+    module = load_module(source)
+    provenance = {k: v for k, v in (("command", args.command), ("minutes", args.minutes),
+                                    ("machine", args.machine), ("note", args.note))
+                  if v is not None}
+    provenance.update(source=source, satagraph_version=__version__)
+    size = save_weights(module, args.output, half=args.half,
+                        training_data=args.training_data, provenance=provenance,
+                        force=args.force)
+    print(f"wrote {args.output}: {size / 2**20:.2f} MB "
+          f"({'float16' if args.half else 'float32'} weights of {source})")
     return 0
 
 

@@ -12,8 +12,8 @@ import torch
 
 from satagraph.config import expand_path
 from satagraph.data.datamodule import MotionDataModule
-from satagraph.io.checkpoint import (CheckpointError, check_finite_weights,
-                                     load_checkpoint)
+from satagraph.io.checkpoint import CheckpointError, check_finite_weights
+from satagraph.io.weights import load_weights_or_checkpoint
 from satagraph.io.files import atomic_write_text, sweep_stale_temps
 from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
                                  SATAVAEModule)
@@ -125,9 +125,10 @@ def last_checkpoint(trainer: L.Trainer) -> str:
 
 def init_weights(module: L.LightningModule, ckpt: str) -> None:
     """Load another run's weights into :obj:`module` for fine-tuning; the
-    module keeps its own normaliser (the new data's). Warns about weights
-    the checkpoint lacks or has in excess (e.g. another bottleneck)."""
-    state = load_checkpoint(ckpt)["state_dict"]
+    module keeps its own normaliser (the new data's). :obj:`ckpt` is a
+    checkpoint, a ``.safetensors`` weights file or ``"builtin"``. Warns about
+    weights the checkpoint lacks or has in excess (e.g. another bottleneck)."""
+    state = load_weights_or_checkpoint(ckpt)["state_dict"]
     state = {k: v for k, v in state.items() if not k.startswith("normalizer.")}
     result = module.load_state_dict(state, strict=False)
     missing = [k for k in result.missing_keys if not k.startswith("normalizer.")]
@@ -165,7 +166,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         raise FileNotFoundError(f"--resume: no checkpoint at "
                                 f"{run_dir / 'checkpoints' / 'last.ckpt'}")
     if init_from:
-        load_checkpoint(init_from)  # a bad file fails before any work
+        load_weights_or_checkpoint(init_from)  # a bad file fails before any work
     if cfg.get("threads"):
         torch.set_num_threads(int(cfg["threads"]))
     with _lock(run_dir):
@@ -206,15 +207,17 @@ def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:
         atomic_write_text(path, "\n".join(dm.skipped) + "\n", create_parent=True)
 
 
-def load_module(ckpt: str, map_location: str = "cpu"):
-    """A trained module from a checkpoint, whatever its class, loaded safely
-    (``weights_only=True``).
+def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
+    """A trained module, whatever its class, loaded safely: from a
+    checkpoint (``weights_only=True``), a weights file (``.safetensors``,
+    :mod:`satagraph.io.weights`) or ``"builtin"`` (the package's weights).
 
     Raises:
-        CheckpointError: The file is not a satagraph model checkpoint, is
-            damaged, or holds non-finite weights (one line naming it).
+        CheckpointError: The file is not a satagraph model checkpoint or
+            weights file, is damaged, or holds non-finite weights; or
+            ``"builtin"`` and none ship (one line naming it).
     """
-    data = load_checkpoint(ckpt, require=("state_dict", "hyper_parameters"))
+    data = load_weights_or_checkpoint(ckpt, require=("state_dict", "hyper_parameters"))
     hparams = dict(data["hyper_parameters"])
     if not isinstance(hparams.get("model"), dict):
         raise CheckpointError(f"{ckpt}: not a satagraph model checkpoint (no model "

@@ -12,6 +12,8 @@ from torch.utils.data import DataLoader
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import (ON_ERROR, MotionDataset, WindowAugment, dataset_error,
                                     try_load_features)
+from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_datasets,
+                                    zoo_entry)
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
@@ -56,7 +58,12 @@ class MotionDataModule(L.LightningDataModule):
 
     Args:
         sources: A folder, a manifest TSV, a ``{"path", "dataset",
-            "exclude"}`` dict, or a list of these.
+            "exclude", "include"}`` dict (see
+            :func:`~satagraph.data.sources.resolve_sources`), an endless
+            procedural zoo ``{"zoo": "endless", "species": [...],
+            "holdout_species": [...], "windows_per_epoch": N}`` (windows
+            generated on the fly, see :func:`~satagraph.data.endless.zoo_entry`),
+            or a list of these (mixed in one training set).
         window (int): Frames per training window.
         stride (int): Frames between training window starts.
         eval_stride (int, optional): Stride for validation/test windows
@@ -122,7 +129,10 @@ class MotionDataModule(L.LightningDataModule):
     def setup(self, stage: Optional[str] = None) -> None:
         if self.datasets:
             return
-        files = resolve_sources(self.sources)
+        sources = self.sources if isinstance(self.sources, (list, tuple)) \
+            else [self.sources]
+        zoos = [zoo_entry(s) for s in sources if is_zoo_entry(s)]
+        files = resolve_sources([s for s in sources if not is_zoo_entry(s)])
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
         loaded, errors, total = {}, [], 0
         for split in SPLITS:
@@ -142,10 +152,28 @@ class MotionDataModule(L.LightningDataModule):
             augment = self.augment if split == "train" else None
             self.datasets[split] = MotionDataset(kept, feats, embed, self.window, stride,
                                                  augment)
+            if zoos:
+                self.datasets[split] = MixedDataset([self.datasets[split]] + [
+                    d for z in zoos for d in zoo_datasets(
+                        z, split, self.window, embed, self.preprocessing, self.seed)])
         if not len(self.datasets["train"]):
             raise ValueError(f"no training windows in {self.sources!r}")
-        self.normalizer.fit(self.datasets["train"].features,
-                            [f.path for f in self.datasets["train"].files])
+        self._fit_normalizer(loaded["train"], zoos)
+
+    def _fit_normalizer(self, train, zoos) -> None:
+        """Statistics of the training files and of ``fit_windows`` windows
+        of each zoo source's first epoch."""
+        kept, feats = list(train[0]), list(train[1])
+        names = [f.path for f in kept]
+        for z, spec in zip(self._zoo_parts("train"), zoos):
+            extra = z.fit_features(int(spec["fit_windows"]))
+            feats += extra
+            names += [f"<endless zoo window {i}>" for i in range(len(extra))]
+        self.normalizer.fit(feats, names)
+
+    def _zoo_parts(self, split: str) -> list:
+        ds = self.datasets[split]
+        return [p for p in getattr(ds, "parts", []) if hasattr(p, "zoo")]
 
     @property
     def semantic_channels(self) -> int:
@@ -162,8 +190,7 @@ class MotionDataModule(L.LightningDataModule):
                 groups = [ds.group(i) for i in range(len(ds))]
                 counts = Counter(groups)
                 weights = [1.0 / counts[g] for g in groups]
-            sampler = ResumableSampler(len(ds), weights, self.seed,
-                                       keys=ds.augment is not None)
+            sampler = ResumableSampler(len(ds), weights, self.seed, keys=_keyed(ds))
             self._resume(sampler)
         # a generator of its own: iterating never draws from the global state
         gen = torch.Generator().manual_seed(self.seed)

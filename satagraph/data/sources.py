@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import csv
+import fnmatch
 import hashlib
 import os
 from dataclasses import dataclass, replace
@@ -95,10 +96,13 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
     r"""Files from one or several sources: a folder, a manifest path, or a
-    dict ``{"path": ..., "dataset": ..., "exclude": [...], "up_axis": ...,
-    "units": ...}``. A manifest with a ``dataset`` key keeps only that
-    dataset; ``up_axis`` and ``units`` (or ``scale``) apply to every file of
-    the entry that has no setting of its own in its manifest."""
+    dict ``{"path": ..., "dataset": ..., "exclude": [...], "include": [...],
+    "up_axis": ..., "units": ...}``. A manifest with a ``dataset`` key keeps
+    only that dataset; ``include`` keeps only files whose name matches one of
+    its shell patterns (e.g. ``["[0-9][0-9]_[0-9][0-9].bvh"]``: only the
+    clips whose licence allows a use); ``up_axis`` and ``units`` (or
+    ``scale``) apply to every file of the entry that has no setting of its
+    own in its manifest."""
     if isinstance(sources, (str, os.PathLike)) or isinstance(sources, dict):
         sources = [sources]
     files: List[MotionFile] = []
@@ -110,10 +114,24 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         found = (read_manifest(path, spec.get("dataset")) if path.is_file()
                  else scan_folder(path, spec.get("dataset")))
         exclude = set(spec.get("exclude") or ())
+        include = _patterns(spec.get("include"))
         settings = _row_settings(spec, f"data.sources entry {spec['path']}")
         files += [_with_defaults(f, settings) for f in found
-                  if f.dataset not in exclude and f.split != "parser_test"]
+                  if f.dataset not in exclude and f.split != "parser_test"
+                  and (include is None or _included(f.path, include))]
     return files
+
+
+def _patterns(include) -> Optional[List[str]]:
+    """``include`` of a source entry as a list of patterns (``None``: all)."""
+    if include is None:
+        return None
+    return [include] if isinstance(include, str) else [str(p) for p in include]
+
+
+def _included(path: str, patterns: Sequence[str]) -> bool:
+    name = Path(path).name
+    return any(fnmatch.fnmatchcase(name, p) for p in patterns)
 
 
 def _with_defaults(f: MotionFile, settings: dict) -> MotionFile:

@@ -1,0 +1,278 @@
+r"""Trained weights as a safetensors file: the format of the built-in model.
+
+A weights file holds tensors only (the module's ``state_dict``: the network,
+optionally in half precision, and the normaliser statistics, always in
+float32) and, in the safetensors metadata (JSON strings), everything needed
+to rebuild the module offline:
+
+- ``format``: :data:`FORMAT`, ``format_version``: :data:`FORMAT_VERSION`,
+- ``hyper_parameters``: ``{model, loss, optim, fps, meta}`` (plain
+  containers; what :func:`satagraph.train.load_module` rebuilds from),
+- ``module``, ``semantic_encoder``, ``fps``, ``window``, ``dtype``,
+- ``training_data``: what the model was trained on (free text or a
+  description), ``provenance``: how (command, minutes, machine, ...).
+
+The file format cannot carry code (no pickle anywhere): reading it parses a
+JSON header and raw tensor bytes. Every failure is one
+:class:`~satagraph.io.checkpoint.CheckpointError` line naming the file.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Dict, Mapping, Optional, Tuple, Union
+
+import torch
+from torch import Tensor
+
+from satagraph.io.checkpoint import CheckpointError
+from satagraph.io.files import InputFileError, atomic_write, check_input_file
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: ``format`` of a satagraph weights file's metadata.
+FORMAT = "satagraph.weights"
+#: Version of the metadata layout.
+FORMAT_VERSION = "1"
+#: Largest file :func:`save_weights` writes without ``force`` (the built-in
+#: model is committed to the repository).
+MAX_WEIGHTS_BYTES = 8 * 1024 * 1024
+#: Name that resolves to the package's built-in weights.
+BUILTIN = "builtin"
+#: The one line shown when no built-in weights ship.
+NO_BUILTIN = ("no built-in weights are shipped in this version: train one with "
+              "`satagraph train pretrain_zoo` or pass --ckpt")
+#: Largest weights file read.
+_MAX_READ_BYTES = 1 << 30
+_HPARAM_KEYS = ("model", "loss", "optim", "fps", "meta")
+
+
+class WeightsSizeError(ValueError):
+    """A weights file over the size limit (pass ``force`` to write it)."""
+
+
+def builtin_path() -> Path:
+    """Where the package's built-in weights live
+    (``satagraph/weights/builtin.safetensors``; package data)."""
+    from importlib import resources
+    return Path(str(resources.files("satagraph.weights") / "builtin.safetensors"))
+
+
+def resolve_weights(name: PathLike) -> str:
+    """A path for :obj:`name`: ``"builtin"`` gives the package's weights.
+
+    Raises:
+        CheckpointError: ``"builtin"`` and no built-in weights ship
+            (:data:`NO_BUILTIN`).
+    """
+    if os.fspath(name) != BUILTIN:
+        return os.fspath(name)
+    path = builtin_path()
+    if not path.is_file():
+        raise CheckpointError(NO_BUILTIN)
+    return str(path)
+
+
+def is_weights_file(path: PathLike) -> bool:
+    """Whether :obj:`path` looks like a safetensors file (an 8-byte header
+    length followed by ``{``), whatever its name."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(9)
+    except OSError:
+        return False
+    return len(head) == 9 and head[8:9] == b"{" and int.from_bytes(head[:8], "little") > 1
+
+
+def _plain(value: Any, where: str) -> Any:
+    """:obj:`value` as JSON-ready plain containers."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v, f"{where}.{k}") for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v, where) for v in value]
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    if hasattr(value, "item") and getattr(value, "ndim", 1) == 0:  # numpy / torch scalar
+        return value.item()
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    raise TypeError(f"{where}: {type(value).__name__} is not a plain value")
+
+
+def module_hyper_parameters(module: torch.nn.Module) -> Dict[str, Any]:
+    """The ``{model, loss, optim, fps, meta}`` hyperparameters a module was
+    built from, as plain containers."""
+    hparams = dict(getattr(module, "hparams", {}) or {})
+    return _plain({k: hparams[k] for k in _HPARAM_KEYS if k in hparams},
+                  "hyper_parameters")
+
+
+def weights_payload(module: torch.nn.Module, half: bool = False,
+                    training_data: Any = None,
+                    provenance: Optional[Mapping[str, Any]] = None,
+                    ) -> Tuple[Dict[str, Tensor], Dict[str, str]]:
+    """The tensors and metadata of a module's weights file.
+
+    Args:
+        module: A trained satagraph module (its ``hparams`` hold
+            ``model``, ``fps`` and ``meta``).
+        half: Store the network's floating-point weights as float16 (the
+            normaliser statistics stay float32).
+        training_data: What it was trained on (default: the sources named
+            in its ``meta.data``).
+        provenance: How it was trained (command, minutes, machine, ...).
+
+    Returns:
+        ``(tensors, metadata)``: contiguous CPU tensors and JSON strings.
+    """
+    hparams = module_hyper_parameters(module)
+    if not isinstance(hparams.get("model"), dict):
+        raise ValueError("not a satagraph model: no model hyperparameters")
+    meta = dict(hparams.get("meta") or {})
+    if training_data is None:
+        training_data = (meta.get("data") or {}).get("sources")
+    dtype = torch.float16 if half else torch.float32
+    tensors = {}
+    for key, value in module.state_dict().items():
+        value = value.detach().to("cpu")
+        if value.is_floating_point() and not key.startswith("normalizer."):
+            value = value.to(dtype)
+        tensors[key] = value.contiguous().clone()
+    metadata = {"format": FORMAT, "format_version": FORMAT_VERSION,
+                "hyper_parameters": hparams,
+                "module": meta.get("module", "vae"),
+                "semantic_encoder": meta.get("semantic_encoder", "offline"),
+                "fps": hparams.get("fps", 30.0), "window": meta.get("window"),
+                "dtype": "float16" if half else "float32",
+                "training_data": _plain(training_data, "training_data"),
+                "provenance": _plain(dict(provenance or {}), "provenance")}
+    return tensors, {k: json.dumps(v, sort_keys=True) for k, v in metadata.items()}
+
+
+def save_weights(module: torch.nn.Module, path: PathLike, half: bool = False,
+                 training_data: Any = None, provenance: Optional[Mapping[str, Any]] = None,
+                 force: bool = False, max_bytes: int = MAX_WEIGHTS_BYTES) -> int:
+    """Write a module's weights file atomically (see :func:`weights_payload`).
+
+    Returns:
+        int: The file's size in bytes.
+
+    Raises:
+        WeightsSizeError: Larger than :obj:`max_bytes` and not :obj:`force`
+            (nothing is written).
+    """
+    from safetensors.torch import save
+    tensors, metadata = weights_payload(module, half, training_data, provenance)
+    data = save(tensors, metadata=metadata)
+    if len(data) > max_bytes and not force:
+        raise WeightsSizeError(
+            f"{os.fspath(path)}: the weights take {len(data) / 2**20:.2f} MB, over the "
+            f"{max_bytes / 2**20:.0f} MB limit: try --half, or --force to write it")
+    atomic_write(path, lambda f: f.write(data), binary=True)
+    return len(data)
+
+
+def _header(data: bytes, path: str) -> Dict[str, Any]:
+    """The JSON header of safetensors bytes."""
+    size = int.from_bytes(data[:8], "little") if len(data) >= 8 else 0
+    if size < 2 or 8 + size > len(data):
+        raise CheckpointError(f"{path}: not a readable weights file (truncated or "
+                              "another format)")
+    try:
+        header = json.loads(data[8:8 + size].decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        raise CheckpointError(f"{path}: not a readable weights file (its header is "
+                              "not JSON)") from None
+    if not isinstance(header, dict):
+        raise CheckpointError(f"{path}: not a readable weights file (bad header)")
+    return header
+
+
+def _metadata(header: Dict[str, Any], path: str) -> Dict[str, Any]:
+    """The decoded satagraph metadata of a header."""
+    raw = header.get("__metadata__") or {}
+    if not isinstance(raw, dict) or raw.get("format") != json.dumps(FORMAT):
+        raise CheckpointError(f"{path}: not satagraph weights (a safetensors file "
+                              "without satagraph metadata)")
+    try:
+        meta = {k: json.loads(v) for k, v in raw.items()}
+    except (TypeError, ValueError):
+        raise CheckpointError(f"{path}: not readable satagraph weights (metadata "
+                              "that is not JSON)") from None
+    if meta.get("format_version") != FORMAT_VERSION:
+        raise CheckpointError(f"{path}: satagraph weights of format version "
+                              f"{meta.get('format_version')!r}; this version reads "
+                              f"{FORMAT_VERSION!r}")
+    if not isinstance(meta.get("hyper_parameters"), dict) or \
+            not isinstance(meta["hyper_parameters"].get("model"), dict):
+        raise CheckpointError(f"{path}: not satagraph weights (no model "
+                              "hyperparameters)")
+    return meta
+
+
+def read_weights_metadata(path: PathLike) -> Dict[str, Any]:
+    """The decoded metadata of a satagraph weights file (no tensors read).
+
+    Raises:
+        CheckpointError: Not a satagraph weights file (one line naming it).
+    """
+    path = os.fspath(path)
+    with open(_checked(path), "rb") as f:
+        head = f.read(8)
+        size = int.from_bytes(head, "little") if len(head) == 8 else 0
+        body = f.read(size) if 1 < size < _MAX_READ_BYTES else b""
+    return _metadata(_header(head + body, path), path)
+
+
+def _checked(path: str) -> str:
+    try:
+        check_input_file(path, "checkpoint or weights file", max_bytes=_MAX_READ_BYTES)
+    except InputFileError as err:
+        raise CheckpointError(str(err)) from None
+    return path
+
+
+def load_weights(path: PathLike) -> Dict[str, Any]:
+    """A weights file as a checkpoint-like dictionary.
+
+    Returns:
+        dict: ``state_dict`` (float32 for every floating-point tensor),
+        ``hyper_parameters`` and ``weights_metadata`` (the decoded metadata).
+
+    Raises:
+        CheckpointError: Missing, truncated, not safetensors, or a
+            safetensors file that is not satagraph weights (one line
+            naming it).
+    """
+    from safetensors import SafetensorError
+    from safetensors.torch import load
+    path = os.fspath(path)
+    with open(_checked(path), "rb") as f:
+        data = f.read()
+    meta = _metadata(_header(data, path), path)
+    try:
+        state = load(data)
+    except (SafetensorError, ValueError, RuntimeError) as err:
+        first = (str(err).strip().splitlines() or [type(err).__name__])[0]
+        raise CheckpointError(f"{path}: not a readable weights file (truncated or "
+                              f"damaged: {first[:120]})") from None
+    state = {k: v.float() if v.is_floating_point() else v for k, v in state.items()}
+    return {"state_dict": state, "hyper_parameters": meta["hyper_parameters"],
+            "weights_metadata": meta}
+
+
+def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[str, Any]:
+    """A checkpoint (``torch.save``, loaded with ``weights_only=True``) or a
+    weights file, by content; ``"builtin"`` names the package's weights."""
+    from satagraph.io.checkpoint import load_checkpoint
+    path = _checked(resolve_weights(path))
+    if is_weights_file(path):
+        return load_weights(path)
+    return load_checkpoint(path, require=require)
+
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "NO_BUILTIN",
+           "WeightsSizeError", "builtin_path", "resolve_weights", "is_weights_file",
+           "module_hyper_parameters", "weights_payload", "save_weights",
+           "read_weights_metadata", "load_weights", "load_weights_or_checkpoint"]

@@ -1,0 +1,182 @@
+"""Weights files (safetensors): export, offline loading, ``builtin``, refusals."""
+from __future__ import annotations
+
+import json
+import pickle
+from pathlib import Path
+from typing import Callable, List
+
+import lightning as L
+import numpy as np
+import pytest
+import torch
+from safetensors.torch import save_file
+
+import satagraph.io.weights as weights
+from satagraph.cli import main
+from satagraph.data.zoo import generate_clip, zoo_rigs
+from satagraph.inference import reconstruct_motion
+from satagraph.io import write_bvh
+from satagraph.io.checkpoint import CheckpointError
+from satagraph.io.weights import (NO_BUILTIN, WeightsSizeError, load_weights,
+                                  read_weights_metadata, save_weights)
+from satagraph.motion import Motion
+from satagraph.train import load_module
+
+
+@pytest.fixture(scope="module")
+def zoo_clip() -> Motion:
+    """A short quadruped walk of the procedural zoo."""
+    rig = zoo_rigs(["quadruped"], seed=3)[0]
+    return generate_clip(rig, "walk", frames=40, seed=1)
+
+
+def _reconstruct(module: L.LightningModule, motion: Motion, embed: Callable) -> np.ndarray:
+    return reconstruct_motion(module, motion, embed, window=16, overlap=4).rotations
+
+
+def _no_pickle(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make any unpickling (torch.load included) fail."""
+    def refuse(*args, **kwargs):
+        raise AssertionError("unpickling while loading a weights file")
+    monkeypatch.setattr(torch, "load", refuse)
+    monkeypatch.setattr(pickle, "loads", refuse)
+    monkeypatch.setattr(pickle, "load", refuse)
+
+
+def test_export_and_reload_reconstruct_the_same(build_tiny_module: Callable, embed: Callable,
+                                                zoo_clip: Motion, tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    module = build_tiny_module()
+    expected = _reconstruct(module, zoo_clip, embed)
+    full, half = tmp_path / "full.safetensors", tmp_path / "half.safetensors"
+    size = save_weights(module, full, training_data="tiny test data",
+                        provenance={"command": "pytest", "minutes": 0.1})
+    assert size == full.stat().st_size
+    assert save_weights(module, half, half=True) < size
+
+    meta = read_weights_metadata(full)
+    assert meta["provenance"] == {"command": "pytest", "minutes": 0.1}
+    assert meta["training_data"] == "tiny test data"
+    assert meta["semantic_encoder"] == "offline" and meta["window"] == module.meta["window"]
+    assert meta["fps"] == module.fps and meta["dtype"] == "float32"
+
+    _no_pickle(monkeypatch)  # the file carries no code: nothing is unpickled
+    loaded = load_module(str(full))
+    assert type(loaded) is type(module)
+    np.testing.assert_array_equal(_reconstruct(loaded, zoo_clip, embed), expected)
+    for key, value in module.normalizer.state_dict().items():
+        torch.testing.assert_close(loaded.normalizer.state_dict()[key], value,
+                                   rtol=0, atol=0)
+
+    halved = load_weights(half)
+    assert halved["weights_metadata"]["dtype"] == "float16"
+    assert all(v.dtype != torch.float16 for v in halved["state_dict"].values())
+    loaded = load_module(str(half))
+    np.testing.assert_allclose(_reconstruct(loaded, zoo_clip, embed), expected, atol=0.05)
+
+
+def _one_line_error(path: Path) -> str:
+    with pytest.raises(CheckpointError) as info:
+        load_module(str(path))
+    text = str(info.value)
+    assert "\n" not in text and str(path) in text
+    return text
+
+
+def test_foreign_or_damaged_files_give_one_line(build_tiny_module: Callable,
+                                                tmp_path: Path) -> None:
+    foreign = tmp_path / "other.safetensors"
+    save_file({"weight": torch.ones(3)}, str(foreign), metadata={"format": "pt"})
+    assert "not satagraph weights" in _one_line_error(foreign)
+
+    good = tmp_path / "good.safetensors"
+    save_weights(build_tiny_module(), good)
+    data = good.read_bytes()
+    cut = tmp_path / "cut.safetensors"
+    cut.write_bytes(data[: len(data) // 2])
+    assert "truncated" in _one_line_error(cut)
+    head = tmp_path / "head.safetensors"
+    head.write_bytes(data[:20])
+    assert "truncated" in _one_line_error(head)
+
+    # Metadata is JSON strings only, and the format is checked.
+    meta = read_weights_metadata(good)
+    assert json.loads(json.dumps(meta)) == meta
+    with pytest.raises(CheckpointError, match="init-from|not satagraph"):
+        from satagraph.train import init_weights
+        init_weights(build_tiny_module(), str(foreign))
+
+
+def test_size_limit(build_tiny_module: Callable, tmp_path: Path) -> None:
+    path = tmp_path / "big.safetensors"
+    with pytest.raises(WeightsSizeError, match=r"MB, over the .* --force"):
+        save_weights(build_tiny_module(), path, max_bytes=1000)
+    assert not path.exists()
+    assert save_weights(build_tiny_module(), path, max_bytes=1000, force=True) > 1000
+
+
+def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip: Motion,
+                                          tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                          capsys: pytest.CaptureFixture) -> None:
+    clip = tmp_path / "walk.bvh"
+    write_bvh(zoo_clip, clip)
+    out = tmp_path / "out.bvh"
+    monkeypatch.setattr(weights, "builtin_path", lambda: tmp_path / "none.safetensors")
+    assert main(["reconstruct", str(clip), str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"satagraph: error: {NO_BUILTIN}"
+    assert "Traceback" not in err and not out.exists()
+
+    shipped = tmp_path / "builtin.safetensors"
+    save_weights(build_tiny_module(), shipped)
+    monkeypatch.setattr(weights, "builtin_path", lambda: shipped)
+    assert main(["reconstruct", str(clip), str(out)]) == 0
+    assert main(["reconstruct", "--ckpt", "builtin", str(clip), str(out)]) == 0
+    assert out.is_file()
+
+
+def test_builtin_path_is_package_data() -> None:
+    path = weights.builtin_path()
+    assert path.name == "builtin.safetensors" and path.parent.name == "weights"
+    assert (path.parent / "__init__.py").is_file()
+    setup = (Path(__file__).parents[2] / "setup.cfg").read_text()
+    assert "satagraph.weights = *.safetensors" in setup
+
+
+def _train_args(config_overrides: List[str], run: Path, *extra: str) -> List[str]:
+    return ["--traceback", "train", "tiny", *config_overrides, f"output_dir={run}",
+            "data.max_files=2", "trainer.max_epochs=1", "trainer.limit_train_batches=1",
+            "trainer.limit_val_batches=0", *extra]
+
+
+def test_export_weights_command_and_init_from(config_overrides: List[str], zoo_clip: Motion,
+                                              tmp_path: Path,
+                                              capsys: pytest.CaptureFixture) -> None:
+    run = tmp_path / "run"
+    assert main(_train_args(config_overrides, run)) == 0
+    out = tmp_path / "w.safetensors"
+    assert main(["--traceback", "export-weights", str(run), str(out), "--half",
+                 "--minutes", "0.5", "--machine", "2-core CPU", "--command", "pytest"]) == 0
+    assert "MB (float16 weights of" in capsys.readouterr().out
+    meta = read_weights_metadata(out)
+    assert meta["provenance"]["machine"] == "2-core CPU"
+    assert meta["provenance"]["source"].endswith("last.ckpt")
+    assert meta["training_data"] == meta["hyper_parameters"]["meta"]["data"]["sources"]
+
+    clip = tmp_path / "walk.bvh"
+    write_bvh(zoo_clip, clip)
+    assert main(["--traceback", "reconstruct", "--ckpt", str(out), str(clip),
+                 str(tmp_path / "o.bvh")]) == 0
+
+    # --init-from a weights file: with lr = 0 the network stays as loaded.
+    tuned = tmp_path / "tuned"
+    assert main(_train_args(config_overrides, tuned, "optim.lr=0.0",
+                            "--init-from", str(out))) == 0
+    state = torch.load(tuned / "checkpoints" / "last.ckpt", weights_only=True)["state_dict"]
+    source = load_weights(out)["state_dict"]
+    for key, value in source.items():
+        if key.startswith("model."):
+            torch.testing.assert_close(state[key], value, rtol=0, atol=0, msg=key)
+
+    assert main(["export-weights", str(tmp_path / "nothing"), str(tmp_path / "x.safetensors")]) == 2
