@@ -86,3 +86,18 @@ def test_normalizer_fit_and_inverse(shared_data, tmp_path):
     other = FeatureNormalizer()
     other.load_state_dict(state)
     assert bool(other.fitted)
+
+
+def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
+    """Bone scaling of ccbase/007_01 (a moving RL_BoneRoot above the hips)
+    gave root speeds of 1e5 (a 1e9 training loss); such a window is used as
+    it is instead."""
+    from satagraph.data import canonicalize, motion_to_features
+    from satagraph.data.dataset import WindowAugment
+    feats = motion_to_features(canonicalize(read_real("ccbase/007_01.bvh")))
+    aug = WindowAugment.from_config({"scale": 1.0, "mirror": 0.0})
+    bound = 4 * max(np.abs(feats.r[:, :3]).max(), 0.5)
+    for i, start in enumerate(range(0, 44, 4)):
+        out, _ = aug(feats, start, start + 32, 0, i)
+        assert np.abs(out.r[:, :3]).max() <= bound
+    assert aug.rejected > 0  # the bug is still there: the guard catches it
