@@ -130,7 +130,7 @@ class UpAxisGuess:
         text = (f"{self.axis} (detected, confidence {self.confidence:.2f}; {cues}"
                 + (f"; runner-up {runner} {self.scores[runner]:.2f} against "
                    f"{self.scores[self.axis]:.2f}" if runner else "") + ")")
-        return text + ("" if self.moving else "; the clip barely moves: pose cues only")
+        return text + ("" if self.moving else "; the clip barely moves: mostly its pose")
 
 
 def axis_vector(axis: str) -> np.ndarray:
