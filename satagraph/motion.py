@@ -29,9 +29,10 @@ class CanonicalTransform:
         removed_root (dict, optional): A motionless root above the moving
             root that canonicalisation removed (name, channels, offset,
             constant rotation and translation), for writing back.
-        source_rig (RigSettings, optional): The source's own
-            :class:`RigSettings` (a canonical file's declaration), given
-            back by decanonicalisation.
+        source_rig (RigSettings, optional): How the source was read (up
+            axis and units, as given, declared or detected), given back by
+            decanonicalisation so that results on the source's rig are read
+            the same way.
     """
 
     up_axis: str = "+Y"

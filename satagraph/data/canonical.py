@@ -195,7 +195,8 @@ def canonicalize(
     yaw = float(np.arctan2(-forward[0], forward[2]))  # rotate forward onto +Z
     transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
                                    scale=reading.units.scale, source_fps=motion.fps,
-                                   removed_root=removed, source_rig=motion.rig)
+                                   removed_root=removed,
+                                   source_rig=_as_read(reading))
     out = _apply_rotation(motion, transform.rotation, transform.scale, np.zeros(3))
     shift = np.zeros(3)
     if out.num_frames:
@@ -208,6 +209,15 @@ def canonicalize(
                     rig=CANONICAL_RIG)
     out.transform = transform
     return resample(out, fps) if fps else out
+
+
+def _as_read(reading) -> RigSettings:
+    """The reading of a source as settings: what :func:`decanonicalize`
+    gives back, so that a result on the source's rig is read the same way
+    (units left unset where they were the file's own, undecided)."""
+    return RigSettings(reading.up.axis,
+                       None if reading.units.kept else reading.units.scale,
+                       declared=True)
 
 
 #: What a canonical motion is: +Y up, metres (declared, never re-guessed).

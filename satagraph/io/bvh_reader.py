@@ -207,10 +207,12 @@ def _unique(name: str, names: set) -> str:
     return out
 
 
-#: A trailing ``# satagraph: canonical up_axis=+Y scale=1`` line: the file
-#: declares how it is to be read (written by ``satagraph convert --canonical``).
-_DECLARATION = re.compile(r"(?:\r?\n|\r)[ \t]*#[ \t]*satagraph:[ \t]*canonical"
-                          r"[ \t]+up_axis=([+-][XYZ])[ \t]+scale=(\S+)[ \t]*(?:\r?\n|\r)?\s*\Z")
+#: A trailing ``# satagraph: [canonical] up_axis=AXIS [scale=S]`` line: the
+#: file declares how it is to be read (written by ``satagraph convert
+#: --canonical``, and by retarget / reconstruct in the target's own frame;
+#: no ``scale`` where the units are the file's own, undecided).
+_DECLARATION = re.compile(r"(?:\r?\n|\r)[ \t]*#[ \t]*satagraph:[ \t]*(?:canonical[ \t]+)?"
+                          r"up_axis=([+-][XYZ])(?:[ \t]+scale=(\S+))?[ \t]*(?:\r?\n|\r)?\s*\Z")
 _MOTION = re.compile(r"^[ \t]*MOTION[ \t]*\r?$", re.M | re.I)
 
 
@@ -469,6 +471,8 @@ def _declaration(path: str, text: str) -> Tuple[str, Optional[RigSettings]]:
     match = _DECLARATION.search(text)
     if match is None:
         return text, None
+    if match.group(2) is None:
+        return text[:match.start()] + "\n", RigSettings(match.group(1), None, declared=True)
     try:
         scale = float(match.group(2))
     except ValueError:

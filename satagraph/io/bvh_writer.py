@@ -98,13 +98,18 @@ def channel_values(motion: Motion) -> np.ndarray:
 
 
 def declaration(motion: Motion) -> str:
-    """The trailing line by which a canonical file declares its up axis and
-    units (empty for other motions): readers of this package then never
-    re-guess them; other readers stop after the declared frames."""
+    """The trailing line by which a file declares how it is to be read
+    (empty where nothing is declared): ``canonical up_axis=+Y scale=1`` for
+    a canonical motion, the up axis and units of the rig it was put on for
+    a retargeted or reconstructed one (no scale where the units are the
+    file's own). Readers of this package then never re-guess them; other
+    readers stop after the declared frames."""
     rig = motion.rig
-    if rig is None or not rig.declared or rig.up_axis is None or rig.scale is None:
+    if rig is None or not rig.declared or rig.up_axis is None:
         return ""
-    return f"# satagraph: canonical up_axis={rig.up_axis} scale={float(rig.scale):g}\n"
+    scale = "" if rig.scale is None else f" scale={float(rig.scale):g}"
+    canonical = "canonical " if rig.up_axis == "+Y" and scale == " scale=1" else ""
+    return f"# satagraph: {canonical}up_axis={rig.up_axis}{scale}\n"
 
 
 def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:

@@ -48,3 +48,30 @@ def test_override_survives_convert_inspect_render_retarget(
     assert out.num_frames == 40
     write_bvh(out, tmp_path / "out.bvh")
     assert read_bvh(tmp_path / "out.bvh").rig.declared
+
+
+def test_results_on_a_rig_are_read_as_that_rig_was(
+        tmp_path: Path, build_tiny_module: Callable, embed: Callable, monkeypatch) -> None:
+    """A retarget onto a -X-up rig in inches says so in its file; one onto a
+    rig of undecided units declares the up axis only."""
+    from satagraph.motion import RigSettings
+    source = read_bvh(_write(tmp_path / "biped.bvh", "biped", Dialect()))
+    module = build_tiny_module()
+    crab = read_bvh(_write(tmp_path / "crab.bvh", "crab", Dialect(up_axis="-X", unit="in")))
+    out = retarget_motion(module, source, with_rig(crab, "-X", "in"), embed, window=16)
+    assert out.rig == RigSettings("-X", 0.0254, declared=True)
+    write_bvh(out, tmp_path / "out.bvh")
+    assert (tmp_path / "out.bvh").read_text().splitlines()[-1] == \
+        "# satagraph: up_axis=-X scale=0.0254"
+    bird = read_bvh(_write(tmp_path / "bird.bvh", "fowl", Dialect(unit=28.0)))
+    out = retarget_motion(module, source, with_rig(bird, "+Y"), embed, window=16)
+    assert out.rig == RigSettings("+Y", None, declared=True)  # units stay undecided
+    write_bvh(out, tmp_path / "out2.bvh")
+    again = read_bvh(tmp_path / "out2.bvh")
+    assert again.rig == out.rig
+
+    def never(_motion, *_args):
+        raise AssertionError("re-guessed")
+    monkeypatch.setattr(rr, "guess_up_axis", never)
+    from satagraph.data.canonical import canonicalize
+    assert canonicalize(again, fps=None).transform.up_axis == "+Y"
