@@ -49,99 +49,24 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.canonical import canonicalize, lateral_forward  # noqa: E402
+from satagraph.data.canonical import canonicalize  # noqa: E402
 from satagraph.data.datamodule import semantic_embedder  # noqa: E402
-from satagraph.data.features import motion_to_features  # noqa: E402
-from satagraph.data.semantics import LIMBS, limb_ends  # noqa: E402
+from satagraph.data.semantics import LIMBS  # noqa: E402
 from satagraph.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
+from satagraph.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402
 from satagraph.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
-#: Displacement interval (frames at the model's 30 fps, 0.1 s): the stepping
-#: band (1-3 Hz) without frame-to-frame capture and resampling jitter.
-LAG = 3
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
 
 
-def facing_axis(canonical) -> Optional[np.ndarray]:
-    """Root-local facing axis of a canonical motion: the mean over its
-    frames of the horizontal forward direction
-    (:func:`~satagraph.data.canonical.lateral_forward`) in the root's frame;
-    ``None`` (the features' first-frame axis) without left/right pairs."""
-    rot, pos = canonical.global_transforms()
-    forward = lateral_forward(pos, canonical.skeleton.names, np.array([0.0, 1.0, 0.0]))
-    if forward is None:
-        return None
-    forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-9)
-    axis = np.einsum("tji,tj->i", rot[:, 0], forward)
-    return axis / max(np.linalg.norm(axis), 1e-9)
-
-
-def forward_track(motion, fps: float, first_frame: bool = False) -> np.ndarray:
-    """Forward coordinate of every joint relative to the root in the facing
-    frame of :func:`facing_axis` (with :obj:`first_frame`: of the axis facing
-    +Z at the first frame, as the features), :math:`(T, J)`."""
-    return _forward_tracks(canonicalize(motion, fps=fps), (not first_frame,))[0]
-
-
-def _forward_tracks(canonical, averaged: Sequence[bool]) -> List[np.ndarray]:
-    """:func:`forward_track` of a canonical motion for each facing choice
-    (``True``: clip-averaged axis, ``False``: first-frame axis)."""
-    # ``x`` is placed at the root's ground projection in the facing frame;
-    # ``x_rel`` (relative to the parent) would only measure the last bone.
-    return [motion_to_features(canonical, facing_axis=facing_axis(canonical) if avg
-                               else None).x[..., 2] for avg in averaged]
-
-
-def limb_tracks(motion, fps: float, first_frame: bool = False) -> Dict[str, np.ndarray]:
-    """Forward track :math:`(T,)` of each limb end found on the motion's
-    skeleton, at :obj:`fps` (see :func:`forward_track`)."""
-    return _by_limb(motion, forward_track(motion, fps, first_frame))
-
-
 def both_limb_tracks(motion, fps: float) -> Tuple[Dict[str, np.ndarray], Dict[str, np.ndarray]]:
-    """:func:`limb_tracks` with the clip-averaged and with the first-frame
-    facing axis, canonicalising the motion once."""
-    tracks = _forward_tracks(canonicalize(motion, fps=fps), (True, False))
-    return _by_limb(motion, tracks[0]), _by_limb(motion, tracks[1])
-
-
-def _by_limb(motion, track: np.ndarray) -> Dict[str, np.ndarray]:
-    return {limb: track[:, j] for limb, j in limb_ends(motion.skeleton).items()}
-
-
-def most_active(motion, frames: int):
-    """The :obj:`frames`-long slice of :obj:`motion` (at its own frame rate)
-    whose limb ends move most (summed forward speed)."""
-    if motion.num_frames <= frames:
-        return motion
-    tracks = np.stack(list(limb_tracks(motion, motion.fps).values()), axis=1)
-    speed = np.abs(np.diff(tracks, axis=0)).sum(axis=1)
-    window = np.convolve(speed, np.ones(frames - 1), mode="valid")
-    start = int(np.argmax(window))
-    return motion.slice(start, start + frames)
-
-
-def correlate(source: Dict[str, np.ndarray], output: Dict[str, np.ndarray],
-              lag: Optional[int] = LAG) -> Dict[str, float]:
-    """Per limb on both, the Pearson correlation of the tracks'
-    displacements over :obj:`lag` frames (``None``: of the tracks
-    themselves)."""
-    out = {}
-    for limb in LIMBS:
-        if limb in source and limb in output:
-            frames = min(len(source[limb]), len(output[limb]))
-            x, y = source[limb][:frames], output[limb][:frames]
-            if lag:
-                x, y = x[lag:] - x[:-lag], y[lag:] - y[:-lag]
-            out[limb] = float(np.corrcoef(x, y)[0, 1])
-    return out
-
-
-def correlations(source, output, fps: float, lag: Optional[int] = LAG) -> Dict[str, float]:
-    """:func:`correlate` of the limb tracks of two motions at :obj:`fps`."""
-    return correlate(limb_tracks(source, fps), limb_tracks(output, fps), lag)
+    """Limb tracks (:func:`satagraph.quality.limb_tracks`) with the
+    clip-averaged and with the first-frame facing axis, canonicalising the
+    motion once."""
+    canonical = canonicalize(motion, fps=fps)
+    return limb_tracks(canonical, True), limb_tracks(canonical, False)
 
 
 def reinitialised(module):

@@ -308,7 +308,7 @@ def run_demo(args: argparse.Namespace) -> int:
     options = DemoOptions(
         output=args.output or "demo_output", minutes=args.minutes, data=args.data,
         species=args.species, clips=args.clips, frames=args.frames, seed=args.seed,
-        config=args.config, overrides=list(args.overrides))
+        config=args.config, overrides=list(args.overrides), from_scratch=args.from_scratch)
     result = run_full_demo(options)
     print(json.dumps(result.to_dict(), indent=2) if args.json
           else format_summary(result))
@@ -335,15 +335,19 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         description="Run the whole pipeline on built-in data, with no data "
         "files and no network, in under 10 minutes on a CPU: (1) write the "
         "procedural zoo (bipeds, quadrupeds, birds, hexapods, snakes) to "
-        "OUTPUT/zoo; (2) train a small SATA-VAE on it (experiments/demo.yaml, "
-        "4 minutes; --minutes changes it) into OUTPUT/run, or on your own BVH "
-        "folders and manifests with --data; (3) retarget a biped walk onto a "
-        "quadruped, a bird and a differently proportioned human "
-        "(OUTPUT/retarget/*.bvh); (4) render them side by side "
-        "(OUTPUT/demo.gif, OUTPUT/demo_sheet.png); (5) print what was "
-        "written where and how long each step took. --quick only writes the "
-        "built-in example walk (7 joints, 3 end sites, 60 frames at 30 fps) "
-        "and inspects it, in seconds.",
+        "OUTPUT/zoo; (2) retarget a biped walk onto a quadruped, a bird and a "
+        "differently proportioned human with the built-in model "
+        "(OUTPUT/retarget/*.bvh), scoring each (limbs in step with the source, "
+        "root travel against the source's); (3) render them side by side "
+        "(OUTPUT/demo.gif, OUTPUT/demo_sheet.png); (4) fine-tune the built-in "
+        "model on the zoo (experiments/demo.yaml, 4 minutes; --minutes changes "
+        "it) into OUTPUT/run and score the same retargets with it "
+        "(OUTPUT/retarget_finetuned); (5) print what was written where, how "
+        "long each step took and the scores. --from-scratch (or --data with "
+        "your own BVH folders and manifests, or a version without built-in "
+        "weights) trains a new model first and retargets with it. --quick "
+        "only writes the built-in example walk (7 joints, 3 end sites, 60 "
+        "frames at 30 fps) and inspects it, in seconds.",
         epilog="examples: satagraph demo --minutes 2 | satagraph demo --data "
         "../shared/data --output runs/demo | satagraph demo --quick")
     parser.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
@@ -362,6 +366,9 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         "of the zoo (e.g. ../shared/data)")
     parser.add_argument("--config", default="demo",
                         help="training config (default: demo)")
+    parser.add_argument("--from-scratch", action="store_true",
+                        help="train a new model instead of fine-tuning the "
+                        "built-in one")
     parser.add_argument("--species", nargs="+", choices=SPECIES, default=None,
                         metavar="NAME", help="zoo species (default: biped, "
                         "quadruped, bird, hexapod, snake; biped, quadruped and "

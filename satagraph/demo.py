@@ -2,13 +2,17 @@ r"""``satagraph demo``: the whole pipeline in minutes, with no data and no
 network.
 
 1. write the procedural zoo (:func:`satagraph.data.zoo.write_zoo`);
-2. train a small SATA-VAE on it (``experiments/demo.yaml``) for a few
-   minutes, or on the user's BVH folders and manifests instead;
-3. retarget a biped walk onto a quadruped, onto a bird and onto a
+2. retarget a biped walk onto a quadruped, onto a bird and onto a
    differently proportioned human (:func:`satagraph.data.augment.scale_bones`,
-   whose ground truth gives a retargeting error);
-4. render the four side by side (GIF and PNG contact sheet);
-5. print what was written where and how long each step took.
+   whose ground truth gives a retargeting error) with the built-in model,
+   and score each retarget (:mod:`satagraph.quality`: limbs in step with
+   the source, root travel against the source's);
+3. render the four side by side (GIF and PNG contact sheet);
+4. fine-tune the built-in model on the zoo for a few minutes
+   (``experiments/demo.yaml``; or train from scratch, ``--from-scratch``,
+   always so when no built-in weights ship or ``--data`` names the user's
+   BVH folders and manifests) and score the same retargets with it;
+5. print what was written where, how long each step took and the scores.
 
 Example::
 
@@ -60,6 +64,8 @@ class DemoOptions:
         config (str): Training config (name in ``experiments/`` or path).
         overrides (list[str]): Dotted config overrides (``key.sub=value``),
             applied last.
+        from_scratch (bool): Train a new model instead of fine-tuning the
+            built-in one (always so when none ships).
     """
 
     output: str = "demo_output"
@@ -71,6 +77,7 @@ class DemoOptions:
     seed: int = 0
     config: str = "demo"
     overrides: List[str] = field(default_factory=list)
+    from_scratch: bool = False
 
 
 @dataclass
@@ -82,6 +89,7 @@ class DemoStep:
     seconds: float = 0.0
     written: List[str] = field(default_factory=list)
     note: str = ""
+    quality: Dict[str, Dict[str, Any]] = field(default_factory=dict)
 
 
 @dataclass
@@ -115,6 +123,7 @@ class _Progress:
 
     def __init__(self, result: DemoResult, total: int, stream: TextIO) -> None:
         self.result, self.total, self.stream = result, total, stream
+        self.panels: List[Panel] = []
 
     def say(self, text: str) -> None:
         print(text, file=self.stream, flush=True)
@@ -143,35 +152,64 @@ def write_demo_zoo(folder: Path, options: DemoOptions) -> List[Dict[str, str]]:
                      seed=options.seed, frames=options.frames)
 
 
-def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path
-                ) -> Dict[str, Any]:
+def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
+                base: Optional[Dict[str, Any]] = None) -> Dict[str, Any]:
     """The training config: :attr:`DemoOptions.config` with the data
     sources, run folder and training time of the demo, then the user's
-    overrides."""
+    overrides. With :obj:`base` (the built-in model's hyperparameters) the
+    model, loss and window are the built-in model's and the learning rate a
+    fine-tune's."""
     from satagraph.config import load_config
 
     cfg = load_config(options.config)
     cfg["data"]["sources"] = [str(s) for s in sources]
     cfg["output_dir"] = str(run_dir)
+    if base is not None:
+        cfg["model"], cfg["loss"] = dict(base["model"]), dict(base.get("loss") or {})
+        cfg["data"]["window"] = int(base.get("meta", {}).get("window", cfg["data"]["window"]))
+        cfg["optim"] = dict(cfg.get("optim") or {}, **FINE_TUNE_OPTIM)
     if options.minutes is not None:
         cfg.setdefault("trainer", {})["max_time"] = {"minutes": float(options.minutes)}
     for item in options.overrides:
         if "=" not in item:
             raise ValueError(f"override {item!r} is not of the form key=value")
+        if base is not None and item.startswith("model."):
+            raise ValueError(f"override {item!r}: the fine-tune keeps the built-in "
+                             "model's architecture; add --from-scratch to change it")
     merged = OmegaConf.merge(OmegaConf.create(cfg),
                              OmegaConf.from_dotlist(list(options.overrides)))
     return OmegaConf.to_container(merged, resolve=True)
 
 
-def train_demo(cfg: Dict[str, Any]) -> Tuple[Any, Any]:
-    """Step 2: train; returns the trained module and the trainer."""
+#: Optimiser settings of the demo's fine-tune from the built-in weights.
+FINE_TUNE_OPTIM: Dict[str, Any] = {"lr": 3.0e-4, "warmup_epochs": 0}
+
+
+def train_demo(cfg: Dict[str, Any], init_from: Optional[str] = None) -> Tuple[Any, Any]:
+    """Step 2: train (from :obj:`init_from`'s weights when given); returns
+    the trained module and the trainer."""
     from satagraph.train import train
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", ".*does not have many workers.*")
         warnings.filterwarnings("ignore", ".*Checkpoint directory.*exists.*")
-        module, _, trainer, _ = train(cfg)
+        module, _, trainer, _ = train(cfg, init_from=init_from)
     return module, trainer
+
+
+def builtin_module():
+    """The built-in model, or ``None`` when this version ships none."""
+    from satagraph.io.weights import builtin_path
+    from satagraph.train import load_module
+
+    return load_module("builtin").eval() if builtin_path().is_file() else None
+
+
+def module_embedder(module, cache_dir: Optional[str] = None):
+    """The semantic embedder a module was trained with."""
+    from satagraph.data.datamodule import semantic_embedder
+
+    return semantic_embedder(module.meta.get("semantic_encoder", "offline"), cache_dir)
 
 
 def _rig(path: str) -> str:
@@ -197,25 +235,24 @@ def pick_clips(rows: Sequence[Dict[str, str]], zoo: Path) -> Dict[str, Path]:
             "bird": first("bird")}
 
 
-def retarget_demo(module, cfg: Dict[str, Any], clips: Dict[str, Path],
-                  folder: Path, seed: int = 0) -> Tuple[List[Panel], str, float]:
+def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: int,
+                  seed: int = 0) -> Tuple[List[Panel], str, float, Dict[str, Dict]]:
     r"""Step 3: retarget the source walk onto the quadruped, the bird and a
     bone-scaled copy of the source's human skeleton, and write the BVH
     files (a copy of the source and the rescaled human's ground truth too).
 
     Returns:
-        The panels (source first), the ground truth file and the mean joint
+        The panels (source first), the ground truth file, the mean joint
         position error of the rescaled human against it, relative to the
-        height (see :func:`pose_error`).
+        height (see :func:`pose_error`), and per target the
+        :func:`~satagraph.quality.retarget_quality` of its retarget (with
+        the source's own root travel, ``source_travel``, in leg lengths).
     """
     from satagraph.data.augment import scale_bones
-    from satagraph.data.datamodule import semantic_embedder
-    from satagraph.inference import retarget_motion
+    from satagraph.inference import from_canonical, retarget_canonical
     from satagraph.io import read_bvh, write_bvh
+    from satagraph.quality import retarget_quality, root_travel
 
-    data = cfg["data"]
-    embed = semantic_embedder(data.get("semantic_encoder", "offline"), data.get("cache_dir"))
-    window = int(data.get("window", 64))
     source = read_bvh(clips["source"])
     human = scale_bones(source, 0.7, 1.3, seed=seed)
     folder.mkdir(parents=True, exist_ok=True)
@@ -224,15 +261,29 @@ def retarget_demo(module, cfg: Dict[str, Any], clips: Dict[str, Path],
     targets = [(f"quadruped: {_rig(str(clips['quadruped']))}", read_bvh(clips["quadruped"])),
                (f"bird: {_rig(str(clips['bird']))}", read_bvh(clips["bird"])),
                (f"rescaled human: {name}", human)]
+    qualities: Dict[str, Dict] = {}
     for title, target in targets:
-        out = retarget_motion(module, source, target, embed, window, window // 4)
+        src, canon = retarget_canonical(module, source, target, embed, window, window // 4)
+        qualities[title.split(":")[0]] = dict(retarget_quality(src, canon),
+                                              source_travel=root_travel(src))
         stem = title.split(": ")[1] + ("_rescaled" if title.startswith("rescaled") else "")
-        panels.append(Panel(title, out, str(folder / f"walk_on_{stem}.bvh")))
+        panels.append(Panel(title, from_canonical(canon, source),
+                            str(folder / f"walk_on_{stem}.bvh")))
     truth = str(folder / f"ground_truth_{name}_rescaled.bvh")
     for panel in panels:
         write_bvh(panel.motion, panel.path)
     write_bvh(human, truth)
-    return panels, truth, pose_error(panels[-1].motion, human)
+    return panels, truth, pose_error(panels[-1].motion, human), qualities
+
+
+def quality_note(qualities: Dict[str, Dict], error: float) -> str:
+    """One line per model: each target's in-step correlation with the source
+    (1 = every limb in step, 0 = chance or still) and its root travel
+    against the source's (1.00 = as far, in leg lengths)."""
+    parts = [f"{name} steps {q['steps']:+.2f} travel {q['travel']:.2f}x"
+             for name, q in qualities.items()]
+    return ("; ".join(parts) + f"; rescaled human joint error {100 * error:.1f}% of "
+            "its height vs the bone-scaled ground truth")
 
 
 def pose_error(motion: Motion, truth: Motion) -> float:
@@ -259,41 +310,72 @@ def render_demo(panels: Sequence[Panel], gif: Path, sheet: Path) -> int:
 def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     r"""Run the whole demo into :attr:`DemoOptions.output`.
 
+    With the built-in model (unless :attr:`DemoOptions.from_scratch`):
+    zoo, retarget with the built-in model, render, a short fine-tune from it
+    on the zoo, and the same retargets with the fine-tuned model. Without
+    one: zoo, train from scratch, retarget, render.
+
     Args:
         options (DemoOptions): What to do.
         stream (TextIO): Where the status lines go.
     """
     out = Path(options.output)
     result = DemoResult(str(out))
-    progress = _Progress(result, 4, stream)
+    builtin = None if options.from_scratch or options.data else builtin_module()
+    progress = _Progress(result, 4 if builtin is None else 5, stream)
     zoo = out / "zoo"
     with progress.step("zoo", f"writing the procedural zoo to {zoo}") as step:
         rows = write_demo_zoo(zoo, options)
         step.written = [str(zoo / "manifest.tsv")]
         step.note = (f"{len(rows)} BVH clips of {len({r['skeleton'] for r in rows})} "
                      f"skeletons ({', '.join(dict.fromkeys(r['species'] for r in rows))})")
+    clips = pick_clips(rows, zoo)
     sources = options.data or [str(zoo / "manifest.tsv")]
-    cfg = demo_config(options, sources, out / "run")
-    with progress.step("train", f"training {cfg['name']} on {', '.join(sources)} "
+    if builtin is not None:
+        _retarget_step(progress, "retarget", "with the built-in model", builtin, clips,
+                       out / "retarget", options.seed)
+        _render_step(progress, result, out)
+    cfg = demo_config(options, sources, out / "run",
+                      None if builtin is None else builtin.hparams)
+    what = ("fine-tuning the built-in model" if builtin is not None else
+            f"training {cfg['name']} from scratch")
+    with progress.step("train", f"{what} on {', '.join(sources)} "
                        f"(at most {_budget(cfg)})") as step:
-        module, trainer = train_demo(cfg)
+        module, trainer = train_demo(cfg, None if builtin is None else "builtin")
         from satagraph.train import last_checkpoint
         step.written = [last_checkpoint(trainer)]
         step.note = _training_note(trainer)
-    with progress.step("retarget", "retargeting a biped walk onto a quadruped, a "
-                       "bird and a rescaled human") as step:
-        panels, truth, error = retarget_demo(module, cfg, pick_clips(rows, zoo),
-                                             out / "retarget", options.seed)
-        step.written = [p.path for p in panels] + [truth]
-        step.note = (f"rescaled human: mean joint error {100 * error:.1f}% of the "
-                     "height vs the bone-scaled ground truth")
-    with progress.step("render", "rendering the four side by side") as step:
-        gif, sheet = out / "demo.gif", out / "demo_sheet.png"
-        count = render_demo(panels, gif, sheet)
-        step.written = [str(gif), str(sheet)]
-        step.note = f"{len(panels)} panels, {count} frames"
+    name = "retarget" if builtin is None else "fine-tuned"
+    _retarget_step(progress, name, "with the trained model", module, clips,
+                   out / ("retarget" if builtin is None else "retarget_finetuned"),
+                   options.seed, cfg["data"].get("cache_dir"))
+    if builtin is None:
+        _render_step(progress, result, out)
     _write_json(out / "summary.json", result.to_dict())
     return result
+
+
+def _retarget_step(progress: _Progress, name: str, how: str, module, clips: Dict[str, Path],
+                   folder: Path, seed: int, cache_dir: Optional[str] = None) -> None:
+    from satagraph.inference import default_windows
+
+    with progress.step(name, f"retargeting a biped walk onto a quadruped, a bird and a "
+                       f"rescaled human {how}") as step:
+        panels, truth, error, qualities = retarget_demo(
+            module, module_embedder(module, cache_dir), clips, folder,
+            default_windows(module)[0], seed)
+        step.written = [p.path for p in panels] + [truth]
+        step.note = quality_note(qualities, error)
+        step.quality = qualities
+        progress.panels = panels
+
+
+def _render_step(progress: _Progress, result: DemoResult, out: Path) -> None:
+    with progress.step("render", "rendering the four side by side") as step:
+        gif, sheet = out / "demo.gif", out / "demo_sheet.png"
+        count = render_demo(progress.panels, gif, sheet)
+        step.written = [str(gif), str(sheet)]
+        step.note = f"{len(progress.panels)} panels, {count} frames"
 
 
 def _budget(cfg: Dict[str, Any]) -> str:
@@ -328,9 +410,14 @@ def format_summary(result: DemoResult) -> str:
         lines.append(f"  {step.name:<9} {step.seconds:7.1f} s  {step.note}")
         lines += [f"  {'':<9} {'':>9}  -> {path}" for path in step.written]
     lines.append(f"  {'summary':<9} {'':>9}  -> {Path(result.output) / 'summary.json'}")
+    if any(step.quality for step in result.steps):
+        lines.append("  steps: correlation of each limb end's forward swing with the source's "
+                     "(+1 in step, 0 chance or standing still); travel: root distance in leg "
+                     "lengths against the source's (1.00x = as far)")
     return "\n".join(lines)
 
 
 __all__ = ["DemoOptions", "DemoResult", "DemoStep", "Panel", "run_demo",
            "format_summary", "write_demo_zoo", "demo_config", "train_demo",
-           "pick_clips", "retarget_demo", "render_demo", "pose_error"]
+           "pick_clips", "retarget_demo", "render_demo", "pose_error", "quality_note",
+           "builtin_module", "module_embedder", "FINE_TUNE_OPTIM"]

@@ -142,15 +142,34 @@ def retarget_motion(module, source: Motion, target: Motion,
             (default: a quarter of the window).
         fps (float, optional): Feature frame rate (the model's, default 30).
     """
+    _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps)
+    return from_canonical(canon, source)
+
+
+def from_canonical(canon: Motion, source: Motion) -> Motion:
+    r"""A canonical retarget (:func:`retarget_canonical`) back on its rig:
+    the target's axes, units and channel layout, at the source's frame rate
+    and frame count."""
+    canon = resample_frames(canon, source.fps, source.num_frames)
+    return decanonicalize(canon, canon.transform, fps=source.fps)
+
+
+def retarget_canonical(module, source: Motion, target: Motion,
+                       semantic: Optional[Callable] = None, window: Optional[int] = None,
+                       overlap: Optional[int] = None, fps: Optional[float] = None
+                       ) -> Tuple[Motion, Motion]:
+    r""":func:`retarget_motion` in the model's canonical frame (+Y up,
+    metres, floor at 0, the model's frame rate): the canonical source and
+    its retarget, whose :attr:`~Motion.transform` is the target's (what
+    :func:`~satagraph.data.canonical.decanonicalize` undoes). What
+    :mod:`satagraph.quality` measures."""
     fps = fps or float(getattr(module, "fps", 30.0))
-    src = motion_to_features(canonicalize(source, fps=fps))
+    src_canon = canonicalize(source, fps=fps)
     tgt_canon = canonicalize(target, fps=fps)
     tgt = static_features(tgt_canon)
-    q, r, _ = transfer(module, src, tgt, semantic, window, overlap)
+    q, r, _ = transfer(module, motion_to_features(src_canon), tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
-    canon = features_to_motion(out_feats, q=q, r=r, use_positions=False)
-    canon = resample_frames(canon, source.fps, source.num_frames)
-    return decanonicalize(canon, tgt_canon.transform, fps=source.fps)
+    return src_canon, features_to_motion(out_feats, q=q, r=r, use_positions=False)
 
 
 def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:

@@ -82,47 +82,6 @@ def test_matmul_peak_is_best_over_sizes(monkeypatch):
     assert throughput.matmul_peak(cpu, (32, 64, 128), repeats=1) == 9.0
 
 
-def test_retarget_sanity_measures_limb_swing(read_real):
-    """The sanity check's limb ends are the paws / hands and feet, its window
-    is where the dog moves, and it measures limb swing relative to the root:
-    a clip against itself correlates 1, against a time-reversed copy not."""
-    import retarget_sanity
-    dog = read_real("dog/D1_004_KAN01_001.bvh")
-    human = read_real("cmu/01_01.bvh")
-    names = {k: dog.skeleton.names[j] for k, j in retarget_sanity.limb_ends(dog.skeleton).items()}
-    assert names == {"left front": "LeftHand", "right front": "RightHand",
-                     "left hind": "LeftFoot", "right hind": "RightFoot"}
-    assert set(retarget_sanity.limb_ends(human.skeleton)) == set(retarget_sanity.LIMBS)
-    window = retarget_sanity.most_active(dog, 300)
-    assert window.num_frames == 300
-    ends = list(retarget_sanity.limb_ends(dog.skeleton).values())
-    opening = retarget_sanity.forward_track(dog.slice(0, 300), 30.0)[:, ends]
-    active = retarget_sanity.forward_track(window, 30.0)[:, ends]
-    assert np.diff(active, axis=0).std() > 3 * np.diff(opening, axis=0).std()
-    same = retarget_sanity.correlations(window, window, 30.0)
-    same.update({k + " pos": v for k, v in retarget_sanity.correlations(window, window, 30.0, lag=None).items()})
-    assert all(abs(c - 1.0) < 1e-9 for c in same.values())
-    reversed_ = window.with_(rotations=window.rotations[::-1].copy(),
-                             translations=window.translations[::-1].copy(), raw_channels=None)
-    assert np.mean(list(retarget_sanity.correlations(window, reversed_, 30.0).values())) < 0.5
-
-
-def test_retarget_sanity_facing_axis_follows_the_walk(read_real):
-    """The clip-averaged facing axis points where a walk goes: the root moves
-    forward in its facing frame, and the axis agrees with the first-frame
-    one within 30 degrees on a plain walk."""
-    import retarget_sanity
-    from satagraph.data.canonical import canonicalize
-    from satagraph.data.features import motion_to_features
-    walk = canonicalize(read_real("bandai/dataset-1_walk_normal_001.bvh"), fps=30.0)
-    axis = retarget_sanity.facing_axis(walk)
-    assert abs(np.linalg.norm(axis) - 1.0) < 1e-9
-    feats = motion_to_features(walk, facing_axis=axis)
-    assert feats.r[:, 2].mean() > 0.3 * np.abs(feats.r[:, 1:3]).sum(1).mean()
-    first = motion_to_features(walk).facing_axis
-    assert np.degrees(np.arccos(np.clip(axis @ first / np.linalg.norm(first), -1, 1))) < 30
-
-
 def test_compile_table_reports_speedup_against_eager():
     import compile_step
     rows = [dict(variant="eager", first_s=2.0, best_s=1.0, median_s=1.1, first_loss=3.0,

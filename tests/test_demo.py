@@ -2,6 +2,7 @@
 training steps, retargeting, rendering."""
 import json
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 import pytest
@@ -16,18 +17,68 @@ TINY = ["trainer.max_steps=3", "trainer.accelerator=cpu", "trainer.progress=fals
         "model.num_blocks=1", "model.heads=2", "model.latent_channels=8"]
 
 
-@pytest.fixture(scope="module")
-def demo(tmp_path_factory):
-    """Run the demo once: 3 species, one 30-frame clip per skeleton, 3
-    training steps."""
-    out = tmp_path_factory.mktemp("demo")
-    argv = ["demo", *TINY, "--output", str(out), "--species", "biped", "quadruped",
-            "bird", "--clips", "1", "--frames", str(FRAMES), "--minutes", "1"]
+SMALL = ["--species", "biped", "quadruped", "bird", "--clips", "1", "--frames", str(FRAMES),
+         "--minutes", "1"]
+
+
+def _run_demo(out: Path, argv, builtin: Optional[Path] = None) -> dict:
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SATAGRAPH_CACHE", str(out / "cache"))
-        code = main(argv)
-    assert code == 0
-    return out, json.loads((out / "summary.json").read_text())
+        if builtin is not None:
+            mp.setattr("satagraph.io.weights.builtin_path", lambda: builtin)
+        assert main(["demo", *argv, "--output", str(out), *SMALL]) == 0
+    return json.loads((out / "summary.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    """Run the demo from scratch once: 3 species, one 30-frame clip per
+    skeleton, 3 training steps of a tiny model."""
+    out = tmp_path_factory.mktemp("demo")
+    return out, _run_demo(out, [*TINY, "--from-scratch"])
+
+
+@pytest.fixture(scope="module")
+def demo_builtin(demo, tmp_path_factory):
+    """The demo with a built-in model (the tiny one above, exported as a
+    weights file): retarget and render with it, then fine-tune it."""
+    weights = tmp_path_factory.mktemp("weights") / "builtin.safetensors"
+    assert main(["export-weights", str(demo[0] / "run"), str(weights)]) == 0
+    out = tmp_path_factory.mktemp("demo_builtin")
+    tiny = [o for o in TINY if not o.startswith("model.")]
+    return out, _run_demo(out, tiny, builtin=weights), weights
+
+
+def test_builtin_model_retargets_first_then_fine_tunes(demo_builtin, capsys):
+    """With built-in weights the GIF comes from them in seconds; the
+    fine-tune starts from them (same architecture) and both models' retargets
+    are scored with numbers a user can read."""
+    import torch
+    from satagraph.io.weights import load_weights
+
+    out, summary, weights = demo_builtin
+    names = [s["name"] for s in summary["steps"]]
+    assert names == ["zoo", "retarget", "render", "train", "fine-tuned"]
+    assert (out / "demo.gif").is_file() and (out / "retarget_finetuned").is_dir()
+    for step in (summary["steps"][1], summary["steps"][4]):
+        assert set(step["quality"]) == {"quadruped", "bird", "rescaled human"}
+        for quality in step["quality"].values():
+            assert -1.0 <= quality["steps"] <= 1.0 and quality["travel"] >= 0.0
+        assert "steps" in step["note"] and "travel" in step["note"]
+    tuned = torch.load(out / "run" / "checkpoints" / "last.ckpt", weights_only=True)
+    base = load_weights(weights)
+    assert tuned["hyper_parameters"]["model"] == base["hyper_parameters"]["model"]
+    assert "3 steps" in summary["steps"][3]["note"]
+
+
+def test_builtin_fine_tune_refuses_a_new_architecture(demo_builtin, tmp_path):
+    """model.* overrides would not fit the built-in weights: one clear error."""
+    from satagraph.demo import DemoOptions, demo_config
+    from satagraph.io.weights import load_weights
+
+    base = load_weights(demo_builtin[2])["hyper_parameters"]
+    with pytest.raises(ValueError, match="--from-scratch"):
+        demo_config(DemoOptions(overrides=["model.hidden_channels=8"]), [], tmp_path, base)
 
 
 def test_steps_and_summary(demo, capsys):

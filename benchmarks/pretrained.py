@@ -1,0 +1,224 @@
+"""The built-in model, measured the same way on every row (issue 16).
+
+Retargets (:func:`satagraph.inference.retarget_canonical`, the model's
+canonical frame at 30 fps), scored without a ground truth by
+:mod:`satagraph.quality`:
+
+- **steps**: mean over limbs of the Pearson correlation between the source's
+  and the retarget's limb-end forward displacement over 0.1 s (facing frame,
+  relative to the root; a still limb counts 0). Target >= 0.8 on held-out
+  zoo rigs, >= 0.7 on the real rigs.
+- **travel**: the retarget's root path in leg lengths over the source's.
+  Target 0.8-1.25.
+- **ground**: median lowest-joint height, % of the character's height.
+  Target |ground| <= 3 %.
+- **upright**: % of frames with the head above the hips (characters whose
+  source is upright). Target >= 95 %.
+
+Reconstruction: JP, the mean global joint position error of a clip decoded
+onto its own skeleton, as % of the character's height, over each clip's
+most active 128 frames (root path integrated from the predicted velocities,
+so drift counts). Target <= 5 % on held-out zoo rigs, <= 8 % on bandai and
+the dog.
+
+Held-out zoo rigs come from the endless zoo's test seed stream (rigs never
+drawn in training) and from its held-out body plans (``longtail``, ``spider/palps``);
+bandai and the dog were never trained on (CC BY-NC 4.0), nor was the CMU
+skeleton's test split.
+
+    .venv/bin/python benchmarks/pretrained.py [--ckpt builtin|RUN.ckpt|W.safetensors]
+
+Writes benchmarks/results/pretrained.md and .json.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from results_io import write_results  # noqa: E402
+from satagraph.data.datamodule import semantic_embedder  # noqa: E402
+from satagraph.data.rig_reading import with_rig  # noqa: E402
+from satagraph.data.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.inference import retarget_canonical  # noqa: E402
+from satagraph.io import read_bvh  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
+from satagraph.quality import most_active, retarget_quality  # noqa: E402
+from satagraph.train import load_module  # noqa: E402
+
+DATA = ROOT.parent / "shared" / "data"
+OUT = ROOT / "benchmarks" / "results" / "pretrained"
+#: Frames of each zoo clip (4 s at 30 fps) and of each real clip's most
+#: active window (at its own rate, 10 s).
+ZOO_FRAMES, REAL_SECONDS, RECON_FRAMES = 120, 10.0, 128
+#: Body plans of the training zoo and the held-out ones (pretrain_zoo.yaml).
+TRAIN_SPECIES = ["biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab", "spider"]
+HOLDOUT = ["longtail", "spider/palps"]
+TARGETS = {"steps_zoo": 0.8, "steps_real": 0.7, "travel": (0.8, 1.25), "ground": 0.03,
+           "upright": 0.95, "jp_zoo": 0.05, "jp_real": 0.08}
+
+
+def zoo_clip(species: str, kind: str = "walk", holdout: bool = False,
+             skip: int = 0) -> Tuple[Motion, str]:
+    """The :obj:`skip`-th test-stream endless-zoo clip of a species (or
+    held-out plan) and kind, and its plan name."""
+    zoo = EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT)
+    found = 0
+    for index in range(400):
+        sample = zoo.sample(0, index, ZOO_FRAMES, "test", holdout)
+        if sample.species == species.split("/")[0] and sample.kind == kind:
+            if found == skip:
+                return sample.motion, f"{sample.plan} ({sample.rest} rest)"
+            found += 1
+    raise LookupError(f"no held-out {species} {kind} clip in 400 samples")
+
+
+def real_clip(rel: str) -> Motion:
+    """A real clip (the dog in cm: its files do not say), cut to its most
+    active :data:`REAL_SECONDS`."""
+    motion = read_bvh(DATA / rel)
+    if rel.startswith("dog/"):
+        motion = with_rig(motion, scale="cm")
+    return most_active(motion, int(REAL_SECONDS * motion.fps))
+
+
+def retarget_cases() -> List[Tuple[str, str, Callable[[], Tuple[Motion, str, Motion, str]]]]:
+    """``(group, case, loader)``: the loader gives source, its name, target
+    and its name."""
+    def zoo(src: str, dst: str, holdout: bool = False):
+        def load():
+            a, an = zoo_clip(src)
+            b, bn = zoo_clip(dst, holdout=holdout, skip=1 if src == dst else 0)
+            return a, an, b, bn
+        return load
+
+    def real(src: str, dst: str):
+        return lambda: (real_clip(src), src, with_rig(read_bvh(DATA / dst), scale="cm")
+                        if dst.startswith("dog/") else read_bvh(DATA / dst), dst)
+
+    return [("held-out zoo", "biped -> quadruped", zoo("biped", "quadruped")),
+            ("held-out zoo", "quadruped -> biped", zoo("quadruped", "biped")),
+            ("held-out zoo", "biped -> bird", zoo("biped", "bird")),
+            ("held-out zoo", "biped -> unseen plan (longtail)", zoo("biped", "longtail", True)),
+            ("held-out zoo", "quadruped -> unseen plan (longtail)",
+             zoo("quadruped", "longtail", True)),
+            ("real, never trained", "bandai human -> dog",
+             real("bandai/dataset-1_walk_sad_001.bvh", "dog/D1_001_KAN01_001.bvh")),
+            ("real, never trained", "dog -> bandai human",
+             real("dog/D1_004_KAN01_001.bvh", "bandai/dataset-1_walk_sad_001.bvh")),
+            ("real, never trained", "bandai -> cmu",
+             real("bandai/dataset-1_walk_sad_001.bvh", "cmu/01_01.bvh"))]
+
+
+def recon_cases() -> List[Tuple[str, str, Callable[[], Motion]]]:
+    zoo = [(f"held-out zoo", name, (lambda s=s, h=h: zoo_clip(s, k, h)[0]))
+           for name, s, k, h in [("biped walk", "biped", "walk", False),
+                                 ("quadruped trot", "quadruped", "trot", False),
+                                 ("bird walk", "bird", "walk", False),
+                                 ("hexapod walk", "hexapod", "walk", False),
+                                 ("crab walk", "crab", "walk", False),
+                                 ("longtail walk (unseen plan)", "longtail", "walk", True),
+                                 ("spider/palps walk (unseen plan)", "spider", "walk", True)]]
+    real = [("real, never trained", rel, (lambda r=rel: real_clip(r)))
+            for rel in ("bandai/dataset-1_walk_sad_001.bvh", "bandai/dataset-1_run_giant_001.bvh",
+                        "bandai/dataset-1_bow_sad_001.bvh", "dog/D1_001_KAN01_001.bvh",
+                        "dog/D1_005_KAN01_001.bvh", "dog/D1_013_KAN01_001.bvh")]
+    return zoo + real
+
+
+def joint_error(source: Motion, output: Motion) -> float:
+    """Mean global joint distance over the height (canonical motions)."""
+    frames = min(source.num_frames, output.num_frames)
+    err = np.linalg.norm(source.global_positions()[:frames]
+                         - output.global_positions()[:frames], axis=-1).mean()
+    return float(err / max(source.height(), 1e-9))
+
+
+def measure(module, embed) -> Dict[str, List[dict]]:
+    rows: Dict[str, List[dict]] = {"retarget": [], "reconstruction": []}
+    for group, case, load in retarget_cases():
+        source, sname, target, tname = load()
+        src, out = retarget_canonical(module, source, target, embed)
+        quality = retarget_quality(src, out)
+        quality["source_upright"] = retarget_quality(src, src, ("upright",))["upright"]
+        rows["retarget"].append(dict(group=group, case=case, source=sname, target=tname,
+                                     **quality))
+    for group, case, load in recon_cases():
+        motion = load()
+        clip = motion.slice(0, min(motion.num_frames, RECON_FRAMES)) if group.startswith(
+            "held") else most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))
+        src, out = retarget_canonical(module, clip, clip, embed)
+        rows["reconstruction"].append(dict(group=group, case=case, jp=joint_error(src, out),
+                                           height=src.height()))
+    return rows
+
+
+def _ok(row: dict) -> str:
+    steps = TARGETS["steps_zoo" if row["group"].startswith("held") else "steps_real"]
+    low, high = TARGETS["travel"]
+    checks = [row["steps"] >= steps, low <= row["travel"] <= high,
+              abs(row["ground"]) <= TARGETS["ground"]]
+    if row["source_upright"] is not None and row["source_upright"] >= 0.95 \
+            and row["upright"] is not None:
+        checks.append(row["upright"] >= TARGETS["upright"])
+    return "yes" if all(checks) else "no"
+
+
+def _pct(value: Optional[float]) -> str:
+    return "-" if value is None else f"{100 * value:.0f}%"
+
+
+def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float) -> str:
+    lines = [f"Model `{ckpt}`; {seconds:.0f} s on this machine.", "",
+             "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
+             "| travel ratio (0.8-1.25) | ground, % height (<= 3) | upright (>= 95%) "
+             "| source upright | all targets met |",
+             "|---|---|---|---|---:|---:|---:|---:|---:|---|"]
+    for r in rows["retarget"]:
+        lines.append(f"| {r['group']} | {r['case']} | {r['source']} | {r['target']} "
+                     f"| {r['steps']:+.2f} | {r['travel']:.2f} | {100 * r['ground']:+.1f} "
+                     f"| {_pct(r['upright'])} | {_pct(r['source_upright'])} | {_ok(r)} |")
+    lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met |",
+              "|---|---|---:|---|"]
+    for r in rows["reconstruction"]:
+        limit = TARGETS["jp_zoo" if r["group"].startswith("held") else "jp_real"]
+        lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
+                     f"| {'yes' if r['jp'] <= limit else 'no'} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--ckpt", default="builtin",
+                        help="builtin (the package's weights), a checkpoint or a "
+                             ".safetensors weights file")
+    parser.add_argument("--out", type=Path, default=OUT)
+    args = parser.parse_args(argv)
+    if not (DATA / "manifest.tsv").is_file():
+        print(f"pretrained.py: {DATA} not found: the real rows need ../shared/data",
+              file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    module = load_module(args.ckpt).eval()
+    embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rows = measure(module, embed)
+    text = table(rows, args.ckpt, time.perf_counter() - start)
+    print(text)
+    write_results(args.out, "The built-in model (benchmarks/pretrained.py)", text,
+                  dict(rows, ckpt=args.ckpt))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
