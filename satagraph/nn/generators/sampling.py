@@ -151,5 +151,7 @@ def residual_layer_schedule(size: int, num_quantizers: int,
 
 def guided(cond: Tensor, uncond: Tensor, scale: float) -> Tensor:
     r"""Classifier-free guidance on logits:
-    :math:`u + s\,(c - u)` (:math:`s = 1`: the conditional logits)."""
+    :math:`u + s\,(c - u)` (:math:`s = 1`: exactly the conditional logits)."""
+    if scale == 1.0:
+        return cond
     return uncond + scale * (cond - uncond)
