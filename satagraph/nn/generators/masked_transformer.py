@@ -13,7 +13,8 @@ from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided
                                               lowest_ranked, mask_ratio, random_mask,
                                               sample_logits, uniform)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
-                                                       masked_accuracy, masked_cross_entropy)
+                                                       init_token_model, masked_accuracy,
+                                                       masked_cross_entropy)
 
 
 class MaskedLoss(NamedTuple):
@@ -103,6 +104,7 @@ class MaskedTransformer(nn.Module):
                                          text_channels, skel_channels, cond_drop, positions,
                                          max_length)
         self.head = nn.Linear(hidden_channels, num_codes)
+        init_token_model(self)
 
     # ------------------------------------------------------------ tokens
     def to_tokens(self, codes: Tensor, lengths: Tensor) -> Tuple[Tensor, Tensor]:

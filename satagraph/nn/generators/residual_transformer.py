@@ -10,7 +10,8 @@ from torch import Tensor, nn
 from satagraph.nn.generators.codes import length_mask, pool_codes, token_lengths, unpool_codes
 from satagraph.nn.generators.sampling import guided, residual_layer_schedule, sample_logits
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
-                                                       masked_accuracy, masked_cross_entropy)
+                                                       init_token_model, masked_accuracy,
+                                                       masked_cross_entropy)
 
 
 class ResidualLoss(NamedTuple):
@@ -98,6 +99,7 @@ class ResidualTransformer(nn.Module):
                                          text_channels, skel_channels, cond_drop, positions,
                                          max_length)
         self.out_proj = nn.Linear(hidden_channels, code_channels)
+        init_token_model(self)
 
     @torch.no_grad()
     def load_codebooks(self, codebooks: Tensor, freeze: bool = False) -> None:

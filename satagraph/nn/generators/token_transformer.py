@@ -145,3 +145,16 @@ def evaluating(module: nn.Module) -> Iterator[None]:
         yield
     finally:
         module.train(mode)
+
+
+def init_token_model(module: nn.Module) -> None:
+    """MoMask's (BERT's) initialisation: linear and embedding weights
+    :math:`N(0, 0.02)`, zero biases, unit layer norms."""
+    for sub in module.modules():
+        if isinstance(sub, (nn.Linear, nn.Embedding)):
+            nn.init.normal_(sub.weight, std=0.02)
+        if isinstance(sub, nn.Linear) and sub.bias is not None:
+            nn.init.zeros_(sub.bias)
+        if isinstance(sub, nn.LayerNorm):
+            nn.init.ones_(sub.weight)
+            nn.init.zeros_(sub.bias)
