@@ -60,6 +60,19 @@ def merge_codes(codes: Tensor, lengths: Tensor) -> Tensor:
     return codes[length_mask(lengths, codes.size(1))]
 
 
+def check_codes(codes: Tensor, lengths: Tensor, num_codes: int) -> None:
+    r"""Refuses codes outside ``0..num_codes-1`` at real positions (e.g.
+    the ``-1`` of RVQ quantiser dropout: encode in eval mode).
+
+    Shapes:
+        - **codes**: :math:`(B, T[, Q])`, **lengths**: :math:`(B,)`
+    """
+    real = codes[length_mask(lengths, codes.size(1))]
+    if real.numel() and (bool(real.min() < 0) or bool(real.max() >= num_codes)):
+        raise ValueError(f"codes must lie in [0, {num_codes}) before each length, got "
+                         f"[{int(real.min())}, {int(real.max())}] (dropped RVQ layers?)")
+
+
 def _window_choice(base: Tensor, valid: Tensor, reduce: str) -> Tensor:
     """Frame chosen in every window ``[B, W, stride]`` of layer-0 codes."""
     if reduce == "first":

@@ -8,7 +8,8 @@ from typing import NamedTuple, Optional, Tuple
 import torch
 from torch import Tensor, nn
 
-from satagraph.nn.generators.codes import length_mask, pool_codes, token_lengths, unpool_codes
+from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes, token_lengths,
+                                           unpool_codes)
 from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided,
                                               lowest_ranked, mask_ratio, random_mask,
                                               sample_logits, uniform)
@@ -163,6 +164,7 @@ class MaskedTransformer(nn.Module):
         frames), on the masked positions only; the text is dropped with
         probability :obj:`cond_drop` in training."""
         targets, tok_lengths = self.to_tokens(codes, lengths)
+        check_codes(targets, tok_lengths, self.num_codes)
         corruption = self.corrupt(targets, tok_lengths, generator)
         drop = self.backbone.draw_text_drop(targets.size(0), generator, targets.device)
         logits = self(corruption.inputs, text_emb, skel_emb, tok_lengths, drop_text=drop)
@@ -177,11 +179,13 @@ class MaskedTransformer(nn.Module):
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None) -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
-        as [MASK]; at step :math:`i` of :obj:`steps` the
-        :math:`\mathrm{round}(\cos(\pi i / (2(n-1))) L)` least confident
-        tokens (at least one) are re-masked and re-drawn from the guided logits
-        (top-k keeping :obj:`topk_ratio` of the codes, :obj:`temperature`;
-        0: argmax).
+        as [MASK]; at step :math:`i` of :obj:`steps` (:math:`n`) the
+        :math:`\mathrm{round}(r_i L)` least confident tokens (at least one),
+        :math:`r_i = f + (1 - f)\cos(\pi i / (2(n-1)))` with :math:`f` =
+        :obj:`mask_floor` (as in training), are re-masked and re-drawn from
+        the guided logits (top-k keeping :obj:`topk_ratio` of the codes,
+        :obj:`temperature`; 0: argmax). Every step fills all the masked
+        tokens, so the output has no [MASK].
 
         Args:
             text_emb (Tensor, optional): Text embeddings (``None``:
@@ -205,7 +209,8 @@ class MaskedTransformer(nn.Module):
             ids = ids.masked_fill(~valid, self.pad_id)
             scores = torch.zeros(valid.shape, device=valid.device).masked_fill(~valid, float("inf"))
             for step in range(steps):
-                ratio = math.cos(math.pi / 2 * step / max(steps - 1, 1))
+                ratio = self.mask_floor + (1 - self.mask_floor) * math.cos(
+                    math.pi / 2 * step / max(steps - 1, 1))
                 count = torch.round(ratio * tok_lengths).clamp(min=1).long()
                 remask = lowest_ranked(scores, count) & valid
                 ids = ids.masked_fill(remask, self.mask_id)

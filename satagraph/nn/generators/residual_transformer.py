@@ -7,7 +7,7 @@ from typing import NamedTuple, Optional, Tuple
 import torch
 from torch import Tensor, nn
 
-from satagraph.nn.generators.codes import length_mask, pool_codes, token_lengths, unpool_codes
+from satagraph.nn.generators.codes import check_codes, length_mask, pool_codes, unpool_codes
 from satagraph.nn.generators.sampling import guided, residual_layer_schedule, sample_logits
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
@@ -39,7 +39,8 @@ class ResidualTransformer(nn.Module):
     with probability :obj:`cond_drop` (MoMask: 0.2). Token ids as
     :class:`~satagraph.nn.generators.MaskedTransformer`: codes ``0..K-1``,
     :attr:`pad_id` ``= K + 1``; positions past each length are ignored on
-    input.
+    input. Codes must be complete stacks (encode with the RVQ in eval mode:
+    quantiser dropout writes ``-1``).
 
     Intended size for satagraph's data: 4 layers, 256 wide, 4 heads,
     :obj:`code_channels` = the RVQ latent width (256) when initialised from
@@ -166,6 +167,7 @@ class ResidualTransformer(nn.Module):
         :math:`1 - \cos` bias unless :obj:`layer` is given) over every real
         position; per-frame codes, :obj:`lengths` in frames."""
         tokens, tok_lengths = self.to_tokens(codes, lengths)
+        check_codes(tokens, tok_lengths, self.num_codes)
         size = tokens.size(0)
         if layer is None:
             layer = residual_layer_schedule(size, codes.size(-1), generator, tokens.device)

@@ -53,7 +53,8 @@ def lowest_ranked(scores: Tensor, count: Tensor) -> Tensor:
     return ranks < count.unsqueeze(-1)
 
 
-def random_mask(valid: Tensor, ratio: Tensor, generator: Optional[torch.Generator] = None) -> Tensor:
+def random_mask(valid: Tensor, ratio: Tensor,
+                generator: Optional[torch.Generator] = None) -> Tensor:
     r"""A uniformly random subset of :math:`\mathrm{round}(r_b\,n_b)` (at
     least one) of the real positions of every row.
 
@@ -68,7 +69,8 @@ def random_mask(valid: Tensor, ratio: Tensor, generator: Optional[torch.Generato
     return lowest_ranked(scores.masked_fill(~valid, 2.0), count) & valid
 
 
-def bernoulli_subset(mask: Tensor, prob: float, generator: Optional[torch.Generator] = None) -> Tensor:
+def bernoulli_subset(mask: Tensor, prob: float,
+                     generator: Optional[torch.Generator] = None) -> Tensor:
     """Each ``True`` of :obj:`mask` kept with probability :obj:`prob`."""
     draw = uniform(mask.shape, generator, mask.device)
     return mask & (draw < prob)

@@ -69,7 +69,7 @@ class TopologyAttentionLayer(nn.Module):
         qkv = self.qkv(h).view(size, length, 3, self.heads, channels // self.heads)
         q, k, v = qkv.permute(2, 0, 3, 1, 4)
         p = self.dropout if self.training else 0.0
-        out = F.scaled_dot_product_attention(q, k, v, attn_mask=bias, dropout_p=p)
+        out = F.scaled_dot_product_attention(q, k, v, attn_mask=bias.to(q.dtype), dropout_p=p)
         return self.out(out.transpose(1, 2).reshape(size, length, channels))
 
     def forward(self, h: Tensor, bias: Tensor) -> Tensor:
@@ -154,7 +154,7 @@ class SkeletonEmbedding(nn.Module):
             topology = skeleton_topology(edge_index, batch, root, x.size(0), self.max_hops)
         h, _ = to_dense_batch(self.joint_mlp(x), batch)
         h = torch.cat([self.cls.expand(h.size(0), 1, -1), h], dim=1)
-        bias = self.attention_bias(topology).to(h.dtype)
+        bias = self.attention_bias(topology)
         for layer in self.layers:
             h = layer(h, bias)
         return self.lin(self.norm(h[:, 0]))

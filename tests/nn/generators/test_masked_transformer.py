@@ -191,3 +191,31 @@ def test_gradients_reach_the_skeleton_embedding():
     for name, param in net.named_parameters():
         assert param.grad is not None and param.grad.abs().sum() > 0, name
     assert model.backbone.condition.skel_proj.weight.grad.abs().sum() > 0
+
+
+@pytest.mark.parametrize("floor", [0.0, 0.5])
+def test_decoding_steps_remask_on_the_training_schedule(conditions, floor):
+    text, skel, lengths = conditions
+    model = tiny_masked(mask_floor=floor)
+    masked_counts = []
+    model.token_emb.register_forward_hook(
+        lambda mod, args, out: masked_counts.append(args[0].eq(model.mask_id).sum(-1)))
+    model.generate(text, skel, lengths, steps=5, guidance=1.0)
+    assert len(masked_counts) == 5
+    assert torch.equal(masked_counts[0], lengths)  # all masked at first
+    for count in masked_counts:
+        assert (count >= torch.round(floor * lengths).clamp(min=1)).all()
+    if floor == 0.0:
+        assert masked_counts[-1].tolist() == [1, 1, 1]
+
+
+def test_incomplete_code_stacks_are_refused(conditions):
+    text, skel, lengths = conditions
+    model = tiny_masked()
+    codes = random_codes(lengths)
+    codes[0, 2] = -1
+    with pytest.raises(ValueError, match="dropped RVQ layers"):
+        model.loss(codes, text, skel, lengths)
+    codes[0, 2] = 0
+    codes[1, 8:] = -1  # padding may hold anything
+    model.loss(codes, text, skel, lengths)
