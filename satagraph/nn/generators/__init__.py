@@ -29,13 +29,13 @@ from satagraph.nn.generators.skeleton_embedding import (SkeletonEmbedding, Skele
                                                         skeleton_graph)
 from satagraph.nn.generators.skeleton_topology import (NUM_RELATIONS, SkeletonTopology,
                                                        parents_to_edge_index,
-                                                       skeleton_topology)
+                                                       skeleton_topology, stack_topologies)
 from satagraph.nn.generators.token_transformer import (ConditionTokens, TokenTransformer,
                                                        masked_cross_entropy)
 
 __all__ = [
     "SkeletonEmbedding", "SkeletonGraph", "TopologyAttentionLayer", "skeleton_graph",
-    "SkeletonTopology", "skeleton_topology", "parents_to_edge_index", "NUM_RELATIONS",
+    "SkeletonTopology", "skeleton_topology", "stack_topologies", "parents_to_edge_index", "NUM_RELATIONS",
     "MaskedTransformer", "MaskedLoss", "ResidualTransformer", "ResidualLoss", "LengthModel",
     "ConditionTokens", "TokenTransformer", "masked_cross_entropy",
     "split_codes", "merge_codes", "pool_codes", "unpool_codes", "token_lengths",

@@ -22,6 +22,9 @@ class LengthModel(nn.Module):
     null-text vector where the text is absent or dropped) plus the projected
     skeleton embedding.
 
+    Intended size for satagraph's data: 128 wide, 0.25 s bins up to 10 s
+    (the longest training windows; AnyTop generates at most 9.8 s).
+
     Args:
         text_channels (int): Text embedding width.
         skel_channels (int): Skeleton embedding width.

@@ -3,9 +3,10 @@ relation types (self, parent, child, sibling, none, end effector), as AnyTop
 defines them and OmniZoo's skeleton embedding uses them."""
 from __future__ import annotations
 
-from typing import NamedTuple, Optional, Tuple
+from typing import NamedTuple, Optional, Sequence, Tuple
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor
 from torch_geometric.utils import to_dense_adj
 
@@ -135,6 +136,28 @@ def skeleton_topology(edge_index: Tensor, batch: Optional[Tensor] = None,
     depth = _depth(adj, root - start, mask)
     dist = _hop_distance(adj, max_hops).masked_fill(~(mask.unsqueeze(1) & mask.unsqueeze(2)), 0)
     return SkeletonTopology(dist, _relations(adj, depth, mask), mask, depth)
+
+
+def stack_topologies(tables: Sequence[SkeletonTopology]) -> SkeletonTopology:
+    r"""One padded batch from per-skeleton tables (e.g. computed once per
+    skeleton and cached by a dataset), equal to computing them together.
+
+    Shapes:
+        - **tables**: each of batch size 1 (or more)
+        - **output**: tables of :math:`\sum B` skeletons padded to the largest
+    """
+    size = max(t.mask.size(-1) for t in tables)
+    pads = {"distance": 0, "relation": NONE, "mask": False, "depth": 0}
+    fields = {}
+    for name, value in pads.items():
+        parts = []
+        for t in tables:
+            part = getattr(t, name)
+            extra = size - part.size(-1)
+            spec = (0, extra, 0, extra) if part.dim() == 3 else (0, extra)
+            parts.append(F.pad(part, spec, value=value))
+        fields[name] = torch.cat(parts)
+    return SkeletonTopology(**fields)
 
 
 def parents_to_edge_index(parents: Tensor) -> Tuple[Tensor, Tensor]:

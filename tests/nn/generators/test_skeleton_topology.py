@@ -5,7 +5,8 @@ import pytest
 import torch
 
 from satagraph.data import collate_clips
-from satagraph.nn.generators import parents_to_edge_index, skeleton_graph, skeleton_topology
+from satagraph.nn.generators import (parents_to_edge_index, skeleton_graph, skeleton_topology,
+                                     stack_topologies)
 from satagraph.nn.generators.skeleton_topology import (CHILD, END_EFFECTOR, NONE, PARENT, SELF,
                                                        SIBLING)
 from tests.nn.generators.generator_helpers import TREE, relabel
@@ -80,6 +81,17 @@ def test_batched_skeletons_match_single_ones():
     for field, ref_a, ref_b in zip(got, tables(TREE), tables(small)):
         assert torch.equal(field[1], ref_a[0])
         assert torch.equal(field[0][..., :3, :3] if field.dim() == 3 else field[0][:3], ref_b[0])
+
+
+def test_cached_tables_stack_into_the_batched_ones():
+    small = [-1, 0, 1]
+    edge_a, _ = parents_to_edge_index(torch.tensor(TREE))
+    edge_b, _ = parents_to_edge_index(torch.tensor(small))
+    batched = skeleton_topology(torch.cat([edge_b, edge_a + 3, edge_b + 10], 1),
+                                torch.tensor([0] * 3 + [1] * 7 + [2] * 3))
+    stacked = stack_topologies([tables(small), tables(TREE), tables(small)])
+    for got, ref in zip(stacked, batched):
+        assert torch.equal(got, ref)
 
 
 def test_disconnected_skeleton_is_refused():
