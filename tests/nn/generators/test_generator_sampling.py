@@ -65,6 +65,15 @@ def test_corruption_split_of_the_masked_tokens():
     assert out.inputs[out.random].lt(K).all() and out.inputs[out.random].ge(0).all()
 
 
+def test_corruption_split_read_as_shares_of_all_masked_tokens():
+    gen = torch.Generator().manual_seed(1)
+    codes = torch.randint(K, (400, 100), generator=gen)
+    mask = torch.ones(400, 100, dtype=torch.bool)
+    out = corrupt_tokens(codes, mask, K, K, 0.1, 0.88 / 0.9, gen)  # 10 / 88 / 2
+    assert abs(out.random.float().mean().item() - 0.10) < 0.01
+    assert abs(out.masked.float().mean().item() - 0.88) < 0.01
+
+
 def test_top_k_keeps_the_share_of_codes():
     logits = torch.randn(3, 20)
     kept = torch.isfinite(top_k_filter(logits, 0.1))
