@@ -1,0 +1,222 @@
+r"""MoMask's masked token transformer over the first RVQ layer's codes,
+conditioned on a text token and a skeleton token."""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple, Optional, Tuple
+
+import torch
+from torch import Tensor, nn
+
+from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes, token_lengths,
+                                           unpool_codes)
+from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided,
+                                              lowest_ranked, mask_ratio, random_mask,
+                                              sample_logits, uniform)
+from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
+                                                       init_token_model, masked_accuracy,
+                                                       masked_cross_entropy)
+
+
+class MaskedLoss(NamedTuple):
+    """Output of :meth:`MaskedTransformer.loss`."""
+    loss: Tensor
+    accuracy: Tensor
+    logits: Tensor
+    targets: Tensor
+    corruption: Corruption
+    drop_text: Tensor
+
+
+class MaskedTransformer(nn.Module):
+    r"""Masked token model over layer-0 RVQ codes (MoMask), with two
+    separate condition tokens: the text (projected text embedding; a learned
+    null-text token when dropped) and the skeleton (projected
+    :math:`f_{skel}`, never dropped).
+
+    Vocabulary: codes ``0..K-1``, :attr:`mask_id` ``= K``, :attr:`pad_id`
+    ``= K + 1``. Training (:meth:`loss`) masks a fraction
+    :math:`f + (1 - f)\cos(\pi u / 2)` of each sequence (:obj:`mask_floor`
+    :math:`f`), corrupts the masked positions (10 % random code, 88 % of the
+    rest [MASK], the others kept) and scores them only; the text is dropped
+    with probability :obj:`cond_drop`. :meth:`generate` decodes iteratively
+    with cosine re-masking of the least confident tokens and classifier-free
+    guidance ``uncond + s (cond - uncond)`` where ``uncond`` drops the text
+    only.
+
+    Token rate: with :obj:`pool` :math:`s > 1` one token stands for
+    :math:`s` frames (:func:`~satagraph.nn.generators.pool_codes`).
+    :meth:`forward` works on tokens; :meth:`loss` takes per-frame codes and
+    :meth:`generate` returns per-frame codes, lengths in frames for both.
+
+    Intended size for satagraph's data (about 18 min of captioned real
+    motion plus the procedural zoo): 4 layers, 256 wide, 4 heads,
+    feed-forward 1024, dropout 0.2 (MoMask on HumanML3D: 8 layers, 384
+    wide, 6 heads).
+
+    Args:
+        num_codes (int): Codebook size :math:`K`.
+        text_channels (int): Text embedding width :math:`D_{text}`.
+        skel_channels (int): Skeleton embedding width :math:`D_s`.
+        hidden_channels (int, optional): Width.
+        heads (int, optional): Attention heads.
+        num_layers (int, optional): Encoder layers.
+        ff_channels (int, optional): Feed-forward width (default
+            ``4 * hidden_channels``).
+        dropout (float, optional): Dropout.
+        cond_drop (float, optional): Text dropout probability (MoMask: 0.1).
+        positions (str, optional): ``"sine"`` or ``"learned"``.
+        max_length (int, optional): Longest token sequence (learned
+            positions).
+        pool (int, optional): Frames per token (1: per-frame tokens).
+        pool_reduce (str, optional): ``"mode"`` or ``"first"`` (see
+            :func:`~satagraph.nn.generators.pool_codes`).
+        mask_floor (float, optional): Smallest training mask ratio.
+        random_prob (float, optional): Share of masked tokens given a random
+            code.
+        mask_prob (float, optional): Share of the other masked tokens given
+            [MASK].
+        label_smoothing (float, optional): Cross-entropy label smoothing.
+
+    Shapes:
+        - **tokens**: :math:`(B, T)` (token rate), **text_emb**:
+          :math:`(B, D_{text})` or ``None``, **skel_emb**: :math:`(B, D_s)`,
+          **lengths**: :math:`(B,)` tokens (:meth:`forward`) or frames
+        - **output** of :meth:`forward`: :math:`(B, T, K)` logits
+    """
+
+    def __init__(self, num_codes: int, text_channels: int, skel_channels: int,
+                 hidden_channels: int = 64, heads: int = 4, num_layers: int = 2,
+                 ff_channels: Optional[int] = None, dropout: float = 0.1,
+                 cond_drop: float = 0.1, positions: str = "sine",
+                 max_length: Optional[int] = None, pool: int = 1, pool_reduce: str = "mode",
+                 mask_floor: float = 0.0, random_prob: float = 0.1, mask_prob: float = 0.88,
+                 label_smoothing: float = 0.0) -> None:
+        super().__init__()
+        if not 0.0 <= mask_floor < 1.0:
+            raise ValueError(f"mask_floor must be in [0, 1), got {mask_floor}")
+        self.num_codes, self.mask_id, self.pad_id = num_codes, num_codes, num_codes + 1
+        self.pool, self.pool_reduce, self.mask_floor = int(pool), pool_reduce, float(mask_floor)
+        self.random_prob, self.mask_prob = random_prob, mask_prob
+        self.label_smoothing = label_smoothing
+        self.token_emb = nn.Embedding(num_codes + 2, hidden_channels)
+        self.backbone = TokenTransformer(hidden_channels, heads, num_layers,
+                                         ff_channels or 4 * hidden_channels, dropout,
+                                         text_channels, skel_channels, cond_drop, positions,
+                                         max_length)
+        self.head = nn.Linear(hidden_channels, num_codes)
+        init_token_model(self)
+
+    # ------------------------------------------------------------ tokens
+    def to_tokens(self, codes: Tensor, lengths: Tensor) -> Tuple[Tensor, Tensor]:
+        r"""Per-frame layer-0 codes to tokens (pooled by :attr:`pool`, [PAD]
+        after each sequence) and tokens per sequence.
+
+        Shapes:
+            - **codes**: :math:`(B, T_f)` or :math:`(B, T_f, Q)`,
+              **lengths**: :math:`(B,)` frames
+        """
+        base = codes[..., 0] if codes.dim() == 3 else codes
+        return pool_codes(base, lengths, self.pool, self.pool_reduce, self.pad_id)
+
+    def to_frames(self, tokens: Tensor, lengths: Tensor) -> Tensor:
+        """Tokens back to per-frame codes (:attr:`pad_id` after each clip)."""
+        return unpool_codes(tokens, lengths, self.pool, self.pad_id)
+
+    # ------------------------------------------------------------ model
+    def forward(self, tokens: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+                lengths: Tensor, drop_text: Optional[Tensor] = None) -> Tensor:
+        """Logits over codes at every token position (positions from
+        :obj:`lengths` on are [PAD] whatever :obj:`tokens` holds there)."""
+        valid = length_mask(lengths, tokens.size(1))
+        tokens = tokens.masked_fill(~valid, self.pad_id)
+        h = self.backbone(self.token_emb(tokens), valid, text_emb, skel_emb,
+                          drop_text=drop_text)
+        return self.head(h)
+
+    def guided_logits(self, tokens: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+                      lengths: Tensor, guidance: float = 1.0) -> Tensor:
+        r"""Classifier-free guided logits ``uncond + s (cond - uncond)``;
+        ``uncond`` drops the text only. ``text_emb=None``: the unconditional
+        logits; :math:`s = 1`: the conditional ones (one pass each)."""
+        if text_emb is None or guidance == 1.0:
+            return self(tokens, text_emb, skel_emb, lengths)
+        size = tokens.size(0)
+        drop = torch.arange(2 * size, device=tokens.device) >= size
+        both = self(tokens.repeat(2, 1), text_emb.repeat(2, 1), skel_emb.repeat(2, 1),
+                    lengths.repeat(2), drop_text=drop)
+        return guided(both[:size], both[size:], guidance)
+
+    # ------------------------------------------------------------ training
+    def corrupt(self, tokens: Tensor, lengths: Tensor,
+                generator: Optional[torch.Generator] = None) -> Corruption:
+        """Training masks and corrupted inputs for token sequences."""
+        valid = length_mask(lengths, tokens.size(1))
+        ratio = mask_ratio(uniform((tokens.size(0),), generator, tokens.device), self.mask_floor)
+        mask = random_mask(valid, ratio, generator)
+        out = corrupt_tokens(tokens, mask, self.mask_id, self.num_codes, self.random_prob,
+                             self.mask_prob, generator)
+        return out._replace(inputs=out.inputs.masked_fill(~valid, self.pad_id))
+
+    def loss(self, codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+             lengths: Tensor, generator: Optional[torch.Generator] = None) -> MaskedLoss:
+        r"""Masked-token cross-entropy on per-frame codes (:obj:`lengths` in
+        frames), on the masked positions only; the text is dropped with
+        probability :obj:`cond_drop` in training."""
+        targets, tok_lengths = self.to_tokens(codes, lengths)
+        check_codes(targets, tok_lengths, self.num_codes)
+        corruption = self.corrupt(targets, tok_lengths, generator)
+        drop = self.backbone.draw_text_drop(targets.size(0), generator, targets.device)
+        logits = self(corruption.inputs, text_emb, skel_emb, tok_lengths, drop_text=drop)
+        loss = masked_cross_entropy(logits, targets, corruption.mask, self.label_smoothing)
+        return MaskedLoss(loss, masked_accuracy(logits, targets, corruption.mask), logits,
+                          targets, corruption, drop)
+
+    # ------------------------------------------------------------ generation
+    @torch.no_grad()
+    def generate(self, text_emb: Optional[Tensor], skel_emb: Tensor, lengths: Tensor,
+                 steps: int = 10, guidance: float = 4.0, temperature: float = 1.0,
+                 topk_ratio: Optional[float] = 0.1,
+                 generator: Optional[torch.Generator] = None) -> Tensor:
+        r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
+        as [MASK]; at step :math:`i` of :obj:`steps` (:math:`n`) the
+        :math:`\mathrm{round}(r_i L)` least confident tokens (at least one),
+        :math:`r_i = f + (1 - f)\cos(\pi i / (2(n-1)))` with :math:`f` =
+        :obj:`mask_floor` (as in training), are re-masked and re-drawn from
+        the guided logits (top-k keeping :obj:`topk_ratio` of the codes,
+        :obj:`temperature`; 0: argmax). Every step fills all the masked
+        tokens, so the output has no [MASK].
+
+        Args:
+            text_emb (Tensor, optional): Text embeddings (``None``:
+                unconditional on the skeleton).
+            skel_emb (Tensor): Skeleton embeddings.
+            lengths (Tensor): Frames to generate per sequence.
+            steps (int, optional): Decoding steps (MoMask: 10).
+            guidance (float, optional): Guidance scale (MoMask: 4).
+            temperature (float, optional): Sampling temperature.
+            topk_ratio (float, optional): Share of codes kept by top-k.
+            generator (torch.Generator, optional): Source of randomness.
+
+        Returns:
+            Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
+            after each sequence's length.
+        """
+        with evaluating(self):
+            tok_lengths = token_lengths(lengths, self.pool)
+            valid = length_mask(tok_lengths, int(tok_lengths.max()))
+            ids = torch.full(valid.shape, self.mask_id, dtype=torch.long, device=valid.device)
+            ids = ids.masked_fill(~valid, self.pad_id)
+            scores = torch.zeros(valid.shape, device=valid.device).masked_fill(~valid, float("inf"))
+            for step in range(steps):
+                ratio = self.mask_floor + (1 - self.mask_floor) * math.cos(
+                    math.pi / 2 * step / max(steps - 1, 1))
+                count = torch.round(ratio * tok_lengths).clamp(min=1).long()
+                remask = lowest_ranked(scores, count) & valid
+                ids = ids.masked_fill(remask, self.mask_id)
+                logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
+                pred = sample_logits(logits, temperature, topk_ratio, generator)
+                ids = torch.where(remask, pred, ids)
+                conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
+                scores = conf.masked_fill(~remask, 1e5).masked_fill(~valid, float("inf"))
+            return self.to_frames(ids, lengths)

@@ -1,0 +1,159 @@
+r"""Masking schedules, token corruption and sampling for masked and residual
+token transformers (MoMask's recipe), all driven by an optional
+:class:`torch.Generator` so that training draws and generation are
+reproducible."""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple, Optional
+
+import torch
+from torch import Tensor
+
+
+def _device_of(generator: Optional[torch.Generator], device) -> torch.device:
+    return generator.device if generator is not None else torch.device(device or "cpu")
+
+
+def uniform(shape, generator: Optional[torch.Generator] = None, device=None) -> Tensor:
+    """:func:`torch.rand` on :obj:`generator`'s device, moved to :obj:`device`
+    (the same draws wherever the model runs)."""
+    return torch.rand(shape, generator=generator,
+                      device=_device_of(generator, device)).to(device)
+
+
+def integers(high: int, shape, generator: Optional[torch.Generator] = None,
+             device=None) -> Tensor:
+    """:func:`torch.randint` on :obj:`generator`'s device, moved to :obj:`device`."""
+    return torch.randint(high, shape, generator=generator,
+                         device=_device_of(generator, device)).to(device)
+
+
+def cosine_schedule(u: Tensor) -> Tensor:
+    r"""Masked fraction :math:`\cos(\pi u / 2)` for :math:`u \in [0, 1]`."""
+    return torch.cos(u * math.pi / 2)
+
+
+def mask_ratio(u: Tensor, floor: float = 0.0) -> Tensor:
+    r"""Training mask ratio: :math:`f + (1 - f)\cos(\pi u / 2)` (MoMask:
+    :math:`f = 0`). A floor :math:`f > 0` keeps the task from being a copy
+    of neighbouring tokens when tokens are per frame."""
+    return floor + (1.0 - floor) * cosine_schedule(u)
+
+
+def lowest_ranked(scores: Tensor, count: Tensor) -> Tensor:
+    r"""``True`` at the :obj:`count` lowest :obj:`scores` of every row (ties
+    broken by position).
+
+    Shapes:
+        - **scores**: :math:`(B, T)`, **count**: :math:`(B,)`,
+          **output**: :math:`(B, T)`
+    """
+    ranks = scores.argsort(dim=-1, stable=True).argsort(dim=-1)
+    return ranks < count.unsqueeze(-1)
+
+
+def random_mask(valid: Tensor, ratio: Tensor,
+                generator: Optional[torch.Generator] = None) -> Tensor:
+    r"""A uniformly random subset of :math:`\mathrm{round}(r_b\,n_b)` (at
+    least one) of the real positions of every row.
+
+    Shapes:
+        - **valid**: :math:`(B, T)`, **ratio**: :math:`(B,)`,
+          **output**: :math:`(B, T)`
+    """
+    length = valid.sum(-1)
+    count = torch.round(ratio * length).clamp(min=1)
+    count = torch.minimum(count, length).long()
+    scores = uniform(valid.shape, generator, valid.device)
+    return lowest_ranked(scores.masked_fill(~valid, 2.0), count) & valid
+
+
+def bernoulli_subset(mask: Tensor, prob: float,
+                     generator: Optional[torch.Generator] = None) -> Tensor:
+    """Each ``True`` of :obj:`mask` kept with probability :obj:`prob`."""
+    draw = uniform(mask.shape, generator, mask.device)
+    return mask & (draw < prob)
+
+
+class Corruption(NamedTuple):
+    """Inputs of a masked-token training step and where they differ from
+    the targets' role: ``mask`` (loss positions), ``random`` (replaced by a
+    random code), ``masked`` (replaced by [MASK]); the rest of ``mask``
+    keeps its true code."""
+    inputs: Tensor
+    mask: Tensor
+    random: Tensor
+    masked: Tensor
+
+
+def corrupt_tokens(codes: Tensor, mask: Tensor, mask_id: int, num_codes: int,
+                   random_prob: float = 0.1, mask_prob: float = 0.88,
+                   generator: Optional[torch.Generator] = None) -> Corruption:
+    r"""MoMask's corruption of the masked positions: :obj:`random_prob` of
+    them get a uniformly random code; of the others, :obj:`mask_prob` get
+    [MASK] and the rest keep the true code (defaults: 10 % random, 79.2 %
+    [MASK], 10.8 % kept).
+
+    Shapes:
+        - **codes**, **mask**: :math:`(B, T)`; outputs alike
+    """
+    random = bernoulli_subset(mask, random_prob, generator)
+    masked = bernoulli_subset(mask & ~random, mask_prob, generator)
+    noise = integers(num_codes, codes.shape, generator, codes.device)
+    inputs = torch.where(random, noise, codes)
+    inputs = inputs.masked_fill(masked, mask_id)
+    return Corruption(inputs, mask, random, masked)
+
+
+def top_k_filter(logits: Tensor, ratio: Optional[float]) -> Tensor:
+    r"""Logits outside the :math:`\lceil r K \rceil` largest of every row set
+    to ``-inf`` (MoMask keeps 10 %: :obj:`ratio` 0.1; ``None`` or 1: none
+    filtered).
+
+    Shapes:
+        - **logits**: :math:`(\ldots, K)`, **output**: alike
+    """
+    if ratio is None or ratio >= 1.0:
+        return logits
+    k = max(1, math.ceil(ratio * logits.size(-1)))
+    kth = logits.topk(k, dim=-1).values[..., -1:]
+    return logits.masked_fill(logits < kth, float("-inf"))
+
+
+def sample_logits(logits: Tensor, temperature: float = 1.0, topk_ratio: Optional[float] = 0.1,
+                  generator: Optional[torch.Generator] = None) -> Tensor:
+    r"""Codes drawn from ``softmax(top_k(logits) / temperature)``
+    (:obj:`temperature` 0: the argmax).
+
+    Shapes:
+        - **logits**: :math:`(\ldots, K)`, **output**: :math:`(\ldots)` long
+    """
+    if temperature <= 0:
+        return logits.argmax(-1)
+    probs = torch.softmax(top_k_filter(logits, topk_ratio) / temperature, dim=-1)
+    flat = probs.reshape(-1, probs.size(-1)).to(_device_of(generator, probs.device))
+    draw = torch.multinomial(flat, 1, generator=generator)
+    return draw.to(probs.device).view(probs.shape[:-1])
+
+
+def residual_layer_schedule(size: int, num_quantizers: int,
+                            generator: Optional[torch.Generator] = None,
+                            device=None) -> Tensor:
+    r"""Residual layer :math:`q \in [1, Q-1]` per sample, biased to low
+    layers: :math:`q = 1 + \mathrm{round}((1 - \cos(\pi u / 2))(Q - 2))`
+    (MoMask's ``q_schedule``).
+
+    Shapes:
+        - **output**: :math:`(B,)` long
+    """
+    u = uniform((size,), generator, device)
+    return 1 + torch.round((1 - cosine_schedule(u)) * (num_quantizers - 2)).long()
+
+
+def guided(cond: Tensor, uncond: Tensor, scale: float) -> Tensor:
+    r"""Classifier-free guidance on logits:
+    :math:`u + s\,(c - u)` (:math:`s = 1`: exactly the conditional logits)."""
+    if scale == 1.0:
+        return cond
+    return uncond + scale * (cond - uncond)
