@@ -27,7 +27,7 @@ excepted), or a look-alike read as anything but the unit it looks like.
 
 Usage::
 
-    .venv/bin/python benchmarks/rig_reading.py [--seeds 0 1] [--data DIR]
+    .venv/bin/python benchmarks/rig_reading.py [--seeds 0 1 2 3] [--data DIR]
 """
 from __future__ import annotations
 
@@ -152,7 +152,7 @@ def _table(rows: List[List]) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     parser.add_argument("--frames", type=int, default=90)
     parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data")
     args = parser.parse_args(argv)

@@ -219,3 +219,14 @@ def test_semantic_alignment_bodyplans_without_data():
         embs = {k: enc.encode(fn(k)) for k in ("crab", "quadruped_longtail")}
         c, t, _ = sa.score_pair("crab", "quadruped_longtail", skels, embs, legs)
         assert t == 20 and (c == t if want == 1.0 else c < want * t)
+
+
+def test_rig_reading_every_zoo_variant(tmp_path):
+    # every zoo rig in all six up axes, in m, cm, inches and arbitrary units
+    import rig_reading
+    rows = rig_reading.zoo_rows(0, 40, tmp_path)
+    assert {r["up_true"] for r in rows} == {"+X", "-X", "+Y", "-Y", "+Z", "-Z"}
+    assert {r["species"] for r in rows} >= {"biped", "fowl", "crab", "spider", "longtail"}
+    wrong = [r for r in rows if r["up_read"] != r["up_true"] and not r["flagged"]]
+    assert not wrong
+    assert all(r["units_ok"] for r in rows), [r for r in rows if not r["units_ok"]]
