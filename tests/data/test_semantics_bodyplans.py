@@ -165,11 +165,11 @@ def test_leg_pairs_follow_geometry_over_name_numbers():
     assert "third leg pair" in with_geometry["leg_R_01"]
 
 
-@pytest.mark.parametrize("species", ["crab", "spider"])
+@pytest.mark.parametrize("species", ["crab", "spider", "hexapod"])
 def test_zoo_arthropods_walk_with_leg_pairs_front_to_back(species, tmp_path):
-    # the zoo numbers legs front to back; their feet must be so too (front
-    # legs once splayed backwards, crossing the hind ones, and motion
-    # evidence then read the first pair as the last)
+    # pairs are numbered by where legs join the body, then by their feet:
+    # the zoo's hexapod splays its front legs backwards across the hind ones
+    # (as the crab and spider once did), which read the first pair as last
     from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
     from satagraph.io import read_bvh, write_bvh
     rig = zoo_rigs([species], seed=0)[0]
@@ -178,7 +178,8 @@ def test_zoo_arthropods_walk_with_leg_pairs_front_to_back(species, tmp_path):
               tmp_path / "a.bvh")
     motion = read_bvh(tmp_path / "a.bvh")
     d = table(motion.skeleton, evidence_from_motion(motion, up_axis="+X"))
-    pairs = {"crab": ("leg_L_01", "leg_L_03"), "spider": ("Leg_L_01", "Leg_R_08")}
+    pairs = {"crab": ("leg_L_01", "leg_L_03"), "spider": ("Leg_L_01", "Leg_R_08"),
+             "hexapod": ("LeftFrontFemur", "RightHindFemur")}
     front, hind = pairs[species]
     assert d[front].endswith("first leg pair (femur / thigh)") and "front limb" in d[front]
     assert "hind limb" in d[hind]
