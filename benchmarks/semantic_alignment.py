@@ -20,9 +20,12 @@ with exporter noise in every name, a bird with finger-named wings, a crab, a
 spider, a long-tailed quadruped) against the real humans and the dog:
 bird <-> human (legs to legs, wings to arms), arthropod <-> quadruped (legs to
 legs: a leg segment to the same side's leg segment of the same rank, front
-or hind, any leg pair) and tail / neck / head. Scored with the rules and the
-geometry / motion evidence (real files: their motion; reference rigs: their
-rest pose), the rules on names alone, and the raw-name baseline.
+or hind, any leg pair) and tail / neck / head; and the zoo's crab and
+spider, written +X up in inches with an A rest pose and read back, whose leg
+pairs must be told front to back (the first pair to a quadruped's front leg,
+the last to its hind leg). Scored with the rules and the geometry / motion
+evidence (real files and zoo files: their motion; reference rigs: their rest
+pose), the rules on names alone, and the raw-name baseline.
 
 It also times describing and embedding every joint of every skeleton in the
 data with a warm embedding cache (target < 1 s).
@@ -54,7 +57,8 @@ from satagraph.data.semantics.reference_rigs import (REFERENCE_RIGS,
 from satagraph.data.semantics.lexicon import split_words, strip_prefixes
 from satagraph.data.semantics.lexicon import parse_name
 from satagraph.data.semantics.rules import describe_structure
-from satagraph.io import read_bvh
+from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
+from satagraph.io import read_bvh, write_bvh
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "semantic_alignment.md"
@@ -146,6 +150,8 @@ TABLE = build_table()
 # ------------------------------------------------- body plans beyond mammals
 BIRDS = ("bird_bip01", "bird_bip01_noise", "bird_fingerwing")
 ARTHROPODS = ("crab", "spider")
+#: Zoo arthropods read from a dialect file with their motion as evidence.
+ZOO_ARTHROPODS = ("zoo_crab", "zoo_spider")
 QUADRUPEDS = ("dog", "quadruped_longtail")
 _B = "Bip01_L_"
 _CRAB = [f"leg_L_0{n}" for n in (1, 2, 3)]
@@ -175,6 +181,16 @@ BODYPLAN = {
                          "dog": "LeftHand|LeftFoot",
                          "quadruped_longtail": "LeftHand|LeftFoot"},
     },
+    "leg pairs front to back": {
+        f"{end} leg {seg}": {
+            "zoo_crab": f"leg_L_0{1 if end == 'front' else 3}{crab}",
+            "zoo_spider": f"Leg_L_0{1 if end == 'front' else 4}{spider}",
+            "dog": quad[end == "hind"], "quadruped_longtail": quad[end == "hind"]}
+        for seg, crab, spider, quad in (
+            ("upper", "", "", ("LeftArm", "LeftUpLeg")),
+            ("lower", "_02", "_1", ("LeftForeArm", "LeftLeg")),
+            ("terminal", "_03", "_2", ("LeftHand", "LeftFoot")))
+        for end in ("front", "hind")},
     "tail / neck / head": {
         "tail": {"bird_bip01": "Bip01_Tail|Bip01_Tail1", "dog": "Tail|Tail1",
                  "quadruped_longtail": "|".join(f"Tail_{i:02d}" for i in range(1, 33))},
@@ -190,6 +206,8 @@ BODYPLAN_PAIRS = [
      [(b, h) for b in BIRDS for h in HUMANS]),
     ("arthropod<->quadruped", ("legs to legs",),
      [(a, q) for a in ARTHROPODS for q in QUADRUPEDS]),
+    ("arthropod<->quadruped, pairs in order", ("leg pairs front to back",),
+     [(a, q) for a in ZOO_ARTHROPODS for q in QUADRUPEDS]),
     ("tail/neck", ("tail / neck / head",),
      [("bird_bip01", "dog"), ("bird_bip01", "quadruped_longtail"),
       ("bird_bip01_noise", "dog"), ("quadruped_longtail", "dog"),
@@ -202,7 +220,7 @@ _HUMAN_ROWS = {"front girdle", "front upper", "front lower", "front terminal",
 def _mirror_in(key: str, name: str) -> str:
     """Right-side joint of a left-side joint in skeleton :obj:`key` (the
     spider numbers its right legs 05 .. 08)."""
-    if key == "spider":
+    if key.endswith("spider"):
         return re.sub(r"Leg_L_0(\d)", lambda m: f"Leg_R_0{int(m.group(1)) + 4}", name)
     return mirror(name)
 
@@ -455,7 +473,20 @@ def bodyplan_skeletons(motions: dict) -> Tuple[dict, dict, Dict[str, str]]:
     noise = dict(zip(refs["bird_bip01"].names, refs["bird_bip01_noise"].names))
     for k, sk in refs.items():
         skels[k], evidence[k] = sk, rest_evidence(sk)
+    for k in ZOO_ARTHROPODS:
+        motion = zoo_file_motion(k[len("zoo_"):])
+        skels[k], evidence[k] = motion.skeleton, evidence_from_motion(motion)
     return skels, evidence, noise
+
+
+def zoo_file_motion(species: str):
+    """A zoo rig's walk written +X up in inches with an A rest pose, read
+    back from the file (up axis detected, units the file's own)."""
+    clip = generate_clip(zoo_rigs([species], seed=0)[0], "walk", frames=90, seed=1)
+    motion = apply_dialect(clip, Dialect(up_axis="+X", unit="in", rest="apose"))[0]
+    with tempfile.TemporaryDirectory() as tmp:
+        write_bvh(motion, Path(tmp) / f"{species}.bvh")
+        return read_bvh(Path(tmp) / f"{species}.bvh")
 
 
 def _bodyplan_lines(motions: dict, t5_path: Path, cache_dir: Path
@@ -470,8 +501,11 @@ def _bodyplan_lines(motions: dict, t5_path: Path, cache_dir: Path
              "issue 15 rig spec) against the real humans (bandai, cmu, ccbase, "
              "mixamo, mocapbank, blender) and the dog; `bird_bip01_noise` has an "
              "exporter suffix on every name (`__x7Q`, `_v2`, `_a1b2c3`). "
-             "Evidence: real files their motion, reference rigs their rest "
-             "pose. Both directions; a row sums a rig over its partners.", "",
+             "`zoo_crab` / `zoo_spider`: the zoo's rigs written +X up in inches "
+             "with an A rest pose and read back; their first leg pair must meet a "
+             "quadruped's front leg and their last its hind leg. Evidence: real "
+             "and zoo files their motion, reference rigs their rest pose. Both "
+             "directions; a row sums a rig over its partners.", "",
              "| encoder | pairs | kind | correct | accuracy |",
              "|---|---|---|---|---|"]
     notes: List[str] = []

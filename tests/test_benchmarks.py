@@ -178,3 +178,28 @@ def test_semantic_alignment_bodyplans_without_data():
         embs = {k: enc.encode(fn(k)) for k in ("crab", "quadruped_longtail")}
         c, t, _ = sa.score_pair("crab", "quadruped_longtail", skels, embs, legs)
         assert t == 20 and (c == t if want == 1.0 else c < want * t)
+
+
+def test_semantic_alignment_zoo_leg_pairs_in_order():
+    # zoo arthropods read from a dialect file: first pair front, last hind
+    import semantic_alignment as sa
+    from satagraph.data.semantics import OfflineTextEncoder, describe_joints
+    skels, evidence, noise = sa.bodyplan_skeletons({})
+    rows = sa.build_bodyplan_table(noise)["leg pairs front to back"]
+    enc = OfflineTextEncoder()
+    embs = {k: enc.encode(describe_joints(skels[k], evidence=evidence[k]))
+            for k in sa.ZOO_ARTHROPODS + ("quadruped_longtail",)}
+    for a in sa.ZOO_ARTHROPODS:
+        c, t, misses = sa.score_pair(a, "quadruped_longtail", skels, embs, rows)
+        assert t == 24 and c == t, misses
+
+
+def test_rig_reading_every_zoo_variant(tmp_path):
+    # every zoo rig in all six up axes, in m, cm, inches and arbitrary units
+    import rig_reading
+    rows = rig_reading.zoo_rows(0, 40, tmp_path)
+    assert {r["up_true"] for r in rows} == {"+X", "-X", "+Y", "-Y", "+Z", "-Z"}
+    assert {r["species"] for r in rows} >= {"biped", "fowl", "crab", "spider", "longtail"}
+    wrong = [r for r in rows if r["up_read"] != r["up_true"] and not r["flagged"]]
+    assert not wrong
+    assert all(r["units_ok"] for r in rows), [r for r in rows if not r["units_ok"]]

@@ -15,9 +15,13 @@ The up axis is decided from the motion first (:func:`guess_up_axis`):
 Units (:func:`guess_units`) come from what the file says: a declaration
 written by ``satagraph convert --canonical``, exporter dialects with known
 units (CMU, Mixamo, Reallusion CC), a human body plan (whose height is
-known), and magnitudes that can only be metres. Anything else keeps the
-file's own units and says so: a 45-unit quadruped may be a dog in
-centimetres or a horse in inches.
+known), and magnitudes that can only be metres (a vertebrate 0.02 to 3.5
+units across; never an arthropod, which may be a millimetre or a metre
+across). Anything else keeps the file's own units and says so: a 45-unit
+quadruped may be a dog in centimetres or a horse in inches, a 3-unit spider
+a tarantula in inches or a giant in metres. A human in an arbitrary unit
+that makes it a human height in a standard unit cannot be told from one:
+it is read in that unit.
 
 Overrides always win: :class:`RigSettings` on a motion (from the command
 line, a manifest row, a ``data.sources`` entry or the file's own
@@ -314,8 +318,11 @@ _DIALECTS = (
     ("Mixamo", re.compile(r"^mixamorig\d*:", re.I), None, "cm"),
     ("Reallusion CC", re.compile(r"^CC_Base_"), None, "cm"),
 )
-_HUMAN_HEIGHT = (1.0, 2.3)  # metres: what a human body plan allows
-_STANDARD = ("m", "cm", "mm", "in", "cmu")
+#: Heights (metres) a human body plan allows.
+HUMAN_HEIGHT = (1.0, 2.3)
+#: The units a human body plan may be read in: a file in an arbitrary unit
+#: that makes it :data:`HUMAN_HEIGHT` tall in one of them reads as that unit.
+STANDARD_UNITS = ("m", "cm", "mm", "in", "cmu")
 _NOT_HUMAN = re.compile(r"tail|wing|beak|snout|muzzle|paw|hoof|antenn|claw|"
                         r"pincer|fin(?![a-z])|horn|mane|feather|tentacle", re.I)
 _SIDED = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)|"
@@ -384,6 +391,14 @@ def _size(motion: Motion) -> float:
     return body_size(_sample(motion)[0])
 
 
+def _paired_legs(motion: Motion, up_axis: str) -> int:
+    """Legs numbered in leg pairs (an arthropod's six or more), read from
+    names, geometry and motion; ``0`` for any other body plan."""
+    from satagraph.data.semantics import evidence_from_motion, paired_legs
+    evidence = evidence_from_motion(motion, up_axis=up_axis)
+    return paired_legs(motion.skeleton, evidence)
+
+
 def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
     r"""Guess the units of a rig from what its file says (see the module
     docstring), never from a human prior unless the rig is human."""
@@ -393,17 +408,24 @@ def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
         label, units = dialect
         return UnitGuess(UNITS[units], 0.9, "dialect", f"{label} rig", height)
     if looks_human(motion, pose):
-        fits = [u for u in _STANDARD
-                if _HUMAN_HEIGHT[0] <= height * UNITS[u] <= _HUMAN_HEIGHT[1]]
+        fits = [u for u in STANDARD_UNITS
+                if HUMAN_HEIGHT[0] <= height * UNITS[u] <= HUMAN_HEIGHT[1]]
         if fits:
             best = min(fits, key=lambda u: abs(np.log(height * UNITS[u] / 1.7)))
             conf = 0.9 if len(fits) == 1 else 0.5
             return UnitGuess(UNITS[best], conf, "human", f"a human body plan "
-                             f"{height:.4g} units tall", height)
+                             f"{height:.4g} units tall ({height * UNITS[best]:.3g} m "
+                             f"in {best})", height)
+    legs = _paired_legs(motion, up_axis)
+    if legs:
+        return UnitGuess(1.0, 0.0, "kept", f"{height:.4g} units tall, {legs} legs: "
+                         "an arthropod may be a millimetre or a metre across, so "
+                         "no size tells its units; pass --units to set them", height)
     size = _size(motion)
     if 0.02 <= size <= 3.5:
         return UnitGuess(1.0, 0.7, "magnitude", f"{size:.3g} units across: "
-                         "only metres make such a size", height)
+                         "only metres make such a size for a body of four "
+                         "legs or fewer", height)
     return UnitGuess(1.0, 0.0, "kept", f"{height:.4g} units tall, not a human "
                      "and no known exporter: cm, inches or another unit all "
                      "fit; pass --units to set them", height)

@@ -63,6 +63,25 @@ def test_units_of_an_animal_are_kept_and_reported_not_humanised() -> None:
     assert metres.how == "magnitude" and metres.scale == 1.0
 
 
+@pytest.mark.parametrize("unit", ["in", "m", "cm"])
+def test_units_of_an_arthropod_are_kept_whatever_its_size(unit: str) -> None:
+    # a 7 cm spider is 2.8 inches across: as many units as a 2.8 m body in
+    # metres (the benchmark's zoo0-spider-palps, once read as metres)
+    spider = generate_clip(zoo_rigs(["spider"], seed=0)[1], "walk", frames=60, seed=5)
+    reading = read_rig(apply_dialect(spider, Dialect(up_axis="-X", unit=unit))[0])
+    assert reading.units.kept and reading.units.scale == 1.0, reading.units.summary()
+    assert reading.units.reason.split(", ")[1].startswith("8 legs: an arthropod")
+
+
+def test_a_human_in_an_arbitrary_unit_is_kept_unless_it_looks_standard() -> None:
+    human = _clip("biped")
+    odd = read_rig(apply_dialect(human, Dialect(unit=12.0))[0]).units  # no unit fits
+    assert odd.kept and "pass --units" in odd.reason
+    # 160 units tall is what a 1.6 m human in cm is: no file tells them apart
+    alike = read_rig(apply_dialect(human, Dialect(unit=160.0))[0]).units
+    assert (alike.how, alike.scale) == ("human", 0.01) and " m in cm" in alike.reason
+
+
 def test_real_files_keep_their_readings(read_real) -> None:
     expect = {"bandai/dataset-1_walk_normal_001.bvh": ("+Y", "cm"),
               "cmu/01_01.bvh": ("+Y", "cmu"), "ccbase/007_01.bvh": ("+Y", "cm"),

@@ -165,6 +165,26 @@ def test_leg_pairs_follow_geometry_over_name_numbers():
     assert "third leg pair" in with_geometry["leg_R_01"]
 
 
+@pytest.mark.parametrize("species", ["crab", "spider", "hexapod"])
+def test_zoo_arthropods_walk_with_leg_pairs_front_to_back(species, tmp_path):
+    # pairs are numbered by where legs join the body, then by their feet:
+    # the zoo's hexapod splays its front legs backwards across the hind ones
+    # (as the crab and spider once did), which read the first pair as last
+    from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
+    from satagraph.io import read_bvh, write_bvh
+    rig = zoo_rigs([species], seed=0)[0]
+    clip = generate_clip(rig, "walk", frames=40, seed=1)
+    write_bvh(apply_dialect(clip, Dialect(up_axis="+X", unit="in", rest="apose"))[0],
+              tmp_path / "a.bvh")
+    motion = read_bvh(tmp_path / "a.bvh")
+    d = table(motion.skeleton, evidence_from_motion(motion, up_axis="+X"))
+    pairs = {"crab": ("leg_L_01", "leg_L_03"), "spider": ("Leg_L_01", "Leg_R_08"),
+             "hexapod": ("LeftFrontFemur", "RightHindFemur")}
+    front, hind = pairs[species]
+    assert d[front].endswith("first leg pair (femur / thigh)") and "front limb" in d[front]
+    assert "hind limb" in d[hind]
+
+
 def test_spider_four_leg_pairs_mirrored_by_side():
     for d in both(spider()):
         assert d["Leg_L_01"].replace("left", "right") == d["Leg_R_05"]
@@ -367,7 +387,7 @@ def test_dataset_embeds_each_file_with_its_evidence():
     frames = 8
     rot = np.broadcast_to(np.eye(3), (frames, sk.num_joints, 3, 3)).copy()
     motion = Motion(sk, rot, np.broadcast_to(sk.offsets, (frames,) + sk.offsets.shape).copy())
-    feats = motion_to_features(canonicalize(motion, up_axis="+Y"))  # flat body
+    feats = motion_to_features(canonicalize(motion, up_axis="+Y", unit_scale=1.0))  # flat body
     sk = feats.skeleton  # the motionless root is removed
     calls = []
 
@@ -394,7 +414,7 @@ def test_inference_embeds_target_with_its_evidence():
     sk = crab(reverse_numbers=True)
     motion = Motion(sk, np.broadcast_to(np.eye(3), (2, sk.num_joints, 3, 3)).copy(),
                     np.broadcast_to(sk.offsets, (2,) + sk.offsets.shape).copy())
-    feats = static_features(canonicalize(motion, up_axis="+Y"))
+    feats = static_features(canonicalize(motion, up_axis="+Y", unit_scale=1.0))
     sk = feats.skeleton
     got = _embed(lambda s, evidence=None: describe_joints(s, evidence=evidence), feats)
     assert "first leg pair" in got[sk.names.index("leg_L_03")]

@@ -5,7 +5,7 @@ spine joint as its wings, a crab's legs are numbered, exporters write joints
 ``Bone.017``. What the body does does: a chain whose end carries weight and
 touches the ground is a leg wherever it hangs, a laterally spread chain that
 never bears weight is a wing or an arm, and the legs of an arthropod are
-ordered front to back by where their feet are.
+ordered front to back by where they join the body, then by their feet.
 
 :class:`JointEvidence` summarises a motion per joint (mean height above the
 ground, fraction of frames in ground contact, mean lateral and forward

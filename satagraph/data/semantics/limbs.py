@@ -10,6 +10,7 @@ segment", whatever their names.
 """
 from __future__ import annotations
 
+import re
 from typing import Dict, List
 
 from satagraph.data.semantics.evidence import EvidenceLike
@@ -39,3 +40,17 @@ def limb_end_index(skeleton: Skeleton, evidence: EvidenceLike = None) -> List[in
     for a limb the skeleton lacks)."""
     found = limb_ends(skeleton, evidence)
     return [found.get(limb, -1) for limb in LIMBS]
+
+
+#: A leg's terminal segment in a description of an arthropod's leg pairs.
+_PAIRED_LEG_END = re.compile(r"^(left|right) \w+ limb terminal segment, \w+ leg pair")
+
+
+def paired_legs(skeleton: Skeleton, evidence: EvidenceLike = None) -> int:
+    """Number of legs numbered in leg pairs (six or more legs: an arthropod),
+    ``0`` for a body with four legs or fewer, as
+    :func:`~satagraph.data.semantics.describe_joints` (with the optional
+    geometry / motion :obj:`evidence`) reads them."""
+    from satagraph.data.semantics import describe_joints  # the package imports this module
+    return sum(bool(_PAIRED_LEG_END.match(text))
+               for text in describe_joints(skeleton, evidence=evidence))

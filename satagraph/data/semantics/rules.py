@@ -35,8 +35,8 @@ The rules follow the SATA prompt (paper Figure 6) without a language model:
 * **Evidence** (optional, :mod:`.evidence`): a chain whose end bears weight
   is a leg wherever it hangs, hind unless the weight-bearing chains form a
   front and a back group; a laterally spread chain that never bears weight
-  is a front limb (arm or wing); leg pairs are ordered by where their feet
-  are; unnamed paired chains off the trunk become legs or wings. Without
+  is a front limb (arm or wing); leg pairs are ordered by where they join
+  the body, then by their feet; unnamed paired chains off the trunk become legs or wings. Without
   evidence, names and hierarchy decide.
 * Unknown names fall back to their cleaned words plus a structural role:
   ``"unnamed joint, second segment of a chain from the spine"``.
@@ -292,6 +292,7 @@ class _Chain:
     weight: Optional[bool] = None  # bears weight (None: no evidence)
     spread: float = 0.0  # sideways reach beyond the attachment
     forward: float = 0.0  # where its lowest joint (the foot) is
+    attach_forward: float = 0.0  # where its first joint (on the body) is
     lateral: float = 0.0  # sideways position of its farthest joint
     low_height: float = 0.0  # height of its lowest joint
     root_height: float = 0.0  # height of its first joint
@@ -316,6 +317,7 @@ def _chain_facts(chain: _Chain, tree: _Tree, ev: JointEvidence) -> None:
                     or ev.height[low] <= BEARS_WEIGHT_HEIGHT)
     chain.spread = abs(ev.lateral[far]) - (abs(ev.lateral[base]) if base >= 0 else 0.0)
     chain.forward, chain.lateral = ev.forward[low], ev.lateral[far]
+    chain.attach_forward = ev.forward[chain.root]
     chain.low_height, chain.root_height = ev.height[low], ev.height[chain.root]
 
 
@@ -564,12 +566,15 @@ def _positional_ranks(states: List[_State], tree: _Tree) -> None:
 
 def _pair_order_key(chain: _Chain, states: List[_State], geometry: bool
                     ) -> tuple:
-    """Front-to-back sort key: the feet's position, else the name's number,
-    else front / middle / hind words, else the joint order."""
+    """Front-to-back sort key: where the leg joins the body, then where
+    its foot is (legs may splay across each other: the body keeps their
+    order), else the name's number, else front / middle / hind words, else
+    the joint order."""
     info = states[chain.root].info
     word = {"front": 0, "hind": 2}.get(info.front_hind or "", 1)
     number = info.number if info.number is not None else 1 << 30
-    return (-chain.forward if geometry else 0.0, number, word, chain.root)
+    where = (-chain.attach_forward, -chain.forward) if geometry else (0.0, 0.0)
+    return (*where, number, word, chain.root)
 
 
 def _number_leg_pairs(states: List[_State], tree: _Tree,

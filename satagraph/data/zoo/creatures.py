@@ -41,7 +41,7 @@ def _limb(b: _Builder, parent: int, names: Sequence[str],
 def _spread(sx: float, yaw: float, out: float, up: float) -> np.ndarray:
     """Direction ``(out, up)`` in the vertical plane of a leg that points
     sideways (``sx``) turned by :obj:`yaw` degrees towards the front."""
-    return _rot(1, np.radians(sx * yaw)) @ np.array([sx * out, up, 0.0])
+    return _rot(1, np.radians(-sx * yaw)) @ np.array([sx * out, up, 0.0])
 
 
 def _fold_wing(b: _Builder, joints: Sequence[int], sx: float) -> None:
