@@ -119,7 +119,7 @@ class SentenceEncoder(TextEncoder):
                                                       local_files_only=True)
             model = AutoModel.from_pretrained(str(self.model_path), local_files_only=True)
         except (OSError, ValueError) as err:
-            first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+            first = (str(err).strip() or type(err).__name__).splitlines()[0]
             raise FileNotFoundError(f"SentenceEncoder: cannot load a model and tokenizer "
                                     f"from {self.model_path}: {first}. {SENTENCE_HELP}"
                                     ) from err
