@@ -328,8 +328,9 @@ def _snake_path(length: float, kind: str, rng: np.random.Generator,
     theta = np.radians(rng.uniform(25, 40)) * np.sin(2 * np.pi * s / wave)
     bend = 0.0
     if kind == "turn":
-        bend = rng.choice([-1.0, 1.0]) / (length * rng.uniform(1.0, 2.0))
-        theta += bend * s
+        sign, radius = rng.choice([-1.0, 1.0]), length * rng.uniform(1.0, 2.0)
+        theta += sign * s / radius
+        bend = sign / radius
     theta += rng.uniform(-np.pi, np.pi)
     xz = np.cumsum(np.stack([np.sin(theta), np.cos(theta)], 1), axis=0) * step
     return s, xz - xz[np.searchsorted(s, 0.0)], float(bend)
