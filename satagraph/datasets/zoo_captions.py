@@ -11,11 +11,14 @@ change without its sign).
 
 What each kind does (:mod:`satagraph.data.zoo.motions`):
 
-* ``walk``: forward at a steady speed (a drift of at most 4 deg/s is not
-  mentioned); snakes slither.
+* ``walk``: forward at a steady speed; snakes slither. The generator adds
+  a drift of at most 4 deg/s, told (as veering) only where it adds up to
+  :data:`DRIFT_TURN` degrees.
 * ``trot``: a trot (quadrupeds).
 * ``turn``: walks forward while turning, from about a third of the way in;
-  the side is the sign of the turn (positive: left), the wording its size.
+  the side is the sign of the turn (positive: left), the wording its size
+  (:data:`TURN_WORDS`; a turn under :data:`UNTOLD_TURN` degrees, as in a
+  short window, is told as walking forward).
 * ``speed``: walks forward, speeding up or slowing down (about x2).
 * ``idle``: stands in place, swaying gently (snakes: lie in place swaying
   the raised front of the body).
@@ -44,6 +47,10 @@ ZOO_SUBJECTS: Dict[str, Tuple[str, ...]] = {
 #: Turn sizes (degrees, upper bounds) -> how a turn of that size is told.
 TURN_WORDS = ((45.0, "veers"), (135.0, "turns"), (225.0, "turns around"),
               (float("inf"), "turns in a circle"))
+#: Turns smaller than this (degrees) go untold, whatever the kind; larger
+#: drifts of straight kinds (long walks) are told as veering.
+UNTOLD_TURN = 10.0
+DRIFT_TURN = 30.0
 _KIND_IN_NAME = re.compile(r"_(?P<kind>walk|trot|turn|speed|idle)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
@@ -100,10 +107,12 @@ def _verbs(clip: ZooClip) -> List[str]:
     """Verb phrases of a clip."""
     move = "slithers" if clip.species == "snake" else "walks"
     moving = "slithering" if clip.species == "snake" else "walking"
-    if clip.kind == "walk":
-        return [f"{move} forward", f"{move} forward at a steady pace"]
+    drift = _drift(clip)
+    if clip.kind == "walk" or (clip.kind == "turn" and clip.turn is not None
+                               and abs(clip.turn) < UNTOLD_TURN):
+        return [f"{move} forward{drift}", f"{move} forward at a steady pace{drift}"]
     if clip.kind == "trot":
-        return ["trots forward", "moves forward at a trot"]
+        return [f"trots forward{drift}", f"moves forward at a trot{drift}"]
     if clip.kind == "idle":
         if clip.species == "snake":
             return ["lies in place, swaying the front of its body",
@@ -118,8 +127,18 @@ def _verbs(clip: ZooClip) -> List[str]:
     if clip.speed_start is None or clip.speed_end is None:
         return [f"{move} forward, changing its speed", f"changes speed while {moving}"]
     if clip.speed_end > clip.speed_start:
-        return [f"{move} forward, speeding up", f"starts slowly and {move} faster and faster"]
-    return [f"{move} forward, slowing down", f"starts fast and {move} slower and slower"]
+        return [f"{move} forward, speeding up{drift}",
+                f"starts slowly and {move} faster and faster{drift}"]
+    return [f"{move} forward, slowing down{drift}",
+            f"starts fast and {move} slower and slower{drift}"]
+
+
+def _drift(clip: ZooClip) -> str:
+    """``", veering to the left"`` for a straight kind whose small yaw
+    rate added up to :data:`DRIFT_TURN` degrees or more; else empty."""
+    if clip.kind in ("turn", "idle") or clip.turn is None or abs(clip.turn) < DRIFT_TURN:
+        return ""
+    return f", veering to the {'left' if clip.turn > 0 else 'right'}"
 
 
 def zoo_phrasings(clip: ZooClip) -> List[str]:
@@ -136,4 +155,4 @@ def zoo_phrasings(clip: ZooClip) -> List[str]:
             for subject in ZOO_SUBJECTS[clip.species]]
 
 
-__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]
+__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]
