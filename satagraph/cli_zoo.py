@@ -85,7 +85,9 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
         "per combination of --up-axes, --units, --rest-poses and --name-noise "
         "(default: once, +Y up in metres), each exactly the same motion; the "
         "manifest records up_axis, scale (metres per file unit), height_m, "
-        "rest_pose and name_noise.",
+        "rest_pose and name_noise, and what each clip does (kind, turn_deg: "
+        "positive to the left, speed_start and speed_end in leg lengths per "
+        "second), the truth of its captions (satagraph.datasets).",
         epilog="examples: satagraph zoo zoo/ --species quadruped bird --clips 5; "
         "satagraph zoo zoo/ --species spider --up-axes=+Z,-Y --units cm in 28 "
         "--rest-poses native crouched --name-noise none tag")

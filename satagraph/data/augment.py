@@ -126,8 +126,10 @@ def _heading(rotation: np.ndarray) -> np.ndarray:
 
 
 # ------------------------------------------------------------- mirroring
-_SIDE_WORDS = {"Left": "Right", "Right": "Left", "left": "right",
-               "right": "left", "LEFT": "RIGHT", "RIGHT": "LEFT"}
+#: The side words and their mirror images (joint names here, caption words
+#: in :mod:`satagraph.datasets.mirror`).
+SIDE_WORDS = {"Left": "Right", "Right": "Left", "left": "right",
+              "right": "left", "LEFT": "RIGHT", "RIGHT": "LEFT"}
 _SIDE_LETTERS = {"L": "R", "R": "L", "l": "r", "r": "l"}
 # A side word anywhere, or a side letter standing alone (``l_hip``,
 # ``thigh.L``, ``LHipJoint``) or closing a name (``HipL``).
@@ -141,7 +143,7 @@ def swap_side(name: str) -> str:
     ``"l_hip"`` -> ``"r_hip"``; names without a side come back unchanged."""
     def swap(match: re.Match) -> str:
         text = match.group(0)
-        return _SIDE_WORDS.get(text) or _SIDE_LETTERS[text]
+        return SIDE_WORDS.get(text) or _SIDE_LETTERS[text]
     return _SIDE_PATTERN.sub(swap, name)
 
 

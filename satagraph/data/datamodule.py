@@ -24,22 +24,16 @@ def semantic_embedder(encoder: Optional[str] = "offline",
                       dictionary: Optional[str] = None) -> Optional[Callable]:
     r"""A function ``(skeleton, evidence=None) -> [J, D_t]`` from the
     semantic tag pipeline: ``"offline"`` (default, no weights),
-    ``"t5:/path/to/t5"`` for a local T5, or ``None``/``"none"`` for no
-    semantic features. ``evidence`` (a
+    ``"t5:/path/to/t5"`` for a local T5, any other spec of
+    :func:`~satagraph.data.semantics.build_text_encoder`, or
+    ``None``/``"none"`` for no semantic features. ``evidence`` (a
     :class:`~satagraph.data.semantics.JointEvidence` of the motion, see
     :func:`~satagraph.data.semantics.evidence_from_features`) lets the rules
     read legs, wings and leg pairs from what the body does."""
     if encoder in (None, "none", ""):
         return None
-    from satagraph.data.semantics import (OfflineTextEncoder, T5TextEncoder,
-                                          embed_skeleton)
-    if encoder == "offline":
-        text_encoder = OfflineTextEncoder()
-    elif str(encoder).startswith("t5:"):
-        text_encoder = T5TextEncoder(str(encoder)[3:])
-    else:
-        raise ValueError(f"unknown semantic encoder {encoder!r}: use 'offline', "
-                         "'t5:/path/to/t5' or 'none'")
+    from satagraph.data.semantics import build_text_encoder, embed_skeleton
+    text_encoder = build_text_encoder(encoder)
     kwargs = {"dictionary": dictionary} if dictionary else {}
 
     def embed(skeleton, evidence=None):

@@ -13,7 +13,10 @@ The pipeline of SATA (paper section 3.2, appendix C.3), offline:
 3. :func:`embed_skeleton` embeds the descriptions with a
    :class:`TextEncoder` (:class:`OfflineTextEncoder` by default, or a local
    :class:`T5TextEncoder`) through a disk cache (:mod:`.cache`): the
-   semantic features X_t, one row per joint.
+   semantic features X_t, one row per joint. The same encoders embed
+   captions for text-to-motion, with :class:`SentenceEncoder` (a local
+   MiniLM) and :class:`GloVeEncoder` (local word vectors);
+   :func:`build_text_encoder` builds any of them from a spec string.
 
 Example::
 
@@ -37,6 +40,13 @@ from satagraph.data.semantics.cache import (EmbeddingCache, clear_memory,
                                             default_cache_dir)
 from satagraph.data.semantics.encoders import (OfflineTextEncoder,
                                                T5TextEncoder, TextEncoder)
+from satagraph.data.semantics.factory import (TextEncoderMismatch,
+                                              build_text_encoder,
+                                              check_text_encoder,
+                                              check_text_encoder_state,
+                                              text_encoder_state)
+from satagraph.data.semantics.glove import GloVeEncoder
+from satagraph.data.semantics.sentence import SentenceEncoder
 from satagraph.data.semantics.evidence import (EvidenceLike, JointEvidence,
                                                as_evidence, call_semantic,
                                                evidence_from_features,
@@ -160,7 +170,10 @@ def embed_skeleton(skeleton: Skeleton, encoder: Optional[TextEncoder] = None,
 
 __all__ = [
     "describe_joints", "embed_skeleton", "embed_texts", "default_encoder",
-    "TextEncoder", "OfflineTextEncoder", "T5TextEncoder", "EmbeddingCache",
+    "TextEncoder", "OfflineTextEncoder", "T5TextEncoder", "SentenceEncoder",
+    "GloVeEncoder", "build_text_encoder", "check_text_encoder",
+    "check_text_encoder_state", "text_encoder_state", "TextEncoderMismatch",
+    "EmbeddingCache",
     "default_cache_dir", "clear_memory", "build_prompt", "parse_answer",
     "import_answer", "load_reference_vocab", "load_dictionary",
     "validate_dictionary", "normalize_anchors", "parse_anchor",

@@ -296,20 +296,54 @@ class T5TextEncoder(TextEncoder):
     @torch.inference_mode()
     def encode(self, texts: Sequence[str]) -> Tensor:
         self.load()
-        chunks = [self._encode_batch(list(texts[i:i + self.batch_size]))
-                  for i in range(0, len(texts), self.batch_size)]
-        if not chunks:
-            return torch.zeros(0, self._dim)
-        return torch.cat(chunks)
+        return encode_mean_pooled(self._model, self._tokenizer, texts, self._dim,
+                                  self.device, self.batch_size, self.max_length)
 
-    def _encode_batch(self, texts: List[str]) -> Tensor:
-        tokens = self._tokenizer(texts, padding=True, truncation=True,
-                                 max_length=self.max_length,
-                                 return_tensors="pt")
-        ids = tokens["input_ids"].to(self.device)
-        mask = tokens["attention_mask"].to(self.device)
-        hidden = self._model(input_ids=ids, attention_mask=mask
-                             ).last_hidden_state
-        weights = mask.unsqueeze(-1).to(hidden.dtype)
-        pooled = (hidden * weights).sum(1) / weights.sum(1).clamp_min(1.0)
-        return pooled.float().cpu()
+
+def mean_pool(hidden: Tensor, mask: Tensor) -> Tensor:
+    r"""Mean of hidden states over the non-padding tokens.
+
+    Args:
+        hidden: Last hidden states.
+        mask: Attention mask (1 for tokens, 0 for padding).
+
+    Returns:
+        Tensor: The pooled states.
+
+    Shapes:
+        - **hidden**: :math:`(N, L, D)`
+        - **mask**: :math:`(N, L)`
+        - **output**: :math:`(N, D)`
+    """
+    weights = mask.unsqueeze(-1).to(hidden.dtype)
+    return (hidden * weights).sum(1) / weights.sum(1).clamp_min(1.0)
+
+
+def encode_mean_pooled(model: torch.nn.Module, tokenizer, texts: Sequence[str],
+                       dim: int, device: torch.device, batch_size: int,
+                       max_length: int) -> Tensor:
+    r"""Mean-pooled last hidden states of a ``transformers`` encoder, in
+    batches (call under :func:`torch.inference_mode`).
+
+    Args:
+        model: The encoder (returns ``last_hidden_state``).
+        tokenizer: Its tokenizer.
+        texts: N texts.
+        dim: Hidden width D (the shape of an empty result).
+        device: Where the model runs.
+        batch_size: Texts per forward pass.
+        max_length: Token limit per text.
+
+    Returns:
+        Tensor: float32 ``[N, D]`` on the CPU.
+    """
+    chunks = []
+    for i in range(0, len(texts), batch_size):
+        tokens = tokenizer(list(texts[i:i + batch_size]), padding=True,
+                           truncation=True, max_length=max_length,
+                           return_tensors="pt")
+        ids = tokens["input_ids"].to(device)
+        mask = tokens["attention_mask"].to(device)
+        hidden = model(input_ids=ids, attention_mask=mask).last_hidden_state
+        chunks.append(mean_pool(hidden, mask).float().cpu())
+    return torch.cat(chunks) if chunks else torch.zeros(0, dim)

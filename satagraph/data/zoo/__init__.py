@@ -36,13 +36,15 @@ from satagraph.data.zoo.dialects import (NOISE_STYLES, REST_POSES, UNITS, UP_AXE
                                          apply_dialect, change_rest_pose,
                                          dialect_variants, export_dialect,
                                          rest_pose_rotations, unit_scale, up_rotation)
-from satagraph.data.zoo.motions import GAITS, generate_clip
+from satagraph.data.zoo.motions import (GAITS, ClipFacts, generate_clip,
+                                        generate_clip_with_facts)
 from satagraph.data.zoo.rigs import STYLES, Leg, Sway, ZooRig
 from satagraph.data.zoo.species import CLIP_KINDS, SPECIES, VARIANTS, zoo_rigs
 from satagraph.data.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_COLUMNS,
-                                      write_dialect_zoo, write_zoo)
+                                      MOTION_COLUMNS, write_dialect_zoo, write_zoo)
 
-__all__ = ["CLIP_KINDS", "DIALECT_COLUMNS", "GAITS", "LICENCE", "MANIFEST_COLUMNS",
+__all__ = ["CLIP_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS", "LICENCE",
+           "MANIFEST_COLUMNS", "MOTION_COLUMNS", "generate_clip_with_facts",
            "NOISE_STYLES", "REST_POSES", "SPECIES", "STYLES", "UNITS", "UP_AXES",
            "VARIANTS", "Dialect", "DialectVariant", "Leg", "Sway", "ZooRig",
            "add_name_noise", "apply_dialect", "change_rest_pose", "dialect_variants",

@@ -29,7 +29,7 @@ from typing import List, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph.data.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
-from satagraph.data.zoo.motions import generate_clip
+from satagraph.data.zoo.motions import ClipFacts, generate_clip_with_facts
 from satagraph.data.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, CLIP_KINDS,
                                         SPECIES, VARIANTS)
 from satagraph.motion import Motion
@@ -46,8 +46,9 @@ DEFAULT_SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "cr
 
 @dataclass(frozen=True)
 class ZooSample:
-    """One endless-zoo sample: a canonical motion (metres, +Y up) and what
-    it was drawn as."""
+    """One endless-zoo sample: a canonical motion (metres, +Y up), what
+    it was drawn as and what the clip does (:attr:`facts`, the truth of its
+    captions)."""
 
     motion: Motion
     species: str
@@ -55,6 +56,7 @@ class ZooSample:
     kind: str
     rest: str
     noise: Optional[str]
+    facts: Optional[ClipFacts] = None
 
     @property
     def plan(self) -> str:
@@ -162,14 +164,14 @@ class EndlessZoo:
         rig = build(style, np.random.default_rng(rng.integers(2 ** 63)), name, **options)
         kinds = CLIP_KINDS[species]
         kind = kinds[int(rng.integers(len(kinds)))]
-        motion = generate_clip(rig, kind, frames=frames, fps=self.fps,
-                               seed=int(rng.integers(2 ** 31)))
+        motion, facts = generate_clip_with_facts(rig, kind, frames=frames, fps=self.fps,
+                                                 seed=int(rng.integers(2 ** 31)))
         rest = self.rests[int(rng.integers(len(self.rests)))]
         noise = (NOISE_STYLES[int(rng.integers(len(NOISE_STYLES)))]
                  if rng.random() < self.noise else None)
         motion, _ = apply_dialect(motion, Dialect(rest=rest, noise=noise),
                                   seed=int(rng.integers(2 ** 31)))
-        return ZooSample(motion, species, style, kind, rest, noise)
+        return ZooSample(motion, species, style, kind, rest, noise, facts)
 
 
 __all__ = ["EVAL_STREAMS", "DEFAULT_SPECIES", "ZooSample", "EndlessZoo"]

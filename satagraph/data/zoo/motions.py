@@ -76,6 +76,42 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
     return _Clip(fps, pad, v, yaw)
 
 
+@dataclass(frozen=True)
+class ClipFacts:
+    r"""What a generated zoo clip does, as the generator drew it (the
+    truth captions are written from).
+
+    Attributes:
+        species (str): Body plan.
+        kind (str): Clip kind (:data:`CLIP_KINDS`).
+        duration (float): Seconds.
+        speed_start (float): Forward speed at the first frame, in leg
+            lengths per second (0 for idles).
+        speed_end (float): Forward speed at the last frame.
+        turn (float): Heading change over the clip in degrees; positive
+            turns to the character's left (+X of the canonical frame,
+            counterclockwise seen from above). Snakes: the bend of their
+            path, without the serpentine wave.
+    """
+
+    species: str
+    kind: str
+    duration: float
+    speed_start: float
+    speed_end: float
+    turn: float
+
+
+def _legged_facts(rig: ZooRig, kind: str, clip: _Clip, frames: int) -> ClipFacts:
+    """Facts of a legged clip from its traced profile."""
+    first, last = clip.pad, clip.pad + frames - 1
+    turn = np.degrees(clip.heading[last] - clip.heading[first])
+    scale = 1.0 / rig.leg_length
+    return ClipFacts(rig.species, kind, frames / clip.fps,
+                     float(clip.speed[first] * scale), float(clip.speed[last] * scale),
+                     float(turn))
+
+
 # ------------------------------------------------------------ feet, IK
 @dataclass
 class _Feet:
@@ -237,8 +273,10 @@ def _smooth_min(x: np.ndarray, width: int) -> np.ndarray:
 
 
 def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
-            rng: np.random.Generator) -> Tuple[np.ndarray, np.ndarray, int]:
-    """Global rotations and positions of a legged clip (extended grid)."""
+            rng: np.random.Generator
+            ) -> Tuple[np.ndarray, np.ndarray, int, ClipFacts]:
+    """Global rotations and positions of a legged clip (extended grid),
+    and its facts."""
     gait = GAITS["trot" if kind == "trot" else rig.species]
     _, _, stride, speed, _ = gait
     length = rig.leg_length
@@ -259,7 +297,7 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     if idle:
         root[:, 1] -= 0.01 * length * (1 + np.sin(2 * np.pi * phase))
     rot, pos = _pose(rig, root, root_rot, phase, clip.heading, feet)
-    return rot, pos, clip.pad
+    return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
 
 
 def _trace(clip: _Clip, heading: float, idle: bool, length: float,
@@ -281,28 +319,35 @@ def _trace(clip: _Clip, heading: float, idle: bool, length: float,
 
 # ----------------------------------------------------------- snake motion
 def _snake_path(length: float, kind: str, rng: np.random.Generator,
-                extent: Tuple[float, float]) -> Tuple[np.ndarray, np.ndarray]:
-    """Arc-length grid and points (x, z) of a serpentine path."""
+                extent: Tuple[float, float]) -> Tuple[np.ndarray, np.ndarray, float]:
+    """Arc-length grid and points (x, z) of a serpentine path, and its bend
+    (radians per unit of arc length, positive to the left)."""
     step = length / 400
     s = np.arange(extent[0] - length, extent[1] + length, step)
     wave = length * rng.uniform(0.4, 0.6)
     theta = np.radians(rng.uniform(25, 40)) * np.sin(2 * np.pi * s / wave)
+    bend = 0.0
     if kind == "turn":
-        theta += rng.choice([-1.0, 1.0]) * s / (length * rng.uniform(1.0, 2.0))
+        sign, radius = rng.choice([-1.0, 1.0]), length * rng.uniform(1.0, 2.0)
+        theta += sign * s / radius
+        bend = sign / radius
     theta += rng.uniform(-np.pi, np.pi)
     xz = np.cumsum(np.stack([np.sin(theta), np.cos(theta)], 1), axis=0) * step
-    return s, xz - xz[np.searchsorted(s, 0.0)]
+    return s, xz - xz[np.searchsorted(s, 0.0)], float(bend)
 
 
 def _slither(rig: ZooRig, kind: str, frames: int, fps: float,
-             rng: np.random.Generator) -> Tuple[np.ndarray, np.ndarray, int]:
-    """Global rotations and positions of a slithering snake."""
+             rng: np.random.Generator
+             ) -> Tuple[np.ndarray, np.ndarray, int, ClipFacts]:
+    """Global rotations and positions of a slithering snake, and its
+    facts."""
     skel, length = rig.skeleton, rig.leg_length
     clip = _profile(kind, frames, fps, GAITS["snake"][3] * length, rng)
     s_root = np.cumsum(clip.speed) / fps
     s_root = (s_root - s_root[clip.pad])[clip.pad:clip.pad + frames]
     z = skel.rest_positions()[:, 2]
-    s, xz = _snake_path(length, kind, rng, (s_root.min() + z.min(), s_root.max() + z.max()))
+    s, xz, bend = _snake_path(length, kind, rng,
+                              (s_root.min() + z.min(), s_root.max() + z.max()))
     arc = s_root[:, None] + z[None]
     target = np.zeros((frames, skel.num_joints, 3))
     target[..., 0], target[..., 2] = np.interp(arc, s, xz[:, 0]), np.interp(arc, s, xz[:, 1])
@@ -314,7 +359,11 @@ def _slither(rig: ZooRig, kind: str, frames: int, fps: float,
         sway = 0.05 * length * np.sin(2 * np.pi * _IDLE_HZ * t)[:, None] * lift
         target[..., 0] += sway
         target[..., 1] += 0.02 * length * lift * np.sin(np.pi * _IDLE_HZ * t)[:, None]
-    return (*_follow(skel, target), 0)
+    first, last = clip.pad, clip.pad + frames - 1
+    facts = ClipFacts(rig.species, kind, frames / fps, float(clip.speed[first] / length),
+                      float(clip.speed[last] / length),
+                      float(np.degrees(bend * (s_root[-1] - s_root[0]))))
+    return (*_follow(skel, target), 0, facts)
 
 
 def _follow(skel: Skeleton, target: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
@@ -354,14 +403,33 @@ def generate_clip(rig: ZooRig, kind: str = "walk", frames: int = 120,
         Motion: Local rotations and translations (metres, +Y up, ground at
         y = 0); no raw channels.
     """
+    return generate_clip_with_facts(rig, kind, frames, fps, seed)[0]
+
+
+def generate_clip_with_facts(rig: ZooRig, kind: str = "walk", frames: int = 120,
+                             fps: float = 30.0, seed: int = 0
+                             ) -> Tuple[Motion, ClipFacts]:
+    r""":func:`generate_clip` and what the clip does (:class:`ClipFacts`:
+    speeds, turn), from the same random draws.
+
+    Args:
+        rig (ZooRig): A skeleton from :func:`zoo_rigs`.
+        kind (str): One of ``CLIP_KINDS[rig.species]``.
+        frames (int): Number of frames.
+        fps (float): Frames per second.
+        seed (int): Random seed.
+
+    Returns:
+        tuple: The motion (see :func:`generate_clip`) and its facts.
+    """
     if kind not in CLIP_KINDS[rig.species]:
         raise ValueError(f"{rig.species} has no clip kind {kind!r}: choose "
                          f"from {list(CLIP_KINDS[rig.species])}")
     rng = np.random.default_rng(seed)
     make = _slither if rig.species == "snake" else _legged
-    rot, pos, pad = make(rig, kind, frames, fps, rng)
+    rot, pos, pad, facts = make(rig, kind, frames, fps, rng)
     rot, pos = rot[pad:pad + frames], pos[pad:pad + frames]
-    return _to_motion(rig, rot, pos, fps, kind)
+    return _to_motion(rig, rot, pos, fps, kind), facts
 
 
 def _to_motion(rig: ZooRig, rot: np.ndarray, pos: np.ndarray, fps: float,

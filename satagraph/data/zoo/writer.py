@@ -11,7 +11,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Union
 import numpy as np
 
 from satagraph.data.zoo.dialects import Dialect, DialectVariant, apply_dialect
-from satagraph.data.zoo.motions import generate_clip
+from satagraph.data.zoo.motions import ClipFacts, generate_clip_with_facts
 from satagraph.data.zoo.rigs import ZooRig
 from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.io import write_bvh
@@ -22,12 +22,17 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 MANIFEST_COLUMNS = ("path", "dataset", "skeleton", "species", "split", "fps",
                     "frames", "joints", "licence", "sha1", "up_axis", "scale",
-                    "height_m", "rest_pose", "name_noise")
+                    "height_m", "rest_pose", "name_noise", "kind", "turn_deg",
+                    "speed_start", "speed_end")
 LICENCE = "CC0 1.0"
 #: What the manifest's dialect columns mean: ``up_axis`` the file's up axis,
 #: ``scale`` metres per file unit, ``height_m`` the character's true height
 #: in metres, ``rest_pose`` and ``name_noise`` the :class:`Dialect` options.
-DIALECT_COLUMNS = MANIFEST_COLUMNS[-5:]
+DIALECT_COLUMNS = ("up_axis", "scale", "height_m", "rest_pose", "name_noise")
+#: What the clip does (:class:`~satagraph.data.zoo.motions.ClipFacts`, the
+#: truth of its captions): ``kind``, ``turn_deg`` (positive: to the left),
+#: ``speed_start`` and ``speed_end`` in leg lengths per second.
+MOTION_COLUMNS = ("kind", "turn_deg", "speed_start", "speed_end")
 
 
 # ---------------------------------------------------------------- writing
@@ -90,14 +95,14 @@ def _write_clip(out: Path, rig: ZooRig, c: int, seed: int, fps: float,
     kinds = CLIP_KINDS[rig.species]
     kind, repeat = kinds[c % len(kinds)], c // len(kinds)
     clip_seed = int(np.random.default_rng([seed, r, c]).integers(2 ** 31))
-    motion = generate_clip(rig, kind, frames, fps, clip_seed)
+    motion, facts = generate_clip_with_facts(rig, kind, frames, fps, clip_seed)
     stem = f"{rig.name}_{kind}{f'_{repeat + 1}' if repeat else ''}.bvh"
-    return [_write_file(out, rig, motion, stem, split, dialect, clip_seed + d)
+    return [_write_file(out, rig, motion, facts, stem, split, dialect, clip_seed + d)
             for d, dialect in enumerate(dialects)]
 
 
-def _write_file(out: Path, rig: ZooRig, motion: Motion, stem: str, split: str,
-                dialect: Dialect, seed: int) -> Dict[str, str]:
+def _write_file(out: Path, rig: ZooRig, motion: Motion, facts: ClipFacts, stem: str,
+                split: str, dialect: Dialect, seed: int) -> Dict[str, str]:
     """Write one clip in one dialect; its manifest row."""
     height = motion.height()
     if not dialect.canonical:
@@ -115,7 +120,9 @@ def _write_file(out: Path, rig: ZooRig, motion: Motion, stem: str, split: str,
             "sha1": hashlib.sha1(path.read_bytes()).hexdigest(),
             "up_axis": dialect.up_axis, "scale": f"{scale:.10g}",
             "height_m": f"{height:.6f}", "rest_pose": dialect.rest,
-            "name_noise": dialect.noise or ""}
+            "name_noise": dialect.noise or "", "kind": facts.kind,
+            "turn_deg": f"{facts.turn:+.1f}", "speed_start": f"{facts.speed_start:.3f}",
+            "speed_end": f"{facts.speed_end:.3f}"}
 
 
 def write_dialect_zoo(out_dir: PathLike, variants: Iterable[DialectVariant],
@@ -144,9 +151,11 @@ def write_dialect_zoo(out_dir: PathLike, variants: Iterable[DialectVariant],
     for v, item in enumerate(variants):
         key = zlib.crc32(f"{item.rig.name}/{item.kind}".encode())
         clip_seed = int(np.random.default_rng([seed, key]).integers(2 ** 31))
-        motion = generate_clip(item.rig, item.kind, frames, fps, clip_seed)
-        rows.append(_write_file(out, item.rig, motion, f"{item.rig.name}_{item.kind}.bvh",
-                                "test", item.dialect, clip_seed + v))
+        motion, facts = generate_clip_with_facts(item.rig, item.kind, frames, fps,
+                                                 clip_seed)
+        rows.append(_write_file(out, item.rig, motion, facts,
+                                f"{item.rig.name}_{item.kind}.bvh", "test", item.dialect,
+                                clip_seed + v))
     _write_manifest(out / "manifest.tsv", rows)
     return rows
 
