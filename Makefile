@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: venv test demo bench scatter sweep clean
+.PHONY: venv test test-slow demo bench scatter sweep clean
 
 $(STAMP): setup.cfg pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -17,6 +17,11 @@ venv: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2 tests
+
+# Also the tests marked slow (every real file, real training runs, kill -9
+# and resume, ddp_spawn, the sweep end to end); `pytest -m slow` runs only them.
+test-slow: $(STAMP)
+	$(PY) -m pytest -q -n 2 --slow tests
 
 # The whole pipeline on the procedural zoo in under 10 minutes on a CPU (zoo,
 # training, retargeting, rendering into demo_output/), e.g.

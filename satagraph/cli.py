@@ -25,7 +25,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph import __version__
-from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.io import BVHError, read_bvh
 from satagraph.io.files import check_output_path
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
@@ -103,6 +103,8 @@ def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Moti
 
 
 def _write(motion: Motion, path: str) -> None:
+    from satagraph.io import write_bvh  # torch: loaded for the commands that write
+
     try:
         write_bvh(motion, path)
     except OSError as err:

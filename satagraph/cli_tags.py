@@ -25,10 +25,6 @@ import sys
 from pathlib import Path
 from typing import List, Optional, Sequence
 
-from satagraph.data.semantics import (SemanticsError, build_prompt,
-                                      describe_joints, evidence_from_motion,
-                                      import_answer, load_reference_vocab)
-from satagraph.io import BVHError
 from satagraph.io.files import atomic_write_text
 from satagraph.skeleton import Skeleton
 
@@ -109,8 +105,8 @@ def _evidence(motion):
     only) where the motion cannot be canonicalised or its up axis is a
     low-confidence guess, said on stderr: evidence read on the wrong axis
     would mislead."""
-    import sys
     from satagraph.data.rig_reading import read_rig
+    from satagraph.data.semantics import evidence_from_motion
     up = read_rig(motion).up
     if up.low_confidence:
         print(f"satagraph: note: {motion.source}: the up axis is uncertain "
@@ -132,6 +128,9 @@ def _emit(text: str, out: Optional[Path]) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from satagraph.data.semantics import (SemanticsError, build_prompt,
+                                          describe_joints, import_answer,
+                                          load_reference_vocab)
     if args.reference_vocab and not args.prompt:
         raise SemanticsError("--reference-vocab needs --prompt")
     if args.import_answer and args.out is None:
@@ -167,6 +166,8 @@ def run_tags(args: argparse.Namespace) -> int:
     Returns:
         int: 0 on success, 2 on any user error (one line on stderr).
     """
+    from satagraph.data.semantics import SemanticsError  # torch: only here
+    from satagraph.io import BVHError
     try:
         return _run(args)
     except (SemanticsError, BVHError, OSError) as err:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import os
 from pathlib import Path
-from typing import Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 import numpy as np
 import pytest
@@ -45,22 +45,55 @@ def _representatives(rows: List[Dict[str, str]]) -> List[Dict[str, str]]:
     return list(best.values())
 
 
+# --------------------------------------------------------------- slow tests
+SLOW_REASON = "slow: run with --slow (everything) or -m slow (only these)"
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--slow", action="store_true", default=False,
+                     help="also run the tests marked slow (skipped by default)")
+
+
+def pytest_collection_modifyitems(config: pytest.Config,
+                                  items: List[pytest.Item]) -> None:
+    """Tests marked ``slow`` are skipped unless ``--slow`` is given or the
+    ``-m`` expression names the marker (``-m slow``)."""
+    if config.getoption("--slow") or "slow" in (config.getoption("markexpr") or ""):
+        return
+    skip = pytest.mark.skip(reason=SLOW_REASON)
+    for item in items:
+        if item.get_closest_marker("slow") is not None:
+            item.add_marker(skip)
+
+
+# -------------------------------------------------------- real-data params
+def _row_params(rows: List[Dict[str, str]], slow_beyond_representatives: bool
+                ) -> List[Any]:
+    """One param per row; with :obj:`slow_beyond_representatives`, all but
+    the shortest file of each skeleton id are marked slow."""
+    quick = {r["path"] for r in _representatives(rows)}
+    return [pytest.param(r, id=r["path"], marks=(
+        [pytest.mark.slow] if slow_beyond_representatives and r["path"] not in quick
+        else [])) for r in rows]
+
+
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
-    """Parametrise ``manifest_row`` over every file of the manifest and
-    ``skeleton_row`` over one file per skeleton id."""
-    wanted = [n for n in ("manifest_row", "skeleton_row")
+    """Parametrise ``manifest_row`` over every file of the manifest,
+    ``skeleton_row`` over one file per skeleton id, and ``every_file_row``
+    over every file with all but one file per skeleton id marked slow."""
+    wanted = [n for n in ("manifest_row", "skeleton_row", "every_file_row")
               if n in metafunc.fixturenames]
     if not wanted:
         return
     root = data_dir()
     rows = _read_manifest(root) if root is not None else []
     for name in wanted:
-        chosen = rows if name == "manifest_row" else _representatives(rows)
+        chosen = _representatives(rows) if name == "skeleton_row" else rows
         if not chosen:
             metafunc.parametrize(name, [pytest.param(
                 None, marks=pytest.mark.skip(reason=SKIP_MESSAGE))])
         else:
-            metafunc.parametrize(name, chosen, ids=[r["path"] for r in chosen])
+            metafunc.parametrize(name, _row_params(chosen, name == "every_file_row"))
 
 
 @pytest.fixture(scope="session")

@@ -20,7 +20,13 @@ def test_enough_distinct_cases() -> None:
     assert len(full) >= 120 and len(CASES) >= 90
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def _param(case: bad_inputs.Case):
+    """A 3000-level hierarchy takes 10-40 s per command: slow."""
+    slow = [pytest.mark.slow] if "3000-level" in case.name else []
+    return pytest.param(case, id=case.name, marks=slow)
+
+
+@pytest.mark.parametrize("case", [_param(c) for c in CASES])
 def test_bad_input(case: bad_inputs.Case, tmp_path: Path) -> None:
     result = bad_inputs.run_in_process(case, tmp_path)
     expected = "handled" if case.expect == "handled" else "clean error"

@@ -1,21 +1,55 @@
-"""Every config in experiments/ loads, resolves its defaults and names a
-module, a model and data sources."""
+"""Every config in experiments/ loads, resolves its defaults, names a
+module, a model and data sources, and builds its module; the wandb sweep
+names configs of experiments/ and its command parses."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import List
 
 import pytest
+import yaml
 
 from satagraph.config import load_config
 
-CONFIGS = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "experiments")
-                 .glob("*.yaml"))
+EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments"
+CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml"))
+WANDB_SWEEP = EXPERIMENTS / "sweeps" / "wandb_sweep.yaml"
+#: Widths and depths small enough to build every config in a fraction of a
+#: second; the structure (layers, attention, convolution kinds) is kept.
+SMALL_MODEL = {"hidden_channels": 32, "ff_channels": 32, "latent_channels": 16,
+               "codebook_size": 16, "num_blocks": 1, "num_layers": 1, "heads": 2}
 
 
 @pytest.mark.parametrize("name", CONFIGS)
-def test_config_loads(name: str):
+def test_config_builds_its_module(name: str):
+    from satagraph.train import build_module, module_class
     cfg = load_config(name)
     assert cfg["module"] and cfg["model"] and cfg["data"]["sources"]
+    model = cfg["model"]
+    model.update({k: v for k, v in SMALL_MODEL.items() if k in model})
+    module = build_module(cfg)  # the real builder, without data
+    assert type(module) is module_class(cfg["module"])
+    assert sum(p.numel() for p in module.parameters()) > 0
+
+
+def _sweep_argv(config: str) -> List[str]:
+    """The command line a wandb agent runs for one value of ``config``."""
+    spec = yaml.safe_load(WANDB_SWEEP.read_text())
+    return [{"${args_no_hyphens}": f"config={config}"}.get(a, a)
+            for a in spec["command"] if a != "${program}"]
+
+
+def test_wandb_sweep_runs_configs_of_experiments():
+    from satagraph.cli import build_parser, parse_args
+    from satagraph.sweep import split_arguments
+    spec = yaml.safe_load(WANDB_SWEEP.read_text())
+    assert spec["program"] == "satagraph"
+    names = spec["parameters"]["config"]["values"]
+    assert names and set(names) <= set(CONFIGS)
+    for name in names:
+        args = parse_args(build_parser(), _sweep_argv(name))
+        assert args.command == "sweep" and args.logger == "wandb"
+        assert split_arguments(args.items) == ([name], [])
 
 
 def test_finetune_stage_inherits_cpu_joint():

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from pathlib import Path
 
 import pytest
@@ -58,18 +57,17 @@ def test_sweep_table_has_internal_and_cross_retarget_columns():
     assert "retarget" not in format_sweep(rows[1:])
 
 
+@pytest.mark.slow
 @needs_data
 def test_sweep_cli_end_to_end(tmp_path):
     gin = load_config("tiny", ["model.local_conv=gin"])
     gin["name"] = "tiny_gin"
     (tmp_path / "tiny_gin.yaml").write_text(yaml.safe_dump(gin))
     out = tmp_path / "sweep"
-    start = time.perf_counter()
     code = main(["sweep", "--budget", "0.08", "--output", str(out), "--max-batches", "2",
                  "tiny", str(tmp_path / "tiny_gin.yaml"),
                  f"data.sources=[{data_dir()}]", "data.max_files=3"])
     assert code == 0
-    assert time.perf_counter() - start < 60
     table = (out / "sweep.md").read_text()
     assert "| tiny |" in table and "| tiny_gin |" in table
     assert "`data.max_files=3`" in table and "Retarget:" not in table

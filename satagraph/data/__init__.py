@@ -1,10 +1,15 @@
-"""Datasets, canonicalisation, features and batching of motion clips."""
-from satagraph.data.canonical import canonicalize, decanonicalize, detect_up_axis, resample
-from satagraph.data.clip import MotionClip
-from satagraph.data.collate import FrameBatch, collate_clips
-from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
-from satagraph.data.frame_graph import FrameGraph
+"""Datasets, canonicalisation, features and batching of motion clips
+(imported lazily, so that numpy-only submodules load without torch)."""
+from satagraph._lazy import lazy_exports
 
-__all__ = ["canonicalize", "decanonicalize", "detect_up_axis", "resample", "MotionClip",
-           "FrameGraph", "FrameBatch", "collate_clips", "MotionFeatures",
-           "motion_to_features", "features_to_motion"]
+_CANONICAL = ("canonicalize", "decanonicalize", "detect_up_axis", "resample")
+_FEATURES = ("MotionFeatures", "motion_to_features", "features_to_motion")
+_EXPORTS = {**dict.fromkeys(_CANONICAL, "satagraph.data.canonical"),
+            **dict.fromkeys(_FEATURES, "satagraph.data.features"),
+            "MotionClip": "satagraph.data.clip",
+            "FrameBatch": "satagraph.data.collate",
+            "collate_clips": "satagraph.data.collate",
+            "FrameGraph": "satagraph.data.frame_graph"}
+__all__ = [*_CANONICAL, "MotionClip", "FrameGraph", "FrameBatch", "collate_clips",
+           *_FEATURES]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -467,8 +467,12 @@ def read_bvh(path: PathLike) -> Motion:
 
 def _declaration(path: str, text: str) -> Tuple[str, Optional[RigSettings]]:
     """The text without a trailing satagraph declaration, and the settings
-    it declares (``None`` without one)."""
-    match = _DECLARATION.search(text)
+    it declares (``None`` without one). Only the last non-blank line can
+    be one: the search starts at the line break before it (a whole-text
+    search costs more than parsing the frames)."""
+    end = len(text.rstrip())
+    start = max(text.rfind("\n", 0, end), text.rfind("\r", 0, end))
+    match = _DECLARATION.search(text, max(start - 1, 0)) if start >= 0 else None
     if match is None:
         return text, None
     if match.group(2) is None:

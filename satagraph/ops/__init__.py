@@ -1,25 +1,16 @@
-"""Differentiable operators: rotations, forward kinematics, temporal streams."""
-from satagraph.ops.fk import fk_levels, forward_kinematics, forward_kinematics_numpy
-from satagraph.ops.rotation import (
-    axis_angle_matrix,
-    euler_to_matrix,
-    euler_to_quaternion,
-    geodesic_angle,
-    matrix_to_euler,
-    matrix_to_quaternion,
-    matrix_to_rotation_6d,
-    quaternion_slerp,
-    quaternion_to_euler,
-    quaternion_to_matrix,
-    rotation_6d_to_matrix,
-    yaw_matrix,
-)
-from satagraph.ops.temporal import from_temporal_streams, to_temporal_streams
+"""Differentiable operators: rotations, forward kinematics, temporal streams
+(imported lazily: the numpy forward kinematics loads without torch)."""
+from satagraph._lazy import lazy_exports
 
-__all__ = [
-    "fk_levels", "forward_kinematics", "forward_kinematics_numpy", "axis_angle_matrix", "euler_to_matrix",
-    "euler_to_quaternion", "geodesic_angle", "matrix_to_euler",
-    "matrix_to_quaternion", "matrix_to_rotation_6d", "quaternion_slerp",
-    "quaternion_to_euler", "quaternion_to_matrix", "rotation_6d_to_matrix",
-    "yaw_matrix", "to_temporal_streams", "from_temporal_streams",
-]
+_FK = ("fk_levels", "forward_kinematics", "forward_kinematics_numpy")
+_ROTATION = (
+    "axis_angle_matrix", "euler_to_matrix", "euler_to_quaternion", "geodesic_angle",
+    "matrix_to_euler", "matrix_to_quaternion", "matrix_to_rotation_6d",
+    "quaternion_slerp", "quaternion_to_euler", "quaternion_to_matrix",
+    "rotation_6d_to_matrix", "yaw_matrix")
+_TEMPORAL = ("to_temporal_streams", "from_temporal_streams")
+_EXPORTS = {**dict.fromkeys(_FK, "satagraph.ops.fk"),
+            **dict.fromkeys(_ROTATION, "satagraph.ops.rotation"),
+            **dict.fromkeys(_TEMPORAL, "satagraph.ops.temporal")}
+__all__ = [*_FK, *_ROTATION, *_TEMPORAL]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

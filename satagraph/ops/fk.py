@@ -3,11 +3,12 @@ and a numpy version for single clips without gradients)."""
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import List, NamedTuple, Optional, Tuple
+from typing import TYPE_CHECKING, List, NamedTuple, Optional, Tuple
 
 import numpy as np
-import torch
-from torch import Tensor
+
+if TYPE_CHECKING:  # torch loads on first use: the numpy FK does without it
+    from torch import Tensor
 
 #: Joint-frames per step of :func:`forward_kinematics_numpy` (bounds the size
 #: of its temporary arrays on long clips).
@@ -26,6 +27,8 @@ def fk_levels(parent: Tensor, depth: Optional[Tensor] = None) -> List[Tensor]:
         - **parent**: :math:`(N,)`
         - **depth**: :math:`(N,)`, optional
     """
+    import torch
+
     if depth is None:
         parent = parent.cpu().long()
         if (parent >= torch.arange(parent.numel())).any():
@@ -69,6 +72,8 @@ def forward_kinematics(
         - **output**: global rotations :math:`(*, N, 3, 3)` and positions
           :math:`(*, N, 3)`
     """
+    import torch
+
     if levels is None:
         levels = fk_levels(parent)
     parent = parent.to(rotation.device)

@@ -107,6 +107,7 @@ def _overrides(root: Path) -> List[str]:
             "checkpoint.every_n_steps=3", "loss_log=true"]
 
 
+@pytest.mark.slow
 def test_resume_on_the_endless_zoo_gives_the_same_losses(tmp_path: Path) -> None:
     """Stopped after 4 steps (checkpoint at step 3), resumed: the same
     windows, the same losses as an uninterrupted run."""

@@ -78,6 +78,7 @@ def test_offline_shape_norm_and_identity():
         OfflineTextEncoder(0)
 
 
+@pytest.mark.slow
 def test_offline_is_deterministic_across_processes():
     text = "left hind limb upper segment (thigh)"
     here = OfflineTextEncoder().encode([text])[0]

@@ -30,6 +30,7 @@ def _assert_chain(skel, names, parent=None):
         assert skel.parents[b] == a, (skel.names[a], skel.names[b])
 
 
+@pytest.mark.slow
 def test_existing_species_unchanged():
     """The full zoo (new species included) writes the same files for the
     existing species as the main branch before issue 15 did."""

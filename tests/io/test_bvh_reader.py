@@ -360,3 +360,18 @@ def test_only_bvh_errors_on_corrupted_input(tmp_path):
             failures += 1
             assert str(err).startswith(f"{path}:")
     assert failures > 50
+
+
+@pytest.mark.parametrize("text, found", [
+    ("a\n# satagraph: up_axis=+Z scale=0.01\n", ("+Z", 0.01)),
+    ("a\r\n# satagraph: canonical up_axis=+Y\r\n\r\n  \n", ("+Y", None)),
+    ("a\n  # satagraph: up_axis=-X \n", ("-X", None)),
+    ("# satagraph: up_axis=+Z\n", None),  # no line before it: not a declaration
+    ("a\n# satagraph: up_axis=+Z\nb\n", None),  # not the last line
+])
+def test_declaration_is_read_on_the_last_line_only(text, found):
+    from satagraph.io.bvh_reader import _DECLARATION, _declaration
+    rest, rig = _declaration("x.bvh", text)
+    assert (rig and (rig.up_axis, rig.scale)) == (found or None)
+    whole = _DECLARATION.search(text)  # what a whole-text search finds
+    assert rest == (text if whole is None else text[:whole.start()] + "\n")

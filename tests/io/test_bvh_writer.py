@@ -61,17 +61,14 @@ def test_roundtrip_without_raw_channels(skeleton_row, read_real, tmp_path,
     assert_same_positions(motion, again)
 
 
-@pytest.mark.skipif(not os.environ.get("SATAGRAPH_FULL_TESTS"),
-                    reason="slow (~30 s): set SATAGRAPH_FULL_TESTS=1 to "
-                    "round-trip every file of the manifest")
-def test_roundtrip_every_file(manifest, read_real, tmp_path):
-    for row in manifest:
-        motion = read_real(row["path"])
-        write_bvh(motion, tmp_path / "a.bvh")
-        assert np.allclose(read_bvh(tmp_path / "a.bvh").raw_channels,
-                           motion.raw_channels, rtol=1e-5, atol=1e-6), row["path"]
-        write_bvh(motion.with_(), tmp_path / "b.bvh")
-        assert_same_positions(motion, read_bvh(tmp_path / "b.bvh"))
+def test_roundtrip_every_file(every_file_row, read_real, tmp_path):
+    """Every file of the manifest (one per skeleton id without --slow)."""
+    motion = read_real(every_file_row["path"])
+    write_bvh(motion, tmp_path / "a.bvh")
+    assert np.allclose(read_bvh(tmp_path / "a.bvh").raw_channels,
+                       motion.raw_channels, rtol=1e-5, atol=1e-6)
+    write_bvh(motion.with_(), tmp_path / "b.bvh")
+    assert_same_positions(motion, read_bvh(tmp_path / "b.bvh"))
 
 
 def test_manifest_fps_survives_roundtrip(read_real, tmp_path):

@@ -126,6 +126,7 @@ def test_retarget_and_reconstruct_commands(config_overrides: List[str], shared_d
     assert "wrote" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_default_wandb_logger_is_offline_under_run_dir(tiny_config: Dict[str, Any],
                                                        tmp_path: Path,
                                                        monkeypatch: pytest.MonkeyPatch) -> None:

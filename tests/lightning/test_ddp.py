@@ -1,7 +1,6 @@
 """Distributed data-parallel training on CPU (two processes, gloo)."""
 from __future__ import annotations
 
-import os
 import pickle
 from typing import Any, Dict
 
@@ -11,10 +10,6 @@ import torch
 
 from satagraph import train as train_mod
 from satagraph.train import train
-
-#: ``ddp_spawn`` starts fresh interpreters that import torch, PyG and
-#: satagraph again (10-25 s here); set this variable to run it too.
-SLOW_ENV = "SATAGRAPH_SLOW_TESTS"
 
 pytestmark = pytest.mark.skipif(not torch.distributed.is_available()
                                 or not torch.distributed.is_gloo_available(),
@@ -29,8 +24,8 @@ def _ddp_overrides(strategy: str) -> Dict[str, Any]:
 
 @pytest.mark.parametrize("strategy", [
     "ddp_fork",
-    pytest.param("ddp_spawn", marks=pytest.mark.skipif(
-        not os.environ.get(SLOW_ENV), reason=f"slow (set {SLOW_ENV}=1)")),
+    # fresh interpreters import torch, PyG and satagraph again (10-25 s)
+    pytest.param("ddp_spawn", marks=pytest.mark.slow),
 ])
 def test_one_ddp_step_on_two_cpu_processes(strategy: str, tiny_config: Dict[str, Any]) -> None:
     cfg = dict(tiny_config, logger={"name": "none"})

@@ -62,6 +62,7 @@ def _kill_at(cmd: List[str], log: Path, step: int, env: Dict[str, str]) -> int:
     return max(read_loss_log(log))
 
 
+@pytest.mark.slow
 def test_kill9_then_resume_gives_the_same_losses(zoo_overrides: List[str],
                                                  tmp_path: Path) -> None:
     """A real training process killed at a random step; ``--resume``

@@ -279,6 +279,7 @@ def test_clip_independence():
         torch.testing.assert_close(a[key], b[key], atol=1e-5, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_tiny_model_overfits_one_batch():
     torch.manual_seed(0)
     batch = collate_clips(make_clips([(6, 4), (4, 5)]))

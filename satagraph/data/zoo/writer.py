@@ -14,7 +14,6 @@ from satagraph.data.zoo.dialects import Dialect, DialectVariant, apply_dialect
 from satagraph.data.zoo.motions import ClipFacts, generate_clip_with_facts
 from satagraph.data.zoo.rigs import ZooRig
 from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
-from satagraph.io import write_bvh
 from satagraph.io.files import atomic_write
 from satagraph.motion import Motion
 
@@ -112,6 +111,8 @@ def _write_file(out: Path, rig: ZooRig, motion: Motion, facts: ClipFacts, stem: 
     rel = "/".join(p for p in (rig.species, dialect.tag, stem) if p)
     path = out / rel
     path.parent.mkdir(parents=True, exist_ok=True)
+    from satagraph.io import write_bvh  # torch: loaded when writing
+
     write_bvh(motion, path)
     return {"path": rel, "dataset": "zoo", "skeleton": rig.name,
             "species": rig.species, "split": split, "fps": f"{motion.fps:.1f}",
