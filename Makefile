@@ -18,10 +18,10 @@ venv: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2 tests
 
-# Also the tests marked slow (every real file, real training runs, kill -9
-# and resume, ddp_spawn, the sweep end to end); `pytest -m slow` runs only them.
+# Only the tests marked slow (every real file, real training runs, kill -9
+# and resume, ddp_spawn, the sweep end to end); CI runs it after `make test`.
 test-slow: $(STAMP)
-	$(PY) -m pytest -q -n 2 --slow tests
+	$(PY) -m pytest -q -n 2 -m slow tests
 
 # The whole pipeline on the procedural zoo in under 10 minutes on a CPU (zoo,
 # training, retargeting, rendering into demo_output/), e.g.

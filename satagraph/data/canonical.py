@@ -6,13 +6,10 @@ import re
 from typing import List, Optional, Tuple
 
 import numpy as np
-import torch
 
 from satagraph.data.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
 from satagraph.skeleton import Skeleton
-from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
-                                    quaternion_to_matrix)
 
 _SIDE = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)"
                    r"|(?<![A-Za-z])[LR](?=[A-Z])")
@@ -145,6 +142,11 @@ def resample(motion: Motion, fps: float) -> Motion:
     r"""Resample to :obj:`fps` frames per second: slerp for rotations, linear
     interpolation for translations. The first frame is kept; the last new
     frame is at or before the last old frame."""
+    import torch  # only here: reading a rig (evidence, inspect) stays torch-free
+
+    from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
+                                        quaternion_to_matrix)
+
     if abs(motion.fps - fps) < 1e-9 or motion.num_frames < 2:
         return motion.with_(fps=fps)
     count = int(np.floor((motion.num_frames - 1) * fps / motion.fps + 1e-9)) + 1

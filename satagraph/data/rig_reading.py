@@ -393,7 +393,11 @@ def _size(motion: Motion) -> float:
 
 def _paired_legs(motion: Motion, up_axis: str) -> int:
     """Legs numbered in leg pairs (an arthropod's six or more), read from
-    names, geometry and motion; ``0`` for any other body plan."""
+    names, geometry and motion; ``0`` for any other body plan. A skeleton
+    with fewer than six chain ends has no three leg pairs: it is told so
+    without the motion evidence (which needs torch)."""
+    if int(np.count_nonzero(motion.skeleton.is_leaf)) < 6:
+        return 0
     from satagraph.data.semantics import evidence_from_motion, paired_legs
     evidence = evidence_from_motion(motion, up_axis=up_axis)
     return paired_legs(motion.skeleton, evidence)

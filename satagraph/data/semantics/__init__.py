@@ -31,22 +31,10 @@ Example::
 from __future__ import annotations
 
 import os
-from typing import List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, List, Optional, Sequence, Union
 
-from torch import Tensor
-
+from satagraph._lazy import lazy_exports
 from satagraph.data.semantics._files import SemanticsError, write_json_atomic
-from satagraph.data.semantics.cache import (EmbeddingCache, clear_memory,
-                                            default_cache_dir)
-from satagraph.data.semantics.encoders import (OfflineTextEncoder,
-                                               T5TextEncoder, TextEncoder)
-from satagraph.data.semantics.factory import (TextEncoderMismatch,
-                                              build_text_encoder,
-                                              check_text_encoder,
-                                              check_text_encoder_state,
-                                              text_encoder_state)
-from satagraph.data.semantics.glove import GloVeEncoder
-from satagraph.data.semantics.sentence import SentenceEncoder
 from satagraph.data.semantics.evidence import (EvidenceLike, JointEvidence,
                                                as_evidence, call_semantic,
                                                evidence_from_features,
@@ -63,8 +51,26 @@ from satagraph.data.semantics.user import (AnchorsLike, DictionaryLike,
                                            parse_anchor, validate_dictionary)
 from satagraph.skeleton import Skeleton
 
+if TYPE_CHECKING:
+    from torch import Tensor
+
+    from satagraph.data.semantics.encoders import TextEncoder
+
+# The encoders and the embedding cache need torch: they load on first use, so
+# that reading a rig (describe_joints, evidence, limbs) stays numpy-only.
+_ENCODERS = ("TextEncoder", "OfflineTextEncoder", "T5TextEncoder")
+_FACTORY = ("TextEncoderMismatch", "build_text_encoder", "check_text_encoder",
+            "check_text_encoder_state", "text_encoder_state")
+__getattr__, __dir__ = lazy_exports(__name__, {
+    **dict.fromkeys(_ENCODERS, "satagraph.data.semantics.encoders"),
+    **dict.fromkeys(_FACTORY, "satagraph.data.semantics.factory"),
+    "GloVeEncoder": "satagraph.data.semantics.glove",
+    "SentenceEncoder": "satagraph.data.semantics.sentence",
+    **dict.fromkeys(("EmbeddingCache", "clear_memory", "default_cache_dir"),
+                    "satagraph.data.semantics.cache")})
+
 PathLike = Union[str, "os.PathLike[str]"]
-_DEFAULT_ENCODER: Optional[TextEncoder] = None
+_DEFAULT_ENCODER: Optional["TextEncoder"] = None
 
 
 def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
@@ -109,12 +115,14 @@ def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
     return apply_user(names, parents, end_site, rules, table, tags)
 
 
-def default_encoder() -> TextEncoder:
+def default_encoder() -> "TextEncoder":
     """The shared default encoder, ``OfflineTextEncoder(256)``.
 
     Returns:
         TextEncoder: The encoder.
     """
+    from satagraph.data.semantics.encoders import OfflineTextEncoder
+
     global _DEFAULT_ENCODER
     if _DEFAULT_ENCODER is None:
         _DEFAULT_ENCODER = OfflineTextEncoder()
@@ -136,6 +144,8 @@ def embed_texts(texts: Sequence[str], encoder: Optional[TextEncoder] = None,
     Returns:
         Tensor: float32 ``[N, D]``.
     """
+    from satagraph.data.semantics.cache import EmbeddingCache
+
     encoder = encoder or default_encoder()
     if not use_cache:
         return encoder.encode(list(texts)).float().cpu()
