@@ -32,20 +32,23 @@ PathLike = Union[str, "os.PathLike[str]"]
 class TextEncoder(abc.ABC):
     """Interface of the description encoders.
 
-    Subclasses provide :meth:`encode`, :attr:`out_channels` and :attr:`id`;
-    :attr:`id` must change whenever the vectors would (it keys the disk
-    cache).
+    Subclasses provide :meth:`encode` and set ``self._id`` and ``self._dim``
+    (or override :attr:`id` / :attr:`out_channels`); :attr:`id` must change
+    whenever the vectors would (it keys the disk cache).
     """
 
-    @property
-    @abc.abstractmethod
-    def id(self) -> str:
-        """Stable identifier of the encoder and its weights."""
+    _id: str
+    _dim: int
 
     @property
-    @abc.abstractmethod
+    def id(self) -> str:
+        """Stable identifier of the encoder and its weights."""
+        return self._id
+
+    @property
     def out_channels(self) -> int:
         """Embedding width D."""
+        return self._dim
 
     @abc.abstractmethod
     def encode(self, texts: Sequence[str]) -> Tensor:
@@ -175,10 +178,6 @@ class OfflineTextEncoder(TextEncoder):
     def id(self) -> str:
         return f"offline-hash-v{self.VERSION}-d{self._dim}"
 
-    @property
-    def out_channels(self) -> int:
-        return self._dim
-
     def encode_one(self, text: str) -> np.ndarray:
         """Embed one text.
 
@@ -260,14 +259,6 @@ class T5TextEncoder(TextEncoder):
             torch.device("cuda" if torch.cuda.is_available() else "cpu")
         self.batch_size, self.max_length = int(batch_size), int(max_length)
         self._model = self._tokenizer = None
-
-    @property
-    def id(self) -> str:
-        return self._id
-
-    @property
-    def out_channels(self) -> int:
-        return self._dim
 
     def load(self) -> "T5TextEncoder":
         """Load tokenizer and model now (otherwise on first use).

@@ -76,14 +76,6 @@ class GloVeEncoder(TextEncoder):
         raise ValueError(f"{self.path}: no word vectors in the file")
 
     @property
-    def id(self) -> str:
-        return self._id
-
-    @property
-    def out_channels(self) -> int:
-        return self._dim
-
-    @property
     def vocabulary_size(self) -> int:
         """Words in the file (reads it)."""
         return len(self.load()._index)

@@ -97,14 +97,6 @@ class SentenceEncoder(TextEncoder):
         self._model: Optional[torch.nn.Module] = None
         self._tokenizer = None
 
-    @property
-    def id(self) -> str:
-        return self._id
-
-    @property
-    def out_channels(self) -> int:
-        return self._dim
-
     def load(self) -> "SentenceEncoder":
         """Load tokenizer and model now (otherwise on first use).
 
