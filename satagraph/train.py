@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import warnings
 from pathlib import Path
@@ -29,6 +30,12 @@ MODULES = {"vae": SATAVAEModule, "rvq": SATARVQModule, "same": SAMEModule,
            "padded_rvq": PaddedRVQModule}
 
 
+#: Modules registered by importing a module of their own, on first use.
+PLUGIN_MODULES = {"t2m": "satagraph.lightning.text_to_motion_plugin"}
+#: ``module`` name -> data module class (default :class:`MotionDataModule`).
+DATAMODULES: Dict[str, Any] = {}
+
+
 def register_module(name: str, cls) -> None:
     """Make a LightningModule class selectable as ``module: name``."""
     MODULES[name] = cls
@@ -36,6 +43,8 @@ def register_module(name: str, cls) -> None:
 
 def module_class(name: str):
     """The LightningModule class registered under :obj:`name`."""
+    if name not in MODULES and name in PLUGIN_MODULES:
+        importlib.import_module(PLUGIN_MODULES[name])
     if name not in MODULES:
         raise ValueError(f"unknown module {name!r}; known: {sorted(MODULES)}")
     return MODULES[name]
@@ -46,14 +55,17 @@ def build_datamodule(cfg: Dict[str, Any]) -> MotionDataModule:
     run's ``seed`` unless ``data.seed`` sets one."""
     data = dict(cfg["data"])
     data.setdefault("seed", int(cfg.get("seed", 0)))
-    return MotionDataModule(**data)
+    name = cfg.get("module", "vae")
+    module_class(name)  # registers a plugin's data module
+    return DATAMODULES.get(name, MotionDataModule)(**data)
 
 
 def build_module(cfg: Dict[str, Any], dm: Optional[MotionDataModule] = None):
     """The LightningModule for a config; the semantic width comes from the
     data when it is not set."""
     model = dict(cfg.get("model", {}))
-    if dm is not None and model.get("semantic_channels") is None:
+    if dm is not None and model.get("semantic_channels") is None \
+            and hasattr(dm, "semantic_channels"):
         model["semantic_channels"] = dm.semantic_channels
     name = cfg.get("module", "vae")
     data = cfg["data"]
@@ -62,7 +74,7 @@ def build_module(cfg: Dict[str, Any], dm: Optional[MotionDataModule] = None):
     module = module_class(name)(
         model=model, loss=cfg.get("loss"), optim=cfg.get("optim"),
         fps=float((data.get("preprocessing") or {}).get("fps", 30.0)), meta=meta)
-    if dm is not None:
+    if dm is not None and hasattr(dm, "normalizer"):
         module.normalizer.load_state_dict(dm.normalizer.state_dict())
     return module
 
