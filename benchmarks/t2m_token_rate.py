@@ -31,8 +31,9 @@ from satagraph.nn.generators import (code_run_lengths, merge_codes, pool_codes, 
                                      split_codes, unpool_codes)
 from satagraph.train import load_module  # noqa: E402
 
-#: Mean layer-0 run length (frames) from which tokens are pooled.
-POOL_FROM = 3.0
+#: A token covers at most this share of the mean layer-0 run: stride
+#: ``floor(mean run * POOL_SHARE)`` (1: per-frame tokens).
+POOL_SHARE = 2.0 / 3.0
 
 
 def held_out_batches(data: CaptionDataModule, split: str, max_windows: int) -> List:
@@ -123,11 +124,12 @@ def main(argv=None) -> int:
     print(f"| dataset | layer | windows | runs | mean run (frames) | median | p90 | "
           f"share of 1-frame runs | distinct codes | runs per second |\n"
           "|---|---|---|---|---|---|---|---|---|---|")
-    means = []
+    frames = runs = 0
     for name, seqs in sorted(codes.items()):
         for layer in range(seqs[0].size(-1)):
             s = run_stats(seqs, layer, module.fps)
-            means += [s["mean"]] if layer == 0 else []
+            if layer == 0:
+                frames, runs = frames + s["frames"], runs + s["runs"]
             print(f"| {name} | {layer} | {s['windows']} | {s['runs']} | {s['mean']:.2f} | "
                   f"{s['median']:.0f} | {s['p90']:.0f} | {s['ones']:.2f} | "
                   f"{s['distinct']} | {s['per_second']:.1f} |")
@@ -139,9 +141,11 @@ def main(argv=None) -> int:
                 pooling_error(module, batches, stride).items()):
             print(f"| {name} | {stride} | {pool_q:.4f} | {rec_q:.4f} | {pool_r:.4f} | "
                   f"{rec_r:.4f} |")
-    mean = sum(means) / max(len(means), 1)
-    verdict = "pool tokens" if mean >= POOL_FROM else "per-frame tokens with a masking floor"
-    print(f"\nlayer-0 mean run length over datasets: {mean:.2f} frames -> {verdict}")
+    mean = frames / max(runs, 1)
+    stride = max(1, int(mean * POOL_SHARE))
+    verdict = (f"pool: {stride} (one token every {stride} frames)" if stride > 1
+               else "per-frame tokens with a masking floor")
+    print(f"\nlayer-0 mean run length over all windows: {mean:.2f} frames -> {verdict}")
     return 0
 
 

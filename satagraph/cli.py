@@ -40,6 +40,7 @@ OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
     ("satagraph.cli_zoo", "add_zoo_parser"),
     ("satagraph.cli_render", "add_render_parser"),
     ("satagraph.cli_sweep", "add_sweep_parser"),
+    ("satagraph.cli_generate", "add_generate_parser"),
 )
 
 Subparsers = argparse._SubParsersAction  # what add_subparsers() returns
