@@ -40,7 +40,8 @@ def add_generate_parser(sub) -> None:
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
-    p.add_argument("output", metavar="OUT.bvh")
+    p.add_argument("output", metavar="OUT.bvh", nargs="?",
+                   help="output file (may also come last after the --skeleton files)")
     add_rig_arguments(p, "", "the skeleton files")
     p.set_defaults(func=run_generate)
 
@@ -57,10 +58,20 @@ def _targets(args) -> list:
     return out
 
 
+def _split_output(args) -> None:
+    """``--skeleton A.bvh B.bvh OUT.bvh``: the last path is the output when
+    no other positional argument gave one."""
+    if args.output is None:
+        if len(args.skeleton) < 2:
+            raise ValueError("generate: OUT.bvh is missing (the file to write)")
+        args.output = args.skeleton.pop()
+
+
 def run_generate(args) -> int:
     from satagraph.generate import (GenerationSettings, generate_on, load_generator,
                                     output_paths, write_all)
     from satagraph.io.files import check_output_path
+    _split_output(args)
     if args.steps < 1:
         raise ValueError(f"--steps must be at least 1, got {args.steps}")
     paths = output_paths(args.output, args.skeleton)
