@@ -36,6 +36,7 @@ A config (``module: t2m``, see ``experiments/t2m_tiny.yaml``)::
 from __future__ import annotations
 
 import copy
+import os
 from typing import Any, Dict, List, Optional, Tuple
 
 import lightning as L
@@ -66,6 +67,9 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     it). Returns the module and the stored form."""
     from satagraph.train import load_module, module_class
     if isinstance(spec, str):
+        if not os.path.isfile(spec):
+            raise CheckpointError(f"{spec}: no such autoencoder checkpoint (model.autoencoder;"
+                                  " train one with `satagraph train t2m_rvq_tiny`)")
         module = load_module(spec)
         hparams = {k: copy.deepcopy(module.hparams[k])
                    for k in ("model", "loss", "optim", "fps", "meta")}

@@ -123,3 +123,19 @@ def test_satagraph_train_t2m_selects_on_validation(autoencoder_ckpt, tmp_path):
     assert "val_loss" in trainer.callback_metrics
     loaded = load_module(best.best_model_path)
     assert type(loaded).__name__ == "TextToMotionModule"
+
+
+@pytest.mark.parametrize("name", ["t2m", "t2m_tiny"])
+def test_t2m_configs_build_on_an_autoencoder(name, autoencoder_ckpt):
+    cfg = load_config(name, [f"model.autoencoder={autoencoder_ckpt}"])
+    for key in ("masked", "residual"):
+        cfg["model"][key].update(hidden_channels=16, ff_channels=16, num_layers=1, heads=2)
+    module = build_module(cfg)
+    assert type(module).__name__ == "TextToMotionModule"
+    assert module.masked.pool == 2 and module.residual.pool == 2
+
+
+def test_a_missing_autoencoder_is_named(tmp_path):
+    cfg = load_config("t2m_tiny", [f"model.autoencoder={tmp_path / 'none.ckpt'}"])
+    with pytest.raises(CheckpointError, match="none.ckpt: no such autoencoder"):
+        build_module(cfg)
