@@ -117,6 +117,10 @@ class TextToMotionModule(L.LightningModule):
         self.loss_weights = dict(DEFAULT_LOSS, **(loss or {}))
         self.optim = dict(DEFAULT_OPTIM, **(optim or {}))
         self.text_encoder = build_text_encoder(model.get("text_encoder", "offline"))
+        # also in the hyperparameters, which `export-weights` keeps: the
+        # record of training, never overwritten by a later load
+        self.meta.setdefault(TEXT_ENCODER_KEY, text_encoder_state(self.text_encoder))
+        self.hparams["meta"] = self.meta
         self._check_semantic_encoder()
         self.build(model)
 
@@ -234,9 +238,13 @@ class TextToMotionModule(L.LightningModule):
         checkpoint[TEXT_ENCODER_KEY] = text_encoder_state(self.text_encoder)
 
     def on_load_checkpoint(self, checkpoint: Dict[str, Any]) -> None:
-        """Refuses a checkpoint without the text encoder record or trained
-        with another encoder than the one its spec builds now."""
+        """Refuses a checkpoint without the text encoder record (its own
+        key, or ``meta`` of a weights file) or trained with another encoder
+        than the one its spec builds now."""
         state = checkpoint.get(TEXT_ENCODER_KEY)
+        if state is None:
+            meta = (checkpoint.get("hyper_parameters") or {}).get("meta") or {}
+            state = meta.get(TEXT_ENCODER_KEY)
         if not isinstance(state, dict):
             raise CheckpointError("not a text-to-motion checkpoint (no text encoder record)")
         check_text_encoder_state(state, self.text_encoder)

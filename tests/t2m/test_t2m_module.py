@@ -78,7 +78,10 @@ def test_checkpoint_round_trip_checks_the_text_encoder(autoencoder_ckpt, t2m_ckp
     torch.save(other, bad)
     with pytest.raises(ValueError, match="text encoder mismatch"):
         load_module(str(bad))
+    assert saved["hyper_parameters"]["meta"]["text_encoder"] == saved["text_encoder"]
     missing = {k: v for k, v in saved.items() if k != "text_encoder"}
+    missing["hyper_parameters"] = copy.deepcopy(saved["hyper_parameters"])
+    del missing["hyper_parameters"]["meta"]["text_encoder"]
     torch.save(missing, bad)
     with pytest.raises(CheckpointError, match="no text encoder record"):
         load_module(str(bad))
@@ -139,3 +142,14 @@ def test_a_missing_autoencoder_is_named(tmp_path):
     cfg = load_config("t2m_tiny", [f"model.autoencoder={tmp_path / 'none.ckpt'}"])
     with pytest.raises(CheckpointError, match="none.ckpt: no such autoencoder"):
         build_module(cfg)
+
+
+def test_exported_weights_keep_the_text_encoder_record(t2m_ckpt, tmp_path):
+    from satagraph.io.weights import save_weights
+    module = load_module(str(t2m_ckpt))
+    path = tmp_path / "t2m.safetensors"
+    save_weights(module, str(path))
+    again = load_module(str(path))
+    assert type(again).__name__ == "TextToMotionModule"
+    assert again.meta["text_encoder"] == {"id": module.text_encoder.id, "width": 32}
+    assert all(torch.equal(v, again.state_dict()[k]) for k, v in module.state_dict().items())
