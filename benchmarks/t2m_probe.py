@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from satagraph.data.canonical import canonicalize  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
+from satagraph.data.rig_reading import normalize_up_axis, parse_units, with_rig  # noqa: E402
 from satagraph.generate import generate_on, load_generator  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
@@ -86,6 +87,8 @@ def main(argv=None) -> int:
     parser.add_argument("--seconds", type=float, default=4.0)
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--up-axis", default=None, help="up axis of every file (zoo: +Y)")
+    parser.add_argument("--units", default=None, help="units of every file (e.g. cm)")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
     warnings.simplefilter("ignore")
@@ -94,7 +97,8 @@ def main(argv=None) -> int:
           "speed (m/s) | time (s) |\n|---|---|---|---|---|---|")
     for item in args.skeleton:
         plan, _, path = item.partition("=")
-        target = read_bvh(path)
+        target = with_rig(read_bvh(path), args.up_axis and normalize_up_axis(args.up_axis),
+                          args.units and parse_units(args.units))
         for row in probe(module, SUBJECTS.get(plan, "a character"), target, args.seconds,
                          args.seeds):
             way = "" if np.isnan(row["right_way"]) else f"{row['right_way']:.0%}"

@@ -40,6 +40,9 @@ def add_generate_parser(sub) -> None:
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
+    p.add_argument("--threads", type=int, default=1,
+                   help="CPU threads (default 1: the generators are small, and extra "
+                   "threads make a busy machine many times slower)")
     p.add_argument("output", metavar="OUT.bvh", nargs="?",
                    help="output file (may also come last after the --skeleton files)")
     add_rig_arguments(p, "", "the skeleton files")
@@ -71,9 +74,12 @@ def run_generate(args) -> int:
     from satagraph.generate import (GenerationSettings, generate_on, load_generator,
                                     output_paths, write_all)
     from satagraph.io.files import check_output_path
+    import torch
     _split_output(args)
-    if args.steps < 1:
-        raise ValueError(f"--steps must be at least 1, got {args.steps}")
+    if args.steps < 1 or args.threads < 1:
+        raise ValueError(f"--steps and --threads must be at least 1, got {args.steps} "
+                         f"and {args.threads}")
+    torch.set_num_threads(args.threads)
     paths = output_paths(args.output, args.skeleton)
     for path in paths:
         check_output_path(path)
