@@ -30,7 +30,8 @@ def add_generate_parser(sub) -> None:
         "folder). The same seed gives the same motion. Works offline.")
     p.add_argument("--ckpt", required=True, help="a text-to-motion checkpoint")
     p.add_argument("--text", required=True, help="the prompt, e.g. \"a person walks "
-                   "forward and turns left\"")
+                   "forward and turns left\"; an empty text generates for the skeleton "
+                   "alone (the model is trained with some text dropped)")
     p.add_argument("--skeleton", required=True, nargs="+", metavar="TARGET.bvh",
                    help="BVH file(s) whose skeleton the motion is generated on")
     p.add_argument("--seconds", type=_seconds, default=None,
@@ -87,7 +88,8 @@ def run_generate(args) -> int:
     module = load_generator(args.ckpt)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance)
     start = time.time()
-    motions = [generate_on(module, args.text, t, args.seconds, args.seed, settings)
+    text = args.text.strip() or None
+    motions = [generate_on(module, text, t, args.seconds, args.seed, settings)
                for t in targets]
     write_all(motions, paths)
     took = time.time() - start

@@ -118,3 +118,19 @@ def test_a_bad_skeleton_file_is_named(t2m_ckpt, zoo_skeletons, tmp_path, capsys)
     assert _generate(t2m_ckpt, [zoo_skeletons["biped"], bad], out) == 2
     assert "bad.bvh" in _error(capsys)
     assert not list(tmp_path.glob("x*.bvh"))  # no partial set of outputs
+
+
+def test_an_empty_text_generates_for_the_skeleton_alone(t2m_ckpt, zoo_skeletons, tmp_path):
+    out, text = tmp_path / "none.bvh", tmp_path / "text.bvh"
+    argv = ["generate", "--ckpt", str(t2m_ckpt), "--skeleton", str(zoo_skeletons["bird"]),
+            "--seconds", "1"]
+    assert main(argv + ["--text", "", str(out)]) == 0
+    assert main(argv + ["--text", TEXT, str(text)]) == 0
+    _same_rig(out, zoo_skeletons["bird"])
+    assert out.read_bytes() != text.read_bytes()
+
+
+def test_bad_numbers_are_one_line(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
+    out = tmp_path / "x.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--threads", "0") == 2
+    assert "--threads" in _error(capsys) and not out.exists()
