@@ -267,7 +267,8 @@ class MotionLoss(nn.Module):
 
     def _root(self, out: Dict[str, Tensor], batch, normalizer) -> Tensor:
         if normalizer is not None and "r_norm" in out:
-            return F.mse_loss(out["r_norm"], normalizer.normalize(batch.root, "root"))
+            return F.mse_loss(out["r_norm"], normalizer.normalize(
+                batch.root, "root", batch.heights("frame")))
         return F.mse_loss(out["r"], batch.root.to(out["r"].dtype))
 
     def _positions(self, q: Tensor, r: Tensor, batch, fps: float):

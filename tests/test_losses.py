@@ -93,7 +93,7 @@ def test_root_loss_uses_normalised_r_with_normalizer(batch):
     norm = FeatureNormalizer()
     norm.set_stats({"root": (torch.ones(4), 2 * torch.ones(4))})
     out = perfect(batch)
-    out["r_norm"] = norm.normalize(batch.root, "root")
+    out["r_norm"] = norm.normalize(batch.root, "root", batch.heights("frame"))
     crit = MotionLoss()
     assert crit(out, batch, norm, fps=FPS)["root"].item() == pytest.approx(0.0, abs=1e-10)
     out["r_norm"] = out["r_norm"] + 1.0

@@ -59,7 +59,23 @@ class FrameBatch(Batch):
         - **stream_clip**: :math:`(S,)` clip of each stream
         - **clip_num_frames**: :math:`(B,)` :math:`T_s`
         - **clip_num_joints**: :math:`(B,)` :math:`J_s`
+        - **clip_height**: :math:`(B,)` character height of each clip
+          (``meta["height"]``, 1 where the clip does not say)
     """
+
+    def heights(self, level: str) -> Tensor:
+        r"""The clip height of every row of a feature tensor: ``"node"``
+        (:math:`N`, rows of :obj:`x`), ``"frame"`` (:math:`G`, rows of
+        :obj:`root`) or ``"stream"`` (:math:`S`, rows of
+        :obj:`joint_static`)."""
+        if level == "node":
+            return self.clip_height[self.stream_clip[self.node_stream]]
+        if level == "frame":
+            return self.clip_height[self.frame_clip]
+        if level == "stream":
+            return self.clip_height[self.stream_clip]
+        raise ValueError(f"FrameBatch.heights: unknown level {level!r} "
+                         "(node, frame or stream)")
 
 
 class _Group(NamedTuple):
@@ -192,6 +208,7 @@ def collate_clips(clips: List[MotionClip]) -> FrameBatch:
     out.num_streams, out.max_time = sum(joints), max(frames)
     out.clip_num_frames, out.clip_num_joints = num_frames, num_joints
     out.meta = [c.meta for c in clips]
+    out.clip_height = torch.tensor([float(c.meta.get("height", 1.0)) for c in clips])
     _frame_stream_attrs(out, clips, num_frames, num_joints)
     _node_edge_attrs(out, clips, frames, joints)
     _separation(out, sum(frames))

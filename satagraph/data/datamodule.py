@@ -90,6 +90,8 @@ class MotionDataModule(L.LightningDataModule):
             bad file of every split is found first; ``"raise"`` (default)
             then fails with one error listing them all, ``"skip"`` warns,
             lists them in :attr:`skipped` and uses the others.
+        body_relative (bool): Normalise lengths in character heights
+            (default), see :class:`~satagraph.data.FeatureNormalizer`.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -99,7 +101,7 @@ class MotionDataModule(L.LightningDataModule):
                  cache_dir: Optional[str] = None, num_workers: int = 0,
                  max_files: Optional[int] = None, seed: int = 0,
                  augment: Union[None, bool, Mapping[str, Any]] = None,
-                 on_error: str = "raise") -> None:
+                 on_error: str = "raise", body_relative: bool = True) -> None:
         super().__init__()
         if on_error not in ON_ERROR:
             raise ValueError(f"data.on_error must be one of {ON_ERROR}, got {on_error!r}")
@@ -114,7 +116,7 @@ class MotionDataModule(L.LightningDataModule):
         self.max_files, self.seed = max_files, seed
         self.augment = WindowAugment.from_config(augment, seed, self.preprocessing)
         self.datasets: Dict[str, MotionDataset] = {}
-        self.normalizer = FeatureNormalizer()
+        self.normalizer = FeatureNormalizer(body_relative)
 
     def _files(self, split: str, files: List[MotionFile]) -> List[MotionFile]:
         chosen = select(files, split)

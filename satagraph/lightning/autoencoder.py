@@ -89,10 +89,10 @@ class MotionAutoencoderModule(L.LightningModule):
         """Encode :obj:`batch`, decode on :obj:`target` (default: itself).
         Both are physical batches; predictions come back physical."""
         source = self.normalize_batch(batch)
-        target = source if target is None else self.normalize_batch(target)
+        normed = source if target is None else self.normalize_batch(target)
         enc = self.encode(source)
-        out = dict(enc, **self.decode(enc["z"], target))
-        return self.denormalize_output(out)
+        out = dict(enc, **self.decode(enc["z"], normed))
+        return self.denormalize_output(out, batch if target is None else target)
 
     # --------------------------------------------------- normalisation
     def setup(self, stage: str) -> None:
@@ -101,19 +101,25 @@ class MotionAutoencoderModule(L.LightningModule):
             self.normalizer.load_state_dict(dm.normalizer.state_dict())
 
     def normalize_batch(self, batch):
-        """A shallow copy of :obj:`batch` with normalised features."""
+        """A shallow copy of :obj:`batch` with normalised features (lengths
+        in each clip's heights when the normaliser is body-relative)."""
         out = copy.copy(batch)
         norm = self.normalizer
-        out.x = norm.normalize(batch.x, "dynamic")
-        out.root = norm.normalize(batch.root, "root")
-        out.joint_static = norm.normalize(batch.joint_static, "static")
+        out.x = norm.normalize(batch.x, "dynamic", batch.heights("node"))
+        out.root = norm.normalize(batch.root, "root", batch.heights("frame"))
+        out.joint_static = norm.normalize(batch.joint_static, "static",
+                                          batch.heights("stream"))
         return out
 
-    def denormalize_output(self, out: Dict[str, Tensor]) -> Dict[str, Tensor]:
+    def denormalize_output(self, out: Dict[str, Tensor], target) -> Dict[str, Tensor]:
+        """Physical predictions on :obj:`target` (the physical batch that
+        was decoded onto: its clip heights scale the root lengths); the
+        normalised ones stay under ``q_norm`` and ``r_norm``."""
         out = dict(out)
         out["q_norm"], out["r_norm"] = out["q"], out["r"]
         out["q"] = self.normalizer.denormalize(out["q"], "dynamic", DYNAMIC_LAYOUT["q"])
-        out["r"] = self.normalizer.denormalize(out["r"], "root")
+        out["r"] = self.normalizer.denormalize(out["r"], "root",
+                                               height=target.heights("frame"))
         return out
 
     # ----------------------------------------------------------- steps
@@ -144,7 +150,8 @@ class MotionAutoencoderModule(L.LightningModule):
         if pairing is None:
             return None
         target = self.normalize_batch(pairing.target)
-        pred = self.denormalize_output(self.decode(z[pairing.frames], target))
+        pred = self.denormalize_output(self.decode(z[pairing.frames], target),
+                                       pairing.target)
         pos = facing_positions(pred["q"], pred["r"], pairing.target)
         return limb_velocity_loss(batch.x[:, DYNAMIC_LAYOUT["x"]], pos, pairing)
 

@@ -113,6 +113,7 @@ class _Feats:
         self.dynamic = gen.normal(size=(8, 5, DYNAMIC_CHANNELS))
         self.r = gen.normal(size=(8, ROOT_CHANNELS))
         self.static = gen.normal(size=(5, STATIC_CHANNELS)) * scale
+        self.height = 1.0
 
 
 @pytest.mark.parametrize("scale", [1e30, np.nan])
