@@ -46,7 +46,6 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from results_io import write_results  # noqa: E402
-from satagraph.data.datamodule import semantic_embedder  # noqa: E402
 from satagraph.data.rig_reading import with_rig  # noqa: E402
 from satagraph.data.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.inference import retarget_canonical  # noqa: E402
@@ -209,7 +208,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 2
     start = time.perf_counter()
     module = load_module(args.ckpt).eval()
-    embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+    embed = module.embed
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rows = measure(module, embed)

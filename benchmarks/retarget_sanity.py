@@ -50,7 +50,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from satagraph.data.canonical import canonicalize  # noqa: E402
-from satagraph.data.datamodule import semantic_embedder  # noqa: E402
 from satagraph.data.semantics import LIMBS  # noqa: E402
 from satagraph.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
@@ -81,7 +80,7 @@ def reinitialised(module):
 def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
         frames: int) -> str:
     module = load_module(ckpt).eval()
-    embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+    embed = module.embed
     fps = float(getattr(module, "fps", 30.0))
     control = reinitialised(module)
     rigs = {target: read_bvh(target) for target in targets}

@@ -134,10 +134,9 @@ def run_train(args) -> int:
 
 
 def _load(args):
-    from satagraph.data.datamodule import semantic_embedder
     from satagraph.train import load_module
     module = load_module(args.ckpt)
-    return module, semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+    return module, module.embed
 
 
 def _read_checked(args, key: str, fps: float, frames: bool = True):
@@ -249,10 +248,8 @@ def run_export_weights(args) -> int:
 def _print_retarget(module, files, results: dict) -> None:
     """Retarget error table (internal and cross settings) per dataset; the
     values go into :obj:`results` as ``retarget`` and ``retarget_cross``."""
-    from satagraph.data.datamodule import semantic_embedder
     from satagraph.evaluation import retarget_error_table
-    embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
-    table = retarget_error_table(module, files, embed)
+    table = retarget_error_table(module, files, module.embed)
     internal, cross = table["internal"], table["cross"]
     print("\n| dataset | retarget error internal (x1000 / H^2) | cross (x1000 / H^2) |\n"
           "|---|---|---|")

@@ -206,10 +206,10 @@ def builtin_module():
 
 
 def module_embedder(module, cache_dir: Optional[str] = None):
-    """The semantic embedder a module was trained with."""
-    from satagraph.data.datamodule import semantic_embedder
-
-    return semantic_embedder(module.meta.get("semantic_encoder", "offline"), cache_dir)
+    """:meth:`module.embed <satagraph.lightning.MotionAutoencoderModule.embed>`,
+    its text embeddings cached in :obj:`cache_dir`."""
+    module.set_semantic_cache(cache_dir)
+    return module.embed
 
 
 def _rig(path: str) -> str:

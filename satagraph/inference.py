@@ -74,8 +74,10 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
     probabilities ``c [T, J_t]`` for every source frame. The module is run
     in evaluation mode and given back in the mode it was in. :obj:`window`
     defaults to the module's training window and :obj:`overlap` to a
-    quarter of the window (see :func:`default_windows`)."""
+    quarter of the window (see :func:`default_windows`). :obj:`semantic`
+    defaults to the module's own encoder (``module.embed``)."""
     window, overlap = default_windows(module, window, overlap)
+    semantic = semantic if semantic is not None else getattr(module, "embed", None)
     was_training = module.training
     module.eval()
     try:

@@ -224,9 +224,8 @@ def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
         settings (list[str], optional): Retargeting settings (default:
             every one of :data:`~satagraph.evaluation.RETARGET_SETTINGS`).
     """
-    from satagraph.data.datamodule import semantic_embedder
     from satagraph.evaluation import retarget_error_table
-    embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+    embed = module.embed
     out: Dict[str, Dict[str, float]] = {}
     for label, chosen in files.items():
         chosen = dm.datasets[split].files if chosen == "split" else chosen

@@ -38,6 +38,11 @@ class MotionAutoencoderModule(L.LightningModule):
     - :meth:`configure_optimizers` (Adam, warm-up, exponential decay with
       a floor: :func:`lr_factor`).
 
+    The module owns the semantic encoder it was trained with
+    (``meta["semantic_encoder"]``): :meth:`embed` gives a skeleton's
+    semantic features, built once per module, for inference, evaluation,
+    sweeps and benchmarks alike.
+
     Batches are :class:`~satagraph.data.FrameBatch` objects with physical
     (unnormalised) features; the module normalises inputs with its
     :attr:`normalizer` (fitted on the training split by the data module and
@@ -66,6 +71,38 @@ class MotionAutoencoderModule(L.LightningModule):
         self.normalizer = FeatureNormalizer()
         self.model = self.build_model(**model)
         self.criterion = self.build_loss(**(loss or {}))
+
+    # -------------------------------------------------------- semantics
+    def embed(self, skeleton, evidence=None) -> Tensor:
+        r"""Semantic features of :obj:`skeleton` with the module's encoder
+        (:func:`~satagraph.data.datamodule.semantic_embedder` of
+        ``meta["semantic_encoder"]``, its text embeddings cached as
+        :meth:`set_semantic_cache` says); :math:`(J, 0)` for a module
+        trained without semantics. :obj:`evidence` (a
+        :class:`~satagraph.data.semantics.JointEvidence`) lets the rules read
+        the body from its motion.
+
+        Shapes:
+            - **output**: :math:`(J, D_t)`
+        """
+        embedder = self.__dict__.get("_embedder")
+        if embedder is None:
+            from satagraph.data.datamodule import semantic_embedder
+            embedder = semantic_embedder(self.meta.get("semantic_encoder", "offline"),
+                                         self.__dict__.get("_semantic_cache")) or _no_semantics
+            self.__dict__["_embedder"] = embedder
+        return embedder(skeleton, evidence=evidence)
+
+    def set_semantic_cache(self, cache_dir: Optional[str]) -> None:
+        """Cache folder of :meth:`embed`'s text embeddings (``None``: the
+        default cache root); not saved with the module."""
+        self.__dict__["_semantic_cache"] = cache_dir
+        self.__dict__.pop("_embedder", None)
+
+    def __getstate__(self) -> Dict[str, Any]:
+        state = super().__getstate__()
+        state.pop("_embedder", None)  # a text encoder: rebuilt after unpickling
+        return state
 
     # ------------------------------------------------------------ hooks
     def build_model(self, **kwargs: Any) -> nn.Module:
@@ -213,6 +250,11 @@ class SATARVQModule(MotionAutoencoderModule):
     def codes(self, batch) -> Tensor:
         """Code indices per frame, ``[G, Q]``, for generators."""
         return self.encode(self.normalize_batch(batch))["codes"]
+
+
+def _no_semantics(skeleton, evidence=None) -> Tensor:
+    """The semantic features of a module trained without them."""
+    return torch.zeros(skeleton.num_joints, 0)
 
 
 def count_parameters(module: nn.Module) -> int:
