@@ -325,7 +325,7 @@ def test_top_level_help_and_version(capsys):
 
 def test_tags_registered_when_available():
     choices = cli.build_parser()._subparsers._group_actions[0].choices
-    has_tags = importlib.util.find_spec("satagraph.cli_tags") is not None
+    has_tags = importlib.util.find_spec("satagraph.cli.tags") is not None
     assert ("tags" in choices) == has_tags
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from satagraph.cli_tags import add_tags_parser, main, run_tags
+from satagraph.cli.tags import add_tags_parser, main, run_tags
 
 BVH = """HIERARCHY
 ROOT Hips

@@ -423,7 +423,7 @@ def test_inference_embeds_target_with_its_evidence():
 
 
 def test_tags_cli_reads_the_motion(tmp_path, capsys):
-    from satagraph.cli_tags import main
+    from satagraph.cli.tags import main
     from satagraph.io import write_bvh
     sk = crab(reverse_numbers=True)
     channels = [("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation",

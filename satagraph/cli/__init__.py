@@ -35,11 +35,11 @@ PROG = "satagraph"
 #: Subcommands defined in other modules: ``(module, parser function)``.
 #: A module that does not exist (yet) is skipped silently.
 OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
-    ("satagraph.cli_tags", "add_tags_parser"),
-    ("satagraph.cli_train", "add_train_parsers"),
-    ("satagraph.cli_zoo", "add_zoo_parser"),
-    ("satagraph.cli_render", "add_render_parser"),
-    ("satagraph.cli_sweep", "add_sweep_parser"),
+    ("satagraph.cli.tags", "add_tags_parser"),
+    ("satagraph.cli.train", "add_train_parsers"),
+    ("satagraph.cli.zoo", "add_zoo_parser"),
+    ("satagraph.cli.render", "add_render_parser"),
+    ("satagraph.cli.sweep", "add_sweep_parser"),
 )
 
 Subparsers = argparse._SubParsersAction  # what add_subparsers() returns

@@ -177,7 +177,7 @@ def run_tags(args: argparse.Namespace) -> int:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Stand-alone entry point: ``python -m satagraph.cli_tags FILE ...``.
+    """Stand-alone entry point: ``python -m satagraph.cli.tags FILE ...``.
 
     Args:
         argv: Arguments after the program name (default ``sys.argv[1:]``).
