@@ -3,7 +3,7 @@ same wall-clock budget on the same data, evaluated on the same test split.
 
 Data: ``../shared/data/manifest.tsv`` without one dataset (``--held-out``,
 default ``cmu``), 32-frame windows, batches of 8. Each model trains for
-``--minutes`` (``trainer.max_time``) with the :mod:`satagraph.sweep`
+``--minutes`` (``trainer.max_time``) with the :mod:`satagraph.experiment.sweep`
 machinery, then its final weights are evaluated:
 
 - Table 1 layout: JR, RT, JP, FS, GP per test dataset, and zero-shot on every
@@ -38,7 +38,7 @@ import torch
 
 from results_io import write_results
 from satagraph.data.sources import MotionFile, resolve_sources, select
-from satagraph.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
+from satagraph.experiment.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
                              held_out_loader, run_config, sweep_configs)
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -53,7 +53,7 @@ from satagraph.inference import retarget_canonical  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.quality import most_active, retarget_quality  # noqa: E402
-from satagraph.train import load_module  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 OUT = ROOT / "benchmarks" / "results" / "pretrained"

@@ -55,7 +55,7 @@ from satagraph.data.semantics import LIMBS  # noqa: E402
 from satagraph.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402
-from satagraph.train import load_module  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"

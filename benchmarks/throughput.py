@@ -101,8 +101,8 @@ def training_batch(paths: Sequence[str], window: int = WINDOW):
 def build_module(config: str, features, overrides: Sequence[str] = ()):
     """The LightningModule of a config with :data:`SEMANTIC` semantic
     channels and a normaliser fitted on :obj:`features`."""
-    from satagraph.config import load_config
-    from satagraph.train import module_class
+    from satagraph.experiment.config import load_config
+    from satagraph.experiment.train import module_class
     cfg = load_config(config, overrides)
     model = dict(cfg["model"], semantic_channels=SEMANTIC)
     module = module_class(cfg["module"])(model=model, loss=cfg.get("loss"),

@@ -13,7 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import compare  # noqa: E402
 import scaling  # noqa: E402
 import throughput  # noqa: E402
-from satagraph.sweep import SweepRow  # noqa: E402
+from satagraph.experiment.sweep import SweepRow  # noqa: E402
 
 
 def test_synthetic_tree_batch():

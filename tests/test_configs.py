@@ -9,7 +9,7 @@ from typing import List
 import pytest
 import yaml
 
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 
 EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments"
 CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml"))
@@ -22,7 +22,7 @@ SMALL_MODEL = {"hidden_channels": 32, "ff_channels": 32, "latent_channels": 16,
 
 @pytest.mark.parametrize("name", CONFIGS)
 def test_config_builds_its_module(name: str):
-    from satagraph.train import build_module, module_class
+    from satagraph.experiment.train import build_module, module_class
     cfg = load_config(name)
     assert cfg["module"] and cfg["model"] and cfg["data"]["sources"]
     model = cfg["model"]
@@ -41,7 +41,7 @@ def _sweep_argv(config: str) -> List[str]:
 
 def test_wandb_sweep_runs_configs_of_experiments():
     from satagraph.cli import build_parser, parse_args
-    from satagraph.sweep import split_arguments
+    from satagraph.experiment.sweep import split_arguments
     spec = yaml.safe_load(WANDB_SWEEP.read_text())
     assert spec["program"] == "satagraph"
     names = spec["parameters"]["config"]["values"]
@@ -76,3 +76,17 @@ def test_long_retarget_stage_doubles_the_term_with_a_new_data_order():
     assert stage["loss"] == dict(base["loss"], retarget=0.02)
     assert stage["model"] == base["model"] and stage["data"] == base["data"]
     assert stage["seed"] != base.get("seed", 0)
+
+
+def test_named_configs_found_without_a_source_checkout(tmp_path, monkeypatch):
+    """A non-editable install has no ``experiments/`` beside the package: the
+    named configs come from the data files it ships (``setup.cfg``)."""
+    from satagraph.experiment import config
+    shipped = tmp_path / "share" / "satagraph" / "experiments"
+    shipped.mkdir(parents=True)
+    (shipped / "tiny.yaml").write_text((EXPERIMENTS / "tiny.yaml").read_text())
+    monkeypatch.setattr(config, "CONFIG_DIRS", (tmp_path / "missing", shipped))
+    assert config.experiments_dir() == shipped
+    assert config.config_path("tiny") == shipped / "tiny.yaml"
+    with pytest.raises(FileNotFoundError, match="one of: tiny"):
+        config.config_path("sata_vae")

@@ -73,7 +73,7 @@ def test_builtin_model_retargets_first_then_fine_tunes(demo_builtin, capsys):
 
 def test_builtin_fine_tune_refuses_a_new_architecture(demo_builtin, tmp_path):
     """model.* overrides would not fit the built-in weights: one clear error."""
-    from satagraph.demo import DemoOptions, demo_config
+    from satagraph.experiment.demo import DemoOptions, demo_config
     from satagraph.io.weights import load_weights
 
     base = load_weights(demo_builtin[2])["hyper_parameters"]

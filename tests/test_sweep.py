@@ -9,8 +9,8 @@ import pytest
 import yaml
 
 from satagraph.cli import main
-from satagraph.config import load_config
-from satagraph.sweep import (SweepRow, budget_config, format_sweep, split_arguments,
+from satagraph.experiment.config import load_config
+from satagraph.experiment.sweep import (SweepRow, budget_config, format_sweep, split_arguments,
                              sweep_configs)
 from tests.conftest import data_dir
 

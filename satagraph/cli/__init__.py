@@ -300,12 +300,12 @@ def run_quick_demo(args: argparse.Namespace) -> int:
 
 
 def run_demo(args: argparse.Namespace) -> int:
-    """The whole pipeline on the procedural zoo (see :mod:`satagraph.demo`),
+    """The whole pipeline on the procedural zoo (see :mod:`satagraph.experiment.demo`),
     or the built-in example with ``--quick``."""
     if args.quick:
         return run_quick_demo(args)
-    from satagraph.demo import DemoOptions, format_summary
-    from satagraph.demo import run_demo as run_full_demo
+    from satagraph.experiment.demo import DemoOptions, format_summary
+    from satagraph.experiment.demo import run_demo as run_full_demo
 
     options = DemoOptions(
         output=args.output or "demo_output", minutes=args.minutes, data=args.data,

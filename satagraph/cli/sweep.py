@@ -57,7 +57,7 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
 
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Run a sweep from parsed arguments and print its table."""
-    from satagraph.sweep import run_sweep, split_arguments
+    from satagraph.experiment.sweep import run_sweep, split_arguments
     configs, overrides = split_arguments(args.items)
     if not configs:
         raise ValueError("sweep: name at least one config")

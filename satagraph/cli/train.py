@@ -113,9 +113,9 @@ def _rig_overrides(args) -> List[str]:
 def run_train(args) -> int:
     """Train; exit code 1 (one line on stderr) when a non-finite loss or
     gradient stopped the run, or another run holds the output folder."""
-    from satagraph.config import load_config
+    from satagraph.experiment.config import load_config
     from satagraph.lightning.reliability import RunLockedError, TrainingStopped
-    from satagraph.train import last_checkpoint, train
+    from satagraph.experiment.train import last_checkpoint, train
     cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
     start = time.time()
     try:
@@ -135,7 +135,7 @@ def run_train(args) -> int:
 
 def _load(args):
     from satagraph.data.datamodule import semantic_embedder
-    from satagraph.train import load_module
+    from satagraph.experiment.train import load_module
     module = load_module(args.ckpt)
     return module, semantic_embedder(module.meta.get("semantic_encoder", "offline"))
 
@@ -188,7 +188,7 @@ def run_eval(args) -> int:
     from satagraph.data.datamodule import MotionDataModule
     from satagraph.evaluation import evaluate, format_table
     from satagraph.io.files import atomic_write_text, check_output_path
-    from satagraph.train import load_module
+    from satagraph.experiment.train import load_module
     if args.json:
         check_output_path(args.json)
     module = load_module(args.ckpt)
@@ -230,7 +230,7 @@ def run_export_weights(args) -> int:
     from satagraph import __version__
     from satagraph.io.files import check_output_path
     from satagraph.io.weights import save_weights
-    from satagraph.train import load_module
+    from satagraph.experiment.train import load_module
     check_output_path(args.output)
     source = _export_source(args.source)
     module = load_module(source)

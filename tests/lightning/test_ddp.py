@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from satagraph import train as train_mod
-from satagraph.train import train
+from satagraph.experiment.train import train
 
 pytestmark = pytest.mark.skipif(not torch.distributed.is_available()
                                 or not torch.distributed.is_gloo_available(),

@@ -12,7 +12,7 @@ from torch.utils.data import DataLoader
 
 from satagraph.data.collate import FrameBatch, collate_clips
 from satagraph.lightning import SATARVQModule, SATAVAEModule, lr_factor
-from satagraph.train import init_weights, load_module
+from satagraph.experiment.train import init_weights, load_module
 
 METRICS = ("JR", "RT", "RT_h", "JP", "JP_h", "FS", "GP", "RE")
 

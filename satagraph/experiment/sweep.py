@@ -4,7 +4,7 @@ paper's Table 4 layout: one row per config).
 
 Example::
 
-    from satagraph.sweep import run_sweep
+    from satagraph.experiment.sweep import run_sweep
     rows = run_sweep(["tiny", "tiny"], budget_minutes=0.5, output="sweep",
                      variants=[[], ["model.local_conv=gin"]])
 
@@ -28,7 +28,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import torch
 from torch.utils.data import DataLoader
 
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 from satagraph.io.files import atomic_write_text
 
 #: Steps the "train loss" column averages (see :class:`TrailingLoss`).
@@ -167,7 +167,7 @@ def train_budgeted(cfg: Dict[str, Any]):
         training loss over the last :obj:`TRAILING_STEPS` steps.
     """
     from satagraph.lightning.trailing_loss import TrailingLoss
-    from satagraph.train import train
+    from satagraph.experiment.train import train
     budget = timedelta(seconds=float(cfg["_budget_s"]))
     cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
     trailing = TrailingLoss(TRAILING_STEPS)

@@ -3,13 +3,24 @@ turned into plain containers before they reach the modules."""
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 from typing import Any, Dict, Sequence
 
 from omegaconf import OmegaConf
 
-ROOT = Path(__file__).resolve().parents[1]
-EXPERIMENTS = ROOT / "experiments"
+ROOT = Path(__file__).resolve().parents[2]
+#: Where named configs are looked up, first existing folder wins: the
+#: source checkout's ``experiments/`` (editable installs, the repository),
+#: then the copy a non-editable install ships as data files
+#: (``<prefix>/share/satagraph/experiments``, see ``setup.cfg``).
+CONFIG_DIRS = (ROOT / "experiments",
+               Path(sys.prefix) / "share" / "satagraph" / "experiments")
+
+
+def experiments_dir() -> Path:
+    """The folder of the named configs (see :data:`CONFIG_DIRS`)."""
+    return next((d for d in CONFIG_DIRS if d.is_dir()), CONFIG_DIRS[0])
 
 
 def config_path(name: str) -> Path:
@@ -18,10 +29,11 @@ def config_path(name: str) -> Path:
     path = Path(name)
     if path.is_file():
         return path
-    for candidate in (EXPERIMENTS / name, EXPERIMENTS / f"{name}.yaml"):
+    folder = experiments_dir()
+    for candidate in (folder / name, folder / f"{name}.yaml"):
         if candidate.is_file():
             return candidate
-    known = ", ".join(sorted(p.stem for p in EXPERIMENTS.glob("*.yaml")))
+    known = ", ".join(sorted(p.stem for p in folder.glob("*.yaml")))
     raise FileNotFoundError(f"config {name!r} not found (a path, or one of: {known})")
 
 

@@ -16,7 +16,7 @@ network.
 
 Example::
 
-    from satagraph.demo import DemoOptions, run_demo
+    from satagraph.experiment.demo import DemoOptions, run_demo
     result = run_demo(DemoOptions(output="demo_output", minutes=1.0))
     print(result.steps[-1].written)
 """
@@ -159,7 +159,7 @@ def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
     overrides. With :obj:`base` (the built-in model's hyperparameters) the
     model, loss and window are the built-in model's and the learning rate a
     fine-tune's."""
-    from satagraph.config import load_config
+    from satagraph.experiment.config import load_config
 
     cfg = load_config(options.config)
     cfg["data"]["sources"] = [str(s) for s in sources]
@@ -188,7 +188,7 @@ FINE_TUNE_OPTIM: Dict[str, Any] = {"lr": 3.0e-4, "warmup_epochs": 0}
 def train_demo(cfg: Dict[str, Any], init_from: Optional[str] = None) -> Tuple[Any, Any]:
     """Step 2: train (from :obj:`init_from`'s weights when given); returns
     the trained module and the trainer."""
-    from satagraph.train import train
+    from satagraph.experiment.train import train
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", ".*does not have many workers.*")
@@ -200,7 +200,7 @@ def train_demo(cfg: Dict[str, Any], init_from: Optional[str] = None) -> Tuple[An
 def builtin_module():
     """The built-in model, or ``None`` when this version ships none."""
     from satagraph.io.weights import builtin_path
-    from satagraph.train import load_module
+    from satagraph.experiment.train import load_module
 
     return load_module("builtin").eval() if builtin_path().is_file() else None
 
@@ -342,7 +342,7 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     with progress.step("train", f"{what} on {', '.join(sources)} "
                        f"(at most {_budget(cfg)})") as step:
         module, trainer = train_demo(cfg, None if builtin is None else "builtin")
-        from satagraph.train import last_checkpoint
+        from satagraph.experiment.train import last_checkpoint
         step.written = [last_checkpoint(trainer)]
         step.note = _training_note(trainer)
     name = "retarget" if builtin is None else "fine-tuned"

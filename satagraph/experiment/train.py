@@ -10,7 +10,7 @@ from typing import Any, Dict, Optional, Tuple
 import lightning as L
 import torch
 
-from satagraph.config import expand_path
+from satagraph.experiment.config import expand_path
 from satagraph.data.datamodule import MotionDataModule
 from satagraph.io.checkpoint import CheckpointError, check_finite_weights
 from satagraph.io.weights import load_weights_or_checkpoint
