@@ -168,7 +168,7 @@ internal: onto bone-scaled copies (x0.8-1.2 per axis) of the source skeleton
 (same structure, other proportions); cross: onto copies with a leaf chain of
 up to two joints dropped, a bone split by a new joint and bones scaled (another
 structure and other proportions). Ground truth: the same motion on that
-skeleton (satagraph.data.augment). {args.retarget_files} test files per dataset
+skeleton (satagraph.transforms.augment). {args.retarget_files} test files per dataset
 (first 600 frames); {HELD_OUT_LABEL}: {args.retarget_files} {args.held_out} files.
 """
 

@@ -49,9 +49,9 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.canonical import canonicalize  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.data.datamodule import semantic_embedder  # noqa: E402
-from satagraph.data.semantics import LIMBS  # noqa: E402
+from satagraph.semantics import LIMBS  # noqa: E402
 from satagraph.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402

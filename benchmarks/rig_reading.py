@@ -18,7 +18,7 @@ make (vertebrates in metres; an arthropod may be a millimetre or a metre
 across, so no size decides its units); elsewhere the file's own units must
 be kept and reported. One kind of undecidable file cannot be told from a
 decidable one: a human in an arbitrary unit that makes it a human height
-(:data:`~satagraph.data.rig_reading.HUMAN_HEIGHT`) in a standard unit is
+(:data:`~satagraph.transforms.rig_reading.HUMAN_HEIGHT`) in a standard unit is
 exactly what a file in that unit would be. Such files are *look-alikes*:
 counted apart, read as the unit they look like (right by chance or not),
 never as a success of the reader. A failure is a wrong axis, a decidable
@@ -41,7 +41,7 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Dict, List
 
-from satagraph.data.rig_reading import HUMAN_HEIGHT, STANDARD_UNITS, UNITS, read_rig
+from satagraph.transforms.rig_reading import HUMAN_HEIGHT, STANDARD_UNITS, UNITS, read_rig
 from satagraph.data.zoo import apply_dialect, dialect_variants, generate_clip
 from satagraph.io import read_bvh, write_bvh
 

@@ -7,8 +7,8 @@ from typing import Callable, Dict, Optional, Sequence
 
 import torch
 
-from satagraph.data.augment import restructure, scale_bones
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.augment import restructure, scale_bones
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import (MotionFeatures, features_to_motion,
                                      motion_to_features)
 from satagraph.data.sources import MotionFile

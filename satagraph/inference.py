@@ -7,11 +7,11 @@ from typing import Callable, List, Optional, Tuple
 import numpy as np
 import torch
 
-from satagraph.data.canonical import canonicalize, decanonicalize
+from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
-from satagraph.data.semantics.evidence import call_semantic, evidence_from_features
+from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion
 from satagraph.ops.rotation import matrix_to_quaternion, quaternion_slerp, quaternion_to_matrix
 

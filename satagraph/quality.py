@@ -28,9 +28,9 @@ from typing import Dict, Optional, Sequence
 
 import numpy as np
 
-from satagraph.data.canonical import canonicalize, lateral_forward
+from satagraph.transforms.canonical import canonicalize, lateral_forward
 from satagraph.data.features import motion_to_features
-from satagraph.data.semantics import LIMBS, describe_joints, limb_ends
+from satagraph.semantics import LIMBS, describe_joints, limb_ends
 from satagraph.motion import Motion
 
 #: Displacement interval of :func:`step_correlation` (frames at 30 fps, 0.1 s):

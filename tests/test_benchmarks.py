@@ -161,7 +161,7 @@ def test_op_counter_sees_torch_scatter_kernels():
 
 def test_semantic_alignment_bodyplans_without_data():
     import semantic_alignment as sa
-    from satagraph.data.semantics import OfflineTextEncoder, describe_joints
+    from satagraph.semantics import OfflineTextEncoder, describe_joints
     skels, evidence, noise = sa.bodyplan_skeletons({})
     table = sa.build_bodyplan_table(noise)
     refs = {k: s for k, s in skels.items() if k in sa.BIRDS + sa.ARTHROPODS
@@ -183,7 +183,7 @@ def test_semantic_alignment_bodyplans_without_data():
 def test_semantic_alignment_zoo_leg_pairs_in_order():
     # zoo arthropods read from a dialect file: first pair front, last hind
     import semantic_alignment as sa
-    from satagraph.data.semantics import OfflineTextEncoder, describe_joints
+    from satagraph.semantics import OfflineTextEncoder, describe_joints
     skels, evidence, noise = sa.bodyplan_skeletons({})
     rows = sa.build_bodyplan_table(noise)["leg pairs front to back"]
     enc = OfflineTextEncoder()

@@ -157,7 +157,7 @@ def test_convert_in_place(capsys, tiny_file):
 
 
 def test_convert_fps(capsys, shared_data, tmp_path):
-    pytest.importorskip("satagraph.data.canonical")
+    pytest.importorskip("satagraph.transforms.canonical")
     out = tmp_path / "30.bvh"
     code, text, _ = run(capsys, "convert", str(shared_data / "cmu/angry_13_000.bvh"),
                         str(out), "--fps", "30")
@@ -169,7 +169,7 @@ def test_convert_fps(capsys, shared_data, tmp_path):
 
 
 def test_convert_canonical(capsys, shared_data, tmp_path):
-    pytest.importorskip("satagraph.data.canonical")
+    pytest.importorskip("satagraph.transforms.canonical")
     out = tmp_path / "canon.bvh"
     code, text, _ = run(capsys, "convert", str(shared_data / BANDAI), str(out),
                         "--canonical", "--fps", "15")
@@ -184,7 +184,7 @@ def test_convert_canonical(capsys, shared_data, tmp_path):
 
 
 def test_convert_canonical_up_axis_flag(capsys, tiny_skeleton, tmp_path):
-    pytest.importorskip("satagraph.data.canonical")
+    pytest.importorskip("satagraph.transforms.canonical")
     src = tmp_path / "zup.bvh"
     write_bvh(rest_motion(tiny_skeleton, up="+Z"), src)
     out = tmp_path / "yup.bvh"

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
-from satagraph.data.semantics import LIMBS, limb_ends
+from satagraph.semantics import LIMBS, limb_ends
 from satagraph.data.zoo.endless import EndlessZoo
 from satagraph.quality import (correlate, facing_axis, forward_tracks, ground_height,
                                head_index, leg_length, limb_tracks, mean_correlation,

@@ -62,7 +62,7 @@ def _positive_float(text: str) -> float:
 
 def _up_axis(text: str) -> str:
     """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
-    from satagraph.data.rig_reading import normalize_up_axis
+    from satagraph.transforms.rig_reading import normalize_up_axis
     try:
         return normalize_up_axis(text)
     except ValueError as err:
@@ -71,7 +71,7 @@ def _up_axis(text: str) -> str:
 
 def _units(text: str):
     """A unit name (``cm``, ``in``, ...) or a factor to metres."""
-    from satagraph.data.rig_reading import parse_units
+    from satagraph.transforms.rig_reading import parse_units
     try:
         return parse_units(text)
     except ValueError as err:
@@ -96,7 +96,7 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
 def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Motion:
     """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
     :func:`add_rig_arguments` (the file's own declaration otherwise)."""
-    from satagraph.data.rig_reading import with_rig
+    from satagraph.transforms.rig_reading import with_rig
     key = f"{prefix}_" if prefix else ""
     return with_rig(read_bvh(path), getattr(args, f"{key}up_axis", None),
                     getattr(args, f"{key}units", None))
@@ -115,12 +115,12 @@ def _write(motion: Motion, path: str) -> None:
 def describe(motion: Motion, path: str) -> Dict[str, Any]:
     """Summary of a motion as plain Python values (what ``inspect`` shows).
 
-    ``rig`` is how the rig is read (:func:`~satagraph.data.rig_reading.read_rig`:
+    ``rig`` is how the rig is read (:func:`~satagraph.transforms.rig_reading.read_rig`:
     up axis and units, each given, declared or guessed, with the confidence
     and the evidence); ``height`` is the character height in file units
     along that up axis and ``height_m`` in metres.
     """
-    from satagraph.data.rig_reading import read_rig
+    from satagraph.transforms.rig_reading import read_rig
     skel = motion.skeleton
     reading = read_rig(motion)
     layout = Counter(len(c) for c in skel.channels)
@@ -232,13 +232,13 @@ def run_convert(args: argparse.Namespace) -> int:
             check_skeleton(motion, args.input)
     notes = []
     if args.canonical:
-        from satagraph.data.canonical import canonicalize
+        from satagraph.transforms.canonical import canonicalize
         motion = canonicalize(motion, fps=args.fps)
         tf = motion.transform
         notes.append(f"canonical: source up axis {tf.up_axis}, scale {tf.scale:g} "
                      "to metres; the file declares itself +Y up in metres")
     elif args.fps:
-        from satagraph.data.canonical import resample
+        from satagraph.transforms.canonical import resample
         motion = resample(motion, args.fps)
     _write(motion, args.output)
     note = f" ({'; '.join(notes)})" if notes else ""

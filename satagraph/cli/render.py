@@ -62,7 +62,7 @@ def _load(path: str, args: argparse.Namespace) -> Motion:
     from satagraph.cli import read_with_rig
     motion = read_with_rig(path, args)
     if not args.raw:
-        from satagraph.data.canonical import canonicalize
+        from satagraph.transforms.canonical import canonicalize
         motion = canonicalize(motion, fps=None)
     return motion
 

@@ -12,7 +12,7 @@ Examples::
 
 The descriptions use the file's motion as evidence (which chains bear
 weight, spread sideways, lie in front; see
-:mod:`satagraph.data.semantics.evidence`), as training and inference do;
+:mod:`satagraph.semantics.evidence`), as training and inference do;
 ``--names-only`` reads names and hierarchy alone.
 
 Errors print one line to stderr and return exit code 2.
@@ -105,8 +105,8 @@ def _evidence(motion):
     only) where the motion cannot be canonicalised or its up axis is a
     low-confidence guess, said on stderr: evidence read on the wrong axis
     would mislead."""
-    from satagraph.data.rig_reading import read_rig
-    from satagraph.data.semantics import evidence_from_motion
+    from satagraph.transforms.rig_reading import read_rig
+    from satagraph.semantics import evidence_from_motion
     up = read_rig(motion).up
     if up.low_confidence:
         print(f"satagraph: note: {motion.source}: the up axis is uncertain "
@@ -128,7 +128,7 @@ def _emit(text: str, out: Optional[Path]) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from satagraph.data.semantics import (SemanticsError, build_prompt,
+    from satagraph.semantics import (SemanticsError, build_prompt,
                                           describe_joints, import_answer,
                                           load_reference_vocab)
     if args.reference_vocab and not args.prompt:
@@ -166,7 +166,7 @@ def run_tags(args: argparse.Namespace) -> int:
     Returns:
         int: 0 on success, 2 on any user error (one line on stderr).
     """
-    from satagraph.data.semantics import SemanticsError  # torch: only here
+    from satagraph.semantics import SemanticsError  # torch: only here
     from satagraph.io import BVHError
     try:
         return _run(args)

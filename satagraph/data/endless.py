@@ -18,13 +18,13 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton)
 from satagraph.data.features import MotionFeatures, motion_to_features
-from satagraph.data.semantics.evidence import (JointEvidence, call_semantic,
+from satagraph.semantics.evidence import (JointEvidence, call_semantic,
                                                evidence_from_features)
-from satagraph.data.semantics.limbs import limb_end_index
+from satagraph.semantics.limbs import limb_end_index
 from satagraph.data.validate import check_features
 from satagraph.data.zoo.endless import EndlessZoo, ZooSample
 

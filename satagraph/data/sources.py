@@ -29,7 +29,7 @@ class MotionFile:
 
     def read(self):
         """The motion, with this file's rig settings attached."""
-        from satagraph.data.rig_reading import with_rig
+        from satagraph.transforms.rig_reading import with_rig
         from satagraph.io import read_bvh
         return with_rig(read_bvh(self.path), self.up_axis, self.scale)
 
@@ -37,7 +37,7 @@ class MotionFile:
 def _row_settings(row: dict, where: str) -> dict:
     """``up_axis`` and ``scale`` of a manifest row or source entry (empty
     cells and missing keys: not set), validated."""
-    from satagraph.data.rig_reading import normalize_up_axis, parse_units
+    from satagraph.transforms.rig_reading import normalize_up_axis, parse_units
     out = {}
     try:
         if row.get("up_axis") not in (None, ""):

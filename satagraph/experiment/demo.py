@@ -248,7 +248,7 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
         :func:`~satagraph.quality.retarget_quality` of its retarget (with
         the source's own root travel, ``source_travel``, in leg lengths).
     """
-    from satagraph.data.augment import scale_bones
+    from satagraph.transforms.augment import scale_bones
     from satagraph.inference import from_canonical, retarget_canonical
     from satagraph.io import read_bvh, write_bvh
     from satagraph.quality import retarget_quality, root_travel
@@ -299,7 +299,7 @@ def pose_error(motion: Motion, truth: Motion) -> float:
 def render_demo(panels: Sequence[Panel], gif: Path, sheet: Path) -> int:
     """Step 4: the panels side by side (each canonicalised: facing +Z,
     starting at the origin) as a GIF and a PNG contact sheet."""
-    from satagraph.data.canonical import canonicalize
+    from satagraph.transforms.canonical import canonicalize
     from satagraph.viz import render
 
     motions = [canonicalize(p.motion, fps=None) for p in panels]

@@ -4,11 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.data.augment import (SkeletonAugment, drop_leaf_chain,
+from satagraph.transforms.augment import (SkeletonAugment, drop_leaf_chain,
                                     insert_joint, merge_segments, mirror,
                                     mirror_pairs, paired, rebase_rest,
                                     restructure, scale_bones, swap_side)
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import WindowAugment
 from satagraph.data.examples import example_motion
 from satagraph.data.features import motion_to_features

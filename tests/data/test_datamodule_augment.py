@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.data.augment import mirror_pairs
+from satagraph.transforms.augment import mirror_pairs
 from satagraph.data.datamodule import MotionDataModule
 from satagraph.data.dataset import WindowAugment
 from satagraph.data.zoo import write_zoo

@@ -92,7 +92,8 @@ def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
     """Bone scaling of ccbase/007_01 (a moving RL_BoneRoot above the hips)
     gave root speeds of 1e5 (a 1e9 training loss); such a window is used as
     it is instead."""
-    from satagraph.data import canonicalize, motion_to_features
+    from satagraph.data import motion_to_features
+    from satagraph.transforms import canonicalize
     from satagraph.data.dataset import WindowAugment
     feats = motion_to_features(canonicalize(read_real("ccbase/007_01.bvh")))
     aug = WindowAugment.from_config({"scale": 1.0, "mirror": 0.0})

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import satagraph.data.rig_reading as rr
+import satagraph.transforms.rig_reading as rr
 from satagraph.cli import main
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import load_features
-from satagraph.data.rig_reading import (RigReadingWarning, guess_up_axis, parse_units,
+from satagraph.transforms.rig_reading import (RigReadingWarning, guess_up_axis, parse_units,
                                         read_rig, with_rig)
 from satagraph.data.sources import resolve_sources
 from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
@@ -180,8 +180,8 @@ def test_no_warning_where_nothing_is_guessed() -> None:
 
 @pytest.mark.parametrize("species", ["crab", "fowl", "spider"])
 def test_zoo_body_plans_read_the_same_in_any_dialect(species: str, tmp_path: Path) -> None:
-    from satagraph.data.semantics import describe_joints
-    from satagraph.data.semantics.evidence import evidence_from_motion
+    from satagraph.semantics import describe_joints
+    from satagraph.semantics.evidence import evidence_from_motion
     clip = _clip(species)
     clean = describe_joints(clip.skeleton, evidence=evidence_from_motion(clip))
     path = tmp_path / "x.bvh"

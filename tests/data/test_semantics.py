@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from satagraph import Skeleton
-from satagraph.data.semantics import (SemanticsError, build_prompt,
+from satagraph.semantics import (SemanticsError, build_prompt,
                                       describe_joints, import_answer,
                                       load_dictionary, load_reference_vocab,
                                       normalize_anchors, parse_answer)
-from satagraph.data.semantics.lexicon import parse_name
-from satagraph.data.semantics.rules import describe_structure, ordinal
+from satagraph.semantics.lexicon import parse_name
+from satagraph.semantics.rules import describe_structure, ordinal
 from satagraph.io import read_bvh
 
 REPO_ROOT = Path(__file__).resolve().parents[2]

@@ -14,18 +14,18 @@ import pytest
 import torch
 
 from satagraph import Skeleton
-from satagraph.data.semantics import (JointEvidence, as_evidence, call_semantic,
+from satagraph.semantics import (JointEvidence, as_evidence, call_semantic,
                                       describe_joints, evidence_from_motion,
                                       joint_evidence, limb_ends, remap_evidence)
-from satagraph.data.semantics.lexicon import (drop_noise_tokens, is_noise_token,
+from satagraph.semantics.lexicon import (drop_noise_tokens, is_noise_token,
                                               parse_name)
-from satagraph.data.semantics.reference_rigs import (REFERENCE_RIGS, bip01_bird,
+from satagraph.semantics.reference_rigs import (REFERENCE_RIGS, bip01_bird,
                                                      build_skeleton, crab,
                                                      fingerwing_bird,
                                                      long_tailed_quadruped,
                                                      rest_evidence, spider,
                                                      with_exporter_noise)
-from satagraph.data.semantics.rules import describe_structure
+from satagraph.semantics.rules import describe_structure
 from satagraph.motion import Motion
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -382,7 +382,7 @@ def test_dataset_embeds_each_file_with_its_evidence():
     from satagraph.data.dataset import MotionDataset
     from satagraph.data.features import motion_to_features
     from satagraph.data.sources import MotionFile
-    from satagraph.data.canonical import canonicalize
+    from satagraph.transforms.canonical import canonicalize
     sk = crab(reverse_numbers=True)
     frames = 8
     rot = np.broadcast_to(np.eye(3), (frames, sk.num_joints, 3, 3)).copy()
@@ -410,7 +410,7 @@ def test_dataset_embeds_each_file_with_its_evidence():
 
 def test_inference_embeds_target_with_its_evidence():
     from satagraph.inference import _embed, static_features
-    from satagraph.data.canonical import canonicalize
+    from satagraph.transforms.canonical import canonicalize
     sk = crab(reverse_numbers=True)
     motion = Motion(sk, np.broadcast_to(np.eye(3), (2, sk.num_joints, 3, 3)).copy(),
                     np.broadcast_to(sk.offsets, (2,) + sk.offsets.shape).copy())

@@ -15,11 +15,11 @@ import pytest
 import torch
 
 from satagraph import Skeleton
-from satagraph.data.semantics import (EmbeddingCache, OfflineTextEncoder,
+from satagraph.semantics import (EmbeddingCache, OfflineTextEncoder,
                                       T5TextEncoder, TextEncoder, clear_memory,
                                       default_cache_dir, describe_joints,
                                       embed_skeleton, embed_texts)
-from satagraph.data.semantics.cache import ENV_VAR, cache_file
+from satagraph.semantics.cache import ENV_VAR, cache_file
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from satagraph.cli import main
-from satagraph.data.semantics import describe_joints
+from satagraph.semantics import describe_joints
 from satagraph.data.sources import read_manifest
 from satagraph.data.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
                                 generate_clip, write_zoo, zoo_rigs)

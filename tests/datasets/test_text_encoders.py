@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.data.semantics import (GloVeEncoder, OfflineTextEncoder, SentenceEncoder,
+from satagraph.semantics import (GloVeEncoder, OfflineTextEncoder, SentenceEncoder,
                                       T5TextEncoder, TextEncoderMismatch,
                                       build_text_encoder, check_text_encoder,
                                       check_text_encoder_state, text_encoder_state)

@@ -9,7 +9,7 @@ stalks), ``spider`` (four leg pairs) and ``longtail`` (a quadruped of about
 100 joints with a 32+ joint tail). Each has several skeleton variants
 (:data:`VARIANTS`) that differ in proportions, joint counts, rotation orders
 and naming conventions (``LeftUpLeg`` / ``thigh.L`` / ``l_hip``), all chosen
-so that :func:`satagraph.data.semantics.describe_joints` reads them well.
+so that :func:`satagraph.semantics.describe_joints` reads them well.
 
 Legged motions are built from a gait: per-leg phases and a duty factor give
 stance and swing intervals; a stance foot stays planted where it landed

@@ -28,9 +28,9 @@ from typing import Dict, Iterator, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from satagraph.data.augment import rebase_rest, set_rest_rotations
-from satagraph.data.rig_reading import UNITS as READ_UNITS
-from satagraph.data.rig_reading import UP_AXES
+from satagraph.transforms.augment import rebase_rest, set_rest_rotations
+from satagraph.transforms.rig_reading import UNITS as READ_UNITS
+from satagraph.transforms.rig_reading import UP_AXES
 from satagraph.data.zoo.rigs import ZooRig, _rot, _unit
 from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.motion import Motion
@@ -169,7 +169,7 @@ def change_rest_pose(motion: Motion, pose: str = "apose", seed: int = 0) -> Moti
     Args:
         motion (Motion): A canonical motion (+Y up, facing +Z).
         pose (str): One of :data:`REST_POSES`; ``"frame"`` takes a random
-            frame's pose (:func:`~satagraph.data.augment.rebase_rest`).
+            frame's pose (:func:`~satagraph.transforms.augment.rebase_rest`).
         seed (int): Random seed (``"random"`` and ``"frame"``).
     """
     if pose not in REST_POSES:

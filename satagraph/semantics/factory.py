@@ -16,10 +16,10 @@ from __future__ import annotations
 
 from typing import Callable, Dict, Mapping, Union
 
-from satagraph.data.semantics.encoders import (OfflineTextEncoder, T5TextEncoder,
+from satagraph.semantics.encoders import (OfflineTextEncoder, T5TextEncoder,
                                                TextEncoder)
-from satagraph.data.semantics.glove import GloVeEncoder
-from satagraph.data.semantics.sentence import SentenceEncoder
+from satagraph.semantics.glove import GloVeEncoder
+from satagraph.semantics.sentence import SentenceEncoder
 
 #: Spec prefix -> encoder class built from the rest of the spec (a path).
 TEXT_ENCODERS: Dict[str, Callable[[str], TextEncoder]] = {

@@ -22,8 +22,8 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import torch
 from torch import Tensor
 
-from satagraph.data.semantics._files import write_atomic
-from satagraph.data.semantics.encoders import TextEncoder
+from satagraph.semantics._files import write_atomic
+from satagraph.semantics.encoders import TextEncoder
 
 PathLike = Union[str, "os.PathLike[str]"]
 ENV_VAR = "SATAGRAPH_CACHE"

@@ -398,7 +398,7 @@ def _paired_legs(motion: Motion, up_axis: str) -> int:
     without the motion evidence (which needs torch)."""
     if int(np.count_nonzero(motion.skeleton.is_leaf)) < 6:
         return 0
-    from satagraph.data.semantics import evidence_from_motion, paired_legs
+    from satagraph.semantics import evidence_from_motion, paired_legs
     evidence = evidence_from_motion(motion, up_axis=up_axis)
     return paired_legs(motion.skeleton, evidence)
 

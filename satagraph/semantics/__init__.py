@@ -21,7 +21,7 @@ The pipeline of SATA (paper section 3.2, appendix C.3), offline:
 Example::
 
     from satagraph.io import read_bvh
-    from satagraph.data.semantics import describe_joints, embed_skeleton
+    from satagraph.semantics import describe_joints, embed_skeleton
 
     motion = read_bvh("walk.bvh")
     describe_joints(motion.skeleton)   # ["pelvis, hips root ...", ...]
@@ -34,18 +34,18 @@ import os
 from typing import TYPE_CHECKING, List, Optional, Sequence, Union
 
 from satagraph._lazy import lazy_exports
-from satagraph.data.semantics._files import SemanticsError, write_json_atomic
-from satagraph.data.semantics.evidence import (EvidenceLike, JointEvidence,
+from satagraph.semantics._files import SemanticsError, write_json_atomic
+from satagraph.semantics.evidence import (EvidenceLike, JointEvidence,
                                                as_evidence, call_semantic,
                                                evidence_from_features,
                                                evidence_from_motion,
                                                joint_evidence, remap_evidence)
-from satagraph.data.semantics.limbs import LIMBS, limb_end_index, limb_ends, paired_legs
-from satagraph.data.semantics.prompt import (build_prompt, import_answer,
+from satagraph.semantics.limbs import LIMBS, limb_end_index, limb_ends, paired_legs
+from satagraph.semantics.prompt import (build_prompt, import_answer,
                                              load_reference_vocab,
                                              parse_answer)
-from satagraph.data.semantics.rules import describe_structure
-from satagraph.data.semantics.user import (AnchorsLike, DictionaryLike,
+from satagraph.semantics.rules import describe_structure
+from satagraph.semantics.user import (AnchorsLike, DictionaryLike,
                                            apply_user, check_anchor_names,
                                            load_dictionary, normalize_anchors,
                                            parse_anchor, validate_dictionary)
@@ -54,7 +54,7 @@ from satagraph.skeleton import Skeleton
 if TYPE_CHECKING:
     from torch import Tensor
 
-    from satagraph.data.semantics.encoders import TextEncoder
+    from satagraph.semantics.encoders import TextEncoder
 
 # The encoders and the embedding cache need torch: they load on first use, so
 # that reading a rig (describe_joints, evidence, limbs) stays numpy-only.
@@ -62,12 +62,12 @@ _ENCODERS = ("TextEncoder", "OfflineTextEncoder", "T5TextEncoder")
 _FACTORY = ("TextEncoderMismatch", "build_text_encoder", "check_text_encoder",
             "check_text_encoder_state", "text_encoder_state")
 __getattr__, __dir__ = lazy_exports(__name__, {
-    **dict.fromkeys(_ENCODERS, "satagraph.data.semantics.encoders"),
-    **dict.fromkeys(_FACTORY, "satagraph.data.semantics.factory"),
-    "GloVeEncoder": "satagraph.data.semantics.glove",
-    "SentenceEncoder": "satagraph.data.semantics.sentence",
+    **dict.fromkeys(_ENCODERS, "satagraph.semantics.encoders"),
+    **dict.fromkeys(_FACTORY, "satagraph.semantics.factory"),
+    "GloVeEncoder": "satagraph.semantics.glove",
+    "SentenceEncoder": "satagraph.semantics.sentence",
     **dict.fromkeys(("EmbeddingCache", "clear_memory", "default_cache_dir"),
-                    "satagraph.data.semantics.cache")})
+                    "satagraph.semantics.cache")})
 
 PathLike = Union[str, "os.PathLike[str]"]
 _DEFAULT_ENCODER: Optional["TextEncoder"] = None
@@ -78,9 +78,9 @@ def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
                     evidence: EvidenceLike = None) -> List[str]:
     """One canonical functional description per joint (end sites included).
 
-    Rules first (see :mod:`satagraph.data.semantics.rules`), then the
+    Rules first (see :mod:`satagraph.semantics.rules`), then the
     dictionary, then anchor tags and their propagation along chains (see
-    :mod:`satagraph.data.semantics.user` for the exact precedence and
+    :mod:`satagraph.semantics.user` for the exact precedence and
     propagation rule). Never returns an empty string; unknown names get a
     cleaned form plus their structural role.
 
@@ -91,7 +91,7 @@ def describe_joints(skeleton: Skeleton, dictionary: DictionaryLike = None,
         evidence: Optional geometry / motion evidence: a
             :class:`JointEvidence`, motion features, or canonical joint
             positions ``[T, J, 3]`` / ``[J, 3]`` (+Y up, facing +Z, see
-            :mod:`satagraph.data.semantics.evidence`). ``None``: names and
+            :mod:`satagraph.semantics.evidence`). ``None``: names and
             hierarchy only.
 
     Returns:
@@ -121,7 +121,7 @@ def default_encoder() -> "TextEncoder":
     Returns:
         TextEncoder: The encoder.
     """
-    from satagraph.data.semantics.encoders import OfflineTextEncoder
+    from satagraph.semantics.encoders import OfflineTextEncoder
 
     global _DEFAULT_ENCODER
     if _DEFAULT_ENCODER is None:
@@ -144,7 +144,7 @@ def embed_texts(texts: Sequence[str], encoder: Optional[TextEncoder] = None,
     Returns:
         Tensor: float32 ``[N, D]``.
     """
-    from satagraph.data.semantics.cache import EmbeddingCache
+    from satagraph.semantics.cache import EmbeddingCache
 
     encoder = encoder or default_encoder()
     if not use_cache:

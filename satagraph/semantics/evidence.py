@@ -140,7 +140,7 @@ def evidence_from_motion(motion, canonical: bool = False,
         JointEvidence: The evidence, one entry per joint of
         ``motion.skeleton``.
     """
-    from satagraph.data.canonical import canonicalize
+    from satagraph.transforms.canonical import canonicalize
     from satagraph.inference import static_features
     source = motion if motion.num_frames else _rest(motion)
     if not canonical:  # evidence is in body heights: the units do not matter

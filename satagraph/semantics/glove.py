@@ -10,7 +10,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from satagraph.data.semantics.encoders import _WORD, PathLike, TextEncoder
+from satagraph.semantics.encoders import _WORD, PathLike, TextEncoder
 
 GLOVE_HELP = ("satagraph never downloads word vectors: pass a local text file of "
               "'word v1 v2 ...' lines (e.g. glove.6B.50d.txt) as "

@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from typing import Dict, List
 
-from satagraph.data.semantics.evidence import EvidenceLike
+from satagraph.semantics.evidence import EvidenceLike
 from satagraph.skeleton import Skeleton
 
 #: The limbs, in the order of :func:`limb_end_index`.
@@ -22,11 +22,11 @@ LIMBS: List[str] = ["left front", "right front", "left hind", "right hind"]
 
 def limb_ends(skeleton: Skeleton, evidence: EvidenceLike = None) -> Dict[str, int]:
     """Terminal joint of each limb the skeleton has: the first joint that
-    :func:`~satagraph.data.semantics.describe_joints` (with the optional
+    :func:`~satagraph.semantics.describe_joints` (with the optional
     geometry / motion :obj:`evidence`) describes as ``"<limb> limb terminal
     segment"`` (an arthropod's first and last leg pairs are its front and
     hind limbs)."""
-    from satagraph.data.semantics import describe_joints  # the package imports this module
+    from satagraph.semantics import describe_joints  # the package imports this module
     found: Dict[str, int] = {}
     for j, text in enumerate(describe_joints(skeleton, evidence=evidence)):
         for limb in LIMBS:
@@ -49,8 +49,8 @@ _PAIRED_LEG_END = re.compile(r"^(left|right) \w+ limb terminal segment, \w+ leg 
 def paired_legs(skeleton: Skeleton, evidence: EvidenceLike = None) -> int:
     """Number of legs numbered in leg pairs (six or more legs: an arthropod),
     ``0`` for a body with four legs or fewer, as
-    :func:`~satagraph.data.semantics.describe_joints` (with the optional
+    :func:`~satagraph.semantics.describe_joints` (with the optional
     geometry / motion :obj:`evidence`) reads them."""
-    from satagraph.data.semantics import describe_joints  # the package imports this module
+    from satagraph.semantics import describe_joints  # the package imports this module
     return sum(bool(_PAIRED_LEG_END.match(text))
                for text in describe_joints(skeleton, evidence=evidence))

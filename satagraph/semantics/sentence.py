@@ -11,7 +11,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from satagraph.data.semantics.encoders import (PathLike, TextEncoder,
+from satagraph.semantics.encoders import (PathLike, TextEncoder,
                                                _folder_fingerprint,
                                                encode_mean_pooled)
 

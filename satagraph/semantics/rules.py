@@ -47,8 +47,8 @@ from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from satagraph.data.semantics.evidence import JointEvidence
-from satagraph.data.semantics.lexicon import NameInfo, parse_name
+from satagraph.semantics.evidence import JointEvidence
+from satagraph.semantics.lexicon import NameInfo, parse_name
 
 SEGMENTS = ("girdle segment", "upper segment", "lower segment",
             "terminal segment", "digit segment")
@@ -764,7 +764,7 @@ def describe_structure(names: Tuple[str, ...], parents: Tuple[int, ...],
         parents: Parent index per joint (``-1`` for the root, parents first).
         end_site: End-site flags.
         evidence: Optional geometry / motion facts per joint (see
-            :mod:`satagraph.data.semantics.evidence`).
+            :mod:`satagraph.semantics.evidence`).
 
     Returns:
         RuleResult: descriptions and fallback flags.

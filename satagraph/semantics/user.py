@@ -31,8 +31,8 @@ from __future__ import annotations
 import os
 from typing import Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
-from satagraph.data.semantics._files import SemanticsError, read_json
-from satagraph.data.semantics.rules import RuleResult, ordinal
+from satagraph.semantics._files import SemanticsError, read_json
+from satagraph.semantics.rules import RuleResult, ordinal
 
 DictionaryLike = Union[None, Mapping[str, str], str, "os.PathLike[str]"]
 AnchorsLike = Union[None, Mapping[str, str], Iterable[str]]

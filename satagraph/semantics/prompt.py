@@ -21,7 +21,7 @@ import re
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Union
 
-from satagraph.data.semantics._files import (SemanticsError, read_json,
+from satagraph.semantics._files import (SemanticsError, read_json,
                                              write_json_atomic)
 from satagraph.skeleton import Skeleton
 

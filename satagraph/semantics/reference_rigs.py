@@ -11,8 +11,8 @@ evidence. Tests and ``benchmarks/semantic_alignment.py`` share them.
 
 Example::
 
-    from satagraph.data.semantics import describe_joints
-    from satagraph.data.semantics.reference_rigs import crab, rest_evidence
+    from satagraph.semantics import describe_joints
+    from satagraph.semantics.reference_rigs import crab, rest_evidence
 
     skeleton = crab()
     describe_joints(skeleton, evidence=rest_evidence(skeleton))
@@ -24,7 +24,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from satagraph.data.semantics.evidence import JointEvidence, joint_evidence
+from satagraph.semantics.evidence import JointEvidence, joint_evidence
 from satagraph.skeleton import Skeleton
 
 #: ``(name, parent name or None, offset)``; a name ending in ``_end`` is an

@@ -7,7 +7,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from satagraph.data.rig_reading import axis_vector
+from satagraph.transforms.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
 from satagraph.skeleton import Skeleton
 
@@ -36,9 +36,9 @@ def _first_pose(motion: Motion) -> np.ndarray:
 
 def detect_up_axis(motion: Motion) -> str:
     r"""Guess the up axis of a motion (``"+Y"``, ``"-Z"``, ...) from its
-    motion and pose; :func:`~satagraph.data.rig_reading.guess_up_axis` gives
+    motion and pose; :func:`~satagraph.transforms.rig_reading.guess_up_axis` gives
     the confidence and the evidence too."""
-    from satagraph.data.rig_reading import guess_up_axis
+    from satagraph.transforms.rig_reading import guess_up_axis
 
     return guess_up_axis(motion).axis
 
@@ -55,7 +55,7 @@ def _side(name: str) -> Optional[str]:
 def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
     """Indices of left joints and their right counterparts (matched by the
     name with the side marker and exporter noise such as ``__x7Q`` removed)."""
-    from satagraph.data.semantics.lexicon import drop_noise_tokens
+    from satagraph.semantics.lexicon import drop_noise_tokens
     stems = {}
     for i, raw in enumerate(names):
         name = drop_noise_tokens(raw)
@@ -178,13 +178,13 @@ def canonicalize(
     Up axis and units are :obj:`up_axis` / :obj:`unit_scale` when given,
     else the motion's :attr:`~Motion.rig` settings (a file's declaration, or
     overrides from a manifest or the command line), else guessed by
-    :func:`~satagraph.data.rig_reading.read_rig`; a low-confidence or
-    undecided guess warns (:class:`~satagraph.data.rig_reading.RigReadingWarning`).
+    :func:`~satagraph.transforms.rig_reading.read_rig`; a low-confidence or
+    undecided guess warns (:class:`~satagraph.transforms.rig_reading.RigReadingWarning`).
     The returned motion's :attr:`~Motion.transform` records what was done;
     :func:`decanonicalize` undoes it. The result declares itself canonical
     (:attr:`~Motion.rig`), so it is never re-guessed, also once written.
     """
-    from satagraph.data.rig_reading import read_rig, warn_reading
+    from satagraph.transforms.rig_reading import read_rig, warn_reading
 
     motion, removed = (remove_static_root(motion) if remove_root
                        else (motion, None))
