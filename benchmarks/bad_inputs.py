@@ -332,7 +332,7 @@ def _zoo(root: Path) -> Path:
     manifest = root / "zoo" / "manifest.tsv"
     if not manifest.is_file():
         sys.path.insert(0, str(REPO))
-        from satagraph.data.zoo import write_zoo
+        from satagraph.datasets.zoo import write_zoo
         write_zoo(root / "zoo", species=["biped", "quadruped"], clips=2, frames=40)
     return manifest
 

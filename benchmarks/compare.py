@@ -37,7 +37,7 @@ from typing import Dict, List, Optional, Sequence
 import torch
 
 from results_io import write_results
-from satagraph.data.sources import MotionFile, resolve_sources, select
+from satagraph.datasets.sources import MotionFile, resolve_sources, select
 from satagraph.experiment.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
                              held_out_loader, run_config, sweep_configs)
 

@@ -48,7 +48,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from results_io import write_results  # noqa: E402
 from satagraph.data.datamodule import semantic_embedder  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
-from satagraph.data.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.inference import retarget_canonical  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402

@@ -1,7 +1,7 @@
 """Rig reading benchmark: are up axes and units read right, on every body
 plan and exporter dialect, and is every doubtful reading flagged?
 
-Corpus: the procedural zoo's dialect variants (:func:`satagraph.data.zoo.
+Corpus: the procedural zoo's dialect variants (:func:`satagraph.datasets.zoo.
 dialect_variants`: every zoo rig -- bipeds, quadrupeds, long-tailed
 quadrupeds, birds in three dialects, hexapods, crabs, spiders, snakes --
 written in each of the six up axes, in m, cm, inches or an arbitrary unit,
@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Dict, List
 
 from satagraph.transforms.rig_reading import HUMAN_HEIGHT, STANDARD_UNITS, UNITS, read_rig
-from satagraph.data.zoo import apply_dialect, dialect_variants, generate_clip
+from satagraph.datasets.zoo import apply_dialect, dialect_variants, generate_clip
 from satagraph.io import read_bvh, write_bvh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

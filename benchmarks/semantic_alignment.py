@@ -57,7 +57,7 @@ from satagraph.semantics.reference_rigs import (REFERENCE_RIGS,
 from satagraph.semantics.lexicon import split_words, strip_prefixes
 from satagraph.semantics.lexicon import parse_name
 from satagraph.semantics.rules import describe_structure
-from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
+from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
 
 REPO = Path(__file__).resolve().parents[1]

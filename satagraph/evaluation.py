@@ -11,7 +11,7 @@ from satagraph.transforms.augment import restructure, scale_bones
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import (MotionFeatures, features_to_motion,
                                      motion_to_features)
-from satagraph.data.sources import MotionFile
+from satagraph.datasets.sources import MotionFile
 from satagraph.inference import transfer
 from satagraph.motion import Motion
 

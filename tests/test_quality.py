@@ -8,7 +8,7 @@ import pytest
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
-from satagraph.data.zoo.endless import EndlessZoo
+from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.quality import (correlate, facing_axis, forward_tracks, ground_height,
                                head_index, leg_length, limb_tracks, mean_correlation,
                                most_active, retarget_quality, root_travel,

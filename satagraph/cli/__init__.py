@@ -330,7 +330,7 @@ def _positive_int(text: str) -> int:
 def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     """Register ``satagraph demo [--quick] [--output DIR] [--minutes M]
     [--data PATH ...] [overrides ...]``."""
-    from satagraph.data.zoo import SPECIES
+    from satagraph.datasets.zoo import SPECIES
 
     parser = subparsers.add_parser(
         "demo", help="the whole pipeline on built-in data (no data needed)",

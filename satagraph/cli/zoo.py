@@ -18,7 +18,7 @@ import itertools
 import time
 from typing import List
 
-from satagraph.data.zoo import (CLIP_KINDS, NOISE_STYLES, REST_POSES, SPECIES, UNITS,
+from satagraph.datasets.zoo import (CLIP_KINDS, NOISE_STYLES, REST_POSES, SPECIES, UNITS,
                                 UP_AXES, Dialect, dialect_variants, unit_scale,
                                 write_dialect_zoo, write_zoo)
 

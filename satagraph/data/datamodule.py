@@ -16,7 +16,7 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
                                     zoo_entry)
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
+from satagraph.datasets.sources import SPLITS, MotionFile, resolve_sources, select
 
 
 def semantic_embedder(encoder: Optional[str] = "offline",
@@ -53,7 +53,7 @@ class MotionDataModule(L.LightningDataModule):
     Args:
         sources: A folder, a manifest TSV, a ``{"path", "dataset",
             "exclude", "include"}`` dict (see
-            :func:`~satagraph.data.sources.resolve_sources`), an endless
+            :func:`~satagraph.datasets.sources.resolve_sources`), an endless
             procedural zoo ``{"zoo": "endless", "species": [...],
             "holdout_species": [...], "windows_per_epoch": N}`` (windows
             generated on the fly, see :func:`~satagraph.data.endless.zoo_entry`),

@@ -20,7 +20,7 @@ from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatur
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
                                                evidence_from_features, remap_evidence)
 from satagraph.semantics.limbs import limb_end_index
-from satagraph.data.sources import MotionFile
+from satagraph.datasets.sources import MotionFile
 from satagraph.data.validate import check_features, check_motion
 from satagraph.io import BVHError, read_bvh
 from satagraph.skeleton import Skeleton

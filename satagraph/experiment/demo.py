@@ -144,7 +144,7 @@ class _Progress:
 def write_demo_zoo(folder: Path, options: DemoOptions) -> List[Dict[str, str]]:
     """Step 1: the procedural zoo (always with the species the retargeting
     needs)."""
-    from satagraph.data.zoo import write_zoo
+    from satagraph.datasets.zoo import write_zoo
 
     species = list(options.species or DEMO_SPECIES)
     species += [s for s in REQUIRED_SPECIES if s not in species]

@@ -245,7 +245,7 @@ def held_out_loader(data: Dict[str, Any], sources: Any, batch_size: Optional[int
         from satagraph.data.collate import collate_clips
         from satagraph.data.datamodule import semantic_embedder
         from satagraph.data.dataset import MotionDataset, load_features
-        from satagraph.data.sources import resolve_sources
+        from satagraph.datasets.sources import resolve_sources
         files = resolve_sources(sources)
         feats = load_features(files, data.get("preprocessing"), data.get("cache_dir"))
         window = int(data.get("window", 64))

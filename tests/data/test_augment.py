@@ -12,7 +12,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import WindowAugment
 from satagraph.data.examples import example_motion
 from satagraph.data.features import motion_to_features
-from satagraph.data.zoo import generate_clip, zoo_rigs
+from satagraph.datasets.zoo import generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
 
 RIGS = {r.species: r for r in zoo_rigs(seed=0)}

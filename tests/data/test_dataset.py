@@ -10,7 +10,7 @@ from satagraph.data.dataset import (MotionDatasetError, load_features,
                                     preprocess_file, window_starts,
                                     DEFAULT_PREPROCESSING)
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.data.sources import resolve_sources, scan_folder, select
+from satagraph.datasets.sources import resolve_sources, scan_folder, select
 
 
 def test_window_starts_cover_clip():

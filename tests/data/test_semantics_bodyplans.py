@@ -68,7 +68,7 @@ def test_real_files_keep_their_readings_with_and_without_motion(rel):
 
 
 def test_zoo_rigs_keep_their_readings():
-    from satagraph.data.zoo import zoo_rigs
+    from satagraph.datasets.zoo import zoo_rigs
     rigs = {r.name: r.skeleton for r in zoo_rigs()}
     checked = 0
     for name in _ZOO:
@@ -170,7 +170,7 @@ def test_zoo_arthropods_walk_with_leg_pairs_front_to_back(species, tmp_path):
     # pairs are numbered by where legs join the body, then by their feet:
     # the zoo's hexapod splays its front legs backwards across the hind ones
     # (as the crab and spider once did), which read the first pair as last
-    from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
+    from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
     from satagraph.io import read_bvh, write_bvh
     rig = zoo_rigs([species], seed=0)[0]
     clip = generate_clip(rig, "walk", frames=40, seed=1)
@@ -197,7 +197,7 @@ def test_spider_four_leg_pairs_mirrored_by_side():
 
 
 def test_insect_leg_pairs_by_front_center_hind_words():
-    from satagraph.data.zoo import zoo_rigs
+    from satagraph.datasets.zoo import zoo_rigs
     rig = next(r for r in zoo_rigs(["hexapod"]))
     d = table(rig.skeleton)
     assert "first leg pair" in d["LeftFrontFemur"]
@@ -381,7 +381,7 @@ def test_call_semantic_passes_evidence_only_where_accepted():
 def test_dataset_embeds_each_file_with_its_evidence():
     from satagraph.data.dataset import MotionDataset
     from satagraph.data.features import motion_to_features
-    from satagraph.data.sources import MotionFile
+    from satagraph.datasets.sources import MotionFile
     from satagraph.transforms.canonical import canonicalize
     sk = crab(reverse_numbers=True)
     frames = 8
@@ -444,7 +444,7 @@ def test_tags_cli_reads_the_motion(tmp_path, capsys):
 def _regenerate() -> None:  # pragma: no cover - maintenance helper
     """Rewrite semantic_readings.json (run only after a reviewed change)."""
     import csv
-    from satagraph.data.zoo import zoo_rigs
+    from satagraph.datasets.zoo import zoo_rigs
     from satagraph.io import read_bvh
     root, out = _data_dir(), {}
     rows = list(csv.DictReader(open(root / "manifest.tsv"), delimiter="\t"))

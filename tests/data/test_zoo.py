@@ -9,8 +9,8 @@ import pytest
 
 from satagraph.cli import main
 from satagraph.semantics import describe_joints
-from satagraph.data.sources import read_manifest
-from satagraph.data.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
+from satagraph.datasets.sources import read_manifest
+from satagraph.datasets.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
                                 generate_clip, write_zoo, zoo_rigs)
 from satagraph.io import read_bvh, write_bvh
 

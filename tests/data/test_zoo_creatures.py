@@ -8,7 +8,7 @@ import hashlib
 import numpy as np
 import pytest
 
-from satagraph.data.zoo import SPECIES, generate_clip, write_zoo, zoo_rigs
+from satagraph.datasets.zoo import SPECIES, generate_clip, write_zoo, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
 
 OLD_SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from satagraph.cli import main
-from satagraph.data.zoo import (DIALECT_COLUMNS, MANIFEST_COLUMNS, NOISE_STYLES, REST_POSES,
+from satagraph.datasets.zoo import (DIALECT_COLUMNS, MANIFEST_COLUMNS, NOISE_STYLES, REST_POSES,
                                 UP_AXES, Dialect, add_name_noise, change_rest_pose,
                                 dialect_variants, export_dialect, generate_clip, unit_scale,
                                 up_rotation, write_dialect_zoo, write_zoo, zoo_rigs)

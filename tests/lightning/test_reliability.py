@@ -18,7 +18,7 @@ import torch
 
 from satagraph.cli import main
 from satagraph.experiment.config import load_config
-from satagraph.data.zoo import write_zoo
+from satagraph.datasets.zoo import write_zoo
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint
 from satagraph.lightning.reliability import (LAST, PREVIOUS, RunLockedError,
                                              TrainingStopped, read_loss_log,

@@ -1,11 +1,11 @@
 r"""An endless zoo: a new rig and clip for every ``(seed, epoch, index)``.
 
-Instead of the zoo's fixed skeletons (:func:`~satagraph.data.zoo.zoo_rigs`),
-every sample draws a body plan and variant (:data:`~satagraph.data.zoo.VARIANTS`),
+Instead of the zoo's fixed skeletons (:func:`~satagraph.datasets.zoo.zoo_rigs`),
+every sample draws a body plan and variant (:data:`~satagraph.datasets.zoo.VARIANTS`),
 fresh proportions (the rig builders' random generator), a clip kind
-(:data:`~satagraph.data.zoo.CLIP_KINDS`), a rest pose
-(:data:`~satagraph.data.zoo.REST_POSES`) and a joint-naming noise
-(:data:`~satagraph.data.zoo.NOISE_STYLES`). The result is a pure function
+(:data:`~satagraph.datasets.zoo.CLIP_KINDS`), a rest pose
+(:data:`~satagraph.datasets.zoo.REST_POSES`) and a joint-naming noise
+(:data:`~satagraph.datasets.zoo.NOISE_STYLES`). The result is a pure function
 of the key, so any worker, restart or resumed run draws the same sample.
 
 Body plans can be held out: a ``holdout`` entry is a species
@@ -28,9 +28,9 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from satagraph.data.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
-from satagraph.data.zoo.motions import ClipFacts, generate_clip_with_facts
-from satagraph.data.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, CLIP_KINDS,
+from satagraph.datasets.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
+from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
+from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, CLIP_KINDS,
                                         SPECIES, VARIANTS)
 from satagraph.motion import Motion
 
@@ -91,7 +91,7 @@ class EndlessZoo:
             evaluation streams. Held-out species need not be in
             :obj:`species`.
         rests (list[str]): Rest poses drawn (default: all of
-            :data:`~satagraph.data.zoo.REST_POSES`).
+            :data:`~satagraph.datasets.zoo.REST_POSES`).
         noise (float): Probability of noisy joint names.
         fps (float): Frame rate of the clips.
         seed (int): Base seed.

@@ -10,9 +10,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from satagraph.data.zoo.bodies import _biped, _bird, _hexapod, _quadruped, _snake
-from satagraph.data.zoo.creatures import _bip01, _crab, _fingerwing, _longtail, _spider
-from satagraph.data.zoo.rigs import ZooRig
+from satagraph.datasets.zoo.bodies import _biped, _bird, _hexapod, _quadruped, _snake
+from satagraph.datasets.zoo.creatures import _bip01, _crab, _fingerwing, _longtail, _spider
+from satagraph.datasets.zoo.rigs import ZooRig
 
 #: Body plans: ``fowl`` are birds in exporter dialects (``Bip01_*`` with
 #: legs and wings off one spine joint, finger-named wings), ``longtail`` a

@@ -31,8 +31,8 @@ import numpy as np
 from satagraph.transforms.augment import rebase_rest, set_rest_rotations
 from satagraph.transforms.rig_reading import UNITS as READ_UNITS
 from satagraph.transforms.rig_reading import UP_AXES
-from satagraph.data.zoo.rigs import ZooRig, _rot, _unit
-from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
+from satagraph.datasets.zoo.rigs import ZooRig, _rot, _unit
+from satagraph.datasets.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
 

@@ -4,7 +4,7 @@ and wings off the same spine joint) and with finger-named wings, crabs
 (three walking-leg pairs, claws, eye stalks), spiders (four leg pairs
 numbered over both sides) and long-tailed quadrupeds (about 100 joints).
 
-Every walking leg is an IK :class:`~satagraph.data.zoo.rigs.Leg`: an upper
+Every walking leg is an IK :class:`~satagraph.datasets.zoo.rigs.Leg`: an upper
 and a lower bone solved by two-bone IK, then a rigid foot whose tips rest
 flat on the ground in the rest pose.
 """
@@ -14,7 +14,7 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
-from satagraph.data.zoo.rigs import Leg, ZooRig, _Builder, _rot, _unit
+from satagraph.datasets.zoo.rigs import Leg, ZooRig, _Builder, _rot, _unit
 
 Vec = Sequence[float]
 

@@ -6,7 +6,7 @@ from typing import Sequence
 
 import numpy as np
 
-from satagraph.data.zoo.rigs import (STYLES, Leg, ZooRig, _Builder, _chain,
+from satagraph.datasets.zoo.rigs import (STYLES, Leg, ZooRig, _Builder, _chain,
                                      _leg, _name, _rot)
 
 

@@ -10,10 +10,10 @@ from typing import Dict, Iterable, List, Optional, Sequence, Union
 
 import numpy as np
 
-from satagraph.data.zoo.dialects import Dialect, DialectVariant, apply_dialect
-from satagraph.data.zoo.motions import ClipFacts, generate_clip_with_facts
-from satagraph.data.zoo.rigs import ZooRig
-from satagraph.data.zoo.species import CLIP_KINDS, zoo_rigs
+from satagraph.datasets.zoo.dialects import Dialect, DialectVariant, apply_dialect
+from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
+from satagraph.datasets.zoo.rigs import ZooRig
+from satagraph.datasets.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.io.files import atomic_write
 from satagraph.motion import Motion
 
@@ -28,7 +28,7 @@ LICENCE = "CC0 1.0"
 #: ``scale`` metres per file unit, ``height_m`` the character's true height
 #: in metres, ``rest_pose`` and ``name_noise`` the :class:`Dialect` options.
 DIALECT_COLUMNS = ("up_axis", "scale", "height_m", "rest_pose", "name_noise")
-#: What the clip does (:class:`~satagraph.data.zoo.motions.ClipFacts`, the
+#: What the clip does (:class:`~satagraph.datasets.zoo.motions.ClipFacts`, the
 #: truth of its captions): ``kind``, ``turn_deg`` (positive: to the left),
 #: ``speed_start`` and ``speed_end`` in leg lengths per second.
 MOTION_COLUMNS = ("kind", "turn_deg", "speed_start", "speed_end")
@@ -130,7 +130,7 @@ def write_dialect_zoo(out_dir: PathLike, variants: Iterable[DialectVariant],
                       seed: int = 0, fps: float = 30.0, frames: int = 120
                       ) -> List[Dict[str, str]]:
     r"""Write one clip per :class:`DialectVariant` (e.g. from
-    :func:`~satagraph.data.zoo.dialects.dialect_variants`) and a
+    :func:`~satagraph.datasets.zoo.dialects.dialect_variants`) and a
     ``manifest.tsv``, laid out like :func:`write_zoo`. A rig's clip of one
     kind is the same motion in every dialect (its seed depends on
     :obj:`seed`, the rig and the kind only); every file is in the

@@ -7,9 +7,9 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
-from satagraph.data.zoo.rigs import (Leg, Sway, ZooRig, _align, _euler,
+from satagraph.datasets.zoo.rigs import (Leg, Sway, ZooRig, _align, _euler,
                                      _is_below, _rot, _smoothstep, _unit)
-from satagraph.data.zoo.species import CLIP_KINDS
+from satagraph.datasets.zoo.species import CLIP_KINDS
 from satagraph.motion import Motion
 from satagraph.skeleton import Skeleton
 

@@ -20,27 +20,27 @@ of reach. Clip kinds (:data:`CLIP_KINDS`): ``walk``, ``turn``, ``speed``
 (speed change), ``idle`` and ``trot`` (quadrupeds). Snakes slither: every
 joint follows the path of the head.
 
-Exporter dialects (:mod:`satagraph.data.zoo.dialects`) re-express a clip
+Exporter dialects (:mod:`satagraph.datasets.zoo.dialects`) re-express a clip
 exactly with another up axis (:data:`UP_AXES`), unit, rest pose and noisy
 joint names; :func:`write_zoo` writes them and records the truth in the
 manifest (``up_axis``, ``scale``, ``height_m``, ...).
 
 Example::
 
-    from satagraph.data.zoo import write_zoo
+    from satagraph.datasets.zoo import write_zoo
     rows = write_zoo("zoo", species=["quadruped", "snake"], clips=3, seed=1)
     rows = write_zoo("zoo_zup", species=["crab"], dialects=[Dialect("+Z", "cm")])
 """
-from satagraph.data.zoo.dialects import (NOISE_STYLES, REST_POSES, UNITS, UP_AXES,
+from satagraph.datasets.zoo.dialects import (NOISE_STYLES, REST_POSES, UNITS, UP_AXES,
                                          Dialect, DialectVariant, add_name_noise,
                                          apply_dialect, change_rest_pose,
                                          dialect_variants, export_dialect,
                                          rest_pose_rotations, unit_scale, up_rotation)
-from satagraph.data.zoo.motions import (GAITS, ClipFacts, generate_clip,
+from satagraph.datasets.zoo.motions import (GAITS, ClipFacts, generate_clip,
                                         generate_clip_with_facts)
-from satagraph.data.zoo.rigs import STYLES, Leg, Sway, ZooRig
-from satagraph.data.zoo.species import CLIP_KINDS, SPECIES, VARIANTS, zoo_rigs
-from satagraph.data.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_COLUMNS,
+from satagraph.datasets.zoo.rigs import STYLES, Leg, Sway, ZooRig
+from satagraph.datasets.zoo.species import CLIP_KINDS, SPECIES, VARIANTS, zoo_rigs
+from satagraph.datasets.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_COLUMNS,
                                       MOTION_COLUMNS, write_dialect_zoo, write_zoo)
 
 __all__ = ["CLIP_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS", "LICENCE",
