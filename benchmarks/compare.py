@@ -8,7 +8,7 @@ machinery, then its final weights are evaluated:
 
 - Table 1 layout: JR, RT, JP, FS, GP per test dataset, and zero-shot on every
   file of the held-out dataset (a skeleton never seen in training);
-- Table 3 layout: retarget error (:func:`satagraph.evaluation.retarget_errors`:
+- Table 3 layout: retarget error (:func:`satagraph.pipelines.evaluation.retarget_errors`:
   1000 x mean squared joint error / H^2) with paired ground truth from
   skeleton augmentation, on ``--retarget-files`` test files per dataset and
   on the held-out dataset, in the SATA paper's two settings: "internal"

@@ -1,7 +1,7 @@
 """Sliding-window plan and learning-rate schedule."""
 import pytest
 
-from satagraph.inference import window_plan
+from satagraph.pipelines.inference import window_plan
 from satagraph.lightning import lr_factor
 
 

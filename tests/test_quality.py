@@ -1,4 +1,4 @@
-"""satagraph.quality: retarget quality without a ground truth (limb steps,
+"""satagraph.pipelines.quality: retarget quality without a ground truth (limb steps,
 root travel, ground contact, uprightness), on real clips and zoo walks."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
 from satagraph.datasets.zoo.endless import EndlessZoo
-from satagraph.quality import (correlate, facing_axis, forward_tracks, ground_height,
+from satagraph.pipelines.quality import (correlate, facing_axis, forward_tracks, ground_height,
                                head_index, leg_length, limb_tracks, mean_correlation,
                                most_active, retarget_quality, root_travel,
                                step_correlation, upright_fraction)

@@ -157,7 +157,7 @@ def _read_checked(args, key: str, fps: float, frames: bool = True):
 
 
 def run_reconstruct(args) -> int:
-    from satagraph.inference import reconstruct_motion
+    from satagraph.pipelines.inference import reconstruct_motion
     from satagraph.io import write_bvh
     from satagraph.io.files import check_output_path
     check_output_path(args.output)
@@ -170,7 +170,7 @@ def run_reconstruct(args) -> int:
 
 
 def run_retarget(args) -> int:
-    from satagraph.inference import retarget_motion
+    from satagraph.pipelines.inference import retarget_motion
     from satagraph.io import write_bvh
     from satagraph.io.files import check_output_path
     check_output_path(args.output)
@@ -186,7 +186,7 @@ def run_retarget(args) -> int:
 
 def run_eval(args) -> int:
     from satagraph.data.datamodule import MotionDataModule
-    from satagraph.evaluation import evaluate, format_table
+    from satagraph.pipelines.evaluation import evaluate, format_table
     from satagraph.io.files import atomic_write_text, check_output_path
     from satagraph.experiment.train import load_module
     if args.json:
@@ -250,7 +250,7 @@ def _print_retarget(module, files, results: dict) -> None:
     """Retarget error table (internal and cross settings) per dataset; the
     values go into :obj:`results` as ``retarget`` and ``retarget_cross``."""
     from satagraph.data.datamodule import semantic_embedder
-    from satagraph.evaluation import retarget_error_table
+    from satagraph.pipelines.evaluation import retarget_error_table
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
     table = retarget_error_table(module, files, embed)
     internal, cross = table["internal"], table["cross"]

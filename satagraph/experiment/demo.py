@@ -249,9 +249,9 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
         the source's own root travel, ``source_travel``, in leg lengths).
     """
     from satagraph.transforms.augment import scale_bones
-    from satagraph.inference import from_canonical, retarget_canonical
+    from satagraph.pipelines.inference import from_canonical, retarget_canonical
     from satagraph.io import read_bvh, write_bvh
-    from satagraph.quality import retarget_quality, root_travel
+    from satagraph.pipelines.quality import retarget_quality, root_travel
 
     source = read_bvh(clips["source"])
     human = scale_bones(source, 0.7, 1.3, seed=seed)
@@ -357,7 +357,7 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
 
 def _retarget_step(progress: _Progress, name: str, how: str, module, clips: Dict[str, Path],
                    folder: Path, seed: int, cache_dir: Optional[str] = None) -> None:
-    from satagraph.inference import default_windows
+    from satagraph.pipelines.inference import default_windows
 
     with progress.step(name, f"retargeting a biped walk onto a quadruped, a bird and a "
                        f"rescaled human {how}") as step:

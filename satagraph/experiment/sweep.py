@@ -12,7 +12,7 @@ Every config gets the data section of the first one (``same_data``), a CSV
 logger, no progress bar, ``trainer.max_time`` set to the budget and no
 epoch limit, and its own run folder under the output folder. The metrics
 are those of the final weights (not the best checkpoint) on the test split
-(:func:`~satagraph.evaluation.evaluate`).
+(:func:`~satagraph.pipelines.evaluation.evaluate`).
 """
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ class SweepRow:
             evaluation split (and extra loaders).
         retarget (dict): Retarget error ``{setting: {group: value}}``, setting
             ``"internal"`` or ``"cross"`` (see
-            :data:`~satagraph.evaluation.RETARGET_SETTINGS`), group a file
+            :data:`~satagraph.pipelines.evaluation.RETARGET_SETTINGS`), group a file
             label or ``"label:dataset"`` (empty when not asked).
         run_dir (str): The run folder (checkpoints, CSV logs).
     """
@@ -189,11 +189,11 @@ def run_config(cfg: Dict[str, Any], eval_split: str = "test",
             of further evaluation data (e.g. a held-out dataset); their
             results are stored under ``label``.
         retarget_files (dict, optional): ``{label: files}`` for
-            :func:`~satagraph.evaluation.retarget_errors`; ``"split"`` as the
+            :func:`~satagraph.pipelines.evaluation.retarget_errors`; ``"split"`` as the
             value's key takes the evaluation split's files.
         max_batches (int, optional): Evaluation batches per loader.
     """
-    from satagraph.evaluation import evaluate
+    from satagraph.pipelines.evaluation import evaluate
     from satagraph.lightning.autoencoder import count_parameters
     module, dm, trainer, seconds, train_loss = train_budgeted(cfg)
     row = SweepRow(name=cfg["name"], config=str(cfg.get("_config", cfg["name"])),
@@ -222,10 +222,10 @@ def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
             :obj:`split`.
         split (str): Split whose files ``"split"`` stands for.
         settings (list[str], optional): Retargeting settings (default:
-            every one of :data:`~satagraph.evaluation.RETARGET_SETTINGS`).
+            every one of :data:`~satagraph.pipelines.evaluation.RETARGET_SETTINGS`).
     """
     from satagraph.data.datamodule import semantic_embedder
-    from satagraph.evaluation import retarget_error_table
+    from satagraph.pipelines.evaluation import retarget_error_table
     embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
     out: Dict[str, Dict[str, float]] = {}
     for label, chosen in files.items():

@@ -141,7 +141,7 @@ def evidence_from_motion(motion, canonical: bool = False,
         ``motion.skeleton``.
     """
     from satagraph.transforms.canonical import canonicalize
-    from satagraph.inference import static_features
+    from satagraph.pipelines.inference import static_features
     source = motion if motion.num_frames else _rest(motion)
     if not canonical:  # evidence is in body heights: the units do not matter
         known = source.rig is not None and source.rig.scale is not None

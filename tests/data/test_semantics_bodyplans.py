@@ -409,7 +409,7 @@ def test_dataset_embeds_each_file_with_its_evidence():
 
 
 def test_inference_embeds_target_with_its_evidence():
-    from satagraph.inference import _embed, static_features
+    from satagraph.pipelines.inference import _embed, static_features
     from satagraph.transforms.canonical import canonicalize
     sk = crab(reverse_numbers=True)
     motion = Motion(sk, np.broadcast_to(np.eye(3), (2, sk.num_joints, 3, 3)).copy(),

@@ -11,7 +11,7 @@ import satagraph.transforms.rig_reading as rr
 from satagraph.cli import main
 from satagraph.transforms.rig_reading import with_rig
 from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
-from satagraph.inference import retarget_motion
+from satagraph.pipelines.inference import retarget_motion
 from satagraph.io import read_bvh, write_bvh
 
 

@@ -15,7 +15,7 @@ from safetensors.torch import save_file
 import satagraph.io.weights as weights
 from satagraph.cli import main
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
-from satagraph.inference import reconstruct_motion
+from satagraph.pipelines.inference import reconstruct_motion
 from satagraph.io import write_bvh
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.io.weights import (NO_BUILTIN, WeightsSizeError, load_weights,

@@ -12,7 +12,7 @@ from torch.utils.data import DataLoader
 from satagraph.experiment.config import load_config
 from satagraph.data import collate_clips
 from satagraph.data.examples import example_motion
-from satagraph.inference import reconstruct_motion
+from satagraph.pipelines.inference import reconstruct_motion
 from satagraph.lightning.baselines import PaddedRVQModule, SAMEModule
 from satagraph.losses import MotionLoss
 from satagraph.nn.padded import (PaddedRVQ, from_padded, latent_mask, padding_mask,

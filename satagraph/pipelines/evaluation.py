@@ -12,7 +12,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import (MotionFeatures, features_to_motion,
                                      motion_to_features)
 from satagraph.datasets.sources import MotionFile
-from satagraph.inference import transfer
+from satagraph.pipelines.inference import transfer
 from satagraph.motion import Motion
 
 #: How each retargeting setting builds the target skeleton and its paired
