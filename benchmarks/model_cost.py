@@ -37,7 +37,7 @@ from results_io import write_results
 from satagraph.experiment.config import load_config
 from satagraph.data import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
-from satagraph.nn.bottleneck_rvq import RVQBottleneck
+from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.experiment.train import module_class
 
 ROOT = Path(__file__).resolve().parents[1]

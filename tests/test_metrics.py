@@ -1,4 +1,4 @@
-r"""Value tests of every metric of :mod:`satagraph.metrics` on a hand-made
+r"""Value tests of every metric of :mod:`satagraph.metrics.motion` on a hand-made
 batch whose answers are worked out by hand in the comments.
 
 The batch holds two clips (nodes are frame-major: node = t * J + j within a
@@ -16,7 +16,7 @@ import torch
 
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
-from satagraph.metrics import (SLIDE_HEIGHT, foot_sliding, ground_penetration,
+from satagraph.metrics.motion import (SLIDE_HEIGHT, foot_sliding, ground_penetration,
                                joint_position_error, joint_rotation_error,
                                motion_metrics, root_trajectory_error, retarget_error)
 

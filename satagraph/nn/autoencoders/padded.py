@@ -8,9 +8,9 @@ import torch
 from torch import Tensor, nn
 
 from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS
-from satagraph.metrics import node_clip
-from satagraph.nn.bottleneck_rvq import RVQBottleneck
-from satagraph.nn.decoder import C_CHANNELS, Q_CHANNELS
+from satagraph.ops.batch_index import node_clip
+from satagraph.nn.bottlenecks.rvq import RVQBottleneck
+from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
 
 #: Outputs per padded joint slot: 6D rotation and contact logit.
 JOINT_OUT = Q_CHANNELS + C_CHANNELS

@@ -8,8 +8,8 @@ from torch import Tensor, nn
 from torch_geometric.nn import global_max_pool
 
 from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
-from satagraph.nn.modulation import build_input_layer
-from satagraph.nn.spatio_temporal import make_blocks
+from satagraph.nn.layers.modulation import build_input_layer
+from satagraph.nn.layers.spatio_temporal import make_blocks
 
 
 def node_motion_features(frames) -> Tensor:

@@ -10,9 +10,9 @@ import torch
 from torch import Tensor, nn
 from torch_geometric.nn.resolver import activation_resolver
 
-from satagraph.nn.dropout import fast_dropout, use_fast_dropout
-from satagraph.nn.frame_gps import FrameGPSConv
-from satagraph.nn.local_conv import accepts_edge_attr, build_local_conv
+from satagraph.nn.layers.dropout import fast_dropout, use_fast_dropout
+from satagraph.nn.layers.frame_gps import FrameGPSConv
+from satagraph.nn.layers.local_conv import accepts_edge_attr, build_local_conv
 from satagraph.ops.temporal import from_temporal_streams, to_temporal_streams
 
 
@@ -65,7 +65,7 @@ class SpatioTemporalBlock(nn.Module):
     Spatial part: :class:`~torch_geometric.nn.conv.GPSConv` (local conv +
     multi-head self-attention within each frame graph, summed, MLP,
     residuals, node-wise layer norm), as
-    :class:`~satagraph.nn.frame_gps.FrameGPSConv` so that the attention runs
+    :class:`~satagraph.nn.layers.frame_gps.FrameGPSConv` so that the attention runs
     per skeleton without padding; bone features (depth, reverse depth)
     are embedded to :obj:`channels` by a linear layer for the local convs that
     take edge features. Temporal part: every joint stream is gathered with
@@ -80,7 +80,7 @@ class SpatioTemporalBlock(nn.Module):
             Transformer layer.
         dropout (float, optional): Dropout probability.
         local_conv (str, optional): See
-            :func:`~satagraph.nn.local_conv.build_local_conv`; ``None``: no GNN.
+            :func:`~satagraph.nn.layers.local_conv.build_local_conv`; ``None``: no GNN.
         spatial_attention (bool, optional): Per-frame self-attention
             (``False``: ablation "w/o spatial TF").
         temporal (bool, optional): Temporal Transformer (``False``: ablation

@@ -22,6 +22,7 @@ import torch
 from torch import Tensor
 from torch_geometric.utils import scatter
 
+from satagraph.ops.batch_index import clip_heights, node_clip, previous_node
 from satagraph.ops.rotation import geodesic_angle
 
 #: SAME's foot-sliding height threshold (3 cm) for a 1.75 m character.
@@ -30,25 +31,6 @@ SLIDE_HEIGHT = 0.03 / 1.75
 
 def _per_clip(value: Tensor, clip: Tensor, num_clips: int) -> Tensor:
     return scatter(value, clip, dim=0, dim_size=num_clips, reduce="mean")
-
-
-def node_clip(batch) -> Tensor:
-    """Clip id of every node."""
-    return batch.stream_clip[batch.node_stream]
-
-
-def clip_heights(batch) -> Tensor:
-    """Character height per clip (from the clips' meta), :math:`(B,)`."""
-    return torch.tensor([float(m.get("height", 1.0)) for m in batch.meta],
-                        device=batch.x.device)
-
-
-def previous_node(batch) -> Tensor:
-    """Index of the same joint one frame earlier (itself at frame 0)."""
-    joints = batch.clip_num_joints[node_clip(batch)]
-    return torch.where(batch.node_time > 0, torch.arange(
-        batch.num_nodes, device=joints.device) - joints, torch.arange(
-        batch.num_nodes, device=joints.device))
 
 
 def joint_rotation_error(local_pred: Tensor, local_true: Tensor, batch) -> Tensor:

@@ -6,8 +6,8 @@ from typing import Dict, Optional
 from torch import Tensor, nn
 
 from satagraph.data.features import ROOT_CHANNELS, STATIC_CHANNELS
-from satagraph.nn.modulation import build_input_layer
-from satagraph.nn.spatio_temporal import make_blocks
+from satagraph.nn.layers.modulation import build_input_layer
+from satagraph.nn.layers.spatio_temporal import make_blocks
 
 #: Output widths: 6D rotation per node, root features per frame, contact logit.
 Q_CHANNELS, C_CHANNELS = 6, 1

@@ -17,7 +17,7 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 from torch_geometric.nn import GPSConv
 
-from satagraph.nn.dropout import fast_dropout
+from satagraph.nn.layers.dropout import fast_dropout
 
 
 def joint_count_groups(frames) -> List[Tuple[int, Optional[Tensor]]]:

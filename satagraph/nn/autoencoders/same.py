@@ -10,8 +10,8 @@ from torch_geometric.nn import GATConv, GATv2Conv, global_max_pool
 from torch_geometric.nn.resolver import activation_resolver
 
 from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
-from satagraph.nn.decoder import C_CHANNELS, Q_CHANNELS
-from satagraph.nn.encoder import node_motion_features
+from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
+from satagraph.nn.autoencoders.encoder import node_motion_features
 
 #: Graph attention layers by name.
 SAME_CONVS = {"gat": GATConv, "gatv2": GATv2Conv}

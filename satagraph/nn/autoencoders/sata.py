@@ -5,10 +5,10 @@ from typing import Dict, Optional
 
 from torch import Tensor, nn
 
-from satagraph.nn.bottleneck_rvq import RVQBottleneck
-from satagraph.nn.bottleneck_vae import VAEBottleneck
-from satagraph.nn.decoder import SATADecoder
-from satagraph.nn.encoder import SATAEncoder
+from satagraph.nn.bottlenecks.rvq import RVQBottleneck
+from satagraph.nn.bottlenecks.vae import VAEBottleneck
+from satagraph.nn.autoencoders.decoder import SATADecoder
+from satagraph.nn.autoencoders.encoder import SATAEncoder
 
 #: Default latent width per bottleneck (paper section 4.1).
 DEFAULT_LATENT = {"vae": 128, "rvq": 256}
