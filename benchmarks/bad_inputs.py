@@ -882,7 +882,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         results = run_all(all_cases(root, args.quick), root, args.jobs)
         text = format_results(results, root)
         sys.path.insert(0, str(REPO))
-        from satagraph.io.files import atomic_write_text
+        from satagraph.utils.files import atomic_write_text
         atomic_write_text(args.out, f"# Bad inputs\n\n{text}\nTotal "
                           f"{time.monotonic() - start:.0f} s.\n", create_parent=True)
     print(text.split("\n\nExpected")[0])

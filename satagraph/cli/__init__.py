@@ -26,7 +26,7 @@ import numpy as np
 
 from satagraph import __version__
 from satagraph.io import BVHError, read_bvh
-from satagraph.io.files import check_output_path
+from satagraph.utils.files import check_output_path
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
 

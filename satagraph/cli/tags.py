@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 from typing import List, Optional, Sequence
 
-from satagraph.io.files import atomic_write_text
+from satagraph.utils.files import atomic_write_text
 from satagraph.skeleton import Skeleton
 
 

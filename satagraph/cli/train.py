@@ -159,7 +159,7 @@ def _read_checked(args, key: str, fps: float, frames: bool = True):
 def run_reconstruct(args) -> int:
     from satagraph.pipelines.inference import reconstruct_motion
     from satagraph.io import write_bvh
-    from satagraph.io.files import check_output_path
+    from satagraph.utils.files import check_output_path
     check_output_path(args.output)
     module, embed = _load(args)
     motion = _read_checked(args, "input", module.fps)
@@ -172,7 +172,7 @@ def run_reconstruct(args) -> int:
 def run_retarget(args) -> int:
     from satagraph.pipelines.inference import retarget_motion
     from satagraph.io import write_bvh
-    from satagraph.io.files import check_output_path
+    from satagraph.utils.files import check_output_path
     check_output_path(args.output)
     module, embed = _load(args)
     source = _read_checked(args, "source", module.fps)
@@ -187,7 +187,7 @@ def run_retarget(args) -> int:
 def run_eval(args) -> int:
     from satagraph.data.datamodule import MotionDataModule
     from satagraph.pipelines.evaluation import evaluate, format_table
-    from satagraph.io.files import atomic_write_text, check_output_path
+    from satagraph.utils.files import atomic_write_text, check_output_path
     from satagraph.experiment.train import load_module
     if args.json:
         check_output_path(args.json)
@@ -228,7 +228,7 @@ def _export_source(source: str) -> str:
 
 def run_export_weights(args) -> int:
     from satagraph import __version__
-    from satagraph.io.files import check_output_path
+    from satagraph.utils.files import check_output_path
     from satagraph.io.weights import save_weights
     from satagraph.experiment.train import load_module
     check_output_path(args.output)

@@ -34,7 +34,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, TextIO, Tuple
 import numpy as np
 from omegaconf import OmegaConf
 
-from satagraph.io.files import atomic_write_text
+from satagraph.utils.files import atomic_write_text
 from satagraph.motion import Motion
 
 #: The species the retargeting step needs in the zoo.

@@ -29,7 +29,7 @@ import torch
 from torch.utils.data import DataLoader
 
 from satagraph.experiment.config import load_config
-from satagraph.io.files import atomic_write_text
+from satagraph.utils.files import atomic_write_text
 
 #: Steps the "train loss" column averages (see :class:`TrailingLoss`).
 TRAILING_STEPS = 50

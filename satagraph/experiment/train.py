@@ -14,7 +14,7 @@ from satagraph.experiment.config import expand_path
 from satagraph.data.datamodule import MotionDataModule
 from satagraph.io.checkpoint import CheckpointError, check_finite_weights
 from satagraph.io.weights import load_weights_or_checkpoint
-from satagraph.io.files import atomic_write_text, sweep_stale_temps
+from satagraph.utils.files import atomic_write_text, sweep_stale_temps
 from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
                                  SATAVAEModule)
 from satagraph.lightning.reliability import (LossLog, NonFiniteGuard, ResumeCheckpoint,

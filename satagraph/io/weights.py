@@ -27,7 +27,7 @@ import torch
 from torch import Tensor
 
 from satagraph.io.checkpoint import CheckpointError
-from satagraph.io.files import InputFileError, atomic_write, check_input_file
+from satagraph.utils.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any, Callable, Union
+from typing import Any, Union
 
-from satagraph.io.files import InputFileError, atomic_write, check_input_file
+from satagraph.utils.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -17,20 +17,6 @@ class SemanticsError(ValueError):
     and names the file or the offending key."""
 
 
-def write_atomic(path: PathLike, write: Callable[[Any], None],
-                 binary: bool = False) -> None:
-    """Write a file through :func:`satagraph.io.files.atomic_write` (a
-    temporary file in the same folder and :func:`os.replace`), so that
-    readers never see a half-written file; the folder is created.
-
-    Args:
-        path: Destination file.
-        write: Called with the open temporary file object.
-        binary: Open the temporary file in binary mode.
-    """
-    atomic_write(path, write, binary=binary, create_parent=True)
-
-
 def write_json_atomic(path: PathLike, obj: Any) -> None:
     """Write :obj:`obj` as indented UTF-8 JSON, atomically.
 
@@ -39,7 +25,7 @@ def write_json_atomic(path: PathLike, obj: Any) -> None:
         obj: A JSON-serialisable object.
     """
     text = json.dumps(obj, indent=2, ensure_ascii=False) + "\n"
-    write_atomic(path, lambda f: f.write(text))
+    atomic_write(path, lambda f: f.write(text), create_parent=True)
 
 
 def read_json(path: PathLike, what: str) -> Any:

@@ -22,11 +22,11 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import torch
 from torch import Tensor
 
-from satagraph.semantics._files import write_atomic
 from satagraph.semantics.encoders import TextEncoder
+from satagraph.utils.cache import cache_moved, cache_root
+from satagraph.utils.files import atomic_write
 
 PathLike = Union[str, "os.PathLike[str]"]
-ENV_VAR = "SATAGRAPH_CACHE"
 FORMAT = "satagraph-embeddings"
 
 
@@ -36,9 +36,7 @@ def default_cache_dir() -> Path:
     Returns:
         Path: The cache directory (not created).
     """
-    env = os.environ.get(ENV_VAR)
-    return Path(env).expanduser() if env else \
-        Path.home() / ".cache" / "satagraph" / "embeddings"
+    return cache_root() if cache_moved() else cache_root() / "embeddings"
 
 
 def cache_file(cache_dir: PathLike, encoder_id: str) -> Path:
@@ -160,7 +158,8 @@ class EmbeddingCache:
         payload = {"format": FORMAT, "encoder_id": encoder.id,
                    "texts": table.texts, "embeddings": table.emb}
         try:
-            write_atomic(path, lambda f: torch.save(payload, f), binary=True)
+            atomic_write(path, lambda f: torch.save(payload, f), binary=True,
+                         create_parent=True)
             table.stamp = _stamp(path)
         except OSError as err:
             warnings.warn(f"satagraph: cannot write embedding cache {path} "

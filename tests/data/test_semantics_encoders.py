@@ -19,7 +19,8 @@ from satagraph.semantics import (EmbeddingCache, OfflineTextEncoder,
                                       T5TextEncoder, TextEncoder, clear_memory,
                                       default_cache_dir, describe_joints,
                                       embed_skeleton, embed_texts)
-from satagraph.semantics.cache import ENV_VAR, cache_file
+from satagraph.semantics.cache import cache_file
+from satagraph.utils.cache import ENV_VAR
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 

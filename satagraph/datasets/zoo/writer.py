@@ -14,7 +14,7 @@ from satagraph.datasets.zoo.dialects import Dialect, DialectVariant, apply_diale
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
 from satagraph.datasets.zoo.rigs import ZooRig
 from satagraph.datasets.zoo.species import CLIP_KINDS, zoo_rigs
-from satagraph.io.files import atomic_write
+from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
 
 PathLike = Union[str, "os.PathLike[str]"]

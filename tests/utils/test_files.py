@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from satagraph.io.files import (InputFileError, OutputPathError, atomic_path,
+from satagraph.utils.files import (InputFileError, OutputPathError, atomic_path,
                                 atomic_write, atomic_write_text, check_input_file,
                                 check_output_path, sweep_stale_temps)
 
@@ -105,7 +105,7 @@ def test_check_output_path(tmp_path: Path) -> None:
 
 
 def test_one_atomic_helper_in_the_package() -> None:
-    """Every other module writes through satagraph.io.files."""
+    """Every other module writes through satagraph.utils.files."""
     root = Path(__file__).resolve().parents[2] / "satagraph"
     offenders = [str(p.relative_to(root)) for p in root.rglob("*.py")
                  if p.name != "files.py" and ("mkstemp" in p.read_text()
