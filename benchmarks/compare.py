@@ -39,7 +39,7 @@ import torch
 from results_io import write_results
 from satagraph.datasets.sources import MotionFile, resolve_sources, select
 from satagraph.experiment.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
-                             held_out_loader, run_config, sweep_configs)
+                                        held_out_loader, run_config, sweep_configs)
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"

@@ -48,12 +48,12 @@ from typing import Dict, List, Sequence, Tuple
 import torch
 
 from satagraph.semantics import (OfflineTextEncoder, T5TextEncoder,
-                                      TextEncoder, clear_memory,
-                                      describe_joints, embed_skeleton,
-                                      embed_texts, evidence_from_motion)
+                                 TextEncoder, clear_memory,
+                                 describe_joints, embed_skeleton,
+                                 embed_texts, evidence_from_motion)
 from satagraph.semantics.reference_rigs import (REFERENCE_RIGS,
-                                                     rest_evidence,
-                                                     with_exporter_noise)
+                                                rest_evidence,
+                                                with_exporter_noise)
 from satagraph.semantics.lexicon import split_words, strip_prefixes
 from satagraph.semantics.lexicon import parse_name
 from satagraph.semantics.rules import describe_structure

@@ -129,8 +129,8 @@ def _emit(text: str, out: Optional[Path]) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from satagraph.semantics import (SemanticsError, build_prompt,
-                                          describe_joints, import_answer,
-                                          load_reference_vocab)
+                                     describe_joints, import_answer,
+                                     load_reference_vocab)
     if args.reference_vocab and not args.prompt:
         raise SemanticsError("--reference-vocab needs --prompt")
     if args.import_answer and args.out is None:

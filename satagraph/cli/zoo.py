@@ -19,8 +19,8 @@ import time
 from typing import List
 
 from satagraph.datasets.zoo import (CLIP_KINDS, NOISE_STYLES, REST_POSES, SPECIES, UNITS,
-                                UP_AXES, Dialect, dialect_variants, unit_scale,
-                                write_dialect_zoo, write_zoo)
+                                    UP_AXES, Dialect, dialect_variants, unit_scale,
+                                    write_dialect_zoo, write_zoo)
 
 
 def _positive_int(text: str) -> int:

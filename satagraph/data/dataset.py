@@ -18,7 +18,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures,
                                      features_to_motion, motion_to_features)
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
-                                               evidence_from_features, remap_evidence)
+                                          evidence_from_features, remap_evidence)
 from satagraph.semantics.limbs import limb_end_index
 from satagraph.datasets.sources import MotionFile
 from satagraph.data.validate import check_features, check_motion

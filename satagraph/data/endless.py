@@ -23,7 +23,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton)
 from satagraph.data.features import MotionFeatures, motion_to_features
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
-                                               evidence_from_features)
+                                          evidence_from_features)
 from satagraph.semantics.limbs import limb_end_index
 from satagraph.data.validate import check_features
 from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample

@@ -8,7 +8,7 @@
 - :mod:`.generators`: text-to-motion generators over SATA-RVQ codes.
 """
 from satagraph.nn.autoencoders import (SAME, SATA, PaddedRVQ, SATADecoder, SATAEncoder,
-                                      node_motion_features)
+                                       node_motion_features)
 from satagraph.nn.bottlenecks import (RVQBottleneck, RVQOutput, VAEBottleneck, VAEOutput,
                                       gaussian_kl)
 from satagraph.nn.layers import (LOCAL_CONVS, ConcatProjection, FastDropout, FrameGPSConv,

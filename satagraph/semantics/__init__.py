@@ -36,19 +36,19 @@ from typing import TYPE_CHECKING, List, Optional, Sequence, Union
 from satagraph._lazy import lazy_exports
 from satagraph.semantics._files import SemanticsError, write_json_atomic
 from satagraph.semantics.evidence import (EvidenceLike, JointEvidence,
-                                               as_evidence, call_semantic,
-                                               evidence_from_features,
-                                               evidence_from_motion,
-                                               joint_evidence, remap_evidence)
+                                          as_evidence, call_semantic,
+                                          evidence_from_features,
+                                          evidence_from_motion,
+                                          joint_evidence, remap_evidence)
 from satagraph.semantics.limbs import LIMBS, limb_end_index, limb_ends, paired_legs
 from satagraph.semantics.prompt import (build_prompt, import_answer,
-                                             load_reference_vocab,
-                                             parse_answer)
+                                        load_reference_vocab,
+                                        parse_answer)
 from satagraph.semantics.rules import describe_structure
 from satagraph.semantics.user import (AnchorsLike, DictionaryLike,
-                                           apply_user, check_anchor_names,
-                                           load_dictionary, normalize_anchors,
-                                           parse_anchor, validate_dictionary)
+                                      apply_user, check_anchor_names,
+                                      load_dictionary, normalize_anchors,
+                                      parse_anchor, validate_dictionary)
 from satagraph.skeleton import Skeleton
 
 if TYPE_CHECKING:

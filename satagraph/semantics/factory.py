@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Callable, Dict, Mapping, Union
 
 from satagraph.semantics.encoders import (OfflineTextEncoder, T5TextEncoder,
-                                               TextEncoder)
+                                          TextEncoder)
 from satagraph.semantics.glove import GloVeEncoder
 from satagraph.semantics.sentence import SentenceEncoder
 

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Union
 
 from satagraph.semantics._files import (SemanticsError, read_json,
-                                             write_json_atomic)
+                                        write_json_atomic)
 from satagraph.skeleton import Skeleton
 
 PathLike = Union[str, "os.PathLike[str]"]

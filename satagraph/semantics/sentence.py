@@ -12,8 +12,8 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from satagraph.semantics.encoders import (PathLike, TextEncoder,
-                                               _folder_fingerprint,
-                                               encode_mean_pooled)
+                                          _folder_fingerprint,
+                                          encode_mean_pooled)
 
 SENTENCE_HELP = (
     "satagraph never downloads models. Get a sentence-transformers folder "

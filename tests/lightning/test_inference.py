@@ -12,7 +12,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import motion_to_features
 from satagraph.pipelines.inference import (reconstruct_motion, resample_frames, retarget_motion,
-                                 target_clip, transfer, window_plan)
+                                           target_clip, transfer, window_plan)
 from satagraph.io import read_bvh, write_bvh
 from satagraph.motion import Motion
 

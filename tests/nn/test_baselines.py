@@ -16,7 +16,7 @@ from satagraph.pipelines.inference import reconstruct_motion
 from satagraph.lightning.baselines import PaddedRVQModule, SAMEModule
 from satagraph.losses import MotionLoss
 from satagraph.nn.autoencoders.padded import (PaddedRVQ, from_padded, latent_mask, padding_mask,
-                                 to_padded)
+                                              to_padded)
 from satagraph.nn.autoencoders.same import SAME
 from satagraph.experiment.train import build_module, load_module, module_class
 from test_sata_modules import (assert_finite_grads, count, make_clips, output_sum,

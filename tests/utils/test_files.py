@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from satagraph.utils.files import (InputFileError, OutputPathError, atomic_path,
-                                atomic_write, atomic_write_text, check_input_file,
-                                check_output_path, sweep_stale_temps)
+                                   atomic_write, atomic_write_text, check_input_file,
+                                   check_output_path, sweep_stale_temps)
 
 
 def _temps(folder: Path):

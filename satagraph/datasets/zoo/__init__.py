@@ -32,16 +32,16 @@ Example::
     rows = write_zoo("zoo_zup", species=["crab"], dialects=[Dialect("+Z", "cm")])
 """
 from satagraph.datasets.zoo.dialects import (NOISE_STYLES, REST_POSES, UNITS, UP_AXES,
-                                         Dialect, DialectVariant, add_name_noise,
-                                         apply_dialect, change_rest_pose,
-                                         dialect_variants, export_dialect,
-                                         rest_pose_rotations, unit_scale, up_rotation)
+                                             Dialect, DialectVariant, add_name_noise,
+                                             apply_dialect, change_rest_pose,
+                                             dialect_variants, export_dialect,
+                                             rest_pose_rotations, unit_scale, up_rotation)
 from satagraph.datasets.zoo.motions import (GAITS, ClipFacts, generate_clip,
-                                        generate_clip_with_facts)
+                                            generate_clip_with_facts)
 from satagraph.datasets.zoo.rigs import STYLES, Leg, Sway, ZooRig
 from satagraph.datasets.zoo.species import CLIP_KINDS, SPECIES, VARIANTS, zoo_rigs
 from satagraph.datasets.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_COLUMNS,
-                                      MOTION_COLUMNS, write_dialect_zoo, write_zoo)
+                                           MOTION_COLUMNS, write_dialect_zoo, write_zoo)
 
 __all__ = ["CLIP_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS", "LICENCE",
            "MANIFEST_COLUMNS", "MOTION_COLUMNS", "generate_clip_with_facts",

@@ -7,7 +7,7 @@ from typing import Sequence
 import numpy as np
 
 from satagraph.datasets.zoo.rigs import (STYLES, Leg, ZooRig, _Builder, _chain,
-                                     _leg, _name, _rot)
+                                         _leg, _name, _rot)
 
 
 # ---------------------------------------------------------------- biped

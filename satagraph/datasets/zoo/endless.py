@@ -31,7 +31,7 @@ import numpy as np
 from satagraph.datasets.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
 from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, CLIP_KINDS,
-                                        SPECIES, VARIANTS)
+                                            SPECIES, VARIANTS)
 from satagraph.motion import Motion
 
 #: Seed streams: training samples, and the held-out seeds of validation

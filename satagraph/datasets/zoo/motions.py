@@ -8,7 +8,7 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from satagraph.datasets.zoo.rigs import (Leg, Sway, ZooRig, _align, _euler,
-                                     _is_below, _rot, _smoothstep, _unit)
+                                         _is_below, _rot, _smoothstep, _unit)
 from satagraph.datasets.zoo.species import CLIP_KINDS
 from satagraph.motion import Motion
 from satagraph.skeleton import Skeleton

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from satagraph.transforms.canonical import (_apply_rotation, _rotation_between,
-                                      canonicalize, decanonicalize,
-                                      detect_up_axis, resample)
+                                            canonicalize, decanonicalize,
+                                            detect_up_axis, resample)
 from satagraph.io import read_bvh, write_bvh
 
 

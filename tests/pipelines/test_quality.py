@@ -10,9 +10,9 @@ from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.pipelines.quality import (correlate, facing_axis, forward_tracks, ground_height,
-                               head_index, leg_length, limb_tracks, mean_correlation,
-                               most_active, retarget_quality, root_travel,
-                               step_correlation, upright_fraction)
+                                         head_index, leg_length, limb_tracks, mean_correlation,
+                                         most_active, retarget_quality, root_travel,
+                                         step_correlation, upright_fraction)
 
 
 def _walk(species: str, kind: str = "walk", frames: int = 90):

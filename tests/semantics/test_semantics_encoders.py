@@ -16,9 +16,9 @@ import torch
 
 from satagraph import Skeleton
 from satagraph.semantics import (EmbeddingCache, OfflineTextEncoder,
-                                      T5TextEncoder, TextEncoder, clear_memory,
-                                      default_cache_dir, describe_joints,
-                                      embed_skeleton, embed_texts)
+                                 T5TextEncoder, TextEncoder, clear_memory,
+                                 default_cache_dir, describe_joints,
+                                 embed_skeleton, embed_texts)
 from satagraph.semantics.cache import cache_file
 from satagraph.utils.cache import ENV_VAR
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 HEAVY = ("torch", "torch_geometric", "lightning", "roma", "transformers")
 
 # Runs the CLI in-process, then prints the heavy top-level modules loaded.

@@ -11,7 +11,7 @@ from satagraph.cli import main
 from satagraph.semantics import describe_joints
 from satagraph.datasets.sources import read_manifest
 from satagraph.datasets.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
-                                generate_clip, write_zoo, zoo_rigs)
+                                    generate_clip, write_zoo, zoo_rigs)
 from satagraph.io import read_bvh, write_bvh
 
 RIGS = zoo_rigs(seed=0)

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from satagraph.transforms.augment import (SkeletonAugment, drop_leaf_chain,
-                                    insert_joint, merge_segments, mirror,
-                                    mirror_pairs, paired, rebase_rest,
-                                    restructure, scale_bones, swap_side)
+                                          insert_joint, merge_segments, mirror,
+                                          mirror_pairs, paired, rebase_rest,
+                                          restructure, scale_bones, swap_side)
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import WindowAugment
 from satagraph.data.examples import example_motion

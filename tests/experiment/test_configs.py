@@ -11,7 +11,7 @@ import yaml
 
 from satagraph.experiment.config import load_config
 
-EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments"
+EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
 CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml"))
 WANDB_SWEEP = EXPERIMENTS / "sweeps" / "wandb_sweep.yaml"
 #: Widths and depths small enough to build every config in a fraction of a

@@ -11,9 +11,9 @@ import pytest
 
 from satagraph.cli import main
 from satagraph.datasets.zoo import (DIALECT_COLUMNS, MANIFEST_COLUMNS, NOISE_STYLES, REST_POSES,
-                                UP_AXES, Dialect, add_name_noise, change_rest_pose,
-                                dialect_variants, export_dialect, generate_clip, unit_scale,
-                                up_rotation, write_dialect_zoo, write_zoo, zoo_rigs)
+                                    UP_AXES, Dialect, add_name_noise, change_rest_pose,
+                                    dialect_variants, export_dialect, generate_clip, unit_scale,
+                                    up_rotation, write_dialect_zoo, write_zoo, zoo_rigs)
 from satagraph.io import read_bvh, write_bvh
 
 RIGS = {r.species: r for r in zoo_rigs(["biped", "crab", "fowl"], seed=0)}

@@ -15,16 +15,16 @@ import torch
 
 from satagraph import Skeleton
 from satagraph.semantics import (JointEvidence, as_evidence, call_semantic,
-                                      describe_joints, evidence_from_motion,
-                                      joint_evidence, limb_ends, remap_evidence)
+                                 describe_joints, evidence_from_motion,
+                                 joint_evidence, limb_ends, remap_evidence)
 from satagraph.semantics.lexicon import (drop_noise_tokens, is_noise_token,
-                                              parse_name)
+                                         parse_name)
 from satagraph.semantics.reference_rigs import (REFERENCE_RIGS, bip01_bird,
-                                                     build_skeleton, crab,
-                                                     fingerwing_bird,
-                                                     long_tailed_quadruped,
-                                                     rest_evidence, spider,
-                                                     with_exporter_noise)
+                                                build_skeleton, crab,
+                                                fingerwing_bird,
+                                                long_tailed_quadruped,
+                                                rest_evidence, spider,
+                                                with_exporter_noise)
 from satagraph.semantics.rules import describe_structure
 from satagraph.motion import Motion
 

@@ -14,7 +14,7 @@ from satagraph.cli import main
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import load_features
 from satagraph.transforms.rig_reading import (RigReadingWarning, guess_up_axis, parse_units,
-                                        read_rig, with_rig)
+                                              read_rig, with_rig)
 from satagraph.datasets.sources import resolve_sources
 from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh

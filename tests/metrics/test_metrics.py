@@ -17,8 +17,8 @@ import torch
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.metrics.motion import (SLIDE_HEIGHT, foot_sliding, ground_penetration,
-                               joint_position_error, joint_rotation_error,
-                               motion_metrics, root_trajectory_error, retarget_error)
+                                      joint_position_error, joint_rotation_error,
+                                      motion_metrics, root_trajectory_error, retarget_error)
 
 HEIGHTS = (2.0, 1.0)
 #: geodesic_angle clamps the cosine to 1 - 1e-7 (a finite gradient at 0):

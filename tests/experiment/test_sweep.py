@@ -11,7 +11,7 @@ import yaml
 from satagraph.cli import main
 from satagraph.experiment.config import load_config
 from satagraph.experiment.sweep import (SweepRow, budget_config, format_sweep, split_arguments,
-                             sweep_configs)
+                                        sweep_configs)
 from tests.conftest import data_dir
 
 needs_data = pytest.mark.skipif(data_dir() is None, reason="../shared/data not found")

@@ -12,9 +12,9 @@ import pytest
 
 from satagraph import Skeleton
 from satagraph.semantics import (SemanticsError, build_prompt,
-                                      describe_joints, import_answer,
-                                      load_dictionary, load_reference_vocab,
-                                      normalize_anchors, parse_answer)
+                                 describe_joints, import_answer,
+                                 load_dictionary, load_reference_vocab,
+                                 normalize_anchors, parse_answer)
 from satagraph.semantics.lexicon import parse_name
 from satagraph.semantics.rules import describe_structure, ordinal
 from satagraph.io import read_bvh
