@@ -46,13 +46,13 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from results_io import write_results  # noqa: E402
-from satagraph.data.rig_reading import with_rig  # noqa: E402
-from satagraph.data.zoo.endless import EndlessZoo  # noqa: E402
-from satagraph.inference import retarget_canonical  # noqa: E402
+from satagraph.transforms.rig_reading import with_rig  # noqa: E402
+from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.quality import most_active, retarget_quality  # noqa: E402
-from satagraph.train import load_module  # noqa: E402
+from satagraph.pipelines.quality import most_active, retarget_quality  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 OUT = ROOT / "benchmarks" / "results" / "pretrained"

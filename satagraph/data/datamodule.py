@@ -16,7 +16,7 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
                                     zoo_entry)
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
+from satagraph.datasets.sources import SPLITS, MotionFile, resolve_sources, select
 
 
 def semantic_embedder(encoder: Optional[str] = "offline",
@@ -25,14 +25,14 @@ def semantic_embedder(encoder: Optional[str] = "offline",
     r"""A function ``(skeleton, evidence=None) -> [J, D_t]`` from the
     semantic tag pipeline: ``"offline"`` (default, no weights),
     ``"t5:/path/to/t5"`` for a local T5, any other spec of
-    :func:`~satagraph.data.semantics.build_text_encoder`, or
+    :func:`~satagraph.semantics.build_text_encoder`, or
     ``None``/``"none"`` for no semantic features. ``evidence`` (a
-    :class:`~satagraph.data.semantics.JointEvidence` of the motion, see
-    :func:`~satagraph.data.semantics.evidence_from_features`) lets the rules
+    :class:`~satagraph.semantics.JointEvidence` of the motion, see
+    :func:`~satagraph.semantics.evidence_from_features`) lets the rules
     read legs, wings and leg pairs from what the body does."""
     if encoder in (None, "none", ""):
         return None
-    from satagraph.data.semantics import build_text_encoder, embed_skeleton
+    from satagraph.semantics import build_text_encoder, embed_skeleton
     text_encoder = build_text_encoder(encoder)
     kwargs = {"dictionary": dictionary} if dictionary else {}
 
@@ -53,7 +53,7 @@ class MotionDataModule(L.LightningDataModule):
     Args:
         sources: A folder, a manifest TSV, a ``{"path", "dataset",
             "exclude", "include"}`` dict (see
-            :func:`~satagraph.data.sources.resolve_sources`), an endless
+            :func:`~satagraph.datasets.sources.resolve_sources`), an endless
             procedural zoo ``{"zoo": "endless", "species": [...],
             "holdout_species": [...], "windows_per_epoch": N}`` (windows
             generated on the fly, see :func:`~satagraph.data.endless.zoo_entry`),

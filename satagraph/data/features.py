@@ -162,7 +162,7 @@ def motion_to_features(
 
     Args:
         motion (Motion): A motion, +Y up; canonicalise it first
-            (:func:`satagraph.data.canonicalize`) so that frame 0 faces +Z.
+            (:func:`satagraph.transforms.canonicalize`) so that frame 0 faces +Z.
         contact_height (float, optional): Contact height threshold as a
             fraction of the character height.
         contact_speed (float, optional): Contact speed threshold in character

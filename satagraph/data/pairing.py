@@ -5,7 +5,7 @@ clip of the batch on a different skeleton (another dataset, species or
 augmented rig); :func:`partner_batch` builds the frame graphs of the
 partners' skeletons with the clips' own lengths, so that a model can decode
 each clip's latents onto its partner's rig, and the node indices of the
-limb ends (see :mod:`satagraph.data.semantics.limbs`) that such a
+limb ends (see :mod:`satagraph.semantics.limbs`) that such a
 retargeted motion should move like the source's.
 """
 from __future__ import annotations

@@ -79,7 +79,7 @@ class MotionAutoencoderModule(L.LightningModule):
         ``meta["semantic_encoder"]``, its text embeddings cached as
         :meth:`set_semantic_cache` says); :math:`(J, 0)` for a module
         trained without semantics. :obj:`evidence` (a
-        :class:`~satagraph.data.semantics.JointEvidence`) lets the rules read
+        :class:`~satagraph.semantics.JointEvidence`) lets the rules read
         the body from its motion.
 
         Shapes:

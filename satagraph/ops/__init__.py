@@ -1,5 +1,6 @@
 """Differentiable operators: rotations, forward kinematics, temporal streams
-(imported lazily: the numpy forward kinematics loads without torch)."""
+and the index helpers of a frame-graph batch (imported lazily: the numpy
+forward kinematics loads without torch)."""
 from satagraph._lazy import lazy_exports
 
 _FK = ("fk_levels", "forward_kinematics", "forward_kinematics_numpy")
@@ -9,8 +10,10 @@ _ROTATION = (
     "quaternion_slerp", "quaternion_to_euler", "quaternion_to_matrix",
     "rotation_6d_to_matrix", "yaw_matrix")
 _TEMPORAL = ("to_temporal_streams", "from_temporal_streams")
-_EXPORTS = {**dict.fromkeys(_FK, "satagraph.ops.fk"),
+_BATCH_INDEX = ("node_clip", "clip_heights", "previous_node")
+_EXPORTS = {**dict.fromkeys(_BATCH_INDEX, "satagraph.ops.batch_index"),
+            **dict.fromkeys(_FK, "satagraph.ops.fk"),
             **dict.fromkeys(_ROTATION, "satagraph.ops.rotation"),
             **dict.fromkeys(_TEMPORAL, "satagraph.ops.temporal")}
-__all__ = [*_FK, *_ROTATION, *_TEMPORAL]
+__all__ = [*_FK, *_ROTATION, *_TEMPORAL, *_BATCH_INDEX]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

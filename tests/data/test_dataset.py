@@ -10,7 +10,7 @@ from satagraph.data.dataset import (MotionDatasetError, load_features,
                                     preprocess_file, window_starts,
                                     DEFAULT_PREPROCESSING)
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.data.sources import resolve_sources, scan_folder, select
+from satagraph.datasets.sources import resolve_sources, scan_folder, select
 
 
 def test_window_starts_cover_clip():
@@ -93,7 +93,8 @@ def test_normalizer_fit_and_inverse(shared_data, tmp_path):
 def test_body_relative_normaliser_sees_a_scaled_body_alike(shared_data, tmp_path):
     """The same motion on a body ten times smaller has the same normalised
     features (lengths in heights); rotations are untouched."""
-    from satagraph.data import canonicalize, features_to_motion, motion_to_features
+    from satagraph.data import features_to_motion, motion_to_features
+    from satagraph.transforms import canonicalize
     files = resolve_sources(str(shared_data / "cmu"))[:1]
     feats = load_features(files, cache_dir=str(tmp_path))[0]
     norm = FeatureNormalizer().fit([feats])
@@ -127,7 +128,8 @@ def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
     """Bone scaling of ccbase/007_01 (a moving RL_BoneRoot above the hips)
     gave root speeds of 1e5 (a 1e9 training loss); such a window is used as
     it is instead."""
-    from satagraph.data import canonicalize, motion_to_features
+    from satagraph.data import motion_to_features
+    from satagraph.transforms import canonicalize
     from satagraph.data.dataset import WindowAugment
     feats = motion_to_features(canonicalize(read_real("ccbase/007_01.bvh")))
     aug = WindowAugment.from_config({"scale": 1.0, "mirror": 0.0})

@@ -12,7 +12,7 @@ from torch.utils.data import DataLoader
 
 from satagraph.data.collate import FrameBatch, collate_clips
 from satagraph.lightning import SATARVQModule, SATAVAEModule, lr_factor
-from satagraph.train import init_weights, load_module
+from satagraph.experiment.train import init_weights, load_module
 
 METRICS = ("JR", "RT", "RT_h", "JP", "JP_h", "FS", "GP", "RE")
 
@@ -178,7 +178,7 @@ def test_module_owns_its_semantic_encoder(build_tiny_module: Callable, embed: Ca
     builds the encoder once, leaves it out of pickles, and follows
     set_semantic_cache."""
     import pickle
-    from satagraph.data.zoo import zoo_rigs
+    from satagraph.datasets.zoo import zoo_rigs
     module = build_tiny_module("vae")
     skeleton = zoo_rigs(["quadruped"])[0].skeleton
     torch.testing.assert_close(module.embed(skeleton), embed(skeleton))

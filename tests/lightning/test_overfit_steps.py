@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.config import load_config
-from satagraph.data import canonicalize, motion_to_features
+from satagraph.experiment.config import load_config
+from satagraph.data import motion_to_features
+from satagraph.transforms import canonicalize
 from satagraph.data.collate import collate_clips
-from satagraph.data.zoo import generate_clip, zoo_rigs
-from satagraph.inference import retarget_canonical
-from satagraph.quality import retarget_quality
-from satagraph.train import module_class
+from satagraph.datasets.zoo import generate_clip, zoo_rigs
+from satagraph.pipelines.inference import retarget_canonical
+from satagraph.pipelines.quality import retarget_quality
+from satagraph.experiment.train import module_class
 
 
 def _fit(module, batch, steps: int) -> None:

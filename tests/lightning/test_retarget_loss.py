@@ -8,7 +8,7 @@ import torch
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import DYNAMIC_LAYOUT
 from satagraph.data.pairing import choose_partners, partner_batch
-from satagraph.data.semantics import LIMBS
+from satagraph.semantics import LIMBS
 from satagraph.losses import limb_velocity_loss
 
 
