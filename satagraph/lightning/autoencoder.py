@@ -136,6 +136,9 @@ class MotionAutoencoderModule(L.LightningModule):
         dm = getattr(self.trainer, "datamodule", None) if self._trainer else None
         if not bool(self.normalizer.fitted) and dm is not None:
             self.normalizer.load_state_dict(dm.normalizer.state_dict())
+        if dm is not None and hasattr(dm, "pair_partners"):
+            # partners for the retarget term are collated with the batch
+            dm.pair_partners = self._retarget_weight() > 0
 
     def normalize_batch(self, batch):
         """A shallow copy of :obj:`batch` with normalised features (lengths
@@ -164,7 +167,7 @@ class MotionAutoencoderModule(L.LightningModule):
         """Named loss terms and their weighted sum under ``"loss"``; with a
         ``retarget`` weight, also :meth:`retarget_loss` of ``out["z"]``."""
         losses = self.criterion(out, batch, self.normalizer, fps=self.fps)
-        weight = float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+        weight = self._retarget_weight()
         if weight > 0 and "z" in out:
             term = self.retarget_loss(out["z"], batch)
             # logged every step (zero without a pair), so that every process
@@ -173,19 +176,27 @@ class MotionAutoencoderModule(L.LightningModule):
             losses["loss"] = losses["loss"] + weight * losses["retarget"]
         return losses
 
+    def _retarget_weight(self) -> float:
+        return float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+
     def retarget_loss(self, z: Tensor, batch) -> Optional[Tensor]:
         """Unpaired cross-skeleton term: every clip's latents :obj:`z`
-        decoded onto another skeleton of the batch
-        (:func:`~satagraph.data.pairing.partner_batch`, drawn from a
-        generator seeded with the global step) must move the limb ends like
-        the source (:func:`~satagraph.losses.limb_velocity_loss`). ``None``
-        when every clip of the batch has the same skeleton."""
-        from satagraph.data.pairing import partner_batch
+        decoded onto another skeleton of the batch must move the limb ends
+        like the source (:func:`~satagraph.losses.limb_velocity_loss`).
+        Partners come with the batch (``batch.pairing``, collated by
+        :class:`~satagraph.data.pairing.PartnerCollate`), else are drawn here
+        from a generator seeded with the global step
+        (:func:`~satagraph.data.pairing.partner_batch`). ``None`` when every
+        clip of the batch has the same skeleton."""
+        from satagraph.data.pairing import pairing_to, partner_batch
         from satagraph.losses import facing_positions, limb_velocity_loss
-        gen = torch.Generator().manual_seed(int(self.global_step))
-        pairing = partner_batch(batch, gen)
+        pairing = getattr(batch, "pairing", None)
+        if pairing is None:
+            gen = torch.Generator().manual_seed(int(self.global_step))
+            pairing = partner_batch(batch, gen)
         if pairing is None:
             return None
+        pairing = pairing_to(pairing, z.device)
         target = self.normalize_batch(pairing.target)
         pred = self.denormalize_output(self.decode(z[pairing.frames], target),
                                        pairing.target)

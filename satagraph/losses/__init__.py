@@ -65,7 +65,6 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 
 from satagraph.data.features import DYNAMIC_LAYOUT
-from satagraph.ops.batch_index import clip_heights, node_clip, previous_node
 from satagraph.ops.fk import fk_levels, forward_kinematics
 from satagraph.ops.motion_batch import integrate_root_batch
 from satagraph.ops.rotation import rotation_6d_to_matrix, yaw_matrix
@@ -134,7 +133,7 @@ def to_global(pos: Tensor, r: Tensor, batch, fps: float = 30.0) -> Tensor:
 def position_scale(batch, scale: float = POSITION_SCALE) -> Tensor:
     """Factor per node turning physical lengths into :obj:`scale` units per
     character height, :math:`(N, 1)`."""
-    return (scale / clip_heights(batch))[node_clip(batch)][:, None]
+    return (scale / batch.clip_height)[batch.node_clip][:, None]
 
 
 def velocity_loss(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
@@ -143,7 +142,7 @@ def velocity_loss(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
     Shapes:
         - **pos_pred**, **pos_true**: :math:`(N, 3)` global positions
     """
-    prev = previous_node(batch)
+    prev = batch.node_prev
     diff = (pos_pred - pos_pred[prev]) - (pos_true - pos_true[prev])
     return _masked_mean(diff.pow(2), batch.node_time > 0)
 
@@ -191,7 +190,7 @@ def foot_sliding_loss(pos_pred: Tensor, c_true: Tensor, batch) -> Tensor:
     Shapes:
         - **pos_pred**: :math:`(N, 3)`, **c_true**: :math:`(N, 1)`
     """
-    step = (pos_pred - pos_pred[previous_node(batch)])[:, [0, 2]].norm(dim=-1)
+    step = (pos_pred - pos_pred[batch.node_prev])[:, [0, 2]].norm(dim=-1)
     return _masked_mean(step * c_true.reshape(-1), batch.node_time > 0)
 
 
@@ -212,7 +211,7 @@ def time_difference(pos: Tensor, batch, order: int = 2) -> Tuple[Tensor, Tensor]
         - **pos**: :math:`(N, F)`
         - **output**: :math:`(N, F)` and :math:`(N,)` bool
     """
-    prev = previous_node(batch)
+    prev = batch.node_prev
     diff = pos
     for _ in range(order):  # loop over the order (2 or 3), not over frames
         diff = diff - diff[prev]
