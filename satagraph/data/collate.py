@@ -10,6 +10,9 @@ from torch_geometric.data import Batch
 from satagraph.data.clip import MotionClip
 from satagraph.data.frame_graph import FrameGraph, joint_depth
 
+#: Frame rate of clips that do not say theirs (``meta["fps"]``).
+DEFAULT_FPS = 30.0
+
 #: Limb ends per clip (left front, right front, left hind, right hind).
 NUM_LIMBS = 4
 
@@ -36,6 +39,8 @@ class FrameBatch(Batch):
     streams.
 
     Attributes:
+        fps (float): The clips' frame rate (``meta["fps"]``; they must
+            agree), :data:`DEFAULT_FPS` for clips that do not say.
         num_streams (int): :math:`S`, a Python int (no device sync).
         max_time (int): :math:`\max_s T_s`, a Python int.
         meta (list[dict]): The clips' :attr:`MotionClip.meta`.
@@ -194,6 +199,15 @@ def _structure(out: FrameBatch, clips: List[MotionClip]) -> None:
                                       dtype=torch.long).view(len(clips), NUM_LIMBS)
 
 
+def _frame_rate(clips: List[MotionClip]) -> float:
+    """The one frame rate of :obj:`clips`."""
+    rates = {float(c.meta["fps"]) for c in clips if "fps" in c.meta}
+    if len(rates) > 1:
+        raise ValueError(f"collate_clips: clips at different frame rates {sorted(rates)}; "
+                         "resample them to one rate first")
+    return rates.pop() if rates else DEFAULT_FPS
+
+
 def _separation(out: FrameBatch, num_graphs: int) -> None:
     """What :meth:`Batch.get_example` needs to give back frame graphs."""
     graphs = torch.arange(num_graphs + 1)
@@ -232,6 +246,7 @@ def collate_clips(clips: List[MotionClip]) -> FrameBatch:
     out.num_streams, out.max_time = sum(joints), max(frames)
     out.clip_num_frames, out.clip_num_joints = num_frames, num_joints
     out.meta = [c.meta for c in clips]
+    out.fps = _frame_rate(clips)
     _frame_stream_attrs(out, clips, num_frames, num_joints)
     _node_edge_attrs(out, clips, frames, joints)
     _structure(out, clips)

@@ -108,7 +108,7 @@ class MotionFeatures:
                       else torch.zeros(num, 0)),
             parents=torch.from_numpy(self.skeleton.parents),
             edge_attr=torch.from_numpy(self.edge_attr).float(),
-            meta=dict(meta or {}, height=self.height, start=start),
+            meta=dict(meta or {}, height=self.height, fps=self.fps, start=start),
         )
 
 

@@ -54,7 +54,9 @@ class MotionAutoencoderModule(L.LightningModule):
         loss (dict, optional): Loss weights (see :mod:`satagraph.losses`).
         optim (dict, optional): ``lr``, ``warmup_epochs``, ``decay``,
             ``floor``, ``grad_clip``.
-        fps (float): Frame rate of the features.
+        fps (float): Frame rate the module was trained at (what inference
+            resamples motion to); losses and metrics use each batch's own
+            (:attr:`~satagraph.data.FrameBatch.fps`).
         meta (dict, optional): What inference needs to know about the data
             (``semantic_encoder``, ``window``, ``module``), kept in the
             checkpoint.
@@ -166,7 +168,7 @@ class MotionAutoencoderModule(L.LightningModule):
     def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Named loss terms and their weighted sum under ``"loss"``; with a
         ``retarget`` weight, also :meth:`retarget_loss` of ``out["z"]``."""
-        losses = self.criterion(out, batch, self.normalizer, fps=self.fps)
+        losses = self.criterion(out, batch, self.normalizer)
         weight = self._retarget_weight()
         if weight > 0 and "z" in out:
             term = self.retarget_loss(out["z"], batch)
@@ -231,8 +233,8 @@ class MotionAutoencoderModule(L.LightningModule):
     def metrics(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Per-clip metrics of a (physical) prediction against the batch."""
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]]
-        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch, self.fps)
-        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch, self.fps)
+        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch)
+        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch)
         return motion_metrics(local_p, pos_p, local_t, pos_t, batch)
 
     def configure_optimizers(self):

@@ -117,14 +117,16 @@ def facing_positions(q: Tensor, r: Tensor, batch) -> Tensor:
                               levels)[1]
 
 
-def to_global(pos: Tensor, r: Tensor, batch, fps: float = 30.0) -> Tensor:
+def to_global(pos: Tensor, r: Tensor, batch, fps: Optional[float] = None) -> Tensor:
     r"""Facing-frame positions to global ones: :math:`F_t` (yaw and ground
-    origin integrated from ``r``, every clip starting at the origin).
+    origin integrated from ``r`` at :obj:`fps`, by default the batch's;
+    every clip starting at the origin).
 
     Shapes:
         - **pos**: :math:`(N, 3)`, **r**: :math:`(G, 4)`
         - **output**: :math:`(N, 3)`
     """
+    fps = batch.fps if fps is None else fps
     theta, origin = integrate_root_batch(r, batch.clip_num_frames, fps)
     frame = batch.batch
     return (yaw_matrix(theta)[frame] @ pos[..., None])[..., 0] + origin[frame]
@@ -245,7 +247,8 @@ class MotionLoss(nn.Module):
             target's time differences (``False``: the predicted ones, SAME).
         **kwargs (float): Weights by term name, e.g. ``rotation=5.0``.
 
-    Call with ``(out, batch, normalizer=None, fps=30.0)``: :obj:`out` holds
+    Call with ``(out, batch, normalizer=None, fps=None)`` (``fps``: the
+    batch's frame rate unless given): :obj:`out` holds
     physical ``q`` :math:`(N, 6)`, ``r`` :math:`(G, 4)`, contact logits
     ``c`` :math:`(N, 1)`, optionally ``r_norm`` (normalised ``r``, used for
     the root term with :obj:`normalizer`, as SAME), ``kl`` and ``commit``.
@@ -270,13 +273,13 @@ class MotionLoss(nn.Module):
                 batch.root, "root", batch.heights("frame")))
         return F.mse_loss(out["r"], batch.root.to(out["r"].dtype))
 
-    def _positions(self, q: Tensor, r: Tensor, batch, fps: float):
+    def _positions(self, q: Tensor, r: Tensor, batch, fps: Optional[float]):
         scale = position_scale(batch, self.position_scale)
         local = facing_positions(q, r, batch)
         return local * scale, to_global(local, r, batch, fps) * scale
 
     def terms(self, out: Dict[str, Tensor], batch, normalizer=None,
-              fps: float = 30.0) -> Dict[str, Tensor]:
+              fps: Optional[float] = None) -> Dict[str, Tensor]:
         """Every unweighted term."""
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]].to(out["q"].dtype)
         c_true = batch.x[:, DYNAMIC_LAYOUT["c"]]
@@ -297,7 +300,7 @@ class MotionLoss(nn.Module):
         return terms
 
     def forward(self, out: Dict[str, Tensor], batch, normalizer=None,
-                fps: float = 30.0) -> Dict[str, Tensor]:
+                fps: Optional[float] = None) -> Dict[str, Tensor]:
         terms = self.terms(out, batch, normalizer, fps)
         terms["loss"] = sum(self.weights[k] * v for k, v in terms.items())
         return terms

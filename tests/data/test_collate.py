@@ -241,3 +241,26 @@ def test_batch_owns_its_index_structure(clips):
     assert torch.equal(batch.heights("frame"), batch.clip_height[batch.frame_clip])
     with pytest.raises(ValueError, match="unknown level"):
         batch.heights("edge")
+
+
+def test_batch_knows_its_frame_rate(clips):
+    assert collate_clips(clips).fps == 30.0  # clips that do not say
+    for clip in clips:
+        clip.meta["fps"] = 60.0
+    assert collate_clips(clips).fps == 60.0
+    clips[0].meta["fps"] = 24.0
+    with pytest.raises(ValueError, match="different frame rates"):
+        collate_clips(clips)
+
+
+def test_losses_and_metrics_read_the_batch_frame_rate(clips):
+    """Root integration (losses, metrics) at the batch's rate unless told."""
+    from satagraph.losses import to_global
+    for clip in clips:
+        clip.meta["fps"] = 60.0
+    batch = collate_clips(clips)
+    gen = torch.Generator().manual_seed(0)
+    pos = torch.randn(batch.num_nodes, 3, generator=gen)
+    root = torch.randn(batch.root.shape, generator=gen)
+    torch.testing.assert_close(to_global(pos, root, batch), to_global(pos, root, batch, 60.0))
+    assert not torch.allclose(to_global(pos, root, batch), to_global(pos, root, batch, 30.0))
