@@ -332,7 +332,7 @@ def _zoo(root: Path) -> Path:
     manifest = root / "zoo" / "manifest.tsv"
     if not manifest.is_file():
         sys.path.insert(0, str(REPO))
-        from satagraph.data.zoo import write_zoo
+        from satagraph.datasets.zoo import write_zoo
         write_zoo(root / "zoo", species=["biped", "quadruped"], clips=2, frames=40)
     return manifest
 
@@ -882,7 +882,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         results = run_all(all_cases(root, args.quick), root, args.jobs)
         text = format_results(results, root)
         sys.path.insert(0, str(REPO))
-        from satagraph.io.files import atomic_write_text
+        from satagraph.utils.files import atomic_write_text
         atomic_write_text(args.out, f"# Bad inputs\n\n{text}\nTotal "
                           f"{time.monotonic() - start:.0f} s.\n", create_parent=True)
     print(text.split("\n\nExpected")[0])

@@ -3,12 +3,12 @@ same wall-clock budget on the same data, evaluated on the same test split.
 
 Data: ``../shared/data/manifest.tsv`` without one dataset (``--held-out``,
 default ``cmu``), 32-frame windows, batches of 8. Each model trains for
-``--minutes`` (``trainer.max_time``) with the :mod:`satagraph.sweep`
+``--minutes`` (``trainer.max_time``) with the :mod:`satagraph.experiment.sweep`
 machinery, then its final weights are evaluated:
 
 - Table 1 layout: JR, RT, JP, FS, GP per test dataset, and zero-shot on every
   file of the held-out dataset (a skeleton never seen in training);
-- Table 3 layout: retarget error (:func:`satagraph.evaluation.retarget_errors`:
+- Table 3 layout: retarget error (:func:`satagraph.pipelines.evaluation.retarget_errors`:
   1000 x mean squared joint error / H^2) with paired ground truth from
   skeleton augmentation, on ``--retarget-files`` test files per dataset and
   on the held-out dataset, in the SATA paper's two settings: "internal"
@@ -37,9 +37,9 @@ from typing import Dict, List, Optional, Sequence
 import torch
 
 from results_io import write_results
-from satagraph.data.sources import MotionFile, resolve_sources, select
-from satagraph.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
-                             held_out_loader, run_config, sweep_configs)
+from satagraph.datasets.sources import MotionFile, resolve_sources, select
+from satagraph.experiment.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
+                                        held_out_loader, run_config, sweep_configs)
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
@@ -168,7 +168,7 @@ internal: onto bone-scaled copies (x0.8-1.2 per axis) of the source skeleton
 (same structure, other proportions); cross: onto copies with a leaf chain of
 up to two joints dropped, a bone split by a new joint and bones scaled (another
 structure and other proportions). Ground truth: the same motion on that
-skeleton (satagraph.data.augment). {args.retarget_files} test files per dataset
+skeleton (satagraph.transforms.augment). {args.retarget_files} test files per dataset
 (first 600 frames); {HELD_OUT_LABEL}: {args.retarget_files} {args.held_out} files.
 """
 

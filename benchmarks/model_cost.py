@@ -34,11 +34,11 @@ from torch import nn
 from torch.utils.flop_counter import FlopCounterMode, flop_registry, sdpa_flop_count
 
 from results_io import write_results
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 from satagraph.data import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
-from satagraph.nn.bottleneck_rvq import RVQBottleneck
-from satagraph.train import module_class
+from satagraph.nn.bottlenecks.rvq import RVQBottleneck
+from satagraph.experiment.train import module_class
 
 ROOT = Path(__file__).resolve().parents[1]
 aten = torch.ops.aten

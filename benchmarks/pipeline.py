@@ -21,7 +21,7 @@ from typing import Callable, List, Tuple
 import numpy as np
 import torch
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.io import read_bvh
 from satagraph.io._floats import parse_decimal_table

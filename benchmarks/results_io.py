@@ -5,7 +5,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from satagraph.io.files import atomic_write_text
+from satagraph.utils.files import atomic_write_text
 
 
 def write_results(out: Path, title: str, text: str, data: Any) -> None:

@@ -30,8 +30,8 @@ from typing import Dict, List, Optional, Sequence
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from satagraph.data.zoo import write_zoo  # noqa: E402
-from satagraph.io.files import atomic_write_text  # noqa: E402
+from satagraph.datasets.zoo import write_zoo  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 from satagraph.lightning.reliability import read_loss_log  # noqa: E402
 
 

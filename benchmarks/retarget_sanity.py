@@ -49,20 +49,19 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.canonical import canonicalize  # noqa: E402
-from satagraph.data.datamodule import semantic_embedder  # noqa: E402
-from satagraph.data.semantics import LIMBS  # noqa: E402
-from satagraph.inference import retarget_motion  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.semantics import LIMBS  # noqa: E402
+from satagraph.pipelines.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
-from satagraph.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402
-from satagraph.train import load_module  # noqa: E402
+from satagraph.pipelines.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
 
 
 def both_limb_tracks(motion, fps: float) -> Tuple[Dict[str, np.ndarray], Dict[str, np.ndarray]]:
-    """Limb tracks (:func:`satagraph.quality.limb_tracks`) with the
+    """Limb tracks (:func:`satagraph.pipelines.quality.limb_tracks`) with the
     clip-averaged and with the first-frame facing axis, canonicalising the
     motion once."""
     canonical = canonicalize(motion, fps=fps)
@@ -81,7 +80,7 @@ def reinitialised(module):
 def run(ckpt: str, sources: Sequence[Path], targets: Sequence[Path],
         frames: int) -> str:
     module = load_module(ckpt).eval()
-    embed = semantic_embedder(module.meta.get("semantic_encoder", "offline"))
+    embed = module.embed
     fps = float(getattr(module, "fps", 30.0))
     control = reinitialised(module)
     rigs = {target: read_bvh(target) for target in targets}

@@ -1,7 +1,7 @@
 """Rig reading benchmark: are up axes and units read right, on every body
 plan and exporter dialect, and is every doubtful reading flagged?
 
-Corpus: the procedural zoo's dialect variants (:func:`satagraph.data.zoo.
+Corpus: the procedural zoo's dialect variants (:func:`satagraph.datasets.zoo.
 dialect_variants`: every zoo rig -- bipeds, quadrupeds, long-tailed
 quadrupeds, birds in three dialects, hexapods, crabs, spiders, snakes --
 written in each of the six up axes, in m, cm, inches or an arbitrary unit,
@@ -18,7 +18,7 @@ make (vertebrates in metres; an arthropod may be a millimetre or a metre
 across, so no size decides its units); elsewhere the file's own units must
 be kept and reported. One kind of undecidable file cannot be told from a
 decidable one: a human in an arbitrary unit that makes it a human height
-(:data:`~satagraph.data.rig_reading.HUMAN_HEIGHT`) in a standard unit is
+(:data:`~satagraph.transforms.rig_reading.HUMAN_HEIGHT`) in a standard unit is
 exactly what a file in that unit would be. Such files are *look-alikes*:
 counted apart, read as the unit they look like (right by chance or not),
 never as a success of the reader. A failure is a wrong axis, a decidable
@@ -41,8 +41,8 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Dict, List
 
-from satagraph.data.rig_reading import HUMAN_HEIGHT, STANDARD_UNITS, UNITS, read_rig
-from satagraph.data.zoo import apply_dialect, dialect_variants, generate_clip
+from satagraph.transforms.rig_reading import HUMAN_HEIGHT, STANDARD_UNITS, UNITS, read_rig
+from satagraph.datasets.zoo import apply_dialect, dialect_variants, generate_clip
 from satagraph.io import read_bvh, write_bvh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

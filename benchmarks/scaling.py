@@ -118,7 +118,7 @@ def measure_point(model: str, input_spec: Dict, frames: int, repeat: int = 2,
     r"""Time and memory per frame of one model on one input
     (``{"kind": "synthetic", "joints": J, "clips": B}`` or
     ``{"kind": "mixed"}``)."""
-    from satagraph.nn.frame_gps import FrameGPSConv
+    from satagraph.nn.layers.frame_gps import FrameGPSConv
     torch.manual_seed(0)
     dev = torch.device(device)
     if input_spec["kind"] == "mixed":
@@ -201,7 +201,7 @@ def notes(args) -> str:
   tree (nodes = joints). Mixed batch: one {args.frames}-frame clip each of
   the dog, a bandai human and the ccbase rig (nodes with end sites).
 - SATA: paper sizes (8.47 M parameters with a 256-D semantic embedding),
-  padding-free per-frame attention (satagraph.nn.frame_gps). "PyG padded
+  padding-free per-frame attention (satagraph.nn.layers.frame_gps). "PyG padded
   attention": the same model through torch_geometric's GPSConv.forward,
   which pads every frame to the batch's largest skeleton in the attention.
   "Every frame padded": the same model with every clip on the batch's

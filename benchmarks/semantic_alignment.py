@@ -15,7 +15,7 @@ a baseline that embeds the raw names without rules, and a local T5 with
 ``--t5 PATH``.
 
 Body plans beyond mammals (issue 15): the hand-built rigs of
-:mod:`satagraph.data.semantics.reference_rigs` (a 3ds Max biped bird, also
+:mod:`satagraph.semantics.reference_rigs` (a 3ds Max biped bird, also
 with exporter noise in every name, a bird with finger-named wings, a crab, a
 spider, a long-tailed quadruped) against the real humans and the dog:
 bird <-> human (legs to legs, wings to arms), arthropod <-> quadruped (legs to
@@ -47,17 +47,17 @@ from typing import Dict, List, Sequence, Tuple
 
 import torch
 
-from satagraph.data.semantics import (OfflineTextEncoder, T5TextEncoder,
-                                      TextEncoder, clear_memory,
-                                      describe_joints, embed_skeleton,
-                                      embed_texts, evidence_from_motion)
-from satagraph.data.semantics.reference_rigs import (REFERENCE_RIGS,
-                                                     rest_evidence,
-                                                     with_exporter_noise)
-from satagraph.data.semantics.lexicon import split_words, strip_prefixes
-from satagraph.data.semantics.lexicon import parse_name
-from satagraph.data.semantics.rules import describe_structure
-from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
+from satagraph.semantics import (OfflineTextEncoder, T5TextEncoder,
+                                 TextEncoder, clear_memory,
+                                 describe_joints, embed_skeleton,
+                                 embed_texts, evidence_from_motion)
+from satagraph.semantics.reference_rigs import (REFERENCE_RIGS,
+                                                rest_evidence,
+                                                with_exporter_noise)
+from satagraph.semantics.lexicon import split_words, strip_prefixes
+from satagraph.semantics.lexicon import parse_name
+from satagraph.semantics.rules import describe_structure
+from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
 
 REPO = Path(__file__).resolve().parents[1]
@@ -497,7 +497,7 @@ def _bodyplan_lines(motions: dict, t5_path: Path, cache_dir: Path
     for rows in table.values():
         _check_table(skels, rows)
     lines = ["", "## Body plans beyond mammals", "",
-             "Reference rigs (`satagraph/data/semantics/reference_rigs.py`, the "
+             "Reference rigs (`satagraph/semantics/reference_rigs.py`, the "
              "issue 15 rig spec) against the real humans (bandai, cmu, ccbase, "
              "mixamo, mocapbank, blender) and the dog; `bird_bip01_noise` has an "
              "exporter suffix on every name (`__x7Q`, `_v2`, `_a1b2c3`). "

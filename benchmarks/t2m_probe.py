@@ -31,10 +31,10 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.canonical import canonicalize  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
-from satagraph.data.rig_reading import normalize_up_axis, parse_units, with_rig  # noqa: E402
-from satagraph.generate import generate_on, load_generator  # noqa: E402
+from satagraph.transforms.rig_reading import normalize_up_axis, parse_units, with_rig  # noqa: E402
+from satagraph.pipelines.generate import generate_on, load_generator  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 

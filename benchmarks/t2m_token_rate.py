@@ -25,11 +25,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from satagraph.data.collate import collate_clips  # noqa: E402
-from satagraph.datasets.datamodule import CaptionDataModule  # noqa: E402
+from satagraph.data.caption_datamodule import CaptionDataModule  # noqa: E402
 from satagraph.data.features import DYNAMIC_LAYOUT  # noqa: E402
 from satagraph.nn.generators import (code_run_lengths, merge_codes, pool_codes,  # noqa: E402
                                      split_codes, unpool_codes)
-from satagraph.train import load_module  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
 
 #: A token covers at most this share of the mean layer-0 run: stride
 #: ``floor(mean run * POOL_SHARE)`` (1: per-frame tokens).
@@ -75,9 +75,9 @@ def pooling_error(module, batches: List, stride: int) -> Dict[str, float]:
         frames = unpool_codes(pooled, lengths, stride)
         bottleneck = module.model.bottleneck
         full = module.denormalize_output(module.decode(
-            bottleneck.decode_codes(merge_codes(codes, lengths)), norm))
+            bottleneck.decode_codes(merge_codes(codes, lengths)), norm), batch)
         coarse = module.denormalize_output(module.decode(
-            bottleneck.decode_codes(merge_codes(frames, lengths)), norm))
+            bottleneck.decode_codes(merge_codes(frames, lengths)), norm), batch)
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]]
         name = str(batch.meta[0]["dataset"])
         row = sums.setdefault(name, [0.0, 0.0, 0.0, 0.0, 0])

@@ -27,7 +27,7 @@ backward, gradient clipping (0.5) and Adam.
   process before and after the timed steps. The
   usual 3 x forward estimate is shown next to it.
 - Inference: real-time factor (clip duration / wall time, higher is faster)
-  of :func:`satagraph.inference.retarget_motion` with SATA-VAE at paper size
+  of :func:`satagraph.pipelines.inference.retarget_motion` with SATA-VAE at paper size
   (untrained weights, normaliser fitted on the training batch) of
   ``cmu/01_01.bvh`` repeated three times (2752 frames at 120 fps, x3 = 68.8 s)
   onto the bandai skeleton: canonicalisation, features, 64-frame windows with
@@ -101,8 +101,8 @@ def training_batch(paths: Sequence[str], window: int = WINDOW):
 def build_module(config: str, features, overrides: Sequence[str] = ()):
     """The LightningModule of a config with :data:`SEMANTIC` semantic
     channels and a normaliser fitted on :obj:`features`."""
-    from satagraph.config import load_config
-    from satagraph.train import module_class
+    from satagraph.experiment.config import load_config
+    from satagraph.experiment.train import module_class
     cfg = load_config(config, overrides)
     model = dict(cfg["model"], semantic_channels=SEMANTIC)
     module = module_class(cfg["module"])(model=model, loss=cfg.get("loss"),
@@ -234,7 +234,7 @@ def measure_inference(device: str = "cpu", repeats: int = 1, data: str = str(DAT
                       config: str = "sata_vae", overrides: Sequence[str] = (),
                       tile: int = INFER_REPEATS) -> Dict:
     """Real-time factor of sliding-window retargeting with SATA-VAE."""
-    from satagraph.inference import default_windows, retarget_motion
+    from satagraph.pipelines.inference import default_windows, retarget_motion
     from satagraph.io import read_bvh
     torch.manual_seed(0)
     dev = torch.device(device)

@@ -78,7 +78,7 @@ class RigSettings:
         up_axis (str, optional): ``"+Y"``, ``"-Z"``, ...
         scale (float or str, optional): File units to metres, or a unit
             name (``"cm"``, ``"in"``, ...; see
-            :data:`satagraph.data.rig_reading.UNITS`).
+            :data:`satagraph.transforms.rig_reading.UNITS`).
         declared (bool): Whether the file itself declared these (a
             canonical file), rather than a user.
     """

@@ -13,7 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import compare  # noqa: E402
 import scaling  # noqa: E402
 import throughput  # noqa: E402
-from satagraph.sweep import SweepRow  # noqa: E402
+from satagraph.experiment.sweep import SweepRow  # noqa: E402
 
 
 def test_synthetic_tree_batch():
@@ -161,7 +161,7 @@ def test_op_counter_sees_torch_scatter_kernels():
 
 def test_semantic_alignment_bodyplans_without_data():
     import semantic_alignment as sa
-    from satagraph.data.semantics import OfflineTextEncoder, describe_joints
+    from satagraph.semantics import OfflineTextEncoder, describe_joints
     skels, evidence, noise = sa.bodyplan_skeletons({})
     table = sa.build_bodyplan_table(noise)
     refs = {k: s for k, s in skels.items() if k in sa.BIRDS + sa.ARTHROPODS
@@ -183,7 +183,7 @@ def test_semantic_alignment_bodyplans_without_data():
 def test_semantic_alignment_zoo_leg_pairs_in_order():
     # zoo arthropods read from a dialect file: first pair front, last hind
     import semantic_alignment as sa
-    from satagraph.data.semantics import OfflineTextEncoder, describe_joints
+    from satagraph.semantics import OfflineTextEncoder, describe_joints
     skels, evidence, noise = sa.bodyplan_skeletons({})
     rows = sa.build_bodyplan_table(noise)["leg pairs front to back"]
     enc = OfflineTextEncoder()

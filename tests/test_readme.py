@@ -44,7 +44,7 @@ def _runs(argv: List[str]) -> bool:
 def _fake_answer(argv: List[str]) -> None:
     """A language model's answer for ``tags FILE --import ANSWER``: the
     descriptions satagraph itself gives (stands in for the LLM)."""
-    from satagraph.data.semantics import describe_joints
+    from satagraph.semantics import describe_joints
     from satagraph.io import read_bvh
     skeleton = read_bvh(argv[1]).skeleton
     answer = dict(zip(skeleton.names, describe_joints(skeleton)))

@@ -11,7 +11,7 @@ from PIL import Image  # noqa: E402
 
 from satagraph.cli import main  # noqa: E402
 from satagraph.data.examples import example_motion  # noqa: E402
-from satagraph.data.zoo import generate_clip, zoo_rigs  # noqa: E402
+from satagraph.datasets.zoo import generate_clip, zoo_rigs  # noqa: E402
 from satagraph.io import write_bvh  # noqa: E402
 from satagraph.viz import contacts, frame_count, render, render_frames  # noqa: E402
 

@@ -12,9 +12,10 @@ from typing import Dict, Optional
 import numpy as np
 
 from satagraph.data.features import MotionFeatures
-from satagraph.io.files import atomic_write
 from satagraph.motion import CanonicalTransform
 from satagraph.skeleton import Skeleton
+from satagraph.utils.cache import cache_root
+from satagraph.utils.files import atomic_write
 
 #: Bump when the feature definition changes: old cache entries are ignored.
 #: 2: files are checked (satagraph.data.validate) before they are cached.
@@ -25,8 +26,9 @@ _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
 
 
 def default_cache_dir() -> Path:
-    """``$SATAGRAPH_CACHE`` or ``~/.cache/satagraph``."""
-    return Path(os.environ.get("SATAGRAPH_CACHE", "~/.cache/satagraph")).expanduser()
+    """The cache root (:func:`satagraph.utils.cache.cache_root`):
+    ``$SATAGRAPH_CACHE`` or ``~/.cache/satagraph``."""
+    return cache_root()
 
 
 def cache_key(path: str, config: Dict) -> str:

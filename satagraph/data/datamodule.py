@@ -16,7 +16,8 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
                                     zoo_entry)
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.data.sources import SPLITS, MotionFile, resolve_sources, select
+from satagraph.data.pairing import PartnerCollate
+from satagraph.datasets.sources import SPLITS, MotionFile, resolve_sources, select
 
 
 def semantic_embedder(encoder: Optional[str] = "offline",
@@ -25,14 +26,14 @@ def semantic_embedder(encoder: Optional[str] = "offline",
     r"""A function ``(skeleton, evidence=None) -> [J, D_t]`` from the
     semantic tag pipeline: ``"offline"`` (default, no weights),
     ``"t5:/path/to/t5"`` for a local T5, any other spec of
-    :func:`~satagraph.data.semantics.build_text_encoder`, or
+    :func:`~satagraph.semantics.build_text_encoder`, or
     ``None``/``"none"`` for no semantic features. ``evidence`` (a
-    :class:`~satagraph.data.semantics.JointEvidence` of the motion, see
-    :func:`~satagraph.data.semantics.evidence_from_features`) lets the rules
+    :class:`~satagraph.semantics.JointEvidence` of the motion, see
+    :func:`~satagraph.semantics.evidence_from_features`) lets the rules
     read legs, wings and leg pairs from what the body does."""
     if encoder in (None, "none", ""):
         return None
-    from satagraph.data.semantics import build_text_encoder, embed_skeleton
+    from satagraph.semantics import build_text_encoder, embed_skeleton
     text_encoder = build_text_encoder(encoder)
     kwargs = {"dictionary": dictionary} if dictionary else {}
 
@@ -53,7 +54,7 @@ class MotionDataModule(L.LightningDataModule):
     Args:
         sources: A folder, a manifest TSV, a ``{"path", "dataset",
             "exclude", "include"}`` dict (see
-            :func:`~satagraph.data.sources.resolve_sources`), an endless
+            :func:`~satagraph.datasets.sources.resolve_sources`), an endless
             procedural zoo ``{"zoo": "endless", "species": [...],
             "holdout_species": [...], "windows_per_epoch": N}`` (windows
             generated on the fly, see :func:`~satagraph.data.endless.zoo_entry`),
@@ -90,6 +91,8 @@ class MotionDataModule(L.LightningDataModule):
             bad file of every split is found first; ``"raise"`` (default)
             then fails with one error listing them all, ``"skip"`` warns,
             lists them in :attr:`skipped` and uses the others.
+        body_relative (bool): Normalise lengths in character heights
+            (default), see :class:`~satagraph.data.FeatureNormalizer`.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -99,7 +102,7 @@ class MotionDataModule(L.LightningDataModule):
                  cache_dir: Optional[str] = None, num_workers: int = 0,
                  max_files: Optional[int] = None, seed: int = 0,
                  augment: Union[None, bool, Mapping[str, Any]] = None,
-                 on_error: str = "raise") -> None:
+                 on_error: str = "raise", body_relative: bool = True) -> None:
         super().__init__()
         if on_error not in ON_ERROR:
             raise ValueError(f"data.on_error must be one of {ON_ERROR}, got {on_error!r}")
@@ -114,7 +117,12 @@ class MotionDataModule(L.LightningDataModule):
         self.max_files, self.seed = max_files, seed
         self.augment = WindowAugment.from_config(augment, seed, self.preprocessing)
         self.datasets: Dict[str, MotionDataset] = {}
-        self.normalizer = FeatureNormalizer()
+        self.normalizer = FeatureNormalizer(body_relative)
+        #: Pair every training clip with a clip of another skeleton when
+        #: collating (``batch.pairing``, see
+        #: :class:`~satagraph.data.pairing.PartnerCollate`); a module with an
+        #: unpaired retargeting term switches it on in its ``setup``.
+        self.pair_partners = False
 
     def _files(self, split: str, files: List[MotionFile]) -> List[MotionFile]:
         chosen = select(files, split)
@@ -188,8 +196,10 @@ class MotionDataModule(L.LightningDataModule):
             self._resume(sampler)
         # a generator of its own: iterating never draws from the global state
         gen = torch.Generator().manual_seed(self.seed)
+        collate = (PartnerCollate(self.seed) if self.pair_partners and split == "train"
+                   else collate_clips)
         return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
-                          collate_fn=collate_clips, num_workers=self.num_workers,
+                          collate_fn=collate, num_workers=self.num_workers,
                           persistent_workers=self.num_workers > 0, generator=gen)
 
     def _resume(self, sampler: ResumableSampler) -> None:

@@ -10,17 +10,17 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset, Sampler
 
-from satagraph.data.augment import SkeletonAugment
-from satagraph.data.augment import mirror as mirror_motion
+from satagraph.transforms.augment import SkeletonAugment
+from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures,
                                      features_to_motion, motion_to_features)
-from satagraph.data.semantics.evidence import (JointEvidence, call_semantic,
-                                               evidence_from_features, remap_evidence)
-from satagraph.data.semantics.limbs import limb_end_index
-from satagraph.data.sources import MotionFile
+from satagraph.semantics.evidence import (JointEvidence, call_semantic,
+                                          evidence_from_features, remap_evidence)
+from satagraph.semantics.limbs import limb_end_index
+from satagraph.datasets.sources import MotionFile
 from satagraph.data.validate import check_features, check_motion
 from satagraph.io import BVHError, read_bvh
 from satagraph.skeleton import Skeleton
@@ -33,7 +33,7 @@ DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "scale": None,
 
 #: ``data.augment`` defaults: probabilities of bone scaling, mirroring,
 #: dropping a leaf chain, merging two trunk segments and inserting a joint
-#: (see :class:`~satagraph.data.augment.SkeletonAugment`), the per-axis bone
+#: (see :class:`~satagraph.transforms.augment.SkeletonAugment`), the per-axis bone
 #: scale range and the longest leaf chain dropped.
 AUGMENT_DEFAULTS: Dict[str, float] = {"scale": 0.5, "mirror": 0.5, "drop": 0.0,
                                       "merge": 0.0, "insert": 0.0, "low": 0.8,
@@ -67,7 +67,7 @@ def preprocess_file(path: str, config: Dict) -> MotionFeatures:
     canonicalise and featurise one BVH file; ``config["up_axis"]`` and
     ``config["scale"]`` (when set) override the file's declaration and
     detection."""
-    from satagraph.data.rig_reading import parse_units
+    from satagraph.transforms.rig_reading import parse_units
     scale = None if config.get("scale") is None else parse_units(config["scale"])
     motion = read_bvh(path)
     check_motion(motion, path, fps=config["fps"])
@@ -166,7 +166,7 @@ class WindowAugment:
     A window is turned back into a motion (losslessly, see
     :func:`~satagraph.data.features_to_motion`), mirrored and put on a
     changed skeleton (bone scaling, leaf chain dropped, trunk segments
-    merged, joint inserted; see :class:`~satagraph.data.augment.SkeletonAugment`)
+    merged, joint inserted; see :class:`~satagraph.transforms.augment.SkeletonAugment`)
     and featurised again, static features included. One frame before the
     window is carried along so that the velocities and root deltas of its
     first frame are those of the clip. The random draws depend only on
@@ -180,7 +180,7 @@ class WindowAugment:
         merge (float): Probability of merging two trunk segments.
         insert (float): Probability of inserting a joint.
         rest (float): Probability of taking a random frame's pose as the
-            rest pose (:func:`~satagraph.data.augment.rebase_rest`): the same
+            rest pose (:func:`~satagraph.transforms.augment.rebase_rest`): the same
             motion under another rest-pose convention.
         low (float): Smallest per-axis bone scale.
         high (float): Largest per-axis bone scale.
@@ -289,7 +289,7 @@ class MotionDataset(Dataset):
             :func:`~satagraph.data.datamodule.semantic_embedder` returns)
             gets the evidence of the window's whole file (which chains bear
             weight, spread, lie in front; see
-            :mod:`satagraph.data.semantics.evidence`), carried over by joint
+            :mod:`satagraph.semantics.evidence`), carried over by joint
             name to augmented skeletons.
         window (int): Frames per window.
         stride (int): Frames between window starts.
@@ -335,7 +335,7 @@ class MotionDataset(Dataset):
     def limb_ends(self, feats: MotionFeatures,
                   evidence: Optional[JointEvidence] = None) -> Tuple[int, ...]:
         """Terminal joint of each limb of a skeleton (in the order of
-        :data:`~satagraph.data.semantics.LIMBS`, ``-1`` where missing),
+        :data:`~satagraph.semantics.LIMBS`, ``-1`` where missing),
         computed once per skeleton and evidence; clips carry it as
         ``meta["limb_ends"]``."""
         return _per_skeleton(self._limbs, feats.skeleton,

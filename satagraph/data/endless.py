@@ -3,7 +3,7 @@ r"""The endless zoo as a data source: windows generated on the fly.
 A ``data.sources`` entry ``{zoo: endless, ...}`` (see :func:`zoo_entry`)
 gives, per split, an :class:`EndlessZooDataset`: training windows are new
 rigs and clips drawn from ``(seed, epoch, index)``
-(:class:`~satagraph.data.zoo.endless.EndlessZoo`), featurised like real
+(:class:`~satagraph.datasets.zoo.endless.EndlessZoo`), featurised like real
 files; validation and test windows come from held-out seeds (fixed across
 epochs), together with the held-out body plans (dataset
 ``<name>-holdout``). :class:`MixedDataset` puts file and zoo windows in one
@@ -18,15 +18,15 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton)
 from satagraph.data.features import MotionFeatures, motion_to_features
-from satagraph.data.semantics.evidence import (JointEvidence, call_semantic,
-                                               evidence_from_features)
-from satagraph.data.semantics.limbs import limb_end_index
+from satagraph.semantics.evidence import (JointEvidence, call_semantic,
+                                          evidence_from_features)
+from satagraph.semantics.limbs import limb_end_index
 from satagraph.data.validate import check_features
-from satagraph.data.zoo.endless import EndlessZoo, ZooSample
+from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample
 
 #: Keys of a ``{zoo: endless}`` source entry and their defaults.
 ZOO_ENTRY_DEFAULTS: Dict[str, Any] = {
@@ -57,7 +57,7 @@ def zoo_entry(source: Mapping[str, Any]) -> Dict[str, Any]:
 
 
 class EndlessZooDataset(Dataset):
-    r"""Windows of an :class:`~satagraph.data.zoo.endless.EndlessZoo`.
+    r"""Windows of an :class:`~satagraph.datasets.zoo.endless.EndlessZoo`.
 
     The key ``(epoch, index)`` (what a keyed
     :class:`~satagraph.data.sampler.ResumableSampler` yields) draws a new

@@ -108,7 +108,7 @@ class MotionFeatures:
                       else torch.zeros(num, 0)),
             parents=torch.from_numpy(self.skeleton.parents),
             edge_attr=torch.from_numpy(self.edge_attr).float(),
-            meta=dict(meta or {}, height=self.height, start=start),
+            meta=dict(meta or {}, height=self.height, fps=self.fps, start=start),
         )
 
 
@@ -162,7 +162,7 @@ def motion_to_features(
 
     Args:
         motion (Motion): A motion, +Y up; canonicalise it first
-            (:func:`satagraph.data.canonicalize`) so that frame 0 faces +Z.
+            (:func:`satagraph.transforms.canonicalize`) so that frame 0 faces +Z.
         contact_height (float, optional): Contact height threshold as a
             fraction of the character height.
         contact_speed (float, optional): Contact speed threshold in character

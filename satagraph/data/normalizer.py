@@ -1,5 +1,10 @@
 """Feature normalisation with statistics stored as module buffers (so they
-travel inside checkpoints)."""
+travel inside checkpoints).
+
+Lengths can be measured in character heights before the statistics are
+taken (:attr:`FeatureNormalizer.body_relative`): a 5 cm spider and a 3 m
+giraffe that walk alike then have alike features, and a latent decoded onto
+another body moves it in its own body lengths."""
 from __future__ import annotations
 
 from typing import Dict, Iterable, List, Optional, Sequence
@@ -13,6 +18,16 @@ from satagraph.data.features import (DYNAMIC_CHANNELS, DYNAMIC_LAYOUT,
                                      MotionFeatures)
 
 _EPS = 1e-4
+
+#: Channels of each feature group that are lengths (or lengths per second):
+#: ``x``, ``x_rel`` and ``v_x`` of the dynamic features, the root's x/z
+#: velocity and height, and both static offsets.
+LENGTH_CHANNELS: Dict[str, List[int]] = {
+    "dynamic": [*range(DYNAMIC_LAYOUT["x"].start, DYNAMIC_LAYOUT["x_rel"].stop),
+                *range(DYNAMIC_LAYOUT["v_x"].start, DYNAMIC_LAYOUT["v_x"].stop)],
+    "root": [1, 2, 3],
+    "static": list(range(STATIC_CHANNELS)),
+}
 #: Largest accepted mean or standard deviation of any feature channel
 #: (features are in metres, seconds and radians after canonicalisation).
 MAX_STAT = 1e5
@@ -30,15 +45,34 @@ class FeatureNormalizer(nn.Module):
     features ``r`` and static features ``[X_l, X_g]`` have their own
     statistics. Statistics come from the training split only
     (:meth:`fit`) and are saved with the model.
+
+    Args:
+        body_relative (bool, optional): Divide the length channels
+            (:data:`LENGTH_CHANNELS`) by the character height of each row
+            before normalising (and multiply after denormalising), so that
+            models see every body in its own heights. Stored as a buffer:
+            checkpoints written before it existed load as ``False``.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, body_relative: bool = True) -> None:
         super().__init__()
         for name, width in (("dynamic", DYNAMIC_CHANNELS), ("root", ROOT_CHANNELS),
                             ("static", STATIC_CHANNELS)):
             self.register_buffer(f"{name}_mean", torch.zeros(width))
             self.register_buffer(f"{name}_std", torch.ones(width))
         self.register_buffer("fitted", torch.zeros((), dtype=torch.bool))
+        self.register_buffer("body_relative", torch.tensor(bool(body_relative)))
+        for name, columns in LENGTH_CHANNELS.items():
+            width = getattr(self, f"{name}_mean").numel()
+            mask = torch.zeros(width, dtype=torch.bool)
+            mask[columns] = True
+            self.register_buffer(f"_{name}_lengths", mask, persistent=False)
+
+    def _load_from_state_dict(self, state_dict, prefix, *args, **kwargs) -> None:
+        # statistics saved before body_relative existed are in metres
+        if prefix + "fitted" in state_dict:
+            state_dict.setdefault(prefix + "body_relative", torch.tensor(False))
+        super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
     @torch.no_grad()
     def fit(self, features: Iterable[MotionFeatures],
@@ -57,8 +91,11 @@ class FeatureNormalizer(nn.Module):
         feats = list(features)
         if not feats:
             raise ValueError("FeatureNormalizer.fit: no training features")
-        parts = {"dynamic": [f.dynamic.reshape(-1, DYNAMIC_CHANNELS) for f in feats],
-                 "root": [f.r for f in feats], "static": [f.static for f in feats]}
+        parts = {"dynamic": [self._relative(f.dynamic.reshape(-1, DYNAMIC_CHANNELS),
+                                            "dynamic", f.height) for f in feats],
+                 "root": [self._relative(f.r, "root", f.height) for f in feats],
+                 "static": [self._relative(f.static, "static", f.height)
+                            for f in feats]}
         stats = {}
         for name, values in parts.items():
             stats[name] = _stats(np.concatenate(values))
@@ -85,15 +122,45 @@ class FeatureNormalizer(nn.Module):
                        getattr(self, f"{name}_std").tolist())
                 for name in ("dynamic", "root", "static")}
 
-    def normalize(self, value: Tensor, name: str) -> Tensor:
-        """``(value - mean) / std`` over the last dimension."""
+    def _relative(self, value: np.ndarray, name: str, height: float) -> np.ndarray:
+        """Length channels of numpy features in character heights."""
+        if not bool(self.body_relative):
+            return value
+        out = np.array(value, dtype=np.float64, copy=True)
+        out[..., LENGTH_CHANNELS[name]] /= max(float(height), 1e-8)
+        return out
+
+    def _scale(self, name: str, height: Optional[Tensor], columns: slice,
+               like: Tensor) -> Optional[Tensor]:
+        """Per-row divisor of the length channels, :math:`(R, C)`, or
+        ``None`` when lengths stay as they are."""
+        if height is None or not bool(self.body_relative):
+            return None
+        mask = getattr(self, f"_{name}_lengths")[columns]
+        height = height.to(like).clamp(min=1e-8).unsqueeze(-1)
+        return torch.where(mask, height, torch.ones_like(height))
+
+    def normalize(self, value: Tensor, name: str,
+                  height: Optional[Tensor] = None) -> Tensor:
+        """``(value - mean) / std`` over the last dimension, lengths first
+        divided by :obj:`height` when :attr:`body_relative`.
+
+        Shapes:
+            - **value**: :math:`(R, C)`
+            - **height**: :math:`(R,)` character height of each row, optional
+        """
+        scale = self._scale(name, height, slice(None), value)
+        if scale is not None:
+            value = value / scale
         return (value - getattr(self, f"{name}_mean")) / getattr(self, f"{name}_std")
 
-    def denormalize(self, value: Tensor, name: str,
-                    columns: slice = slice(None)) -> Tensor:
+    def denormalize(self, value: Tensor, name: str, columns: slice = slice(None),
+                    height: Optional[Tensor] = None) -> Tensor:
         """Inverse of :meth:`normalize`, optionally for a column range."""
         mean = getattr(self, f"{name}_mean")[columns]
-        return value * getattr(self, f"{name}_std")[columns] + mean
+        out = value * getattr(self, f"{name}_std")[columns] + mean
+        scale = self._scale(name, height, columns, out)
+        return out if scale is None else out * scale
 
 
 def _stats(values: np.ndarray) -> tuple:

@@ -1,5 +1,10 @@
-r"""Data sources and their captions for text-to-motion.
+r"""Where motion comes from, and its captions for text-to-motion
+(imported lazily).
 
+* :mod:`.sources`: BVH folders and manifests resolved into
+  :class:`~satagraph.datasets.sources.MotionFile` entries with splits.
+* :mod:`.zoo`: the procedural zoo (rigs, motions, exporter dialects and
+  the writer).
 * :mod:`.captions`: :func:`captions_for` (the captions of any clip: user
   sidecars, templates from file names and the zoo generator's facts) and
   :func:`captioned_clips` (a manifest's captioned clips with their splits).
@@ -8,16 +13,21 @@ r"""Data sources and their captions for text-to-motion.
 * :mod:`.mirror`: :func:`mirror_text`, the caption of a left/right mirrored
   motion.
 """
-from satagraph.datasets.caption import Caption, CaptionError, choose, mirror_captions
-from satagraph.datasets.captions import (CAPTIONERS, CaptionedClip, captioned_clips,
-                                         captions_for, infer_dataset)
-from satagraph.datasets.mirror import MIRROR_WORDS, mirror_text
-from satagraph.datasets.sidecar import (parse_caption_json, parse_humanml3d,
-                                        read_sidecar, read_sidecars, sidecar_paths)
-from satagraph.datasets.zoo_captions import ZooClip, zoo_clip_of_row, zoo_phrasings
+from satagraph._lazy import lazy_exports
 
+_EXPORTS = {
+    **dict.fromkeys(("Caption", "CaptionError", "choose", "mirror_captions"),
+                    "satagraph.datasets.caption"),
+    **dict.fromkeys(("CAPTIONERS", "CaptionedClip", "captioned_clips", "captions_for",
+                     "infer_dataset"), "satagraph.datasets.captions"),
+    **dict.fromkeys(("MIRROR_WORDS", "mirror_text"), "satagraph.datasets.mirror"),
+    **dict.fromkeys(("parse_caption_json", "parse_humanml3d", "read_sidecar",
+                     "read_sidecars", "sidecar_paths"), "satagraph.datasets.sidecar"),
+    **dict.fromkeys(("ZooClip", "zoo_clip_of_row", "zoo_phrasings"),
+                    "satagraph.datasets.zoo_captions")}
 __all__ = ["Caption", "CaptionError", "CaptionedClip", "CAPTIONERS", "MIRROR_WORDS",
            "ZooClip", "captioned_clips", "captions_for", "choose", "infer_dataset",
            "mirror_captions", "mirror_text", "parse_caption_json", "parse_humanml3d",
            "read_sidecar", "read_sidecars", "sidecar_paths", "zoo_clip_of_row",
            "zoo_phrasings"]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

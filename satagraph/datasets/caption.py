@@ -62,7 +62,7 @@ class Caption:
 
 def mirror_captions(captions: Sequence[Caption]) -> List[Caption]:
     """The captions of a left/right mirrored clip, to go with
-    :func:`~satagraph.data.augment.mirror`."""
+    :func:`~satagraph.transforms.augment.mirror`."""
     return [c.mirrored() for c in captions]
 
 

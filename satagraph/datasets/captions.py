@@ -1,9 +1,9 @@
 r"""Captions of clips: one entry point for every source of motion.
 
 :func:`captions_for` gives the captions of a clip, named by its path, a
-manifest row, a :class:`~satagraph.data.sources.MotionFile`, an
-endless-zoo :class:`~satagraph.data.zoo.endless.ZooSample` or the zoo's
-:class:`~satagraph.data.zoo.ClipFacts`:
+manifest row, a :class:`~satagraph.datasets.sources.MotionFile`, an
+endless-zoo :class:`~satagraph.datasets.zoo.endless.ZooSample` or the zoo's
+:class:`~satagraph.datasets.zoo.ClipFacts`:
 
 1. user captions from the clip's sidecar files (``clip.txt`` in HumanML3D
    lines, ``clip.json``; see :mod:`.sidecar`), then
@@ -32,9 +32,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Dict, List, Mapping, Optional, Union
 
-from satagraph.data.sources import MotionFile
-from satagraph.data.zoo import ClipFacts
-from satagraph.data.zoo.endless import ZooSample
+from satagraph.datasets.sources import MotionFile
+from satagraph.datasets.zoo import ClipFacts
+from satagraph.datasets.zoo.endless import ZooSample
 from satagraph.datasets.caption import Caption, CaptionError, choose
 from satagraph.datasets.mocap_captions import (bandai_phrasings, ccbase_phrasings,
                                                cmu_phrasings)
@@ -142,9 +142,9 @@ def captions_for(clip: ClipLike, dataset: Optional[str] = None,
         clip: A clip path, a manifest row (``path``, ``dataset``, ... as in
             ``manifest.tsv``; zoo rows with their ``species``/``kind``/
             ``turn_deg``/``speed_*`` columns), a
-            :class:`~satagraph.data.sources.MotionFile`, an endless-zoo
-            :class:`~satagraph.data.zoo.endless.ZooSample` or a
-            :class:`~satagraph.data.zoo.ClipFacts`.
+            :class:`~satagraph.datasets.sources.MotionFile`, an endless-zoo
+            :class:`~satagraph.datasets.zoo.endless.ZooSample` or a
+            :class:`~satagraph.datasets.zoo.ClipFacts`.
         dataset: The dataset (default: the row's or file's, else inferred
             from the path, see :func:`infer_dataset`).
         count: Templated phrasings to keep (a seeded choice, see

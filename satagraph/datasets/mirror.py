@@ -1,10 +1,10 @@
 r"""Mirroring captions: the text of a left/right mirrored motion.
 
-:func:`~satagraph.data.augment.mirror` swaps the left and right joints of a
+:func:`~satagraph.transforms.augment.mirror` swaps the left and right joints of a
 motion; a caption of that motion must swap its side words too (``"turns
 left"`` -> ``"turns right"``, ``"clockwise"`` -> ``"counterclockwise"``).
 The side words are those of the joint-name rule
-(:data:`~satagraph.data.augment.SIDE_WORDS`), plus the words of turning
+(:data:`~satagraph.transforms.augment.SIDE_WORDS`), plus the words of turning
 directions. Whole words only (``"leftover"`` stays), case kept
 (``"Left"`` -> ``"Right"``, ``"LEFT"`` -> ``"RIGHT"``).
 
@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 from typing import Dict
 
-from satagraph.data.augment import SIDE_WORDS
+from satagraph.transforms.augment import SIDE_WORDS
 
 #: Lower-case word -> its mirror image.
 MIRROR_WORDS: Dict[str, str] = {

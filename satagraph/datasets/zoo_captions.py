@@ -1,15 +1,15 @@
 r"""Templated captions of procedural zoo clips, from what the generator drew.
 
-The truth is the generator's :class:`~satagraph.data.zoo.ClipFacts` (body
+The truth is the generator's :class:`~satagraph.datasets.zoo.ClipFacts` (body
 plan, clip kind, start and end speed, signed turn): an endless-zoo sample
-carries them (:attr:`~satagraph.data.zoo.endless.ZooSample.facts`) and
+carries them (:attr:`~satagraph.datasets.zoo.endless.ZooSample.facts`) and
 ``satagraph zoo`` writes them to its manifest (columns
-:data:`~satagraph.data.zoo.MOTION_COLUMNS`). A manifest written before
+:data:`~satagraph.datasets.zoo.MOTION_COLUMNS`). A manifest written before
 those columns existed still names the kind in the file name; its captions
 then say only what the kind guarantees (a turn without its side, a speed
 change without its sign).
 
-What each kind does (:mod:`satagraph.data.zoo.motions`):
+What each kind does (:mod:`satagraph.datasets.zoo.motions`):
 
 * ``walk``: forward at a steady speed; snakes slither. The generator adds
   a drift of at most 4 deg/s, told (as veering) only where it adds up to
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import PurePath
 from typing import Dict, List, Mapping, Optional, Tuple
 
-from satagraph.data.zoo import CLIP_KINDS, SPECIES, ClipFacts
+from satagraph.datasets.zoo import CLIP_KINDS, SPECIES, ClipFacts
 
 #: Body plan -> subjects.
 ZOO_SUBJECTS: Dict[str, Tuple[str, ...]] = {

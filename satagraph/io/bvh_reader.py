@@ -13,7 +13,7 @@ import numpy as np
 
 from satagraph.io._floats import parse_decimal_table
 from satagraph.io.errors import BVHError
-from satagraph.io.files import InputFileError, check_input_file
+from satagraph.utils.files import InputFileError, check_input_file
 from satagraph.motion import Motion, RigSettings
 from satagraph.skeleton import Skeleton
 

@@ -7,7 +7,7 @@ from typing import List, Union
 import numpy as np
 import torch
 
-from satagraph.io.files import atomic_write
+from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
 from satagraph.ops.rotation import matrix_to_euler
 
@@ -116,7 +116,7 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     r"""Write a motion as a BVH file.
 
     The file is written to a temporary file beside :obj:`path` and moved into
-    place only when complete (:func:`~satagraph.io.files.atomic_write`), so
+    place only when complete (:func:`~satagraph.utils.files.atomic_write`), so
     a failure never leaves a partial file. Non-finite values are refused.
 
     Args:

@@ -18,7 +18,7 @@ from typing import Any, Dict, Sequence, Union
 
 import torch
 
-from satagraph.io.files import InputFileError, atomic_path, check_input_file
+from satagraph.utils.files import InputFileError, atomic_path, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 

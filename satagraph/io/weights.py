@@ -7,7 +7,7 @@ to rebuild the module offline:
 
 - ``format``: :data:`FORMAT`, ``format_version``: :data:`FORMAT_VERSION`,
 - ``hyper_parameters``: ``{model, loss, optim, fps, meta}`` (plain
-  containers; what :func:`satagraph.train.load_module` rebuilds from),
+  containers; what :func:`satagraph.experiment.train.load_module` rebuilds from),
 - ``module``, ``semantic_encoder``, ``fps``, ``window``, ``dtype``,
 - ``training_data``: what the model was trained on (free text or a
   description), ``provenance``: how (command, minutes, machine, ...).
@@ -27,7 +27,7 @@ import torch
 from torch import Tensor
 
 from satagraph.io.checkpoint import CheckpointError
-from satagraph.io.files import InputFileError, atomic_write, check_input_file
+from satagraph.utils.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 

@@ -38,6 +38,11 @@ class MotionAutoencoderModule(L.LightningModule):
     - :meth:`configure_optimizers` (Adam, warm-up, exponential decay with
       a floor: :func:`lr_factor`).
 
+    The module owns the semantic encoder it was trained with
+    (``meta["semantic_encoder"]``): :meth:`embed` gives a skeleton's
+    semantic features, built once per module, for inference, evaluation,
+    sweeps and benchmarks alike.
+
     Batches are :class:`~satagraph.data.FrameBatch` objects with physical
     (unnormalised) features; the module normalises inputs with its
     :attr:`normalizer` (fitted on the training split by the data module and
@@ -49,7 +54,9 @@ class MotionAutoencoderModule(L.LightningModule):
         loss (dict, optional): Loss weights (see :mod:`satagraph.losses`).
         optim (dict, optional): ``lr``, ``warmup_epochs``, ``decay``,
             ``floor``, ``grad_clip``.
-        fps (float): Frame rate of the features.
+        fps (float): Frame rate the module was trained at (what inference
+            resamples motion to); losses and metrics use each batch's own
+            (:attr:`~satagraph.data.FrameBatch.fps`).
         meta (dict, optional): What inference needs to know about the data
             (``semantic_encoder``, ``window``, ``module``), kept in the
             checkpoint.
@@ -66,6 +73,38 @@ class MotionAutoencoderModule(L.LightningModule):
         self.normalizer = FeatureNormalizer()
         self.model = self.build_model(**model)
         self.criterion = self.build_loss(**(loss or {}))
+
+    # -------------------------------------------------------- semantics
+    def embed(self, skeleton, evidence=None) -> Tensor:
+        r"""Semantic features of :obj:`skeleton` with the module's encoder
+        (:func:`~satagraph.data.datamodule.semantic_embedder` of
+        ``meta["semantic_encoder"]``, its text embeddings cached as
+        :meth:`set_semantic_cache` says); :math:`(J, 0)` for a module
+        trained without semantics. :obj:`evidence` (a
+        :class:`~satagraph.semantics.JointEvidence`) lets the rules read
+        the body from its motion.
+
+        Shapes:
+            - **output**: :math:`(J, D_t)`
+        """
+        embedder = self.__dict__.get("_embedder")
+        if embedder is None:
+            from satagraph.data.datamodule import semantic_embedder
+            embedder = semantic_embedder(self.meta.get("semantic_encoder", "offline"),
+                                         self.__dict__.get("_semantic_cache")) or _no_semantics
+            self.__dict__["_embedder"] = embedder
+        return embedder(skeleton, evidence=evidence)
+
+    def set_semantic_cache(self, cache_dir: Optional[str]) -> None:
+        """Cache folder of :meth:`embed`'s text embeddings (``None``: the
+        default cache root); not saved with the module."""
+        self.__dict__["_semantic_cache"] = cache_dir
+        self.__dict__.pop("_embedder", None)
+
+    def __getstate__(self) -> Dict[str, Any]:
+        state = super().__getstate__()
+        state.pop("_embedder", None)  # a text encoder: rebuilt after unpickling
+        return state
 
     # ------------------------------------------------------------ hooks
     def build_model(self, **kwargs: Any) -> nn.Module:
@@ -89,39 +128,48 @@ class MotionAutoencoderModule(L.LightningModule):
         """Encode :obj:`batch`, decode on :obj:`target` (default: itself).
         Both are physical batches; predictions come back physical."""
         source = self.normalize_batch(batch)
-        target = source if target is None else self.normalize_batch(target)
+        normed = source if target is None else self.normalize_batch(target)
         enc = self.encode(source)
-        out = dict(enc, **self.decode(enc["z"], target))
-        return self.denormalize_output(out)
+        out = dict(enc, **self.decode(enc["z"], normed))
+        return self.denormalize_output(out, batch if target is None else target)
 
     # --------------------------------------------------- normalisation
     def setup(self, stage: str) -> None:
         dm = getattr(self.trainer, "datamodule", None) if self._trainer else None
         if not bool(self.normalizer.fitted) and dm is not None:
             self.normalizer.load_state_dict(dm.normalizer.state_dict())
+        if dm is not None and hasattr(dm, "pair_partners"):
+            # partners for the retarget term are collated with the batch
+            dm.pair_partners = self._retarget_weight() > 0
 
     def normalize_batch(self, batch):
-        """A shallow copy of :obj:`batch` with normalised features."""
+        """A shallow copy of :obj:`batch` with normalised features (lengths
+        in each clip's heights when the normaliser is body-relative)."""
         out = copy.copy(batch)
         norm = self.normalizer
-        out.x = norm.normalize(batch.x, "dynamic")
-        out.root = norm.normalize(batch.root, "root")
-        out.joint_static = norm.normalize(batch.joint_static, "static")
+        out.x = norm.normalize(batch.x, "dynamic", batch.heights("node"))
+        out.root = norm.normalize(batch.root, "root", batch.heights("frame"))
+        out.joint_static = norm.normalize(batch.joint_static, "static",
+                                          batch.heights("stream"))
         return out
 
-    def denormalize_output(self, out: Dict[str, Tensor]) -> Dict[str, Tensor]:
+    def denormalize_output(self, out: Dict[str, Tensor], target) -> Dict[str, Tensor]:
+        """Physical predictions on :obj:`target` (the physical batch that
+        was decoded onto: its clip heights scale the root lengths); the
+        normalised ones stay under ``q_norm`` and ``r_norm``."""
         out = dict(out)
         out["q_norm"], out["r_norm"] = out["q"], out["r"]
         out["q"] = self.normalizer.denormalize(out["q"], "dynamic", DYNAMIC_LAYOUT["q"])
-        out["r"] = self.normalizer.denormalize(out["r"], "root")
+        out["r"] = self.normalizer.denormalize(out["r"], "root",
+                                               height=target.heights("frame"))
         return out
 
     # ----------------------------------------------------------- steps
     def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Named loss terms and their weighted sum under ``"loss"``; with a
         ``retarget`` weight, also :meth:`retarget_loss` of ``out["z"]``."""
-        losses = self.criterion(out, batch, self.normalizer, fps=self.fps)
-        weight = float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+        losses = self.criterion(out, batch, self.normalizer)
+        weight = self._retarget_weight()
         if weight > 0 and "z" in out:
             term = self.retarget_loss(out["z"], batch)
             # logged every step (zero without a pair), so that every process
@@ -130,21 +178,30 @@ class MotionAutoencoderModule(L.LightningModule):
             losses["loss"] = losses["loss"] + weight * losses["retarget"]
         return losses
 
+    def _retarget_weight(self) -> float:
+        return float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+
     def retarget_loss(self, z: Tensor, batch) -> Optional[Tensor]:
         """Unpaired cross-skeleton term: every clip's latents :obj:`z`
-        decoded onto another skeleton of the batch
-        (:func:`~satagraph.data.pairing.partner_batch`, drawn from a
-        generator seeded with the global step) must move the limb ends like
-        the source (:func:`~satagraph.losses.limb_velocity_loss`). ``None``
-        when every clip of the batch has the same skeleton."""
-        from satagraph.data.pairing import partner_batch
+        decoded onto another skeleton of the batch must move the limb ends
+        like the source (:func:`~satagraph.losses.limb_velocity_loss`).
+        Partners come with the batch (``batch.pairing``, collated by
+        :class:`~satagraph.data.pairing.PartnerCollate`), else are drawn here
+        from a generator seeded with the global step
+        (:func:`~satagraph.data.pairing.partner_batch`). ``None`` when every
+        clip of the batch has the same skeleton."""
+        from satagraph.data.pairing import pairing_to, partner_batch
         from satagraph.losses import facing_positions, limb_velocity_loss
-        gen = torch.Generator().manual_seed(int(self.global_step))
-        pairing = partner_batch(batch, gen)
+        pairing = getattr(batch, "pairing", None)
+        if pairing is None:
+            gen = torch.Generator().manual_seed(int(self.global_step))
+            pairing = partner_batch(batch, gen)
         if pairing is None:
             return None
+        pairing = pairing_to(pairing, z.device)
         target = self.normalize_batch(pairing.target)
-        pred = self.denormalize_output(self.decode(z[pairing.frames], target))
+        pred = self.denormalize_output(self.decode(z[pairing.frames], target),
+                                       pairing.target)
         pos = facing_positions(pred["q"], pred["r"], pairing.target)
         return limb_velocity_loss(batch.x[:, DYNAMIC_LAYOUT["x"]], pos, pairing)
 
@@ -176,8 +233,8 @@ class MotionAutoencoderModule(L.LightningModule):
     def metrics(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Per-clip metrics of a (physical) prediction against the batch."""
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]]
-        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch, self.fps)
-        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch, self.fps)
+        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch)
+        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch)
         return motion_metrics(local_p, pos_p, local_t, pos_t, batch)
 
     def configure_optimizers(self):
@@ -206,6 +263,11 @@ class SATARVQModule(MotionAutoencoderModule):
     def codes(self, batch) -> Tensor:
         """Code indices per frame, ``[G, Q]``, for generators."""
         return self.encode(self.normalize_batch(batch))["codes"]
+
+
+def _no_semantics(skeleton, evidence=None) -> Tensor:
+    """The semantic features of a module trained without them."""
+    return torch.zeros(skeleton.num_joints, 0)
 
 
 def count_parameters(module: nn.Module) -> int:

@@ -1,7 +1,7 @@
 """LightningModules of the baselines: SAME and the zero-padding RVQ-VAE.
 
 Importing this module registers them as ``module: same`` and
-``module: padded_rvq`` (see :func:`satagraph.train.register_module`).
+``module: padded_rvq`` (see :func:`satagraph.experiment.train.register_module`).
 Their configs inherit ``experiments/sata_vae.yaml``; model keys that only
 SATA understands (``num_blocks``, ``local_conv``, ``semantic_channels``,
 ...) are dropped, any other unknown key is an error.
@@ -32,23 +32,23 @@ def baseline_kwargs(model_cls: type, kwargs: Dict[str, Any]) -> Dict[str, Any]:
 
 
 class SAMEModule(MotionAutoencoderModule):
-    r"""SAME (:class:`~satagraph.nn.same.SAME`) with SATA's losses, metrics,
+    r"""SAME (:class:`~satagraph.nn.autoencoders.same.SAME`) with SATA's losses, metrics,
     schedule and inference. Deterministic latent: no KL or commitment
     term."""
 
     def build_model(self, **kwargs: Any) -> nn.Module:
-        from satagraph.nn.same import SAME
+        from satagraph.nn.autoencoders.same import SAME
         return SAME(**baseline_kwargs(SAME, kwargs))
 
 
 class PaddedRVQModule(MotionAutoencoderModule):
-    r"""The zero-padding MoMask RVQ-VAE (:class:`~satagraph.nn.padded.PaddedRVQ`,
+    r"""The zero-padding MoMask RVQ-VAE (:class:`~satagraph.nn.autoencoders.padded.PaddedRVQ`,
     SATA paper appendix D.3.1). Its outputs are read back onto the real
     nodes only, so padded joints never enter the losses or metrics. Its
     latents are one per 4 frames (``z [K, D]``, ``codes [K, Q]``)."""
 
     def build_model(self, **kwargs: Any) -> nn.Module:
-        from satagraph.nn.padded import PaddedRVQ
+        from satagraph.nn.autoencoders.padded import PaddedRVQ
         return PaddedRVQ(**baseline_kwargs(PaddedRVQ, kwargs))
 
     @torch.no_grad()

@@ -33,7 +33,7 @@ import torch
 from lightning.fabric.plugins.io.torch_io import TorchCheckpointIO
 
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
-from satagraph.io.files import keep_copy
+from satagraph.utils.files import keep_copy
 
 #: Names of the resume checkpoints in ``<run>/checkpoints``.
 LAST, PREVIOUS, DAMAGED = "last.ckpt", "last.prev.ckpt", "last.damaged.ckpt"

@@ -3,7 +3,7 @@ transformers over the codes of a frozen SATA-RVQ, a skeleton embedding and
 a length model, trained together by one LightningModule.
 
 Every batch is a :class:`~satagraph.data.FrameBatch` of captioned windows
-(:mod:`satagraph.datasets.windows`); the frozen autoencoder computes the
+(:mod:`satagraph.data.captioned`); the frozen autoencoder computes the
 codes of each window on the fly (so augmentation stays free), the text
 encoder the caption embeddings. The losses:
 
@@ -17,7 +17,7 @@ encoder the caption embeddings. The losses:
 Classifier-free guidance drops the text token only; the skeleton token is
 never dropped. The checkpoint holds the autoencoder (its hyperparameters and
 weights: generation needs no other file) and the text encoder's id and
-width (:func:`~satagraph.data.semantics.text_encoder_state`), checked when
+width (:func:`~satagraph.semantics.text_encoder_state`), checked when
 it is loaded. Validation draws its masks from a generator seeded by the
 batch index, so ``val_loss`` (what checkpoint selection monitors) is
 comparable across epochs.
@@ -44,9 +44,9 @@ import torch
 from torch import Tensor, nn
 
 from satagraph.data.datamodule import semantic_embedder
-from satagraph.data.semantics import build_text_encoder
-from satagraph.data.semantics.factory import check_text_encoder_state, text_encoder_state
-from satagraph.datasets.windows import batch_seconds, batch_texts
+from satagraph.semantics import build_text_encoder
+from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
+from satagraph.data.captioned import batch_seconds, batch_texts
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTransformer,
                                      SkeletonEmbedding, skeleton_graph, split_codes)
@@ -65,7 +65,7 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     (loaded with its weights) or the stored ``{"checkpoint", "hparams"}``
     of a trained generator (built empty: the generator's own weights fill
     it). Returns the module and the stored form."""
-    from satagraph.train import load_module, module_class
+    from satagraph.experiment.train import load_module, module_class
     if isinstance(spec, str):
         if not os.path.isfile(spec):
             raise CheckpointError(f"{spec}: no such autoencoder checkpoint (model.autoencoder;"
@@ -94,7 +94,7 @@ class TextToMotionModule(L.LightningModule):
 
     Args:
         model (dict): ``autoencoder`` (checkpoint path), ``text_encoder``
-            (spec, see :func:`~satagraph.data.semantics.build_text_encoder`),
+            (spec, see :func:`~satagraph.semantics.build_text_encoder`),
             and the keyword arguments of ``skeleton``
             (:class:`~satagraph.nn.generators.SkeletonEmbedding`),
             ``masked``, ``residual`` and ``length``.

@@ -1,19 +1,21 @@
-"""Neural network modules: SATA (modulation, spatio-temporal blocks, encoder,
-decoder, VAE / RVQ bottlenecks) and the local GNN factory."""
-from satagraph.nn.bottleneck_rvq import RVQBottleneck, RVQOutput
-from satagraph.nn.bottleneck_vae import VAEBottleneck, VAEOutput, gaussian_kl
-from satagraph.nn.decoder import SATADecoder
-from satagraph.nn.dropout import FastDropout, fast_dropout, use_fast_dropout
-from satagraph.nn.encoder import SATAEncoder, node_motion_features
-from satagraph.nn.local_conv import LOCAL_CONVS, accepts_edge_attr, build_local_conv
-from satagraph.nn.modulation import (ConcatProjection, SemanticModulation,
-                                     SinusoidalEncoding, build_input_layer)
-from satagraph.nn.frame_gps import FrameGPSConv
-from satagraph.nn.padded import PaddedRVQ
-from satagraph.nn.same import SAME
-from satagraph.nn.sata import SATA
-from satagraph.nn.spatio_temporal import (LocalSpatialLayer, SpatioTemporalBlock,
-                                          make_blocks, sinusoidal_positions)
+"""Neural network modules, as plain :class:`torch.nn.Module` objects:
+
+- :mod:`.layers`: modulation, local GNN convolutions, frame attention,
+  spatio-temporal blocks, dropout;
+- :mod:`.bottlenecks`: VAE and RVQ;
+- :mod:`.autoencoders`: SATA (encoder, decoder) and the SAME and padded
+  baselines;
+- :mod:`.generators`: text-to-motion generators over SATA-RVQ codes.
+"""
+from satagraph.nn.autoencoders import (SAME, SATA, PaddedRVQ, SATADecoder, SATAEncoder,
+                                       node_motion_features)
+from satagraph.nn.bottlenecks import (RVQBottleneck, RVQOutput, VAEBottleneck, VAEOutput,
+                                      gaussian_kl)
+from satagraph.nn.layers import (LOCAL_CONVS, ConcatProjection, FastDropout, FrameGPSConv,
+                                 LocalSpatialLayer, SemanticModulation, SinusoidalEncoding,
+                                 SpatioTemporalBlock, accepts_edge_attr, build_input_layer,
+                                 build_local_conv, fast_dropout, make_blocks,
+                                 sinusoidal_positions, use_fast_dropout)
 
 __all__ = [
     "SATA", "SAME", "PaddedRVQ", "FrameGPSConv", "SATAEncoder", "SATADecoder", "SemanticModulation", "ConcatProjection",

@@ -1,5 +1,8 @@
-"""Differentiable operators: rotations, forward kinematics, temporal streams
-(imported lazily: the numpy forward kinematics loads without torch)."""
+"""Differentiable operators: rotations, forward kinematics and temporal
+streams (imported lazily: the numpy forward kinematics loads without
+torch). The index structure of a frame-graph batch (clip of each node, the
+same joint one frame earlier, inner joints, clip heights) is collated with
+it: see :class:`~satagraph.data.collate.FrameBatch`."""
 from satagraph._lazy import lazy_exports
 
 _FK = ("fk_levels", "forward_kinematics", "forward_kinematics_numpy")

@@ -22,7 +22,7 @@ from typing import Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from satagraph.io.files import atomic_path
+from satagraph.utils.files import atomic_path
 from satagraph.motion import Motion
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -259,7 +259,7 @@ def save_sheet(frames: Sequence[np.ndarray], path: PathLike,
 
 def _atomic(path: PathLike, write) -> None:
     """Run ``write(tmp)`` on a temporary file beside :obj:`path`, then move
-    it into place (:func:`satagraph.io.files.atomic_path`)."""
+    it into place (:func:`satagraph.utils.files.atomic_path`)."""
     with atomic_path(path) as tmp:
         write(tmp)
 

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.data.augment import mirror_pairs
+from satagraph.transforms.augment import mirror_pairs
 from satagraph.data.datamodule import MotionDataModule
 from satagraph.data.dataset import WindowAugment
-from satagraph.data.zoo import write_zoo
+from satagraph.datasets.zoo import write_zoo
 
 ALL_OPS = {"scale": 1.0, "mirror": 0.5, "drop": 0.5, "merge": 0.5, "insert": 0.5}
 

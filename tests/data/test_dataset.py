@@ -10,7 +10,7 @@ from satagraph.data.dataset import (MotionDatasetError, load_features,
                                     preprocess_file, window_starts,
                                     DEFAULT_PREPROCESSING)
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.data.sources import resolve_sources, scan_folder, select
+from satagraph.datasets.sources import resolve_sources, scan_folder, select
 
 
 def test_window_starts_cover_clip():
@@ -78,21 +78,58 @@ def test_normalizer_fit_and_inverse(shared_data, tmp_path):
     feats = load_features(files, cache_dir=str(tmp_path))
     norm = FeatureNormalizer().fit(feats)
     x = torch.from_numpy(np.concatenate([f.dynamic.reshape(-1, 22) for f in feats])).float()
-    z = norm.normalize(x, "dynamic")
+    height = torch.cat([torch.full((f.dynamic[..., 0].size,), f.height) for f in feats])
+    z = norm.normalize(x, "dynamic", height)
     assert z[:, :21].mean(0).abs().max() < 1e-3
     torch.testing.assert_close(z[:, 21], x[:, 21])  # contacts stay raw
-    torch.testing.assert_close(norm.denormalize(z, "dynamic"), x, atol=1e-4, rtol=1e-4)
+    torch.testing.assert_close(norm.denormalize(z, "dynamic", height=height), x,
+                               atol=1e-4, rtol=1e-4)
     state = norm.state_dict()
-    other = FeatureNormalizer()
+    other = FeatureNormalizer(body_relative=False)
     other.load_state_dict(state)
-    assert bool(other.fitted)
+    assert bool(other.fitted) and bool(other.body_relative)
+
+
+def test_body_relative_normaliser_sees_a_scaled_body_alike(shared_data, tmp_path):
+    """The same motion on a body ten times smaller has the same normalised
+    features (lengths in heights); rotations are untouched."""
+    from satagraph.data import features_to_motion, motion_to_features
+    from satagraph.transforms import canonicalize
+    files = resolve_sources(str(shared_data / "cmu"))[:1]
+    feats = load_features(files, cache_dir=str(tmp_path))[0]
+    norm = FeatureNormalizer().fit([feats])
+    motion = features_to_motion(feats)
+    small = motion.with_(translations=motion.translations * 0.1,
+                         skeleton=motion.skeleton.replace(offsets=motion.skeleton.offsets * 0.1))
+    tiny = motion_to_features(canonicalize(small))
+    assert tiny.height == pytest.approx(0.1 * feats.height, rel=1e-6)
+    # canonical ground placement differs by 0.1% of the height: root height
+    # (a channel of small spread) agrees to 0.1 of its standard deviation
+    for name, a, b, tol in (("root", feats.r, tiny.r, 0.1),
+                            ("static", feats.static, tiny.static, 1e-3)):
+        za = norm.normalize(torch.from_numpy(a).float(), name,
+                            torch.full((len(a),), feats.height))
+        zb = norm.normalize(torch.from_numpy(b).float(), name,
+                            torch.full((len(b),), tiny.height))
+        torch.testing.assert_close(za, zb, atol=tol, rtol=1e-3)
+
+
+def test_normaliser_of_an_old_checkpoint_stays_in_metres():
+    """Statistics saved before body_relative existed load as metres."""
+    norm = FeatureNormalizer()
+    state = {k: v for k, v in norm.state_dict().items() if k != "body_relative"}
+    norm.load_state_dict(state)
+    assert not bool(norm.body_relative)
+    x = torch.ones(3, 4)
+    torch.testing.assert_close(norm.normalize(x, "root", torch.full((3,), 2.0)), x)
 
 
 def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
     """Bone scaling of ccbase/007_01 (a moving RL_BoneRoot above the hips)
     gave root speeds of 1e5 (a 1e9 training loss); such a window is used as
     it is instead."""
-    from satagraph.data import canonicalize, motion_to_features
+    from satagraph.data import motion_to_features
+    from satagraph.transforms import canonicalize
     from satagraph.data.dataset import WindowAugment
     feats = motion_to_features(canonicalize(read_real("ccbase/007_01.bvh")))
     aug = WindowAugment.from_config({"scale": 1.0, "mirror": 0.0})

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 from satagraph.data.collate import collate_clips
 from satagraph.data.datamodule import MotionDataModule, semantic_embedder
 from satagraph.data.endless import EndlessZooDataset, MixedDataset, zoo_entry
-from satagraph.data.sources import resolve_sources
-from satagraph.data.zoo.endless import EndlessZoo
+from satagraph.datasets.sources import resolve_sources
+from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.lightning.reliability import read_loss_log
-from satagraph.train import train
+from satagraph.experiment.train import train
 
 HOLDOUT = "quadruped/abbrev"
 

@@ -4,7 +4,7 @@ import glob
 import numpy as np
 import pytest
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import (DYNAMIC_CHANNELS, DYNAMIC_LAYOUT,
                                      features_to_motion, integrate_root,
                                      motion_to_features)

@@ -14,7 +14,7 @@ from satagraph.data.datamodule import MotionDataModule
 from satagraph.data.dataset import MotionDatasetError
 from satagraph.data.normalizer import FeatureNormalizer, NormalizerError
 from satagraph.data.validate import MotionLimits, MotionValidationError, check_motion
-from satagraph.data.zoo import write_zoo
+from satagraph.datasets.zoo import write_zoo
 from satagraph.io import read_bvh
 
 #: name -> (split, edit of the lines of a good file, words of the error)
@@ -113,6 +113,7 @@ class _Feats:
         self.dynamic = gen.normal(size=(8, 5, DYNAMIC_CHANNELS))
         self.r = gen.normal(size=(8, ROOT_CHANNELS))
         self.static = gen.normal(size=(5, STATIC_CHANNELS)) * scale
+        self.height = 1.0
 
 
 @pytest.mark.parametrize("scale", [1e30, np.nan])

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pytest
 
-from satagraph.data.augment import SIDE_WORDS, swap_side
-from satagraph.data.zoo import ClipFacts
+from satagraph.transforms.augment import SIDE_WORDS, swap_side
+from satagraph.datasets.zoo import ClipFacts
 from satagraph.datasets import Caption, captions_for, mirror_captions, mirror_text
 
 CANONICAL = [

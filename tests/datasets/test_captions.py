@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from satagraph.data.sources import MotionFile
-from satagraph.data.zoo import MOTION_COLUMNS, ClipFacts, generate_clip_with_facts, write_zoo
-from satagraph.data.zoo.endless import EndlessZoo
+from satagraph.datasets.sources import MotionFile
+from satagraph.datasets.zoo import MOTION_COLUMNS, ClipFacts, generate_clip_with_facts, write_zoo
+from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.datasets import (CAPTIONERS, Caption, CaptionError, captioned_clips,
                                 captions_for, choose, infer_dataset, zoo_clip_of_row)
 from satagraph.datasets.mocap_captions import BANDAI_ACTIONS, BANDAI_STYLES
@@ -124,7 +124,7 @@ def _heading_change(root: np.ndarray, span: int = 8) -> float:
 
 
 def test_zoo_turn_side_is_the_side_of_the_left_joints():
-    from satagraph.data.zoo import zoo_rigs
+    from satagraph.datasets.zoo import zoo_rigs
     rig = zoo_rigs(["biped"])[0]
     for seed in range(4):
         motion, facts = generate_clip_with_facts(rig, "turn", 60, 30.0, seed)

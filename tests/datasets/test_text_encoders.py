@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.data.semantics import (GloVeEncoder, OfflineTextEncoder, SentenceEncoder,
-                                      T5TextEncoder, TextEncoderMismatch,
-                                      build_text_encoder, check_text_encoder,
-                                      check_text_encoder_state, text_encoder_state)
+from satagraph.semantics import (GloVeEncoder, OfflineTextEncoder, SentenceEncoder,
+                                 T5TextEncoder, TextEncoderMismatch,
+                                 build_text_encoder, check_text_encoder,
+                                 check_text_encoder_state, text_encoder_state)
 from satagraph.datasets import captions_for
 
 WORDS = ("a person walks runs forward backward slowly angrily left right turns jumps "

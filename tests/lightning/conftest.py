@@ -10,10 +10,10 @@ import lightning as L
 import pytest
 import torch
 
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 from satagraph.data.collate import FrameBatch
 from satagraph.data.datamodule import MotionDataModule, semantic_embedder
-from satagraph.train import build_datamodule, build_module
+from satagraph.experiment.train import build_datamodule, build_module
 
 #: Datasets of the test manifest, in the order the splits list them, so
 #: that ``max_files=2`` keeps one file of each dataset per split.

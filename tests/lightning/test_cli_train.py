@@ -12,7 +12,7 @@ import torch
 
 from satagraph.cli import main
 from satagraph.io import read_bvh
-from satagraph.train import build_logger, train
+from satagraph.experiment.train import build_logger, train
 
 
 DOG = "dog/D1_010_KAN01_002.bvh"

@@ -8,8 +8,8 @@ import lightning as L
 import pytest
 import torch
 
-from satagraph import train as train_mod
-from satagraph.train import train
+from satagraph.experiment import train as train_mod
+from satagraph.experiment.train import train
 
 pytestmark = pytest.mark.skipif(not torch.distributed.is_available()
                                 or not torch.distributed.is_gloo_available(),

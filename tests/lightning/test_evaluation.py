@@ -7,9 +7,9 @@ from typing import Callable
 import numpy as np
 import pytest
 
-import satagraph.evaluation as evaluation
+import satagraph.pipelines.evaluation as evaluation
 from satagraph.data.datamodule import MotionDataModule
-from satagraph.evaluation import retarget_errors
+from satagraph.pipelines.evaluation import retarget_errors
 
 
 @pytest.fixture

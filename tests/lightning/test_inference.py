@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import torch
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import motion_to_features
-from satagraph.inference import (reconstruct_motion, resample_frames, retarget_motion,
-                                 target_clip, transfer, window_plan)
+from satagraph.pipelines.inference import (reconstruct_motion, resample_frames, retarget_motion,
+                                           target_clip, transfer, window_plan)
 from satagraph.io import read_bvh, write_bvh
 from satagraph.motion import Motion
 

@@ -12,7 +12,7 @@ from torch.utils.data import DataLoader
 
 from satagraph.data.collate import FrameBatch, collate_clips
 from satagraph.lightning import SATARVQModule, SATAVAEModule, lr_factor
-from satagraph.train import init_weights, load_module
+from satagraph.experiment.train import init_weights, load_module
 
 METRICS = ("JR", "RT", "RT_h", "JP", "JP_h", "FS", "GP", "RE")
 
@@ -169,3 +169,27 @@ def test_every_term_logged_with_number_of_clips(build_tiny_module: Callable,
         mean = sum(v * b for v, b in logged) / 4
         assert float(trainer.callback_metrics[name]) == pytest.approx(mean, rel=1e-5), name
     assert {n for n, _, _ in calls} == names
+
+
+# ------------------------------------------------------------------ embed
+def test_module_owns_its_semantic_encoder(build_tiny_module: Callable, embed: Callable,
+                                          tmp_path: Path) -> None:
+    """module.embed gives what the data module's embedder gave in training,
+    builds the encoder once, leaves it out of pickles, and follows
+    set_semantic_cache."""
+    import pickle
+    from satagraph.datasets.zoo import zoo_rigs
+    module = build_tiny_module("vae")
+    skeleton = zoo_rigs(["quadruped"])[0].skeleton
+    torch.testing.assert_close(module.embed(skeleton), embed(skeleton))
+    first = module.__dict__["_embedder"]
+    module.embed(skeleton)
+    assert module.__dict__["_embedder"] is first
+    assert "_embedder" not in pickle.loads(pickle.dumps(module)).__dict__
+    module.set_semantic_cache(str(tmp_path / "cache"))
+    torch.testing.assert_close(module.embed(skeleton), embed(skeleton))
+    assert module.__dict__["_embedder"] is not first
+    assert any((tmp_path / "cache").rglob("*"))
+    module.meta["semantic_encoder"] = "none"
+    module.set_semantic_cache(None)
+    assert module.embed(skeleton).shape == (skeleton.num_joints, 0)

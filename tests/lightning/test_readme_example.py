@@ -6,7 +6,7 @@ from pathlib import Path
 
 import torch
 
-from satagraph.train import MODULES, register_module
+from satagraph.experiment.train import MODULES, register_module
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 
@@ -26,7 +26,7 @@ def test_readme_subclass_example_runs(tiny_config, datamodule, train_batch):
               if isinstance(v, type) and issubclass(v, base) and v is not base]
     register_module("readme_example", cls)
     try:
-        from satagraph.train import build_module
+        from satagraph.experiment.train import build_module
         module = build_module(dict(tiny_config, module="readme_example"), datamodule)
         assert type(module) is cls
         torch.manual_seed(0)

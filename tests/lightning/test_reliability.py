@@ -17,13 +17,13 @@ import pytest
 import torch
 
 from satagraph.cli import main
-from satagraph.config import load_config
-from satagraph.data.zoo import write_zoo
+from satagraph.experiment.config import load_config
+from satagraph.datasets.zoo import write_zoo
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint
 from satagraph.lightning.reliability import (LAST, PREVIOUS, RunLockedError,
                                              TrainingStopped, read_loss_log,
                                              resume_checkpoint, run_lock)
-from satagraph.train import load_module, train
+from satagraph.experiment.train import load_module, train
 
 REPO = Path(__file__).resolve().parents[2]
 EVERY = 4  # steps between checkpoints in the resume test
@@ -122,7 +122,7 @@ def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
 def test_cli_train_exit_code_when_stopped(tiny_config: Dict[str, Any], tmp_path: Path,
                                           monkeypatch: pytest.MonkeyPatch,
                                           capsys: pytest.CaptureFixture) -> None:
-    import satagraph.train as train_mod
+    import satagraph.experiment.train as train_mod
 
     def stopped(*args, **kwargs):
         raise TrainingStopped("training stopped at step 3: non-finite loss")

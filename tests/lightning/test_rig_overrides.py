@@ -7,11 +7,11 @@ from typing import Callable
 
 import numpy as np
 
-import satagraph.data.rig_reading as rr
+import satagraph.transforms.rig_reading as rr
 from satagraph.cli import main
-from satagraph.data.rig_reading import with_rig
-from satagraph.data.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
-from satagraph.inference import retarget_motion
+from satagraph.transforms.rig_reading import with_rig
+from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
+from satagraph.pipelines.inference import retarget_motion
 from satagraph.io import read_bvh, write_bvh
 
 
@@ -73,5 +73,5 @@ def test_results_on_a_rig_are_read_as_that_rig_was(
     def never(_motion, *_args):
         raise AssertionError("re-guessed")
     monkeypatch.setattr(rr, "guess_up_axis", never)
-    from satagraph.data.canonical import canonicalize
+    from satagraph.transforms.canonical import canonicalize
     assert canonicalize(again, fps=None).transform.up_axis == "+Y"

@@ -28,7 +28,7 @@ def test_window_must_be_positive():
 
 
 def test_train_passes_extra_callbacks(tiny_config):
-    from satagraph.train import train
+    from satagraph.experiment.train import train
     cb = TrailingLoss(window=2)
     cfg = dict(tiny_config, logger={"name": "none"})
     _, _, trainer, _ = train(cfg, max_epochs=1, limit_train_batches=3, limit_val_batches=0,

@@ -14,14 +14,14 @@ from safetensors.torch import save_file
 
 import satagraph.io.weights as weights
 from satagraph.cli import main
-from satagraph.data.zoo import generate_clip, zoo_rigs
-from satagraph.inference import reconstruct_motion
+from satagraph.datasets.zoo import generate_clip, zoo_rigs
+from satagraph.pipelines.inference import reconstruct_motion
 from satagraph.io import write_bvh
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.io.weights import (NO_BUILTIN, WeightsSizeError, load_weights,
                                   read_weights_metadata, save_weights)
 from satagraph.motion import Motion
-from satagraph.train import load_module
+from satagraph.experiment.train import load_module
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +104,7 @@ def test_foreign_or_damaged_files_give_one_line(build_tiny_module: Callable,
     meta = read_weights_metadata(good)
     assert json.loads(json.dumps(meta)) == meta
     with pytest.raises(CheckpointError, match="init-from|not satagraph"):
-        from satagraph.train import init_weights
+        from satagraph.experiment.train import init_weights
         init_weights(build_tiny_module(), str(foreign))
 
 

@@ -9,16 +9,16 @@ import pytest
 import torch
 from torch.utils.data import DataLoader
 
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 from satagraph.data import collate_clips
 from satagraph.data.examples import example_motion
-from satagraph.inference import reconstruct_motion
+from satagraph.pipelines.inference import reconstruct_motion
 from satagraph.lightning.baselines import PaddedRVQModule, SAMEModule
 from satagraph.losses import MotionLoss
-from satagraph.nn.padded import (PaddedRVQ, from_padded, latent_mask, padding_mask,
-                                 to_padded)
-from satagraph.nn.same import SAME
-from satagraph.train import build_module, load_module, module_class
+from satagraph.nn.autoencoders.padded import (PaddedRVQ, from_padded, latent_mask, padding_mask,
+                                              to_padded)
+from satagraph.nn.autoencoders.same import SAME
+from satagraph.experiment.train import build_module, load_module, module_class
 from test_sata_modules import (assert_finite_grads, count, make_clips, output_sum,
                                per_clip)
 

@@ -6,7 +6,7 @@ import torch
 from torch_geometric.nn import GINEConv, GPSConv
 
 from satagraph.data import collate_clips
-from satagraph.nn.frame_gps import FrameGPSConv, frame_self_attention, joint_count_groups
+from satagraph.nn.layers.frame_gps import FrameGPSConv, frame_self_attention, joint_count_groups
 from tests.nn.test_sata_modules import make_clips
 
 MIXED = [(4, 5), (3, 9), (2, 5), (3, 2), (5, 9)]

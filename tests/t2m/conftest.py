@@ -11,11 +11,11 @@ import pytest
 import torch
 
 from satagraph.data.datamodule import semantic_embedder
-from satagraph.data.zoo import zoo_rigs
-from satagraph.data.zoo.dialects import export_dialect
-from satagraph.data.zoo.endless import EndlessZoo
-from satagraph.data.zoo.motions import generate_clip
-from satagraph.datasets.windows import ZooCaptionWindows
+from satagraph.datasets.zoo import zoo_rigs
+from satagraph.datasets.zoo.dialects import export_dialect
+from satagraph.datasets.zoo.endless import EndlessZoo
+from satagraph.datasets.zoo.motions import generate_clip
+from satagraph.data.captioned import ZooCaptionWindows
 from satagraph.io import write_bvh
 from satagraph.lightning import SATARVQModule
 from satagraph.lightning.text_to_motion import TextToMotionModule
@@ -66,7 +66,7 @@ def autoencoder_ckpt(tmp_path_factory: pytest.TempPathFactory) -> Path:
     module = SATARVQModule(model=dict(AE_MODEL), meta={
         "module": "rvq", "semantic_encoder": "offline", "window": 32})
     zoo = EndlessZoo(species=["biped", "quadruped"], seed=0)
-    from satagraph.data.canonical import canonicalize
+    from satagraph.transforms.canonical import canonicalize
     from satagraph.data.features import motion_to_features
     feats = [motion_to_features(canonicalize(zoo.sample(0, i, 33).motion, up_axis="+Y",
                                              unit_scale=1.0)) for i in range(4)]

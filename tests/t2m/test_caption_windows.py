@@ -6,13 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.data.canonical import canonicalize
+from satagraph.transforms.canonical import canonicalize
 from satagraph.data.examples import example_motion
 from satagraph.data.features import motion_to_features
-from satagraph.data.sources import MotionFile
+from satagraph.datasets.sources import MotionFile
 from satagraph.datasets import Caption, captions_for, mirror_text
-from satagraph.datasets.datamodule import CaptionDataModule
-from satagraph.datasets.windows import FileCaptionWindows, batch_seconds, batch_texts
+from satagraph.data.caption_datamodule import CaptionDataModule
+from satagraph.data.captioned import FileCaptionWindows, batch_seconds, batch_texts
 from tests.conftest import data_dir
 from tests.t2m.conftest import zoo_batch, zoo_windows
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from satagraph.cli import main
-from satagraph.generate import output_paths
+from satagraph.pipelines.generate import output_paths
 from satagraph.io import read_bvh
 from tests.conftest import data_dir
 

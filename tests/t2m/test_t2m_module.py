@@ -9,9 +9,9 @@ import copy
 import pytest
 import torch
 
-from satagraph.config import load_config
+from satagraph.experiment.config import load_config
 from satagraph.io.checkpoint import CheckpointError
-from satagraph.train import build_module, load_module, train
+from satagraph.experiment.train import build_module, load_module, train
 from tests.t2m.conftest import build_t2m, save_checkpoint, zoo_batch
 
 

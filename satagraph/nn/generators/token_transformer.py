@@ -11,7 +11,7 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 
 from satagraph.nn.generators.sampling import uniform
-from satagraph.nn.spatio_temporal import sinusoidal_positions
+from satagraph.nn.layers.spatio_temporal import sinusoidal_positions
 
 POSITIONS = ("sine", "learned")
 

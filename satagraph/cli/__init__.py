@@ -1,0 +1,491 @@
+r"""The ``satagraph`` command line.
+
+Every subcommand is registered by a small ``add_<name>_parser(subparsers)``
+function that sets ``func`` (a function of the parsed arguments returning
+an exit code or ``None``) with :meth:`~argparse.ArgumentParser.set_defaults`.
+Subcommands living in other modules are listed in :data:`OPTIONAL_COMMANDS`
+and registered when their module imports.
+
+Exit codes: 0 on success, 2 on bad usage or bad input (a malformed BVH file,
+a missing file, an unwritable output): one line ``satagraph: error: ...`` on
+stderr, no traceback (``--traceback`` shows it).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+import tempfile
+import warnings
+from collections import Counter
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from satagraph import __version__
+from satagraph.io import BVHError, read_bvh
+from satagraph.utils.files import check_output_path
+from satagraph.memory import retain_freed_memory
+from satagraph.motion import Motion
+
+PROG = "satagraph"
+
+#: Subcommands defined in other modules: ``(module, parser function)``.
+#: A module that does not exist (yet) is skipped silently.
+OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
+    ("satagraph.cli.tags", "add_tags_parser"),
+    ("satagraph.cli.train", "add_train_parsers"),
+    ("satagraph.cli.zoo", "add_zoo_parser"),
+    ("satagraph.cli.render", "add_render_parser"),
+    ("satagraph.cli.sweep", "add_sweep_parser"),
+    ("satagraph.cli.generate", "add_generate_parser"),
+)
+
+Subparsers = argparse._SubParsersAction  # what add_subparsers() returns
+
+
+class CommandError(Exception):
+    """A user-facing failure: printed as one line, exit code 2."""
+
+
+# ------------------------------------------------------------------ helpers
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
+    return value
+
+
+def _up_axis(text: str) -> str:
+    """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
+    from satagraph.transforms.rig_reading import normalize_up_axis
+    try:
+        return normalize_up_axis(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def _units(text: str):
+    """A unit name (``cm``, ``in``, ...) or a factor to metres."""
+    from satagraph.transforms.rig_reading import parse_units
+    try:
+        return parse_units(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
+                      what: str = "the input") -> None:
+    """``--[PREFIX-]up-axis`` and ``--[PREFIX-]units`` (alias
+    ``--[PREFIX-]scale``): how to read a rig where detection guesses
+    wrong. They are used as given, never re-guessed."""
+    dash = f"--{prefix}-" if prefix else "--"
+    parser.add_argument(f"{dash}up-axis", type=_up_axis, default=None,
+                        metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
+                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it")
+    parser.add_argument(f"{dash}units", f"{dash}scale", type=_units, default=None,
+                        metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
+                        "ft, cmu (CMU mocap units), file (keep the file's own) or "
+                        "a factor to metres, instead of guessing them")
+
+
+def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Motion:
+    """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
+    :func:`add_rig_arguments` (the file's own declaration otherwise)."""
+    from satagraph.transforms.rig_reading import with_rig
+    key = f"{prefix}_" if prefix else ""
+    return with_rig(read_bvh(path), getattr(args, f"{key}up_axis", None),
+                    getattr(args, f"{key}units", None))
+
+
+def _write(motion: Motion, path: str) -> None:
+    from satagraph.io import write_bvh  # torch: loaded for the commands that write
+
+    try:
+        write_bvh(motion, path)
+    except OSError as err:
+        raise CommandError(f"cannot write {path}: "
+                           f"{err.strerror or err}") from err
+
+
+def describe(motion: Motion, path: str) -> Dict[str, Any]:
+    """Summary of a motion as plain Python values (what ``inspect`` shows).
+
+    ``rig`` is how the rig is read (:func:`~satagraph.transforms.rig_reading.read_rig`:
+    up axis and units, each given, declared or guessed, with the confidence
+    and the evidence); ``height`` is the character height in file units
+    along that up axis and ``height_m`` in metres.
+    """
+    from satagraph.transforms.rig_reading import read_rig
+    skel = motion.skeleton
+    reading = read_rig(motion)
+    layout = Counter(len(c) for c in skel.channels)
+    return {
+        "file": path,
+        "root": skel.names[0],
+        "joints": skel.num_joints,
+        "joints_without_end_sites": int((~skel.end_site).sum()),
+        "end_sites": int(skel.end_site.sum()),
+        "frames": motion.num_frames,
+        "fps": float(motion.fps),
+        "duration": float(motion.duration),
+        "up_axis": reading.up.axis,
+        "height": reading.units.height,
+        "height_m": reading.units.height * reading.units.scale,
+        "rig": reading.to_dict(),
+        "max_depth": int(skel.depth.max()),
+        "rotation_orders": dict(sorted(Counter(
+            o for o in skel.rotation_orders if o).items())),
+        "channel_layout": {str(k): layout[k] for k in sorted(layout)},
+        "position_channel_joints": int(skel.has_position_channels.sum()),
+        "channels_per_frame": skel.num_channels,
+    }
+
+
+def _rig_rows(rig: Dict[str, Any]) -> List[Tuple[str, str]]:
+    """The up-axis and unit rows of the ``inspect`` table."""
+    how = rig["up_axis_how"]
+    up = f"{rig['up_axis']} ({how}"
+    if how == "detected":
+        up += f", confidence {rig['up_axis_confidence']:.2f}"
+    rows = [("up axis", up + ")")]
+    for cue, scores in rig["up_axis_evidence"].items():
+        ranked = sorted(scores, key=scores.get, reverse=True)[:3]
+        rows.append((f"  {cue}", ", ".join(f"{a} {scores[a]:.2f}" for a in ranked)))
+    units = ("file units kept (undecided)" if rig["units_how"] == "kept" else
+             f"{rig['units']} ({rig['units_how']}, confidence "
+             f"{rig['units_confidence']:.2f})")
+    rows.append(("units", units if rig["units_how"] == "kept"
+                  else f"{units}: {rig['units_reason']}"))
+    rows += [("WARNING", w) for w in rig["warnings"]]
+    return rows
+
+
+def format_table(info: Dict[str, Any]) -> str:
+    """The human-readable form of :func:`describe`."""
+    orders = ", ".join(f"{o} x{n}" for o, n in info["rotation_orders"].items())
+    layout = info["channel_layout"]
+    channels = ", ".join(
+        f"{n} joint{'s' * (n != 1)} with {k}" for k, n in layout.items())
+    rows = [
+        ("file", info["file"]),
+        ("root", info["root"]),
+        ("joints", f"{info['joints']} ({info['joints_without_end_sites']} "
+                   f"without end sites)"),
+        ("end sites", info["end_sites"]),
+        ("frames", info["frames"]),
+        ("fps", f"{info['fps']:g}"),
+        ("duration", f"{info['duration']:.3f} s"),
+        *_rig_rows(info["rig"]),
+        ("height", f"{info['height']:.4g} file units, {info['height_m']:.4g} m"
+                   + (" if the file units were metres" if info["rig"]["units_how"]
+                      == "kept" else "")),
+        ("depth", info["max_depth"]),
+        ("rotation orders", orders or "none"),
+        ("channels", f"{info['channels_per_frame']} per frame: {channels}"),
+        ("position channels", f"on {info['position_channel_joints']} joint(s)"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+# ------------------------------------------------------------------ inspect
+def run_inspect(args: argparse.Namespace) -> int:
+    """Print the summary of a BVH file."""
+    info = describe(read_with_rig(args.file, args), str(args.file))
+    print(json.dumps(info, indent=2) if args.json else format_table(info))
+    return 0
+
+
+def add_inspect_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
+    """Register ``satagraph inspect FILE [--json]``."""
+    parser = subparsers.add_parser(
+        "inspect", help="summarise a BVH file",
+        description="Summarise a BVH file: joints and end sites, frames, "
+        "frame rate, duration, the up axis (with the confidence and evidence "
+        "of its detection), the units and height, Euler rotation orders and "
+        "channel layout. Doubtful readings are flagged WARNING.",
+        epilog="example: satagraph inspect walk.bvh --json")
+    parser.add_argument("file", help="the .bvh file")
+    parser.add_argument("--json", action="store_true",
+                        help="print a JSON object instead of a table")
+    add_rig_arguments(parser)
+    parser.set_defaults(func=run_inspect)
+    return parser
+
+
+# ------------------------------------------------------------------ convert
+def run_convert(args: argparse.Namespace) -> int:
+    """Re-write a BVH file, optionally resampled and/or canonicalised."""
+    if (args.up_axis or args.units) and not args.canonical:
+        raise CommandError("--up-axis and --units need --canonical")
+    check_output_path(args.output)
+    motion = read_with_rig(args.input, args)
+    if args.canonical or args.fps:  # resampling: bounded memory, a sane skeleton
+        from satagraph.data.validate import check_resample, check_skeleton
+        check_resample(motion, args.input, args.fps)
+        if args.canonical:
+            check_skeleton(motion, args.input)
+    notes = []
+    if args.canonical:
+        from satagraph.transforms.canonical import canonicalize
+        motion = canonicalize(motion, fps=args.fps)
+        tf = motion.transform
+        notes.append(f"canonical: source up axis {tf.up_axis}, scale {tf.scale:g} "
+                     "to metres; the file declares itself +Y up in metres")
+    elif args.fps:
+        from satagraph.transforms.canonical import resample
+        motion = resample(motion, args.fps)
+    _write(motion, args.output)
+    note = f" ({'; '.join(notes)})" if notes else ""
+    print(f"wrote {args.output}: {motion.num_frames} frames at "
+          f"{motion.fps:g} fps, {motion.num_joints} joints{note}")
+    return 0
+
+
+def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
+    """Register ``satagraph convert IN OUT [--fps N] [--canonical]``."""
+    parser = subparsers.add_parser(
+        "convert", help="re-write a BVH file (resample, canonicalise)",
+        description="Read a BVH file and write it again in a standard "
+        "layout. Without options the channel values are kept exactly. "
+        "--fps resamples (slerp for rotations); --canonical brings the "
+        "motion to +Y up, facing +Z, root at the origin, metres (and "
+        "removes a motionless extra root joint) and the output declares "
+        "itself canonical on a last comment line, so that satagraph never "
+        "re-guesses its up axis or units. The output is replaced "
+        "atomically, so IN and OUT may be the same file.",
+        epilog="example: satagraph convert in.bvh out.bvh --fps 30 --canonical")
+    parser.add_argument("input", help="the .bvh file to read")
+    parser.add_argument("output", help="the .bvh file to write")
+    parser.add_argument("--fps", type=_positive_float, default=None,
+                        help="resample to this frame rate")
+    parser.add_argument("--canonical", action="store_true",
+                        help="canonicalise (Y up, facing +Z, metres)")
+    add_rig_arguments(parser, what="the input (with --canonical)")
+    parser.set_defaults(func=run_convert)
+    return parser
+
+
+# --------------------------------------------------------------------- demo
+def _quick_demo_path(output: Optional[str], tmp: str) -> str:
+    """Where ``demo --quick`` writes the example: :obj:`output` when it
+    names a ``.bvh`` file, ``example_walk.bvh`` in it when it is a folder,
+    else in :obj:`tmp`."""
+    if output is None:
+        return str(Path(tmp) / "example_walk.bvh")
+    if output.lower().endswith(".bvh"):
+        return output
+    Path(output).mkdir(parents=True, exist_ok=True)
+    return str(Path(output) / "example_walk.bvh")
+
+
+def run_quick_demo(args: argparse.Namespace) -> int:
+    """Write the built-in example walk and inspect it (``demo --quick``)."""
+    from satagraph.data.examples import example_motion
+
+    motion = example_motion()
+    with tempfile.TemporaryDirectory(prefix="satagraph-demo-") as tmp:
+        path = _quick_demo_path(args.output, tmp)
+        _write(motion, path)
+        print(f"satagraph demo: wrote the built-in example walk "
+              f"({motion.skeleton.num_joints} joints, {motion.num_frames} "
+              f"frames at {motion.fps:g} fps) to {path}")
+        print(f"$ satagraph inspect {path}")
+        return run_inspect(argparse.Namespace(file=path, json=args.json))
+
+
+def run_demo(args: argparse.Namespace) -> int:
+    """The whole pipeline on the procedural zoo (see :mod:`satagraph.experiment.demo`),
+    or the built-in example with ``--quick``."""
+    if args.quick:
+        return run_quick_demo(args)
+    from satagraph.experiment.demo import DemoOptions, format_summary
+    from satagraph.experiment.demo import run_demo as run_full_demo
+
+    options = DemoOptions(
+        output=args.output or "demo_output", minutes=args.minutes, data=args.data,
+        species=args.species, clips=args.clips, frames=args.frames, seed=args.seed,
+        config=args.config, overrides=list(args.overrides), from_scratch=args.from_scratch)
+    result = run_full_demo(options)
+    print(json.dumps(result.to_dict(), indent=2) if args.json
+          else format_summary(result))
+    return 0
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
+    return value
+
+
+def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
+    """Register ``satagraph demo [--quick] [--output DIR] [--minutes M]
+    [--data PATH ...] [overrides ...]``."""
+    from satagraph.datasets.zoo import SPECIES
+
+    parser = subparsers.add_parser(
+        "demo", help="the whole pipeline on built-in data (no data needed)",
+        description="Run the whole pipeline on built-in data, with no data "
+        "files and no network, in under 10 minutes on a CPU: (1) write the "
+        "procedural zoo (bipeds, quadrupeds, birds, hexapods, snakes) to "
+        "OUTPUT/zoo; (2) retarget a biped walk onto a quadruped, a bird and a "
+        "differently proportioned human with the built-in model "
+        "(OUTPUT/retarget/*.bvh), scoring each (limbs in step with the source, "
+        "root travel against the source's); (3) render them side by side "
+        "(OUTPUT/demo.gif, OUTPUT/demo_sheet.png); (4) fine-tune the built-in "
+        "model on the zoo (experiments/demo.yaml, 4 minutes; --minutes changes "
+        "it) into OUTPUT/run and score the same retargets with it "
+        "(OUTPUT/retarget_finetuned); (5) print what was written where, how "
+        "long each step took and the scores. --from-scratch (or --data with "
+        "your own BVH folders and manifests, or a version without built-in "
+        "weights) trains a new model first and retargets with it. --quick "
+        "only writes the built-in example walk (7 joints, 3 end sites, 60 "
+        "frames at 30 fps) and inspects it, in seconds.",
+        epilog="examples: satagraph demo --minutes 2 | satagraph demo --data "
+        "../shared/data --output runs/demo | satagraph demo --quick")
+    parser.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
+                        help="dotted overrides of the training config, e.g. "
+                        "data.batch_size=8 data.augment.scale=0.5")
+    parser.add_argument("--quick", action="store_true",
+                        help="only write and inspect the built-in example walk")
+    parser.add_argument("--output", default=None, metavar="PATH",
+                        help="output folder (default: demo_output); with "
+                        "--quick, where to keep the example BVH file")
+    parser.add_argument("--minutes", type=_positive_float, default=None,
+                        help="training time in minutes (default: the "
+                        "config's, 4)")
+    parser.add_argument("--data", nargs="+", default=None, metavar="PATH",
+                        help="train on these BVH folders / manifests instead "
+                        "of the zoo (e.g. ../shared/data)")
+    parser.add_argument("--config", default="demo",
+                        help="training config (default: demo)")
+    parser.add_argument("--from-scratch", action="store_true",
+                        help="train a new model instead of fine-tuning the "
+                        "built-in one")
+    parser.add_argument("--species", nargs="+", choices=SPECIES, default=None,
+                        metavar="NAME", help="zoo species (default: biped, "
+                        "quadruped, bird, hexapod, snake; biped, quadruped and "
+                        "bird are always written)")
+    parser.add_argument("--clips", type=_positive_int, default=4,
+                        help="zoo clips per skeleton (default: 4)")
+    parser.add_argument("--frames", type=_positive_int, default=120,
+                        help="frames per zoo clip (default: 120)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="zoo and bone-scaling seed (default: 0)")
+    parser.add_argument("--json", action="store_true",
+                        help="print the summary as JSON")
+    parser.set_defaults(func=run_demo)
+    return parser
+
+
+# ------------------------------------------------------------------- parser
+def _warn(message: str) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+def _add_optional_parsers(subparsers: Subparsers) -> None:
+    """Register the subcommands of :data:`OPTIONAL_COMMANDS` whose module
+    imports. A parser left without ``func`` gets the module's
+    ``run_<name>`` function."""
+    for module_name, function in OPTIONAL_COMMANDS:
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as err:
+            if err.name != module_name:
+                _warn(f"{module_name} unavailable ({err})")
+            continue
+        except Exception as err:  # a broken plugin must not break the rest
+            _warn(f"{module_name} failed to import ({type(err).__name__}: {err})")
+            continue
+        before = set(subparsers.choices)
+        getattr(module, function)(subparsers)
+        for name in sorted(set(subparsers.choices) - before):
+            parser = subparsers.choices[name]
+            run = getattr(module, f"run_{name.replace('-', '_')}", None)
+            if parser.get_default("func") is None and run is not None:
+                parser.set_defaults(func=run)
+
+
+PARSERS: List[Callable[[Subparsers], Any]] = [
+    add_inspect_parser, add_convert_parser, add_demo_parser]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand."""
+    parser = argparse.ArgumentParser(
+        prog=PROG, description="Topology-agnostic character motion: BVH "
+        "tools for any skeleton. Run 'satagraph COMMAND --help' for details.")
+    parser.add_argument("-V", "--version", action="version",
+                        version=f"{PROG} {__version__}")
+    parser.add_argument("--traceback", action="store_true",
+                        help="show the full traceback on errors")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers.required = True
+    for add in PARSERS:
+        add(subparsers)
+    _add_optional_parsers(subparsers)
+    return parser
+
+
+def _message(err: BaseException) -> str:
+    if isinstance(err, OSError) and err.filename is not None:
+        return f"{err.filename}: {err.strerror or err}"
+    return str(err)
+
+
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """Warnings as one line: ``satagraph: warning: ...``."""
+    return f"{PROG}: warning: {message}\n"
+
+
+def parse_args(parser: argparse.ArgumentParser,
+               argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
+    """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
+    (also after an option such as ``--init-from CKPT``, where argparse alone
+    would reject them)."""
+    args, extra = parser.parse_known_args(argv)
+    overrides = [a for a in extra if "=" in a and not a.startswith("-")]
+    if hasattr(args, "overrides") and overrides:
+        args.overrides = list(args.overrides or []) + overrides
+        extra = [a for a in extra if a not in overrides]
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the ``satagraph`` command; returns the exit code.
+
+    Args:
+        argv (list[str], optional): Arguments (default: ``sys.argv[1:]``).
+    """
+    parser = build_parser()
+    args = parse_args(parser, argv)
+    retain_freed_memory()  # batches of frame graphs: no page faults per call
+    before = warnings.formatwarning
+    if not args.traceback:
+        warnings.formatwarning = _format_warning
+    try:
+        code = args.func(args)
+    except (BVHError, CommandError, OSError, ValueError) as err:
+        if args.traceback:
+            raise
+        print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
+        return 2
+    finally:
+        warnings.formatwarning = before
+    return int(code or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,262 @@
+"""``satagraph train | reconstruct | retarget | eval`` subcommands."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from typing import List
+
+
+def add_train_parsers(sub) -> None:
+    """Register the model subcommands on an argparse subparsers object."""
+    p = sub.add_parser("train", help="train a model from a config",
+                       description="Train from an omegaconf YAML config in experiments/ "
+                       "(or a path), with dotted overrides, e.g. "
+                       "`satagraph train tiny trainer.max_epochs=2 data.batch_size=8`.")
+    p.add_argument("config", help="config name (tiny, sata_vae, ...) or path")
+    p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
+    p.add_argument("--resume", action="store_true",
+                   help="continue from the run's last checkpoint")
+    p.add_argument("--init-from", metavar="CKPT",
+                   help="start from another run's weights (fine-tuning): a checkpoint, "
+                   "a .safetensors weights file or builtin")
+    _data_rig(p)
+    p.set_defaults(func=run_train)
+
+    p = sub.add_parser("reconstruct", help="encode and decode a BVH on its own skeleton",
+                       description="Sliding-window reconstruction of IN.bvh into OUT.bvh.")
+    _common(p)
+    p.add_argument("input", metavar="IN.bvh")
+    p.add_argument("output", metavar="OUT.bvh")
+    _rig(p)
+    p.set_defaults(func=run_reconstruct)
+
+    p = sub.add_parser("retarget", help="transfer a motion onto another skeleton",
+                       description="Retarget SOURCE.bvh onto TARGET.bvh's skeleton (any "
+                       "species); OUT.bvh is in the target's axes, units and channel layout "
+                       "at the source's frame rate.")
+    _common(p)
+    p.add_argument("source", metavar="SOURCE.bvh")
+    p.add_argument("--target", required=True, metavar="TARGET.bvh")
+    p.add_argument("output", metavar="OUT.bvh")
+    _rig(p, what="SOURCE.bvh")
+    _rig(p, "target", "TARGET.bvh")
+    p.set_defaults(func=run_retarget)
+
+    p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
+                       description="Evaluate JR, RT, JP, FS, GP per dataset on a split.")
+    p.add_argument("--ckpt", required=True)
+    p.add_argument("--split", default="test", choices=["train", "val", "test"])
+    p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
+    p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
+    p.add_argument("--max-batches", type=int, default=None)
+    p.add_argument("--retarget", action="store_true",
+                   help="also the retarget error onto copies of each split file's "
+                   "skeleton with paired ground truth: bone-scaled (internal) and "
+                   "with a leaf chain dropped, a bone split and bones scaled (cross)")
+    _data_rig(p)
+    p.set_defaults(func=run_eval)
+
+    p = sub.add_parser("export-weights", help="write a trained model as a safetensors "
+                       "weights file", description="Write the weights of RUN (its "
+                       "checkpoints/last.ckpt) or CKPT to OUT.safetensors with everything "
+                       "needed to rebuild the model offline (config, normaliser, semantic "
+                       "encoder, fps, window, training data, provenance). No pickle: "
+                       "the file cannot carry code.")
+    p.add_argument("source", metavar="RUN_OR_CKPT")
+    p.add_argument("output", metavar="OUT.safetensors")
+    p.add_argument("--half", action="store_true",
+                   help="store the network in float16 (the normaliser stays float32)")
+    p.add_argument("--force", action="store_true",
+                   help="write a file over the 8 MB limit")
+    p.add_argument("--training-data", metavar="TEXT",
+                   help="what it was trained on (default: the run's data sources)")
+    p.add_argument("--command", metavar="TEXT", help="the command that trained it")
+    p.add_argument("--minutes", type=float, help="training wall time in minutes")
+    p.add_argument("--machine", metavar="TEXT", help="where it was trained")
+    p.add_argument("--note", metavar="TEXT", help="free-text provenance")
+    p.set_defaults(func=run_export_weights)
+
+
+def _common(p) -> None:
+    p.add_argument("--ckpt", default="builtin",
+                   help="a checkpoint from `satagraph train`, a .safetensors weights "
+                   "file from `satagraph export-weights`, or builtin (the default: "
+                   "the weights shipped in the package)")
+    p.add_argument("--window", type=int, default=None,
+                   help="frames per window (default: the training window)")
+    p.add_argument("--overlap", type=int, default=None,
+                   help="frames shared by consecutive windows (default: window / 4)")
+
+
+def _rig(p, prefix: str = "", what: str = "the input") -> None:
+    from satagraph.cli import add_rig_arguments
+    add_rig_arguments(p, prefix, what)
+
+
+def _data_rig(p) -> None:
+    _rig(p, what="every data file without its own setting (a manifest's "
+         "up_axis / scale column or a data.sources entry's up_axis / units)")
+
+
+def _rig_overrides(args) -> List[str]:
+    """``--up-axis`` / ``--units`` as ``data.preprocessing`` overrides."""
+    out = []
+    if args.up_axis:
+        out.append(f"data.preprocessing.up_axis={args.up_axis}")
+    if args.units:
+        out.append(f"data.preprocessing.scale={args.units}")
+    return out
+
+
+def run_train(args) -> int:
+    """Train; exit code 1 (one line on stderr) when a non-finite loss or
+    gradient stopped the run, or another run holds the output folder."""
+    from satagraph.experiment.config import load_config
+    from satagraph.lightning.reliability import RunLockedError, TrainingStopped
+    from satagraph.experiment.train import last_checkpoint, train
+    cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
+    start = time.time()
+    try:
+        module, dm, trainer, run_dir = train(cfg, resume=args.resume,
+                                             init_from=args.init_from)
+    except (TrainingStopped, RunLockedError) as err:
+        print(f"satagraph: error: {err}", file=sys.stderr)
+        return 1
+    best = trainer.checkpoint_callback.best_model_path
+    skipped = f"; {len(dm.skipped)} bad files left out (skipped_files.txt)" \
+        if dm.skipped else ""
+    print(f"trained {cfg['name']} for {trainer.current_epoch} epochs in "
+          f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
+          f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")
+    return 0
+
+
+def _load(args):
+    from satagraph.experiment.train import load_module
+    module = load_module(args.ckpt)
+    return module, module.embed
+
+
+def _read_checked(args, key: str, fps: float, frames: bool = True):
+    """The BVH file ``args.<key>`` with its ``--[target-]up-axis`` /
+    ``--[target-]units``, checked for inference
+    (:mod:`satagraph.data.validate`); :obj:`frames`: also its timing and
+    values (a target needs only its skeleton)."""
+    from satagraph.cli import read_with_rig
+    from satagraph.data.validate import check_motion, check_skeleton
+    path = getattr(args, key)
+    motion = read_with_rig(path, args, "target" if key == "target" else "")
+    if frames:
+        check_motion(motion, path, fps=fps)
+    else:
+        check_skeleton(motion, path)
+    return motion
+
+
+def run_reconstruct(args) -> int:
+    from satagraph.pipelines.inference import reconstruct_motion
+    from satagraph.io import write_bvh
+    from satagraph.utils.files import check_output_path
+    check_output_path(args.output)
+    module, embed = _load(args)
+    motion = _read_checked(args, "input", module.fps)
+    out = reconstruct_motion(module, motion, embed, args.window, args.overlap)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
+    return 0
+
+
+def run_retarget(args) -> int:
+    from satagraph.pipelines.inference import retarget_motion
+    from satagraph.io import write_bvh
+    from satagraph.utils.files import check_output_path
+    check_output_path(args.output)
+    module, embed = _load(args)
+    source = _read_checked(args, "source", module.fps)
+    target = _read_checked(args, "target", module.fps, frames=False)
+    out = retarget_motion(module, source, target, embed, args.window, args.overlap)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
+          f"{out.num_joints}-joint skeleton of {args.target}")
+    return 0
+
+
+def run_eval(args) -> int:
+    from satagraph.data.datamodule import MotionDataModule
+    from satagraph.pipelines.evaluation import evaluate, format_table
+    from satagraph.utils.files import atomic_write_text, check_output_path
+    from satagraph.experiment.train import load_module
+    if args.json:
+        check_output_path(args.json)
+    module = load_module(args.ckpt)
+    data = dict(module.meta.get("data") or {})
+    if args.data:
+        data["sources"] = args.data
+    if not data.get("sources"):
+        raise ValueError("the checkpoint does not name its data: pass --data")
+    prep = dict(data.get("preprocessing") or {})
+    prep.update({k: v for k, v in (("up_axis", args.up_axis),
+                                   ("scale", args.units)) if v is not None})
+    data["preprocessing"] = prep
+    dm = MotionDataModule(**data)
+    dm.setup("test")
+    loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)
+    results = evaluate(module, loader, args.max_batches)
+    print(format_table(results))
+    if args.retarget:
+        _print_retarget(module, dm.datasets[args.split].files, results)
+    if args.json:
+        atomic_write_text(args.json, json.dumps(results, indent=2) + "\n")
+    return 0
+
+
+def _export_source(source: str) -> str:
+    """The checkpoint of ``export-weights``' RUN_OR_CKPT: a run folder gives
+    its ``checkpoints/last.ckpt``."""
+    from pathlib import Path
+    path = Path(source)
+    if path.is_dir():
+        last = path / "checkpoints" / "last.ckpt"
+        if not last.is_file():
+            raise ValueError(f"{source}: a folder without checkpoints/last.ckpt")
+        return str(last)
+    return source
+
+
+def run_export_weights(args) -> int:
+    from satagraph import __version__
+    from satagraph.utils.files import check_output_path
+    from satagraph.io.weights import save_weights
+    from satagraph.experiment.train import load_module
+    check_output_path(args.output)
+    source = _export_source(args.source)
+    module = load_module(source)
+    provenance = {k: v for k, v in (("command", args.command), ("minutes", args.minutes),
+                                    ("machine", args.machine), ("note", args.note))
+                  if v is not None}
+    provenance.update(source=source, satagraph_version=__version__)
+    size = save_weights(module, args.output, half=args.half,
+                        training_data=args.training_data, provenance=provenance,
+                        force=args.force)
+    print(f"wrote {args.output}: {size / 2**20:.2f} MB "
+          f"({'float16' if args.half else 'float32'} weights of {source})")
+    return 0
+
+
+def _print_retarget(module, files, results: dict) -> None:
+    """Retarget error table (internal and cross settings) per dataset; the
+    values go into :obj:`results` as ``retarget`` and ``retarget_cross``."""
+    from satagraph.pipelines.evaluation import retarget_error_table
+    table = retarget_error_table(module, files, module.embed)
+    internal, cross = table["internal"], table["cross"]
+    print("\n| dataset | retarget error internal (x1000 / H^2) | cross (x1000 / H^2) |\n"
+          "|---|---|---|")
+    for name in sorted(internal, key=lambda g: (g == "all", g)):
+        print(f"| {name} | {internal[name]:.3f} | {cross[name]:.3f} |")
+        results.setdefault(name, {}).update(retarget=internal[name],
+                                            retarget_cross=cross[name])
+
+
+__all__: List[str] = ["add_train_parsers"]

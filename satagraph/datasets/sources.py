@@ -1,0 +1,145 @@
+"""Where motion files come from: folders and manifests, with splits."""
+from __future__ import annotations
+
+import csv
+import fnmatch
+import hashlib
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Iterable, List, Optional, Sequence, Union
+
+SPLITS = ("train", "val", "test")
+
+
+@dataclass(frozen=True)
+class MotionFile:
+    r"""One BVH file with its dataset, skeleton id and split, and how to read
+    its rig where that is known (a manifest's ``up_axis`` and ``scale``
+    columns, or a ``data.sources`` entry's ``up_axis`` and ``units`` /
+    ``scale`` keys): these override detection (see
+    :class:`~satagraph.motion.RigSettings`)."""
+
+    path: str
+    dataset: str
+    skeleton: str
+    split: str
+    up_axis: Optional[str] = None
+    scale: Optional[float] = None
+
+    def read(self):
+        """The motion, with this file's rig settings attached."""
+        from satagraph.transforms.rig_reading import with_rig
+        from satagraph.io import read_bvh
+        return with_rig(read_bvh(self.path), self.up_axis, self.scale)
+
+
+def _row_settings(row: dict, where: str) -> dict:
+    """``up_axis`` and ``scale`` of a manifest row or source entry (empty
+    cells and missing keys: not set), validated."""
+    from satagraph.transforms.rig_reading import normalize_up_axis, parse_units
+    out = {}
+    try:
+        if row.get("up_axis") not in (None, ""):
+            out["up_axis"] = normalize_up_axis(row["up_axis"])
+        units = row.get("scale", row.get("units"))
+        if units not in (None, ""):
+            out["scale"] = parse_units(units)
+    except ValueError as err:
+        raise ValueError(f"{where}: {err}") from None
+    return out
+
+
+def _hash_split(name: str, val: float = 0.1, test: float = 0.1) -> str:
+    """Deterministic split from the file name (for folders without one)."""
+    u = int(hashlib.sha1(name.encode()).hexdigest()[:8], 16) / 0xFFFFFFFF
+    return "test" if u < test else "val" if u < test + val else "train"
+
+
+def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
+    r"""Rows of a manifest TSV with at least the columns ``path`` (relative
+    to the manifest's folder) and ``split``; ``dataset`` and ``skeleton``
+    are used when present."""
+    path = Path(path)
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f, delimiter="\t"))
+    if not rows or "path" not in rows[0] or "split" not in rows[0]:
+        raise ValueError(f"{path}: a manifest needs 'path' and 'split' columns")
+    out = []
+    for line, row in enumerate(rows, start=2):
+        name = row.get("dataset") or dataset or path.parent.name
+        if dataset and name != dataset:
+            continue
+        out.append(MotionFile(str(path.parent / row["path"]), name,
+                              row.get("skeleton") or name, row["split"],
+                              **_row_settings(row, f"{path}:{line}")))
+    return out
+
+
+def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
+    r"""BVH files under a folder. A ``manifest.tsv`` in the folder (or in a
+    parent folder that lists this one) gives the splits; otherwise files are
+    split 80/10/10 by a hash of their name."""
+    path = Path(path)
+    for manifest in (path / "manifest.tsv", path.parent / "manifest.tsv"):
+        if manifest.is_file():
+            rows = [r for r in read_manifest(manifest)
+                    if Path(r.path).resolve().is_relative_to(path.resolve())]
+            if rows:
+                return [replace(r, dataset=dataset or r.dataset) for r in rows]
+    files = sorted(path.rglob("*.bvh")) + sorted(path.rglob("*.BVH"))
+    if not files:
+        raise FileNotFoundError(f"{path}: no .bvh files found")
+    name = dataset or path.name
+    return [MotionFile(str(f), name, name, _hash_split(f.name)) for f in files]
+
+
+def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
+    r"""Files from one or several sources: a folder, a manifest path, or a
+    dict ``{"path": ..., "dataset": ..., "exclude": [...], "include": [...],
+    "up_axis": ..., "units": ...}``. A manifest with a ``dataset`` key keeps
+    only that dataset; ``include`` keeps only files whose name matches one of
+    its shell patterns (e.g. ``["[0-9][0-9]_[0-9][0-9].bvh"]``: only the
+    clips whose licence allows a use); ``up_axis`` and ``units`` (or
+    ``scale``) apply to every file of the entry that has no setting of its
+    own in its manifest."""
+    if isinstance(sources, (str, os.PathLike)) or isinstance(sources, dict):
+        sources = [sources]
+    files: List[MotionFile] = []
+    for src in sources:
+        spec = dict(src) if isinstance(src, dict) else {"path": str(src)}
+        path = Path(os.path.expanduser(str(spec["path"])))
+        if not path.exists():
+            raise FileNotFoundError(f"motion source not found: {path}")
+        found = (read_manifest(path, spec.get("dataset")) if path.is_file()
+                 else scan_folder(path, spec.get("dataset")))
+        exclude = set(spec.get("exclude") or ())
+        include = _patterns(spec.get("include"))
+        settings = _row_settings(spec, f"data.sources entry {spec['path']}")
+        files += [_with_defaults(f, settings) for f in found
+                  if f.dataset not in exclude and f.split != "parser_test"
+                  and (include is None or _included(f.path, include))]
+    return files
+
+
+def _patterns(include) -> Optional[List[str]]:
+    """``include`` of a source entry as a list of patterns (``None``: all)."""
+    if include is None:
+        return None
+    return [include] if isinstance(include, str) else [str(p) for p in include]
+
+
+def _included(path: str, patterns: Sequence[str]) -> bool:
+    name = Path(path).name
+    return any(fnmatch.fnmatchcase(name, p) for p in patterns)
+
+
+def _with_defaults(f: MotionFile, settings: dict) -> MotionFile:
+    """:obj:`f` with the entry's settings where it has none of its own."""
+    missing = {k: v for k, v in settings.items() if getattr(f, k) is None}
+    return replace(f, **missing) if missing else f
+
+
+def select(files: Iterable[MotionFile], split: str) -> List[MotionFile]:
+    """Files of one split."""
+    return [f for f in files if f.split == split]

@@ -1,0 +1,448 @@
+"""Motions of the zoo: gaits with planted feet and two-bone IK for legged
+rigs, slithering for snakes, and :func:`generate_clip`."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+
+from satagraph.datasets.zoo.rigs import (Leg, Sway, ZooRig, _align, _euler,
+                                         _is_below, _rot, _smoothstep, _unit)
+from satagraph.datasets.zoo.species import CLIP_KINDS
+from satagraph.motion import Motion
+from satagraph.skeleton import Skeleton
+
+
+# ----------------------------------------------------------------- gaits
+#: Gaits: leg phases, duty factor, stride (leg lengths), speed (leg lengths
+#: per second), swing height (leg lengths).
+GAITS: Dict[str, Tuple[Dict[str, float], float, float, float, float]] = {
+    "biped": ({"L": 0.0, "R": 0.5}, 0.62, 1.25, 1.5, 0.1),
+    "bird": ({"L": 0.0, "R": 0.5}, 0.6, 1.1, 1.3, 0.15),
+    "quadruped": ({"LH": 0.0, "LF": 0.25, "RH": 0.5, "RF": 0.75}, 0.7, 1.1, 1.0, 0.12),
+    "trot": ({"LH": 0.0, "RF": 0.0, "RH": 0.5, "LF": 0.5}, 0.55, 1.3, 2.4, 0.15),
+    "hexapod": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5,
+                 "R3": 0.5}, 0.55, 0.8, 1.5, 0.2),
+    "snake": ({}, 1.0, 1.0, 0.25, 0.0),
+    # Crabs: alternating tripods; spiders: alternating tetrapods.
+    "crab": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5, "R3": 0.5},
+             0.6, 0.7, 1.2, 0.2),
+    "spider": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R4": 0.0, "R1": 0.5, "L2": 0.5,
+                "R3": 0.5, "L4": 0.5}, 0.6, 0.7, 1.4, 0.2),
+}
+GAITS["fowl"] = GAITS["bird"]
+GAITS["longtail"] = GAITS["quadruped"]
+_IDLE_HZ = 0.3
+_PAD_SECONDS = 3.0
+
+
+@dataclass
+class _Clip:
+    """Speed and yaw rate over an extended frame grid (``pad`` frames on
+    either side of the clip), and the resulting root path."""
+
+    fps: float
+    pad: int
+    speed: np.ndarray
+    yaw_rate: np.ndarray
+    heading: Optional[np.ndarray] = None
+    position: Optional[np.ndarray] = None
+
+    @property
+    def time(self) -> np.ndarray:
+        return (np.arange(len(self.speed)) - self.pad) / self.fps
+
+
+def _profile(kind: str, frames: int, fps: float, speed: float,
+             rng: np.random.Generator) -> _Clip:
+    """Speed and yaw-rate profiles of one clip kind."""
+    pad = int(_PAD_SECONDS * fps)
+    t = (np.arange(frames + 2 * pad) - pad) / fps
+    mid = 0.5 * frames / fps
+    ramp = _smoothstep((t - mid + 0.75) / 1.5)
+    v = speed * rng.uniform(0.85, 1.15) * np.ones_like(t)
+    yaw = np.radians(rng.uniform(-4, 4)) * np.ones_like(t)
+    if kind == "idle":
+        v[:], yaw[:] = 0.0, 0.0
+    elif kind == "turn":
+        rate = np.radians(rng.uniform(35, 70)) * rng.choice([-1.0, 1.0])
+        yaw = rate * _smoothstep((t - 0.3 * mid) / 0.8)
+        v *= 0.85
+    elif kind == "speed":
+        lo, hi = speed * rng.uniform(0.5, 0.65), speed * rng.uniform(1.15, 1.3)
+        a, b = (lo, hi) if rng.random() < 0.5 else (hi, lo)
+        v = a + (b - a) * ramp
+    return _Clip(fps, pad, v, yaw)
+
+
+@dataclass(frozen=True)
+class ClipFacts:
+    r"""What a generated zoo clip does, as the generator drew it (the
+    truth captions are written from).
+
+    Attributes:
+        species (str): Body plan.
+        kind (str): Clip kind (:data:`CLIP_KINDS`).
+        duration (float): Seconds.
+        speed_start (float): Forward speed at the first frame, in leg
+            lengths per second (0 for idles).
+        speed_end (float): Forward speed at the last frame.
+        turn (float): Heading change over the clip in degrees; positive
+            turns to the character's left (+X of the canonical frame,
+            counterclockwise seen from above). Snakes: the bend of their
+            path, without the serpentine wave.
+    """
+
+    species: str
+    kind: str
+    duration: float
+    speed_start: float
+    speed_end: float
+    turn: float
+
+
+def _legged_facts(rig: ZooRig, kind: str, clip: _Clip, frames: int) -> ClipFacts:
+    """Facts of a legged clip from its traced profile."""
+    first, last = clip.pad, clip.pad + frames - 1
+    turn = np.degrees(clip.heading[last] - clip.heading[first])
+    scale = 1.0 / rig.leg_length
+    return ClipFacts(rig.species, kind, frames / clip.fps,
+                     float(clip.speed[first] * scale), float(clip.speed[last] * scale),
+                     float(turn))
+
+
+# ------------------------------------------------------------ feet, IK
+@dataclass
+class _Feet:
+    """Ankle targets and foot yaw per leg over the extended grid."""
+
+    targets: np.ndarray  # (legs, N, 3)
+    yaw: np.ndarray  # (legs, N)
+
+
+def _leg_geometry(rig: ZooRig, leg: Leg) -> Tuple[np.ndarray, float, float, float]:
+    """Neutral foot position (rest, relative to the root), ankle height
+    above the ground, upper and lower bone lengths."""
+    rest = rig.skeleton.rest_positions()
+    below = [j for j in range(rig.skeleton.num_joints)
+             if _is_below(rig.skeleton, j, leg.foot)]
+    ankle = float(rest[leg.foot, 1] - rest[below, 1].min())
+    off = rig.skeleton.offsets
+    return (rest[leg.foot], ankle, float(np.linalg.norm(off[leg.lower])),
+            float(np.linalg.norm(off[leg.foot])))
+
+
+def _plan_feet(rig: ZooRig, clip: _Clip, phase: np.ndarray, gait: tuple,
+               idle: bool) -> _Feet:
+    """Planted / swinging ankle targets for every leg."""
+    offsets, duty, _, _, lift = gait
+    index = np.arange(len(phase), dtype=np.float64)
+    targets, yaws = [], []
+    for leg in rig.legs:
+        neutral, ankle, l1, l2 = _leg_geometry(rig, leg)
+        lift_h = lift * (l1 + l2)
+
+        def plant(tau: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+            psi = np.interp(tau, index, clip.heading)
+            root = np.stack([np.interp(tau, index, clip.position[:, k])
+                             for k in range(3)], axis=-1)
+            c, s = np.cos(psi), np.sin(psi)
+            x = root[..., 0] + c * neutral[0] + s * neutral[2]
+            z = root[..., 2] - s * neutral[0] + c * neutral[2]
+            return np.stack([x, np.full_like(x, ankle), z], axis=-1), psi
+
+        if idle:
+            pos, psi = plant(np.full(len(phase), float(clip.pad)))
+            targets.append(pos)
+            yaws.append(psi)
+            continue
+        u = phase + offsets[leg.key]
+        n = np.floor(u)
+        f = u - n
+        start = np.interp(n + duty / 2 - offsets[leg.key], phase, index)
+        stop = np.interp(n + 1 + duty / 2 - offsets[leg.key], phase, index)
+        (p0, y0), (p1, y1) = plant(start), plant(stop)
+        s = np.clip((f - duty) / (1.0 - duty), 0.0, 1.0)
+        w = _smoothstep(s)[:, None]
+        pos = (1 - w) * p0 + w * p1
+        pos[:, 1] += lift_h * np.sin(np.pi * s)
+        targets.append(pos)
+        yaws.append((1 - w[:, 0]) * y0 + w[:, 0] * y1)
+    return _Feet(np.array(targets), np.array(yaws))
+
+
+def _two_bone(hip: np.ndarray, target: np.ndarray, l1: float, l2: float,
+              pole: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Knee position, upper and lower bone directions reaching ``target``
+    (clamped to the reachable range), the knee bent towards ``pole``.
+
+    Shapes:
+        - **hip**, **target**, **pole**: :math:`(T, 3)`
+        - **output**: three :math:`(T, 3)` arrays
+    """
+    e = target - hip
+    dist = np.clip(np.linalg.norm(e, axis=-1), abs(l1 - l2) + 1e-6,
+                   (l1 + l2) * (1 - 1e-6))
+    e = _unit(e)
+    side = _unit(pole - np.sum(pole * e, axis=-1, keepdims=True) * e)
+    x = (l1 ** 2 - l2 ** 2 + dist ** 2) / (2 * dist)
+    y = np.sqrt(np.maximum(l1 ** 2 - x ** 2, 0.0))
+    knee = hip + x[:, None] * e + y[:, None] * side
+    end = hip + dist[:, None] * e
+    return knee, _unit(knee - hip), _unit(end - knee)
+
+
+def _sway_rotation(sway: Optional[Sway], phase: np.ndarray) -> np.ndarray:
+    """Local rotations :math:`(T, 3, 3)` of a joint's sway."""
+    if sway is None:
+        return np.broadcast_to(np.eye(3), (len(phase), 3, 3))
+    wave = np.sin(2 * np.pi * (sway.k * phase + sway.phase))[:, None]
+    return _euler(sway.static[None] + sway.amplitude[None] * wave)
+
+
+def _pose(rig: ZooRig, root_pos: np.ndarray, root_rot: np.ndarray,
+          phase: np.ndarray, heading: np.ndarray,
+          feet: Optional[_Feet] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """Global rotations and positions by forward kinematics, legs by IK
+    when :obj:`feet` is given."""
+    skel = rig.skeleton
+    frames, num = len(phase), skel.num_joints
+    rot, pos = np.zeros((frames, num, 3, 3)), np.zeros((frames, num, 3))
+    rot[:, 0], pos[:, 0] = root_rot, root_pos
+    fixed: Dict[int, np.ndarray] = {}
+    roles = {leg.upper: i for i, leg in enumerate(rig.legs)}
+    for j in range(1, num):
+        p = skel.parents[j]
+        pos[:, j] = pos[:, p] + rot[:, p] @ skel.offsets[j]
+        if feet is not None and j in roles:
+            fixed.update(_solve_leg(rig, roles[j], pos[:, j], heading, feet))
+        rot[:, j] = fixed[j] if j in fixed else rot[:, p] @ _sway_rotation(
+            rig.sway.get(j), phase)
+    return rot, pos
+
+
+def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
+               feet: _Feet) -> Dict[int, np.ndarray]:
+    """Global rotations of a leg's upper, lower and foot joints."""
+    leg, off = rig.legs[i], rig.skeleton.offsets
+    l1, l2 = np.linalg.norm(off[leg.lower]), np.linalg.norm(off[leg.foot])
+    pole = _rot(1, heading) @ leg.pole
+    _, d1, d2 = _two_bone(hip, feet.targets[i], l1, l2, pole)
+    hinge_w = _unit(np.cross(d1, pole))
+    u, lo = off[leg.lower] / l1, off[leg.foot] / l2
+    hinge = _unit(np.cross(_unit(u + lo), leg.pole))
+    return {leg.upper: _align(u, hinge, d1, hinge_w),
+            leg.lower: _align(lo, hinge, d2, hinge_w),
+            leg.foot: _rot(1, feet.yaw[i])}
+
+
+def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
+                 phase: np.ndarray, feet: _Feet, reach: float = 0.97,
+                 crouch: float = 0.95) -> np.ndarray:
+    """Root height per frame: the rest stance (legs at most ``crouch``
+    extended), lowered wherever a leg would need more than ``reach`` of its
+    length to touch its target."""
+    rest = rig.skeleton.rest_positions()
+    flat = clip.position * np.array([1.0, 0.0, 1.0])
+    _, pos = _pose(rig, flat, root_rot, phase, clip.heading)
+    base = -rest[:, 1].min()
+    bounds = []
+    for i, leg in enumerate(rig.legs):
+        _, ankle, l1, l2 = _leg_geometry(rig, leg)
+        base = min(base, ankle + crouch * (l1 + l2) - rest[leg.upper, 1])
+        d = pos[:, leg.upper] - feet.targets[i]
+        flat2 = d[:, 0] ** 2 + d[:, 2] ** 2
+        vertical = np.sqrt(np.maximum((reach * (l1 + l2)) ** 2 - flat2, 0.0))
+        bounds.append(feet.targets[i][:, 1] - pos[:, leg.upper, 1] + vertical)
+    height = np.minimum(base, np.min(bounds, axis=0)) if bounds else np.full(
+        len(phase), base)
+    return _smooth_min(height, int(round(0.1 * clip.fps)))
+
+
+def _smooth_min(x: np.ndarray, width: int) -> np.ndarray:
+    """A moving minimum followed by a moving average (stays at or below
+    the original almost everywhere)."""
+    if width < 1:
+        return x
+    padded = np.pad(x, width, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * width + 1)
+    low = np.pad(windows.min(axis=1), width, mode="edge")
+    kernel = np.ones(2 * width + 1) / (2 * width + 1)
+    return np.convolve(low, kernel, mode="valid")
+
+
+def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
+            rng: np.random.Generator
+            ) -> Tuple[np.ndarray, np.ndarray, int, ClipFacts]:
+    """Global rotations and positions of a legged clip (extended grid),
+    and its facts."""
+    gait = GAITS["trot" if kind == "trot" else rig.species]
+    _, _, stride, speed, _ = gait
+    length = rig.leg_length
+    clip = _profile(kind, frames, fps, speed * length, rng)
+    idle = kind == "idle"
+    _trace(clip, rng.uniform(-np.pi, np.pi), idle, length, rng)
+    if idle:
+        freq = np.full_like(clip.speed, _IDLE_HZ)
+    else:
+        freq = np.sqrt(clip.speed * speed * length) / (stride * length)
+    phase = np.cumsum(freq) / fps
+    phase = phase - phase[clip.pad] + rng.uniform(0, 1)
+    feet = _plan_feet(rig, clip, phase, gait, idle)
+    root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase)
+    height = _body_height(rig, clip, root_rot, phase, feet)
+    root = clip.position * np.array([1.0, 0.0, 1.0])
+    root[:, 1] = height
+    if idle:
+        root[:, 1] -= 0.01 * length * (1 + np.sin(2 * np.pi * phase))
+    rot, pos = _pose(rig, root, root_rot, phase, clip.heading, feet)
+    return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
+
+
+def _trace(clip: _Clip, heading: float, idle: bool, length: float,
+           rng: np.random.Generator) -> None:
+    """The root's heading and ground path from the speed and yaw rate,
+    starting at the origin with :obj:`heading`; idles sway sideways."""
+    psi = np.cumsum(clip.yaw_rate) / clip.fps
+    clip.heading = psi - psi[clip.pad] + heading
+    fwd = np.stack([np.sin(clip.heading), np.zeros_like(clip.heading),
+                    np.cos(clip.heading)], axis=1)
+    pos = np.cumsum(clip.speed[:, None] * fwd, axis=0) / clip.fps
+    clip.position = pos - pos[clip.pad]
+    if idle:
+        t = clip.time
+        side = np.stack([np.cos(clip.heading), 0 * t, -np.sin(clip.heading)], 1)
+        amp = 0.03 * length * rng.uniform(0.5, 1.0)
+        clip.position += amp * np.sin(2 * np.pi * 0.25 * t)[:, None] * side
+
+
+# ----------------------------------------------------------- snake motion
+def _snake_path(length: float, kind: str, rng: np.random.Generator,
+                extent: Tuple[float, float]) -> Tuple[np.ndarray, np.ndarray, float]:
+    """Arc-length grid and points (x, z) of a serpentine path, and its bend
+    (radians per unit of arc length, positive to the left)."""
+    step = length / 400
+    s = np.arange(extent[0] - length, extent[1] + length, step)
+    wave = length * rng.uniform(0.4, 0.6)
+    theta = np.radians(rng.uniform(25, 40)) * np.sin(2 * np.pi * s / wave)
+    bend = 0.0
+    if kind == "turn":
+        sign, radius = rng.choice([-1.0, 1.0]), length * rng.uniform(1.0, 2.0)
+        theta += sign * s / radius
+        bend = sign / radius
+    theta += rng.uniform(-np.pi, np.pi)
+    xz = np.cumsum(np.stack([np.sin(theta), np.cos(theta)], 1), axis=0) * step
+    return s, xz - xz[np.searchsorted(s, 0.0)], float(bend)
+
+
+def _slither(rig: ZooRig, kind: str, frames: int, fps: float,
+             rng: np.random.Generator
+             ) -> Tuple[np.ndarray, np.ndarray, int, ClipFacts]:
+    """Global rotations and positions of a slithering snake, and its
+    facts."""
+    skel, length = rig.skeleton, rig.leg_length
+    clip = _profile(kind, frames, fps, GAITS["snake"][3] * length, rng)
+    s_root = np.cumsum(clip.speed) / fps
+    s_root = (s_root - s_root[clip.pad])[clip.pad:clip.pad + frames]
+    z = skel.rest_positions()[:, 2]
+    s, xz, bend = _snake_path(length, kind, rng,
+                              (s_root.min() + z.min(), s_root.max() + z.max()))
+    arc = s_root[:, None] + z[None]
+    target = np.zeros((frames, skel.num_joints, 3))
+    target[..., 0], target[..., 2] = np.interp(arc, s, xz[:, 0]), np.interp(arc, s, xz[:, 1])
+    radius = 0.02 * length
+    lift = np.clip((z - 0.55 * z.max()) / (0.45 * z.max()), 0, 1) ** 2
+    target[..., 1] = radius + 0.08 * length * lift
+    if kind == "idle":
+        t = np.arange(frames) / fps
+        sway = 0.05 * length * np.sin(2 * np.pi * _IDLE_HZ * t)[:, None] * lift
+        target[..., 0] += sway
+        target[..., 1] += 0.02 * length * lift * np.sin(np.pi * _IDLE_HZ * t)[:, None]
+    first, last = clip.pad, clip.pad + frames - 1
+    facts = ClipFacts(rig.species, kind, frames / fps, float(clip.speed[first] / length),
+                      float(clip.speed[last] / length),
+                      float(np.degrees(bend * (s_root[-1] - s_root[0]))))
+    return (*_follow(skel, target), 0, facts)
+
+
+def _follow(skel: Skeleton, target: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """Rotations pointing every joint's first child at its target (Y kept
+    up), and the positions they give by forward kinematics."""
+    frames, num = target.shape[:2]
+    rot, pos = np.zeros((frames, num, 3, 3)), np.zeros((frames, num, 3))
+    up = np.array([0.0, 1.0, 0.0])
+    pos[:, 0] = target[:, 0]
+    for j in range(num):
+        p = skel.parents[j]
+        if j:
+            pos[:, j] = pos[:, p] + rot[:, p] @ skel.offsets[j]
+        kids = skel.children[j]
+        if not kids:
+            rot[:, j] = rot[:, p]
+            continue
+        c = kids[0]
+        rot[:, j] = _align(_unit(skel.offsets[c]), up, target[:, c] - target[:, j],
+                           np.broadcast_to(up, (frames, 3)))
+    return rot, pos
+
+
+# -------------------------------------------------------------- clips
+def generate_clip(rig: ZooRig, kind: str = "walk", frames: int = 120,
+                  fps: float = 30.0, seed: int = 0) -> Motion:
+    r"""A procedural motion of a zoo skeleton.
+
+    Args:
+        rig (ZooRig): A skeleton from :func:`zoo_rigs`.
+        kind (str): One of ``CLIP_KINDS[rig.species]``.
+        frames (int): Number of frames.
+        fps (float): Frames per second.
+        seed (int): Random seed (speed, turn rate, heading, phase).
+
+    Returns:
+        Motion: Local rotations and translations (metres, +Y up, ground at
+        y = 0); no raw channels.
+    """
+    return generate_clip_with_facts(rig, kind, frames, fps, seed)[0]
+
+
+def generate_clip_with_facts(rig: ZooRig, kind: str = "walk", frames: int = 120,
+                             fps: float = 30.0, seed: int = 0
+                             ) -> Tuple[Motion, ClipFacts]:
+    r""":func:`generate_clip` and what the clip does (:class:`ClipFacts`:
+    speeds, turn), from the same random draws.
+
+    Args:
+        rig (ZooRig): A skeleton from :func:`zoo_rigs`.
+        kind (str): One of ``CLIP_KINDS[rig.species]``.
+        frames (int): Number of frames.
+        fps (float): Frames per second.
+        seed (int): Random seed.
+
+    Returns:
+        tuple: The motion (see :func:`generate_clip`) and its facts.
+    """
+    if kind not in CLIP_KINDS[rig.species]:
+        raise ValueError(f"{rig.species} has no clip kind {kind!r}: choose "
+                         f"from {list(CLIP_KINDS[rig.species])}")
+    rng = np.random.default_rng(seed)
+    make = _slither if rig.species == "snake" else _legged
+    rot, pos, pad, facts = make(rig, kind, frames, fps, rng)
+    rot, pos = rot[pad:pad + frames], pos[pad:pad + frames]
+    return _to_motion(rig, rot, pos, fps, kind), facts
+
+
+def _to_motion(rig: ZooRig, rot: np.ndarray, pos: np.ndarray, fps: float,
+               kind: str) -> Motion:
+    """Local rotations from global ones; translations are the offsets and
+    the root position."""
+    skel = rig.skeleton
+    parents = np.maximum(skel.parents, 0)
+    local = np.swapaxes(rot[:, parents], -1, -2) @ rot
+    local[:, 0] = rot[:, 0]
+    local[:, skel.end_site] = np.eye(3)
+    trans = np.broadcast_to(skel.offsets, pos.shape).copy()
+    trans[:, 0] = pos[:, 0]
+    return Motion(skel, local, trans, fps=fps,
+                  source=f"<satagraph zoo {rig.name} {kind}>")
+

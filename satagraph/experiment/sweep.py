@@ -1,0 +1,356 @@
+r"""Equal-budget sweeps: train several configs for the same wall-clock time on
+the same data, evaluate each on the same split, and tabulate (the SATA
+paper's Table 4 layout: one row per config).
+
+Example::
+
+    from satagraph.experiment.sweep import run_sweep
+    rows = run_sweep(["tiny", "tiny"], budget_minutes=0.5, output="sweep",
+                     variants=[[], ["model.local_conv=gin"]])
+
+Every config gets the data section of the first one (``same_data``), a CSV
+logger, no progress bar, ``trainer.max_time`` set to the budget and no
+epoch limit, and its own run folder under the output folder. The metrics
+are those of the final weights (not the best checkpoint) on the test split
+(:func:`~satagraph.pipelines.evaluation.evaluate`).
+"""
+from __future__ import annotations
+
+import copy
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from datetime import timedelta
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence
+
+import torch
+from torch.utils.data import DataLoader
+
+from satagraph.experiment.config import load_config
+from satagraph.utils.files import atomic_write_text
+
+#: Steps the "train loss" column averages (see :class:`TrailingLoss`).
+TRAILING_STEPS = 50
+
+#: Retargeting columns of the table (setting: header), as the SATA paper's Table 4.
+RETARGET_HEADERS = {"internal": "retarget int.", "cross": "retarget cross"}
+
+#: Metric columns of the table (name, unit factor, header).
+COLUMNS = (("JR", 1.0, "JR (rad)"), ("RT", 100.0, "RT (cm)"), ("JP", 100.0, "JP (cm)"),
+           ("FS", 100.0, "FS (cm)"), ("GP", 100.0, "GP (cm)"))
+
+
+@dataclass
+class SweepRow:
+    r"""The outcome of one config of a sweep.
+
+    Args:
+        name (str): Row label (the config's name, made unique).
+        config (str): The config as given.
+        params (int): Trainable parameters.
+        steps (int): Optimizer steps done within the budget.
+        epochs (int): Epochs started.
+        seconds (float): Wall time of the training (set-up included).
+        train_loss (float): Mean training loss over the last
+            :obj:`TRAILING_STEPS` steps (``nan`` if none).
+        metrics (dict): ``{dataset: {metric: value, "clips": n}}`` on the
+            evaluation split (and extra loaders).
+        retarget (dict): Retarget error ``{setting: {group: value}}``, setting
+            ``"internal"`` or ``"cross"`` (see
+            :data:`~satagraph.pipelines.evaluation.RETARGET_SETTINGS`), group a file
+            label or ``"label:dataset"`` (empty when not asked).
+        run_dir (str): The run folder (checkpoints, CSV logs).
+    """
+
+    name: str
+    config: str
+    params: int = 0
+    steps: int = 0
+    epochs: int = 0
+    seconds: float = 0.0
+    train_loss: float = math.nan
+    metrics: Dict[str, Dict[str, float]] = field(default_factory=dict)
+    retarget: Dict[str, Dict[str, float]] = field(default_factory=dict)
+    run_dir: str = ""
+
+
+# ----------------------------------------------------------- configs
+def split_arguments(items: Sequence[str]) -> tuple:
+    """Configs and ``key=value`` overrides from one positional list;
+    ``config=NAME`` names a config too (what a wandb sweep agent passes)."""
+    configs, overrides = [], []
+    for item in items:
+        if "=" not in item or item.startswith("config="):
+            configs.append(item.split("=", 1)[-1])
+        else:
+            overrides.append(item)
+    return configs, overrides
+
+
+def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
+                  data: Optional[Dict[str, Any]] = None,
+                  logger: Optional[str] = "csv") -> Dict[str, Any]:
+    r"""A copy of :obj:`cfg` bound by :obj:`budget_minutes` of training
+    (``trainer.max_time``, no epoch or step limit), writing into
+    :obj:`run_dir`, on :obj:`data` when given. :obj:`logger`: ``"csv"``,
+    ``"tensorboard"``, ``"none"``, ``"wandb"`` (online, e.g. under a wandb
+    sweep agent) or ``None`` (the config's own logger)."""
+    cfg = copy.deepcopy(cfg)
+    if data is not None:
+        cfg["data"] = copy.deepcopy(data)
+    trainer = dict(cfg.get("trainer") or {})
+    trainer.pop("max_steps", None)
+    trainer.update(max_epochs=-1, progress=False, enable_model_summary=False,
+                   enable_progress_bar=False)
+    trainer.setdefault("log_every_n_steps", 10)
+    trainer.pop("max_time", None)
+    cfg["trainer"] = trainer
+    if logger is not None:
+        cfg["logger"] = {"name": logger, "offline": False} if logger == "wandb" else {
+            "name": logger}
+    cfg["output_dir"] = str(run_dir)
+    cfg["_budget_s"] = 60.0 * float(budget_minutes)
+    return cfg
+
+
+def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
+                  variants: Optional[Sequence[Sequence[str]]] = None,
+                  budget_minutes: float = 5.0, output: str = "sweeps/latest",
+                  same_data: bool = True,
+                  logger: Optional[str] = "csv") -> List[Dict[str, Any]]:
+    r"""Loaded, budgeted configs of a sweep.
+
+    Args:
+        configs (list[str]): Config names or paths.
+        overrides (list[str]): Overrides applied to every config.
+        variants (list[list[str]], optional): Extra overrides per config.
+        budget_minutes (float): Training budget of each config.
+        output (str): Output folder; config :math:`i` runs in
+            ``output/<i>_<name>``.
+        same_data (bool): Give every config the first one's data section.
+        logger (str, optional): See :func:`budget_config`.
+    """
+    variants = list(variants or [[] for _ in configs])
+    if len(variants) != len(configs):
+        raise ValueError(f"{len(variants)} variants for {len(configs)} configs")
+    loaded = [load_config(c, list(overrides) + list(v)) for c, v in zip(configs, variants)]
+    data = loaded[0]["data"] if same_data and loaded else None
+    out, names = [], []
+    for i, (cfg, spec) in enumerate(zip(loaded, configs)):
+        label = _label(cfg["name"], variants[i], names)
+        names.append(label)
+        cfg = budget_config(cfg, budget_minutes, Path(output) / f"{i}_{label}", data,
+                            logger)
+        cfg.update(name=label, _config=spec)
+        out.append(cfg)
+    return out
+
+
+def _label(name: str, extra: Sequence[str], taken: Sequence[str]) -> str:
+    """A unique row label: the config name, its variant overrides, a count."""
+    label = name + "".join(
+        f"+{o.split('=', 1)[0].split('.')[-1]}={o.split('=', 1)[1]}" for o in extra)
+    base, k = label, 2
+    while label in taken:
+        label, k = f"{base}_{k}", k + 1
+    return label
+
+
+# ---------------------------------------------------------- training
+def train_budgeted(cfg: Dict[str, Any]):
+    r"""Train one budgeted config (see :func:`budget_config`).
+
+    Returns:
+        The module, the data module, the trainer, the wall time and the mean
+        training loss over the last :obj:`TRAILING_STEPS` steps.
+    """
+    from satagraph.lightning.trailing_loss import TrailingLoss
+    from satagraph.experiment.train import train
+    budget = timedelta(seconds=float(cfg["_budget_s"]))
+    cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
+    trailing = TrailingLoss(TRAILING_STEPS)
+    start = time.perf_counter()
+    module, dm, trainer, _ = train(cfg, max_time=budget, callbacks=[trailing])
+    return module, dm, trainer, time.perf_counter() - start, trailing.value
+
+
+def run_config(cfg: Dict[str, Any], eval_split: str = "test",
+               extra_loaders: Optional[Dict[str, Any]] = None,
+               retarget_files: Optional[Dict[str, Sequence]] = None,
+               max_batches: Optional[int] = None) -> SweepRow:
+    r"""Train one budgeted config and evaluate it.
+
+    Args:
+        cfg (dict): A config from :func:`sweep_configs`.
+        eval_split (str): Split of the config's data to evaluate on.
+        extra_loaders (dict, optional): ``{label: callable(module) -> loader}``
+            of further evaluation data (e.g. a held-out dataset); their
+            results are stored under ``label``.
+        retarget_files (dict, optional): ``{label: files}`` for
+            :func:`~satagraph.pipelines.evaluation.retarget_errors`; ``"split"`` as the
+            value's key takes the evaluation split's files.
+        max_batches (int, optional): Evaluation batches per loader.
+    """
+    from satagraph.pipelines.evaluation import evaluate
+    from satagraph.lightning.autoencoder import count_parameters
+    module, dm, trainer, seconds, train_loss = train_budgeted(cfg)
+    row = SweepRow(name=cfg["name"], config=str(cfg.get("_config", cfg["name"])),
+                   params=count_parameters(module), steps=int(trainer.global_step),
+                   epochs=int(trainer.current_epoch), seconds=seconds,
+                   train_loss=train_loss, run_dir=cfg["output_dir"])
+    row.metrics = evaluate(module, dm._loader(eval_split, False), max_batches)
+    for label, make_loader in (extra_loaders or {}).items():
+        for group, values in evaluate(module, make_loader(module), max_batches).items():
+            row.metrics[f"{label}" if group == "all" else f"{label}:{group}"] = values
+    if retarget_files is not None:
+        row.retarget = retarget_table(module, dm, retarget_files, eval_split)
+    return row
+
+
+def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
+                   settings: Optional[Sequence[str]] = None
+                   ) -> Dict[str, Dict[str, float]]:
+    r"""Retarget errors (paired ground truth) per setting, label and dataset:
+    ``{setting: {"label": all files, "label:dataset": value}}``.
+
+    Args:
+        module: The trained module.
+        dm: Its data module (for ``"split"``).
+        files (dict): ``{label: files}``; ``"split"`` takes the files of
+            :obj:`split`.
+        split (str): Split whose files ``"split"`` stands for.
+        settings (list[str], optional): Retargeting settings (default:
+            every one of :data:`~satagraph.pipelines.evaluation.RETARGET_SETTINGS`).
+    """
+    from satagraph.pipelines.evaluation import retarget_error_table
+    embed = module.embed
+    out: Dict[str, Dict[str, float]] = {}
+    for label, chosen in files.items():
+        chosen = dm.datasets[split].files if chosen == "split" else chosen
+        table = retarget_error_table(module, chosen, embed, settings=settings)
+        for setting, errors in table.items():
+            out.setdefault(setting, {}).update({label if group == "all" else f"{label}:{group}": value
+                                 for group, value in errors.items()})
+    return out
+
+
+def held_out_loader(data: Dict[str, Any], sources: Any, batch_size: Optional[int] = None):
+    r"""A function ``module -> DataLoader`` over every file of
+    :obj:`sources` (all splits: a dataset held out of training), cut into
+    evaluation windows as :obj:`data` (a config's data section) says."""
+    def make(module) -> DataLoader:
+        from satagraph.data.collate import collate_clips
+        from satagraph.data.datamodule import semantic_embedder
+        from satagraph.data.dataset import MotionDataset, load_features
+        from satagraph.datasets.sources import resolve_sources
+        files = resolve_sources(sources)
+        feats = load_features(files, data.get("preprocessing"), data.get("cache_dir"))
+        window = int(data.get("window", 64))
+        ds = MotionDataset(files, feats, semantic_embedder(data.get("semantic_encoder",
+                                                                    "offline")),
+                           window, int(data.get("eval_stride") or window))
+        return DataLoader(ds, batch_size=batch_size or int(data.get("batch_size", 32)),
+                          collate_fn=collate_clips)
+    return make
+
+
+def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
+              output: str = "sweeps/latest", overrides: Sequence[str] = (),
+              variants: Optional[Sequence[Sequence[str]]] = None,
+              retarget: bool = False, max_batches: Optional[int] = None,
+              logger: Optional[str] = "csv", log=print) -> List[SweepRow]:
+    r"""Train every config for :obj:`budget_minutes` on the same data,
+    evaluate each on the test split and write ``sweep.md`` and
+    ``sweep.json`` into :obj:`output`.
+
+    Args:
+        configs (list[str]): Config names or paths.
+        budget_minutes (float): Wall-clock training budget per config.
+        output (str): Output folder.
+        overrides (list[str]): Overrides for every config.
+        variants (list[list[str]], optional): Extra overrides per config.
+        retarget (bool): Also the retarget error on the test files.
+        max_batches (int, optional): Evaluation batches (default: all).
+        logger (str, optional): Training logger (see :func:`budget_config`).
+        log (callable): Progress lines.
+    """
+    cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
+                         logger=logger)
+    rows = []
+    for i, cfg in enumerate(cfgs):
+        log(f"[{i + 1}/{len(cfgs)}] {cfg['name']}: training for {budget_minutes:g} min")
+        row = run_config(cfg, retarget_files={"test": "split"} if retarget else None,
+                         max_batches=max_batches)
+        log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
+            f"{row.train_loss:.4f}")
+        rows.append(row)
+    # Configs are plain containers (load_config); all share the first's data.
+    write_results(rows, Path(output), budget_minutes, overrides,
+                  data=cfgs[0]["data"].get("sources") if cfgs else None)
+    return rows
+
+
+# ------------------------------------------------------------- table
+def _metric(row: SweepRow, group: str, name: str, factor: float) -> str:
+    value = (row.metrics.get(group) or {}).get(name)
+    return "-" if value is None else f"{value * factor:.4f}"
+
+
+def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
+    """Table 4 layout: one row per config; metrics of :obj:`group`."""
+    settings = [s for s in RETARGET_HEADERS if any(s in r.retarget for r in rows)]
+    head = ["config", "params (M)", "steps", "train loss"] + [h for _, _, h in COLUMNS]
+    head += [RETARGET_HEADERS[s] for s in settings]
+    lines = ["| " + " | ".join(head) + " |", "|---" + "|---:" * (len(head) - 1) + "|"]
+    for r in rows:
+        cells = [r.name, f"{r.params / 1e6:.2f}", str(r.steps), f"{r.train_loss:.4f}"]
+        cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
+        for setting in settings:
+            value = r.retarget.get(setting, {}).get("test" if group == "all" else f"test:{group}")
+            cells.append("-" if value is None else f"{value:.3f}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
+                  overrides: Sequence[str] = (), data: Any = None) -> str:
+    """Write ``sweep.md`` and ``sweep.json``; returns the markdown.
+
+    Args:
+        rows (list[SweepRow]): One per config.
+        output (Path): Output folder.
+        budget_minutes (float): Training budget per config.
+        overrides (list[str]): Overrides applied to every config (recorded).
+        data (Any, optional): The data sources of the sweep (recorded).
+    """
+    output.mkdir(parents=True, exist_ok=True)
+    text = (f"# Sweep: {len(rows)} configs, {budget_minutes:g} min of training each\n\n"
+            f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data)}\n")
+    atomic_write_text(output / "sweep.md", text)
+    payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
+               "overrides": list(overrides), "data": data,
+               "rows": [asdict(r) for r in rows]}
+    atomic_write_text(output / "sweep.json", json.dumps(payload, indent=1, default=float))
+    return text
+
+
+def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> str:
+    lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
+             "final weights on the test split (all datasets); RT, JP, FS, GP in cm."]
+    if any(r.retarget for r in rows):
+        lines.append("Retarget: 1000 x mean squared joint error / H^2 over the test files; "
+                     "int.: onto bone-scaled copies of each source skeleton; cross: onto "
+                     "copies with a leaf chain dropped, a bone split and bones scaled "
+                     "(paired ground truth from the augmentation).")
+    if data is not None:
+        lines.append(f"Data (every config): `{json.dumps(data)}`.")
+    if overrides:
+        lines.append("Overrides (every config): " + " ".join(f"`{o}`" for o in overrides) + ".")
+    return "\n".join(lines)
+
+
+__all__ = ["SweepRow", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
+           "train_budgeted", "run_config", "retarget_table", "held_out_loader",
+           "run_sweep", "format_sweep", "write_results"]

@@ -1,0 +1,249 @@
+"""Build the data module, model and trainer from a config, and train."""
+from __future__ import annotations
+
+import contextlib
+import importlib
+import os
+import warnings
+from pathlib import Path
+from typing import Any, Dict, Optional, Tuple
+
+import lightning as L
+import torch
+
+from satagraph.experiment.config import expand_path
+from satagraph.data.datamodule import MotionDataModule
+from satagraph.io.checkpoint import CheckpointError, check_finite_weights
+from satagraph.io.weights import load_weights_or_checkpoint
+from satagraph.utils.files import atomic_write_text, sweep_stale_temps
+from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
+                                 SATAVAEModule)
+from satagraph.lightning.reliability import (LossLog, NonFiniteGuard, ResumeCheckpoint,
+                                             SafeCheckpointIO, resume_checkpoint,
+                                             run_lock)
+
+#: ``checkpoint`` config defaults: ``last.ckpt`` every N steps and/or M
+#: minutes of training (and at every epoch end).
+CHECKPOINT_DEFAULTS: Dict[str, Any] = {"every_n_steps": 500, "every_minutes": 10.0}
+
+MODULES = {"vae": SATAVAEModule, "rvq": SATARVQModule, "same": SAMEModule,
+           "padded_rvq": PaddedRVQModule}
+
+
+#: Modules registered by importing a module of their own, on first use.
+PLUGIN_MODULES = {"t2m": "satagraph.experiment.t2m"}
+#: ``module`` name -> data module class (default :class:`MotionDataModule`).
+DATAMODULES: Dict[str, Any] = {}
+
+
+def register_module(name: str, cls) -> None:
+    """Make a LightningModule class selectable as ``module: name``."""
+    MODULES[name] = cls
+
+
+def module_class(name: str):
+    """The LightningModule class registered under :obj:`name`."""
+    if name not in MODULES and name in PLUGIN_MODULES:
+        importlib.import_module(PLUGIN_MODULES[name])
+    if name not in MODULES:
+        raise ValueError(f"unknown module {name!r}; known: {sorted(MODULES)}")
+    return MODULES[name]
+
+
+def build_datamodule(cfg: Dict[str, Any]) -> MotionDataModule:
+    """The data module of a config; its sampling and augmentation seed is the
+    run's ``seed`` unless ``data.seed`` sets one."""
+    data = dict(cfg["data"])
+    data.setdefault("seed", int(cfg.get("seed", 0)))
+    name = cfg.get("module", "vae")
+    module_class(name)  # registers a plugin's data module
+    return DATAMODULES.get(name, MotionDataModule)(**data)
+
+
+def build_module(cfg: Dict[str, Any], dm: Optional[MotionDataModule] = None):
+    """The LightningModule for a config; the semantic width comes from the
+    data when it is not set."""
+    model = dict(cfg.get("model", {}))
+    if dm is not None and model.get("semantic_channels") is None \
+            and hasattr(dm, "semantic_channels"):
+        model["semantic_channels"] = dm.semantic_channels
+    name = cfg.get("module", "vae")
+    data = cfg["data"]
+    meta = {"module": name, "semantic_encoder": data.get("semantic_encoder", "offline"),
+            "window": int(data.get("window", 64)), "data": data}
+    module = module_class(name)(
+        model=model, loss=cfg.get("loss"), optim=cfg.get("optim"),
+        fps=float((data.get("preprocessing") or {}).get("fps", 30.0)), meta=meta)
+    if dm is not None and hasattr(dm, "normalizer"):
+        module.normalizer.load_state_dict(dm.normalizer.state_dict())
+    return module
+
+
+def build_logger(cfg: Dict[str, Any], run_dir: Path):
+    """``logger.name``: ``wandb`` (offline by default), ``csv``,
+    ``tensorboard`` or ``none``."""
+    spec = dict(cfg.get("logger") or {"name": "wandb"})
+    name = spec.pop("name", "wandb")
+    if name == "none":
+        return False
+    if name == "csv":
+        return L.pytorch.loggers.CSVLogger(str(run_dir), name="logs")
+    if name == "tensorboard":
+        return L.pytorch.loggers.TensorBoardLogger(str(run_dir), name="logs")
+    if name == "wandb":
+        from lightning.pytorch.loggers import WandbLogger
+        spec.setdefault("offline", True)
+        spec.setdefault("project", "satagraph")
+        return WandbLogger(name=cfg["name"], save_dir=str(run_dir), **spec)
+    raise ValueError(f"unknown logger {name!r}: use wandb, csv, tensorboard or none")
+
+
+def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Trainer:
+    """The trainer of a config: ``last.ckpt`` by :class:`ResumeCheckpoint`
+    (``checkpoint.every_n_steps`` / ``every_minutes``, and every epoch end),
+    the best ``val_loss`` by :class:`ModelCheckpoint`, non-finite losses and
+    gradients handled by :class:`NonFiniteGuard` (``nonfinite``: ``stop`` or
+    ``skip``), checkpoints written atomically and loaded safely
+    (:class:`SafeCheckpointIO`); ``loss_log: true`` appends every step's
+    loss to ``<run>/losses.tsv`` (:class:`LossLog`)."""
+    from lightning.pytorch.callbacks import ModelCheckpoint, RichProgressBar
+    opts = dict(cfg.get("trainer") or {})
+    opts.update(overrides)
+    opts.setdefault("gradient_clip_val", (cfg.get("optim") or {}).get("grad_clip", 0.5))
+    folder = run_dir / "checkpoints"
+    spec = dict(CHECKPOINT_DEFAULTS, **(cfg.get("checkpoint") or {}))
+    resume = ResumeCheckpoint(str(folder), spec.get("every_n_steps"),
+                              spec.get("every_minutes"))
+    best = ModelCheckpoint(dirpath=str(folder), save_last=False,
+                           monitor=opts.pop("monitor", "val_loss"), mode="min")
+    guard = NonFiniteGuard(cfg.get("nonfinite", "stop"), str(resume.last_path))
+    callbacks = [best, resume, guard] + list(opts.pop("callbacks", None) or [])
+    if cfg.get("loss_log"):
+        callbacks.append(LossLog(str(run_dir / "losses.tsv")))
+    if opts.pop("progress", True):
+        callbacks.append(RichProgressBar())
+    plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
+    return L.Trainer(default_root_dir=str(run_dir), logger=build_logger(cfg, run_dir),
+                     callbacks=callbacks, plugins=plugins, **opts)
+
+
+def last_checkpoint(trainer: L.Trainer) -> str:
+    """The ``last.ckpt`` path of a trainer built by :func:`build_trainer`."""
+    for callback in trainer.callbacks:
+        if isinstance(callback, ResumeCheckpoint):
+            return str(callback.last_path)
+    return trainer.checkpoint_callback.last_model_path
+
+
+def init_weights(module: L.LightningModule, ckpt: str) -> None:
+    """Load another run's weights into :obj:`module` for fine-tuning; the
+    module keeps its own normaliser (the new data's). :obj:`ckpt` is a
+    checkpoint, a ``.safetensors`` weights file or ``"builtin"``. Warns about
+    weights the checkpoint lacks or has in excess (e.g. another bottleneck)."""
+    state = load_weights_or_checkpoint(ckpt)["state_dict"]
+    state = {k: v for k, v in state.items() if not k.startswith("normalizer.")}
+    result = module.load_state_dict(state, strict=False)
+    missing = [k for k in result.missing_keys if not k.startswith("normalizer.")]
+    if missing or result.unexpected_keys:
+        warnings.warn(f"--init-from {ckpt}: {len(missing)} weights not in the checkpoint "
+                      f"(kept at initialisation: {missing[:5]}), "
+                      f"{len(result.unexpected_keys)} unused "
+                      f"({result.unexpected_keys[:5]})", stacklevel=2)
+
+
+def _spawns_workers(trainer: L.Trainer) -> bool:
+    """Whether :meth:`~lightning.pytorch.Trainer.fit` pickles its arguments
+    into new processes (``strategy="ddp_spawn"``)."""
+    launcher = getattr(trainer.strategy, "launcher", None)
+    return getattr(launcher, "_start_method", None) in ("spawn", "forkserver")
+
+
+def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = None,
+          **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
+    r"""Train a model from a config dict (see ``experiments/``).
+
+    Args:
+        cfg (dict): The config (plain containers).
+        resume (bool): Continue from ``<run>/checkpoints/last.ckpt``.
+        init_from (str, optional): Start from another run's weights (fine-
+            tuning on a new dataset); the normaliser of the new data is used.
+
+    Returns:
+        The trained module, the data module, the trainer and the run folder.
+    """
+    run_dir = Path(expand_path(cfg.get("output_dir") or f"runs/{cfg['name']}"))
+    if run_dir.exists() and not run_dir.is_dir():
+        raise ValueError(f"{run_dir}: output_dir is not a folder")
+    if resume and not (run_dir / "checkpoints").is_dir():
+        raise FileNotFoundError(f"--resume: no checkpoint at "
+                                f"{run_dir / 'checkpoints' / 'last.ckpt'}")
+    if init_from:
+        load_weights_or_checkpoint(init_from)  # a bad file fails before any work
+    if cfg.get("threads"):
+        torch.set_num_threads(int(cfg["threads"]))
+    with _lock(run_dir):
+        last = resume_checkpoint(run_dir / "checkpoints") if resume else None
+        sweep_stale_temps(run_dir / "checkpoints")
+        L.seed_everything(int(cfg.get("seed", 0)), workers=True)
+        dm = build_datamodule(cfg)
+        dm.setup("fit")
+        _record_skipped(dm, run_dir)
+        module = build_module(cfg, dm)
+        if init_from:
+            init_weights(module, init_from)
+        trainer = build_trainer(cfg, run_dir, **trainer_overrides)
+        # Spawned workers get the data module pickled: hand them one that is not
+        # set up (its datasets hold the semantic embedder, a closure); each worker
+        # sets it up from the feature cache.
+        fit_dm = build_datamodule(cfg) if _spawns_workers(trainer) else dm
+        with warnings.catch_warnings():
+            # the sampler resumes mid-epoch itself (ResumeCheckpoint)
+            warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
+            trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
+    return module, dm, trainer, run_dir
+
+
+def _lock(run_dir: Path):
+    """:func:`run_lock` in the launching process; processes that Lightning
+    starts for distributed training (``LOCAL_RANK`` > 0) share it."""
+    if int(os.environ.get("LOCAL_RANK", "0") or 0) > 0:
+        return contextlib.nullcontext()
+    return run_lock(run_dir)
+
+
+def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:
+    """Write the files ``data.on_error=skip`` left out to
+    ``<run>/skipped_files.txt`` (one ``split: path: reason`` per line)."""
+    path = run_dir / "skipped_files.txt"
+    if dm.skipped:
+        atomic_write_text(path, "\n".join(dm.skipped) + "\n", create_parent=True)
+
+
+def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
+    """A trained module, whatever its class, loaded safely: from a
+    checkpoint (``weights_only=True``), a weights file (``.safetensors``,
+    :mod:`satagraph.io.weights`) or ``"builtin"`` (the package's weights).
+
+    Raises:
+        CheckpointError: The file is not a satagraph model checkpoint or
+            weights file, is damaged, or holds non-finite weights; or
+            ``"builtin"`` and none ship (one line naming it).
+    """
+    data = load_weights_or_checkpoint(ckpt, require=("state_dict", "hyper_parameters"))
+    hparams = dict(data["hyper_parameters"])
+    if not isinstance(hparams.get("model"), dict):
+        raise CheckpointError(f"{ckpt}: not a satagraph model checkpoint (no model "
+                              "hyperparameters)")
+    check_finite_weights(data, ckpt)
+    name = (hparams.get("meta") or {}).get("module", "vae")
+    cls = module_class(name)
+    module = cls(**{k: hparams[k] for k in ("model", "loss", "optim", "fps", "meta")
+                    if k in hparams})
+    module.on_load_checkpoint(data)
+    try:
+        module.load_state_dict(data["state_dict"])
+    except RuntimeError as err:
+        first = str(err).strip().splitlines()[0]
+        raise CheckpointError(f"{ckpt}: weights do not fit the {name!r} model its "
+                              f"hyperparameters describe ({first})") from None
+    return module.to(map_location)

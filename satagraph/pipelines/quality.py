@@ -1,0 +1,197 @@
+r"""Retarget quality without a ground truth, on any pair of skeletons.
+
+A retarget has no paired truth when the target is another species, yet a
+user can judge it at a glance: do the limbs step with the source's, does
+the character travel as far for its size, do its feet touch the ground,
+does an upright character stay upright? Each question is one number here,
+computed the same way on the source and on the output:
+
+* :func:`step_correlation`: per limb (left/right, front/hind, found by the
+  semantic descriptions), the Pearson correlation of the limb end's forward
+  displacement over 0.1 s in the character's facing frame, relative to the
+  root. In step means clearly positive; chance is 0.
+* :func:`root_travel`: the root's horizontal path length divided by the
+  leg length (the root's median height above the lowest joint), so that a
+  cat and a horse that walk alike travel alike.
+* :func:`ground_height`: the median over frames of the lowest joint's
+  height, as a fraction of the character's height (0: feet on the floor).
+* :func:`upright_fraction`: the share of frames whose head is above the
+  hips (``None`` for a skeleton without a head).
+
+All of them take canonical motions (:func:`~satagraph.transforms.canonical.canonicalize`:
++Y up, metres, floor at 0); :func:`retarget_quality` compares a source with
+its retarget.
+"""
+from __future__ import annotations
+
+from typing import Dict, Optional, Sequence
+
+import numpy as np
+
+from satagraph.transforms.canonical import canonicalize, lateral_forward
+from satagraph.data.features import motion_to_features
+from satagraph.semantics import LIMBS, describe_joints, limb_ends
+from satagraph.motion import Motion
+
+#: Displacement interval of :func:`step_correlation` (frames at 30 fps, 0.1 s):
+#: the stepping band (1-3 Hz) without frame-to-frame capture jitter.
+LAG = 3
+
+
+def facing_axis(canonical: Motion) -> Optional[np.ndarray]:
+    r"""Root-local facing axis of a canonical motion: the mean over its
+    frames of the horizontal forward direction (from left/right joint pairs)
+    in the root's frame; ``None`` without left/right pairs.
+
+    Shapes:
+        output: :math:`(3,)`.
+    """
+    rot, pos = canonical.global_transforms()
+    forward = lateral_forward(pos, canonical.skeleton.names, np.array([0.0, 1.0, 0.0]))
+    if forward is None:
+        return None
+    forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-9)
+    axis = np.einsum("tji,tj->i", rot[:, 0], forward)
+    return axis / max(np.linalg.norm(axis), 1e-9)
+
+
+def forward_tracks(canonical: Motion, averaged: bool = True) -> np.ndarray:
+    r"""Forward coordinate of every joint relative to the root's ground
+    projection, in the facing frame of :func:`facing_axis` (``averaged``) or
+    of the first frame (as the features take it).
+
+    Shapes:
+        output: :math:`(T, J)`.
+    """
+    axis = facing_axis(canonical) if averaged else None
+    return motion_to_features(canonical, facing_axis=axis).x[..., 2]
+
+
+def limb_tracks(canonical: Motion, averaged: bool = True) -> Dict[str, np.ndarray]:
+    r""":func:`forward_tracks` of each limb end the skeleton has, by limb
+    name (:data:`~satagraph.semantics.LIMBS`).
+
+    Shapes:
+        values: :math:`(T,)`.
+    """
+    track = forward_tracks(canonical, averaged)
+    return {limb: track[:, j] for limb, j in limb_ends(canonical.skeleton).items()}
+
+
+def correlate(source: Dict[str, np.ndarray], output: Dict[str, np.ndarray],
+              lag: Optional[int] = LAG) -> Dict[str, float]:
+    """Per limb found on both, the Pearson correlation of the tracks'
+    displacements over :obj:`lag` frames (``None``: of the tracks
+    themselves); a still track gives ``nan``."""
+    out = {}
+    for limb in LIMBS:
+        if limb in source and limb in output:
+            frames = min(len(source[limb]), len(output[limb]))
+            x, y = source[limb][:frames], output[limb][:frames]
+            if lag:
+                x, y = x[lag:] - x[:-lag], y[lag:] - y[:-lag]
+            if x.std() < 1e-9 or y.std() < 1e-9:
+                out[limb] = float("nan")
+            else:
+                out[limb] = float(np.corrcoef(x, y)[0, 1])
+    return out
+
+
+def mean_correlation(correlations: Dict[str, float]) -> float:
+    """Mean over limbs; a still limb counts as 0 (not in step), no limb at
+    all gives ``nan``."""
+    if not correlations:
+        return float("nan")
+    return float(np.mean([0.0 if np.isnan(v) else v for v in correlations.values()]))
+
+
+def step_correlation(source: Motion, output: Motion) -> float:
+    """:func:`mean_correlation` of the limb-end step correlations of two
+    canonical motions at the same frame rate."""
+    return mean_correlation(correlate(limb_tracks(source), limb_tracks(output)))
+
+
+def leg_length(canonical: Motion) -> float:
+    """The root's median height above the lowest joint (the hip height of a
+    legged character), at least 5% of the character's height."""
+    pos = canonical.global_positions()
+    hip = np.median(pos[:, 0, 1] - pos[:, :, 1].min(axis=1))
+    return float(max(hip, 0.05 * max(canonical.height(), 1e-9)))
+
+
+def root_travel(canonical: Motion) -> float:
+    """Horizontal path length of the root divided by :func:`leg_length`."""
+    xz = canonical.global_positions()[:, 0, [0, 2]]
+    return float(np.linalg.norm(np.diff(xz, axis=0), axis=-1).sum() / leg_length(canonical))
+
+
+def ground_height(canonical: Motion) -> float:
+    """Median over frames of the lowest joint's height above the floor
+    (y = 0), as a fraction of the character's height; negative below."""
+    low = canonical.global_positions()[:, :, 1].min(axis=1)
+    return float(np.median(low) / max(canonical.height(), 1e-9))
+
+
+def head_index(canonical: Motion) -> Optional[int]:
+    """The joint described as the head, if any."""
+    for j, text in enumerate(describe_joints(canonical.skeleton)):
+        if text == "head" or text.startswith("head,"):
+            return j
+    return None
+
+
+def upright_fraction(canonical: Motion) -> Optional[float]:
+    """Share of frames whose head is above the root (hips); ``None`` for a
+    skeleton without a head."""
+    head = head_index(canonical)
+    if head is None:
+        return None
+    pos = canonical.global_positions()
+    return float((pos[:, head, 1] > pos[:, 0, 1]).mean())
+
+
+def most_active(motion: Motion, frames: int) -> Motion:
+    """The :obj:`frames`-long slice of :obj:`motion` (at its own frame rate)
+    whose limb ends move most."""
+    if motion.num_frames <= frames:
+        return motion
+    tracks = limb_tracks(canonicalize(motion, fps=None))
+    if not tracks:
+        return motion.slice(0, frames)
+    speed = np.abs(np.diff(np.stack(list(tracks.values()), axis=1), axis=0)).sum(axis=1)
+    start = int(np.argmax(np.convolve(speed, np.ones(frames - 1), mode="valid")))
+    return motion.slice(start, start + frames)
+
+
+def retarget_quality(source: Motion, output: Motion,
+                     keys: Sequence[str] = ("steps", "travel", "ground", "upright")
+                     ) -> Dict[str, Optional[float]]:
+    r"""The quality numbers of a retarget next to the source's.
+
+    Args:
+        source (Motion): The source, canonical.
+        output (Motion): Its retarget, canonical, same frame rate and frames.
+        keys: Which numbers.
+
+    Returns:
+        dict: ``steps`` (:func:`step_correlation`), ``travel`` (the output's
+        :func:`root_travel` over the source's), ``ground``
+        (:func:`ground_height` of the output) and ``upright``
+        (:func:`upright_fraction` of the output).
+    """
+    out: Dict[str, Optional[float]] = {}
+    if "steps" in keys:
+        out["steps"] = step_correlation(source, output)
+    if "travel" in keys:
+        out["travel"] = root_travel(output) / max(root_travel(source), 1e-9)
+    if "ground" in keys:
+        out["ground"] = ground_height(output)
+    if "upright" in keys:
+        out["upright"] = upright_fraction(output)
+    return out
+
+
+__all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
+           "mean_correlation", "step_correlation", "leg_length", "root_travel",
+           "ground_height", "head_index", "upright_fraction", "most_active",
+           "retarget_quality"]

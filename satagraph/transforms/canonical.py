@@ -1,0 +1,286 @@
+"""Canonicalisation: +Y up, facing +Z and root xz at the origin at frame 0,
+floor at y = 0, metres, one frame rate."""
+from __future__ import annotations
+
+import re
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from satagraph.transforms.rig_reading import axis_vector
+from satagraph.motion import CanonicalTransform, Motion, RigSettings
+from satagraph.skeleton import Skeleton
+
+_SIDE = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)"
+                   r"|(?<![A-Za-z])[LR](?=[A-Z])")
+
+
+def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rotation taking unit vector a onto unit vector b (Rodrigues)."""
+    v, c = np.cross(a, b), float(np.dot(a, b))
+    if c < -1 + 1e-9:  # opposite: half turn about any perpendicular axis
+        axis = np.cross(a, [1.0, 0, 0])
+        if np.linalg.norm(axis) < 1e-6:
+            axis = np.cross(a, [0, 1.0, 0])
+        axis /= np.linalg.norm(axis)
+        return 2 * np.outer(axis, axis) - np.eye(3)
+    k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + k + k @ k / (1 + c)
+
+
+def _first_pose(motion: Motion) -> np.ndarray:
+    if motion.num_frames == 0:
+        return motion.skeleton.rest_positions()
+    return motion.slice(0, 1).global_positions()[0]
+
+
+def detect_up_axis(motion: Motion) -> str:
+    r"""Guess the up axis of a motion (``"+Y"``, ``"-Z"``, ...) from its
+    motion and pose; :func:`~satagraph.transforms.rig_reading.guess_up_axis` gives
+    the confidence and the evidence too."""
+    from satagraph.transforms.rig_reading import guess_up_axis
+
+    return guess_up_axis(motion).axis
+
+
+def _side(name: str) -> Optional[str]:
+    """'L' or 'R' for names with a side marker, else None; the stem is the
+    name with the marker removed."""
+    match = _SIDE.search(name)
+    if not match:
+        return None
+    return "L" if match.group(0).strip("_.").lower().startswith("l") else "R"
+
+
+def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
+    """Indices of left joints and their right counterparts (matched by the
+    name with the side marker and exporter noise such as ``__x7Q`` removed)."""
+    from satagraph.semantics.lexicon import drop_noise_tokens
+    stems = {}
+    for i, raw in enumerate(names):
+        name = drop_noise_tokens(raw)
+        side = _side(name)
+        if side:
+            stem = _SIDE.sub("", name, count=1).lower()
+            stems.setdefault(stem, {})[side] = i
+    pairs = [(d["L"], d["R"]) for d in stems.values() if "L" in d and "R" in d]
+    return [p[0] for p in pairs], [p[1] for p in pairs]
+
+
+def lateral_forward(positions: np.ndarray, names: List[str],
+                    up: np.ndarray) -> Optional[np.ndarray]:
+    r"""Forward direction ``across x up`` with ``across`` the mean of
+    left - right over the joint pairs found by name (not normalised);
+    ``None`` for a skeleton without such pairs.
+
+    Shapes:
+        - **positions**: :math:`(..., J, 3)`
+        - **output**: :math:`(..., 3)`
+    """
+    left, right = _lateral_pairs(names)
+    if not left:
+        return None
+    across = (positions[..., left, :] - positions[..., right, :]).mean(-2)
+    return np.cross(across, up)
+
+
+def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
+    r"""Horizontal facing direction at frame 0 (unit vector, world axes).
+
+    From left/right joint pairs found by name (``Left*``/``Right*``, ``L_``,
+    ``.L``, ``_r``, ...): forward = across x up with across = left - right.
+    Falls back to the root's local +Z axis.
+    """
+    forward = lateral_forward(_first_pose(motion), motion.skeleton.names, up)
+    if forward is None or np.linalg.norm(forward - up * forward.dot(up)) < 1e-8:
+        root = motion.rotations[0, 0] if motion.num_frames else np.eye(3)
+        forward = root[:, 2]
+    forward = forward - up * forward.dot(up)
+    norm = np.linalg.norm(forward)
+    return forward / norm if norm > 1e-8 else _orthogonal(up)
+
+
+def _orthogonal(up: np.ndarray) -> np.ndarray:
+    other = np.array([0.0, 0, 1]) if abs(up[2]) < 0.9 else np.array([1.0, 0, 0])
+    vec = other - up * other.dot(up)
+    return vec / np.linalg.norm(vec)
+
+
+def remove_static_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
+    r"""Fold a motionless root with a single child into that child.
+
+    Some rigs put a fixed helper joint (``joint_Root``, ``RL_BoneRoot``) above
+    the moving hips. Global positions of the remaining joints are unchanged.
+
+    Returns:
+        The motion, and a description of the removed root (name, channels,
+        offset, constant rotation and translation) or ``None``.
+    """
+    skel = motion.skeleton
+    if motion.num_frames < 2 or skel.num_joints < 2 or len(skel.children[0]) != 1:
+        return motion, None
+    rot0, trans0 = motion.rotations[:, 0], motion.translations[:, 0]
+    if np.ptp(rot0, axis=0).max() > 1e-9 or np.ptp(trans0, axis=0).max() > 1e-9:
+        return motion, None
+    child = skel.children[0][0]
+    rot = motion.rotations[:, 1:].copy()
+    trans = motion.translations[:, 1:].copy()
+    rot[:, child - 1] = rot0 @ motion.rotations[:, child]
+    trans[:, child - 1] = trans0 + np.einsum("tij,tj->ti", rot0,
+                                             motion.translations[:, child])
+    sub = skel.subset(range(1, skel.num_joints))
+    offsets = sub.offsets.copy()
+    offsets[0] = trans[0, 0]
+    removed = {"name": skel.names[0], "channels": skel.channels[0],
+               "offset": skel.offsets[0].copy(), "rotation": rot0[0].copy(),
+               "translation": trans0[0].copy()}
+    return motion.with_(skeleton=sub.replace(offsets=offsets), rotations=rot,
+                        translations=trans), removed
+
+
+def resample(motion: Motion, fps: float) -> Motion:
+    r"""Resample to :obj:`fps` frames per second: slerp for rotations, linear
+    interpolation for translations. The first frame is kept; the last new
+    frame is at or before the last old frame."""
+    import torch  # only here: reading a rig (evidence, inspect) stays torch-free
+
+    from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
+                                        quaternion_to_matrix)
+
+    if abs(motion.fps - fps) < 1e-9 or motion.num_frames < 2:
+        return motion.with_(fps=fps)
+    count = int(np.floor((motion.num_frames - 1) * fps / motion.fps + 1e-9)) + 1
+    src = np.arange(count) * (motion.fps / fps)
+    lo = np.minimum(np.floor(src).astype(np.int64), motion.num_frames - 2)
+    w = src - lo
+    quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
+    wt = torch.from_numpy(w)[:, None].expand(count, motion.num_joints)
+    q = quaternion_slerp(quat[lo], quat[lo + 1], wt)
+    rot = quaternion_to_matrix(q).numpy()
+    t0, t1 = motion.translations[lo], motion.translations[lo + 1]
+    trans = t0 + w[:, None, None] * (t1 - t0)
+    return motion.with_(rotations=rot, translations=trans, fps=float(fps))
+
+
+def canonicalize(
+    motion: Motion,
+    fps: Optional[float] = 30.0,
+    up_axis: Optional[str] = None,
+    unit_scale: Optional[float] = None,
+    floor: bool = True,
+    remove_root: bool = True,
+) -> Motion:
+    r"""Bring a motion into the canonical frame used by the features.
+
+    +Y up, the character facing +Z and its root at x = z = 0 at frame 0,
+    the floor (a low percentile of the per-frame lowest joint) at y = 0,
+    metres, :obj:`fps` frames per second (``None`` keeps the source rate).
+    Up axis and units are :obj:`up_axis` / :obj:`unit_scale` when given,
+    else the motion's :attr:`~Motion.rig` settings (a file's declaration, or
+    overrides from a manifest or the command line), else guessed by
+    :func:`~satagraph.transforms.rig_reading.read_rig`; a low-confidence or
+    undecided guess warns (:class:`~satagraph.transforms.rig_reading.RigReadingWarning`).
+    The returned motion's :attr:`~Motion.transform` records what was done;
+    :func:`decanonicalize` undoes it. The result declares itself canonical
+    (:attr:`~Motion.rig`), so it is never re-guessed, also once written.
+    """
+    from satagraph.transforms.rig_reading import read_rig, warn_reading
+
+    motion, removed = (remove_static_root(motion) if remove_root
+                       else (motion, None))
+    reading = read_rig(motion, up_axis, unit_scale)
+    warn_reading(reading, motion.source)
+    up_name = reading.up.axis
+    up_rot = _rotation_between(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
+    moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
+    forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
+    yaw = float(np.arctan2(-forward[0], forward[2]))  # rotate forward onto +Z
+    transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
+                                   scale=reading.units.scale, source_fps=motion.fps,
+                                   removed_root=removed,
+                                   source_rig=_as_read(reading))
+    out = _apply_rotation(motion, transform.rotation, transform.scale, np.zeros(3))
+    shift = np.zeros(3)
+    if out.num_frames:
+        shift[[0, 2]] = -out.translations[0, 0, [0, 2]]
+        if floor:
+            lowest = out.global_positions()[:, :, 1].min(axis=1)
+            shift[1] = -float(np.percentile(lowest, 2))
+    transform.translation = shift
+    out = out.with_(translations=_shift_root(out.translations, shift),
+                    rig=CANONICAL_RIG)
+    out.transform = transform
+    return resample(out, fps) if fps else out
+
+
+def _as_read(reading) -> RigSettings:
+    """The reading of a source as settings: what :func:`decanonicalize`
+    gives back, so that a result on the source's rig is read the same way
+    (units left unset where they were the file's own, undecided)."""
+    return RigSettings(reading.up.axis,
+                       None if reading.units.kept else reading.units.scale,
+                       declared=True)
+
+
+#: What a canonical motion is: +Y up, metres (declared, never re-guessed).
+CANONICAL_RIG = RigSettings("+Y", 1.0, declared=True)
+
+
+def _shift_root(translations: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    out = translations.copy()
+    out[:, 0] += shift
+    return out
+
+
+def _apply_rotation(motion: Motion, rot: np.ndarray, scale: float,
+                    shift: np.ndarray) -> Motion:
+    """p' = scale * rot @ p + shift applied to the whole motion."""
+    rotations = motion.rotations.copy()
+    rotations[:, 0] = rot @ rotations[:, 0]
+    trans = motion.translations * scale
+    trans[:, 0] = trans[:, 0] @ rot.T + shift
+    skel = motion.skeleton
+    offsets = skel.offsets * scale
+    offsets[0] = offsets[0] @ rot.T
+    return motion.with_(skeleton=skel.replace(offsets=offsets),
+                        rotations=rotations, translations=trans)
+
+
+def decanonicalize(motion: Motion, transform: Optional[CanonicalTransform] = None,
+                   fps: Optional[float] = None) -> Motion:
+    r"""Undo :func:`canonicalize`: back to the source's axes, units, frame
+    rate (unless :obj:`fps` is given) and, where one was removed, the
+    motionless root joint."""
+    tf = transform or motion.transform
+    if tf is None:
+        return motion
+    back = _apply_rotation(motion.with_(
+        translations=_shift_root(motion.translations, -tf.translation)),
+        tf.rotation.T, 1.0 / tf.scale, np.zeros(3))
+    back.transform = None
+    back.rig = tf.source_rig
+    back = resample(back, fps or tf.source_fps)
+    if tf.removed_root is not None:
+        back = _restore_root(back, tf.removed_root)
+    return back
+
+
+def _restore_root(motion: Motion, removed: dict) -> Motion:
+    """Put the motionless root removed by :func:`remove_static_root` back."""
+    skel = motion.skeleton
+    num_frames = motion.num_frames
+    rot0, trans0 = removed["rotation"], removed["translation"]
+    rotations = motion.rotations.copy()
+    translations = motion.translations.copy()
+    rotations[:, 0] = rot0.T @ rotations[:, 0]
+    translations[:, 0] = (translations[:, 0] - trans0) @ rot0
+    rot = np.concatenate([np.broadcast_to(rot0, (num_frames, 1, 3, 3)),
+                          rotations], axis=1)
+    trans = np.concatenate([np.broadcast_to(trans0, (num_frames, 1, 3)),
+                            translations], axis=1)
+    offsets = np.concatenate([removed["offset"][None], skel.offsets])
+    new = Skeleton(names=[removed["name"]] + skel.names,
+                   parents=np.concatenate([[-1, 0], skel.parents[1:] + 1]),
+                   offsets=offsets, channels=[removed["channels"]] + skel.channels,
+                   end_site=np.concatenate([[False], skel.end_site]))
+    return motion.with_(skeleton=new, rotations=rot, translations=trans)

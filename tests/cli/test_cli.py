@@ -1,0 +1,380 @@
+"""The ``satagraph`` command: inspect, convert, demo, errors, plugins."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import re
+import runpy
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+import satagraph.cli as cli
+from satagraph.cli import main
+from satagraph.io import BVHError, read_bvh, write_bvh
+from satagraph.motion import Motion
+from satagraph.ops.rotation import axis_angle_matrix
+
+BANDAI = "bandai/dataset-1_bow_active_001.bvh"
+
+
+def run(capsys, *argv: str):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def rest_motion(skeleton, up: str = "+Y", frames: int = 3) -> Motion:
+    """The rest pose for a few frames, turned so that +Y goes to :obj:`up`."""
+    rot = np.broadcast_to(np.eye(3), (frames, skeleton.num_joints, 3, 3)).copy()
+    if up == "+Z":  # +90 degrees about X takes +Y to +Z
+        quarter = torch.tensor(np.pi / 2, dtype=torch.float64)
+        rot[:, 0] = axis_angle_matrix(quarter, "X").numpy()
+    trans = np.broadcast_to(skeleton.offsets, (frames, skeleton.num_joints, 3))
+    return Motion(skeleton, rot, trans.copy(), fps=25.0)
+
+
+@pytest.fixture
+def tiny_file(tiny_skeleton, tmp_path) -> Path:
+    path = tmp_path / "tiny.bvh"
+    write_bvh(rest_motion(tiny_skeleton), path)
+    return path
+
+
+# ------------------------------------------------------------------ inspect
+def test_inspect_table_real_file(capsys, shared_data, manifest):
+    code, out, err = run(capsys, "inspect", str(shared_data / BANDAI))
+    assert code == 0 and err == ""
+    row = next(r for r in manifest if r["path"] == BANDAI)
+    rows = dict(re.split(r"\s{2,}", line, maxsplit=1)
+                for line in out.strip().splitlines())
+    assert rows["joints"] == f"27 ({row['joints']} without end sites)"
+    assert rows["end sites"] == "5"
+    assert rows["frames"] == row["frames"]
+    assert rows["fps"] == "30"
+    assert rows["up axis"].startswith("+Y (detected, confidence")
+    assert rows["rotation orders"] == "ZXY x22"
+    assert "22 joints with 6" in rows["channels"]
+    assert rows["root"] == "joint_Root"
+    assert rows["height"].endswith(" m") and "file units, 1." in rows["height"]  # cm
+    assert rows["units"].startswith("cm (human, confidence 0.90")
+
+
+def test_inspect_json_real_file(capsys, shared_data, manifest):
+    for row in manifest:
+        if row["path"] in (BANDAI, "cmu/01_01.bvh", "ccbase/007_01.bvh",
+                           "dog/D1_010_KAN01_002.bvh", "fixtures/test3.bvh"):
+            code, out, _ = run(capsys, "inspect", "--json",
+                               str(shared_data / row["path"]))
+            assert code == 0
+            info = json.loads(out)
+            assert info["frames"] == int(row["frames"])
+            assert info["joints_without_end_sites"] == int(row["joints"])
+            assert info["joints"] == info["joints_without_end_sites"] + info["end_sites"]
+            assert info["fps"] == pytest.approx(float(row["fps"]), rel=1e-4)
+            assert info["duration"] == pytest.approx(info["frames"] / info["fps"])
+            assert info["up_axis"] == "+Y"  # frame 0 of all of these stands on Y
+            assert info["height"] > 0
+            assert sum(info["channel_layout"].values()) == info["joints"]
+
+
+def test_inspect_json_synthetic(capsys, tiny_file):
+    code, out, _ = run(capsys, "inspect", str(tiny_file), "--json")
+    assert code == 0
+    info = json.loads(out)
+    rig = info.pop("rig")
+    # no hands, not metres-sized, no known exporter: the units are undecided
+    assert rig["units_how"] == "kept" and rig["units"] == "file"
+    assert rig["up_axis_how"] == "detected" and 0.0 <= rig["up_axis_confidence"] <= 1.0
+    assert set(rig["up_axis_evidence"]) >= {"rest"}
+    assert any("units unknown" in w for w in rig["warnings"])
+    assert info.pop("height_m") == pytest.approx(150.0)  # file units kept
+    assert info == {
+        "file": str(tiny_file), "root": "Hips", "joints": 10,
+        "joints_without_end_sites": 7, "end_sites": 3, "frames": 3,
+        "fps": 25.0, "duration": pytest.approx(0.12), "up_axis": "+Y",
+        "height": pytest.approx(150.0), "max_depth": 3,
+        "rotation_orders": {"XYZ": 1, "XZY": 1, "YXZ": 1, "YZX": 1, "ZXY": 2,
+                            "ZYX": 1},
+        "channel_layout": {"0": 3, "3": 5, "6": 2},
+        "position_channel_joints": 2, "channels_per_frame": 27,
+    }
+
+
+def test_inspect_detects_z_up(capsys, tiny_skeleton, tmp_path):
+    # Toes straight down: a body this thin with toes pointing forward is
+    # ambiguous (the toes would be "below" along the forward axis too).
+    offsets = tiny_skeleton.offsets.copy()
+    offsets[[6, 9]] = [0.0, -5.0, 0.0]
+    path = tmp_path / "zup.bvh"
+    write_bvh(rest_motion(tiny_skeleton.replace(offsets=offsets), up="+Z"), path)
+    code, out, _ = run(capsys, "inspect", "--json", str(path))
+    info = json.loads(out)
+    assert info["up_axis"] == "+Z"
+    assert info["height"] == pytest.approx(150.0)
+
+
+def test_inspect_table_synthetic(capsys, tiny_file):
+    code, out, _ = run(capsys, "inspect", str(tiny_file))
+    assert code == 0
+    assert "10 (7 without end sites)" in out
+    assert "XYZ x1" in out and "ZXY x2" in out
+    assert "0.120 s" in out
+    assert out.splitlines()[0].split() == ["file", str(tiny_file)]
+
+
+def test_inspect_zero_frames(capsys, tiny_skeleton, tmp_path):
+    path = tmp_path / "empty.bvh"
+    write_bvh(rest_motion(tiny_skeleton, frames=0), path)
+    code, out, _ = run(capsys, "inspect", "--json", str(path))
+    info = json.loads(out)
+    assert code == 0 and info["frames"] == 0 and info["duration"] == 0
+    assert info["up_axis"] == "+Y"
+
+
+# ------------------------------------------------------------------ convert
+def test_convert_roundtrip(capsys, shared_data, tmp_path, assert_same_hierarchy):
+    src = shared_data / "fixtures/test_mocapbank.bvh"
+    out = tmp_path / "out.bvh"
+    code, text, err = run(capsys, "convert", str(src), str(out))
+    assert code == 0 and err == ""
+    assert str(out) in text and "455 frames" in text
+    a, b = read_bvh(src), read_bvh(out)
+    assert_same_hierarchy(a.skeleton, b.skeleton)
+    assert np.allclose(a.raw_channels, b.raw_channels, rtol=1e-5, atol=1e-6)
+    assert b.fps == a.fps
+
+
+def test_convert_in_place(capsys, tiny_file):
+    before = read_bvh(tiny_file)
+    assert main(["convert", str(tiny_file), str(tiny_file)]) == 0
+    np.testing.assert_allclose(read_bvh(tiny_file).raw_channels, before.raw_channels)
+    assert sorted(p.name for p in tiny_file.parent.iterdir()) == ["tiny.bvh"]
+
+
+def test_convert_fps(capsys, shared_data, tmp_path):
+    pytest.importorskip("satagraph.transforms.canonical")
+    out = tmp_path / "30.bvh"
+    code, text, _ = run(capsys, "convert", str(shared_data / "cmu/angry_13_000.bvh"),
+                        str(out), "--fps", "30")
+    assert code == 0
+    motion = read_bvh(out)
+    assert motion.fps == 30.0
+    assert motion.num_frames == pytest.approx(140 / 4, abs=1)
+    assert "30 fps" in text
+
+
+def test_convert_canonical(capsys, shared_data, tmp_path):
+    pytest.importorskip("satagraph.transforms.canonical")
+    out = tmp_path / "canon.bvh"
+    code, text, _ = run(capsys, "convert", str(shared_data / BANDAI), str(out),
+                        "--canonical", "--fps", "15")
+    assert code == 0 and "canonical" in text
+    motion = read_bvh(out)
+    assert motion.fps == 15.0
+    assert "joint_Root" not in motion.skeleton.names  # motionless root removed
+    pos = motion.global_positions()
+    assert 1.0 < np.ptp(pos[0, :, 1]) < 2.2  # metres, Y up
+    code, out_json, _ = run(capsys, "inspect", "--json", str(out))
+    assert json.loads(out_json)["up_axis"] == "+Y"
+
+
+def test_convert_canonical_up_axis_flag(capsys, tiny_skeleton, tmp_path):
+    pytest.importorskip("satagraph.transforms.canonical")
+    src = tmp_path / "zup.bvh"
+    write_bvh(rest_motion(tiny_skeleton, up="+Z"), src)
+    out = tmp_path / "yup.bvh"
+    assert main(["convert", str(src), str(out), "--canonical", "--up-axis", "z"]) == 0
+    pos = read_bvh(out).global_positions()[0]
+    assert np.argmax(np.ptp(pos, axis=0)) == 1  # now Y up
+
+
+def test_convert_up_axis_needs_canonical(capsys, tiny_file, tmp_path):
+    code, _, err = run(capsys, "convert", str(tiny_file), str(tmp_path / "o.bvh"),
+                       "--up-axis", "+Z")
+    assert code == 2
+    assert err.strip() == "satagraph: error: --up-axis and --units need --canonical"
+    assert not (tmp_path / "o.bvh").exists()
+
+
+@pytest.mark.parametrize("argv", [["--fps", "0"], ["--fps", "abc"],
+                                  ["--canonical", "--up-axis", "W"]])
+def test_convert_bad_options(capsys, tiny_file, tmp_path, argv):
+    with pytest.raises(SystemExit) as info:
+        main(["convert", str(tiny_file), str(tmp_path / "o.bvh"), *argv])
+    assert info.value.code == 2
+    assert "error" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------- errors
+def assert_one_line_error(err: str, *words: str) -> None:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("satagraph: error: ")
+    assert "Traceback" not in err
+    for word in words:
+        assert word in lines[0], lines[0]
+
+
+def test_error_missing_file(capsys, tmp_path):
+    missing = tmp_path / "missing.bvh"
+    for argv in (["inspect", str(missing)],
+                 ["convert", str(missing), str(tmp_path / "o.bvh")]):
+        code, out, err = run(capsys, *argv)
+        assert code == 2 and out == ""
+        assert_one_line_error(err, str(missing), "No such file")
+
+
+def test_error_malformed_file(capsys, tmp_path):
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n"
+                   "  CHANNELS 3 Xposition Yposition Zrotation\n}\n")
+    code, _, err = run(capsys, "inspect", str(bad))
+    assert code == 2
+    assert_one_line_error(err, f"{bad}:5:", "not supported")
+
+
+def test_error_unwritable_output(capsys, tiny_file, tmp_path):
+    target = tmp_path / "no" / "such" / "dir.bvh"
+    code, _, err = run(capsys, "convert", str(tiny_file), str(target))
+    assert code == 2
+    assert_one_line_error(err, f"cannot write {target}")
+    (tmp_path / "afile").write_text("x")
+    code, _, err = run(capsys, "convert", str(tiny_file),
+                       str(tmp_path / "afile" / "o.bvh"))
+    assert code == 2
+    assert_one_line_error(err, "cannot write")
+
+
+def test_traceback_flag_reraises(tmp_path):
+    with pytest.raises(BVHError):
+        main(["--traceback", "inspect", str(tmp_path / "missing.bvh")])
+
+
+def test_no_command_is_usage_error(capsys):
+    with pytest.raises(SystemExit) as info:
+        main([])
+    assert info.value.code == 2
+    assert "COMMAND" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------- demo
+def test_demo(capsys):
+    code, out, err = run(capsys, "demo", "--quick")
+    assert code == 0 and err == ""
+    assert "built-in example walk" in out
+    assert "$ satagraph inspect" in out
+    assert "10 (7 without end sites)" in out
+    assert "+Y" in out
+
+
+def test_demo_keeps_output(capsys, tmp_path):
+    path = tmp_path / "walk.bvh"
+    code, out, _ = run(capsys, "demo", "--quick", "--output", str(path), "--json")
+    assert code == 0
+    info = json.loads(out[out.index("{"):])
+    motion = read_bvh(path)
+    assert info["frames"] == motion.num_frames == 60
+    # the median vertical extent over the frames: a 1.75 m rest pose walking
+    assert info["height"] == pytest.approx(1.72, abs=0.01)
+    assert info["rig"]["units"] == "m"
+
+
+def test_example_motion_is_plausible():
+    from satagraph.data.examples import example_motion
+
+    motion = example_motion(num_frames=45, fps=30)
+    pos = motion.global_positions()
+    assert pos.shape == (45, 10, 3)
+    feet = pos[:, motion.skeleton.end_site & (pos[0, :, 1] < 0.5)]
+    np.testing.assert_allclose(feet[..., 1].min(axis=1), 0.0, atol=1e-9)
+    assert pos[-1, 0, 2] > pos[0, 0, 2] + 1.0  # walks forward along +Z
+    assert example_motion(num_frames=45).rotations.tobytes() == motion.rotations.tobytes()
+
+
+# --------------------------------------------------------------- help, plugins
+@pytest.mark.parametrize("command, words", [
+    ("inspect", ["up axis", "--json"]),
+    ("convert", ["--fps", "--canonical", "atomically"]),
+    ("demo", ["built-in", "--output"]),
+])
+def test_subcommand_help(capsys, command, words):
+    with pytest.raises(SystemExit) as info:
+        main([command, "--help"])
+    assert info.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"usage: satagraph {command}")
+    for word in words:
+        assert word in out
+
+
+def test_top_level_help_and_version(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    for command in ("inspect", "convert", "demo"):
+        assert command in out
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.startswith("satagraph ")
+
+
+def test_tags_registered_when_available():
+    choices = cli.build_parser()._subparsers._group_actions[0].choices
+    has_tags = importlib.util.find_spec("satagraph.cli.tags") is not None
+    assert ("tags" in choices) == has_tags
+
+
+def test_optional_commands(capsys, monkeypatch, tmp_path):
+    calls = []
+    plugin = types.ModuleType("fake_satagraph_plugin")
+
+    def add_fake_parser(subparsers):
+        subparsers.add_parser("fake", help="a fake command")  # no func
+
+    plugin.add_fake_parser = add_fake_parser
+    plugin.run_fake = lambda args: calls.append(args.command) or 3
+    monkeypatch.setitem(sys.modules, "fake_satagraph_plugin", plugin)
+    (tmp_path / "broken_satagraph_plugin.py").write_text("raise RuntimeError('boom')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(cli, "OPTIONAL_COMMANDS", (
+        ("fake_satagraph_plugin", "add_fake_parser"),
+        ("satagraph.no_such_module", "add_x_parser"),
+        ("broken_satagraph_plugin", "add_y_parser"),
+    ))
+    assert main(["fake"]) == 3 and calls == ["fake"]
+    err = capsys.readouterr().err
+    assert "no_such_module" not in err  # missing modules are skipped silently
+    assert "broken_satagraph_plugin failed to import" in err and "boom" in err
+
+
+def test_python_dash_m(capsys, monkeypatch):
+    """``python -m satagraph`` runs the same command (in-process here)."""
+    monkeypatch.setattr(sys, "argv", ["satagraph", "--version"])
+    with pytest.raises(SystemExit) as info:
+        runpy.run_module("satagraph", run_name="__main__")
+    assert info.value.code == 0
+    assert capsys.readouterr().out.startswith("satagraph ")
+    monkeypatch.setattr(sys, "argv", ["satagraph", "inspect", "/no/such.bvh"])
+    with pytest.raises(SystemExit) as info:
+        runpy.run_module("satagraph", run_name="__main__")
+    assert info.value.code == 2
+
+
+def test_overrides_may_follow_options():
+    """``satagraph train CONFIG --init-from CKPT key=value`` keeps the
+    overrides (argparse alone rejects them after the option); anything else
+    left over is still a usage error."""
+    from satagraph.cli import build_parser, parse_args
+    parser = build_parser()
+    args = parse_args(parser, ["train", "tiny", "a.b=1", "--init-from", "x.ckpt", "c=2"])
+    assert args.config == "tiny" and args.init_from == "x.ckpt"
+    assert args.overrides == ["a.b=1", "c=2"]
+    with pytest.raises(SystemExit):
+        parse_args(parser, ["train", "tiny", "--init-from", "x.ckpt", "stray"])
+    with pytest.raises(SystemExit):
+        parse_args(parser, ["inspect", "f.bvh", "a=1"])

@@ -1,0 +1,144 @@
+"""The procedural zoo: valid, described, round-tripping skeletons; planted
+feet; determinism; the ``satagraph zoo`` command."""
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from satagraph.cli import main
+from satagraph.semantics import describe_joints
+from satagraph.datasets.sources import read_manifest
+from satagraph.datasets.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
+                                    generate_clip, write_zoo, zoo_rigs)
+from satagraph.io import read_bvh, write_bvh
+
+RIGS = zoo_rigs(seed=0)
+
+
+def _ids(rigs):
+    return [r.name for r in rigs]
+
+
+@pytest.mark.parametrize("rig", RIGS, ids=_ids(RIGS))
+def test_skeletons_valid(rig):
+    skel = rig.skeleton
+    assert (skel.parents[1:] < np.arange(1, skel.num_joints)).all()
+    assert len(set(skel.names)) == skel.num_joints
+    assert (np.linalg.norm(skel.offsets[1:], axis=1) > 1e-6).all()
+    texts = describe_joints(skel)
+    assert all(texts) and len(texts) == skel.num_joints
+
+
+def test_species_and_variety():
+    assert {r.species for r in RIGS} == set(SPECIES)
+    quad = [r for r in RIGS if r.species == "quadruped"]
+    assert any("tail" in " ".join(r.skeleton.names).lower() for r in quad)
+    assert any("tail" not in " ".join(r.skeleton.names).lower() for r in quad)
+    for species in SPECIES:
+        counts = {r.skeleton.num_joints for r in RIGS if r.species == species}
+        assert len(counts) >= 2, species  # joint counts vary within a species
+    names = {n for r in RIGS if r.species == "biped" for n in r.skeleton.names}
+    assert {"LeftUpLeg", "thigh.L", "l_hip"} <= names
+
+
+def test_quadruped_legs_read_as_front_and_hind_limbs():
+    for rig in (r for r in RIGS if r.species in ("quadruped", "hexapod")):
+        texts = describe_joints(rig.skeleton)
+        for leg in rig.legs:
+            upper, lower = texts[leg.upper], texts[leg.lower]
+            limb = ("front limb" if leg.key[1:] in ("F", "1") else
+                    "middle limb" if leg.key[1:] == "2" else "hind limb")  # leg pairs
+            side = "left" if leg.key[0] == "L" else "right"
+            assert f"{side} {limb} upper segment" in upper, (rig.name, upper)
+            assert f"{side} {limb} lower segment" in lower, (rig.name, lower)
+
+
+@pytest.mark.parametrize("species", SPECIES)
+def test_round_trip(tmp_path, species):
+    rig = next(r for r in RIGS if r.species == species)
+    motion = generate_clip(rig, "walk", frames=20, seed=1)
+    write_bvh(motion, tmp_path / "a.bvh")
+    back = read_bvh(tmp_path / "a.bvh")
+    assert back.skeleton.names == motion.skeleton.names
+    assert np.array_equal(back.skeleton.parents, motion.skeleton.parents)
+    err = np.abs(back.global_positions() - motion.global_positions()).max()
+    assert err < 1e-4 * motion.height()
+
+
+def _contacts(motion, tips):
+    pos = motion.global_positions()
+    height = motion.height()
+    speed = np.linalg.norm(np.diff(pos, axis=0, prepend=pos[:1]), axis=-1) * motion.fps
+    low = pos[..., 1] < 0.05 / 1.75 * height
+    slow = speed < 0.4 / 1.75 * height
+    return pos, (low & slow)[:, tips]
+
+
+@pytest.mark.parametrize("rig", [r for r in RIGS if r.legs],
+                         ids=_ids([r for r in RIGS if r.legs]))
+def test_walking_feet_are_planted(rig):
+    tips = sorted({t for leg in rig.legs for t in leg.tips})
+    for kind in ("walk", "turn"):
+        motion = generate_clip(rig, kind, frames=90, seed=2)
+        pos, contact = _contacts(motion, tips)
+        assert pos[..., 1].min() > -1e-6 * motion.height()
+        assert 0.3 <= contact.mean() <= 0.8, (kind, contact.mean())
+        assert (contact.mean(axis=0) > 0.2).all()  # every foot touches down
+        # In stance the foot rests on the ground and does not slide.
+        feet = pos[:, tips]
+        stance = feet[..., 1] < 1e-6 * motion.height()
+        step = np.linalg.norm(np.diff(feet[..., [0, 2]], axis=0), axis=-1)
+        both = stance[1:] & stance[:-1]
+        assert both.any() and step[both].max() < 1e-5 * motion.height()
+
+
+def test_idle_and_speed_change():
+    rig = next(r for r in RIGS if r.species == "quadruped")
+    idle = generate_clip(rig, "idle", frames=60, seed=0)
+    root = idle.root_translation
+    assert np.ptp(root[:, [0, 2]], axis=0).max() < 0.1 * idle.height()
+    speed = generate_clip(rig, "speed", frames=120, seed=0)
+    vel = np.linalg.norm(np.diff(speed.root_translation[:, [0, 2]], axis=0), axis=1)
+    assert abs(vel[:20].mean() - vel[-20:].mean()) > 0.3 * vel.mean()
+    with pytest.raises(ValueError):
+        generate_clip(rig, "fly")
+
+
+def test_deterministic(tmp_path):
+    a = write_zoo(tmp_path / "a", species=["biped", "snake"], clips=2,
+                  seed=5, frames=15)
+    b = write_zoo(tmp_path / "b", species=["biped", "snake"], clips=2,
+                  seed=5, frames=15)
+    c = write_zoo(tmp_path / "c", species=["biped", "snake"], clips=2,
+                  seed=6, frames=15)
+    assert [r["sha1"] for r in a] == [r["sha1"] for r in b]
+    assert [r["sha1"] for r in a] != [r["sha1"] for r in c]
+    subset = zoo_rigs(["snake"], seed=5)
+    full = [r for r in zoo_rigs(seed=5) if r.species == "snake"]
+    assert all(np.array_equal(x.skeleton.offsets, y.skeleton.offsets)
+               for x, y in zip(subset, full))
+
+
+def test_cli_writes_files_and_manifest(tmp_path, capsys):
+    out = tmp_path / "zoo"
+    code = main(["zoo", str(out), "--species", "hexapod", "bird",
+                 "--clips", "3", "--seed", "1", "--frames", "12"])
+    assert code == 0
+    assert "wrote" in capsys.readouterr().out
+    with open(out / "manifest.tsv", newline="") as f:
+        rows = list(csv.DictReader(f, delimiter="\t"))
+    assert tuple(rows[0]) == MANIFEST_COLUMNS
+    rigs = zoo_rigs(["hexapod", "bird"], seed=1)
+    assert len(rows) == 3 * len(rigs)
+    assert {r["species"] for r in rows} == {"hexapod", "bird"}
+    assert {r["split"] for r in rows} <= {"train", "val", "test"}
+    for row in rows:
+        motion = read_bvh(out / row["path"])
+        assert motion.num_frames == int(row["frames"]) == 12
+        assert motion.num_joints == int(row["joints"])
+    files = read_manifest(out / "manifest.tsv")
+    assert len(files) == len(rows) and all(f.dataset == "zoo" for f in files)
+    kinds = {row["path"].rsplit("_", 1)[1][:-4] for row in rows}
+    assert kinds == set(CLIP_KINDS["bird"][:3])

@@ -1,0 +1,94 @@
+"""Every config in experiments/ loads, resolves its defaults, names a
+module, a model and data sources, and builds its module; the wandb sweep
+names configs of experiments/ and its command parses."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import List
+
+import pytest
+import yaml
+
+from satagraph.experiment.config import load_config
+
+EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
+#: Configs whose module needs a trained autoencoder: built in tests/t2m.
+NEEDS_CHECKPOINT = ("t2m", "t2m_tiny")
+CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml") if p.stem not in NEEDS_CHECKPOINT)
+WANDB_SWEEP = EXPERIMENTS / "sweeps" / "wandb_sweep.yaml"
+#: Widths and depths small enough to build every config in a fraction of a
+#: second; the structure (layers, attention, convolution kinds) is kept.
+SMALL_MODEL = {"hidden_channels": 32, "ff_channels": 32, "latent_channels": 16,
+               "codebook_size": 16, "num_blocks": 1, "num_layers": 1, "heads": 2}
+
+
+@pytest.mark.parametrize("name", CONFIGS)
+def test_config_builds_its_module(name: str):
+    from satagraph.experiment.train import build_module, module_class
+    cfg = load_config(name)
+    assert cfg["module"] and cfg["model"] and cfg["data"]["sources"]
+    model = cfg["model"]
+    model.update({k: v for k, v in SMALL_MODEL.items() if k in model})
+    module = build_module(cfg)  # the real builder, without data
+    assert type(module) is module_class(cfg["module"])
+    assert sum(p.numel() for p in module.parameters()) > 0
+
+
+def _sweep_argv(config: str) -> List[str]:
+    """The command line a wandb agent runs for one value of ``config``."""
+    spec = yaml.safe_load(WANDB_SWEEP.read_text())
+    return [{"${args_no_hyphens}": f"config={config}"}.get(a, a)
+            for a in spec["command"] if a != "${program}"]
+
+
+def test_wandb_sweep_runs_configs_of_experiments():
+    from satagraph.cli import build_parser, parse_args
+    from satagraph.experiment.sweep import split_arguments
+    spec = yaml.safe_load(WANDB_SWEEP.read_text())
+    assert spec["program"] == "satagraph"
+    names = spec["parameters"]["config"]["values"]
+    assert names and set(names) <= set(CONFIGS)
+    for name in names:
+        args = parse_args(build_parser(), _sweep_argv(name))
+        assert args.command == "sweep" and args.logger == "wandb"
+        assert split_arguments(args.items) == ([name], [])
+
+
+def test_finetune_stage_inherits_cpu_joint():
+    base, stage = load_config("cpu_joint"), load_config("cpu_joint_finetune")
+    assert stage["model"] == base["model"]
+    assert stage["loss"]["position"] == 0.005 and base["loss"]["position"] == 0.001
+    assert stage["data"] == base["data"]
+
+
+def test_retarget_stage_adds_only_the_cross_skeleton_term():
+    base, stage = load_config("cpu_joint_finetune"), load_config("cpu_joint_retarget")
+    assert stage["loss"] == dict(base["loss"], retarget=0.01)
+    assert stage["model"] == base["model"] and stage["data"] == base["data"]
+
+
+def test_augment_stage_draws_new_rigs_with_new_rest_poses():
+    base, stage = load_config("cpu_joint_retarget"), load_config("cpu_joint_augment")
+    assert stage["loss"] == base["loss"] and stage["model"] == base["model"]
+    assert stage["data"]["augment"]["rest"] > 0
+
+
+def test_long_retarget_stage_doubles_the_term_with_a_new_data_order():
+    base, stage = load_config("cpu_joint_retarget"), load_config("cpu_joint_retarget_long")
+    assert stage["loss"] == dict(base["loss"], retarget=0.02)
+    assert stage["model"] == base["model"] and stage["data"] == base["data"]
+    assert stage["seed"] != base.get("seed", 0)
+
+
+def test_named_configs_found_without_a_source_checkout(tmp_path, monkeypatch):
+    """A non-editable install has no ``experiments/`` beside the package: the
+    named configs come from the data files it ships (``setup.cfg``)."""
+    from satagraph.experiment import config
+    shipped = tmp_path / "share" / "satagraph" / "experiments"
+    shipped.mkdir(parents=True)
+    (shipped / "tiny.yaml").write_text((EXPERIMENTS / "tiny.yaml").read_text())
+    monkeypatch.setattr(config, "CONFIG_DIRS", (tmp_path / "missing", shipped))
+    assert config.experiments_dir() == shipped
+    assert config.config_path("tiny") == shipped / "tiny.yaml"
+    with pytest.raises(FileNotFoundError, match="one of: tiny"):
+        config.config_path("sata_vae")

@@ -1,0 +1,137 @@
+"""``satagraph demo`` end to end on a tiny configuration: zoo, a few
+training steps, retargeting, rendering."""
+import json
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import pytest
+
+from satagraph.cli import main
+from satagraph.io import read_bvh
+
+FRAMES = 30
+TINY = ["trainer.max_steps=3", "trainer.accelerator=cpu", "trainer.progress=false",
+        "trainer.enable_model_summary=false", "data.window=16", "data.stride=16",
+        "data.batch_size=4", "model.hidden_channels=16", "model.ff_channels=32",
+        "model.num_blocks=1", "model.heads=2", "model.latent_channels=8"]
+
+
+SMALL = ["--species", "biped", "quadruped", "bird", "--clips", "1", "--frames", str(FRAMES),
+         "--minutes", "1"]
+
+
+def _run_demo(out: Path, argv, builtin: Optional[Path] = None) -> dict:
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SATAGRAPH_CACHE", str(out / "cache"))
+        if builtin is not None:
+            mp.setattr("satagraph.io.weights.builtin_path", lambda: builtin)
+        assert main(["demo", *argv, "--output", str(out), *SMALL]) == 0
+    return json.loads((out / "summary.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    """Run the demo from scratch once: 3 species, one 30-frame clip per
+    skeleton, 3 training steps of a tiny model."""
+    out = tmp_path_factory.mktemp("demo")
+    return out, _run_demo(out, [*TINY, "--from-scratch"])
+
+
+@pytest.fixture(scope="module")
+def demo_builtin(demo, tmp_path_factory):
+    """The demo with a built-in model (the tiny one above, exported as a
+    weights file): retarget and render with it, then fine-tune it."""
+    weights = tmp_path_factory.mktemp("weights") / "builtin.safetensors"
+    assert main(["export-weights", str(demo[0] / "run"), str(weights)]) == 0
+    out = tmp_path_factory.mktemp("demo_builtin")
+    tiny = [o for o in TINY if not o.startswith("model.")]
+    return out, _run_demo(out, tiny, builtin=weights), weights
+
+
+def test_builtin_model_retargets_first_then_fine_tunes(demo_builtin, capsys):
+    """With built-in weights the GIF comes from them in seconds; the
+    fine-tune starts from them (same architecture) and both models' retargets
+    are scored with numbers a user can read."""
+    import torch
+    from satagraph.io.weights import load_weights
+
+    out, summary, weights = demo_builtin
+    names = [s["name"] for s in summary["steps"]]
+    assert names == ["zoo", "retarget", "render", "train", "fine-tuned"]
+    assert (out / "demo.gif").is_file() and (out / "retarget_finetuned").is_dir()
+    for step in (summary["steps"][1], summary["steps"][4]):
+        assert set(step["quality"]) == {"quadruped", "bird", "rescaled human"}
+        for quality in step["quality"].values():
+            assert -1.0 <= quality["steps"] <= 1.0 and quality["travel"] >= 0.0
+        assert "steps" in step["note"] and "travel" in step["note"]
+    tuned = torch.load(out / "run" / "checkpoints" / "last.ckpt", weights_only=True)
+    base = load_weights(weights)
+    assert tuned["hyper_parameters"]["model"] == base["hyper_parameters"]["model"]
+    assert "3 steps" in summary["steps"][3]["note"]
+
+
+def test_builtin_fine_tune_refuses_a_new_architecture(demo_builtin, tmp_path):
+    """model.* overrides would not fit the built-in weights: one clear error."""
+    from satagraph.experiment.demo import DemoOptions, demo_config
+    from satagraph.io.weights import load_weights
+
+    base = load_weights(demo_builtin[2])["hyper_parameters"]
+    with pytest.raises(ValueError, match="--from-scratch"):
+        demo_config(DemoOptions(overrides=["model.hidden_channels=8"]), [], tmp_path, base)
+
+
+def test_steps_and_summary(demo, capsys):
+    out, summary = demo
+    assert [s["name"] for s in summary["steps"]] == ["zoo", "train", "retarget", "render"]
+    assert all(s["seconds"] > 0 for s in summary["steps"])
+    for step in summary["steps"]:
+        for path in step["written"]:
+            assert Path(path).is_file(), path
+    assert (out / "zoo" / "manifest.tsv").is_file()
+    assert (out / "run" / "checkpoints" / "last.ckpt").is_file()
+    assert "3 steps" in summary["steps"][1]["note"]
+
+
+def test_retargeted_files(demo):
+    out, summary = demo
+    written = summary["steps"][2]["written"]
+    source = read_bvh(next(p for p in written if Path(p).name.startswith("source_")))
+    assert source.num_frames == FRAMES
+    outputs = {Path(p).name: read_bvh(p) for p in written
+               if Path(p).name.startswith("walk_on_")}
+    assert len(outputs) == 3
+    rows = (out / "zoo" / "manifest.tsv").read_text().splitlines()
+    for name, motion in outputs.items():
+        assert motion.num_frames == FRAMES and motion.fps == source.fps
+        if name.endswith("_rescaled.bvh"):
+            truth = read_bvh(out / "retarget" / name.replace("walk_on_", "ground_truth_"))
+            assert motion.skeleton.names == truth.skeleton.names
+            np.testing.assert_allclose(motion.skeleton.offsets, truth.skeleton.offsets,
+                                       atol=1e-4)
+            assert not np.allclose(motion.skeleton.offsets, source.skeleton.offsets,
+                                   atol=1e-3)
+            continue
+        species, rig = name[len("walk_on_"):-len(".bvh")].split("-", 1)
+        target = next(r.split("\t")[0] for r in rows if f"-{species}-{rig}_" in r)
+        skeleton = read_bvh(out / "zoo" / target).skeleton
+        assert motion.skeleton.names == skeleton.names
+        assert motion.skeleton.parents.tolist() == skeleton.parents.tolist()
+        np.testing.assert_allclose(motion.skeleton.offsets, skeleton.offsets, atol=1e-4)
+
+
+def test_rendering(demo):
+    from PIL import Image
+
+    out, _ = demo
+    gif = Image.open(out / "demo.gif")
+    assert gif.n_frames == FRAMES
+    assert gif.size[0] == 4 * gif.size[1]  # four square panels side by side
+    sheet = Image.open(out / "demo_sheet.png")
+    assert sheet.size[0] == gif.size[0] and sheet.size[1] > gif.size[1]
+
+
+def test_quick_demo_still_available(capsys, tmp_path):
+    assert main(["demo", "--quick", "--output", str(tmp_path)]) == 0
+    assert "built-in example walk" in capsys.readouterr().out
+    assert read_bvh(tmp_path / "example_walk.bvh").num_frames == 60

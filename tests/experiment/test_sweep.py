@@ -1,0 +1,83 @@
+"""Equal-budget sweeps: ``satagraph sweep`` end to end on two tiny configs."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+
+from satagraph.cli import main
+from satagraph.experiment.config import load_config
+from satagraph.experiment.sweep import (SweepRow, budget_config, format_sweep, split_arguments,
+                                        sweep_configs)
+from tests.conftest import data_dir
+
+needs_data = pytest.mark.skipif(data_dir() is None, reason="../shared/data not found")
+
+
+def test_split_arguments():
+    configs, overrides = split_arguments(["tiny", "a.b=1", "config=gnn_gin", "c=x"])
+    assert configs == ["tiny", "gnn_gin"]
+    assert overrides == ["a.b=1", "c=x"]
+
+
+def test_budget_config_binds_time_only(tmp_path):
+    cfg = load_config("tiny", ["trainer.max_steps=5"])
+    out = budget_config(cfg, 0.5, tmp_path / "run", data={"sources": ["x"]})
+    assert out["trainer"]["max_epochs"] == -1
+    assert "max_steps" not in out["trainer"] and "max_time" not in out["trainer"]
+    assert out["_budget_s"] == pytest.approx(30.0)
+    assert out["data"] == {"sources": ["x"]} and out["logger"] == {"name": "csv"}
+    assert cfg["trainer"]["max_steps"] == 5  # the input is not modified
+
+
+def test_sweep_configs_share_data_and_unique_names(tmp_path):
+    cfgs = sweep_configs(["tiny", "tiny"], ["data.max_files=2"],
+                         variants=[[], ["data.window=16"]], output=str(tmp_path))
+    assert cfgs[1]["data"] == cfgs[0]["data"]  # the first config's data for all
+    assert cfgs[0]["data"]["max_files"] == 2
+    assert cfgs[0]["name"] != cfgs[1]["name"]
+    assert cfgs[0]["output_dir"] != cfgs[1]["output_dir"]
+
+
+def test_sweep_table_has_internal_and_cross_retarget_columns():
+    """As the SATA paper's Table 4: INT. and CROSS retargeting columns, per
+    evaluation group; a config without retarget errors shows dashes."""
+    metrics = {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}
+    rows = [SweepRow("a", "a", params=10, steps=2, metrics={"all": metrics, "dog": metrics},
+                     retarget={"internal": {"test": 1.5, "test:dog": 1.0},
+                               "cross": {"test": 2.5, "test:dog": 2.0}}),
+            SweepRow("b", "b", params=10, steps=2, metrics={"all": metrics})]
+    lines = format_sweep(rows).splitlines()
+    assert lines[0].endswith("| retarget int. | retarget cross |")
+    assert lines[2].endswith("| 1.500 | 2.500 |") and lines[3].endswith("| - | - |")
+    assert format_sweep(rows, "dog").splitlines()[2].endswith("| 1.000 | 2.000 |")
+    assert "retarget" not in format_sweep(rows[1:])
+
+
+@pytest.mark.slow
+@needs_data
+def test_sweep_cli_end_to_end(tmp_path):
+    gin = load_config("tiny", ["model.local_conv=gin"])
+    gin["name"] = "tiny_gin"
+    (tmp_path / "tiny_gin.yaml").write_text(yaml.safe_dump(gin))
+    out = tmp_path / "sweep"
+    code = main(["sweep", "--budget", "0.08", "--output", str(out), "--max-batches", "2",
+                 "tiny", str(tmp_path / "tiny_gin.yaml"),
+                 f"data.sources=[{data_dir()}]", "data.max_files=3"])
+    assert code == 0
+    table = (out / "sweep.md").read_text()
+    assert "| tiny |" in table and "| tiny_gin |" in table
+    assert "`data.max_files=3`" in table and "Retarget:" not in table
+    payload = json.loads((out / "sweep.json").read_text())
+    assert payload["overrides"][-1] == "data.max_files=3"
+    assert payload["data"] == [str(data_dir())]
+    rows = payload["rows"]
+    assert [r["name"] for r in rows] == ["tiny", "tiny_gin"]
+    for row in rows:
+        assert row["steps"] > 0 and row["params"] > 0
+        assert math.isfinite(row["train_loss"])
+        assert set(row["metrics"]["all"]) >= {"JR", "RT", "JP", "FS", "GP"}
+        assert Path(row["run_dir"]).is_dir()

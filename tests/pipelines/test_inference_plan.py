@@ -1,0 +1,26 @@
+"""Sliding-window plan and learning-rate schedule."""
+import pytest
+
+from satagraph.pipelines.inference import window_plan
+from satagraph.lightning import lr_factor
+
+
+def test_window_plan_covers_every_frame_once():
+    for num in (1, 30, 64, 65, 100, 113, 500):
+        plan = window_plan(num, 64, 16)
+        kept = [f for a, b, keep in plan for f in range(keep, b)]
+        assert kept == list(range(num))
+        assert all(b - a == min(64, num) for a, b, _ in plan)
+        assert all(keep - a in (0, 16) or a == plan[-1][0] for a, _, keep in plan)
+
+
+def test_window_plan_rejects_bad_overlap():
+    with pytest.raises(ValueError, match="overlap"):
+        window_plan(100, 16, 16)
+
+
+def test_lr_schedule():
+    assert lr_factor(0, 30, 0.99, 0.01) == pytest.approx(1 / 30)
+    assert lr_factor(29, 30, 0.99, 0.01) == 1.0
+    assert lr_factor(40, 30, 0.99, 0.01) == pytest.approx(0.99 ** 10)
+    assert lr_factor(10_000, 30, 0.99, 0.01) == 0.01

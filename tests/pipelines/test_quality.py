@@ -1,0 +1,109 @@
+"""satagraph.pipelines.quality: retarget quality without a ground truth (limb steps,
+root travel, ground contact, uprightness), on real clips and zoo walks."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satagraph.transforms.canonical import canonicalize
+from satagraph.data.features import motion_to_features
+from satagraph.semantics import LIMBS, limb_ends
+from satagraph.datasets.zoo.endless import EndlessZoo
+from satagraph.pipelines.quality import (correlate, facing_axis, forward_tracks, ground_height,
+                                         head_index, leg_length, limb_tracks, mean_correlation,
+                                         most_active, retarget_quality, root_travel,
+                                         step_correlation, upright_fraction)
+
+
+def _walk(species: str, kind: str = "walk", frames: int = 90):
+    """The first test-stream endless-zoo sample of a species and clip kind,
+    canonical at 30 fps."""
+    zoo = EndlessZoo(species=[species], noise=0.0)
+    for index in range(64):
+        sample = zoo.sample(0, index, frames, "test")
+        if sample.kind == kind:
+            return canonicalize(sample.motion, fps=30.0)
+    raise AssertionError(f"no {species} {kind} in the first 64 samples")
+
+
+def test_limb_swing_on_a_real_dog(read_real):
+    """The limb ends are the dog's paws, the most active window is where it
+    moves, and the tracks measure limb swing relative to the root: a clip
+    against itself correlates 1, against a time-reversed copy not."""
+    dog = read_real("dog/D1_004_KAN01_001.bvh")
+    human = read_real("cmu/01_01.bvh")
+    names = {k: dog.skeleton.names[j] for k, j in limb_ends(dog.skeleton).items()}
+    assert names == {"left front": "LeftHand", "right front": "RightHand",
+                     "left hind": "LeftFoot", "right hind": "RightFoot"}
+    assert set(limb_ends(human.skeleton)) == set(LIMBS)
+    window = most_active(dog, 300)
+    assert window.num_frames == 300
+    ends = list(limb_ends(dog.skeleton).values())
+    opening = forward_tracks(canonicalize(dog.slice(0, 300), fps=30.0))[:, ends]
+    active = forward_tracks(canonicalize(window, fps=30.0))[:, ends]
+    assert np.diff(active, axis=0).std() > 3 * np.diff(opening, axis=0).std()
+    tracks = limb_tracks(canonicalize(window, fps=30.0))
+    same = correlate(tracks, tracks)
+    same.update({k + " pos": v for k, v in correlate(tracks, tracks, lag=None).items()})
+    assert len(same) == 8 and all(abs(c - 1.0) < 1e-9 for c in same.values())
+    reversed_ = window.with_(rotations=window.rotations[::-1].copy(),
+                             translations=window.translations[::-1].copy(), raw_channels=None)
+    back = correlate(tracks, limb_tracks(canonicalize(reversed_, fps=30.0)))
+    assert mean_correlation(back) < 0.5
+
+
+def test_facing_axis_follows_the_walk(read_real):
+    """The clip-averaged facing axis points where a walk goes, and agrees
+    with the first-frame one within 30 degrees on a plain walk."""
+    walk = canonicalize(read_real("bandai/dataset-1_walk_normal_001.bvh"), fps=30.0)
+    axis = facing_axis(walk)
+    assert abs(np.linalg.norm(axis) - 1.0) < 1e-9
+    feats = motion_to_features(walk, facing_axis=axis)
+    assert feats.r[:, 2].mean() > 0.3 * np.abs(feats.r[:, 1:3]).sum(1).mean()
+    first = motion_to_features(walk).facing_axis
+    assert np.degrees(np.arccos(np.clip(axis @ first / np.linalg.norm(first), -1, 1))) < 30
+
+
+def test_a_walk_scores_as_its_own_perfect_retarget():
+    """A zoo biped walk against itself: in step (1), same travel (ratio 1),
+    feet on the floor, head above the hips in every frame."""
+    walk = _walk("biped")
+    quality = retarget_quality(walk, walk)
+    assert quality["steps"] == pytest.approx(1.0)
+    assert quality["travel"] == pytest.approx(1.0)
+    assert abs(quality["ground"]) < 0.03
+    assert quality["upright"] == 1.0
+    assert walk.skeleton.names[head_index(walk)].lower().endswith("head")
+
+
+def test_a_still_or_sliding_body_is_caught():
+    """A frozen copy of the walk (its first pose in every frame) travels 0 and
+    has no steps; lifted by half its height it floats; turned upside down
+    its head is below its hips."""
+    walk = _walk("biped")
+    frozen = walk.with_(rotations=np.repeat(walk.rotations[:1], walk.num_frames, 0),
+                        translations=np.repeat(walk.translations[:1], walk.num_frames, 0),
+                        raw_channels=None)
+    assert root_travel(frozen) == pytest.approx(0.0, abs=1e-12)
+    assert step_correlation(walk, frozen) == 0.0  # still limbs count as not in step
+    translations = walk.translations.copy()
+    translations[:, 0, 1] += 0.5 * walk.height()
+    lifted = walk.with_(translations=translations)
+    assert ground_height(lifted) == pytest.approx(ground_height(walk) + 0.5, abs=1e-6)
+    flip = np.diag([1.0, -1.0, -1.0])  # half a turn about x, applied at the root
+    rotations, translations = walk.rotations.copy(), walk.translations.copy()
+    rotations[:, 0] = flip @ rotations[:, 0]
+    translations[:, 0] = translations[:, 0] @ flip.T
+    upside = walk.with_(rotations=rotations, translations=translations)
+    assert upright_fraction(upside) == 0.0
+
+
+def test_travel_is_relative_to_the_leg_length():
+    """Scaling a walk (bones and path) leaves its travel in leg lengths
+    unchanged; a faster clip of the same rig travels further."""
+    walk = _walk("quadruped")
+    big = walk.with_(skeleton=walk.skeleton.replace(offsets=walk.skeleton.offsets * 2.5),
+                     translations=walk.translations * 2.5)
+    assert leg_length(big) == pytest.approx(2.5 * leg_length(walk))
+    assert root_travel(big) == pytest.approx(root_travel(walk))
+    assert root_travel(walk) > 0.5

@@ -1,0 +1,71 @@
+"""Canonicalisation: axes, facing, units, floor, resampling, inverse."""
+import numpy as np
+import pytest
+
+from satagraph.transforms.canonical import (_apply_rotation, _rotation_between,
+                                            canonicalize, decanonicalize,
+                                            detect_up_axis, resample)
+from satagraph.io import read_bvh, write_bvh
+
+
+@pytest.fixture(scope="module")
+def human(shared_data):
+    return read_bvh(shared_data / "cmu" / "01_01.bvh")
+
+
+def test_canonical_frame(human):
+    c = canonicalize(human)
+    pos = c.global_positions()
+    assert c.fps == 30 and c.transform.source_fps == 120
+    np.testing.assert_allclose(c.translations[0, 0, [0, 2]], 0, atol=1e-9)
+    assert 1.3 < c.height() < 2.0  # metres
+    assert abs(np.percentile(pos[:, :, 1].min(1), 2)) < 5e-3  # floor at 0
+    names = c.skeleton.names
+    left = pos[0, names.index("LeftUpLeg")] - pos[0, names.index("RightUpLeg")]
+    assert left[0] > 0.8 * np.linalg.norm(left)  # facing +Z: left is +X
+
+
+def test_detects_and_undoes_z_up(human):
+    to_z = _rotation_between(np.array([0, 1.0, 0]), np.array([0, 0, 1.0]))
+    z_up = _apply_rotation(human, to_z, 1.0, np.zeros(3))
+    assert detect_up_axis(z_up) == "+Z"
+    a, b = canonicalize(human, fps=None), canonicalize(z_up, fps=None)
+    np.testing.assert_allclose(a.global_positions(), b.global_positions(), atol=1e-6)
+    assert canonicalize(z_up, up_axis="+Y", fps=None).transform.up_axis == "+Y"
+    with pytest.raises(ValueError, match="up_axis"):
+        canonicalize(human, up_axis="up")
+
+
+def test_static_root_removed_and_restored(shared_data, tmp_path):
+    src = read_bvh(shared_data / "bandai" / "dataset-1_bow_active_001.bvh")
+    c = canonicalize(src, fps=None)
+    assert c.skeleton.names[0] == "Hips"
+    assert c.transform.removed_root["name"] == "joint_Root"
+    back = decanonicalize(c)
+    write_bvh(back, tmp_path / "back.bvh")
+    again = read_bvh(tmp_path / "back.bvh")
+    assert again.skeleton.names == src.skeleton.names
+    assert again.skeleton.channels == src.skeleton.channels
+    np.testing.assert_allclose(again.global_positions(), src.global_positions(),
+                               atol=1e-4)
+
+
+def test_resample_keeps_endpoints_and_is_slerp(human):
+    clip = human.slice(0, 121)
+    down = resample(clip, 30)
+    assert down.num_frames == 31 and down.fps == 30
+    np.testing.assert_allclose(down.rotations[::1], clip.rotations[::4], atol=1e-9)
+    up = resample(clip.slice(0, 5), 240)
+    assert up.num_frames == 9
+    mid = up.rotations[1]
+    rel = np.einsum("jki,jkl->jil", clip.rotations[0], mid)
+    rel2 = np.einsum("jki,jkl->jil", mid, clip.rotations[1])
+    ang = lambda r: np.arccos(np.clip((np.trace(r, axis1=1, axis2=2) - 1) / 2, -1, 1))
+    np.testing.assert_allclose(ang(rel), ang(rel2), atol=1e-6)  # halfway
+
+
+def test_decanonicalize_round_trip(human):
+    clip = human.slice(0, 200)
+    back = decanonicalize(canonicalize(clip, fps=None))
+    np.testing.assert_allclose(back.global_positions(), clip.global_positions(),
+                               atol=1e-8)
