@@ -8,7 +8,7 @@ import lightning as L
 import torch
 from torch import Tensor, nn
 
-from satagraph.data.features import DYNAMIC_LAYOUT
+from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
 from satagraph.ops.motion_batch import batch_global_motion

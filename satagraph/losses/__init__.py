@@ -64,7 +64,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from satagraph.data.features import DYNAMIC_LAYOUT
+from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.ops.fk import fk_levels, forward_kinematics
 from satagraph.ops.motion_batch import integrate_root_batch
 from satagraph.ops.rotation import rotation_6d_to_matrix, yaw_matrix

@@ -7,7 +7,7 @@ from typing import Dict, Tuple
 import torch
 from torch import Tensor, nn
 
-from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS
+from satagraph.typing import DYNAMIC_CHANNELS, ROOT_CHANNELS
 from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
 
