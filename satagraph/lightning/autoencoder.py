@@ -261,8 +261,26 @@ class SATARVQModule(MotionAutoencoderModule):
 
     @torch.no_grad()
     def codes(self, batch) -> Tensor:
-        """Code indices per frame, ``[G, Q]``, for generators."""
+        """Code indices per frame, ``[G, Q]``, of a physical batch, for
+        generators. Evaluation mode only: in training mode quantiser dropout
+        leaves ``-1`` codes."""
+        if self.training:
+            raise RuntimeError("SATARVQModule.codes: call module.eval() first (in "
+                               "training mode quantiser dropout leaves -1 codes)")
         return self.encode(self.normalize_batch(batch))["codes"]
+
+    @torch.no_grad()
+    def decode_codes(self, codes: Tensor, target) -> Dict[str, Tensor]:
+        r"""Physical predictions (``q``, ``r``, contact logits ``c``) of
+        per-frame codes decoded onto the frame graphs of :obj:`target` (a
+        physical :class:`~satagraph.data.FrameBatch` whose frames match the
+        codes').
+
+        Shapes:
+            - **codes**: :math:`(G, Q)`
+        """
+        z = self.model.bottleneck.decode_codes(codes)
+        return self.denormalize_output(self.decode(z, self.normalize_batch(target)), target)
 
 
 def _no_semantics(skeleton, evidence=None) -> Tensor:

@@ -144,8 +144,7 @@ def decode_on(module, codes: torch.Tensor, canon: Motion, feats, sem) -> Motion:
     ae = module.autoencoder
     frames, num = codes.size(0), feats.skeleton.num_joints
     target = collate_clips([target_clip(feats, frames, sem)]).to(module.device)
-    z = ae.model.bottleneck.decode_codes(codes)
-    out = ae.denormalize_output(ae.decode(z, ae.normalize_batch(target)), target)
+    out = ae.decode_codes(codes, target)
     q = out["q"].view(frames, num, 6).cpu().double().numpy()
     r = out["r"].cpu().double().numpy()
     done = replace(feats, q=q, r=r, fps=module.fps, transform=canon.transform)
