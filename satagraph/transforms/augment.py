@@ -13,6 +13,7 @@ import numpy as np
 
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
+from satagraph.sides import side_pairs, swap_side  # noqa: F401 (re-exported)
 from satagraph.skeleton import Skeleton
 
 
@@ -126,40 +127,17 @@ def _heading(rotation: np.ndarray) -> np.ndarray:
 
 
 # ------------------------------------------------------------- mirroring
-#: The side words and their mirror images (joint names here, caption words
-#: in :mod:`satagraph.datasets.mirror`).
-SIDE_WORDS = {"Left": "Right", "Right": "Left", "left": "right",
-              "right": "left", "LEFT": "RIGHT", "RIGHT": "LEFT"}
-_SIDE_LETTERS = {"L": "R", "R": "L", "l": "r", "r": "l"}
-# A side word anywhere, or a side letter standing alone (``l_hip``,
-# ``thigh.L``, ``LHipJoint``) or closing a name (``HipL``).
-_SIDE_PATTERN = re.compile(
-    r"LEFT|RIGHT|Left|Right|left|right"
-    r"|(?<![A-Za-z])[LRlr](?![a-z])|(?<=[a-z])[LR]$")
-
-
-def swap_side(name: str) -> str:
-    """``"LeftUpLeg"`` -> ``"RightUpLeg"``, ``"thigh.L"`` -> ``"thigh.R"``,
-    ``"l_hip"`` -> ``"r_hip"``; names without a side come back unchanged."""
-    def swap(match: re.Match) -> str:
-        text = match.group(0)
-        return SIDE_WORDS.get(text) or _SIDE_LETTERS[text]
-    return _SIDE_PATTERN.sub(swap, name)
-
-
 def mirror_pairs(skeleton: Skeleton) -> np.ndarray:
     r"""Index of each joint's mirror counterpart (itself for joints without
-    a side or whose counterpart is missing).
+    a side or whose counterpart is missing), by
+    :func:`satagraph.sides.side_pairs`.
 
     Shapes:
         - **output**: :math:`(J,)`
     """
-    index = {n: i for i, n in enumerate(skeleton.names)}
+    left, right = side_pairs(skeleton.names)
     out = np.arange(skeleton.num_joints)
-    for i, name in enumerate(skeleton.names):
-        other = index.get(swap_side(name))
-        if other is not None and swap_side(skeleton.names[other]) == name:
-            out[i] = other
+    out[left], out[right] = right, left
     return out
 
 

@@ -2,17 +2,14 @@
 floor at y = 0, metres, one frame rate."""
 from __future__ import annotations
 
-import re
 from typing import List, Optional, Tuple
 
 import numpy as np
 
 from satagraph.transforms.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
+from satagraph.sides import side_pairs
 from satagraph.skeleton import Skeleton
-
-_SIDE = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)"
-                   r"|(?<![A-Za-z])[LR](?=[A-Z])")
 
 
 def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -43,28 +40,12 @@ def detect_up_axis(motion: Motion) -> str:
     return guess_up_axis(motion).axis
 
 
-def _side(name: str) -> Optional[str]:
-    """'L' or 'R' for names with a side marker, else None; the stem is the
-    name with the marker removed."""
-    match = _SIDE.search(name)
-    if not match:
-        return None
-    return "L" if match.group(0).strip("_.").lower().startswith("l") else "R"
-
-
 def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
-    """Indices of left joints and their right counterparts (matched by the
-    name with the side marker and exporter noise such as ``__x7Q`` removed)."""
+    """Indices of left joints and their right counterparts (by
+    :func:`satagraph.sides.side_pairs`, matched case-blind with exporter
+    noise such as ``__x7Q`` removed)."""
     from satagraph.semantics.lexicon import drop_noise_tokens
-    stems = {}
-    for i, raw in enumerate(names):
-        name = drop_noise_tokens(raw)
-        side = _side(name)
-        if side:
-            stem = _SIDE.sub("", name, count=1).lower()
-            stems.setdefault(stem, {})[side] = i
-    pairs = [(d["L"], d["R"]) for d in stems.values() if "L" in d and "R" in d]
-    return [p[0] for p in pairs], [p[1] for p in pairs]
+    return side_pairs(names, key=lambda name: drop_noise_tokens(name).lower())
 
 
 def lateral_forward(positions: np.ndarray, names: List[str],
