@@ -7,6 +7,7 @@ from typing import Optional
 import numpy as np
 
 from satagraph.ops.fk import forward_kinematics_numpy
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy
 from satagraph.skeleton import Skeleton
 
 
@@ -47,9 +48,7 @@ class CanonicalTransform:
     @property
     def rotation(self) -> np.ndarray:
         """The full rotation ``yaw @ up`` from source to canonical axes."""
-        c, s = np.cos(self.yaw), np.sin(self.yaw)
-        yaw = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        return yaw @ self.up_rotation
+        return yaw_matrix_numpy(self.yaw) @ self.up_rotation
 
     def to_dict(self) -> dict:
         """Plain-Python summary (for reports, JSON and checkpoints)."""

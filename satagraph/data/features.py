@@ -27,6 +27,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.motion import CanonicalTransform, Motion
 from satagraph.ops.fk import forward_kinematics
 from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.skeleton import Skeleton
 
 #: Column ranges of the per-joint dynamic features.
@@ -112,23 +113,13 @@ class MotionFeatures:
         )
 
 
-def _yaw(theta: np.ndarray) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    out = np.zeros(theta.shape + (3, 3))
-    out[..., 0, 0], out[..., 0, 2] = c, s
-    out[..., 1, 1] = 1.0
-    out[..., 2, 0], out[..., 2, 2] = -s, c
-    return out
-
-
 def _wrap(angle: np.ndarray) -> np.ndarray:
     return (angle + np.pi) % (2 * np.pi) - np.pi
 
 
 def _facing(root_rot: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Yaw angle per frame of the root's facing axis."""
-    fwd = root_rot @ axis
-    return np.arctan2(fwd[:, 0], fwd[:, 2])
+    return yaw_of(root_rot @ axis)
 
 
 def _to_6d(rot: np.ndarray) -> np.ndarray:
@@ -139,7 +130,7 @@ def _root_features(theta: np.ndarray, origin: np.ndarray, height: np.ndarray,
                    fps: float) -> np.ndarray:
     prev_theta = np.concatenate([[0.0], theta[:-1]])
     prev_origin = np.concatenate([np.zeros((1, 3)), origin[:-1]])
-    delta = np.einsum("tji,tj->ti", _yaw(prev_theta), origin - prev_origin)
+    delta = np.einsum("tji,tj->ti", yaw_matrix_numpy(prev_theta), origin - prev_origin)
     return np.stack([_wrap(theta - prev_theta) * fps, delta[:, 0] * fps,
                      delta[:, 2] * fps, height], axis=1)
 
@@ -177,7 +168,7 @@ def motion_to_features(
         facing_axis = (root_rot[0].T @ np.array([0.0, 0.0, 1.0])
                        if motion.num_frames else np.array([0.0, 0.0, 1.0]))
     theta = _facing(root_rot, facing_axis)
-    inv = _yaw(theta).transpose(0, 2, 1)
+    inv = yaw_matrix_numpy(theta).transpose(0, 2, 1)
     origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
     x = np.einsum("tij,tkj->tki", inv, pos - origin[:, None])
     x_rel = np.einsum("tij,tkj->tki", inv, pos - pos[:, np.maximum(skel.parents, 0)])
@@ -208,7 +199,7 @@ def integrate_root(r: np.ndarray, fps: float) -> tuple:
     theta = np.cumsum(r[:, 0] / fps)
     prev_theta = np.concatenate([[0.0], theta[:-1]])
     local = np.stack([r[:, 1], np.zeros(len(r)), r[:, 2]], axis=1) / fps
-    origin = np.cumsum(np.einsum("tij,tj->ti", _yaw(prev_theta), local), axis=0)
+    origin = np.cumsum(np.einsum("tij,tj->ti", yaw_matrix_numpy(prev_theta), local), axis=0)
     return theta, origin
 
 
@@ -235,7 +226,7 @@ def features_to_motion(
     q = features.q if q is None else q
     r = features.r if r is None else r
     theta, origin = integrate_root(r, features.fps)
-    face = _yaw(theta)
+    face = yaw_matrix_numpy(theta)
     rot = rotation_6d_to_matrix(torch.from_numpy(np.asarray(q, np.float64))).numpy()
     rot[:, 0] = face @ rot[:, 0]
     trans = np.broadcast_to(skel.offsets, rot.shape[:2] + (3,)).copy()

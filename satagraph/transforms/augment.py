@@ -13,6 +13,7 @@ import numpy as np
 
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.sides import side_pairs, swap_side  # noqa: F401 (re-exported)
 from satagraph.skeleton import Skeleton
 
@@ -120,10 +121,7 @@ def set_rest_rotations(motion: Motion, rest: np.ndarray) -> Motion:
 
 def _heading(rotation: np.ndarray) -> np.ndarray:
     """The rotation about +Y that turns +Z where :obj:`rotation` turns it."""
-    forward = rotation @ np.array([0.0, 0.0, 1.0])
-    angle = np.arctan2(forward[0], forward[2])
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return yaw_matrix_numpy(yaw_of(rotation @ np.array([0.0, 0.0, 1.0])))
 
 
 # ------------------------------------------------------------- mirroring

@@ -8,6 +8,7 @@ import numpy as np
 
 from satagraph.transforms.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
+from satagraph.ops.rotation_numpy import yaw_of
 from satagraph.sides import side_pairs
 from satagraph.skeleton import Skeleton
 
@@ -175,7 +176,7 @@ def canonicalize(
     up_rot = _rotation_between(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
     moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
     forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
-    yaw = float(np.arctan2(-forward[0], forward[2]))  # rotate forward onto +Z
+    yaw = -float(yaw_of(forward))  # rotate forward onto +Z
     transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
                                    scale=reading.units.scale, source_fps=motion.fps,
                                    removed_root=removed,
