@@ -122,24 +122,41 @@ def remove_static_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
 
 def resample(motion: Motion, fps: float) -> Motion:
     r"""Resample to :obj:`fps` frames per second: slerp for rotations, linear
-    interpolation for translations. The first frame is kept; the last new
-    frame is at or before the last old frame."""
+    interpolation for translations (:func:`resample_frames`). The first
+    frame is kept; the last new frame is at or before the last old frame."""
+    if abs(motion.fps - fps) < 1e-9 or motion.num_frames < 2:
+        return motion.with_(fps=fps)
+    count = int(np.floor((motion.num_frames - 1) * fps / motion.fps + 1e-9)) + 1
+    return resample_frames(motion, fps, count)
+
+
+def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
+    r"""Exactly :obj:`num_frames` frames at :obj:`fps` from time 0 (slerp for
+    rotations, linear interpolation for translations); frames past the end
+    of :obj:`motion` hold its last frame.
+
+    Resampling a clip to the model's rate and back can lose the last source
+    frames (a 100-frame 60 fps clip has 50 frames at 30 fps, which give 99
+    at 60 fps); this gives the source's frame count back.
+    """
     import torch  # only here: reading a rig (evidence, inspect) stays torch-free
 
     from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
                                         quaternion_to_matrix)
 
-    if abs(motion.fps - fps) < 1e-9 or motion.num_frames < 2:
-        return motion.with_(fps=fps)
-    count = int(np.floor((motion.num_frames - 1) * fps / motion.fps + 1e-9)) + 1
-    src = np.arange(count) * (motion.fps / fps)
-    lo = np.minimum(np.floor(src).astype(np.int64), motion.num_frames - 2)
-    w = src - lo
+    if num_frames < 1 or motion.num_frames < 1:
+        raise ValueError(f"cannot resample {motion.num_frames} frames to {num_frames}")
+    if motion.num_frames == num_frames and abs(motion.fps - fps) < 1e-9:
+        return motion
+    last = motion.num_frames - 1
+    times = np.minimum(np.arange(num_frames) * (motion.fps / fps), last)
+    lo = np.minimum(np.floor(times).astype(np.int64), max(last - 1, 0))
+    hi = np.minimum(lo + 1, last)
+    w = times - lo
     quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
-    wt = torch.from_numpy(w)[:, None].expand(count, motion.num_joints)
-    q = quaternion_slerp(quat[lo], quat[lo + 1], wt)
-    rot = quaternion_to_matrix(q).numpy()
-    t0, t1 = motion.translations[lo], motion.translations[lo + 1]
+    weight = torch.from_numpy(w)[:, None].expand(num_frames, motion.num_joints)
+    rot = quaternion_to_matrix(quaternion_slerp(quat[lo], quat[hi], weight)).numpy()
+    t0, t1 = motion.translations[lo], motion.translations[hi]
     trans = t0 + w[:, None, None] * (t1 - t0)
     return motion.with_(rotations=rot, translations=trans, fps=float(fps))
 
