@@ -11,27 +11,23 @@ import torch
 from satagraph.transforms.canonical import canonicalize, decanonicalize, resample_frames
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
+from satagraph.data.dataset import window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion
 
 
 def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tuple[int, int, int]]:
-    r"""Windows covering a clip as ``(start, stop, keep_from)``: each later
-    window's first :obj:`overlap` frames are cropped (``keep_from`` is the
-    first frame of the window that is kept). A clip shorter than a window
-    is one window."""
+    r"""Windows covering a clip as ``(start, stop, keep_from)``: the
+    training windows (:func:`~satagraph.data.dataset.window_starts` with
+    stride ``window - overlap``), where each window's frames before the
+    previous window's stop are cropped (``keep_from`` is the first frame of
+    the window that is kept). A clip shorter than a window is one window."""
     if overlap >= window:
         raise ValueError(f"overlap ({overlap}) must be smaller than window ({window})")
-    if num_frames <= window:
-        return [(0, num_frames, 0)]
-    plan, start, covered = [], 0, 0
-    while covered < num_frames:
-        start = min(start, num_frames - window)
-        plan.append((start, start + window, covered))
-        covered = start + window
-        start = covered - overlap
-    return plan
+    starts = window_starts(num_frames, window, window - overlap)
+    keep = [0] + [start + window for start in starts[:-1]]
+    return [(start, min(start + window, num_frames), k) for start, k in zip(starts, keep)]
 
 
 def target_clip(feats: MotionFeatures, num_frames: int,
