@@ -10,6 +10,11 @@ from satagraph.ops.fk import forward_kinematics_numpy
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy
 from satagraph.skeleton import Skeleton
 
+#: Contact thresholds as fractions of the character height: SAME's 5 cm and
+#: 0.4 m/s for a 1.75 m human (see :func:`ground_contacts`).
+CONTACT_HEIGHT = 0.05 / 1.75
+CONTACT_SPEED = 0.4 / 1.75
+
 
 @dataclass
 class CanonicalTransform:
@@ -206,3 +211,27 @@ class Motion:
         return self.with_(rotations=self.rotations[start:stop],
                           translations=self.translations[start:stop],
                           raw_channels=raw)
+
+
+def ground_contacts(positions: np.ndarray, fps: float, size: float,
+                    height: float = CONTACT_HEIGHT,
+                    speed: float = CONTACT_SPEED) -> np.ndarray:
+    r"""Joints in ground contact (+Y up, floor at 0): lower than
+    ``height * size`` and slower than ``speed * size`` per second; frame 0
+    has no velocity, so the height test alone decides it.
+
+    Args:
+        positions (np.ndarray): Global joint positions.
+        fps (float): Frame rate.
+        size (float): The character height (:meth:`Motion.height`).
+        height (float): Height threshold, a fraction of :obj:`size`.
+        speed (float): Speed threshold, :obj:`size` per second.
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`
+        - **output**: :math:`(T, J)` bool
+    """
+    vel = np.diff(positions, axis=0, prepend=positions[:1]) * fps
+    slow = np.linalg.norm(vel, axis=-1) < speed * size
+    slow[:1] = True
+    return (positions[..., 1] < height * size) & slow

@@ -24,7 +24,8 @@ import numpy as np
 import torch
 
 from satagraph.data.clip import MotionClip
-from satagraph.motion import CanonicalTransform, Motion
+from satagraph.motion import (CONTACT_HEIGHT, CONTACT_SPEED, CanonicalTransform, Motion,
+                              ground_contacts)
 from satagraph.ops.fk import forward_kinematics
 from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
@@ -38,12 +39,6 @@ DYNAMIC_LAYOUT: Dict[str, slice] = {
 DYNAMIC_CHANNELS = 22
 STATIC_CHANNELS = 6
 ROOT_CHANNELS = 4
-
-#: Contact thresholds as fractions of the character height: SAME's 5 cm and
-#: 0.4 m/s for a 1.75 m human.
-CONTACT_HEIGHT = 0.05 / 1.75
-CONTACT_SPEED = 0.4 / 1.75
-
 
 @dataclass
 class MotionFeatures:
@@ -135,14 +130,6 @@ def _root_features(theta: np.ndarray, origin: np.ndarray, height: np.ndarray,
                      delta[:, 2] * fps, height], axis=1)
 
 
-def _contacts(pos: np.ndarray, speed: np.ndarray, char_height: float,
-              contact_height: float, contact_speed: float) -> np.ndarray:
-    low = pos[..., 1] < contact_height * char_height
-    slow = speed < contact_speed * char_height
-    slow[0] = True  # no velocity at frame 0: the height test alone
-    return (low & slow).astype(np.float64)
-
-
 def motion_to_features(
     motion: Motion,
     contact_height: float = CONTACT_HEIGHT,
@@ -186,8 +173,8 @@ def motion_to_features(
         v_q=_to_6d(prev.transpose(0, 1, 3, 2) @ local),
         v_x=np.einsum("tij,tkj->tki", inv, disp),
         r=_root_features(theta, origin, pos[:, 0, 1], fps),
-        c=_contacts(pos, np.linalg.norm(disp, axis=-1), height,
-                    contact_height, contact_speed),
+        c=ground_contacts(pos, fps, height, contact_height,
+                          contact_speed).astype(np.float64),
         facing_axis=np.asarray(facing_axis, dtype=np.float64),
         transform=motion.transform,
     )
