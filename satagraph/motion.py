@@ -186,14 +186,22 @@ class Motion:
                                         self.skeleton.parents,
                                         rotations=False)[1]
 
+    def first_pose(self) -> np.ndarray:
+        r"""Global joint positions of frame 0; the rest pose for a motion
+        without frames.
+
+        Shapes:
+            - **output**: :math:`(J, 3)`
+        """
+        if self.num_frames == 0:
+            return self.skeleton.rest_positions()
+        return self.slice(0, 1).global_positions()[0]
+
     def height(self) -> float:
         """Character height: the larger vertical (+Y) extent of the rest pose
         and of the first frame (rest poses are not always upright)."""
         extent = float(np.ptp(self.skeleton.rest_positions()[:, 1]))
-        if self.num_frames:
-            first = self.slice(0, 1).global_positions()[0]
-            extent = max(extent, float(np.ptp(first[:, 1])))
-        return extent
+        return max(extent, float(np.ptp(self.first_pose()[:, 1])))
 
     def with_(self, **changes) -> "Motion":
         """A copy with some fields replaced; drops :obj:`raw_channels` unless

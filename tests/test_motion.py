@@ -116,3 +116,12 @@ def test_one_contact_rule(read_real):
     pos[1:, 0, 0] = [0.0, 0.1]  # joint 0 moves 0.1 m at 30 fps: 3 m/s
     assert ground_contacts(pos, 30.0, 1.0).tolist() == [[True, True], [True, True], [False, True]]
     assert not ground_contacts(pos, 30.0, 0.5)[:, 1].any()  # 2 cm > 0.5 * 5/175 m
+
+
+def test_one_first_pose_rule(tiny_motion):
+    """Motion.first_pose: frame 0's global positions, the rest pose without
+    frames (canonical's facing, augment's leg ratio and rig reading use it)."""
+    np.testing.assert_allclose(tiny_motion.first_pose(), tiny_motion.global_positions()[0])
+    empty = tiny_motion.slice(0, 0)
+    np.testing.assert_allclose(empty.first_pose(), tiny_motion.skeleton.rest_positions())
+    assert tiny_motion.first_pose().shape == (tiny_motion.num_joints, 3)

@@ -43,16 +43,9 @@ def scale_bones(motion: Motion, low: float = 0.8, high: float = 1.2,
     trans = motion.translations * scale[None]
     trans[:, 0] = motion.translations[:, 0]
     scaled = motion.with_(skeleton=new, translations=trans)
-    ratio = _leg_ratio(_pose(motion), _pose(scaled))
+    ratio = _leg_ratio(motion.first_pose(), scaled.first_pose())
     trans[:, 0] = motion.translations[:, 0] * ratio
     return motion.with_(skeleton=new, translations=trans)
-
-
-def _pose(motion: Motion) -> np.ndarray:
-    """First frame's global positions (the rest pose without frames)."""
-    if motion.num_frames == 0:
-        return motion.skeleton.rest_positions()
-    return motion.slice(0, 1).global_positions()[0]
 
 
 def _leg_ratio(old: np.ndarray, new: np.ndarray) -> float:

@@ -26,12 +26,6 @@ def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.eye(3) + k + k @ k / (1 + c)
 
 
-def _first_pose(motion: Motion) -> np.ndarray:
-    if motion.num_frames == 0:
-        return motion.skeleton.rest_positions()
-    return motion.slice(0, 1).global_positions()[0]
-
-
 def detect_up_axis(motion: Motion) -> str:
     r"""Guess the up axis of a motion (``"+Y"``, ``"-Z"``, ...) from its
     motion and pose; :func:`~satagraph.transforms.rig_reading.guess_up_axis` gives
@@ -73,7 +67,7 @@ def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
     ``.L``, ``_r``, ...): forward = across x up with across = left - right.
     Falls back to the root's local +Z axis.
     """
-    forward = lateral_forward(_first_pose(motion), motion.skeleton.names, up)
+    forward = lateral_forward(motion.first_pose(), motion.skeleton.names, up)
     if forward is None or np.linalg.norm(forward - up * forward.dot(up)) < 1e-8:
         root = motion.rotations[0, 0] if motion.num_frames else np.eye(3)
         forward = root[:, 2]

@@ -153,9 +153,7 @@ def _sample(motion: Motion) -> Tuple[np.ndarray, Optional[np.ndarray]]:
     """
     frames = motion.num_frames
     if frames < 2:
-        pose = (motion.skeleton.rest_positions() if frames == 0
-                else motion.global_positions()[0])
-        return pose[None], None
+        return motion.first_pose()[None], None
     gap = max(1, min(int(round(motion.fps / 20.0)), frames - 1))
     starts = np.unique(np.linspace(0, frames - 1 - gap, min(_PAIRS, frames - gap))
                        .astype(np.int64))
