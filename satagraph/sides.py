@@ -129,22 +129,23 @@ def swap_side(name: str) -> str:
 def side_pairs(names: List[str], key: Optional[Callable[[str], str]] = None
                ) -> Tuple[List[int], List[int]]:
     r"""Left joints and their right counterparts, matched by name:
-    :obj:`names` ``[right[k]]`` is the mirror image of ``[left[k]]``.
+    :obj:`names` ``[right[k]]`` is the mirror image of ``[left[k]]``
+    (:func:`swap_side`, compared case-blind).
 
     Args:
         names (list[str]): Joint names.
         key (callable, optional): Normalises a name before matching (for
-            example drops exporter noise or lower-cases).
+            example drops exporter noise).
 
     Returns:
         tuple[list[int], list[int]]: Indices of the left joints and of
         their right counterparts.
     """
     keys = [key(n) if key else n for n in names]
-    index = {k: i for i, k in enumerate(keys)}
+    index = {k.lower(): i for i, k in enumerate(keys)}
     left, right = [], []
     for i, k in enumerate(keys):
-        other = index.get(swap_side(k))
+        other = index.get(swap_side(k).lower())
         if side_of(k) == "left" and other is not None and other != i:
             left.append(i)
             right.append(other)

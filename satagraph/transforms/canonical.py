@@ -40,7 +40,7 @@ def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
     :func:`satagraph.sides.side_pairs`, matched case-blind with exporter
     noise such as ``__x7Q`` removed)."""
     from satagraph.semantics.lexicon import drop_noise_tokens
-    return side_pairs(names, key=lambda name: drop_noise_tokens(name).lower())
+    return side_pairs(names, key=drop_noise_tokens)
 
 
 def lateral_forward(positions: np.ndarray, names: List[str],
