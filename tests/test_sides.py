@@ -86,8 +86,8 @@ def test_pairs_follow_the_rule():
              "HipR", "Tail", "LeftHand"]
     assert side_pairs(names) == ([1, 3, 5], [2, 4, 6])
     assert list(mirror_pairs_of(names)) == [0, 2, 1, 4, 3, 6, 5, 7, 8]
-    noisy = ["Hips", "LeftArm__x7Q", "rightarm__k3Z"]
-    assert _lateral_pairs(noisy) == ([1], [2])
+    noisy = ["Hips", "LeftArm__x7Q", "rightarm__k3Z", "LHipJoint", "RHipJoint"]
+    assert _lateral_pairs(noisy) == ([1, 3], [2, 4])
 
 
 def mirror_pairs_of(names):
