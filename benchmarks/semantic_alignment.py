@@ -59,6 +59,7 @@ from satagraph.semantics.lexicon import parse_name
 from satagraph.semantics.rules import describe_structure
 from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
+from satagraph.sides import swap_side
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "semantic_alignment.md"
@@ -122,16 +123,9 @@ LIMBS = {
     "hind toes": {"bandai": "Toes_L", "cmu": "LeftToeBase",
                   "ccbase": "CC_Base_L_ToeBase", "mixamo": _M + "LeftToeBase"},
 }
-_MIRROR = ((re.compile(r"Left"), "Right"), (re.compile(r"_L_"), "_R_"),
-           (re.compile(r"_L$"), "_R"), (re.compile(r"\.L$"), ".R"),
-           (re.compile(r"^L(?=[A-Z])"), "R"), (re.compile(r"^L_"), "R_"))
-
-
 def mirror(name: str) -> str:
-    """Right-side name of a left-side joint name."""
-    for pattern, repl in _MIRROR:
-        name = pattern.sub(repl, name)
-    return name
+    """Right-side name of a left-side joint name (:func:`satagraph.sides.swap_side`)."""
+    return swap_side(name)
 
 
 def build_table() -> List[Tuple[str, Dict[str, Tuple[str, ...]]]]:

@@ -7,7 +7,13 @@ from typing import Optional
 import numpy as np
 
 from satagraph.ops.fk import forward_kinematics_numpy
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy
 from satagraph.skeleton import Skeleton
+
+#: Contact thresholds as fractions of the character height: SAME's 5 cm and
+#: 0.4 m/s for a 1.75 m human (see :func:`ground_contacts`).
+CONTACT_HEIGHT = 0.05 / 1.75
+CONTACT_SPEED = 0.4 / 1.75
 
 
 @dataclass
@@ -47,9 +53,7 @@ class CanonicalTransform:
     @property
     def rotation(self) -> np.ndarray:
         """The full rotation ``yaw @ up`` from source to canonical axes."""
-        c, s = np.cos(self.yaw), np.sin(self.yaw)
-        yaw = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        return yaw @ self.up_rotation
+        return yaw_matrix_numpy(self.yaw) @ self.up_rotation
 
     def to_dict(self) -> dict:
         """Plain-Python summary (for reports, JSON and checkpoints)."""
@@ -182,14 +186,22 @@ class Motion:
                                         self.skeleton.parents,
                                         rotations=False)[1]
 
+    def first_pose(self) -> np.ndarray:
+        r"""Global joint positions of frame 0; the rest pose for a motion
+        without frames.
+
+        Shapes:
+            - **output**: :math:`(J, 3)`
+        """
+        if self.num_frames == 0:
+            return self.skeleton.rest_positions()
+        return self.slice(0, 1).global_positions()[0]
+
     def height(self) -> float:
         """Character height: the larger vertical (+Y) extent of the rest pose
         and of the first frame (rest poses are not always upright)."""
         extent = float(np.ptp(self.skeleton.rest_positions()[:, 1]))
-        if self.num_frames:
-            first = self.slice(0, 1).global_positions()[0]
-            extent = max(extent, float(np.ptp(first[:, 1])))
-        return extent
+        return max(extent, float(np.ptp(self.first_pose()[:, 1])))
 
     def with_(self, **changes) -> "Motion":
         """A copy with some fields replaced; drops :obj:`raw_channels` unless
@@ -207,3 +219,27 @@ class Motion:
         return self.with_(rotations=self.rotations[start:stop],
                           translations=self.translations[start:stop],
                           raw_channels=raw)
+
+
+def ground_contacts(positions: np.ndarray, fps: float, size: float,
+                    height: float = CONTACT_HEIGHT,
+                    speed: float = CONTACT_SPEED) -> np.ndarray:
+    r"""Joints in ground contact (+Y up, floor at 0): lower than
+    ``height * size`` and slower than ``speed * size`` per second; frame 0
+    has no velocity, so the height test alone decides it.
+
+    Args:
+        positions (np.ndarray): Global joint positions.
+        fps (float): Frame rate.
+        size (float): The character height (:meth:`Motion.height`).
+        height (float): Height threshold, a fraction of :obj:`size`.
+        speed (float): Speed threshold, :obj:`size` per second.
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`
+        - **output**: :math:`(T, J)` bool
+    """
+    vel = np.diff(positions, axis=0, prepend=positions[:1]) * fps
+    slow = np.linalg.norm(vel, axis=-1) < speed * size
+    slow[:1] = True
+    return (positions[..., 1] < height * size) & slow

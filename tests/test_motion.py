@@ -96,3 +96,32 @@ def test_canonical_transform_summary():
     assert summary["up_axis"] == "+Z"
     assert summary["yaw_degrees"] == pytest.approx(90)
     assert summary["removed_root"] is None
+
+
+def test_one_contact_rule(read_real):
+    """Features, the renderer and ground_contacts share one rule: below 5 cm
+    and slower than 0.4 m/s for a 1.75 m character, frame 0 by height."""
+    from satagraph.data.features import motion_to_features
+    from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, ground_contacts
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.viz.render import contacts
+
+    assert np.isclose(CONTACT_HEIGHT * 1.75, 0.05) and np.isclose(CONTACT_SPEED * 1.75, 0.4)
+    motion = canonicalize(read_real("cmu/01_01.bvh").slice(0, 60))
+    c = contacts(motion)
+    assert c.any() and not c.all()
+    np.testing.assert_array_equal(motion_to_features(motion).c, c.astype(float))
+    pos = np.zeros((3, 2, 3))
+    pos[:, 1, 1] = 0.02  # 2 cm high, for a 1 m character
+    pos[1:, 0, 0] = [0.0, 0.1]  # joint 0 moves 0.1 m at 30 fps: 3 m/s
+    assert ground_contacts(pos, 30.0, 1.0).tolist() == [[True, True], [True, True], [False, True]]
+    assert not ground_contacts(pos, 30.0, 0.5)[:, 1].any()  # 2 cm > 0.5 * 5/175 m
+
+
+def test_one_first_pose_rule(tiny_motion):
+    """Motion.first_pose: frame 0's global positions, the rest pose without
+    frames (canonical's facing, augment's leg ratio and rig reading use it)."""
+    np.testing.assert_allclose(tiny_motion.first_pose(), tiny_motion.global_positions()[0])
+    empty = tiny_motion.slice(0, 0)
+    np.testing.assert_allclose(empty.first_pose(), tiny_motion.skeleton.rest_positions())
+    assert tiny_motion.first_pose().shape == (tiny_motion.num_joints, 3)

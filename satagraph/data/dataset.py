@@ -15,14 +15,14 @@ from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.features import (CONTACT_HEIGHT, CONTACT_SPEED, MotionFeatures,
-                                     features_to_motion, motion_to_features)
+from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
                                           evidence_from_features, remap_evidence)
 from satagraph.semantics.limbs import limb_end_index
 from satagraph.datasets.sources import MotionFile
 from satagraph.data.validate import check_features, check_motion
 from satagraph.io import BVHError, read_bvh
+from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED
 from satagraph.skeleton import Skeleton
 
 #: Preprocessing defaults; every key is part of the cache key.

@@ -24,18 +24,14 @@ import numpy as np
 import torch
 
 from satagraph.data.clip import MotionClip
-from satagraph.motion import CanonicalTransform, Motion
+from satagraph.motion import (CONTACT_HEIGHT, CONTACT_SPEED, CanonicalTransform, Motion,
+                              ground_contacts)
 from satagraph.ops.fk import forward_kinematics
 from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.skeleton import Skeleton
 from satagraph.typing import (DYNAMIC_CHANNELS, DYNAMIC_LAYOUT, ROOT_CHANNELS,  # noqa: F401
                               STATIC_CHANNELS)
-
-
-#: Contact thresholds as fractions of the character height: SAME's 5 cm and
-#: 0.4 m/s for a 1.75 m human.
-CONTACT_HEIGHT = 0.05 / 1.75
-CONTACT_SPEED = 0.4 / 1.75
 
 
 @dataclass
@@ -106,23 +102,13 @@ class MotionFeatures:
         )
 
 
-def _yaw(theta: np.ndarray) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    out = np.zeros(theta.shape + (3, 3))
-    out[..., 0, 0], out[..., 0, 2] = c, s
-    out[..., 1, 1] = 1.0
-    out[..., 2, 0], out[..., 2, 2] = -s, c
-    return out
-
-
 def _wrap(angle: np.ndarray) -> np.ndarray:
     return (angle + np.pi) % (2 * np.pi) - np.pi
 
 
 def _facing(root_rot: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Yaw angle per frame of the root's facing axis."""
-    fwd = root_rot @ axis
-    return np.arctan2(fwd[:, 0], fwd[:, 2])
+    return yaw_of(root_rot @ axis)
 
 
 def _to_6d(rot: np.ndarray) -> np.ndarray:
@@ -133,17 +119,9 @@ def _root_features(theta: np.ndarray, origin: np.ndarray, height: np.ndarray,
                    fps: float) -> np.ndarray:
     prev_theta = np.concatenate([[0.0], theta[:-1]])
     prev_origin = np.concatenate([np.zeros((1, 3)), origin[:-1]])
-    delta = np.einsum("tji,tj->ti", _yaw(prev_theta), origin - prev_origin)
+    delta = np.einsum("tji,tj->ti", yaw_matrix_numpy(prev_theta), origin - prev_origin)
     return np.stack([_wrap(theta - prev_theta) * fps, delta[:, 0] * fps,
                      delta[:, 2] * fps, height], axis=1)
-
-
-def _contacts(pos: np.ndarray, speed: np.ndarray, char_height: float,
-              contact_height: float, contact_speed: float) -> np.ndarray:
-    low = pos[..., 1] < contact_height * char_height
-    slow = speed < contact_speed * char_height
-    slow[0] = True  # no velocity at frame 0: the height test alone
-    return (low & slow).astype(np.float64)
 
 
 def motion_to_features(
@@ -171,7 +149,7 @@ def motion_to_features(
         facing_axis = (root_rot[0].T @ np.array([0.0, 0.0, 1.0])
                        if motion.num_frames else np.array([0.0, 0.0, 1.0]))
     theta = _facing(root_rot, facing_axis)
-    inv = _yaw(theta).transpose(0, 2, 1)
+    inv = yaw_matrix_numpy(theta).transpose(0, 2, 1)
     origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
     x = np.einsum("tij,tkj->tki", inv, pos - origin[:, None])
     x_rel = np.einsum("tij,tkj->tki", inv, pos - pos[:, np.maximum(skel.parents, 0)])
@@ -189,8 +167,8 @@ def motion_to_features(
         v_q=_to_6d(prev.transpose(0, 1, 3, 2) @ local),
         v_x=np.einsum("tij,tkj->tki", inv, disp),
         r=_root_features(theta, origin, pos[:, 0, 1], fps),
-        c=_contacts(pos, np.linalg.norm(disp, axis=-1), height,
-                    contact_height, contact_speed),
+        c=ground_contacts(pos, fps, height, contact_height,
+                          contact_speed).astype(np.float64),
         facing_axis=np.asarray(facing_axis, dtype=np.float64),
         transform=motion.transform,
     )
@@ -202,7 +180,7 @@ def integrate_root(r: np.ndarray, fps: float) -> tuple:
     theta = np.cumsum(r[:, 0] / fps)
     prev_theta = np.concatenate([[0.0], theta[:-1]])
     local = np.stack([r[:, 1], np.zeros(len(r)), r[:, 2]], axis=1) / fps
-    origin = np.cumsum(np.einsum("tij,tj->ti", _yaw(prev_theta), local), axis=0)
+    origin = np.cumsum(np.einsum("tij,tj->ti", yaw_matrix_numpy(prev_theta), local), axis=0)
     return theta, origin
 
 
@@ -229,7 +207,7 @@ def features_to_motion(
     q = features.q if q is None else q
     r = features.r if r is None else r
     theta, origin = integrate_root(r, features.fps)
-    face = _yaw(theta)
+    face = yaw_matrix_numpy(theta)
     rot = rotation_6d_to_matrix(torch.from_numpy(np.asarray(q, np.float64))).numpy()
     rot[:, 0] = face @ rot[:, 0]
     trans = np.broadcast_to(skel.offsets, rot.shape[:2] + (3,)).copy()

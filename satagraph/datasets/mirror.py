@@ -4,7 +4,7 @@ r"""Mirroring captions: the text of a left/right mirrored motion.
 motion; a caption of that motion must swap its side words too (``"turns
 left"`` -> ``"turns right"``, ``"clockwise"`` -> ``"counterclockwise"``).
 The side words are those of the joint-name rule
-(:data:`~satagraph.transforms.augment.SIDE_WORDS`), plus the words of turning
+(:data:`satagraph.sides.MIRROR_WORDS`: ``left`` and ``right``), plus the words of turning
 directions. Whole words only (``"leftover"`` stays), case kept
 (``"Left"`` -> ``"Right"``, ``"LEFT"`` -> ``"RIGHT"``).
 
@@ -20,11 +20,11 @@ from __future__ import annotations
 import re
 from typing import Dict
 
-from satagraph.transforms.augment import SIDE_WORDS
+from satagraph.sides import MIRROR_WORDS as _SIDE_MIRROR
 
 #: Lower-case word -> its mirror image.
 MIRROR_WORDS: Dict[str, str] = {
-    **{k.lower(): v.lower() for k, v in SIDE_WORDS.items()},
+    **{w: _SIDE_MIRROR[w] for w in ("left", "right")},
     "leftward": "rightward", "rightward": "leftward",
     "leftwards": "rightwards", "rightwards": "leftwards",
     "leftmost": "rightmost", "rightmost": "leftmost",

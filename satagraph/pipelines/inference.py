@@ -1,4 +1,5 @@
-"""Sliding-window reconstruction and retargeting onto any skeleton."""
+"""Sliding-window reconstruction and retargeting onto any skeleton
+(:func:`resample_frames` is :mod:`satagraph.transforms.canonical`'s)."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -7,31 +8,26 @@ from typing import Callable, List, Optional, Tuple
 import numpy as np
 import torch
 
-from satagraph.transforms.canonical import canonicalize, decanonicalize
+from satagraph.transforms.canonical import canonicalize, decanonicalize, resample_frames
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
+from satagraph.data.dataset import window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion
-from satagraph.ops.rotation import matrix_to_quaternion, quaternion_slerp, quaternion_to_matrix
 
 
 def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tuple[int, int, int]]:
-    r"""Windows covering a clip as ``(start, stop, keep_from)``: each later
-    window's first :obj:`overlap` frames are cropped (``keep_from`` is the
-    first frame of the window that is kept). A clip shorter than a window
-    is one window."""
+    r"""Windows covering a clip as ``(start, stop, keep_from)``: the
+    training windows (:func:`~satagraph.data.dataset.window_starts` with
+    stride ``window - overlap``), where each window's frames before the
+    previous window's stop are cropped (``keep_from`` is the first frame of
+    the window that is kept). A clip shorter than a window is one window."""
     if overlap >= window:
         raise ValueError(f"overlap ({overlap}) must be smaller than window ({window})")
-    if num_frames <= window:
-        return [(0, num_frames, 0)]
-    plan, start, covered = [], 0, 0
-    while covered < num_frames:
-        start = min(start, num_frames - window)
-        plan.append((start, start + window, covered))
-        covered = start + window
-        start = covered - overlap
-    return plan
+    starts = window_starts(num_frames, window, window - overlap)
+    keep = [0] + [start + window for start in starts[:-1]]
+    return [(start, min(start + window, num_frames), k) for start, k in zip(starts, keep)]
 
 
 def target_clip(feats: MotionFeatures, num_frames: int,
@@ -172,32 +168,6 @@ def retarget_canonical(module, source: Motion, target: Motion,
     q, r, _ = transfer(module, motion_to_features(src_canon), tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     return src_canon, features_to_motion(out_feats, q=q, r=r, use_positions=False)
-
-
-def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
-    r"""Exactly :obj:`num_frames` frames at :obj:`fps` from time 0 (slerp for
-    rotations, linear interpolation for translations); frames past the end
-    of :obj:`motion` hold its last frame.
-
-    Resampling a clip to the model's rate and back can lose the last source
-    frames (a 100-frame 60 fps clip has 50 frames at 30 fps, which give 99
-    at 60 fps); this gives the source's frame count back.
-    """
-    if num_frames < 1 or motion.num_frames < 1:
-        raise ValueError(f"cannot resample {motion.num_frames} frames to {num_frames}")
-    if motion.num_frames == num_frames and abs(motion.fps - fps) < 1e-9:
-        return motion
-    last = motion.num_frames - 1
-    times = np.minimum(np.arange(num_frames) * (motion.fps / fps), last)
-    lo = np.minimum(np.floor(times).astype(np.int64), max(last - 1, 0))
-    hi = np.minimum(lo + 1, last)
-    w = times - lo
-    quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
-    weight = torch.from_numpy(w)[:, None].expand(num_frames, motion.num_joints)
-    rot = quaternion_to_matrix(quaternion_slerp(quat[lo], quat[hi], weight)).numpy()
-    t0, t1 = motion.translations[lo], motion.translations[hi]
-    trans = t0 + w[:, None, None] * (t1 - t0)
-    return motion.with_(rotations=rot, translations=trans, fps=float(fps))
 
 
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Dict, FrozenSet, List, Optional, Tuple
 
+from satagraph.sides import LEG_CODES, SIDE_WORDS, side_of_words
+
 # (family, candidate ranks, default rank). Family "arm" is a strong hint of a
 # front limb, "leg" a weak hint of a hind limb (the hierarchy may override it).
 LimbWord = Tuple[str, FrozenSet[int], int]
@@ -139,9 +141,6 @@ FILLER_WORDS = frozenset({
     "joint", "jnt", "jt", "bone", "bind", "def", "org", "grp", "node", "base",
     "mixamorig", "cc", "rl", "bip", "biped", "jnts", "skin", "bn", "b", "j",
 })
-SIDE_WORDS = {"left": "left", "l": "left", "lt": "left", "lft": "left",
-              "lf": "left", "right": "right", "r": "right", "rt": "right",
-              "rgt": "right", "rht": "right"}
 FRONT_HIND_WORDS = {"front": "front", "fr": "front", "frnt": "front",
                     "fore": "front", "anterior": "front", "hind": "hind",
                     "bk": "hind", "rear": "hind", "hnd": "hind",
@@ -413,11 +412,6 @@ def parse_name(raw: str) -> NameInfo:
     return _classify(raw, tuple(words), int(number.group()) if number else None)
 
 
-_COMBINED_SIDES = {"fl": ("front", "left"), "fr": ("front", "right"),
-                   "hl": ("hind", "left"), "hr": ("hind", "right"),
-                   "bl": ("hind", "left"), "br": ("hind", "right")}
-
-
 def _expand_combined_sides(words: List[str]) -> List[str]:
     """Quadruped leg codes: ``FL``/``FR``/``HL``/``HR``/``BL``/``BR`` mean
     front/hind + left/right when the name has no other side word (``Fr``
@@ -426,7 +420,7 @@ def _expand_combined_sides(words: List[str]) -> List[str]:
         return words
     out: List[str] = []
     for word in words:
-        out.extend(_COMBINED_SIDES.get(word, (word,)))
+        out.extend(LEG_CODES.get(word, (word,)))
     return out
 
 
@@ -438,7 +432,7 @@ def _pick_limb(words: Tuple[str, ...]) -> Optional[LimbWord]:
 
 def _classify(raw: str, words: Tuple[str, ...],
               number: Optional[int] = None) -> NameInfo:
-    side = next((SIDE_WORDS[w] for w in words if w in SIDE_WORDS), None)
+    side = side_of_words(words)
     position = next((POSITION_WORDS[w] for w in words if w in POSITION_WORDS),
                     None)
     limb_words = [w for w in words if w in LIMB_WORDS or w == "back"]

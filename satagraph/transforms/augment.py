@@ -13,6 +13,8 @@ import numpy as np
 
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
+from satagraph.sides import side_pairs, swap_side  # noqa: F401 (re-exported)
 from satagraph.skeleton import Skeleton
 
 
@@ -41,16 +43,9 @@ def scale_bones(motion: Motion, low: float = 0.8, high: float = 1.2,
     trans = motion.translations * scale[None]
     trans[:, 0] = motion.translations[:, 0]
     scaled = motion.with_(skeleton=new, translations=trans)
-    ratio = _leg_ratio(_pose(motion), _pose(scaled))
+    ratio = _leg_ratio(motion.first_pose(), scaled.first_pose())
     trans[:, 0] = motion.translations[:, 0] * ratio
     return motion.with_(skeleton=new, translations=trans)
-
-
-def _pose(motion: Motion) -> np.ndarray:
-    """First frame's global positions (the rest pose without frames)."""
-    if motion.num_frames == 0:
-        return motion.skeleton.rest_positions()
-    return motion.slice(0, 1).global_positions()[0]
 
 
 def _leg_ratio(old: np.ndarray, new: np.ndarray) -> float:
@@ -119,47 +114,21 @@ def set_rest_rotations(motion: Motion, rest: np.ndarray) -> Motion:
 
 def _heading(rotation: np.ndarray) -> np.ndarray:
     """The rotation about +Y that turns +Z where :obj:`rotation` turns it."""
-    forward = rotation @ np.array([0.0, 0.0, 1.0])
-    angle = np.arctan2(forward[0], forward[2])
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return yaw_matrix_numpy(yaw_of(rotation @ np.array([0.0, 0.0, 1.0])))
 
 
 # ------------------------------------------------------------- mirroring
-#: The side words and their mirror images (joint names here, caption words
-#: in :mod:`satagraph.datasets.mirror`).
-SIDE_WORDS = {"Left": "Right", "Right": "Left", "left": "right",
-              "right": "left", "LEFT": "RIGHT", "RIGHT": "LEFT"}
-_SIDE_LETTERS = {"L": "R", "R": "L", "l": "r", "r": "l"}
-# A side word anywhere, or a side letter standing alone (``l_hip``,
-# ``thigh.L``, ``LHipJoint``) or closing a name (``HipL``).
-_SIDE_PATTERN = re.compile(
-    r"LEFT|RIGHT|Left|Right|left|right"
-    r"|(?<![A-Za-z])[LRlr](?![a-z])|(?<=[a-z])[LR]$")
-
-
-def swap_side(name: str) -> str:
-    """``"LeftUpLeg"`` -> ``"RightUpLeg"``, ``"thigh.L"`` -> ``"thigh.R"``,
-    ``"l_hip"`` -> ``"r_hip"``; names without a side come back unchanged."""
-    def swap(match: re.Match) -> str:
-        text = match.group(0)
-        return SIDE_WORDS.get(text) or _SIDE_LETTERS[text]
-    return _SIDE_PATTERN.sub(swap, name)
-
-
 def mirror_pairs(skeleton: Skeleton) -> np.ndarray:
     r"""Index of each joint's mirror counterpart (itself for joints without
-    a side or whose counterpart is missing).
+    a side or whose counterpart is missing), by
+    :func:`satagraph.sides.side_pairs`.
 
     Shapes:
         - **output**: :math:`(J,)`
     """
-    index = {n: i for i, n in enumerate(skeleton.names)}
+    left, right = side_pairs(skeleton.names)
     out = np.arange(skeleton.num_joints)
-    for i, name in enumerate(skeleton.names):
-        other = index.get(swap_side(name))
-        if other is not None and swap_side(skeleton.names[other]) == name:
-            out[i] = other
+    out[left], out[right] = right, left
     return out
 
 

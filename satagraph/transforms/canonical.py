@@ -2,17 +2,15 @@
 floor at y = 0, metres, one frame rate."""
 from __future__ import annotations
 
-import re
 from typing import List, Optional, Tuple
 
 import numpy as np
 
 from satagraph.transforms.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
+from satagraph.ops.rotation_numpy import yaw_of
+from satagraph.sides import side_pairs
 from satagraph.skeleton import Skeleton
-
-_SIDE = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)"
-                   r"|(?<![A-Za-z])[LR](?=[A-Z])")
 
 
 def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -28,12 +26,6 @@ def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.eye(3) + k + k @ k / (1 + c)
 
 
-def _first_pose(motion: Motion) -> np.ndarray:
-    if motion.num_frames == 0:
-        return motion.skeleton.rest_positions()
-    return motion.slice(0, 1).global_positions()[0]
-
-
 def detect_up_axis(motion: Motion) -> str:
     r"""Guess the up axis of a motion (``"+Y"``, ``"-Z"``, ...) from its
     motion and pose; :func:`~satagraph.transforms.rig_reading.guess_up_axis` gives
@@ -43,28 +35,12 @@ def detect_up_axis(motion: Motion) -> str:
     return guess_up_axis(motion).axis
 
 
-def _side(name: str) -> Optional[str]:
-    """'L' or 'R' for names with a side marker, else None; the stem is the
-    name with the marker removed."""
-    match = _SIDE.search(name)
-    if not match:
-        return None
-    return "L" if match.group(0).strip("_.").lower().startswith("l") else "R"
-
-
 def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
-    """Indices of left joints and their right counterparts (matched by the
-    name with the side marker and exporter noise such as ``__x7Q`` removed)."""
+    """Indices of left joints and their right counterparts (by
+    :func:`satagraph.sides.side_pairs`, matched case-blind with exporter
+    noise such as ``__x7Q`` removed)."""
     from satagraph.semantics.lexicon import drop_noise_tokens
-    stems = {}
-    for i, raw in enumerate(names):
-        name = drop_noise_tokens(raw)
-        side = _side(name)
-        if side:
-            stem = _SIDE.sub("", name, count=1).lower()
-            stems.setdefault(stem, {})[side] = i
-    pairs = [(d["L"], d["R"]) for d in stems.values() if "L" in d and "R" in d]
-    return [p[0] for p in pairs], [p[1] for p in pairs]
+    return side_pairs(names, key=drop_noise_tokens)
 
 
 def lateral_forward(positions: np.ndarray, names: List[str],
@@ -91,7 +67,7 @@ def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
     ``.L``, ``_r``, ...): forward = across x up with across = left - right.
     Falls back to the root's local +Z axis.
     """
-    forward = lateral_forward(_first_pose(motion), motion.skeleton.names, up)
+    forward = lateral_forward(motion.first_pose(), motion.skeleton.names, up)
     if forward is None or np.linalg.norm(forward - up * forward.dot(up)) < 1e-8:
         root = motion.rotations[0, 0] if motion.num_frames else np.eye(3)
         forward = root[:, 2]
@@ -140,24 +116,41 @@ def remove_static_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
 
 def resample(motion: Motion, fps: float) -> Motion:
     r"""Resample to :obj:`fps` frames per second: slerp for rotations, linear
-    interpolation for translations. The first frame is kept; the last new
-    frame is at or before the last old frame."""
+    interpolation for translations (:func:`resample_frames`). The first
+    frame is kept; the last new frame is at or before the last old frame."""
+    if abs(motion.fps - fps) < 1e-9 or motion.num_frames < 2:
+        return motion.with_(fps=fps)
+    count = int(np.floor((motion.num_frames - 1) * fps / motion.fps + 1e-9)) + 1
+    return resample_frames(motion, fps, count)
+
+
+def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
+    r"""Exactly :obj:`num_frames` frames at :obj:`fps` from time 0 (slerp for
+    rotations, linear interpolation for translations); frames past the end
+    of :obj:`motion` hold its last frame.
+
+    Resampling a clip to the model's rate and back can lose the last source
+    frames (a 100-frame 60 fps clip has 50 frames at 30 fps, which give 99
+    at 60 fps); this gives the source's frame count back.
+    """
     import torch  # only here: reading a rig (evidence, inspect) stays torch-free
 
     from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
                                         quaternion_to_matrix)
 
-    if abs(motion.fps - fps) < 1e-9 or motion.num_frames < 2:
-        return motion.with_(fps=fps)
-    count = int(np.floor((motion.num_frames - 1) * fps / motion.fps + 1e-9)) + 1
-    src = np.arange(count) * (motion.fps / fps)
-    lo = np.minimum(np.floor(src).astype(np.int64), motion.num_frames - 2)
-    w = src - lo
+    if num_frames < 1 or motion.num_frames < 1:
+        raise ValueError(f"cannot resample {motion.num_frames} frames to {num_frames}")
+    if motion.num_frames == num_frames and abs(motion.fps - fps) < 1e-9:
+        return motion
+    last = motion.num_frames - 1
+    times = np.minimum(np.arange(num_frames) * (motion.fps / fps), last)
+    lo = np.minimum(np.floor(times).astype(np.int64), max(last - 1, 0))
+    hi = np.minimum(lo + 1, last)
+    w = times - lo
     quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
-    wt = torch.from_numpy(w)[:, None].expand(count, motion.num_joints)
-    q = quaternion_slerp(quat[lo], quat[lo + 1], wt)
-    rot = quaternion_to_matrix(q).numpy()
-    t0, t1 = motion.translations[lo], motion.translations[lo + 1]
+    weight = torch.from_numpy(w)[:, None].expand(num_frames, motion.num_joints)
+    rot = quaternion_to_matrix(quaternion_slerp(quat[lo], quat[hi], weight)).numpy()
+    t0, t1 = motion.translations[lo], motion.translations[hi]
     trans = t0 + w[:, None, None] * (t1 - t0)
     return motion.with_(rotations=rot, translations=trans, fps=float(fps))
 
@@ -194,7 +187,7 @@ def canonicalize(
     up_rot = _rotation_between(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
     moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
     forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
-    yaw = float(np.arctan2(-forward[0], forward[2]))  # rotate forward onto +Z
+    yaw = -float(yaw_of(forward))  # rotate forward onto +Z
     transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
                                    scale=reading.units.scale, source_fps=motion.fps,
                                    removed_root=removed,

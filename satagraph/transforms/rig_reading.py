@@ -37,6 +37,7 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from satagraph.motion import Motion, RigSettings
+from satagraph.sides import side_of
 
 UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 
@@ -153,9 +154,7 @@ def _sample(motion: Motion) -> Tuple[np.ndarray, Optional[np.ndarray]]:
     """
     frames = motion.num_frames
     if frames < 2:
-        pose = (motion.skeleton.rest_positions() if frames == 0
-                else motion.global_positions()[0])
-        return pose[None], None
+        return motion.first_pose()[None], None
     gap = max(1, min(int(round(motion.fps / 20.0)), frames - 1))
     starts = np.unique(np.linspace(0, frames - 1 - gap, min(_PAIRS, frames - gap))
                        .astype(np.int64))
@@ -325,8 +324,6 @@ HUMAN_HEIGHT = (1.0, 2.3)
 STANDARD_UNITS = ("m", "cm", "mm", "in", "cmu")
 _NOT_HUMAN = re.compile(r"tail|wing|beak|snout|muzzle|paw|hoof|antenn|claw|"
                         r"pincer|fin(?![a-z])|horn|mane|feather|tentacle", re.I)
-_SIDED = re.compile(r"(?i:left|right)|(?<![A-Za-z])[LRlr](?=[_.:\s]|$)|"
-                    r"(?<![A-Za-z])[LR](?=[A-Z])|(?<=[_.])[LRlr](?![A-Za-z])")
 
 
 def _dialect(motion: Motion) -> Optional[Tuple[str, str]]:
@@ -340,13 +337,7 @@ def _dialect(motion: Motion) -> Optional[Tuple[str, str]]:
 
 def _limb_sides(names: List[str], word: re.Pattern) -> int:
     """How many sides (0, 1, 2) have a joint named by :obj:`word`."""
-    sides = set()
-    for n in names:
-        if word.search(n):
-            m = _SIDED.search(n)
-            if m:
-                sides.add(m.group(0).strip("_.").lower()[:1])
-    return len(sides)
+    return len({side_of(n) for n in names if word.search(n)} - {None})
 
 
 def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:

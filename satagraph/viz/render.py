@@ -23,14 +23,10 @@ from typing import Iterator, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from satagraph.utils.files import atomic_path
-from satagraph.motion import Motion
+from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion, ground_contacts
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-#: Contact thresholds as fractions of the character height (SAME's 5 cm and
-#: 0.4 m/s for a 1.75 m human).
-CONTACT_HEIGHT = 0.05 / 1.75
-CONTACT_SPEED = 0.4 / 1.75
 _BONE_COLOR, _JOINT_COLOR, _CONTACT_COLOR = "#1f4e8c", "#333333", "#e4572e"
 
 
@@ -55,11 +51,7 @@ def contacts(motion: Motion, positions: Optional[np.ndarray] = None,
         - **output**: :math:`(T, J)` bool
     """
     pos = motion.global_positions() if positions is None else positions
-    size = max(motion.height(), 1e-6)
-    vel = np.diff(pos, axis=0, prepend=pos[:1]) * motion.fps
-    slow = np.linalg.norm(vel, axis=-1) < speed * size
-    slow[0] = True
-    return (pos[..., 1] < height * size) & slow
+    return ground_contacts(pos, motion.fps, max(motion.height(), 1e-6), height, speed)
 
 
 def _tracks(motions: Sequence[Motion], titles: Optional[Sequence[str]]

@@ -13,6 +13,7 @@ from satagraph.datasets.sources import read_manifest
 from satagraph.datasets.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
                                     generate_clip, write_zoo, zoo_rigs)
 from satagraph.io import read_bvh, write_bvh
+from satagraph.motion import ground_contacts
 
 RIGS = zoo_rigs(seed=0)
 
@@ -69,11 +70,7 @@ def test_round_trip(tmp_path, species):
 
 def _contacts(motion, tips):
     pos = motion.global_positions()
-    height = motion.height()
-    speed = np.linalg.norm(np.diff(pos, axis=0, prepend=pos[:1]), axis=-1) * motion.fps
-    low = pos[..., 1] < 0.05 / 1.75 * height
-    slow = speed < 0.4 / 1.75 * height
-    return pos, (low & slow)[:, tips]
+    return pos, ground_contacts(pos, motion.fps, motion.height())[:, tips]
 
 
 @pytest.mark.parametrize("rig", [r for r in RIGS if r.legs],

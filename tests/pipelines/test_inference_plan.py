@@ -1,6 +1,7 @@
 """Sliding-window plan and learning-rate schedule."""
 import pytest
 
+from satagraph.data.dataset import window_starts
 from satagraph.pipelines.inference import window_plan
 from satagraph.lightning import lr_factor
 
@@ -12,6 +13,15 @@ def test_window_plan_covers_every_frame_once():
         assert kept == list(range(num))
         assert all(b - a == min(64, num) for a, b, _ in plan)
         assert all(keep - a in (0, 16) or a == plan[-1][0] for a, _, keep in plan)
+
+
+def test_window_plan_starts_are_the_training_windows():
+    """One windowing rule: inference windows start where training windows
+    of stride ``window - overlap`` do."""
+    for num in (1, 30, 64, 65, 100, 113, 500):
+        for window, overlap in ((64, 16), (16, 0), (10, 9)):
+            plan = window_plan(num, window, overlap)
+            assert [a for a, _, _ in plan] == window_starts(num, window, window - overlap)
 
 
 def test_window_plan_rejects_bad_overlap():

@@ -69,3 +69,18 @@ def test_decanonicalize_round_trip(human):
     back = decanonicalize(canonicalize(clip, fps=None))
     np.testing.assert_allclose(back.global_positions(), clip.global_positions(),
                                atol=1e-8)
+
+
+def test_one_resampling_rule(human):
+    """resample and the inference's exact-count resampling are one rule."""
+    from satagraph.pipelines import inference
+    from satagraph.transforms.canonical import resample_frames
+
+    assert inference.resample_frames is resample_frames
+    clip = human.slice(0, 37)
+    down = resample(clip, 30)
+    same = resample_frames(clip, 30, down.num_frames)
+    np.testing.assert_array_equal(down.rotations, same.rotations)
+    np.testing.assert_array_equal(down.translations, same.translations)
+    held = resample_frames(clip, 30, down.num_frames + 2)
+    np.testing.assert_allclose(held.translations[-2:], clip.translations[[-1, -1]])

@@ -8,6 +8,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
+from satagraph.ops.rotation_numpy import axis_angle_matrix_numpy
 from satagraph.skeleton import Skeleton
 
 _POS = ("Xposition", "Yposition", "Zposition")
@@ -16,14 +17,7 @@ _POS = ("Xposition", "Yposition", "Zposition")
 # ------------------------------------------------------------------ math
 def _rot(axis: int, angle: np.ndarray) -> np.ndarray:
     """Rotations about coordinate axis :obj:`axis` (0, 1, 2), :math:`(*, 3, 3)`."""
-    angle = np.asarray(angle, dtype=np.float64)
-    out = np.zeros(angle.shape + (3, 3))
-    a, b = (axis + 1) % 3, (axis + 2) % 3
-    c, s = np.cos(angle), np.sin(angle)
-    out[..., axis, axis] = 1.0
-    out[..., a, a], out[..., a, b] = c, -s
-    out[..., b, a], out[..., b, b] = s, c
-    return out
+    return axis_angle_matrix_numpy(angle, axis)
 
 
 def _euler(angles: np.ndarray) -> np.ndarray:

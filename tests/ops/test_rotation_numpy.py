@@ -1,0 +1,40 @@
+"""One yaw rule: rotation about +Y, +Z turned towards +X, the same in
+numpy (:mod:`satagraph.ops.rotation_numpy`) and torch."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from satagraph.motion import CanonicalTransform
+from satagraph.ops.rotation import axis_angle_matrix, yaw_matrix
+from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy,
+                                          yaw_matrix_numpy, yaw_of)
+
+
+def test_yaw_of_a_quarter_turn_maps_z_to_x():
+    z = np.array([0.0, 0.0, 1.0])
+    assert np.allclose(yaw_matrix_numpy(np.pi / 2) @ z, [1.0, 0.0, 0.0])
+    assert np.allclose(yaw_matrix(torch.tensor(np.pi / 2, dtype=torch.float64)).numpy() @ z, [1.0, 0.0, 0.0])
+    assert np.isclose(yaw_of(np.array([1.0, 0.3, 0.0])), np.pi / 2)
+
+
+@pytest.mark.parametrize("axis", ["X", "Y", "Z"])
+def test_numpy_and_torch_agree(axis):
+    angle = np.random.default_rng(0).uniform(-np.pi, np.pi, size=(4, 5))
+    expected = axis_angle_matrix(torch.from_numpy(angle), axis).numpy()
+    assert np.allclose(axis_angle_matrix_numpy(angle, axis), expected)
+    assert np.allclose(axis_angle_matrix_numpy(angle, "XYZ".index(axis)), expected)
+    if axis == "Y":
+        assert np.allclose(yaw_matrix_numpy(angle), yaw_matrix(torch.from_numpy(angle)).numpy())
+
+
+def test_yaw_of_inverts_the_yaw_matrix():
+    yaw = np.linspace(-3.0, 3.0, 7)
+    assert np.allclose(yaw_of(yaw_matrix_numpy(yaw) @ np.array([0.0, 0.0, 1.0])), yaw)
+
+
+def test_canonical_transform_uses_the_rule():
+    tf = CanonicalTransform(up_axis="+Y", up_rotation=np.eye(3), yaw=0.4, scale=1.0,
+                            source_fps=30.0)
+    assert np.allclose(tf.rotation, yaw_matrix_numpy(0.4))

@@ -1,0 +1,100 @@
+"""The one left/right rule (:mod:`satagraph.sides`), pinned on real-world
+joint names and shared by canonicalisation, mirroring and the lexicon."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from satagraph.sides import side_of, side_pairs, swap_side
+from satagraph.semantics.lexicon import parse_name
+from satagraph.transforms.augment import mirror_pairs
+from satagraph.transforms.canonical import _lateral_pairs
+
+#: name, side, mirror image.
+TABLE = [
+    ("mixamorig:LeftUpLeg", "left", "mixamorig:RightUpLeg"),
+    ("thigh.L", "left", "thigh.R"),
+    ("l_hip", "left", "r_hip"),
+    ("HipL", "left", "HipR"),  # once: canonical none, augment and lexicon left
+    ("Bip01 L Thigh", "left", "Bip01 R Thigh"),
+    ("LeftHand", "left", "RightHand"),
+    ("lShldr", "left", "rShldr"),
+    ("RightFoot_End", "right", "LeftFoot_End"),
+    ("Left_Wing", "left", "Right_Wing"),
+    ("LHipJoint", "left", "RHipJoint"),
+    ("L_Fr_UpLeg", "left", "R_Fr_UpLeg"),  # Fr beside a side word: front
+    ("FL_Foot", "left", "FR_Foot"),  # a leg code alone: front left
+    ("antenna_r", "right", "antenna_l"),
+    ("Lt_Arm", "left", "Rt_Arm"),
+    ("LEFTARM", "left", "RIGHTARM"),
+    ("lefthand", "left", "righthand"),
+    ("Finger1L", "left", "Finger1R"),
+    ("RightArm__k8L", "right", "LeftArm__k8L"),  # an exporter tag has no side
+    ("Hips", None, "Hips"), ("Spine", None, "Spine"), ("Spine1", None, "Spine1"),
+    ("Lower", None, "Lower"), ("LowerBack", None, "LowerBack"),
+    ("Leg", None, "Leg"), ("Tail", None, "Tail"), ("Root", None, "Root"),
+    ("Ladder", None, "Ladder"), ("Rib", None, "Rib"),
+    ("RL_BoneRoot", None, "RL_BoneRoot"),  # once: augment swapped to LL_
+    ("Tail_09__f8R", None, "Tail_09__f8R"), ("spine_01_a1b2c3", None, "spine_01_a1b2c3"),
+]
+
+
+@pytest.mark.parametrize("name,side,other", TABLE)
+def test_side_of_and_swap_side(name, side, other):
+    assert side_of(name) == side
+    assert swap_side(name) == other
+    assert swap_side(other) == name
+    assert side_of(other) == {"left": "right", "right": "left", None: None}[side]
+
+
+@pytest.mark.parametrize("name,side,other", TABLE)
+def test_the_lexicon_reads_the_same_side(name, side, other):
+    assert parse_name(name).side == side
+
+
+def _real_names():
+    root = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    names = set()
+    for path in sorted(root.rglob("*.bvh"))[:400]:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            for line in f:
+                words = line.split()
+                if words[:1] == ["MOTION"]:
+                    break
+                if words[:1] in (["ROOT"], ["JOINT"]) and len(words) > 1:
+                    names.add(" ".join(words[1:]))
+    return sorted(names)
+
+
+def _zoo_names():
+    from satagraph.datasets.zoo import zoo_rigs
+    return sorted({n for rig in zoo_rigs(seed=0) for n in rig.skeleton.names})
+
+
+def test_one_rule_on_every_real_and_zoo_name():
+    names = _real_names() + _zoo_names()
+    for name in names:
+        side = side_of(name)
+        assert parse_name(name).side == side, name
+        assert swap_side(swap_side(name)) == name, name
+        assert (swap_side(name) == name) == (side is None), name
+
+
+def test_pairs_follow_the_rule():
+    names = ["Hips", "LeftUpLeg", "RightUpLeg", "thigh.L", "thigh.R", "HipL",
+             "HipR", "Tail", "LeftHand"]
+    assert side_pairs(names) == ([1, 3, 5], [2, 4, 6])
+    assert list(mirror_pairs_of(names)) == [0, 2, 1, 4, 3, 6, 5, 7, 8]
+    noisy = ["Hips", "LeftArm__x7Q", "rightarm__k3Z", "LHipJoint", "RHipJoint"]
+    assert _lateral_pairs(noisy) == ([1, 3], [2, 4])
+
+
+def mirror_pairs_of(names):
+    import numpy as np
+    from satagraph.skeleton import Skeleton
+    skel = Skeleton(names=names, parents=np.array([-1] + [0] * (len(names) - 1)),
+                    offsets=np.zeros((len(names), 3)),
+                    channels=[("Xrotation",)] * len(names),
+                    end_site=np.zeros(len(names), bool))
+    return mirror_pairs(skel)
