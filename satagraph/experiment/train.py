@@ -31,7 +31,7 @@ def data_section(cfg: Dict[str, Any]) -> Dict[str, Any]:
     """The ``data`` section of a resolved config; its sampling and
     augmentation seed is the run's ``seed`` unless ``data.seed`` sets one."""
     data = dict(cfg["data"])
-    if data.get("seed", 0) is None:
+    if "seed" in data and data["seed"] is None:
         data["seed"] = int(cfg["seed"])
     return data
 
