@@ -43,11 +43,9 @@ def build_datamodule(cfg: Dict[str, Any]):
     return (module_entry(cfg["module"]).datamodule or MotionDataModule)(**data_section(cfg))
 
 
-def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
-    """The LightningModule for a config, built by its registered builder
-    from its own sections; the semantic width comes from the data when it
-    is not set."""
-    cfg = resolve_config(cfg)
+def module_sections(cfg: Dict[str, Any], dm: Optional[Any] = None) -> ModuleSections:
+    """The module's own sections of a resolved config; the semantic width
+    comes from the data module :obj:`dm` when it is not set."""
     model, data = dict(cfg["model"]), data_section(cfg)
     if dm is not None and model.get("semantic_channels") is None \
             and hasattr(dm, "semantic_channels"):
@@ -55,9 +53,24 @@ def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
     preprocessing = dict(DEFAULT_PREPROCESSING, **(data.get("preprocessing") or {}))
     meta = {"module": cfg["module"], "semantic_encoder": data.get("semantic_encoder"),
             "window": int(data["window"]), "data": data}
-    sections = ModuleSections(model=model, loss=cfg["loss"], optim=cfg["optim"],
-                              fps=float(preprocessing["fps"]), meta=meta)
-    module = build_registered(cfg["module"], sections)
+    return ModuleSections(model=model, loss=cfg["loss"], optim=cfg["optim"],
+                          fps=float(preprocessing["fps"]), meta=meta)
+
+
+def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
+    """The config resolved and every key checked, the module's sections and
+    the trainer's included, before any data is read."""
+    cfg = resolve_config(cfg)
+    module_entry(cfg["module"]).check(module_sections(cfg))
+    check_keys("trainer", cfg["trainer"], trainer_keys())
+    return cfg
+
+
+def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
+    """The LightningModule for a config, built by its registered builder
+    from its own sections (:func:`module_sections`)."""
+    cfg = resolve_config(cfg)
+    module = build_registered(cfg["module"], module_sections(cfg, dm))
     if dm is not None and hasattr(dm, "normalizer"):
         module.normalizer.load_state_dict(dm.normalizer.state_dict())
     return module
@@ -161,7 +174,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     Returns:
         The trained module, the data module, the trainer and the run folder.
     """
-    cfg = resolve_config(cfg)
+    cfg = check_config(cfg)
     run_dir = Path(expand_path(cfg["output_dir"] or f"runs/{cfg['name']}"))
     if run_dir.exists() and not run_dir.is_dir():
         raise ValueError(f"{run_dir}: output_dir is not a folder")

@@ -96,3 +96,13 @@ def test_grad_clip_has_one_owner(tmp_path):
     assert build_trainer(cfg, tmp_path).gradient_clip_val == 0.25
     with pytest.raises(ValueError, match="optim.grad_clip"):
         load_config("tiny", ["trainer.gradient_clip_val=1.0"])
+
+
+def test_train_checks_every_key_before_reading_data(tmp_path):
+    from satagraph.experiment.train import train
+    for override in ("model.hidden_chanels=8", "trainer.max_epoch=1"):
+        cfg = load_config("tiny", [override, "data.sources=[/nowhere]",
+                                   f"output_dir={tmp_path / 'run'}"])
+        with pytest.raises(ValueError, match="did you mean"):
+            train(cfg)
+    assert not (tmp_path / "run").exists()
