@@ -131,3 +131,17 @@ def test_cycle_check_finds_a_cycle():
 def test_the_layout_has_its_parts():
     parts = {_part(module) for module, _ in _modules()}
     assert set(LOWER) | {"nn", "losses", "metrics", "cli", "experiment", "utils"} <= parts
+
+
+def test_models_and_losses_read_layouts_from_typing_not_data():
+    """Networks and losses know the feature layout from satagraph.typing,
+    not from the module that computes features."""
+    bad = []
+    for module, tree in _modules():
+        if _part(module) not in ("nn", "losses"):
+            continue
+        for node in ast.walk(tree):
+            for name in _imported(node, module):
+                if name.startswith("satagraph.data"):
+                    bad.append(f"{module}:{node.lineno} imports {name}")
+    assert not bad, "\n".join(bad)

@@ -10,6 +10,12 @@ from torch_geometric.data import Batch
 from satagraph.data.clip import MotionClip
 from satagraph.data.frame_graph import FrameGraph, joint_depth
 
+#: Frame rate of clips that do not say theirs (``meta["fps"]``).
+DEFAULT_FPS = 30.0
+
+#: Limb ends per clip (left front, right front, left hind, right hind).
+NUM_LIMBS = 4
+
 
 class FrameBatch(Batch):
     r"""Frame graphs of several clips (mixed skeletons and lengths, no
@@ -33,6 +39,8 @@ class FrameBatch(Batch):
     streams.
 
     Attributes:
+        fps (float): The clips' frame rate (``meta["fps"]``; they must
+            agree), :data:`DEFAULT_FPS` for clips that do not say.
         num_streams (int): :math:`S`, a Python int (no device sync).
         max_time (int): :math:`\max_s T_s`, a Python int.
         meta (list[dict]): The clips' :attr:`MotionClip.meta`.
@@ -59,8 +67,15 @@ class FrameBatch(Batch):
         - **stream_clip**: :math:`(S,)` clip of each stream
         - **clip_num_frames**: :math:`(B,)` :math:`T_s`
         - **clip_num_joints**: :math:`(B,)` :math:`J_s`
+        - **node_clip**: :math:`(N,)` clip of each node
+        - **node_prev**: :math:`(N,)` the same joint one frame earlier
+          (itself at frame 0)
+        - **node_inner**: :math:`(N,)` whether the joint has children
         - **clip_height**: :math:`(B,)` character height of each clip
           (``meta["height"]``, 1 where the clip does not say)
+        - **clip_limb_ends**: :math:`(B, 4)` each clip's limb-end joints
+          (``meta["limb_ends"]`` in the order of
+          :data:`~satagraph.semantics.LIMBS`, ``-1`` where missing)
     """
 
     def heights(self, level: str) -> Tensor:
@@ -170,6 +185,29 @@ def _frame_stream_attrs(out: FrameBatch, clips: List[MotionClip],
     out.joint_semantic = torch.cat([c.semantic for c in clips])
 
 
+def _structure(out: FrameBatch, clips: List[MotionClip]) -> None:
+    """What losses and metrics ask of every batch, computed once."""
+    out.node_clip = out.stream_clip[out.node_stream]
+    index = torch.arange(out.node_clip.numel())
+    out.node_prev = torch.where(out.node_time > 0,
+                                index - out.clip_num_joints[out.node_clip], index)
+    out.node_inner = torch.zeros(index.numel(), dtype=torch.bool)
+    out.node_inner[out.node_parent[out.node_parent >= 0]] = True
+    out.clip_height = torch.tensor([float(c.meta.get("height", 1.0)) for c in clips])
+    ends = [list(c.meta.get("limb_ends", ()))[:NUM_LIMBS] for c in clips]
+    out.clip_limb_ends = torch.tensor([e + [-1] * (NUM_LIMBS - len(e)) for e in ends],
+                                      dtype=torch.long).view(len(clips), NUM_LIMBS)
+
+
+def _frame_rate(clips: List[MotionClip]) -> float:
+    """The one frame rate of :obj:`clips`."""
+    rates = {float(c.meta["fps"]) for c in clips if "fps" in c.meta}
+    if len(rates) > 1:
+        raise ValueError(f"collate_clips: clips at different frame rates {sorted(rates)}; "
+                         "resample them to one rate first")
+    return rates.pop() if rates else DEFAULT_FPS
+
+
 def _separation(out: FrameBatch, num_graphs: int) -> None:
     """What :meth:`Batch.get_example` needs to give back frame graphs."""
     graphs = torch.arange(num_graphs + 1)
@@ -208,8 +246,9 @@ def collate_clips(clips: List[MotionClip]) -> FrameBatch:
     out.num_streams, out.max_time = sum(joints), max(frames)
     out.clip_num_frames, out.clip_num_joints = num_frames, num_joints
     out.meta = [c.meta for c in clips]
-    out.clip_height = torch.tensor([float(c.meta.get("height", 1.0)) for c in clips])
+    out.fps = _frame_rate(clips)
     _frame_stream_attrs(out, clips, num_frames, num_joints)
     _node_edge_attrs(out, clips, frames, joints)
+    _structure(out, clips)
     _separation(out, sum(frames))
     return out

@@ -16,6 +16,7 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
                                     zoo_entry)
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import FeatureNormalizer
+from satagraph.data.pairing import PartnerCollate
 from satagraph.datasets.sources import SPLITS, MotionFile, resolve_sources, select
 
 
@@ -117,6 +118,11 @@ class MotionDataModule(L.LightningDataModule):
         self.augment = WindowAugment.from_config(augment, seed, self.preprocessing)
         self.datasets: Dict[str, MotionDataset] = {}
         self.normalizer = FeatureNormalizer(body_relative)
+        #: Pair every training clip with a clip of another skeleton when
+        #: collating (``batch.pairing``, see
+        #: :class:`~satagraph.data.pairing.PartnerCollate`); a module with an
+        #: unpaired retargeting term switches it on in its ``setup``.
+        self.pair_partners = False
 
     def _files(self, split: str, files: List[MotionFile]) -> List[MotionFile]:
         chosen = select(files, split)
@@ -190,8 +196,10 @@ class MotionDataModule(L.LightningDataModule):
             self._resume(sampler)
         # a generator of its own: iterating never draws from the global state
         gen = torch.Generator().manual_seed(self.seed)
+        collate = (PartnerCollate(self.seed) if self.pair_partners and split == "train"
+                   else collate_clips)
         return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
-                          collate_fn=collate_clips, num_workers=self.num_workers,
+                          collate_fn=collate, num_workers=self.num_workers,
                           persistent_workers=self.num_workers > 0, generator=gen)
 
     def _resume(self, sampler: ResumableSampler) -> None:

@@ -28,15 +28,9 @@ from satagraph.motion import CanonicalTransform, Motion
 from satagraph.ops.fk import forward_kinematics
 from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
 from satagraph.skeleton import Skeleton
+from satagraph.typing import (DYNAMIC_CHANNELS, DYNAMIC_LAYOUT, ROOT_CHANNELS,  # noqa: F401
+                              STATIC_CHANNELS)
 
-#: Column ranges of the per-joint dynamic features.
-DYNAMIC_LAYOUT: Dict[str, slice] = {
-    "q": slice(0, 6), "x": slice(6, 9), "x_rel": slice(9, 12),
-    "v_q": slice(12, 18), "v_x": slice(18, 21), "c": slice(21, 22),
-}
-DYNAMIC_CHANNELS = 22
-STATIC_CHANNELS = 6
-ROOT_CHANNELS = 4
 
 #: Contact thresholds as fractions of the character height: SAME's 5 cm and
 #: 0.4 m/s for a 1.75 m human.
@@ -108,7 +102,7 @@ class MotionFeatures:
                       else torch.zeros(num, 0)),
             parents=torch.from_numpy(self.skeleton.parents),
             edge_attr=torch.from_numpy(self.edge_attr).float(),
-            meta=dict(meta or {}, height=self.height, start=start),
+            meta=dict(meta or {}, height=self.height, fps=self.fps, start=start),
         )
 
 

@@ -10,6 +10,7 @@ retargeted motion should move like the source's.
 """
 from __future__ import annotations
 
+import hashlib
 from itertools import accumulate
 from typing import List, NamedTuple, Optional
 
@@ -95,9 +96,9 @@ def partner_batch(batch: FrameBatch,
     r"""Pairs every clip with a clip of another skeleton in :obj:`batch` and
     builds the partners' frame graphs with the clips' lengths.
 
-    Limb ends come from each clip's ``meta["limb_ends"]`` (set by
-    :class:`~satagraph.data.MotionDataset`); limbs missing on either side are
-    left out.
+    Limb ends come from :attr:`FrameBatch.clip_limb_ends` (each clip's
+    ``meta["limb_ends"]``, set by :class:`~satagraph.data.MotionDataset`);
+    limbs missing on either side are left out.
 
     Args:
         batch (FrameBatch): The source batch.
@@ -127,6 +128,7 @@ def partner_batch(batch: FrameBatch,
 def _limb_nodes(batch: FrameBatch, clips: List[int], partners: List[int]) -> List[Tensor]:
     """Node indices (frames ``t >= 1``) and heights of the paired limb ends."""
     frames, joints = batch.clip_num_frames.tolist(), batch.clip_num_joints.tolist()
+    ends, heights = batch.clip_limb_ends.tolist(), batch.clip_height.tolist()
     src_offset = [0]
     for t, j in zip(frames, joints):
         src_offset.append(src_offset[-1] + t * j)
@@ -134,15 +136,14 @@ def _limb_nodes(batch: FrameBatch, clips: List[int], partners: List[int]) -> Lis
     tgt_offset = 0
     for i, p in zip(clips, partners):
         time = torch.arange(1, frames[i])
-        ends_i, ends_p = batch.meta[i].get("limb_ends", ()), batch.meta[p].get("limb_ends", ())
-        for a, b in zip(ends_i, ends_p):
+        for a, b in zip(ends[i], ends[p]):
             if a < 0 or b < 0:
                 continue
             src = src_offset[i] + time * joints[i] + a
             tgt = tgt_offset + time * joints[p] + b
             for row, value in zip(rows, (src, src - joints[i], tgt, tgt - joints[p],
-                                         _full(time, batch.meta[i]),
-                                         _full(time, batch.meta[p]))):
+                                         torch.full(time.shape, heights[i]),
+                                         torch.full(time.shape, heights[p]))):
                 row.append(value)
         tgt_offset += frames[i] * joints[p]
     if not rows[0]:
@@ -151,5 +152,33 @@ def _limb_nodes(batch: FrameBatch, clips: List[int], partners: List[int]) -> Lis
     return [torch.cat(row) for row in rows]
 
 
-def _full(time: Tensor, meta: dict) -> Tensor:
-    return torch.full(time.shape, float(meta.get("height", 1.0)))
+class PartnerCollate:
+    r"""A ``collate_fn`` that batches clips (:func:`collate_clips`) and
+    pairs them with partners (:func:`partner_batch`) in the same step, so
+    that the training step finds them ready (``batch.pairing``, ``None``
+    when every clip shares one skeleton) and, with DataLoader workers, they
+    are built off the training process.
+
+    The pairing is drawn from a generator seeded by :obj:`seed` and the
+    clips themselves (their files and first frames), so a batch gets the
+    same partners whatever worker or epoch collates it.
+
+    Args:
+        seed (int): Seed of the pairing.
+    """
+
+    def __init__(self, seed: int = 0) -> None:
+        self.seed = int(seed)
+
+    def __call__(self, clips: List[MotionClip]) -> FrameBatch:
+        batch = collate_clips(clips)
+        key = "|".join(f"{c.meta.get('path', c.meta.get('skeleton'))}@{c.meta.get('start')}"
+                       for c in clips)
+        seed = int(hashlib.sha1(f"{self.seed}|{key}".encode()).hexdigest()[:15], 16)
+        batch.pairing = partner_batch(batch, torch.Generator().manual_seed(seed))
+        return batch
+
+
+def pairing_to(pairing: Pairing, device: torch.device) -> Pairing:
+    """:obj:`pairing` with every tensor and the target batch on :obj:`device`."""
+    return Pairing(*[value.to(device) for value in pairing])

@@ -37,9 +37,11 @@ from satagraph.motion import Motion
 
 #: The species the retargeting step needs in the zoo.
 REQUIRED_SPECIES: Tuple[str, ...] = ("biped", "quadruped", "bird")
-#: The zoo species the demo writes by default: the body plans it was tuned
-#: on (the zoo's later species, fowl, crab, spider and longtail, on request).
-DEMO_SPECIES: Tuple[str, ...] = ("biped", "quadruped", "bird", "hexapod", "snake")
+#: The zoo species the demo writes by default: the body plans its retargets
+#: need and the fowl (the other species on request). Every further body plan
+#: slows how fast a few minutes of training learn limb timing (see
+#: ``benchmarks/plan_mixing.py`` and experiments/PRETRAIN.md).
+DEMO_SPECIES: Tuple[str, ...] = ("biped", "quadruped", "bird", "fowl")
 
 
 @dataclass

@@ -19,7 +19,8 @@ Example::
         return TextToMotionModule(**sections.kwargs())
 
 The built-in modules (``vae``, ``rvq``, ``same``, ``padded_rvq``) register
-when :mod:`satagraph.experiment.modules` is imported, on first look-up;
+when :mod:`satagraph.experiment.modules` is imported, on first look-up
+(``t2m`` when :mod:`satagraph.experiment.t2m` is);
 :data:`PLUGINS` names such modules, so that this registry imports no torch.
 """
 from __future__ import annotations
@@ -98,8 +99,9 @@ class ModuleEntry:
 _REGISTRY: Dict[str, ModuleEntry] = {}
 
 #: Names registered by importing a module on first look-up.
-PLUGINS: Dict[str, str] = {name: "satagraph.experiment.modules"
-                           for name in ("vae", "rvq", "same", "padded_rvq")}
+PLUGINS: Dict[str, str] = dict({name: "satagraph.experiment.modules"
+                                for name in ("vae", "rvq", "same", "padded_rvq")},
+                               t2m="satagraph.experiment.t2m")
 
 
 def class_builder(cls: type) -> Builder:

@@ -24,7 +24,7 @@ idempotent and returns plain containers.
 from __future__ import annotations
 
 import difflib
-from dataclasses import MISSING, dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields, make_dataclass
 from typing import Any, Dict, Iterable, Mapping, Optional
 
 #: Default of ``optim.grad_clip``: gradient norm clipping of the trainer
@@ -114,6 +114,22 @@ class ExperimentConfig:
     checkpoint: Dict[str, Any] = field(default_factory=dict)
 
 
+def signature_schema(target: Any, name: str, **defaults_: Any) -> type:
+    r"""A dataclass schema of the keyword arguments of :obj:`target` (e.g.
+    a data module of a module of its own), their defaults its signature's
+    (one place) unless :obj:`defaults_` sets them (``seed=None``: the run's
+    seed); a required argument defaults to ``None``."""
+    import inspect
+    specs = []
+    for param in inspect.signature(target).parameters.values():
+        if param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
+            continue
+        value = defaults_.get(param.name, None if param.default is param.empty
+                              else param.default)
+        specs.append((param.name, Any, field(default_factory=lambda v=value: v)))
+    return make_dataclass(name, specs)
+
+
 def unknown_key_error(where: str, key: str, known: Iterable[str],
                       what: str = "config key") -> ValueError:
     """One line naming an unknown :obj:`key` of section :obj:`where`, the
@@ -201,4 +217,4 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
            "TrainerExtras", "GRAD_CLIP", "resolve_config", "resolve_data", "fill",
-           "check_keys", "unknown_key_error", "defaults"]
+           "check_keys", "unknown_key_error", "defaults", "signature_schema"]

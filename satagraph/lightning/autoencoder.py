@@ -8,7 +8,7 @@ import lightning as L
 import torch
 from torch import Tensor, nn
 
-from satagraph.data.features import DYNAMIC_LAYOUT
+from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
 from satagraph.ops.motion_batch import batch_global_motion
@@ -55,7 +55,9 @@ class MotionAutoencoderModule(L.LightningModule):
         optim (dict, optional): ``lr``, ``warmup_epochs``, ``decay``,
             ``floor`` (``grad_clip`` is the trainer's, see
             :mod:`satagraph.experiment.schema`).
-        fps (float): Frame rate of the features.
+        fps (float): Frame rate the module was trained at (what inference
+            resamples motion to); losses and metrics use each batch's own
+            (:attr:`~satagraph.data.FrameBatch.fps`).
         meta (dict, optional): What inference needs to know about the data
             (``semantic_encoder``, ``window``, ``module``), kept in the
             checkpoint.
@@ -137,6 +139,9 @@ class MotionAutoencoderModule(L.LightningModule):
         dm = getattr(self.trainer, "datamodule", None) if self._trainer else None
         if not bool(self.normalizer.fitted) and dm is not None:
             self.normalizer.load_state_dict(dm.normalizer.state_dict())
+        if dm is not None and hasattr(dm, "pair_partners"):
+            # partners for the retarget term are collated with the batch
+            dm.pair_partners = self._retarget_weight() > 0
 
     def normalize_batch(self, batch):
         """A shallow copy of :obj:`batch` with normalised features (lengths
@@ -164,8 +169,8 @@ class MotionAutoencoderModule(L.LightningModule):
     def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Named loss terms and their weighted sum under ``"loss"``; with a
         ``retarget`` weight, also :meth:`retarget_loss` of ``out["z"]``."""
-        losses = self.criterion(out, batch, self.normalizer, fps=self.fps)
-        weight = float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+        losses = self.criterion(out, batch, self.normalizer)
+        weight = self._retarget_weight()
         if weight > 0 and "z" in out:
             term = self.retarget_loss(out["z"], batch)
             # logged every step (zero without a pair), so that every process
@@ -174,19 +179,27 @@ class MotionAutoencoderModule(L.LightningModule):
             losses["loss"] = losses["loss"] + weight * losses["retarget"]
         return losses
 
+    def _retarget_weight(self) -> float:
+        return float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+
     def retarget_loss(self, z: Tensor, batch) -> Optional[Tensor]:
         """Unpaired cross-skeleton term: every clip's latents :obj:`z`
-        decoded onto another skeleton of the batch
-        (:func:`~satagraph.data.pairing.partner_batch`, drawn from a
-        generator seeded with the global step) must move the limb ends like
-        the source (:func:`~satagraph.losses.limb_velocity_loss`). ``None``
-        when every clip of the batch has the same skeleton."""
-        from satagraph.data.pairing import partner_batch
+        decoded onto another skeleton of the batch must move the limb ends
+        like the source (:func:`~satagraph.losses.limb_velocity_loss`).
+        Partners come with the batch (``batch.pairing``, collated by
+        :class:`~satagraph.data.pairing.PartnerCollate`), else are drawn here
+        from a generator seeded with the global step
+        (:func:`~satagraph.data.pairing.partner_batch`). ``None`` when every
+        clip of the batch has the same skeleton."""
+        from satagraph.data.pairing import pairing_to, partner_batch
         from satagraph.losses import facing_positions, limb_velocity_loss
-        gen = torch.Generator().manual_seed(int(self.global_step))
-        pairing = partner_batch(batch, gen)
+        pairing = getattr(batch, "pairing", None)
+        if pairing is None:
+            gen = torch.Generator().manual_seed(int(self.global_step))
+            pairing = partner_batch(batch, gen)
         if pairing is None:
             return None
+        pairing = pairing_to(pairing, z.device)
         target = self.normalize_batch(pairing.target)
         pred = self.denormalize_output(self.decode(z[pairing.frames], target),
                                        pairing.target)
@@ -221,8 +234,8 @@ class MotionAutoencoderModule(L.LightningModule):
     def metrics(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Per-clip metrics of a (physical) prediction against the batch."""
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]]
-        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch, self.fps)
-        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch, self.fps)
+        local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch)
+        local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch)
         return motion_metrics(local_p, pos_p, local_t, pos_t, batch)
 
     def configure_optimizers(self):
@@ -249,8 +262,26 @@ class SATARVQModule(MotionAutoencoderModule):
 
     @torch.no_grad()
     def codes(self, batch) -> Tensor:
-        """Code indices per frame, ``[G, Q]``, for generators."""
+        """Code indices per frame, ``[G, Q]``, of a physical batch, for
+        generators. Evaluation mode only: in training mode quantiser dropout
+        leaves ``-1`` codes."""
+        if self.training:
+            raise RuntimeError("SATARVQModule.codes: call module.eval() first (in "
+                               "training mode quantiser dropout leaves -1 codes)")
         return self.encode(self.normalize_batch(batch))["codes"]
+
+    @torch.no_grad()
+    def decode_codes(self, codes: Tensor, target) -> Dict[str, Tensor]:
+        r"""Physical predictions (``q``, ``r``, contact logits ``c``) of
+        per-frame codes decoded onto the frame graphs of :obj:`target` (a
+        physical :class:`~satagraph.data.FrameBatch` whose frames match the
+        codes').
+
+        Shapes:
+            - **codes**: :math:`(G, Q)`
+        """
+        z = self.model.bottleneck.decode_codes(codes)
+        return self.denormalize_output(self.decode(z, self.normalize_batch(target)), target)
 
 
 def _no_semantics(skeleton, evidence=None) -> Tensor:

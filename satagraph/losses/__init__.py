@@ -64,8 +64,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from satagraph.data.features import DYNAMIC_LAYOUT
-from satagraph.ops.batch_index import clip_heights, node_clip, previous_node
+from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.ops.fk import fk_levels, forward_kinematics
 from satagraph.ops.motion_batch import integrate_root_batch
 from satagraph.ops.rotation import rotation_6d_to_matrix, yaw_matrix
@@ -118,14 +117,16 @@ def facing_positions(q: Tensor, r: Tensor, batch) -> Tensor:
                               levels)[1]
 
 
-def to_global(pos: Tensor, r: Tensor, batch, fps: float = 30.0) -> Tensor:
+def to_global(pos: Tensor, r: Tensor, batch, fps: Optional[float] = None) -> Tensor:
     r"""Facing-frame positions to global ones: :math:`F_t` (yaw and ground
-    origin integrated from ``r``, every clip starting at the origin).
+    origin integrated from ``r`` at :obj:`fps`, by default the batch's;
+    every clip starting at the origin).
 
     Shapes:
         - **pos**: :math:`(N, 3)`, **r**: :math:`(G, 4)`
         - **output**: :math:`(N, 3)`
     """
+    fps = batch.fps if fps is None else fps
     theta, origin = integrate_root_batch(r, batch.clip_num_frames, fps)
     frame = batch.batch
     return (yaw_matrix(theta)[frame] @ pos[..., None])[..., 0] + origin[frame]
@@ -134,7 +135,7 @@ def to_global(pos: Tensor, r: Tensor, batch, fps: float = 30.0) -> Tensor:
 def position_scale(batch, scale: float = POSITION_SCALE) -> Tensor:
     """Factor per node turning physical lengths into :obj:`scale` units per
     character height, :math:`(N, 1)`."""
-    return (scale / clip_heights(batch))[node_clip(batch)][:, None]
+    return (scale / batch.clip_height)[batch.node_clip][:, None]
 
 
 def velocity_loss(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
@@ -143,7 +144,7 @@ def velocity_loss(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
     Shapes:
         - **pos_pred**, **pos_true**: :math:`(N, 3)` global positions
     """
-    prev = previous_node(batch)
+    prev = batch.node_prev
     diff = (pos_pred - pos_pred[prev]) - (pos_true - pos_true[prev])
     return _masked_mean(diff.pow(2), batch.node_time > 0)
 
@@ -191,7 +192,7 @@ def foot_sliding_loss(pos_pred: Tensor, c_true: Tensor, batch) -> Tensor:
     Shapes:
         - **pos_pred**: :math:`(N, 3)`, **c_true**: :math:`(N, 1)`
     """
-    step = (pos_pred - pos_pred[previous_node(batch)])[:, [0, 2]].norm(dim=-1)
+    step = (pos_pred - pos_pred[batch.node_prev])[:, [0, 2]].norm(dim=-1)
     return _masked_mean(step * c_true.reshape(-1), batch.node_time > 0)
 
 
@@ -212,7 +213,7 @@ def time_difference(pos: Tensor, batch, order: int = 2) -> Tuple[Tensor, Tensor]
         - **pos**: :math:`(N, F)`
         - **output**: :math:`(N, F)` and :math:`(N,)` bool
     """
-    prev = previous_node(batch)
+    prev = batch.node_prev
     diff = pos
     for _ in range(order):  # loop over the order (2 or 3), not over frames
         diff = diff - diff[prev]
@@ -246,7 +247,8 @@ class MotionLoss(nn.Module):
             target's time differences (``False``: the predicted ones, SAME).
         **kwargs (float): Weights by term name, e.g. ``rotation=5.0``.
 
-    Call with ``(out, batch, normalizer=None, fps=30.0)``: :obj:`out` holds
+    Call with ``(out, batch, normalizer=None, fps=None)`` (``fps``: the
+    batch's frame rate unless given): :obj:`out` holds
     physical ``q`` :math:`(N, 6)`, ``r`` :math:`(G, 4)`, contact logits
     ``c`` :math:`(N, 1)`, optionally ``r_norm`` (normalised ``r``, used for
     the root term with :obj:`normalizer`, as SAME), ``kl`` and ``commit``.
@@ -271,13 +273,13 @@ class MotionLoss(nn.Module):
                 batch.root, "root", batch.heights("frame")))
         return F.mse_loss(out["r"], batch.root.to(out["r"].dtype))
 
-    def _positions(self, q: Tensor, r: Tensor, batch, fps: float):
+    def _positions(self, q: Tensor, r: Tensor, batch, fps: Optional[float]):
         scale = position_scale(batch, self.position_scale)
         local = facing_positions(q, r, batch)
         return local * scale, to_global(local, r, batch, fps) * scale
 
     def terms(self, out: Dict[str, Tensor], batch, normalizer=None,
-              fps: float = 30.0) -> Dict[str, Tensor]:
+              fps: Optional[float] = None) -> Dict[str, Tensor]:
         """Every unweighted term."""
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]].to(out["q"].dtype)
         c_true = batch.x[:, DYNAMIC_LAYOUT["c"]]
@@ -298,7 +300,7 @@ class MotionLoss(nn.Module):
         return terms
 
     def forward(self, out: Dict[str, Tensor], batch, normalizer=None,
-                fps: float = 30.0) -> Dict[str, Tensor]:
+                fps: Optional[float] = None) -> Dict[str, Tensor]:
         terms = self.terms(out, batch, normalizer, fps)
         terms["loss"] = sum(self.weights[k] * v for k, v in terms.items())
         return terms

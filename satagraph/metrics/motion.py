@@ -22,7 +22,6 @@ import torch
 from torch import Tensor
 from torch_geometric.utils import scatter
 
-from satagraph.ops.batch_index import clip_heights, node_clip, previous_node
 from satagraph.ops.rotation import geodesic_angle
 
 #: SAME's foot-sliding height threshold (3 cm) for a 1.75 m character.
@@ -36,9 +35,7 @@ def _per_clip(value: Tensor, clip: Tensor, num_clips: int) -> Tensor:
 def joint_rotation_error(local_pred: Tensor, local_true: Tensor, batch) -> Tensor:
     """JR per clip (radians), over joints with children."""
     angle = geodesic_angle(local_pred, local_true)
-    inner = torch.zeros(batch.num_nodes, dtype=torch.bool, device=angle.device)
-    inner[batch.node_parent[batch.node_parent >= 0]] = True
-    clip = node_clip(batch)
+    inner, clip = batch.node_inner, batch.node_clip
     num = len(batch.meta)
     total = scatter(angle * inner, clip, dim=0, dim_size=num, reduce="sum")
     count = scatter(inner.float(), clip, dim=0, dim_size=num, reduce="sum")
@@ -55,15 +52,15 @@ def root_trajectory_error(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
 def joint_position_error(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
     """JP per clip: mean global joint position distance."""
     err = (pos_pred - pos_true).norm(dim=-1)
-    return _per_clip(err, node_clip(batch), len(batch.meta))
+    return _per_clip(err, batch.node_clip, len(batch.meta))
 
 
 def foot_sliding(pos: Tensor, batch) -> Tensor:
     """FS per clip: height-weighted horizontal displacement per frame."""
-    clip = node_clip(batch)
-    h0 = SLIDE_HEIGHT * clip_heights(batch)[clip]
+    clip = batch.node_clip
+    h0 = SLIDE_HEIGHT * batch.clip_height[clip]
     weight = (2 - torch.pow(2.0, pos[:, 1] / h0)).clamp(0, 1)
-    step = (pos - pos[previous_node(batch)])[:, [0, 2]].norm(dim=-1)
+    step = (pos - pos[batch.node_prev])[:, [0, 2]].norm(dim=-1)
     moving = batch.node_time > 0
     num = len(batch.meta)
     total = scatter(step * weight * moving, clip, dim=0, dim_size=num, reduce="sum")
@@ -73,20 +70,20 @@ def foot_sliding(pos: Tensor, batch) -> Tensor:
 
 def ground_penetration(pos: Tensor, batch) -> Tensor:
     """GP per clip: mean of min(y, 0) (negative when below the ground)."""
-    return _per_clip(pos[:, 1].clamp(max=0), node_clip(batch), len(batch.meta))
+    return _per_clip(pos[:, 1].clamp(max=0), batch.node_clip, len(batch.meta))
 
 
 def retarget_error(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
     """SAN/SAME retarget error per clip: 1000 * mean squared distance / H^2."""
     err = ((pos_pred - pos_true) ** 2).sum(-1)
-    heights = clip_heights(batch)
-    return 1000 * _per_clip(err, node_clip(batch), len(batch.meta)) / heights ** 2
+    heights = batch.clip_height
+    return 1000 * _per_clip(err, batch.node_clip, len(batch.meta)) / heights ** 2
 
 
 def motion_metrics(local_pred: Tensor, pos_pred: Tensor, local_true: Tensor,
                    pos_true: Tensor, batch) -> Dict[str, Tensor]:
     r"""All metrics per clip: ``JR, RT, RT_h, JP, JP_h, FS, GP, RE``."""
-    heights = clip_heights(batch)
+    heights = batch.clip_height
     rt = root_trajectory_error(pos_pred, pos_true, batch)
     jp = joint_position_error(pos_pred, pos_true, batch)
     return {

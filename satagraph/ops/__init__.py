@@ -1,6 +1,8 @@
-"""Differentiable operators: rotations, forward kinematics, temporal streams
-and the index helpers of a frame-graph batch (imported lazily: the numpy
-forward kinematics loads without torch)."""
+"""Differentiable operators: rotations, forward kinematics and temporal
+streams (imported lazily: the numpy forward kinematics loads without
+torch). The index structure of a frame-graph batch (clip of each node, the
+same joint one frame earlier, inner joints, clip heights) is collated with
+it: see :class:`~satagraph.data.collate.FrameBatch`."""
 from satagraph._lazy import lazy_exports
 
 _FK = ("fk_levels", "forward_kinematics", "forward_kinematics_numpy")
@@ -10,10 +12,8 @@ _ROTATION = (
     "quaternion_slerp", "quaternion_to_euler", "quaternion_to_matrix",
     "rotation_6d_to_matrix", "yaw_matrix")
 _TEMPORAL = ("to_temporal_streams", "from_temporal_streams")
-_BATCH_INDEX = ("node_clip", "clip_heights", "previous_node")
-_EXPORTS = {**dict.fromkeys(_BATCH_INDEX, "satagraph.ops.batch_index"),
-            **dict.fromkeys(_FK, "satagraph.ops.fk"),
+_EXPORTS = {**dict.fromkeys(_FK, "satagraph.ops.fk"),
             **dict.fromkeys(_ROTATION, "satagraph.ops.rotation"),
             **dict.fromkeys(_TEMPORAL, "satagraph.ops.temporal")}
-__all__ = [*_FK, *_ROTATION, *_TEMPORAL, *_BATCH_INDEX]
+__all__ = [*_FK, *_ROTATION, *_TEMPORAL]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,7 +1,7 @@
 """Global motion of a batch of frame graphs (mixed skeletons and lengths)."""
 from __future__ import annotations
 
-from typing import Tuple
+from typing import Optional, Tuple
 
 import torch
 from torch import Tensor
@@ -38,7 +38,7 @@ def integrate_root_batch(r: Tensor, num_frames: Tensor, fps: float) -> Tuple[Ten
     return theta, segment_cumsum(disp, num_frames)
 
 
-def batch_global_motion(q: Tensor, r: Tensor, batch, fps: float = 30.0,
+def batch_global_motion(q: Tensor, r: Tensor, batch, fps: Optional[float] = None,
                         offsets: Tensor = None) -> Tuple[Tensor, Tensor, Tensor]:
     r"""Local and global rotations and global positions of every node.
 
@@ -48,7 +48,8 @@ def batch_global_motion(q: Tensor, r: Tensor, batch, fps: float = 30.0,
         r (Tensor): Root features per frame (yaw velocity, xz velocity,
             height), physical units.
         batch (FrameBatch): The frame graphs.
-        fps (float): Frame rate of the features.
+        fps (float, optional): Frame rate of the features (default: the
+            batch's, :attr:`FrameBatch.fps`).
         offsets (Tensor, optional): Local offsets per node; by default
             ``X_l`` of each node's joint (``joint_static[:, :3]``).
 
@@ -58,6 +59,7 @@ def batch_global_motion(q: Tensor, r: Tensor, batch, fps: float = 30.0,
           :math:`(N, 3, 3)`, positions :math:`(N, 3)`
     """
     local = rotation_6d_to_matrix(q)
+    fps = batch.fps if fps is None else fps
     theta, origin = integrate_root_batch(r, batch.clip_num_frames, fps)
     root = batch.root_node
     rot = local.index_copy(0, root, yaw_matrix(theta) @ local[root])

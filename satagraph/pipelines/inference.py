@@ -45,7 +45,7 @@ def target_clip(feats: MotionFeatures, num_frames: int,
                                 else torch.zeros(num, 0)),
                       parents=torch.from_numpy(feats.skeleton.parents),
                       edge_attr=torch.from_numpy(feats.edge_attr).float(),
-                      meta={"height": feats.height})
+                      meta={"height": feats.height, "fps": feats.fps})
 
 
 def static_features(motion: Motion) -> MotionFeatures:

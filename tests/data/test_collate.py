@@ -213,3 +213,54 @@ def test_forward_kinematics_over_batch(clips):
 def test_empty_raises():
     with pytest.raises(ValueError):
         collate_clips([])
+
+
+def test_batch_owns_its_index_structure(clips):
+    """Clip of every node, the same joint one frame earlier, inner joints,
+    heights and limb ends are collated once, with values that follow from
+    the definition of the node order."""
+    for k, clip in enumerate(clips):
+        clip.meta.update(height=1.0 + k, limb_ends=[1, 2] if k == 0 else [])
+    batch = collate_clips(clips)
+    offset = 0
+    for k, clip in enumerate(clips):
+        t, j = clip.num_frames, clip.num_joints
+        nodes = torch.arange(offset, offset + t * j)
+        assert bool((batch.node_clip[nodes] == k).all())
+        prev = batch.node_prev[nodes].view(t, j)
+        assert torch.equal(prev[0], nodes[:j])  # frame 0: itself
+        assert torch.equal(prev[1:], nodes.view(t, j)[:-1])
+        inner = torch.zeros(j, dtype=torch.bool)
+        inner[clip.parents[clip.parents >= 0].long()] = True
+        assert torch.equal(batch.node_inner[nodes].view(t, j), inner.expand(t, j))
+        offset += t * j
+    assert batch.clip_height.tolist() == [1.0 + k for k in range(len(clips))]
+    assert batch.clip_limb_ends[0].tolist() == [1, 2, -1, -1]
+    assert bool((batch.clip_limb_ends[1:] == -1).all())
+    assert torch.equal(batch.heights("node"), batch.clip_height[batch.node_clip])
+    assert torch.equal(batch.heights("frame"), batch.clip_height[batch.frame_clip])
+    with pytest.raises(ValueError, match="unknown level"):
+        batch.heights("edge")
+
+
+def test_batch_knows_its_frame_rate(clips):
+    assert collate_clips(clips).fps == 30.0  # clips that do not say
+    for clip in clips:
+        clip.meta["fps"] = 60.0
+    assert collate_clips(clips).fps == 60.0
+    clips[0].meta["fps"] = 24.0
+    with pytest.raises(ValueError, match="different frame rates"):
+        collate_clips(clips)
+
+
+def test_losses_and_metrics_read_the_batch_frame_rate(clips):
+    """Root integration (losses, metrics) at the batch's rate unless told."""
+    from satagraph.losses import to_global
+    for clip in clips:
+        clip.meta["fps"] = 60.0
+    batch = collate_clips(clips)
+    gen = torch.Generator().manual_seed(0)
+    pos = torch.randn(batch.num_nodes, 3, generator=gen)
+    root = torch.randn(batch.root.shape, generator=gen)
+    torch.testing.assert_close(to_global(pos, root, batch), to_global(pos, root, batch, 60.0))
+    assert not torch.allclose(to_global(pos, root, batch), to_global(pos, root, batch, 30.0))

@@ -12,7 +12,9 @@ import yaml
 from satagraph.experiment.config import load_config
 
 EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
-CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml"))
+#: Configs whose module needs a trained autoencoder: built in tests/t2m.
+NEEDS_CHECKPOINT = ("t2m", "t2m_tiny")
+CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml") if p.stem not in NEEDS_CHECKPOINT)
 WANDB_SWEEP = EXPERIMENTS / "sweeps" / "wandb_sweep.yaml"
 #: Widths and depths small enough to build every config in a fraction of a
 #: second; the structure (layers, attention, convolution kinds) is kept.
@@ -108,10 +110,11 @@ def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
         target.mkdir(parents=True, exist_ok=True)
         for path in EXPERIMENTS.parent.glob(pattern.strip()):
             shutil.copy(path, target)
-    assert sorted(p.stem for p in shipped.glob("*.yaml")) == CONFIGS
+    every = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml"))
+    assert sorted(p.stem for p in shipped.glob("*.yaml")) == every
     assert (shipped / "sweeps" / WANDB_SWEEP.name).is_file()
     monkeypatch.setattr(config, "CONFIG_DIRS", (tmp_path / "missing", shipped))
-    for name in CONFIGS:
+    for name in every:
         assert load_config(name) == load_config(str(EXPERIMENTS / f"{name}.yaml")), name
 
 

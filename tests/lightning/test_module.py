@@ -193,3 +193,20 @@ def test_module_owns_its_semantic_encoder(build_tiny_module: Callable, embed: Ca
     module.meta["semantic_encoder"] = "none"
     module.set_semantic_cache(None)
     assert module.embed(skeleton).shape == (skeleton.num_joints, 0)
+
+
+def test_rvq_module_codes_round_trip(build_tiny_module: Callable, train_batch) -> None:
+    """codes() refuses training mode; decode_codes of a batch's codes gives
+    the module's own evaluation-mode prediction."""
+    module = build_tiny_module("rvq")
+    module.train()
+    with pytest.raises(RuntimeError, match="eval"):
+        module.codes(train_batch)
+    module.eval()
+    codes = module.codes(train_batch)
+    assert codes.shape[0] == train_batch.root.shape[0] and bool((codes >= 0).all())
+    with torch.no_grad():
+        direct = module(train_batch)
+    decoded = module.decode_codes(codes, train_batch)
+    torch.testing.assert_close(decoded["q"], direct["q"], atol=1e-5, rtol=1e-5)
+    torch.testing.assert_close(decoded["r"], direct["r"], atol=1e-5, rtol=1e-5)

@@ -141,3 +141,35 @@ def test_single_skeleton_batch_logs_a_zero_retarget_term(build_tiny_module, data
     assert losses["retarget"] == 0
     assert torch.equal(losses["loss"], module.criterion(out, batch, module.normalizer,
                                                         fps=module.fps)["loss"])
+
+
+def test_partners_are_collated_with_the_batch_and_used_by_the_module(build_tiny_module,
+                                                                     datamodule):
+    """PartnerCollate pairs a batch the same way whoever collates it; the
+    module's retarget term uses those partners, and the data module collates
+    them once a module with a retarget weight is set up."""
+    from satagraph.data.pairing import PartnerCollate
+    ds = datamodule.datasets["train"]
+    groups = {}
+    for i in range(len(ds)):
+        groups.setdefault(ds.group(i), []).append(i)
+    clips = [ds[i] for members in zip(*[g[:2] for g in groups.values()]) for i in members]
+    batch = PartnerCollate(seed=3)(clips)
+    again = PartnerCollate(seed=3)([ds[i] for members in zip(*[g[:2] for g in groups.values()])
+                                    for i in members])
+    assert torch.equal(batch.pairing.partners, again.pairing.partners)
+    assert torch.equal(batch.pairing.target_nodes, again.pairing.target_nodes)
+    module = build_tiny_module("vae")
+    module.criterion.weights["retarget"] = 0.5
+    out = module(batch)
+    with_partners = module.compute_losses(out, batch)["retarget"]
+    assert torch.equal(module.compute_losses(out, batch)["retarget"], with_partners)
+    # a batch without collated partners gets them drawn in the step
+    assert module.retarget_loss(out["z"], collate_clips(clips)) > 0
+    datamodule.pair_partners = False
+    trainer = type("T", (), {"datamodule": datamodule})()
+    module._trainer = trainer
+    module.setup("fit")
+    assert datamodule.pair_partners
+    assert isinstance(datamodule.train_dataloader().collate_fn, PartnerCollate)
+    datamodule.pair_partners = False

@@ -5,7 +5,7 @@ from typing import Dict, Optional
 
 from torch import Tensor, nn
 
-from satagraph.data.features import ROOT_CHANNELS, STATIC_CHANNELS
+from satagraph.typing import ROOT_CHANNELS, STATIC_CHANNELS
 from satagraph.nn.layers.modulation import build_input_layer
 from satagraph.nn.layers.spatio_temporal import make_blocks
 

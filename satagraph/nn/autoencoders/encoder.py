@@ -7,7 +7,7 @@ import torch
 from torch import Tensor, nn
 from torch_geometric.nn import global_max_pool
 
-from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
+from satagraph.typing import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
 from satagraph.nn.layers.modulation import build_input_layer
 from satagraph.nn.layers.spatio_temporal import make_blocks
 

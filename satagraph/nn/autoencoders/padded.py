@@ -7,8 +7,7 @@ from typing import Dict, Tuple
 import torch
 from torch import Tensor, nn
 
-from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS
-from satagraph.ops.batch_index import node_clip
+from satagraph.typing import DYNAMIC_CHANNELS, ROOT_CHANNELS
 from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
 
@@ -29,7 +28,7 @@ def padded_slots(frames, max_joints: int) -> Tuple[Tensor, int]:
     if int(num_joints.max()) > max_joints:
         raise ValueError(f"a clip has {int(num_joints.max())} joints; this padded "
                          f"model holds at most max_joints={max_joints}")
-    clip = node_clip(frames)
+    clip = frames.node_clip
     first_stream = num_joints.cumsum(0) - num_joints
     joint = frames.node_stream - first_stream[clip]
     time_pad = -(-frames.max_time // 4) * 4

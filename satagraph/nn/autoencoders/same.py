@@ -9,7 +9,7 @@ from torch import Tensor, nn
 from torch_geometric.nn import GATConv, GATv2Conv, global_max_pool
 from torch_geometric.nn.resolver import activation_resolver
 
-from satagraph.data.features import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
+from satagraph.typing import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
 from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
 from satagraph.nn.autoencoders.encoder import node_motion_features
 

@@ -1,0 +1,159 @@
+r"""The data module of text-to-motion training: captioned windows of files
+and of the endless zoo (:mod:`satagraph.data.captioned`), batched as
+:class:`~satagraph.data.FrameBatch` objects whose ``meta`` carries the
+captions.
+
+A config's ``data`` section (``module: t2m``)::
+
+    data:
+      sources:
+        - {zoo: endless, species: [biped, quadruped, bird], windows_per_epoch: 256,
+           val_windows: 32, test_windows: 32}
+        - {path: ../shared/data/manifest.tsv, dataset: bandai}
+      window: 64          # most frames per window (and per zoo clip)
+      min_frames: 32      # fewest frames per zoo clip
+      batch_size: 16
+      mirror: 0.5         # left/right mirroring of motion and captions
+      semantic_encoder: offline   # the autoencoder's
+"""
+from __future__ import annotations
+
+import warnings
+from collections import Counter
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+
+import lightning as L
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from satagraph.data.collate import collate_clips
+from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
+from satagraph.data.datamodule import semantic_embedder
+from satagraph.data.endless import MixedDataset, _keyed, is_zoo_entry, zoo_entry
+from satagraph.data.sampler import ResumableSampler
+from satagraph.datasets.sources import SPLITS, resolve_sources, select
+from satagraph.datasets.zoo.endless import EndlessZoo
+from satagraph.data.captioned import FileCaptionWindows, ZooCaptionWindows
+
+
+def zoo_caption_datasets(spec: Mapping[str, Any], split: str, window: int, min_frames: int,
+                         seed: int, **kwargs: Any) -> List[ZooCaptionWindows]:
+    """The captioned zoo datasets of one split of a ``{zoo: endless}``
+    entry (see :func:`~satagraph.data.endless.zoo_entry`): training clips of
+    the training plans; validation and test clips of held-out seeds, of the
+    training plans and of the held-out plans (``<name>-holdout``)."""
+    spec = zoo_entry(spec)
+    options = {"rests": spec["rests"]} if spec.get("rests") else {}
+    fps = float(kwargs.get("preprocessing", {}).get("fps", DEFAULT_PREPROCESSING["fps"]))
+    zoo = EndlessZoo(spec["species"], spec["holdout_species"], noise=spec["noise"], fps=fps,
+                     seed=seed if spec["seed"] is None else spec["seed"], **options)
+    name = spec["dataset"]
+    if split == "train":
+        return [ZooCaptionWindows(zoo, spec["windows_per_epoch"], window, min_frames,
+                                  "train", False, name, seed=seed, **kwargs)]
+    count = spec[f"{split}_windows"]
+    out = [ZooCaptionWindows(zoo, count, window, min_frames, split, False, name, seed=seed,
+                             **kwargs)]
+    if zoo.holdout_plans:
+        out.append(ZooCaptionWindows(zoo, count, window, min_frames, split, True,
+                                     f"{name}-holdout", seed=seed, **kwargs))
+    return out
+
+
+class CaptionDataModule(L.LightningDataModule):
+    r"""Captioned windows of files and of the endless zoo, in the sources'
+    own splits (a manifest's, the zoo's seed streams); nothing re-split.
+
+    Args:
+        sources: ``data.sources`` entries as for
+            :class:`~satagraph.data.datamodule.MotionDataModule` (folders,
+            manifests, ``{path, dataset, include, exclude}`` dicts and
+            ``{zoo: endless, ...}`` entries); files without captions are
+            left out.
+        window (int): Most frames per window.
+        stride (int): Frames between file window starts.
+        min_frames (int): Fewest frames of a zoo clip.
+        batch_size (int): Windows per batch.
+        mirror (float): Probability of mirroring a training window (motion
+            and captions together).
+        balanced (bool): Draw every (dataset, skeleton) group equally often.
+        semantic_encoder (str, optional): Semantic encoder of the joints
+            (the frozen autoencoder's).
+        preprocessing (dict, optional): See
+            :data:`~satagraph.data.dataset.DEFAULT_PREPROCESSING`.
+        cache_dir (str, optional): Feature cache folder.
+        num_workers (int): DataLoader workers.
+        max_files (int, optional): At most this many files per split.
+        seed (int): Seed of sampling, mirroring and caption choice.
+    """
+
+    def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
+                 min_frames: int = 32, batch_size: int = 16, mirror: float = 0.5,
+                 balanced: bool = True, semantic_encoder: Optional[str] = "offline",
+                 preprocessing: Optional[Dict] = None, cache_dir: Optional[str] = None,
+                 num_workers: int = 0, max_files: Optional[int] = None,
+                 seed: int = 0) -> None:
+        super().__init__()
+        self.sources = list(sources) if isinstance(sources, (list, tuple)) else [sources]
+        self.window, self.stride, self.min_frames = int(window), int(stride), int(min_frames)
+        self.batch_size, self.mirror, self.balanced = int(batch_size), float(mirror), balanced
+        self.semantic_encoder, self.cache_dir = semantic_encoder, cache_dir
+        self.preprocessing = dict(preprocessing or {})
+        self.num_workers, self.max_files, self.seed = num_workers, max_files, int(seed)
+        self.datasets: Dict[str, Dataset] = {}
+        #: Files left out because they could not be processed.
+        self.skipped: List[str] = []
+
+    def setup(self, stage: Optional[str] = None) -> None:
+        if self.datasets:
+            return
+        embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
+        files = resolve_sources([s for s in self.sources if not is_zoo_entry(s)])
+        zoos = [s for s in self.sources if is_zoo_entry(s)]
+        for split in SPLITS:
+            self.datasets[split] = self._split(split, files, zoos, embed)
+        if not len(self.datasets["train"]):
+            raise ValueError(f"no captioned training windows in {self.sources!r}")
+
+    def _split(self, split: str, files, zoos, embed) -> Dataset:
+        """The captioned windows of one split (training windows mirrored)."""
+        kwargs = {"semantic": embed, "preprocessing": self.preprocessing,
+                  "mirror": self.mirror if split == "train" else 0.0}
+        chosen = select(files, split)[: self.max_files or None]
+        kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
+        if bad:
+            self.skipped += [f"{split}: {e}" for e in bad]
+            warnings.warn(f"left out {len(bad)} {split} files: {bad[:3]}", stacklevel=2)
+        stride = self.stride if split == "train" else self.window
+        parts: List[Dataset] = [FileCaptionWindows(kept, feats, self.window, stride,
+                                                   seed=self.seed, **kwargs)]
+        for spec in zoos:
+            parts += zoo_caption_datasets(spec, split, self.window, self.min_frames,
+                                          self.seed, **kwargs)
+        return MixedDataset(parts)
+
+    def _loader(self, split: str, shuffle: bool) -> DataLoader:
+        ds = self.datasets[split]
+        sampler = None
+        if shuffle:
+            weights = None
+            if self.balanced:
+                groups = Counter(ds.group(i) for i in range(len(ds)))
+                weights = [1.0 / groups[ds.group(i)] for i in range(len(ds))]
+            sampler = ResumableSampler(len(ds), weights, self.seed, keys=_keyed(ds))
+        gen = torch.Generator().manual_seed(self.seed)
+        return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
+                          collate_fn=collate_clips, num_workers=self.num_workers,
+                          persistent_workers=self.num_workers > 0, generator=gen)
+
+    def train_dataloader(self) -> DataLoader:
+        return self._loader("train", True)
+
+    def val_dataloader(self) -> DataLoader:
+        return self._loader("val", False)
+
+    def test_dataloader(self) -> DataLoader:
+        return self._loader("test", False)
+
+
+__all__ = ["CaptionDataModule", "zoo_caption_datasets"]

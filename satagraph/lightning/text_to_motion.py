@@ -1,0 +1,258 @@
+r"""Text-to-motion on any skeleton (issue 19): MoMask's masked and residual
+transformers over the codes of a frozen SATA-RVQ, a skeleton embedding and
+a length model, trained together by one LightningModule.
+
+Every batch is a :class:`~satagraph.data.FrameBatch` of captioned windows
+(:mod:`satagraph.data.captioned`); the frozen autoencoder computes the
+codes of each window on the fly (so augmentation stays free), the text
+encoder the caption embeddings. The losses:
+
+- ``masked``: masked-token cross-entropy of the layer-0 codes
+  (:class:`~satagraph.nn.generators.MaskedTransformer`);
+- ``residual``: cross-entropy of one residual layer per window
+  (:class:`~satagraph.nn.generators.ResidualTransformer`);
+- ``length``: duration cross-entropy
+  (:class:`~satagraph.nn.generators.LengthModel`).
+
+Classifier-free guidance drops the text token only; the skeleton token is
+never dropped. The checkpoint holds the autoencoder (its hyperparameters and
+weights: generation needs no other file) and the text encoder's id and
+width (:func:`~satagraph.semantics.text_encoder_state`), checked when
+it is loaded. Validation draws its masks from a generator seeded by the
+batch index, so ``val_loss`` (what checkpoint selection monitors) is
+comparable across epochs.
+
+A config (``module: t2m``, see ``experiments/t2m_tiny.yaml``)::
+
+    module: t2m
+    model:
+      autoencoder: runs/t2m_rvq_tiny/checkpoints/last.ckpt
+      text_encoder: offline
+      skeleton: {hidden_channels: 64, out_channels: 64, num_layers: 2}
+      masked: {hidden_channels: 64, num_layers: 2, mask_floor: 0.3}
+      residual: {hidden_channels: 64, num_layers: 2}
+      length: {hidden_channels: 64, max_seconds: 4.0}
+"""
+from __future__ import annotations
+
+import copy
+import os
+from typing import Any, Dict, List, Optional, Tuple
+
+import lightning as L
+import torch
+from torch import Tensor, nn
+
+from satagraph.data.datamodule import semantic_embedder
+from satagraph.semantics import build_text_encoder
+from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
+from satagraph.data.captioned import batch_seconds, batch_texts
+from satagraph.io.checkpoint import CheckpointError
+from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTransformer,
+                                     SkeletonEmbedding, skeleton_graph, split_codes)
+
+#: Loss weights of the three models.
+DEFAULT_LOSS: Dict[str, float] = {"masked": 1.0, "residual": 1.0, "length": 0.1}
+#: AdamW with a linear warm-up over ``warmup_steps``, then constant.
+DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200,
+                                   "grad_clip": 1.0}
+#: Checkpoint key of the text encoder's id and width.
+TEXT_ENCODER_KEY = "text_encoder"
+
+
+def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
+    """The frozen autoencoder of ``model.autoencoder``: a checkpoint path
+    (loaded with its weights) or the stored ``{"checkpoint", "hparams"}``
+    of a trained generator (built empty: the generator's own weights fill
+    it). Returns the module and the stored form."""
+    from satagraph.experiment.train import load_module, module_class
+    if isinstance(spec, str):
+        if not os.path.isfile(spec):
+            raise CheckpointError(f"{spec}: no such autoencoder checkpoint (model.autoencoder;"
+                                  " train one with `satagraph train t2m_rvq_tiny`)")
+        module = load_module(spec)
+        hparams = {k: copy.deepcopy(module.hparams[k])
+                   for k in ("model", "loss", "optim", "fps", "meta")}
+        stored = {"checkpoint": spec, "hparams": hparams}
+    elif isinstance(spec, dict) and "hparams" in spec:
+        hparams = spec["hparams"]
+        module = module_class(hparams["meta"].get("module", "rvq"))(**hparams)
+        stored = spec
+    else:
+        raise ValueError("model.autoencoder: a SATA-RVQ checkpoint path is needed")
+    if not hasattr(module, "codes"):
+        raise CheckpointError(f"{stored['checkpoint']}: a {module.meta.get('module')!r} "
+                              "model has no codes: text-to-motion needs a SATA-RVQ "
+                              "(module: rvq)")
+    module.requires_grad_(False)
+    return module.eval(), stored
+
+
+class TextToMotionModule(L.LightningModule):
+    r"""Masked + residual transformers, skeleton embedding and length model
+    over a frozen SATA-RVQ's codes (see the module docstring).
+
+    Args:
+        model (dict): ``autoencoder`` (checkpoint path), ``text_encoder``
+            (spec, see :func:`~satagraph.semantics.build_text_encoder`),
+            and the keyword arguments of ``skeleton``
+            (:class:`~satagraph.nn.generators.SkeletonEmbedding`),
+            ``masked``, ``residual`` and ``length``.
+        loss (dict, optional): Weights of :data:`DEFAULT_LOSS`.
+        optim (dict, optional): Keys of :data:`DEFAULT_OPTIM`.
+        fps (float): Frame rate of the features.
+        meta (dict, optional): ``module``, ``semantic_encoder`` (must be the
+            autoencoder's), ``window``, ``data``.
+    """
+
+    def __init__(self, model: Dict[str, Any], loss: Optional[Dict[str, float]] = None,
+                 optim: Optional[Dict[str, float]] = None, fps: float = 30.0,
+                 meta: Optional[Dict[str, Any]] = None) -> None:
+        super().__init__()
+        self.save_hyperparameters()
+        model = dict(model)
+        self.autoencoder, model["autoencoder"] = load_autoencoder(model.get("autoencoder"))
+        self.hparams["model"] = model  # the checkpoint rebuilds it without the file
+        self.fps, self.meta = float(fps), dict(meta or {})
+        self.loss_weights = dict(DEFAULT_LOSS, **(loss or {}))
+        self.optim = dict(DEFAULT_OPTIM, **(optim or {}))
+        self.text_encoder = build_text_encoder(model.get("text_encoder", "offline"))
+        # also in the hyperparameters, which `export-weights` keeps: the
+        # record of training, never overwritten by a later load
+        self.meta.setdefault(TEXT_ENCODER_KEY, text_encoder_state(self.text_encoder))
+        self.hparams["meta"] = self.meta
+        self._check_semantic_encoder()
+        self.build(model)
+
+    # ------------------------------------------------------------ build
+    def _check_semantic_encoder(self) -> None:
+        """The data's semantic encoder must be the autoencoder's."""
+        own = self.autoencoder.meta.get("semantic_encoder", "offline")
+        self.meta.setdefault("semantic_encoder", own)
+        if self.meta["semantic_encoder"] != own:
+            raise ValueError(f"data.semantic_encoder {self.meta['semantic_encoder']!r} is not "
+                             f"the autoencoder's ({own!r})")
+
+    def build(self, model: Dict[str, Any]) -> None:
+        """The skeleton embedding, the two transformers and the length model."""
+        ae = self.autoencoder
+        bottleneck = ae.model.bottleneck
+        num_q, num_codes = int(bottleneck.rvq.num_quantizers), int(bottleneck.codebook_size)
+        static = int(ae.normalizer.static_mean.numel())
+        semantic = int(ae.hparams["model"].get("semantic_channels") or 0)
+        skel = dict(model.get("skeleton") or {})
+        self.skeleton = SkeletonEmbedding(static + semantic, **skel)
+        text, width = int(self.text_encoder.out_channels), self.skeleton.lin.out_features
+        self.masked = MaskedTransformer(num_codes, text, width, **(model.get("masked") or {}))
+        self.residual = ResidualTransformer(num_codes, num_q, text, width,
+                                            **(model.get("residual") or {}))
+        self.length = LengthModel(text, width, **(model.get("length") or {}))
+
+    def train(self, mode: bool = True) -> "TextToMotionModule":
+        """Train mode for the generators; the autoencoder stays in eval."""
+        super().train(mode)
+        self.autoencoder.eval()
+        return self
+
+    # ------------------------------------------------------------ inputs
+    @property
+    def num_quantizers(self) -> int:
+        return self.residual.num_quantizers
+
+    @torch.no_grad()
+    def batch_codes(self, batch) -> Tuple[Tensor, Tensor]:
+        r"""Codes of every window by the frozen autoencoder.
+
+        Shapes:
+            - **output**: codes :math:`(B, T_{max}, Q)` (``-1`` after each
+              window) and frames :math:`(B,)`
+        """
+        lengths = batch.clip_num_frames
+        return split_codes(self.autoencoder.codes(batch), lengths), lengths
+
+    def skeleton_embedding(self, batch) -> Tensor:
+        r""":math:`f_{skel}` of every clip's skeleton (static features
+        normalised as the autoencoder's).
+
+        Shapes:
+            - **output**: :math:`(B, D_s)`
+        """
+        norm = self.autoencoder.normalize_batch(batch)
+        graph = skeleton_graph(norm)
+        return self.skeleton(graph.x, graph.edge_index, graph.batch, graph.root)
+
+    @torch.no_grad()
+    def encode_text(self, texts: List[str]) -> Tensor:
+        r"""Text embeddings on the module's device.
+
+        Shapes:
+            - **output**: :math:`(B, D_{text})`
+        """
+        return self.text_encoder.encode(list(texts)).float().to(self.device)
+
+    # ------------------------------------------------------------ steps
+    def compute_losses(self, batch, generator: Optional[torch.Generator] = None
+                       ) -> Dict[str, Tensor]:
+        """The three losses, their weighted sum (``loss``) and accuracies."""
+        codes, lengths = self.batch_codes(batch)
+        text = self.encode_text(batch_texts(batch))
+        skel = self.skeleton_embedding(batch)
+        masked = self.masked.loss(codes, text, skel, lengths, generator)
+        residual = self.residual.loss(codes, text, skel, lengths, generator)
+        seconds = batch_seconds(batch).to(skel.device)
+        length = self.length.loss(seconds, text, skel, generator)
+        out = {"masked": masked.loss, "residual": residual.loss, "length": length,
+               "masked_acc": masked.accuracy, "residual_acc": residual.accuracy}
+        out["loss"] = sum(self.loss_weights[k] * out[k] for k in DEFAULT_LOSS)
+        return out
+
+    def _step(self, batch, stage: str, generator: Optional[torch.Generator] = None) -> Tensor:
+        losses = self.compute_losses(batch, generator)
+        size = len(batch.meta)
+        self.log_dict({f"{stage}/{k}": v.detach() for k, v in losses.items()},
+                      batch_size=size, on_epoch=True, on_step=stage == "train",
+                      sync_dist=stage != "train")
+        self.log(f"{stage}_loss", losses["loss"].detach(), batch_size=size, prog_bar=True,
+                 on_epoch=True, sync_dist=stage != "train")
+        return losses["loss"]
+
+    def training_step(self, batch, batch_idx: int) -> Tensor:
+        return self._step(batch, "train")
+
+    def validation_step(self, batch, batch_idx: int) -> Tensor:
+        return self._step(batch, "val", torch.Generator().manual_seed(batch_idx))
+
+    def test_step(self, batch, batch_idx: int) -> Tensor:
+        return self._step(batch, "test", torch.Generator().manual_seed(batch_idx))
+
+    def configure_optimizers(self):
+        params = [p for p in self.parameters() if p.requires_grad]
+        opt = torch.optim.AdamW(params, lr=float(self.optim["lr"]),
+                                weight_decay=float(self.optim["weight_decay"]))
+        warmup = max(int(self.optim["warmup_steps"]), 1)
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: min(1.0, (s + 1) / warmup))
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
+
+    # ------------------------------------------------------------ checkpoints
+    def on_save_checkpoint(self, checkpoint: Dict[str, Any]) -> None:
+        checkpoint[TEXT_ENCODER_KEY] = text_encoder_state(self.text_encoder)
+
+    def on_load_checkpoint(self, checkpoint: Dict[str, Any]) -> None:
+        """Refuses a checkpoint without the text encoder record (its own
+        key, or ``meta`` of a weights file) or trained with another encoder
+        than the one its spec builds now."""
+        state = checkpoint.get(TEXT_ENCODER_KEY)
+        if state is None:
+            meta = (checkpoint.get("hyper_parameters") or {}).get("meta") or {}
+            state = meta.get(TEXT_ENCODER_KEY)
+        if not isinstance(state, dict):
+            raise CheckpointError("not a text-to-motion checkpoint (no text encoder record)")
+        check_text_encoder_state(state, self.text_encoder)
+
+    def semantic_fn(self):
+        """The autoencoder's semantic embedder (skeleton -> ``[J, D_t]``)."""
+        return semantic_embedder(self.meta.get("semantic_encoder", "offline"))
+
+
+__all__ = ["TextToMotionModule", "load_autoencoder", "DEFAULT_LOSS", "DEFAULT_OPTIM",
+           "TEXT_ENCODER_KEY"]

@@ -1,0 +1,192 @@
+r"""Text-to-motion generation on any skeleton (``satagraph generate``).
+
+A :class:`~satagraph.lightning.text_to_motion.TextToMotionModule`
+checkpoint holds everything: the frozen SATA-RVQ that decodes codes onto a
+skeleton, the generators, and the id of the text encoder (checked when it
+is loaded). For every target skeleton:
+
+1. the target is brought into the model's canonical frame
+   (:func:`~satagraph.transforms.canonical.canonicalize`) and its static and
+   semantic features give :math:`f_{skel}`;
+2. the duration is the user's, or drawn from the length model given the
+   text and the skeleton;
+3. the masked transformer decodes layer-0 codes (iterative re-masking,
+   classifier-free guidance that drops the text only), the residual
+   transformer the other layers;
+4. the autoencoder decodes the codes onto the target's frame graphs, and
+   the motion goes back to the target's own rig (axes, units, rest pose,
+   joint order, channel layout) with
+   :func:`~satagraph.transforms.canonical.decanonicalize`.
+
+Every skeleton draws from a generator seeded by :obj:`seed` alone, so the
+same seed gives the same motion, whatever other skeletons are asked for.
+Nothing touches the network.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import List, Optional, Sequence
+
+import torch
+
+from satagraph.transforms.canonical import canonicalize, decanonicalize
+from satagraph.data.collate import collate_clips
+from satagraph.data.features import features_to_motion
+from satagraph.semantics.evidence import call_semantic, evidence_from_features
+from satagraph.pipelines.inference import static_features, target_clip
+from satagraph.io.checkpoint import CheckpointError
+from satagraph.motion import Motion
+
+
+@dataclass(frozen=True)
+class GenerationSettings:
+    """How to sample: decoding steps and guidance of the masked transformer
+    (MoMask: 10 and 4), guidance of the residual transformer (MoMask: 5),
+    temperature and the share of codes top-k keeps."""
+
+    steps: int = 10
+    guidance: float = 4.0
+    residual_guidance: float = 5.0
+    temperature: float = 1.0
+    topk_ratio: float = 0.1
+
+
+def load_generator(ckpt: str):
+    """A trained text-to-motion module from a checkpoint, in eval mode.
+
+    Raises:
+        CheckpointError: Missing or damaged file, another kind of
+            checkpoint (an autoencoder), or a text encoder other than the
+            one it was trained with; one line naming :obj:`ckpt`.
+    """
+    from satagraph.lightning.text_to_motion import TextToMotionModule
+    from satagraph.experiment.train import load_module
+    if not os.path.isfile(ckpt):
+        raise CheckpointError(f"{ckpt}: no such checkpoint file")
+    try:
+        module = load_module(ckpt)
+    except CheckpointError as err:
+        text = str(err)
+        raise CheckpointError(text if text.startswith(ckpt) else f"{ckpt}: {text}") from None
+    except ValueError as err:  # e.g. a text encoder mismatch
+        raise CheckpointError(f"{ckpt}: {err}") from None
+    if not isinstance(module, TextToMotionModule):
+        kind = (getattr(module, "meta", None) or {}).get("module", "?")
+        raise CheckpointError(f"{ckpt}: a {kind!r} checkpoint, not a text-to-motion one "
+                              "(train one with `satagraph train t2m_tiny`)")
+    return module.eval()
+
+
+def _skeleton_inputs(module, target: Motion):
+    """Canonical target, its features and semantic embedding."""
+    canon = canonicalize(target, fps=module.fps)
+    feats = static_features(canon)
+    semantic = module.semantic_fn()
+    sem = None if semantic is None else call_semantic(
+        semantic, feats.skeleton, evidence_from_features(feats)).float()
+    return canon, feats, sem
+
+
+def _frames(module, text_emb, skel_emb, seconds: Optional[float],
+            generator: torch.Generator) -> int:
+    """Frames to generate: the user's duration, else a draw of the length
+    model (at least two frames)."""
+    if seconds is None:
+        seconds = float(module.length.sample(text_emb, skel_emb, generator=generator)[0])
+    return max(2, int(round(seconds * module.fps)))
+
+
+@torch.no_grad()
+def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[float] = None,
+                seed: int = 0, settings: GenerationSettings = GenerationSettings()) -> Motion:
+    r"""A motion for :obj:`text` on :obj:`target`'s skeleton, on its own rig.
+
+    Args:
+        module: A :class:`~satagraph.lightning.text_to_motion.TextToMotionModule`.
+        text (str, optional): The prompt (``None``: unconditional, the
+            skeleton only).
+        target (Motion): A motion of the target rig (its frames set the
+            start position and facing; the rest pose and layout are kept).
+        seconds (float, optional): Duration (default: drawn from the length
+            model).
+        seed (int): Seed of every draw.
+        settings (GenerationSettings): Sampling settings.
+
+    Returns:
+        Motion: On the target's rig at the model's frame rate.
+    """
+    module.eval()
+    gen = torch.Generator().manual_seed(int(seed))
+    canon, feats, sem = _skeleton_inputs(module, target)
+    device = module.device
+    skel_batch = collate_clips([target_clip(feats, 1, sem)]).to(device)
+    skel_emb = module.skeleton_embedding(skel_batch)
+    text_emb = None if text is None else module.encode_text([text])
+    frames = _frames(module, text_emb, skel_emb, seconds, gen)
+    lengths = torch.tensor([frames], device=device)
+    base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps,
+                                  settings.guidance, settings.temperature,
+                                  settings.topk_ratio, gen)
+    codes = module.residual.generate(base, text_emb, skel_emb, lengths,
+                                     settings.residual_guidance, settings.temperature,
+                                     settings.topk_ratio, gen)
+    return decode_on(module, codes[0, :frames], canon, feats, sem)
+
+
+def decode_on(module, codes: torch.Tensor, canon: Motion, feats, sem) -> Motion:
+    r"""Per-frame codes decoded onto a canonical target, back on its rig.
+
+    Shapes:
+        - **codes**: :math:`(T, Q)`
+    """
+    ae = module.autoencoder
+    frames, num = codes.size(0), feats.skeleton.num_joints
+    target = collate_clips([target_clip(feats, frames, sem)]).to(module.device)
+    out = ae.decode_codes(codes, target)
+    q = out["q"].view(frames, num, 6).cpu().double().numpy()
+    r = out["r"].cpu().double().numpy()
+    done = replace(feats, q=q, r=r, fps=module.fps, transform=canon.transform)
+    motion = features_to_motion(done, q=q, r=r, use_positions=False)
+    return decanonicalize(motion, canon.transform, fps=module.fps)
+
+
+def output_paths(output: str, skeletons: Sequence[str]) -> List[str]:
+    """Where each skeleton's motion goes: :obj:`output` for one skeleton;
+    for several, ``<output stem>_<skeleton stem>.bvh`` beside :obj:`output`
+    (or ``<skeleton stem>.bvh`` inside it when it is a folder), numbered
+    where stems repeat."""
+    if len(skeletons) == 1 and not os.path.isdir(output):
+        return [output]
+    out, seen = [], {}
+    folder = os.path.isdir(output)
+    base = Path(output)
+    for path in skeletons:
+        stem = Path(path).stem
+        seen[stem] = seen.get(stem, 0) + 1
+        name = stem if seen[stem] == 1 else f"{stem}-{seen[stem]}"
+        out.append(str(base / f"{name}.bvh") if folder
+                   else str(base.with_name(f"{base.stem}_{name}.bvh")))
+    return out
+
+
+def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
+    """Write every motion (each atomically); on a failure, the files this
+    call wrote are removed again, so that no partial set is left."""
+    from satagraph.io import write_bvh
+    written: List[str] = []
+    try:
+        for motion, path in zip(motions, paths):
+            existed = os.path.exists(path)
+            write_bvh(motion, path)
+            if not existed:
+                written.append(path)
+    except BaseException:
+        for path in written:
+            Path(path).unlink(missing_ok=True)
+        raise
+
+
+__all__ = ["GenerationSettings", "load_generator", "generate_on", "decode_on",
+           "output_paths", "write_all"]

@@ -1,0 +1,122 @@
+"""Captioned windows: zoo clips captioned from their facts, file windows
+with the captions that overlap them, mirroring of motion and captions
+together, and the data module's splits."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satagraph.transforms.canonical import canonicalize
+from satagraph.data.examples import example_motion
+from satagraph.data.features import motion_to_features
+from satagraph.datasets.sources import MotionFile
+from satagraph.datasets import Caption, captions_for, mirror_text
+from satagraph.data.caption_datamodule import CaptionDataModule
+from satagraph.data.captioned import FileCaptionWindows, batch_seconds, batch_texts
+from tests.conftest import data_dir
+from tests.t2m.conftest import zoo_batch, zoo_windows
+
+
+def test_zoo_windows_carry_their_captions_and_lengths():
+    ds = zoo_windows(6)
+    for i in range(6):
+        clip = ds[(0, i)]
+        assert 16 <= clip.num_frames <= 40
+        assert clip.meta["text"] in clip.meta["captions"]
+        assert clip.meta["seconds"] == pytest.approx(clip.num_frames / 30.0)
+        assert clip.semantic.shape == (clip.num_joints, 256)
+
+
+def test_zoo_windows_are_deterministic_per_key():
+    a, b = zoo_windows(4), zoo_windows(4)
+    first, again = a[(2, 1)], b[(2, 1)]
+    assert first.meta["text"] == again.meta["text"]
+    assert np.array_equal(first.dynamic.numpy(), again.dynamic.numpy())
+    assert a[(3, 1)].meta["path"] != first.meta["path"]  # a new clip every epoch
+    assert a[1].meta["path"] == b[1].meta["path"]  # evaluation: fixed
+
+
+def test_evaluation_items_take_the_first_caption_unmirrored():
+    ds = zoo_windows(4, mirror=1.0)
+    clip = ds[0]
+    assert not clip.meta["mirrored"]
+    assert clip.meta["text"] == clip.meta["captions"][0]
+
+
+def _turn_keys(plain, mirrored):
+    """A training key of a turning clip that could be mirrored."""
+    for i in range(len(plain)):
+        clip = plain[(0, i)]
+        if clip.meta["kind"] == "turn" and any(w in clip.meta["text"]
+                                               for w in ("left", "right")):
+            flipped = mirrored[(0, i)]
+            if flipped.meta["mirrored"]:
+                return clip, flipped
+    pytest.skip("no mirrorable turning clip drawn")
+
+
+def test_mirroring_swaps_motion_and_caption_sides_together():
+    clip, flipped = _turn_keys(zoo_windows(24, mirror=0.0), zoo_windows(24, mirror=1.0))
+    assert flipped.meta["text"] == mirror_text(clip.meta["text"])
+    assert flipped.meta["captions"] == [mirror_text(t) for t in clip.meta["captions"]]
+    # the root turns the other way: yaw velocities change sign
+    yaw, yaw_m = clip.root[:, 0].sum().item(), flipped.root[:, 0].sum().item()
+    assert abs(yaw) > 0.05 and np.sign(yaw) == -np.sign(yaw_m)
+    assert yaw_m == pytest.approx(-yaw, rel=0.05, abs=1e-3)
+    side = "left" if yaw > 0 else "right"
+    other = "right" if side == "left" else "left"
+    assert side in clip.meta["text"] and other in flipped.meta["text"]
+
+
+def test_file_windows_keep_the_captions_overlapping_them():
+    motion = canonicalize(example_motion(90, fps=30.0), fps=30.0)
+    feats = motion_to_features(motion)
+    captions = [Caption("a person waves the left hand", 0.0, 1.0),
+                Caption("a person kicks with the right foot", 2.0, None)]
+    f = MotionFile("clip.bvh", "user", "example", "train")
+    ds = FileCaptionWindows([f], [feats], window=30, stride=30, captions=[captions])
+    texts = [ds[i].meta["captions"] for i in range(len(ds))]
+    assert texts == [[captions[0].text], [captions[1].text]]  # 1 s - 2 s: no caption
+    assert all(ds[i].num_frames == 30 for i in range(len(ds)))
+
+
+def test_file_windows_mirror_their_captions():
+    motion = canonicalize(example_motion(40, fps=30.0), fps=30.0)
+    feats = motion_to_features(motion)
+    f = MotionFile("clip.bvh", "user", "example", "train")
+    caption = [Caption("a person turns left", 0.0, None)]
+    ds = FileCaptionWindows([f], [feats], window=40, captions=[caption], mirror=1.0)
+    clip = ds[(0, 0)]
+    assert clip.meta["mirrored"] and clip.meta["text"] == "a person turns right"
+    assert clip.num_frames == 40
+
+
+def test_batch_helpers():
+    batch = zoo_batch(3)
+    assert len(batch_texts(batch)) == 3
+    assert batch_seconds(batch).tolist() == pytest.approx(
+        (batch.clip_num_frames.float() / 30.0).tolist())
+
+
+@pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: the real "
+                    "captioned files are needed")
+def test_real_captioned_windows_in_manifest_splits(tmp_path):
+    root = data_dir()
+    rows = [line.split("\t") for line in (root / "manifest.tsv").read_text().splitlines()]
+    keep = [r for r in rows[1:] if r[1] in ("ccbase", "bandai")]
+    picked = [r for r in keep if r[1] == "ccbase"][:2] + \
+        [r for r in keep if r[1] == "bandai" and r[4] == "test"][:1]
+    manifest = tmp_path / "manifest.tsv"
+    manifest.write_text("\t".join(rows[0]) + "\n" + "\n".join(
+        "\t".join([str(root / r[0])] + r[1:]) for r in picked) + "\n")
+    data = CaptionDataModule([str(manifest)], window=64, mirror=0.0,
+                             cache_dir=str(tmp_path / "cache"))
+    data.setup()
+    for split in ("train", "val", "test"):
+        ds = data.datasets[split]
+        for i in range(len(ds)):
+            clip = ds[i]
+            expected = [c.text for c in captions_for(clip.meta["path"])]
+            assert clip.meta["text"] in expected
+    test = data.datasets["test"]
+    assert len(test) and all(test[i].meta["dataset"] == "bandai" for i in range(len(test)))

@@ -1,0 +1,136 @@
+"""`satagraph generate`: BVH on the target's own rig (zoo and real
+skeletons), one file per skeleton, same seed same output, no network, and
+one-line errors without partial output."""
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from satagraph.cli import main
+from satagraph.pipelines.generate import output_paths
+from satagraph.io import read_bvh
+from tests.conftest import data_dir
+
+TEXT = "a person walks forward and turns to the left"
+
+
+def _generate(ckpt, skeletons, out, *extra) -> int:
+    return main(["generate", "--ckpt", str(ckpt), "--text", TEXT, "--skeleton",
+                 *[str(s) for s in skeletons], *extra, str(out)])
+
+
+def _same_rig(out_path: Path, target_path: Path) -> None:
+    out, target = read_bvh(str(out_path)), read_bvh(str(target_path))
+    assert out.skeleton.names == target.skeleton.names
+    assert np.array_equal(out.skeleton.parents, target.skeleton.parents)
+    assert out.skeleton.channels == target.skeleton.channels
+    np.testing.assert_allclose(out.skeleton.offsets, target.skeleton.offsets, atol=1e-4)
+    assert np.isfinite(out.rotations).all() and np.isfinite(out.translations).all()
+
+
+def test_generate_on_a_zoo_skeleton_writes_its_rig(t2m_ckpt, zoo_skeletons, tmp_path):
+    out = tmp_path / "walk.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--seconds", "1.5") == 0
+    _same_rig(out, zoo_skeletons["biped"])  # +Z up, centimetres: the target's own
+    motion = read_bvh(str(out))
+    assert motion.num_frames == 45 and motion.fps == pytest.approx(30.0)
+    height = np.ptp(motion.global_positions()[0], axis=0)
+    assert height[2] > 50  # still in centimetres, still +Z up
+
+
+def test_several_skeletons_give_one_file_each(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
+    skeletons = [zoo_skeletons[s] for s in ("biped", "quadruped", "bird")]
+    out = tmp_path / "walk.bvh"
+    assert _generate(t2m_ckpt, skeletons, out, "--seconds", "1") == 0
+    for path, skeleton in zip(output_paths(str(out), [str(s) for s in skeletons]),
+                              skeletons):
+        assert Path(path).name == f"walk_{Path(skeleton).stem}.bvh"
+        _same_rig(Path(path), skeleton)
+    assert not out.exists()
+    assert capsys.readouterr().out.count("wrote ") == 3
+
+
+def test_without_seconds_the_length_model_decides(t2m_ckpt, zoo_skeletons, tmp_path):
+    out = tmp_path / "any.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["quadruped"]], out) == 0
+    frames = read_bvh(str(out)).num_frames
+    assert 1 <= frames <= 3.0 * 30  # the tiny length model's range: up to 3 s
+
+
+def test_same_seed_same_output(t2m_ckpt, zoo_skeletons, tmp_path):
+    paths = [tmp_path / f"{name}.bvh" for name in ("a", "b", "c")]
+    for path, seed in zip(paths, ("3", "3", "4")):
+        assert _generate(t2m_ckpt, [zoo_skeletons["bird"]], path, "--seconds", "1",
+                         "--seed", seed) == 0
+    assert paths[0].read_bytes() == paths[1].read_bytes()
+    assert paths[0].read_bytes() != paths[2].read_bytes()
+
+
+def test_generate_needs_no_network(t2m_ckpt, zoo_skeletons, tmp_path, monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("network access during generation")
+    monkeypatch.setattr(socket.socket, "connect", refuse)
+    monkeypatch.setattr(socket.socket, "connect_ex", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+    monkeypatch.setattr(socket, "getaddrinfo", refuse)
+    out = tmp_path / "offline.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--seconds", "1") == 0
+    assert out.is_file()
+
+
+@pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: the real "
+                    "CMU file is needed")
+def test_generate_on_a_real_file_writes_its_rig(t2m_ckpt, tmp_path):
+    target = data_dir() / "cmu" / "01_01.bvh"
+    out = tmp_path / "cmu.bvh"
+    assert _generate(t2m_ckpt, [target], out, "--seconds", "1") == 0
+    _same_rig(out, target)
+
+
+def _error(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("satagraph: error: ")
+    return err[0]
+
+
+def test_missing_checkpoint_is_one_line(zoo_skeletons, tmp_path, capsys):
+    out = tmp_path / "x.bvh"
+    assert _generate(tmp_path / "none.ckpt", [zoo_skeletons["biped"]], out) == 2
+    assert "none.ckpt" in _error(capsys) and not out.exists()
+
+
+def test_an_autoencoder_checkpoint_is_refused(autoencoder_ckpt, zoo_skeletons, tmp_path,
+                                              capsys):
+    out = tmp_path / "x.bvh"
+    assert _generate(autoencoder_ckpt, [zoo_skeletons["biped"]], out) == 2
+    line = _error(capsys)
+    assert str(autoencoder_ckpt) in line and "not a text-to-motion" in line
+    assert not out.exists()
+
+
+def test_a_bad_skeleton_file_is_named(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("HIERARCHY\nROOT Hips\n{\n")
+    out = tmp_path / "x.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"], bad], out) == 2
+    assert "bad.bvh" in _error(capsys)
+    assert not list(tmp_path.glob("x*.bvh"))  # no partial set of outputs
+
+
+def test_an_empty_text_generates_for_the_skeleton_alone(t2m_ckpt, zoo_skeletons, tmp_path):
+    out, text = tmp_path / "none.bvh", tmp_path / "text.bvh"
+    argv = ["generate", "--ckpt", str(t2m_ckpt), "--skeleton", str(zoo_skeletons["bird"]),
+            "--seconds", "1"]
+    assert main(argv + ["--text", "", str(out)]) == 0
+    assert main(argv + ["--text", TEXT, str(text)]) == 0
+    _same_rig(out, zoo_skeletons["bird"])
+    assert out.read_bytes() != text.read_bytes()
+
+
+def test_bad_numbers_are_one_line(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
+    out = tmp_path / "x.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--threads", "0") == 2
+    assert "--threads" in _error(capsys) and not out.exists()

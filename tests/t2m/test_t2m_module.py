@@ -1,0 +1,155 @@
+"""TextToMotionModule: codes of a frozen autoencoder on the fly, losses that
+fall on a fixed batch, gradients only into the generators, guidance that
+never drops the skeleton, checkpoints that check their text encoder, and
+`satagraph train` with ``module: t2m``."""
+from __future__ import annotations
+
+import copy
+
+import pytest
+import torch
+
+from satagraph.experiment.config import load_config
+from satagraph.io.checkpoint import CheckpointError
+from satagraph.experiment.train import build_module, load_module, train
+from tests.t2m.conftest import build_t2m, save_checkpoint, zoo_batch
+
+
+def test_codes_come_from_the_frozen_autoencoder(autoencoder_ckpt):
+    module = build_t2m(autoencoder_ckpt)
+    batch = zoo_batch(3)
+    codes, lengths = module.batch_codes(batch)
+    assert codes.shape == (3, int(lengths.max()), 3)
+    assert torch.equal(lengths, batch.clip_num_frames)
+    real = codes[torch.arange(codes.size(1)) < lengths[:, None]]
+    assert real.min() >= 0 and real.max() < 32
+    module.train()
+    assert not module.autoencoder.training  # never trained, no quantiser dropout
+    assert not any(p.requires_grad for p in module.autoencoder.parameters())
+
+
+def test_training_steps_lower_the_loss_and_reach_every_generator(autoencoder_ckpt):
+    module = build_t2m(autoencoder_ckpt).train()
+    batch = zoo_batch(6)
+    ae_before = copy.deepcopy(module.autoencoder.state_dict())
+    opt = torch.optim.AdamW([p for p in module.parameters() if p.requires_grad], 3e-3)
+    losses = []
+    for step in range(12):
+        out = module.compute_losses(batch, torch.Generator().manual_seed(0))
+        opt.zero_grad()
+        out["loss"].backward()
+        if step == 0:
+            for name in ("skeleton", "masked", "residual", "length"):
+                grads = [p.grad for p in getattr(module, name).parameters()
+                         if p.grad is not None]
+                assert grads and any(float(g.abs().sum()) > 0 for g in grads), name
+        opt.step()
+        losses.append(out["loss"].item())
+    assert losses[-1] < 0.8 * losses[0]
+    after = module.autoencoder.state_dict()
+    assert all(torch.equal(ae_before[k], after[k]) for k in ae_before)
+
+
+def test_guidance_drops_the_text_but_never_the_skeleton(autoencoder_ckpt):
+    module = build_t2m(autoencoder_ckpt).eval()
+    batch = zoo_batch(2)
+    skel = module.skeleton_embedding(batch)
+    text = module.encode_text(["a person walks forward"] * 2)
+    tokens = torch.zeros(2, 5, dtype=torch.long)
+    lengths = torch.tensor([5, 5])
+    null = module.masked(tokens, None, skel, lengths)
+    dropped = module.masked(tokens, text, skel, lengths, drop_text=torch.ones(2, dtype=bool))
+    assert torch.allclose(null, dropped, atol=1e-6)  # drop = the null text token
+    other_skel = module.masked(tokens, None, skel.flip(0), lengths)
+    assert not torch.allclose(null, other_skel)  # the skeleton still conditions
+
+
+def test_checkpoint_round_trip_checks_the_text_encoder(autoencoder_ckpt, t2m_ckpt, tmp_path):
+    module = load_module(str(t2m_ckpt)).eval()
+    assert type(module).__name__ == "TextToMotionModule"
+    saved = torch.load(t2m_ckpt, weights_only=True)
+    assert saved["text_encoder"] == {"id": module.text_encoder.id, "width": 32}
+    assert all(torch.equal(saved["state_dict"][k], v)
+               for k, v in module.state_dict().items())
+    # the autoencoder travels inside: no need for its file any more
+    assert "hparams" in saved["hyper_parameters"]["model"]["autoencoder"]
+    other = dict(saved, text_encoder={"id": "glove:other", "width": 32})
+    bad = tmp_path / "other.ckpt"
+    torch.save(other, bad)
+    with pytest.raises(ValueError, match="text encoder mismatch"):
+        load_module(str(bad))
+    assert saved["hyper_parameters"]["meta"]["text_encoder"] == saved["text_encoder"]
+    missing = {k: v for k, v in saved.items() if k != "text_encoder"}
+    missing["hyper_parameters"] = copy.deepcopy(saved["hyper_parameters"])
+    del missing["hyper_parameters"]["meta"]["text_encoder"]
+    torch.save(missing, bad)
+    with pytest.raises(CheckpointError, match="no text encoder record"):
+        load_module(str(bad))
+
+
+def test_a_non_rvq_autoencoder_is_refused(tmp_path):
+    from satagraph.lightning import SATAVAEModule
+    vae = SATAVAEModule(model={"hidden_channels": 8, "heads": 2, "ff_channels": 8,
+                               "num_blocks": 1, "latent_channels": 8,
+                               "semantic_channels": 256},
+                        meta={"module": "vae", "semantic_encoder": "offline"})
+    path = save_checkpoint(vae, tmp_path / "vae.ckpt")
+    with pytest.raises(CheckpointError, match="SATA-RVQ"):
+        build_t2m(path)
+
+
+def test_semantic_encoder_must_be_the_autoencoders(autoencoder_ckpt):
+    cfg = {"module": "t2m", "model": {"autoencoder": str(autoencoder_ckpt),
+                                      "text_encoder": "offline:16"},
+           "data": {"semantic_encoder": "none", "sources": []}}
+    with pytest.raises(ValueError, match="semantic_encoder"):
+        build_module(cfg)
+
+
+def test_satagraph_train_t2m_selects_on_validation(autoencoder_ckpt, tmp_path):
+    """`satagraph train t2m_tiny` (module: t2m) end to end for a few steps."""
+    from tests.t2m.conftest import T2M_MODEL
+    overrides = [f"model.autoencoder={autoencoder_ckpt}", f"output_dir={tmp_path / 'run'}",
+                 "model.text_encoder=offline:32",
+                 "data.sources=[{zoo: endless, species: [biped], windows_per_epoch: 8, "
+                 "val_windows: 4, test_windows: 4}]",
+                 "data.window=24", "data.min_frames=12", "data.batch_size=4",
+                 "trainer.max_epochs=2", "trainer.max_time=null",
+                 "trainer.limit_val_batches=1", "trainer.enable_model_summary=false",
+                 "loss_log=false"]
+    for key in ("skeleton", "masked", "residual", "length"):
+        overrides += [f"model.{key}.{k}={v}" for k, v in T2M_MODEL[key].items()]
+    cfg = load_config("t2m_tiny", overrides)
+    module, data, trainer, run_dir = train(cfg)
+    best = trainer.checkpoint_callback
+    assert best.monitor == "val_loss" and best.best_model_path
+    assert "val_loss" in trainer.callback_metrics
+    loaded = load_module(best.best_model_path)
+    assert type(loaded).__name__ == "TextToMotionModule"
+
+
+@pytest.mark.parametrize("name", ["t2m", "t2m_tiny"])
+def test_t2m_configs_build_on_an_autoencoder(name, autoencoder_ckpt):
+    cfg = load_config(name, [f"model.autoencoder={autoencoder_ckpt}"])
+    for key in ("masked", "residual"):
+        cfg["model"][key].update(hidden_channels=16, ff_channels=16, num_layers=1, heads=2)
+    module = build_module(cfg)
+    assert type(module).__name__ == "TextToMotionModule"
+    assert module.masked.pool == 2 and module.residual.pool == 2
+
+
+def test_a_missing_autoencoder_is_named(tmp_path):
+    cfg = load_config("t2m_tiny", [f"model.autoencoder={tmp_path / 'none.ckpt'}"])
+    with pytest.raises(CheckpointError, match="none.ckpt: no such autoencoder"):
+        build_module(cfg)
+
+
+def test_exported_weights_keep_the_text_encoder_record(t2m_ckpt, tmp_path):
+    from satagraph.io.weights import save_weights
+    module = load_module(str(t2m_ckpt))
+    path = tmp_path / "t2m.safetensors"
+    save_weights(module, str(path))
+    again = load_module(str(path))
+    assert type(again).__name__ == "TextToMotionModule"
+    assert again.meta["text_encoder"] == {"id": module.text_encoder.id, "width": 32}
+    assert all(torch.equal(v, again.state_dict()[k]) for k, v in module.state_dict().items())
