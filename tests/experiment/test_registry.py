@@ -97,3 +97,20 @@ def test_a_name_registers_once(names):
 def test_unknown_module_names_the_closest():
     with pytest.raises(ValueError, match=r"unknown module 'samee' \(did you mean 'same'\?\)"):
         module_entry("samee")
+
+
+def test_t2m_data_schema_is_its_data_module_signature():
+    """``module: t2m`` checks ``data`` against CaptionDataModule's arguments,
+    whose defaults stay in its signature (``seed``: the run's)."""
+    import inspect
+    from satagraph.data.caption_datamodule import CaptionDataModule
+    from satagraph.experiment.schema import defaults
+    entry = module_entry("t2m")
+    assert entry.datamodule is CaptionDataModule
+    signature = inspect.signature(CaptionDataModule).parameters
+    schema = defaults(entry.data)
+    assert set(schema) == set(signature) and schema["seed"] is None
+    assert all(schema[k] == p.default for k, p in signature.items()
+               if k not in ("seed", "sources"))
+    with pytest.raises(ValueError, match=r"'data.min_frame' \(did you mean 'min_frames'\?\)"):
+        load_config("t2m_tiny", ["data.min_frame=8"])
