@@ -86,7 +86,7 @@ def run(minutes: float, data: Path, held_out: str, paper_sizes: bool,
     variants = [[] if paper_sizes else REDUCED[cfg] for _, cfg in chosen]
     cfgs = sweep_configs([cfg for _, cfg in chosen], common, variants, minutes,
                          str(output))
-    loaders = {HELD_OUT_LABEL: held_out_loader(cfgs[0]["data"], {
+    loaders = {HELD_OUT_LABEL: held_out_loader(cfgs[0].cfg["data"], {
         "path": str(manifest), "dataset": held_out})}
     files = retarget_files(manifest, held_out, per_dataset)
     rows = []

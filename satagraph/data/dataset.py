@@ -1,7 +1,7 @@
 """Windows of motion features from many files and skeletons."""
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import (Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence,
                     Tuple, Union)
@@ -10,7 +10,7 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset, Sampler
 
-from satagraph.transforms.augment import SkeletonAugment
+from satagraph.transforms.augment import AUGMENT, SkeletonAugment
 from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
 from satagraph.transforms.canonical import canonicalize
@@ -31,13 +31,9 @@ DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "scale": None,
                                "contact_height": CONTACT_HEIGHT,
                                "contact_speed": CONTACT_SPEED}
 
-#: ``data.augment`` defaults: probabilities of bone scaling, mirroring,
-#: dropping a leaf chain, merging two trunk segments and inserting a joint
-#: (see :class:`~satagraph.transforms.augment.SkeletonAugment`), the per-axis bone
-#: scale range and the longest leaf chain dropped.
-AUGMENT_DEFAULTS: Dict[str, float] = {"scale": 0.5, "mirror": 0.5, "drop": 0.0,
-                                      "merge": 0.0, "insert": 0.0, "low": 0.8,
-                                      "high": 1.2, "max_drop": 2, "rest": 0.0}
+#: ``data.augment`` defaults as a dict: the one set,
+#: :class:`~satagraph.transforms.augment.AugmentConfig`.
+AUGMENT_DEFAULTS: Dict[str, float] = asdict(AUGMENT)
 
 #: Semantic embeddings a dataset keeps (oldest dropped first).
 SEMANTIC_CACHE_SIZE = 4096
@@ -191,9 +187,11 @@ class WindowAugment:
         contact_speed (float): Contact speed threshold.
     """
 
-    def __init__(self, scale: float = 0.5, mirror: float = 0.5, drop: float = 0.0,
-                 merge: float = 0.0, insert: float = 0.0, low: float = 0.8,
-                 high: float = 1.2, max_drop: int = 2, rest: float = 0.0, seed: int = 0,
+    def __init__(self, scale: float = AUGMENT.scale, mirror: float = AUGMENT.mirror,
+                 drop: float = AUGMENT.drop, merge: float = AUGMENT.merge,
+                 insert: float = AUGMENT.insert, low: float = AUGMENT.low,
+                 high: float = AUGMENT.high, max_drop: int = AUGMENT.max_drop,
+                 rest: float = AUGMENT.rest, seed: int = 0,
                  contact_height: float = CONTACT_HEIGHT,
                  contact_speed: float = CONTACT_SPEED) -> None:
         if not 0.0 <= mirror <= 1.0:

@@ -1,13 +1,17 @@
-"""Experiment configs: omegaconf YAML with dotted command-line overrides,
-turned into plain containers before they reach the modules."""
+"""Experiment configs: omegaconf YAML with dotted command-line overrides
+(one merger, :func:`merge_overrides`), checked against the schema
+(:mod:`satagraph.experiment.schema`) and turned into plain containers
+before they reach the modules."""
 from __future__ import annotations
 
 import os
 import sys
 from pathlib import Path
-from typing import Any, Dict, Sequence
+from typing import Any, Dict, Mapping, Sequence
 
 from omegaconf import OmegaConf
+
+from satagraph.experiment.schema import resolve_config
 
 ROOT = Path(__file__).resolve().parents[2]
 #: Where named configs are looked up, first existing folder wins: the
@@ -47,25 +51,41 @@ def _load(path: Path):
     return OmegaConf.merge(*[_load(path.parent / f"{b}.yaml") for b in bases], cfg)
 
 
-def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
-    r"""Load a YAML config (with ``defaults: [base, ...]`` inheritance from
-    the same folder) and apply ``key.sub=value`` overrides."""
-    path = config_path(name)
+def merge_overrides(cfg: Mapping[str, Any], overrides: Sequence[str] = (),
+                    where: str = "the config") -> Dict[str, Any]:
+    r"""The one override merger: :obj:`cfg` with ``key.sub=value``
+    overrides applied (omegaconf's dot-list: nested keys, YAML values such
+    as ``[a, b]``, ``{k: v}``, ``null``, numbers), as plain containers with
+    interpolations resolved.
+
+    Raises:
+        ValueError: An item is not ``key=value``, or omegaconf cannot apply
+            it (one line naming :obj:`where`).
+    """
     for item in overrides:
         if "=" not in item:
             raise ValueError(f"override {item!r} is not of the form key=value")
     try:
-        merged = OmegaConf.merge(_load(path), OmegaConf.from_dotlist(list(overrides)))
-        out = OmegaConf.to_container(merged, resolve=True)
-    except ValueError:
-        raise
+        merged = OmegaConf.merge(OmegaConf.create(dict(cfg)),
+                                 OmegaConf.from_dotlist(list(overrides)))
+        return OmegaConf.to_container(merged, resolve=True)
     except Exception as err:  # omegaconf: bad override or interpolation
         detail = " ".join(str(err).split())[:200]
-        raise ValueError(f"{path}: cannot apply the config and its overrides "
+        raise ValueError(f"{where}: cannot apply the config and its overrides "
                          f"({detail})") from None
-    if not out.get("name"):
-        out["name"] = path.stem
-    return out
+
+
+def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
+    r"""Load a YAML config (with ``defaults: [base, ...]`` inheritance from
+    the same folder), apply ``key.sub=value`` overrides
+    (:func:`merge_overrides`) and check it against the schema, every default
+    filled (:func:`~satagraph.experiment.schema.resolve_config`); ``name``
+    defaults to the file's stem."""
+    path = config_path(name)
+    cfg = merge_overrides(OmegaConf.to_container(_load(path)), overrides, str(path))
+    if not cfg.get("name"):
+        cfg["name"] = path.stem
+    return resolve_config(cfg)
 
 
 def expand_path(value: str) -> str:

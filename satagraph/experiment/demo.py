@@ -32,8 +32,6 @@ from pathlib import Path
 from typing import Any, Dict, Iterator, List, Optional, Sequence, TextIO, Tuple
 
 import numpy as np
-from omegaconf import OmegaConf
-
 from satagraph.utils.files import atomic_write_text
 from satagraph.motion import Motion
 
@@ -161,7 +159,8 @@ def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
     overrides. With :obj:`base` (the built-in model's hyperparameters) the
     model, loss and window are the built-in model's and the learning rate a
     fine-tune's."""
-    from satagraph.experiment.config import load_config
+    from satagraph.experiment.config import load_config, merge_overrides
+    from satagraph.experiment.schema import resolve_config
 
     cfg = load_config(options.config)
     cfg["data"]["sources"] = [str(s) for s in sources]
@@ -169,18 +168,14 @@ def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
     if base is not None:
         cfg["model"], cfg["loss"] = dict(base["model"]), dict(base.get("loss") or {})
         cfg["data"]["window"] = int(base.get("meta", {}).get("window", cfg["data"]["window"]))
-        cfg["optim"] = dict(cfg.get("optim") or {}, **FINE_TUNE_OPTIM)
+        cfg["optim"] = dict(cfg["optim"], **FINE_TUNE_OPTIM)
     if options.minutes is not None:
-        cfg.setdefault("trainer", {})["max_time"] = {"minutes": float(options.minutes)}
+        cfg["trainer"]["max_time"] = {"minutes": float(options.minutes)}
     for item in options.overrides:
-        if "=" not in item:
-            raise ValueError(f"override {item!r} is not of the form key=value")
         if base is not None and item.startswith("model."):
             raise ValueError(f"override {item!r}: the fine-tune keeps the built-in "
                              "model's architecture; add --from-scratch to change it")
-    merged = OmegaConf.merge(OmegaConf.create(cfg),
-                             OmegaConf.from_dotlist(list(options.overrides)))
-    return OmegaConf.to_container(merged, resolve=True)
+    return resolve_config(merge_overrides(cfg, options.overrides, options.config))
 
 
 #: Optimiser settings of the demo's fine-tune from the built-in weights.
@@ -350,7 +345,7 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     name = "retarget" if builtin is None else "fine-tuned"
     _retarget_step(progress, name, "with the trained model", module, clips,
                    out / ("retarget" if builtin is None else "retarget_finetuned"),
-                   options.seed, cfg["data"].get("cache_dir"))
+                   options.seed, cfg["data"]["cache_dir"])
     if builtin is None:
         _render_step(progress, result, out)
     _write_json(out / "summary.json", result.to_dict())

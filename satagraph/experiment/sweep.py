@@ -21,7 +21,6 @@ import json
 import math
 import time
 from dataclasses import asdict, dataclass, field
-from datetime import timedelta
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
@@ -29,6 +28,7 @@ import torch
 from torch.utils.data import DataLoader
 
 from satagraph.experiment.config import load_config
+from satagraph.experiment.schema import resolve_data
 from satagraph.utils.files import atomic_write_text
 
 #: Steps the "train loss" column averages (see :class:`TrailingLoss`).
@@ -93,7 +93,7 @@ def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
                   data: Optional[Dict[str, Any]] = None,
                   logger: Optional[str] = "csv") -> Dict[str, Any]:
     r"""A copy of :obj:`cfg` bound by :obj:`budget_minutes` of training
-    (``trainer.max_time``, no epoch or step limit), writing into
+    (``trainer.max_time: {seconds: ...}``, no epoch or step limit), writing into
     :obj:`run_dir`, on :obj:`data` when given. :obj:`logger`: ``"csv"``,
     ``"tensorboard"``, ``"none"``, ``"wandb"`` (online, e.g. under a wandb
     sweep agent) or ``None`` (the config's own logger)."""
@@ -103,23 +103,35 @@ def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
     trainer = dict(cfg.get("trainer") or {})
     trainer.pop("max_steps", None)
     trainer.update(max_epochs=-1, progress=False, enable_model_summary=False,
-                   enable_progress_bar=False)
+                   enable_progress_bar=False,
+                   max_time={"seconds": 60.0 * float(budget_minutes)})
     trainer.setdefault("log_every_n_steps", 10)
-    trainer.pop("max_time", None)
     cfg["trainer"] = trainer
     if logger is not None:
         cfg["logger"] = {"name": logger, "offline": False} if logger == "wandb" else {
             "name": logger}
     cfg["output_dir"] = str(run_dir)
-    cfg["_budget_s"] = 60.0 * float(budget_minutes)
     return cfg
+
+
+@dataclass
+class SweepRun:
+    r"""One config of a sweep, ready to train.
+
+    Args:
+        cfg (dict): The budgeted config (:func:`budget_config`).
+        source (str): The config as given (name or path).
+    """
+
+    cfg: Dict[str, Any]
+    source: str
 
 
 def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
                   variants: Optional[Sequence[Sequence[str]]] = None,
                   budget_minutes: float = 5.0, output: str = "sweeps/latest",
                   same_data: bool = True,
-                  logger: Optional[str] = "csv") -> List[Dict[str, Any]]:
+                  logger: Optional[str] = "csv") -> List[SweepRun]:
     r"""Loaded, budgeted configs of a sweep.
 
     Args:
@@ -143,8 +155,8 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
         names.append(label)
         cfg = budget_config(cfg, budget_minutes, Path(output) / f"{i}_{label}", data,
                             logger)
-        cfg.update(name=label, _config=spec)
-        out.append(cfg)
+        cfg["name"] = label
+        out.append(SweepRun(cfg, spec))
     return out
 
 
@@ -168,22 +180,20 @@ def train_budgeted(cfg: Dict[str, Any]):
     """
     from satagraph.lightning.trailing_loss import TrailingLoss
     from satagraph.experiment.train import train
-    budget = timedelta(seconds=float(cfg["_budget_s"]))
-    cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
     trailing = TrailingLoss(TRAILING_STEPS)
     start = time.perf_counter()
-    module, dm, trainer, _ = train(cfg, max_time=budget, callbacks=[trailing])
+    module, dm, trainer, _ = train(cfg, callbacks=[trailing])
     return module, dm, trainer, time.perf_counter() - start, trailing.value
 
 
-def run_config(cfg: Dict[str, Any], eval_split: str = "test",
+def run_config(run: SweepRun, eval_split: str = "test",
                extra_loaders: Optional[Dict[str, Any]] = None,
                retarget_files: Optional[Dict[str, Sequence]] = None,
                max_batches: Optional[int] = None) -> SweepRow:
     r"""Train one budgeted config and evaluate it.
 
     Args:
-        cfg (dict): A config from :func:`sweep_configs`.
+        run (SweepRun): A config from :func:`sweep_configs`.
         eval_split (str): Split of the config's data to evaluate on.
         extra_loaders (dict, optional): ``{label: callable(module) -> loader}``
             of further evaluation data (e.g. a held-out dataset); their
@@ -195,8 +205,9 @@ def run_config(cfg: Dict[str, Any], eval_split: str = "test",
     """
     from satagraph.pipelines.evaluation import evaluate
     from satagraph.lightning.autoencoder import count_parameters
+    cfg = run.cfg
     module, dm, trainer, seconds, train_loss = train_budgeted(cfg)
-    row = SweepRow(name=cfg["name"], config=str(cfg.get("_config", cfg["name"])),
+    row = SweepRow(name=cfg["name"], config=run.source,
                    params=count_parameters(module), steps=int(trainer.global_step),
                    epochs=int(trainer.current_epoch), seconds=seconds,
                    train_loss=train_loss, run_dir=cfg["output_dir"])
@@ -246,13 +257,13 @@ def held_out_loader(data: Dict[str, Any], sources: Any, batch_size: Optional[int
         from satagraph.data.dataset import MotionDataset, load_features
         from satagraph.datasets.sources import resolve_sources
         files = resolve_sources(sources)
-        feats = load_features(files, data.get("preprocessing"), data.get("cache_dir"))
-        window = int(data.get("window", 64))
-        ds = MotionDataset(files, feats, semantic_embedder(data.get("semantic_encoder",
-                                                                    "offline")),
-                           window, int(data.get("eval_stride") or window))
-        return DataLoader(ds, batch_size=batch_size or int(data.get("batch_size", 32)),
+        feats = load_features(files, spec["preprocessing"], spec["cache_dir"])
+        window = int(spec["window"])
+        ds = MotionDataset(files, feats, semantic_embedder(spec["semantic_encoder"]),
+                           window, int(spec["eval_stride"] or window))
+        return DataLoader(ds, batch_size=batch_size or int(spec["batch_size"]),
                           collate_fn=collate_clips)
+    spec = resolve_data(data)
     return make
 
 
@@ -279,16 +290,16 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
     cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
                          logger=logger)
     rows = []
-    for i, cfg in enumerate(cfgs):
-        log(f"[{i + 1}/{len(cfgs)}] {cfg['name']}: training for {budget_minutes:g} min")
-        row = run_config(cfg, retarget_files={"test": "split"} if retarget else None,
+    for i, run in enumerate(cfgs):
+        log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for {budget_minutes:g} min")
+        row = run_config(run, retarget_files={"test": "split"} if retarget else None,
                          max_batches=max_batches)
         log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
             f"{row.train_loss:.4f}")
         rows.append(row)
-    # Configs are plain containers (load_config); all share the first's data.
+    # all share the first's data
     write_results(rows, Path(output), budget_minutes, overrides,
-                  data=cfgs[0]["data"].get("sources") if cfgs else None)
+                  data=cfgs[0].cfg["data"]["sources"] if cfgs else None)
     return rows
 
 
@@ -351,6 +362,6 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> st
     return "\n".join(lines)
 
 
-__all__ = ["SweepRow", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
+__all__ = ["SweepRow", "SweepRun", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
            "train_budgeted", "run_config", "retarget_table", "held_out_loader",
            "run_sweep", "format_sweep", "write_results"]

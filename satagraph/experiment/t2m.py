@@ -1,8 +1,14 @@
-"""Registers text-to-motion training (``module: t2m``) with
-:mod:`satagraph.experiment.train`: the LightningModule and its data module."""
+"""Registers text-to-motion training (``module: t2m``) with the module
+registry (:mod:`satagraph.experiment.registry`): the LightningModule, its
+data module and the schema of its ``data`` section (the data module's
+arguments and defaults)."""
 from satagraph.data.caption_datamodule import CaptionDataModule
-from satagraph.lightning.text_to_motion import TextToMotionModule
-from satagraph.experiment.train import DATAMODULES, register_module
+from satagraph.experiment.registry import register_module
+from satagraph.experiment.schema import signature_schema
+from satagraph.lightning.text_to_motion import DEFAULT_OPTIM, TextToMotionModule
 
-register_module("t2m", TextToMotionModule)
-DATAMODULES["t2m"] = CaptionDataModule
+#: The ``data`` section of ``module: t2m``; ``seed`` ``None`` is the run's.
+CaptionDataConfig = signature_schema(CaptionDataModule, "CaptionDataConfig", seed=None)
+
+register_module("t2m", TextToMotionModule, datamodule=CaptionDataModule,
+                data=CaptionDataConfig, optim_keys=DEFAULT_OPTIM)

@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 import contextlib
-import importlib
+import inspect
 import os
 import warnings
+from dataclasses import fields
 from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
 
@@ -12,68 +13,64 @@ import lightning as L
 import torch
 
 from satagraph.experiment.config import expand_path
+# module_class and register_module: re-exported, the registry's face here
+from satagraph.experiment.registry import (ModuleSections, build_registered,  # noqa: F401
+                                           module_class, module_entry, register_module)
+from satagraph.experiment.schema import (LoggerConfig, TrainerExtras, check_keys, fill,
+                                         resolve_config, resolve_trainer)
 from satagraph.data.datamodule import MotionDataModule
+from satagraph.data.dataset import DEFAULT_PREPROCESSING
 from satagraph.io.checkpoint import CheckpointError, check_finite_weights
 from satagraph.io.weights import load_weights_or_checkpoint
 from satagraph.utils.files import atomic_write_text, sweep_stale_temps
-from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
-                                 SATAVAEModule)
 from satagraph.lightning.reliability import (LossLog, NonFiniteGuard, ResumeCheckpoint,
                                              SafeCheckpointIO, resume_checkpoint,
                                              run_lock)
 
-#: ``checkpoint`` config defaults: ``last.ckpt`` every N steps and/or M
-#: minutes of training (and at every epoch end).
-CHECKPOINT_DEFAULTS: Dict[str, Any] = {"every_n_steps": 500, "every_minutes": 10.0}
-
-MODULES = {"vae": SATAVAEModule, "rvq": SATARVQModule, "same": SAMEModule,
-           "padded_rvq": PaddedRVQModule}
-
-
-#: Modules registered by importing a module of their own, on first use.
-PLUGIN_MODULES = {"t2m": "satagraph.experiment.t2m"}
-#: ``module`` name -> data module class (default :class:`MotionDataModule`).
-DATAMODULES: Dict[str, Any] = {}
-
-
-def register_module(name: str, cls) -> None:
-    """Make a LightningModule class selectable as ``module: name``."""
-    MODULES[name] = cls
-
-
-def module_class(name: str):
-    """The LightningModule class registered under :obj:`name`."""
-    if name not in MODULES and name in PLUGIN_MODULES:
-        importlib.import_module(PLUGIN_MODULES[name])
-    if name not in MODULES:
-        raise ValueError(f"unknown module {name!r}; known: {sorted(MODULES)}")
-    return MODULES[name]
-
-
-def build_datamodule(cfg: Dict[str, Any]) -> MotionDataModule:
-    """The data module of a config; its sampling and augmentation seed is the
-    run's ``seed`` unless ``data.seed`` sets one."""
+def data_section(cfg: Dict[str, Any]) -> Dict[str, Any]:
+    """The ``data`` section of a resolved config; its sampling and
+    augmentation seed is the run's ``seed`` unless ``data.seed`` sets one."""
     data = dict(cfg["data"])
-    data.setdefault("seed", int(cfg.get("seed", 0)))
-    name = cfg.get("module", "vae")
-    module_class(name)  # registers a plugin's data module
-    return DATAMODULES.get(name, MotionDataModule)(**data)
+    if "seed" in data and data["seed"] is None:
+        data["seed"] = int(cfg["seed"])
+    return data
 
 
-def build_module(cfg: Dict[str, Any], dm: Optional[MotionDataModule] = None):
-    """The LightningModule for a config; the semantic width comes from the
-    data when it is not set."""
-    model = dict(cfg.get("model", {}))
+def build_datamodule(cfg: Dict[str, Any]):
+    """The data module of a config: the module's registered one
+    (:class:`MotionDataModule` by default) on :func:`data_section`."""
+    cfg = resolve_config(cfg)
+    return (module_entry(cfg["module"]).datamodule or MotionDataModule)(**data_section(cfg))
+
+
+def module_sections(cfg: Dict[str, Any], dm: Optional[Any] = None) -> ModuleSections:
+    """The module's own sections of a resolved config; the semantic width
+    comes from the data module :obj:`dm` when it is not set."""
+    model, data = dict(cfg["model"]), data_section(cfg)
     if dm is not None and model.get("semantic_channels") is None \
             and hasattr(dm, "semantic_channels"):
         model["semantic_channels"] = dm.semantic_channels
-    name = cfg.get("module", "vae")
-    data = cfg["data"]
-    meta = {"module": name, "semantic_encoder": data.get("semantic_encoder", "offline"),
-            "window": int(data.get("window", 64)), "data": data}
-    module = module_class(name)(
-        model=model, loss=cfg.get("loss"), optim=cfg.get("optim"),
-        fps=float((data.get("preprocessing") or {}).get("fps", 30.0)), meta=meta)
+    preprocessing = dict(DEFAULT_PREPROCESSING, **(data.get("preprocessing") or {}))
+    meta = {"module": cfg["module"], "semantic_encoder": data.get("semantic_encoder"),
+            "window": int(data["window"]), "data": data}
+    return ModuleSections(model=model, loss=cfg["loss"], optim=cfg["optim"],
+                          fps=float(preprocessing["fps"]), meta=meta)
+
+
+def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
+    """The config resolved and every key checked, the module's sections and
+    the trainer's included, before any data is read."""
+    cfg = resolve_config(cfg)
+    module_entry(cfg["module"]).check(module_sections(cfg))
+    check_keys("trainer", cfg["trainer"], trainer_keys())
+    return cfg
+
+
+def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
+    """The LightningModule for a config, built by its registered builder
+    from its own sections (:func:`module_sections`)."""
+    cfg = resolve_config(cfg)
+    module = build_registered(cfg["module"], module_sections(cfg, dm))
     if dm is not None and hasattr(dm, "normalizer"):
         module.normalizer.load_state_dict(dm.normalizer.state_dict())
     return module
@@ -82,8 +79,8 @@ def build_module(cfg: Dict[str, Any], dm: Optional[MotionDataModule] = None):
 def build_logger(cfg: Dict[str, Any], run_dir: Path):
     """``logger.name``: ``wandb`` (offline by default), ``csv``,
     ``tensorboard`` or ``none``."""
-    spec = dict(cfg.get("logger") or {"name": "wandb"})
-    name = spec.pop("name", "wandb")
+    spec = fill("logger", LoggerConfig, cfg.get("logger"))
+    name = spec.pop("name")
     if name == "none":
         return False
     if name == "csv":
@@ -92,10 +89,16 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path):
         return L.pytorch.loggers.TensorBoardLogger(str(run_dir), name="logs")
     if name == "wandb":
         from lightning.pytorch.loggers import WandbLogger
-        spec.setdefault("offline", True)
-        spec.setdefault("project", "satagraph")
         return WandbLogger(name=cfg["name"], save_dir=str(run_dir), **spec)
     raise ValueError(f"unknown logger {name!r}: use wandb, csv, tensorboard or none")
+
+
+def trainer_keys() -> set:
+    """The ``trainer`` keys: :class:`lightning.Trainer`'s arguments and
+    :class:`~satagraph.experiment.schema.TrainerExtras`'; ``callbacks`` and
+    ``plugins`` are added to the run's own."""
+    return set(inspect.signature(L.Trainer).parameters) | set(
+        f.name for f in fields(TrainerExtras))
 
 
 def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Trainer:
@@ -107,20 +110,20 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     (:class:`SafeCheckpointIO`); ``loss_log: true`` appends every step's
     loss to ``<run>/losses.tsv`` (:class:`LossLog`)."""
     from lightning.pytorch.callbacks import ModelCheckpoint, RichProgressBar
-    opts = dict(cfg.get("trainer") or {})
-    opts.update(overrides)
-    opts.setdefault("gradient_clip_val", (cfg.get("optim") or {}).get("grad_clip", 0.5))
+    cfg = resolve_config(cfg)
+    opts = resolve_trainer(dict(cfg["trainer"], **overrides))
+    check_keys("trainer", opts, trainer_keys())
+    opts["gradient_clip_val"] = cfg["optim"]["grad_clip"]
     folder = run_dir / "checkpoints"
-    spec = dict(CHECKPOINT_DEFAULTS, **(cfg.get("checkpoint") or {}))
-    resume = ResumeCheckpoint(str(folder), spec.get("every_n_steps"),
-                              spec.get("every_minutes"))
+    spec = cfg["checkpoint"]
+    resume = ResumeCheckpoint(str(folder), spec["every_n_steps"], spec["every_minutes"])
     best = ModelCheckpoint(dirpath=str(folder), save_last=False,
-                           monitor=opts.pop("monitor", "val_loss"), mode="min")
-    guard = NonFiniteGuard(cfg.get("nonfinite", "stop"), str(resume.last_path))
+                           monitor=opts.pop("monitor"), mode="min")
+    guard = NonFiniteGuard(cfg["nonfinite"], str(resume.last_path))
     callbacks = [best, resume, guard] + list(opts.pop("callbacks", None) or [])
-    if cfg.get("loss_log"):
+    if cfg["loss_log"]:
         callbacks.append(LossLog(str(run_dir / "losses.tsv")))
-    if opts.pop("progress", True):
+    if opts.pop("progress"):
         callbacks.append(RichProgressBar())
     plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
     return L.Trainer(default_root_dir=str(run_dir), logger=build_logger(cfg, run_dir),
@@ -171,7 +174,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     Returns:
         The trained module, the data module, the trainer and the run folder.
     """
-    run_dir = Path(expand_path(cfg.get("output_dir") or f"runs/{cfg['name']}"))
+    cfg = check_config(cfg)
+    run_dir = Path(expand_path(cfg["output_dir"] or f"runs/{cfg['name']}"))
     if run_dir.exists() and not run_dir.is_dir():
         raise ValueError(f"{run_dir}: output_dir is not a folder")
     if resume and not (run_dir / "checkpoints").is_dir():
@@ -179,12 +183,12 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
                                 f"{run_dir / 'checkpoints' / 'last.ckpt'}")
     if init_from:
         load_weights_or_checkpoint(init_from)  # a bad file fails before any work
-    if cfg.get("threads"):
+    if cfg["threads"]:
         torch.set_num_threads(int(cfg["threads"]))
     with _lock(run_dir):
         last = resume_checkpoint(run_dir / "checkpoints") if resume else None
         sweep_stale_temps(run_dir / "checkpoints")
-        L.seed_everything(int(cfg.get("seed", 0)), workers=True)
+        L.seed_everything(int(cfg["seed"]), workers=True)
         dm = build_datamodule(cfg)
         dm.setup("fit")
         _record_skipped(dm, run_dir)
@@ -236,9 +240,9 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
                               "hyperparameters)")
     check_finite_weights(data, ckpt)
     name = (hparams.get("meta") or {}).get("module", "vae")
-    cls = module_class(name)
-    module = cls(**{k: hparams[k] for k in ("model", "loss", "optim", "fps", "meta")
-                    if k in hparams})
+    sections = ModuleSections(**{k: hparams[k] for k in ("model", "loss", "optim", "fps",
+                                                         "meta") if hparams.get(k) is not None})
+    module = module_entry(name).build(sections)
     module.on_load_checkpoint(data)
     try:
         module.load_state_dict(data["state_dict"])

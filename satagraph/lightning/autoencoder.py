@@ -14,7 +14,7 @@ from satagraph.metrics import motion_metrics
 from satagraph.ops.motion_batch import batch_global_motion
 
 DEFAULT_OPTIM: Dict[str, float] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
-                                   "floor": 0.01, "grad_clip": 0.5}
+                                   "floor": 0.01}
 
 
 def lr_factor(epoch: int, warmup_epochs: int, decay: float, floor: float) -> float:
@@ -53,7 +53,8 @@ class MotionAutoencoderModule(L.LightningModule):
         model (dict): Keyword arguments of the network.
         loss (dict, optional): Loss weights (see :mod:`satagraph.losses`).
         optim (dict, optional): ``lr``, ``warmup_epochs``, ``decay``,
-            ``floor``, ``grad_clip``.
+            ``floor`` (``grad_clip`` is the trainer's, see
+            :mod:`satagraph.experiment.schema`).
         fps (float): Frame rate the module was trained at (what inference
             resamples motion to); losses and metrics use each batch's own
             (:attr:`~satagraph.data.FrameBatch.fps`).

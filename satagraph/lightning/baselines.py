@@ -1,7 +1,7 @@
 """LightningModules of the baselines: SAME and the zero-padding RVQ-VAE.
 
-Importing this module registers them as ``module: same`` and
-``module: padded_rvq`` (see :func:`satagraph.experiment.train.register_module`).
+They are registered as ``module: same`` and
+``module: padded_rvq`` by :mod:`satagraph.experiment.modules`.
 Their configs inherit ``experiments/sata_vae.yaml``; model keys that only
 SATA understands (``num_blocks``, ``local_conv``, ``semantic_channels``,
 ...) are dropped, any other unknown key is an error.

@@ -363,11 +363,37 @@ def restructure(motion: Motion, low: float = 0.8, high: float = 1.2,
 
 
 # --------------------------------------------------------- on the fly
+@dataclass(frozen=True)
+class AugmentConfig:
+    r"""The one set of augmentation defaults (``data.augment`` keys; the
+    defaults of :class:`SkeletonAugment` and
+    :class:`~satagraph.data.dataset.WindowAugment` too): probabilities of
+    bone scaling, mirroring, dropping a leaf chain, merging two trunk
+    segments, inserting a joint and a new rest pose, the per-axis bone
+    scale range and the longest leaf chain dropped. Only scaling and
+    mirroring are on by default; a config switches the others on."""
+
+    scale: float = 0.5
+    mirror: float = 0.5
+    drop: float = 0.0
+    merge: float = 0.0
+    insert: float = 0.0
+    rest: float = 0.0
+    low: float = 0.8
+    high: float = 1.2
+    max_drop: int = 2
+
+
+#: The augmentation defaults (see :class:`AugmentConfig`).
+AUGMENT = AugmentConfig()
+
+
 @dataclass
 class SkeletonAugment:
     r"""Random skeleton augmentation, applied on the fly.
 
-    Each operation is applied with its probability, in this order: bone
+    Each operation is applied with its probability (defaults:
+    :class:`AugmentConfig`), in this order: bone
     scaling (:func:`scale_bones`), mirroring (:func:`mirror`), dropping a
     leaf chain (:func:`drop_leaf_chain`), merging two trunk segments
     (:func:`merge_segments`), inserting a joint (:func:`insert_joint`) and
@@ -391,14 +417,14 @@ class SkeletonAugment:
         motion = augment(motion)
     """
 
-    p_scale: float = 0.5
-    p_mirror: float = 0.5
-    p_drop: float = 0.1
-    p_merge: float = 0.1
-    p_insert: float = 0.1
-    p_rest: float = 0.0
-    scale_range: Tuple[float, float] = (0.8, 1.2)
-    max_drop: int = 2
+    p_scale: float = AUGMENT.scale
+    p_mirror: float = AUGMENT.mirror
+    p_drop: float = AUGMENT.drop
+    p_merge: float = AUGMENT.merge
+    p_insert: float = AUGMENT.insert
+    p_rest: float = AUGMENT.rest
+    scale_range: Tuple[float, float] = (AUGMENT.low, AUGMENT.high)
+    max_drop: int = AUGMENT.max_drop
     seed: Optional[int] = None
     rng: np.random.Generator = field(init=False, repr=False)
 

@@ -92,3 +92,37 @@ def test_named_configs_found_without_a_source_checkout(tmp_path, monkeypatch):
     assert config.config_path("tiny") == shipped / "tiny.yaml"
     with pytest.raises(FileNotFoundError, match="one of: tiny"):
         config.config_path("sata_vae")
+
+
+def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
+    """The data files of ``setup.cfg`` cover every config, and each loads
+    (inheritance included) from a copy laid out as a non-editable install
+    ships it (``<prefix>/share/satagraph/experiments``)."""
+    import configparser
+    import shutil
+    from satagraph.experiment import config
+    setup = configparser.ConfigParser()
+    setup.read(EXPERIMENTS.parent / "setup.cfg")
+    files = setup["options.data_files"]
+    shipped = tmp_path / "share" / "satagraph" / "experiments"
+    for folder, pattern in files.items():
+        target = tmp_path / folder
+        target.mkdir(parents=True, exist_ok=True)
+        for path in EXPERIMENTS.parent.glob(pattern.strip()):
+            shutil.copy(path, target)
+    every = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml"))
+    assert sorted(p.stem for p in shipped.glob("*.yaml")) == every
+    assert (shipped / "sweeps" / WANDB_SWEEP.name).is_file()
+    monkeypatch.setattr(config, "CONFIG_DIRS", (tmp_path / "missing", shipped))
+    for name in every:
+        assert load_config(name) == load_config(str(EXPERIMENTS / f"{name}.yaml")), name
+
+
+def test_every_package_has_an_init():
+    """``packages = find:`` leaves out folders without ``__init__.py``: a
+    non-editable install would lack them."""
+    package = EXPERIMENTS.parent / "satagraph"
+    missing = [str(d.relative_to(package.parent)) for d in package.rglob("*")
+               if d.is_dir() and d.name != "__pycache__" and any(d.glob("*.py"))
+               and not (d / "__init__.py").is_file()]
+    assert not missing

@@ -27,15 +27,18 @@ def test_budget_config_binds_time_only(tmp_path):
     cfg = load_config("tiny", ["trainer.max_steps=5"])
     out = budget_config(cfg, 0.5, tmp_path / "run", data={"sources": ["x"]})
     assert out["trainer"]["max_epochs"] == -1
-    assert "max_steps" not in out["trainer"] and "max_time" not in out["trainer"]
-    assert out["_budget_s"] == pytest.approx(30.0)
+    assert "max_steps" not in out["trainer"]
+    assert out["trainer"]["max_time"] == {"seconds": pytest.approx(30.0)}
+    assert not [k for k in out if k.startswith("_")]  # no private keys
     assert out["data"] == {"sources": ["x"]} and out["logger"] == {"name": "csv"}
     assert cfg["trainer"]["max_steps"] == 5  # the input is not modified
 
 
 def test_sweep_configs_share_data_and_unique_names(tmp_path):
-    cfgs = sweep_configs(["tiny", "tiny"], ["data.max_files=2"],
+    runs = sweep_configs(["tiny", "tiny"], ["data.max_files=2"],
                          variants=[[], ["data.window=16"]], output=str(tmp_path))
+    assert [r.source for r in runs] == ["tiny", "tiny"]
+    cfgs = [r.cfg for r in runs]
     assert cfgs[1]["data"] == cfgs[0]["data"]  # the first config's data for all
     assert cfgs[0]["data"]["max_files"] == 2
     assert cfgs[0]["name"] != cfgs[1]["name"]

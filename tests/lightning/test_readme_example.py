@@ -6,7 +6,7 @@ from pathlib import Path
 
 import torch
 
-from satagraph.experiment.train import MODULES, register_module
+from satagraph.experiment.registry import register_module, unregister_module
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 
@@ -37,4 +37,4 @@ def test_readme_subclass_example_runs(tiny_config, datamodule, train_batch):
         grads = [p.grad for p in module.parameters() if p.grad is not None]
         assert grads and all(torch.isfinite(g).all() for g in grads)
     finally:
-        MODULES.pop("readme_example", None)
+        unregister_module("readme_example")

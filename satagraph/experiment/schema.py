@@ -1,0 +1,220 @@
+r"""The experiment config schema: typed sections, each key with one default.
+
+A config (``experiments/*.yaml`` after inheritance and overrides) has the
+top-level keys of :class:`ExperimentConfig` and these sections:
+
+- ``data`` (:class:`DataConfig`): the data module's arguments;
+  ``data.augment`` takes the keys of
+  :class:`~satagraph.transforms.augment.AugmentConfig`.
+- ``model``, ``loss``, ``optim``: the module's own sections, checked by the
+  module's builder (see :mod:`satagraph.experiment.registry`); the
+  autoencoders take the network's arguments, the
+  :class:`~satagraph.losses.MotionLoss` weights and ``lr``,
+  ``warmup_epochs``, ``decay``, ``floor``. ``optim.grad_clip``
+  (:data:`GRAD_CLIP`) is the trainer's gradient clipping, for every module.
+- ``trainer``: keyword arguments of :class:`lightning.Trainer` and the
+  keys of :class:`TrainerExtras`.
+- ``logger`` (:class:`LoggerConfig`), ``checkpoint``
+  (:class:`CheckpointConfig`).
+
+:func:`resolve_config` checks every key (one error line naming an unknown
+key, the known ones and the closest) and fills the defaults; it is
+idempotent and returns plain containers.
+"""
+from __future__ import annotations
+
+import difflib
+from dataclasses import MISSING, dataclass, field, fields, make_dataclass
+from typing import Any, Dict, Iterable, Mapping, Optional
+
+#: Default of ``optim.grad_clip``: gradient norm clipping of the trainer
+#: (Lightning's ``gradient_clip_val``), its only owner.
+GRAD_CLIP = 0.5
+
+
+@dataclass
+class DataConfig:
+    r"""``data``: arguments of :class:`~satagraph.data.MotionDataModule`
+    (see there); :obj:`seed` ``None`` is the run's ``seed``."""
+
+    sources: Any = None
+    window: int = 64
+    stride: int = 32
+    eval_stride: Optional[int] = None
+    batch_size: int = 32
+    balanced: bool = True
+    preprocessing: Dict[str, Any] = field(default_factory=dict)
+    semantic_encoder: Optional[str] = "offline"
+    cache_dir: Optional[str] = None
+    num_workers: int = 0
+    max_files: Optional[int] = None
+    seed: Optional[int] = None
+    augment: Any = None
+    on_error: str = "raise"
+    body_relative: bool = True
+
+
+@dataclass
+class LoggerConfig:
+    r"""``logger``: :obj:`name` is ``wandb``, ``csv``, ``tensorboard`` or
+    ``none``; :obj:`offline` and :obj:`project` are wandb's."""
+
+    name: str = "wandb"
+    offline: bool = True
+    project: str = "satagraph"
+
+
+@dataclass
+class CheckpointConfig:
+    r"""``checkpoint``: ``last.ckpt`` every :obj:`every_n_steps` steps
+    and/or :obj:`every_minutes` minutes of training (and every epoch end);
+    ``null`` turns one off."""
+
+    every_n_steps: Optional[int] = 500
+    every_minutes: Optional[float] = 10.0
+
+
+@dataclass
+class TrainerExtras:
+    r"""``trainer`` keys that are not :class:`lightning.Trainer` arguments:
+    :obj:`monitor` (the metric the best checkpoint keeps) and
+    :obj:`progress` (a rich progress bar)."""
+
+    monitor: str = "val_loss"
+    progress: bool = True
+
+
+@dataclass
+class ExperimentConfig:
+    r"""A whole config.
+
+    Args:
+        name (str): Run name (default: the config file's stem).
+        module (str): Registered module (:mod:`satagraph.experiment.registry`).
+        seed (int): Run seed (weights, data order, augmentation).
+        threads (int, optional): ``torch.set_num_threads``.
+        output_dir (str, optional): Run folder (default ``runs/<name>``).
+        loss_log (bool): Append every step's loss to ``<run>/losses.tsv``.
+        nonfinite (str): ``stop`` or ``skip`` on a non-finite loss.
+    """
+
+    name: str = ""
+    module: str = "vae"
+    seed: int = 0
+    threads: Optional[int] = None
+    output_dir: Optional[str] = None
+    loss_log: bool = False
+    nonfinite: str = "stop"
+    model: Dict[str, Any] = field(default_factory=dict)
+    loss: Dict[str, Any] = field(default_factory=dict)
+    optim: Dict[str, Any] = field(default_factory=dict)
+    data: Dict[str, Any] = field(default_factory=dict)
+    trainer: Dict[str, Any] = field(default_factory=dict)
+    logger: Dict[str, Any] = field(default_factory=dict)
+    checkpoint: Dict[str, Any] = field(default_factory=dict)
+
+
+def signature_schema(target: Any, name: str, **defaults_: Any) -> type:
+    r"""A dataclass schema of the keyword arguments of :obj:`target` (e.g.
+    a data module of a module of its own), their defaults its signature's
+    (one place) unless :obj:`defaults_` sets them (``seed=None``: the run's
+    seed); a required argument defaults to ``None``."""
+    import inspect
+    specs = []
+    for param in inspect.signature(target).parameters.values():
+        if param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
+            continue
+        value = defaults_.get(param.name, None if param.default is param.empty
+                              else param.default)
+        specs.append((param.name, Any, field(default_factory=lambda v=value: v)))
+    return make_dataclass(name, specs)
+
+
+def unknown_key_error(where: str, key: str, known: Iterable[str],
+                      what: str = "config key") -> ValueError:
+    """One line naming an unknown :obj:`key` of section :obj:`where`, the
+    known keys and the closest of them."""
+    known = sorted(known)
+    close = difflib.get_close_matches(str(key), known, n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    name = f"{where}.{key}" if where else str(key)
+    return ValueError(f"unknown {what} {name!r}{hint}; known: {', '.join(known)}")
+
+
+def check_keys(where: str, values: Mapping[str, Any], known: Iterable[str]) -> None:
+    """Raise :func:`unknown_key_error` for the first key of :obj:`values`
+    not in :obj:`known`."""
+    known = set(known)
+    for key in values:
+        if key not in known:
+            raise unknown_key_error(where, key, known)
+
+
+def defaults(schema: type) -> Dict[str, Any]:
+    """The default of every field of a dataclass :obj:`schema`."""
+    out = {}
+    for f in fields(schema):
+        out[f.name] = f.default_factory() if f.default is MISSING else f.default
+    return out
+
+
+def fill(where: str, schema: type, values: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
+    """:obj:`values` checked against the fields of :obj:`schema`, with the
+    defaults of the missing ones."""
+    values = dict(values or {})
+    check_keys(where, values, (f.name for f in fields(schema)))
+    return dict(defaults(schema), **values)
+
+
+def resolve_data(data: Optional[Mapping[str, Any]],
+                 schema: type = DataConfig) -> Dict[str, Any]:
+    """The ``data`` section checked against :obj:`schema` (``augment``
+    included) and filled."""
+    from satagraph.transforms.augment import AugmentConfig
+    out = fill("data", schema, data)
+    augment = out.get("augment")
+    if isinstance(augment, Mapping):
+        check_keys("data.augment", augment, (f.name for f in fields(AugmentConfig)))
+    elif augment not in (None, True, False):
+        raise ValueError(f"data.augment must be null, true, false or a mapping, "
+                         f"got {augment!r}")
+    return out
+
+
+def resolve_trainer(trainer: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
+    """The ``trainer`` section with :class:`TrainerExtras` filled; gradient
+    clipping is ``optim.grad_clip``'s alone."""
+    trainer = dict(trainer or {})
+    if "gradient_clip_val" in trainer:
+        raise ValueError("trainer.gradient_clip_val: set optim.grad_clip instead "
+                         "(the one owner of gradient clipping)")
+    return dict(defaults(TrainerExtras), **trainer)
+
+
+def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
+    r"""A config checked against the schema, with every default filled.
+
+    The ``data`` section is checked against the module's data schema
+    (:class:`DataConfig` unless it registered another); the module's own
+    sections (``model``, ``loss``, ``optim`` but ``grad_clip``) are checked
+    when it is built.
+
+    Raises:
+        ValueError: An unknown key (one line: the key, the known ones and
+            the closest).
+    """
+    from satagraph.experiment.registry import module_entry
+    out = fill("", ExperimentConfig, cfg)
+    out["data"] = resolve_data(out["data"], module_entry(out["module"]).data)
+    out["trainer"] = resolve_trainer(out["trainer"])
+    out["logger"] = fill("logger", LoggerConfig, out["logger"])
+    out["checkpoint"] = fill("checkpoint", CheckpointConfig, out["checkpoint"])
+    out["optim"] = dict(out["optim"] or {})
+    out["optim"].setdefault("grad_clip", GRAD_CLIP)
+    out["model"], out["loss"] = dict(out["model"] or {}), dict(out["loss"] or {})
+    return out
+
+
+__all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
+           "TrainerExtras", "GRAD_CLIP", "resolve_config", "resolve_data", "fill",
+           "check_keys", "unknown_key_error", "defaults", "signature_schema"]

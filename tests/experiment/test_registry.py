@@ -1,0 +1,116 @@
+"""The module registry: a decorator, a duplicate check, builders that take
+their own sections, a data module and data schema per module."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, List
+
+import pytest
+import torch
+
+from satagraph.experiment.config import load_config
+from satagraph.experiment.registry import (ModuleSections, module_class, module_entry,
+                                           register_module, registered_names,
+                                           unregister_module)
+
+
+@pytest.fixture
+def names():
+    """Names registered by a test, forgotten after it."""
+    taken: List[str] = []
+    yield taken
+    for name in taken:
+        unregister_module(name)
+
+
+def test_builtins_are_registered():
+    from satagraph.lightning import (PaddedRVQModule, SAMEModule, SATARVQModule,
+                                     SATAVAEModule)
+    assert {"vae", "rvq", "same", "padded_rvq"} <= set(registered_names())
+    assert module_class("vae") is SATAVAEModule and module_class("rvq") is SATARVQModule
+    assert module_class("same") is SAMEModule
+    assert module_class("padded_rvq") is PaddedRVQModule
+
+
+def test_decorated_class_builds_from_a_config(names):
+    from satagraph.experiment.train import build_module
+    from satagraph.lightning import SATAVAEModule
+
+    @register_module("test_vae")
+    class TestVAE(SATAVAEModule):
+        pass
+
+    names.append("test_vae")
+    module = build_module(load_config("tiny", ["module=test_vae"]))
+    assert type(module) is TestVAE and module.meta["module"] == "test_vae"
+
+
+def test_builder_function_takes_its_own_sections(names, tmp_path):
+    """A module with another constructor (e.g. text-to-motion) builds itself
+    from its sections; its data section has a schema of its own."""
+    from satagraph.experiment.train import build_datamodule, build_module
+    seen = {}
+
+    @dataclass
+    class CaptionData:
+        sources: Any = None
+        window: int = 96
+        mirror: float = 0.5
+
+    class CaptionModule(torch.nn.Module):
+        def __init__(self, width: int, **kwargs: Any) -> None:
+            super().__init__()
+            self.layer = torch.nn.Linear(width, width)
+
+    @register_module("test_t2m", datamodule=lambda **data: data, data=CaptionData)
+    def build(sections: ModuleSections) -> CaptionModule:
+        seen.update(sections.kwargs())
+        return CaptionModule(**sections.model)
+
+    names.append("test_t2m")
+    path = tmp_path / "t2m.yaml"
+    path.write_text("module: test_t2m\nmodel: {width: 4}\noptim: {weight_decay: 1}\n"
+                    "data: {sources: [z], mirror: 0.0}\n")
+    cfg = load_config(str(path))
+    assert cfg["data"] == {"sources": ["z"], "window": 96, "mirror": 0.0}
+    module = build_module(cfg)
+    assert isinstance(module, CaptionModule)
+    assert seen["model"] == {"width": 4} and seen["optim"]["weight_decay"] == 1
+    assert seen["meta"]["window"] == 96 and seen["fps"] == 30.0
+    assert build_datamodule(cfg) == {"sources": ["z"], "window": 96, "mirror": 0.0}
+    with pytest.raises(ValueError, match="not a class"):
+        module_class("test_t2m")
+    with pytest.raises(ValueError, match=r"unknown config key 'data\.stride'"):
+        load_config("tiny", ["module=test_t2m"])  # tiny's data is not a caption data set
+
+
+def test_a_name_registers_once(names):
+    register_module("test_once", lambda sections: None)
+    names.append("test_once")
+    with pytest.raises(ValueError, match="'test_once' is registered already"):
+        register_module("test_once", lambda sections: None)
+    with pytest.raises(ValueError, match="'vae' is registered already"):
+        module_entry("vae")  # imports the built-ins
+        register_module("vae")(type("Other", (), {}))
+
+
+def test_unknown_module_names_the_closest():
+    with pytest.raises(ValueError, match=r"unknown module 'samee' \(did you mean 'same'\?\)"):
+        module_entry("samee")
+
+
+def test_t2m_data_schema_is_its_data_module_signature():
+    """``module: t2m`` checks ``data`` against CaptionDataModule's arguments,
+    whose defaults stay in its signature (``seed``: the run's)."""
+    import inspect
+    from satagraph.data.caption_datamodule import CaptionDataModule
+    from satagraph.experiment.schema import defaults
+    entry = module_entry("t2m")
+    assert entry.datamodule is CaptionDataModule
+    signature = inspect.signature(CaptionDataModule).parameters
+    schema = defaults(entry.data)
+    assert set(schema) == set(signature) and schema["seed"] is None
+    assert all(schema[k] == p.default for k, p in signature.items()
+               if k not in ("seed", "sources"))
+    with pytest.raises(ValueError, match=r"'data.min_frame' \(did you mean 'min_frames'\?\)"):
+        load_config("t2m_tiny", ["data.min_frame=8"])

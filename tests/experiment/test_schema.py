@@ -1,0 +1,108 @@
+"""The config schema: one default per key, in one place, and one error line
+for an unknown key (naming it, the known keys and the closest)."""
+from __future__ import annotations
+
+import inspect
+from dataclasses import asdict, fields
+
+import pytest
+
+from satagraph.experiment.config import load_config
+from satagraph.experiment.schema import (GRAD_CLIP, CheckpointConfig, DataConfig,
+                                         ExperimentConfig, defaults, resolve_config)
+
+
+@pytest.mark.parametrize("override, message", [
+    ("seeds=1", r"unknown config key 'seeds' \(did you mean 'seed'\?\); known: "),
+    ("data.batchsize=4", r"'data.batchsize' \(did you mean 'batch_size'\?\)"),
+    ("data.augment={scael: 0.5}", r"'data.augment.scael' \(did you mean 'scale'\?\)"),
+    ("logger.nmae=csv", r"'logger.nmae' \(did you mean 'name'\?\)"),
+    ("checkpoint.every_n_step=5", r"did you mean 'every_n_steps'"),
+    ("module=vea", r"unknown module 'vea' \(did you mean 'vae'\?\); known: .*padded_rvq"),
+])
+def test_unknown_key_is_one_line_with_the_closest(override, message):
+    with pytest.raises(ValueError, match=message) as err:
+        load_config("tiny", [override])
+    assert "\n" not in str(err.value)
+
+
+def test_known_keys_are_listed():
+    with pytest.raises(ValueError) as err:
+        load_config("tiny", ["outputdir=x"])
+    line = str(err.value)
+    assert "did you mean 'output_dir'" in line
+    assert all(f.name in line for f in fields(ExperimentConfig))
+
+
+def test_module_sections_checked_when_built():
+    from satagraph.experiment.train import build_module
+    with pytest.raises(ValueError, match=r"'model.hidden_chanels' \(did you mean "
+                       r"'hidden_channels'\?\)"):
+        build_module(load_config("tiny", ["model.hidden_chanels=8"]))
+    with pytest.raises(ValueError, match=r"'optim.lrr' \(did you mean 'lr'\?\)"):
+        build_module(load_config("tiny", ["optim.lrr=0.1"]))
+
+
+def test_trainer_keys_checked(tmp_path):
+    from satagraph.experiment.train import build_trainer
+    with pytest.raises(ValueError, match=r"'trainer.max_epoch' \(did you mean "
+                       r"'max_epochs'\?\)"):
+        build_trainer(load_config("tiny", ["trainer.max_epoch=1"]), tmp_path)
+
+
+def test_every_default_is_filled_and_resolving_is_idempotent():
+    cfg = load_config("tiny")
+    assert set(cfg) == {f.name for f in fields(ExperimentConfig)}
+    assert set(cfg["data"]) == {f.name for f in fields(DataConfig)}
+    assert cfg["checkpoint"] == asdict(CheckpointConfig())
+    assert resolve_config(cfg) == cfg
+    assert cfg["name"] == "tiny" and cfg["seed"] == 0 and cfg["loss_log"] is False
+
+
+def test_data_defaults_are_the_data_module_s():
+    """The schema's ``data`` defaults are the ones MotionDataModule documents
+    (its signature serves Python callers; a config passes every key)."""
+    from satagraph.data.datamodule import MotionDataModule
+    signature = inspect.signature(MotionDataModule).parameters
+    schema = defaults(DataConfig)
+    assert set(schema) == set(signature)
+    for name, value in schema.items():
+        if name in ("sources", "seed", "preprocessing"):
+            continue  # required; None: the run's seed; None and {} alike
+        assert signature[name].default == value, name
+
+
+def test_one_set_of_augmentation_defaults():
+    from satagraph.data.dataset import AUGMENT_DEFAULTS, WindowAugment
+    from satagraph.transforms.augment import AUGMENT, SkeletonAugment
+    assert AUGMENT_DEFAULTS == asdict(AUGMENT)
+    window = inspect.signature(WindowAugment).parameters
+    assert {k: window[k].default for k in AUGMENT_DEFAULTS} == AUGMENT_DEFAULTS
+    skeleton = SkeletonAugment()
+    assert (skeleton.p_scale, skeleton.p_mirror, skeleton.p_drop, skeleton.p_merge,
+            skeleton.p_insert, skeleton.p_rest) == (AUGMENT.scale, AUGMENT.mirror,
+                                                    AUGMENT.drop, AUGMENT.merge,
+                                                    AUGMENT.insert, AUGMENT.rest)
+    assert skeleton.scale_range == (AUGMENT.low, AUGMENT.high)
+
+
+def test_grad_clip_has_one_owner(tmp_path):
+    from satagraph.experiment.train import build_trainer
+    from satagraph.lightning.autoencoder import DEFAULT_OPTIM
+    assert "grad_clip" not in DEFAULT_OPTIM
+    assert load_config("tiny")["optim"]["grad_clip"] == GRAD_CLIP
+    cfg = load_config("tiny", ["optim.grad_clip=0.25", "logger.name=none",
+                               "trainer.progress=false"])
+    assert build_trainer(cfg, tmp_path).gradient_clip_val == 0.25
+    with pytest.raises(ValueError, match="optim.grad_clip"):
+        load_config("tiny", ["trainer.gradient_clip_val=1.0"])
+
+
+def test_train_checks_every_key_before_reading_data(tmp_path):
+    from satagraph.experiment.train import train
+    for override in ("model.hidden_chanels=8", "trainer.max_epoch=1"):
+        cfg = load_config("tiny", [override, "data.sources=[/nowhere]",
+                                   f"output_dir={tmp_path / 'run'}"])
+        with pytest.raises(ValueError, match="did you mean"):
+            train(cfg)
+    assert not (tmp_path / "run").exists()
