@@ -53,9 +53,9 @@ from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTra
 
 #: Loss weights of the three models.
 DEFAULT_LOSS: Dict[str, float] = {"masked": 1.0, "residual": 1.0, "length": 0.1}
-#: AdamW with a linear warm-up over ``warmup_steps``, then constant.
-DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200,
-                                   "grad_clip": 1.0}
+#: AdamW with a linear warm-up over ``warmup_steps``, then constant
+#: (gradient clipping: ``optim.grad_clip`` of the config schema).
+DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200}
 #: Checkpoint key of the text encoder's id and width.
 TEXT_ENCODER_KEY = "text_encoder"
 
