@@ -517,7 +517,7 @@ def _evil(tmp: Path) -> bytes:
 def _damaged_last(root: Path, tmp: Path) -> List[str]:
     args = _train(root, tmp, str(_zoo(root)), "checkpoint.every_n_steps=1")
     env = dict(os.environ, PYTHONPATH=str(REPO))
-    subprocess.run([sys.executable, "-m", "satagraph.cli", *args], env=env,
+    subprocess.run([sys.executable, "-m", "satagraph", *args], env=env,
                    capture_output=True, check=True)
     last = tmp / "run" / "checkpoints" / "last.ckpt"
     last.write_bytes(last.read_bytes()[:1000])
@@ -559,7 +559,7 @@ def _model(root: Path) -> Path:
     ckpt = root / "model" / "run" / "checkpoints" / "last.ckpt"
     if not ckpt.is_file():
         env = dict(os.environ, PYTHONPATH=str(REPO))
-        subprocess.run([sys.executable, "-m", "satagraph.cli", "train",
+        subprocess.run([sys.executable, "-m", "satagraph", "train",
                         *_train(root, root / "model", str(_zoo(root)))[1:]],
                        env=env, capture_output=True, check=True)
     return ckpt
@@ -758,7 +758,7 @@ def _error_line(stderr: str) -> str:
 
 
 def run_subprocess(case: Case, tmp: Path) -> Result:
-    """Run one case as ``python -m satagraph.cli ...`` in :obj:`tmp`."""
+    """Run one case as ``python -m satagraph ...`` in :obj:`tmp`."""
     tmp.mkdir(parents=True, exist_ok=True)
     start = time.monotonic()
     try:
@@ -766,7 +766,7 @@ def run_subprocess(case: Case, tmp: Path) -> Result:
     except Exception as err:  # noqa: BLE001
         return Result(case, "traceback", None, 0.0, f"setup failed: {err!r}")
     env = dict(os.environ, PYTHONPATH=str(REPO), OMP_NUM_THREADS="1")
-    proc = subprocess.Popen([sys.executable, "-m", "satagraph.cli", *argv], env=env,
+    proc = subprocess.Popen([sys.executable, "-m", "satagraph", *argv], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             errors="replace", cwd=tmp, start_new_session=True)
     try:
@@ -841,7 +841,7 @@ def format_results(results: Sequence[Result], root: Optional[Path] = None) -> st
     unexpected = [r for r in results if r.outcome in ("clean error", "handled")
                   and (r.outcome == "handled") != (r.case.expect == "handled")]
     lines = [f"{len(results)} distinct bad inputs and failure scenarios, each run as "
-             "`python -m satagraph.cli ...` in a subprocess (60-240 s timeout).", "",
+             "`python -m satagraph ...` in a subprocess (60-240 s timeout).", "",
              "| outcome | cases |", "|---|---|"]
     lines += [f"| {o} | {counts[o]} |" for o in OUTCOMES]
     lines += ["", f"Expected outcome (error vs handled) met in "

@@ -47,7 +47,7 @@ def overrides(root: Path, every: int, epochs: int) -> List[str]:
 
 
 def command(args: Sequence[str]) -> List[str]:
-    return [sys.executable, "-m", "satagraph.cli", "train", "tiny", *args]
+    return [sys.executable, "-m", "satagraph", "train", "tiny", *args]
 
 
 ENV = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(REPO))

@@ -75,7 +75,7 @@ def test_kill9_then_resume_gives_the_same_losses(zoo_overrides: List[str],
     assert len(full) == 18
 
     run = tmp_path / "b"
-    cmd = [sys.executable, "-m", "satagraph.cli", "train", "tiny", *zoo_overrides,
+    cmd = [sys.executable, "-m", "satagraph", "train", "tiny", *zoo_overrides,
            f"output_dir={run}"]
     env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(REPO))
     kill_step = random.Random().randint(EVERY + 1, len(full) - 2)

@@ -89,7 +89,7 @@ def test_offline_is_deterministic_across_processes():
             "mod = importlib.util.module_from_spec(spec);"
             "spec.loader.exec_module(mod);"
             f"print(mod.OfflineTextEncoder().encode([{text!r}])[0].tolist())")
-    module = REPO_ROOT / "satagraph" / "data" / "semantics" / "encoders.py"
+    module = REPO_ROOT / "satagraph" / "semantics" / "encoders.py"
     env = dict(os.environ, PYTHONHASHSEED="12345")
     out = subprocess.run([sys.executable, "-c", code, str(module)], env=env,
                          check=True, capture_output=True, text=True)
