@@ -74,6 +74,11 @@ class MotionAutoencoderModule(L.LightningModule):
         self.normalizer = FeatureNormalizer()
         self.model = self.build_model(**model)
         self.criterion = self.build_loss(**(loss or {}))
+        rate = int(getattr(self.model, "latent_rate", 1))
+        if self._retarget_weight() > 0 and rate != 1:
+            raise ValueError(f"loss.retarget needs one latent per frame (decoded onto "
+                             f"another skeleton's frames); {type(self.model).__name__} "
+                             f"has one per {rate} frames: set loss.retarget: 0")
 
     # -------------------------------------------------------- semantics
     def embed(self, skeleton, evidence=None) -> Tensor:

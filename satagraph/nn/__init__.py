@@ -7,7 +7,7 @@
   baselines;
 - :mod:`.generators`: text-to-motion generators over SATA-RVQ codes.
 """
-from satagraph.nn.autoencoders import (SAME, SATA, PaddedRVQ, SATADecoder, SATAEncoder,
+from satagraph.nn.autoencoders import (SAME, SATA, MotionAutoencoder, PaddedRVQ, SATADecoder, SATAEncoder,
                                        node_motion_features)
 from satagraph.nn.bottlenecks import (RVQBottleneck, RVQOutput, VAEBottleneck, VAEOutput,
                                       gaussian_kl)
@@ -18,7 +18,7 @@ from satagraph.nn.layers import (LOCAL_CONVS, ConcatProjection, FastDropout, Fra
                                  sinusoidal_positions, use_fast_dropout)
 
 __all__ = [
-    "SATA", "SAME", "PaddedRVQ", "FrameGPSConv", "SATAEncoder", "SATADecoder", "SemanticModulation", "ConcatProjection",
+    "MotionAutoencoder", "SATA", "SAME", "PaddedRVQ", "FrameGPSConv", "SATAEncoder", "SATADecoder", "SemanticModulation", "ConcatProjection",
     "SinusoidalEncoding", "SpatioTemporalBlock", "LocalSpatialLayer", "VAEBottleneck",
     "VAEOutput", "RVQBottleneck", "RVQOutput", "build_local_conv", "accepts_edge_attr",
     "build_input_layer", "make_blocks", "sinusoidal_positions", "node_motion_features",

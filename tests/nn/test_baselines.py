@@ -223,3 +223,22 @@ def test_two_training_steps(name, model, tmp_path):
     motion = example_motion(num_frames=20)
     out = reconstruct_motion(loaded, motion, window=16, overlap=4)
     assert out.num_frames == motion.num_frames and out.num_joints == motion.num_joints
+
+
+def test_latent_rate_is_part_of_the_contract(batch):
+    """SATA and SAME give one latent per frame graph; the padded model one
+    per latent_rate frames of each clip, and a module refuses the
+    cross-skeleton term (which decodes per-frame latents onto other
+    skeletons' frames) instead of failing inside a step."""
+    from satagraph.nn import SATA, MotionAutoencoder
+    padded = PaddedRVQ(**TINY_PADDED)
+    assert isinstance(padded, MotionAutoencoder) and padded.latent_rate == 4
+    steps = sum(-(-t // padded.latent_rate) for t, _ in MIXED)
+    assert padded.encode(batch)["z"].shape[0] == steps
+    for model in (SAME(hidden_channels=16, latent_channels=8),
+                  SATA(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
+                       latent_channels=8)):
+        assert model.latent_rate == 1
+        assert model.encode(batch)["z"].shape[0] == batch.root.shape[0]
+    with pytest.raises(ValueError, match="one latent per frame"):
+        PaddedRVQModule(model=TINY_PADDED, loss={"retarget": 0.1})

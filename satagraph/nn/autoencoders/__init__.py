@@ -1,12 +1,14 @@
-"""Motion autoencoders: :class:`SATA` (its :class:`SATAEncoder` and
+"""Motion autoencoders, all keeping the :class:`MotionAutoencoder` contract
+(encode, decode onto any target, latent rate): :class:`SATA` (its :class:`SATAEncoder` and
 :class:`SATADecoder`, one latent per frame and joint) and two baselines,
 :class:`SAME` (skeleton-agnostic, one latent per frame) and
 :class:`PaddedRVQ` (frames zero-padded to a fixed joint count)."""
+from satagraph.nn.autoencoders.base import MotionAutoencoder
 from satagraph.nn.autoencoders.decoder import SATADecoder
 from satagraph.nn.autoencoders.encoder import SATAEncoder, node_motion_features
 from satagraph.nn.autoencoders.padded import PaddedRVQ
 from satagraph.nn.autoencoders.same import SAME
 from satagraph.nn.autoencoders.sata import SATA
 
-__all__ = ["SATA", "SATAEncoder", "SATADecoder", "node_motion_features", "SAME",
+__all__ = ["MotionAutoencoder", "SATA", "SATAEncoder", "SATADecoder", "node_motion_features", "SAME",
            "PaddedRVQ"]

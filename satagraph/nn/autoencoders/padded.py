@@ -7,6 +7,7 @@ from typing import Dict, Tuple
 import torch
 from torch import Tensor, nn
 
+from satagraph.nn.autoencoders.base import MotionAutoencoder
 from satagraph.typing import DYNAMIC_CHANNELS, ROOT_CHANNELS
 from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
@@ -151,7 +152,7 @@ def conv_decoder(latent_channels: int, channels: int, out_channels: int, down_t:
     return nn.Sequential(*layers)
 
 
-class PaddedRVQ(nn.Module):
+class PaddedRVQ(MotionAutoencoder):
     r"""The padding baseline of the SATA paper (appendix D.3.1): MoMask's
     RVQ-VAE on per-frame vectors ``[r; vec(X_pad)]`` in which every
     skeleton's joint features are zero-padded to :obj:`max_joints`. The
@@ -202,6 +203,7 @@ class PaddedRVQ(nn.Module):
         if down_t > 2:
             raise ValueError("down_t must be at most 2 (frames are padded to a multiple of 4)")
         self.max_joints, self.down = max_joints, 2 ** down_t
+        self.latent_rate = self.down
         in_dim = ROOT_CHANNELS + max_joints * in_channels
         out_dim = ROOT_CHANNELS + max_joints * JOINT_OUT
         self.encoder = conv_encoder(in_dim, hidden_channels, down_t, depth, dilation_growth)
@@ -239,8 +241,3 @@ class PaddedRVQ(nn.Module):
         out = from_padded(self.decode_dense(z, target_batch), target_batch, self.max_joints)
         out["mask"] = padding_mask(target_batch, self.max_joints)
         return out
-
-    def forward(self, batch, target_batch=None) -> Dict[str, Tensor]:
-        enc = self.encode(batch)
-        target = batch if target_batch is None else target_batch
-        return dict(enc, **self.decode(enc["z"], target))

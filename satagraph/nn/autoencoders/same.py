@@ -9,6 +9,7 @@ from torch import Tensor, nn
 from torch_geometric.nn import GATConv, GATv2Conv, global_max_pool
 from torch_geometric.nn.resolver import activation_resolver
 
+from satagraph.nn.autoencoders.base import MotionAutoencoder
 from satagraph.typing import DYNAMIC_CHANNELS, ROOT_CHANNELS, STATIC_CHANNELS
 from satagraph.nn.autoencoders.decoder import C_CHANNELS, Q_CHANNELS
 from satagraph.nn.autoencoders.encoder import node_motion_features
@@ -147,7 +148,7 @@ class SAMEDecoder(nn.Module):
         return {"q": q, "r": r[frames.root_node], "c": c}
 
 
-class SAME(nn.Module):
+class SAME(MotionAutoencoder):
     r"""The SAME autoencoder (Lee et al., 2023), re-implemented on frame
     graphs: :class:`SAMEEncoder` (one deterministic latent per frame, no
     temporal layers) and :class:`SAMEDecoder` onto any target skeleton.
@@ -198,8 +199,3 @@ class SAME(nn.Module):
     def decode(self, z: Tensor, target_batch) -> Dict[str, Tensor]:
         """``q``, ``r``, ``c`` (logits) on the target frame graphs."""
         return self.decoder(z, target_batch)
-
-    def forward(self, batch, target_batch=None) -> Dict[str, Tensor]:
-        enc = self.encode(batch)
-        target = batch if target_batch is None else target_batch
-        return dict(enc, **self.decode(enc["z"], target))

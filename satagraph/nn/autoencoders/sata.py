@@ -5,6 +5,7 @@ from typing import Dict, Optional
 
 from torch import Tensor, nn
 
+from satagraph.nn.autoencoders.base import MotionAutoencoder
 from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.nn.bottlenecks.vae import VAEBottleneck
 from satagraph.nn.autoencoders.decoder import SATADecoder
@@ -14,7 +15,7 @@ from satagraph.nn.autoencoders.encoder import SATAEncoder
 DEFAULT_LATENT = {"vae": 128, "rvq": 256}
 
 
-class SATA(nn.Module):
+class SATA(MotionAutoencoder):
     r"""The SATA autoencoder: :class:`~satagraph.nn.SATAEncoder` (one latent
     per frame), a VAE or RVQ bottleneck, and
     :class:`~satagraph.nn.SATADecoder` onto any target skeleton.
@@ -91,8 +92,3 @@ class SATA(nn.Module):
     def decode(self, z: Tensor, target_batch) -> Dict[str, Tensor]:
         """``q``, ``r``, ``c`` (logits) on the target frame graphs."""
         return self.decoder(z, target_batch)
-
-    def forward(self, batch, target_batch=None) -> Dict[str, Tensor]:
-        enc = self.encode(batch)
-        target = batch if target_batch is None else target_batch
-        return dict(enc, **self.decode(enc["z"], target))
