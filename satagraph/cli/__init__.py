@@ -22,13 +22,13 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-import numpy as np
-
 from satagraph import __version__
-from satagraph.io import BVHError, read_bvh
-from satagraph.utils.files import check_output_path
+from satagraph.cli.arguments import (add_rig_arguments, positive_float, positive_int,
+                                     read_with_rig)
+from satagraph.io import BVHError
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
+from satagraph.utils.files import check_output_path
 
 PROG = "satagraph"
 
@@ -51,58 +51,6 @@ class CommandError(Exception):
 
 
 # ------------------------------------------------------------------ helpers
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (np.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
-    return value
-
-
-def _up_axis(text: str) -> str:
-    """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
-    from satagraph.transforms.rig_reading import normalize_up_axis
-    try:
-        return normalize_up_axis(text)
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
-
-
-def _units(text: str):
-    """A unit name (``cm``, ``in``, ...) or a factor to metres."""
-    from satagraph.transforms.rig_reading import parse_units
-    try:
-        return parse_units(text)
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
-
-
-def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
-                      what: str = "the input") -> None:
-    """``--[PREFIX-]up-axis`` and ``--[PREFIX-]units`` (alias
-    ``--[PREFIX-]scale``): how to read a rig where detection guesses
-    wrong. They are used as given, never re-guessed."""
-    dash = f"--{prefix}-" if prefix else "--"
-    parser.add_argument(f"{dash}up-axis", type=_up_axis, default=None,
-                        metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
-                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it")
-    parser.add_argument(f"{dash}units", f"{dash}scale", type=_units, default=None,
-                        metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
-                        "ft, cmu (CMU mocap units), file (keep the file's own) or "
-                        "a factor to metres, instead of guessing them")
-
-
-def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Motion:
-    """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
-    :func:`add_rig_arguments` (the file's own declaration otherwise)."""
-    from satagraph.transforms.rig_reading import with_rig
-    key = f"{prefix}_" if prefix else ""
-    return with_rig(read_bvh(path), getattr(args, f"{key}up_axis", None),
-                    getattr(args, f"{key}units", None))
-
-
 def _write(motion: Motion, path: str) -> None:
     from satagraph.io import write_bvh  # torch: loaded for the commands that write
 
@@ -263,7 +211,7 @@ def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         epilog="example: satagraph convert in.bvh out.bvh --fps 30 --canonical")
     parser.add_argument("input", help="the .bvh file to read")
     parser.add_argument("output", help="the .bvh file to write")
-    parser.add_argument("--fps", type=_positive_float, default=None,
+    parser.add_argument("--fps", type=positive_float, default=None,
                         help="resample to this frame rate")
     parser.add_argument("--canonical", action="store_true",
                         help="canonicalise (Y up, facing +Z, metres)")
@@ -318,16 +266,6 @@ def run_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
-    return value
-
-
 def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     """Register ``satagraph demo [--quick] [--output DIR] [--minutes M]
     [--data PATH ...] [overrides ...]``."""
@@ -361,7 +299,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--output", default=None, metavar="PATH",
                         help="output folder (default: demo_output); with "
                         "--quick, where to keep the example BVH file")
-    parser.add_argument("--minutes", type=_positive_float, default=None,
+    parser.add_argument("--minutes", type=positive_float, default=None,
                         help="training time in minutes (default: the "
                         "config's, 4)")
     parser.add_argument("--data", nargs="+", default=None, metavar="PATH",
@@ -376,9 +314,9 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         metavar="NAME", help="zoo species (default: biped, "
                         "quadruped, bird, hexapod, snake; biped, quadruped and "
                         "bird are always written)")
-    parser.add_argument("--clips", type=_positive_int, default=4,
+    parser.add_argument("--clips", type=positive_int, default=4,
                         help="zoo clips per skeleton (default: 4)")
-    parser.add_argument("--frames", type=_positive_int, default=120,
+    parser.add_argument("--frames", type=positive_int, default=120,
                         help="frames per zoo clip (default: 120)")
     parser.add_argument("--seed", type=int, default=0,
                         help="zoo and bone-scaling seed (default: 0)")

@@ -19,7 +19,7 @@ def _seconds(text: str) -> float:
 
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
-    from satagraph.cli import add_rig_arguments
+    from satagraph.cli.arguments import add_rig_arguments
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
@@ -52,7 +52,7 @@ def add_generate_parser(sub) -> None:
 
 def _targets(args) -> list:
     """The skeleton files, read and checked (one line naming a bad file)."""
-    from satagraph.cli import read_with_rig
+    from satagraph.cli.arguments import read_with_rig
     from satagraph.data.validate import check_skeleton
     out = []
     for path in args.skeleton:

@@ -52,14 +52,14 @@ def add_render_parser(subparsers: "argparse._SubParsersAction"
                    help="render at most N frames (the clip is cut)")
     p.add_argument("--raw", action="store_true",
                    help="draw the files as they are (must be +Y up)")
-    from satagraph.cli import add_rig_arguments
+    from satagraph.cli.arguments import add_rig_arguments
     add_rig_arguments(p, what="every input")
     p.set_defaults(func=run_render)
     return p
 
 
 def _load(path: str, args: argparse.Namespace) -> Motion:
-    from satagraph.cli import read_with_rig
+    from satagraph.cli.arguments import read_with_rig
     motion = read_with_rig(path, args)
     if not args.raw:
         from satagraph.transforms.canonical import canonicalize

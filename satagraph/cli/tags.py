@@ -65,7 +65,7 @@ def add_tags_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--names-only", action="store_true",
                    help="ignore the motion: names and hierarchy only")
-    from satagraph.cli import add_rig_arguments
+    from satagraph.cli.arguments import add_rig_arguments
     add_rig_arguments(p, what="the file (for the motion evidence)")
     p.set_defaults(func=run_tags)
     return p
@@ -135,7 +135,7 @@ def _run(args: argparse.Namespace) -> int:
         raise SemanticsError("--reference-vocab needs --prompt")
     if args.import_answer and args.out is None:
         raise SemanticsError("--import needs --out DICT.json")
-    from satagraph.cli import read_with_rig
+    from satagraph.cli.arguments import read_with_rig
     motion = read_with_rig(str(args.file), args)
     skeleton = motion.skeleton
     if args.prompt:

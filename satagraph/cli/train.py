@@ -91,7 +91,7 @@ def _common(p) -> None:
 
 
 def _rig(p, prefix: str = "", what: str = "the input") -> None:
-    from satagraph.cli import add_rig_arguments
+    from satagraph.cli.arguments import add_rig_arguments
     add_rig_arguments(p, prefix, what)
 
 
@@ -144,7 +144,7 @@ def _read_checked(args, key: str, fps: float, frames: bool = True):
     ``--[target-]units``, checked for inference
     (:mod:`satagraph.data.validate`); :obj:`frames`: also its timing and
     values (a target needs only its skeleton)."""
-    from satagraph.cli import read_with_rig
+    from satagraph.cli.arguments import read_with_rig
     from satagraph.data.validate import check_motion, check_skeleton
     path = getattr(args, key)
     motion = read_with_rig(path, args, "target" if key == "target" else "")

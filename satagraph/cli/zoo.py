@@ -18,19 +18,10 @@ import itertools
 import time
 from typing import List
 
+from satagraph.cli.arguments import positive_int
 from satagraph.datasets.zoo import (CLIP_KINDS, NOISE_STYLES, REST_POSES, SPECIES, UNITS,
                                     UP_AXES, Dialect, dialect_variants, unit_scale,
                                     write_dialect_zoo, write_zoo)
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
-    return value
 
 
 def _axes(text: str) -> List[str]:
@@ -95,10 +86,10 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--species", nargs="+", choices=SPECIES, default=None,
                    metavar="NAME", help=f"species to write (default: all of "
                    f"{', '.join(SPECIES)})")
-    p.add_argument("--clips", type=_positive_int, default=4,
+    p.add_argument("--clips", type=positive_int, default=4,
                    help="clips per skeleton (default: 4)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    p.add_argument("--frames", type=_positive_int, default=120,
+    p.add_argument("--frames", type=positive_int, default=120,
                    help="frames per clip (default: 120)")
     p.add_argument("--fps", type=float, default=30.0,
                    help="frames per second (default: 30)")

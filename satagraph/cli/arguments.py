@@ -1,0 +1,76 @@
+"""Argument types and argument groups shared by the ``satagraph`` commands
+(imported without torch)."""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from satagraph.io import read_bvh
+from satagraph.motion import Motion
+
+
+def positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
+    return value
+
+
+def up_axis(text: str) -> str:
+    """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
+    from satagraph.transforms.rig_reading import normalize_up_axis
+    try:
+        return normalize_up_axis(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def units(text: str):
+    """A unit name (``cm``, ``in``, ...) or a factor to metres."""
+    from satagraph.transforms.rig_reading import parse_units
+    try:
+        return parse_units(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
+                      what: str = "the input") -> None:
+    """``--[PREFIX-]up-axis`` and ``--[PREFIX-]units`` (alias
+    ``--[PREFIX-]scale``): how to read a rig where detection guesses
+    wrong. They are used as given, never re-guessed."""
+    dash = f"--{prefix}-" if prefix else "--"
+    parser.add_argument(f"{dash}up-axis", type=up_axis, default=None,
+                        metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
+                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it")
+    parser.add_argument(f"{dash}units", f"{dash}scale", type=units, default=None,
+                        metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
+                        "ft, cmu (CMU mocap units), file (keep the file's own) or "
+                        "a factor to metres, instead of guessing them")
+
+
+def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Motion:
+    """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
+    :func:`add_rig_arguments` (the file's own declaration otherwise)."""
+    from satagraph.transforms.rig_reading import with_rig
+    key = f"{prefix}_" if prefix else ""
+    return with_rig(read_bvh(path), getattr(args, f"{key}up_axis", None),
+                    getattr(args, f"{key}units", None))
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
+    return value
+
+
+__all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
+           "read_with_rig"]
