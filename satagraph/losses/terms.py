@@ -1,0 +1,112 @@
+"""The loss terms on frame-graph batches, each a function of predictions,
+ground truth and the batch (see :mod:`satagraph.losses` for units)."""
+from __future__ import annotations
+
+from typing import Optional
+
+import torch.nn.functional as F
+from torch import Tensor
+
+from satagraph.losses.positions import POSITION_SCALE, time_difference
+from satagraph.ops.rotation import rotation_6d_to_matrix
+
+def _masked_mean(value: Tensor, mask: Tensor) -> Tensor:
+    """Mean of ``value`` rows where ``mask`` (zero when nothing is selected)."""
+    value = value.reshape(mask.shape[0], -1)[mask]
+    return value.mean() if value.numel() else value.sum()
+
+
+def rotation_loss(q_pred: Tensor, q_true: Tensor, batch) -> Tensor:
+    r"""MSE of rotation matrices (from 6D) over joints with children.
+
+    Shapes:
+        - **q_pred**, **q_true**: :math:`(N, 6)`
+    """
+    diff = rotation_6d_to_matrix(q_pred) - rotation_6d_to_matrix(q_true)
+    return _masked_mean(diff.pow(2), batch.node_inner)
+
+
+def velocity_loss(pos_pred: Tensor, pos_true: Tensor, batch) -> Tensor:
+    r"""MSE of per-frame displacements (consecutive frames of a clip).
+
+    Shapes:
+        - **pos_pred**, **pos_true**: :math:`(N, 3)` global positions
+    """
+    prev = batch.node_prev
+    diff = (pos_pred - pos_pred[prev]) - (pos_true - pos_true[prev])
+    return _masked_mean(diff.pow(2), batch.node_time > 0)
+
+
+def limb_velocity_loss(pos_source: Tensor, pos_target: Tensor, pairing,
+                       scale: float = POSITION_SCALE) -> Tensor:
+    r"""Mean squared difference of the paired limb ends' per-frame
+    displacements in the facing frame, relative to the root, each in
+    :obj:`scale` units per its character's height (unpaired retargeting
+    across skeletons; zero when no limb is paired).
+
+    Args:
+        pos_source (Tensor): Source positions relative to the root's ground
+            projection in the facing frame (the ``x`` features).
+        pos_target (Tensor): The same for the motion decoded on the partner
+            skeletons (:func:`facing_positions`).
+        pairing (Pairing): From :func:`satagraph.data.pairing.partner_batch`.
+
+    Shapes:
+        - **pos_source**: :math:`(N, 3)`, **pos_target**: :math:`(N', 3)`
+        - **output**: scalar
+    """
+    if not pairing.source_nodes.numel():
+        return pos_target.sum() * 0.0
+    src = pos_source[pairing.source_nodes] - pos_source[pairing.source_prev]
+    tgt = pos_target[pairing.target_nodes] - pos_target[pairing.target_prev]
+    src = src.to(tgt.dtype) * (scale / pairing.source_height)[:, None]
+    tgt = tgt * (scale / pairing.target_height)[:, None]
+    return (tgt - src).pow(2).sum(-1).mean()
+
+
+def contact_loss(c_logits: Tensor, c_true: Tensor) -> Tensor:
+    r"""Binary cross-entropy of contact logits.
+
+    Shapes:
+        - **c_logits**, **c_true**: :math:`(N, 1)`
+    """
+    return F.binary_cross_entropy_with_logits(c_logits, c_true.to(c_logits.dtype))
+
+
+def foot_sliding_loss(pos_pred: Tensor, c_true: Tensor, batch) -> Tensor:
+    r"""Mean horizontal displacement per frame of the predicted global
+    positions, weighted by the true contact (SAME's ``cv``).
+
+    Shapes:
+        - **pos_pred**: :math:`(N, 3)`, **c_true**: :math:`(N, 1)`
+    """
+    step = (pos_pred - pos_pred[batch.node_prev])[:, [0, 2]].norm(dim=-1)
+    return _masked_mean(step * c_true.reshape(-1), batch.node_time > 0)
+
+
+def penetration_loss(pos_pred: Tensor) -> Tensor:
+    r"""Mean of :math:`\min(y, 0)^2` (the ground is at :math:`y = 0`).
+
+    Shapes:
+        - **pos_pred**: :math:`(N, 3)`
+    """
+    return pos_pred[:, 1].clamp(max=0).pow(2).mean()
+
+
+def smoothness_loss(pos_pred: Tensor, batch, pos_true: Optional[Tensor] = None,
+                    order: int = 2) -> Tensor:
+    r"""Mean squared :obj:`order`-th time difference of the predicted
+    positions, or of its deviation from the target's when :obj:`pos_true`
+    is given.
+
+    Shapes:
+        - **pos_pred**, **pos_true**: :math:`(N, 3)`
+    """
+    diff, valid = time_difference(pos_pred, batch, order)
+    if pos_true is not None:
+        diff = diff - time_difference(pos_true, batch, order)[0]
+    return _masked_mean(diff.pow(2).sum(-1), valid)
+
+
+__all__ = ["rotation_loss", "velocity_loss", "limb_velocity_loss", "contact_loss",
+           "foot_sliding_loss", "penetration_loss", "smoothness_loss"]
