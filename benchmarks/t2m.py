@@ -20,7 +20,7 @@ styles giant and sad):
 
 Metrics (:mod:`satagraph.metrics.generation`): R@1/2/3 in pools of 32 and
 FID / KID, each with a 95% half-width over replications; matching score,
-diversity, multimodality (generator: 3 seeds per text). Kinematic probes
+diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinematic probes
 on every group's motions: direction of travel (walk / back / left / right),
 Froude speed ordering walk < run < dash, stillness of bow and bye.
 
@@ -54,9 +54,9 @@ from satagraph.data.features import (MotionFeatures, features_to_motion,  # noqa
 from satagraph.datasets.captions import captions_for  # noqa: E402
 from satagraph.datasets.sources import read_manifest, select  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
-from satagraph.metrics.generation import (POOL_SIZE, distribution_metrics,  # noqa: E402
-                                          diversity, matching_score, multimodality,
-                                          r_precision, replicate)
+from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noqa: E402
+                                          matching_score, multimodality, r_precision,
+                                          replicate, subsample)
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (describe_features,  # noqa: E402
                                                    froude_speed, leg_length)
@@ -202,6 +202,59 @@ def train_evaluator(items: Sequence[Item], encode: Callable, steps: int, seed: i
     return model.eval()
 
 
+class Recogniser(nn.Module):
+    """An action classifier on standardised descriptors (bandai actions,
+    zoo kinds), trained on the training items.
+
+    Shapes:
+        - **desc**: :math:`(N, D_m)`
+        - **output**: :math:`(N, C)` logits
+    """
+
+    def __init__(self, desc_dim: int, labels: Sequence[str], width: int = 128) -> None:
+        super().__init__()
+        self.labels = list(labels)
+        self.net = nn.Sequential(nn.Linear(desc_dim, width), nn.GELU(), nn.Dropout(0.1),
+                                 nn.Linear(width, len(self.labels)))
+        self.register_buffer("mean", torch.zeros(desc_dim))
+        self.register_buffer("std", torch.ones(desc_dim))
+
+    def forward(self, desc: torch.Tensor) -> torch.Tensor:
+        return self.net((desc - self.mean) / self.std)
+
+    def accuracy(self, descs: Sequence[np.ndarray], labels: Sequence[str]) -> Optional[float]:
+        """Share of motions (of a label it knows) classified as the label
+        their prompt asks for."""
+        known = [(d, l) for d, l in zip(descs, labels) if l in self.labels]
+        if not known:
+            return None
+        with torch.no_grad():
+            pred = self(torch.tensor(np.stack([d for d, _ in known]),
+                                     dtype=torch.float32)).argmax(1).tolist()
+        return float(np.mean([self.labels[p] == l for p, (_, l) in zip(pred, known)]))
+
+
+def train_recogniser(items: Sequence[Item], steps: int, seed: int,
+                     batch: int = 64) -> Recogniser:
+    """Cross-entropy on the training items' labels."""
+    torch.manual_seed(seed)
+    rng = np.random.default_rng([seed, 1])
+    desc = torch.tensor(np.stack([it.desc for it in items]), dtype=torch.float32)
+    model = Recogniser(desc.shape[1], sorted({it.label for it in items}))
+    target = torch.tensor([model.labels.index(it.label) for it in items])
+    model.mean.copy_(desc.mean(0))
+    model.std.copy_(desc.std(0).clamp_min(1e-3))
+    opt = torch.optim.AdamW(model.parameters(), lr=2e-3, weight_decay=1e-4)
+    for _ in range(steps):
+        idx = torch.from_numpy(rng.choice(len(items), size=min(batch, len(items)),
+                                          replace=False))
+        loss = nn.functional.cross_entropy(model(desc[idx]), target[idx])
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    return model.eval()
+
+
 def embed(model: Evaluator, encode: Callable, captions: Sequence[str],
           descs: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
     """Text and motion embeddings (numpy) of paired captions and descriptors."""
@@ -222,13 +275,7 @@ def score(model: Evaluator, encode: Callable, captions: List[str], descs: List[n
             row[f"R@{k + 1}"] = replicate(
                 lambda rng: float(r_precision(text, motion, 3, POOL_SIZE, rng)[k]), reps)
     row["matching"] = matching_score(text, motion)
-    if reference is None:  # the real row: one random half against the other
-        reference, motion_half = split_halves(motion, reps)
-        row.update(distribution_metrics(reference, motion_half, times=reps,
-                                        size=len(motion_half)))
-    else:
-        row.update(distribution_metrics(reference, motion, times=reps,
-                                        size=min(len(motion), 128)))
+    row.update(fid_kid(motion, reference, reps))
     row["diversity"] = diversity(motion, 300)
     if groups:
         row["multimodality"] = multimodality(
@@ -236,10 +283,26 @@ def score(model: Evaluator, encode: Callable, captions: List[str], descs: List[n
     return row
 
 
-def split_halves(x: np.ndarray, seed: int) -> Tuple[np.ndarray, np.ndarray]:
-    """Two random halves of the rows (the real row's FID / KID floor)."""
-    order = np.random.default_rng(seed).permutation(len(x))
+def split_halves(x: np.ndarray, rng: np.random.Generator) -> Tuple[np.ndarray, np.ndarray]:
+    """Two random halves of the rows."""
+    order = rng.permutation(len(x))
     return x[order[: len(x) // 2]], x[order[len(x) // 2:]]
+
+
+def fid_kid(motion: np.ndarray, reference: Optional[np.ndarray], reps: int
+            ) -> Dict[str, Tuple[float, float]]:
+    """FID and KID (mean, 95% half-width over :obj:`reps` draws) of half of
+    the motions against half of the reference; for the real row
+    (:obj:`reference` ``None``), one random half of it against the other,
+    so that every row compares sets of the same size."""
+    def draw(fn):
+        def once(rng):
+            if reference is None:
+                return fn(*split_halves(motion, rng))
+            half = len(motion) // 2
+            return fn(subsample(reference, half, rng), subsample(motion, half, rng))
+        return replicate(once, reps)
+    return {"fid": draw(fid), "kid": draw(kid)}
 
 
 def retrieve(train: Sequence[Item], captions: Sequence[str], encode: Callable) -> List[Item]:
@@ -328,8 +391,8 @@ def reconstructed_items(module, items: Sequence[Item]) -> List[Item]:
 
 
 def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
-               encode: Callable, reps: int, extra: Dict[str, List[List[Item]]],
-               seed: int) -> List[Dict[str, object]]:
+               recogniser: Recogniser, encode: Callable, reps: int,
+               extra: Dict[str, List[List[Item]]], seed: int) -> List[Dict[str, object]]:
     """The rows of one group of test prompts: real, shuffled captions,
     retrieval and the extra sets (reconstruction, generator seeds)."""
     caps = [it.captions[0] for it in test]
@@ -342,9 +405,11 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
         items = seeds[0]
         groups = ([np.stack([s[i].desc for s in seeds]) for i in range(min(16, len(items)))]
                   if len(seeds) > 1 else None)
+        same = kind in ("real", "shuffled captions")  # the test motions themselves
         row = score(model, encode, caps, [it.desc for it in items],
-                    None if kind == "real" else reference, reps, groups)
-        row.update(group=name, row=kind,
+                    None if same else reference, reps, groups)
+        row.update(group=name, row=kind, action=recogniser.accuracy([it.desc for it in items],
+                                                              [it.label for it in test]),
                    probes=probes([it.label for it in test], [it.travel for it in items],
                                  [it.froude for it in items]))
         rows.append(row)
@@ -377,7 +442,7 @@ def probe_cell(p: Dict[str, object]) -> str:
 def table(rows: Sequence[Dict[str, object]]) -> str:
     """The markdown table."""
     head = ("| group | row | n | R@1 | R@2 | R@3 | matching | FID | KID | diversity | "
-            "multimodality | probes |\n|" + "---|" * 12)
+            "multimodality | action acc | probes |\n|" + "---|" * 13)
     lines = [head]
     for r in rows:
         kid = r["kid"]
@@ -385,12 +450,13 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
             f"| {r['group']} | {r['row']} | {r['n']} | {fmt(r.get('R@1'))} | "
             f"{fmt(r.get('R@2'))} | {fmt(r.get('R@3'))} | {fmt(r['matching'])} | "
             f"{fmt(r['fid'])} | {fmt(kid, 4)} | {fmt(r['diversity'])} | "
-            f"{fmt(r.get('multimodality'))} | {probe_cell(r['probes'])} |")
+            f"{fmt(r.get('multimodality'))} | {fmt(r['action'], 2)} | "
+            f"{probe_cell(r['probes'])} |")
     return "\n".join(lines)
 
 
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
-             reps: Optional[int] = None, gen_seeds: int = 3) -> Tuple[List[Dict], Dict]:
+             reps: Optional[int] = None, gen_seeds: int = 2) -> Tuple[List[Dict], Dict]:
     """Train the evaluator and score every group; rows and run facts."""
     start = time.perf_counter()
     encoder = build_text_encoder("offline")
@@ -406,6 +472,7 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     loaded = time.perf_counter()
     steps = steps or (150 if quick else 3000)
     model = train_evaluator(train, encode, steps, seed)
+    recogniser = train_recogniser(train, steps, seed)
     module = None
     if ckpt:
         from satagraph.pipelines.generate import load_generator
@@ -417,13 +484,13 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
         if module is not None:
             extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
-        rows += group_rows(name, items, train, model, encode, reps or (3 if quick else 20),
+        rows += group_rows(name, items, train, model, recogniser, encode, reps or (3 if quick else 20),
                            extra, seed)
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
              "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "quick": quick,
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
-    return rows, {"facts": facts, "model": model}
+    return rows, {"facts": facts, "model": model, "recogniser": recogniser}
 
 
 def main(argv=None) -> int:
@@ -443,7 +510,9 @@ def main(argv=None) -> int:
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)
     save.mkdir(parents=True, exist_ok=True)
-    torch.save({"state_dict": run["model"].state_dict(), "command": command,
+    torch.save({"state_dict": run["model"].state_dict(),
+                "recogniser": run["recogniser"].state_dict(),
+                "labels": run["recogniser"].labels, "command": command,
                 "facts": run["facts"]}, save / f"{name}_evaluator.pt")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
