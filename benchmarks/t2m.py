@@ -390,6 +390,57 @@ def reconstructed_items(module, items: Sequence[Item]) -> List[Item]:
     return out
 
 
+#: Probe prompts (``{}``: the subject) and the action each asks for.
+PROBE_PROMPTS: Tuple[Tuple[str, str], ...] = (
+    ("{} walks forward", "walk"), ("{} walks backward", "walk-back"),
+    ("{} walks forward and to the left", "walk-left"),
+    ("{} walks forward and to the right", "walk-right"), ("{} runs forward", "run"),
+    ("{} dashes forward", "dash"), ("{} bows", "bow"),
+    ("{} waves goodbye with one hand", "bye"))
+SUBJECTS = {"biped": "a person", "quadruped": "a quadruped", "bird": "a bird",
+            "hexapod": "an insect", "human": "a person", "dog": "a four-legged animal"}
+
+
+def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, Motion]]:
+    """One target per skeleton: the first zoo test rig of every body plan,
+    the first bandai test rig, and cmu 01_01 and a dog clip from the
+    manifest (name -> (subject, canonical motion))."""
+    out: Dict[str, Tuple[str, Motion]] = {}
+    for it in test:
+        key = f"zoo {it.skeleton}" if it.group == "zoo" else "bandai"
+        if it.motion is not None and key not in out:
+            out[key] = (SUBJECTS.get(it.skeleton, "a person"), it.motion)
+    if quick or not MANIFEST.is_file():
+        return out
+    files = read_manifest(MANIFEST)
+    for name, subject, dataset in (("cmu 01_01", "a person", "cmu"), ("dog", SUBJECTS["dog"],
+                                                                        "dog")):
+        picks = [f for f in files if f.dataset == dataset and f.split == "test"][:1]
+        kept, feats, _ = try_load_features(picks, {"fps": FPS})
+        if feats:
+            out[name] = (subject, features_to_motion(feats[0]))
+    return out
+
+
+def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
+                    seconds: float = 4.0) -> List[Dict[str, object]]:
+    """The generator's probes per skeleton: every probe prompt, :obj:`seeds`
+    seeds, :obj:`seconds` long."""
+    from satagraph.pipelines.generate import generate_on
+    rows = []
+    for name, (subject, target) in targets.items():
+        labels, travels, froudes = [], [], []
+        for prompt, label in PROBE_PROMPTS:
+            for seed in range(seeds):
+                motion = generate_on(module, prompt.format(subject), target, seconds, seed)
+                it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
+                             name, name)
+                labels.append(label), travels.append(it.travel), froudes.append(it.froude)
+        rows.append({"skeleton": name, "subject": subject,
+                     "probes": probes(labels, travels, froudes)})
+    return rows
+
+
 def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                recogniser: Recogniser, encode: Callable, reps: int,
                extra: Dict[str, List[List[Item]]], seed: int) -> List[Dict[str, object]]:
@@ -486,11 +537,16 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
         rows += group_rows(name, items, train, model, recogniser, encode, reps or (3 if quick else 20),
                            extra, seed)
+    if module is not None:
+        run_extra = skeleton_probes(module, skeleton_targets(test, quick), gen_seeds)
+    else:
+        run_extra = []
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
              "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "quick": quick,
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
-    return rows, {"facts": facts, "model": model, "recogniser": recogniser}
+    return rows, {"facts": facts, "model": model, "recogniser": recogniser,
+                  "skeletons": run_extra}
 
 
 def main(argv=None) -> int:
@@ -518,8 +574,14 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     text = (f"# Text-to-motion evaluation\n\n`{command}`\n\n{json.dumps(run['facts'])}\n\n"
             f"{table(rows)}\n")
+    if run["skeletons"]:
+        text += ("\nGenerator probes per skeleton (4 s, prompts of bandai's wording):\n\n"
+                 "| skeleton | subject | probes |\n|---|---|---|\n" + "\n".join(
+                     f"| {r['skeleton']} | {r['subject']} | {probe_cell(r['probes'])} |"
+                     for r in run["skeletons"]) + "\n")
     (out / f"{name}.md").write_text(text)
-    (out / f"{name}.json").write_text(json.dumps({"facts": run["facts"], "rows": rows},
+    (out / f"{name}.json").write_text(json.dumps({"facts": run["facts"], "rows": rows,
+                                                  "skeletons": run["skeletons"]},
                                                  indent=1, default=str))
     print(text)
     return 0
