@@ -535,8 +535,8 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
         if module is not None:
             extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
-        rows += group_rows(name, items, train, model, recogniser, encode, reps or (3 if quick else 20),
-                           extra, seed)
+        rows += group_rows(name, items, train, model, recogniser, encode,
+                           reps or (3 if quick else 20), extra, seed)
     if module is not None:
         run_extra = skeleton_probes(module, skeleton_targets(test, quick), gen_seeds)
     else:

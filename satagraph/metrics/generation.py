@@ -174,4 +174,5 @@ def distribution_metrics(real: np.ndarray, fake: np.ndarray, times: int = 10,
 
 
 __all__ = ["POOL_SIZE", "diversity", "distribution_metrics", "fid", "kid", "matching_score",
-           "multimodality", "pairwise_distances", "r_precision", "replicate", "subsample", "trace_sqrt_product"]
+           "multimodality", "pairwise_distances", "r_precision", "replicate", "subsample",
+           "trace_sqrt_product"]
