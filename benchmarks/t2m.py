@@ -58,8 +58,9 @@ from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noq
                                           matching_score, multimodality, r_precision,
                                           replicate, subsample)
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.motion_descriptor import (describe_features,  # noqa: E402
-                                                   froude_speed, leg_length)
+from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
+                                                   describe_features, froude_speed,
+                                                   leg_length)
 from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.semantics.limbs import limb_end_index  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
@@ -81,6 +82,7 @@ class Item:
     seconds: float
     froude: float
     travel: np.ndarray  # final ground displacement in the start facing frame, leg lengths
+    contact: Tuple[float, float]  # foot sliding (heights/s), penetration (heights)
     motion: Optional[Motion] = field(default=None, repr=False)
 
 
@@ -93,7 +95,8 @@ def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
     travel = (origin[-1] - origin[0])[[0, 2]] / leg
     motion = features_to_motion(feats) if keep else None
     return Item(describe_features(feats, ends), captions, label, group, skeleton,
-                feats.num_frames / feats.fps, froude_speed(feats, ends), travel, motion)
+                feats.num_frames / feats.fps, froude_speed(feats, ends), travel,
+                contact_quality(feats), motion)
 
 
 def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:
@@ -459,6 +462,8 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
         same = kind in ("real", "shuffled captions")  # the test motions themselves
         row = score(model, encode, caps, [it.desc for it in items],
                     None if same else reference, reps, groups)
+        row.update(slide=float(np.mean([it.contact[0] for it in items])),
+                   penetration=float(np.mean([it.contact[1] for it in items])))
         row.update(group=name, row=kind, action=recogniser.accuracy([it.desc for it in items],
                                                               [it.label for it in test]),
                    probes=probes([it.label for it in test], [it.travel for it in items],
@@ -493,7 +498,8 @@ def probe_cell(p: Dict[str, object]) -> str:
 def table(rows: Sequence[Dict[str, object]]) -> str:
     """The markdown table."""
     head = ("| group | row | n | R@1 | R@2 | R@3 | matching | FID | KID | diversity | "
-            "multimodality | action acc | probes |\n|" + "---|" * 13)
+            "multimodality | action acc | foot slide (H/s) | penetration (H) | probes |\n|"
+            + "---|" * 15)
     lines = [head]
     for r in rows:
         kid = r["kid"]
@@ -502,6 +508,7 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
             f"{fmt(r.get('R@2'))} | {fmt(r.get('R@3'))} | {fmt(r['matching'])} | "
             f"{fmt(r['fid'])} | {fmt(kid, 4)} | {fmt(r['diversity'])} | "
             f"{fmt(r.get('multimodality'))} | {fmt(r['action'], 2)} | "
+            f"{fmt(r['slide'])} | {fmt(r['penetration'], 4)} | "
             f"{probe_cell(r['probes'])} |")
     return "\n".join(lines)
 

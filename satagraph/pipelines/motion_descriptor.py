@@ -23,7 +23,7 @@ needs no rest pose to stand upright.
 """
 from __future__ import annotations
 
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -44,6 +44,9 @@ POOLS: List[str] = ["mean", "std", "q10", "q90", "first", "middle", "last"]
 DESCRIPTOR_DIM = len(POOLS) * len(FRAME_CHANNELS) + len(LIMBS)
 #: Standard gravity (m/s^2), for Froude-normalised speed.
 GRAVITY = 9.81
+#: Foot-sliding height threshold as a fraction of the height (SAME's 3 cm
+#: for a 1.75 m character, as :data:`satagraph.metrics.SLIDE_HEIGHT`).
+SLIDE_HEIGHT = 0.03 / 1.75
 
 
 def _chain_length(skeleton: Skeleton, joint: int) -> float:
@@ -185,11 +188,28 @@ def froude_speed(feats: MotionFeatures, ends: Optional[Sequence[int]] = None) ->
     return float(speed / np.sqrt(GRAVITY * leg))
 
 
+def contact_quality(feats: MotionFeatures) -> Tuple[float, float]:
+    r"""Foot sliding and ground penetration of a canonical motion, in
+    heights: the horizontal speed (per second) of every joint near the
+    ground, averaged with SAME's weights
+    :math:`\mathrm{clamp}(2 - 2^{h / H_0}, 0, 1)` (:data:`SLIDE_HEIGHT`),
+    and the mean of :math:`\min(y, 0)` of the lowest joint per frame."""
+    height = max(float(feats.height), 1e-6)
+    slide = 0.0
+    if feats.num_frames > 1:
+        y = feats.x[1:, :, 1]
+        weight = np.clip(2.0 - 2.0 ** (y / (SLIDE_HEIGHT * height)), 0.0, 1.0)
+        speed = np.linalg.norm(feats.v_x[1:][..., [0, 2]], axis=-1)
+        slide = float((weight * speed).sum() / max(weight.sum(), 1e-6) / height)
+    lowest = feats.x[:, :, 1].min(axis=1)
+    return slide, float(np.minimum(lowest, 0.0).mean() / height)
+
+
 def channel_index(channel: str, pool: str = "mean") -> int:
     """Position of one channel's pooled statistic in the descriptor."""
     return POOLS.index(pool) * len(FRAME_CHANNELS) + FRAME_CHANNELS.index(channel)
 
 
 __all__ = ["DESCRIPTOR_DIM", "FRAME_CHANNELS", "POOLS", "ROOT_CHANNELS", "canonical_features",
-           "channel_index", "describe_features", "describe_motion", "frame_descriptor",
+           "channel_index", "contact_quality", "describe_features", "describe_motion", "frame_descriptor",
            "froude_speed", "leg_length", "limb_mask", "pool_frames"]

@@ -7,7 +7,8 @@ import pytest
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.motion import Motion
 from satagraph.pipelines.motion_descriptor import (DESCRIPTOR_DIM, canonical_features,
-                                                   channel_index, describe_motion,
+                                                   channel_index, contact_quality,
+                                                   describe_motion,
                                                    froude_speed, leg_length)
 
 
@@ -67,3 +68,14 @@ def test_froude_speed_orders_idle_below_walk(walk):
 def test_leg_length_falls_back_to_height(walk):
     assert leg_length(walk.skeleton, [-1, -1, -1, -1], height=1.7) == 1.7
     assert 0.2 < leg_length(walk.skeleton) / walk.height() < 0.8
+
+
+def test_contact_quality_sees_sliding_feet(walk):
+    feats = canonical_features(walk, up_axis="+Y", unit_scale=1.0)
+    slide, pen = contact_quality(feats)
+    assert slide >= 0.0 and pen <= 0.0
+    skate = walk.with_(translations=walk.translations + np.arange(walk.num_frames)[:, None,
+                                                                                     None]
+                       * np.array([0.0, 0.0, 0.05]))
+    faster, _ = contact_quality(canonical_features(skate, up_axis="+Y", unit_scale=1.0))
+    assert faster > slide + 0.1
