@@ -1,0 +1,598 @@
+"""Text-to-motion evaluation you can trust (issue 19, item 8).
+
+An evaluator independent of the generator and of SATA's encoder: a small
+text-motion contrastive model (offline text encoder -> MLP; the
+skeleton-agnostic kinematic descriptor of
+:mod:`satagraph.pipelines.motion_descriptor` -> MLP; InfoNCE), trained,
+seeded, on the captioned TRAINING split only (endless-zoo training clips;
+bandai / cmu / ccbase files of the manifest's train split, less one take in
+five of bandai's, kept apart as seen-style test prompts). It scores, per
+group of test prompts (zoo test seeds; bandai seen styles; bandai unseen
+styles giant and sad):
+
+- **real**: the test motions with their own captions;
+- **shuffled captions**: the same, captions permuted (chance control);
+- **retrieval**: the nearest training clip by caption embedding, taken on
+  its own rig (no retargeting);
+- **reconstruction** / **generator** (with ``--ckpt``): the test motion sent
+  through the generator's frozen SATA-RVQ; a generation for the caption on
+  the test clip's rig, given the test clip's length (stated in the table).
+
+Metrics (:mod:`satagraph.metrics.generation`): R@1/2/3 in pools of 32 and
+FID / KID, each with a 95% half-width over replications; matching score,
+diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinematic probes
+on every group's motions: direction of travel (walk / back / left / right),
+Froude speed ordering walk < run < dash, stillness of bow and bye.
+
+    python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
+
+Writes ``benchmarks/results/t2m.md`` and ``.json`` (``--quick``:
+``t2m_quick.*``), and the evaluator to ``runs/t2m_evaluator/``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import torch
+from torch import nn
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from satagraph.data.dataset import _frames, try_load_features  # noqa: E402
+from satagraph.data.captioned import FileCaptionWindows  # noqa: E402
+from satagraph.data.features import (MotionFeatures, features_to_motion,  # noqa: E402
+                                     integrate_root, motion_to_features)
+from satagraph.datasets.captions import captions_for  # noqa: E402
+from satagraph.datasets.sources import read_manifest, select  # noqa: E402
+from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noqa: E402
+                                          matching_score, multimodality, r_precision,
+                                          replicate, subsample)
+from satagraph.motion import Motion  # noqa: E402
+from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
+                                                   describe_features, froude_speed,
+                                                   leg_length)
+from satagraph.semantics import build_text_encoder  # noqa: E402
+from satagraph.semantics.limbs import limb_end_index  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
+
+MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
+SPECIES = ["biped", "quadruped", "bird", "hexapod"]
+FPS = 30.0
+
+
+@dataclass
+class Item:
+    """One captioned motion: descriptor, captions and what the probes read."""
+
+    desc: np.ndarray
+    captions: List[str]
+    label: str
+    group: str
+    skeleton: str
+    seconds: float
+    froude: float
+    travel: np.ndarray  # final ground displacement in the start facing frame, leg lengths
+    contact: Tuple[float, float]  # foot sliding (heights/s), penetration (heights)
+    motion: Optional[Motion] = field(default=None, repr=False)
+
+
+def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
+            skeleton: str, keep: bool = False) -> Item:
+    """An :class:`Item` of canonical features (the motion kept for targets)."""
+    ends = limb_end_index(feats.skeleton)
+    _, origin = integrate_root(feats.r[1:], feats.fps)
+    leg = max(leg_length(feats.skeleton, ends, feats.height), 1e-6)
+    travel = (origin[-1] - origin[0])[[0, 2]] / leg
+    motion = features_to_motion(feats) if keep else None
+    return Item(describe_features(feats, ends), captions, label, group, skeleton,
+                feats.num_frames / feats.fps, froude_speed(feats, ends), travel,
+                contact_quality(feats), motion)
+
+
+def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:
+    """Endless-zoo clips of 32-96 frames of one seed stream, captioned from
+    their facts."""
+    zoo, rng = EndlessZoo(SPECIES, fps=FPS, seed=seed), np.random.default_rng([seed, 8])
+    out = []
+    for idx in range(count):
+        sample = zoo.sample(0, idx, int(rng.integers(33, 97)), stream, False)
+        motion = canonicalize(sample.motion, fps=FPS, up_axis="+Y", unit_scale=1.0)
+        caps = [c.text for c in captions_for(sample)]
+        out.append(measure(motion_to_features(motion), caps, sample.kind, "zoo",
+                           sample.species, keep))
+    return out
+
+
+def bandai_parts(path: str) -> Tuple[str, str]:
+    """(action, style) of a bandai file name."""
+    parts = Path(path).stem.split("_")
+    return parts[1], parts[2]
+
+
+def file_items(files, group: Callable[[object], str], window: int = 96, stride: int = 48,
+               keep: bool = False) -> List[Item]:
+    """Captioned windows of manifest files (see :class:`FileCaptionWindows`)."""
+    kept, feats, errors = try_load_features(files, {"fps": FPS})
+    for err in errors:
+        print("skipped:", err, file=sys.stderr)
+    windows = FileCaptionWindows(kept, feats, window, stride)
+    out = []
+    for i, start in windows.index:
+        f, full = windows.files[i], windows.features[i]
+        part = _frames(full, slice(start, min(start + window, full.num_frames)))
+        caps = [c.text for c in windows.window_captions(i, start)]
+        label = bandai_parts(f.path)[0] if f.dataset == "bandai" else f.dataset
+        out.append(measure(part, caps, label, group(f), f.skeleton, keep))
+    return out
+
+
+def real_items(quick: bool, seed: int) -> Tuple[List[Item], List[Item]]:
+    """Training items (evaluator, retrieval) and test items."""
+    zoo_train = zoo_items("train", 128 if quick else 1200, seed)
+    zoo_test = zoo_items("test", 64 if quick else 256, seed, keep=True)
+    if quick or not MANIFEST.is_file():
+        return zoo_train, zoo_test
+    files = [f for f in read_manifest(MANIFEST) if f.dataset in ("bandai", "cmu", "ccbase")]
+    train = sorted(select(files, "train"), key=lambda f: f.path)
+    bandai = [f for f in train if f.dataset == "bandai"]
+    seen = {f.path for f in bandai[::5]}  # one take in five: seen-style test prompts
+    fit = [f for f in train if f.path not in seen]
+    held = [f for f in train if f.path in seen]
+    test = [f for f in select(files, "test") if f.dataset == "bandai"]
+    train_items = zoo_train + file_items(fit, lambda f: f.dataset)
+    test_items = (zoo_test + file_items(held, lambda f: "bandai seen-style", keep=True)
+                  + file_items(test, lambda f: "bandai unseen-style", keep=True))
+    return train_items, test_items
+
+
+class Evaluator(nn.Module):
+    """Text and motion MLPs into one unit-norm space.
+
+    Shapes:
+        - **text**: :math:`(N, D_t)`; **desc**: :math:`(N, D_m)`
+        - **output**: :math:`(N, E)`
+    """
+
+    def __init__(self, text_dim: int, desc_dim: int, width: int = 128, out: int = 64) -> None:
+        super().__init__()
+        self.text = nn.Sequential(nn.Linear(text_dim, width), nn.GELU(), nn.Linear(width, out))
+        self.motion = nn.Sequential(nn.Linear(desc_dim, width), nn.GELU(),
+                                    nn.Dropout(0.1), nn.Linear(width, out))
+        self.register_buffer("mean", torch.zeros(desc_dim))
+        self.register_buffer("std", torch.ones(desc_dim))
+
+    def embed_text(self, text: torch.Tensor) -> torch.Tensor:
+        return nn.functional.normalize(self.text(text), dim=-1)
+
+    def embed_motion(self, desc: torch.Tensor) -> torch.Tensor:
+        return nn.functional.normalize(self.motion((desc - self.mean) / self.std), dim=-1)
+
+
+def train_evaluator(items: Sequence[Item], encode: Callable, steps: int, seed: int,
+                    batch: int = 64, temperature: float = 0.1) -> Evaluator:
+    """InfoNCE on (caption drawn per step, descriptor) pairs of the training
+    items; descriptors standardised with the training statistics."""
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    desc = torch.tensor(np.stack([it.desc for it in items]), dtype=torch.float32)
+    texts = sorted({c for it in items for c in it.captions})
+    lookup = {t: i for i, t in enumerate(texts)}
+    text_emb = encode(texts)
+    model = Evaluator(text_emb.shape[1], desc.shape[1])
+    model.mean.copy_(desc.mean(0))
+    model.std.copy_(desc.std(0).clamp_min(1e-3))
+    opt = torch.optim.AdamW(model.parameters(), lr=2e-3, weight_decay=1e-4)
+    for _ in range(steps):
+        idx = rng.choice(len(items), size=min(batch, len(items)), replace=False)
+        caps = [lookup[items[i].captions[rng.integers(len(items[i].captions))]] for i in idx]
+        logits = model.embed_motion(desc[idx]) @ model.embed_text(text_emb[caps]).T
+        target = torch.arange(len(idx))
+        loss = (nn.functional.cross_entropy(logits / temperature, target)
+                + nn.functional.cross_entropy(logits.T / temperature, target)) / 2
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    return model.eval()
+
+
+class Recogniser(nn.Module):
+    """An action classifier on standardised descriptors (bandai actions,
+    zoo kinds), trained on the training items.
+
+    Shapes:
+        - **desc**: :math:`(N, D_m)`
+        - **output**: :math:`(N, C)` logits
+    """
+
+    def __init__(self, desc_dim: int, labels: Sequence[str], width: int = 128) -> None:
+        super().__init__()
+        self.labels = list(labels)
+        self.net = nn.Sequential(nn.Linear(desc_dim, width), nn.GELU(), nn.Dropout(0.1),
+                                 nn.Linear(width, len(self.labels)))
+        self.register_buffer("mean", torch.zeros(desc_dim))
+        self.register_buffer("std", torch.ones(desc_dim))
+
+    def forward(self, desc: torch.Tensor) -> torch.Tensor:
+        return self.net((desc - self.mean) / self.std)
+
+    def accuracy(self, descs: Sequence[np.ndarray], labels: Sequence[str]) -> Optional[float]:
+        """Share of motions (of a label it knows) classified as the label
+        their prompt asks for."""
+        known = [(d, l) for d, l in zip(descs, labels) if l in self.labels]
+        if not known:
+            return None
+        with torch.no_grad():
+            pred = self(torch.tensor(np.stack([d for d, _ in known]),
+                                     dtype=torch.float32)).argmax(1).tolist()
+        return float(np.mean([self.labels[p] == l for p, (_, l) in zip(pred, known)]))
+
+
+def train_recogniser(items: Sequence[Item], steps: int, seed: int,
+                     batch: int = 64) -> Recogniser:
+    """Cross-entropy on the training items' labels."""
+    torch.manual_seed(seed)
+    rng = np.random.default_rng([seed, 1])
+    desc = torch.tensor(np.stack([it.desc for it in items]), dtype=torch.float32)
+    model = Recogniser(desc.shape[1], sorted({it.label for it in items}))
+    target = torch.tensor([model.labels.index(it.label) for it in items])
+    model.mean.copy_(desc.mean(0))
+    model.std.copy_(desc.std(0).clamp_min(1e-3))
+    opt = torch.optim.AdamW(model.parameters(), lr=2e-3, weight_decay=1e-4)
+    for _ in range(steps):
+        idx = torch.from_numpy(rng.choice(len(items), size=min(batch, len(items)),
+                                          replace=False))
+        loss = nn.functional.cross_entropy(model(desc[idx]), target[idx])
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    return model.eval()
+
+
+def embed(model: Evaluator, encode: Callable, captions: Sequence[str],
+          descs: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
+    """Text and motion embeddings (numpy) of paired captions and descriptors."""
+    with torch.no_grad():
+        t = model.embed_text(encode(list(captions))).double().numpy()
+        m = model.embed_motion(torch.tensor(np.stack(descs), dtype=torch.float32))
+    return t, m.double().numpy()
+
+
+def score(model: Evaluator, encode: Callable, captions: List[str], descs: List[np.ndarray],
+          reference: np.ndarray, reps: int, groups: Optional[List[np.ndarray]] = None
+          ) -> Dict[str, object]:
+    """Every metric of one row (``reference``: the real motions' embeddings)."""
+    text, motion = embed(model, encode, captions, descs)
+    row: Dict[str, object] = {"n": len(captions)}
+    if len(captions) >= POOL_SIZE:
+        for k in range(3):
+            row[f"R@{k + 1}"] = replicate(
+                lambda rng: float(r_precision(text, motion, 3, POOL_SIZE, rng)[k]), reps)
+    row["matching"] = matching_score(text, motion)
+    row.update(fid_kid(motion, reference, reps))
+    row["diversity"] = diversity(motion, 300)
+    if groups:
+        row["multimodality"] = multimodality(
+            [embed(model, encode, ["x"] * len(g), list(g))[1] for g in groups], 10)
+    return row
+
+
+def split_halves(x: np.ndarray, rng: np.random.Generator) -> Tuple[np.ndarray, np.ndarray]:
+    """Two random halves of the rows."""
+    order = rng.permutation(len(x))
+    return x[order[: len(x) // 2]], x[order[len(x) // 2:]]
+
+
+def fid_kid(motion: np.ndarray, reference: Optional[np.ndarray], reps: int
+            ) -> Dict[str, Tuple[float, float]]:
+    """FID and KID (mean, 95% half-width over :obj:`reps` draws) of half of
+    the motions against half of the reference; for the real row
+    (:obj:`reference` ``None``), one random half of it against the other,
+    so that every row compares sets of the same size."""
+    def draw(fn):
+        def once(rng):
+            if reference is None:
+                return fn(*split_halves(motion, rng))
+            half = len(motion) // 2
+            return fn(subsample(reference, half, rng), subsample(motion, half, rng))
+        return replicate(once, reps)
+    return {"fid": draw(fid), "kid": draw(kid)}
+
+
+def retrieve(train: Sequence[Item], captions: Sequence[str], encode: Callable) -> List[Item]:
+    """The training item whose caption is nearest (cosine of the text
+    encoder) to each caption."""
+    pool = [(c, it) for it in train for c in it.captions]
+    keys = nn.functional.normalize(encode([c for c, _ in pool]), dim=-1)
+    query = nn.functional.normalize(encode(list(captions)), dim=-1)
+    best = (query @ keys.T).argmax(dim=1).tolist()
+    return [pool[b][1] for b in best]
+
+
+def travel_direction(travel: np.ndarray) -> str:
+    """forward / back / left / right: the larger component of the ground
+    displacement (x: left, z: forward)."""
+    x, z = float(travel[0]), float(travel[1])
+    if abs(z) >= abs(x):
+        return "forward" if z > 0 else "back"
+    return "left" if x > 0 else "right"
+
+
+#: Bandai action -> direction of travel it asks for (walk-left / -right
+#: are "forward and to the left / right": their lateral sign is what counts).
+DIRECTIONS = {"walk": "forward", "walk-back": "back", "walk-left": "left",
+              "walk-right": "right"}
+STILL_FROUDE = 0.1
+
+
+def direction_ok(label: str, travel: np.ndarray) -> bool:
+    """Whether a motion travels the way its action asks."""
+    want = DIRECTIONS[label]
+    if want in ("left", "right"):
+        return (travel[0] > 0) == (want == "left")
+    return travel_direction(travel) == want
+
+
+def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
+           froudes: Sequence[float]) -> Dict[str, object]:
+    """Direction accuracy, walk < run < dash ordering of mean Froude speed
+    and share of still bow / bye motions, over labelled motions."""
+    out: Dict[str, object] = {}
+    dirs = [direction_ok(l, t) for l, t in zip(labels, travels) if l in DIRECTIONS]
+    if dirs:
+        out["direction"] = (float(np.mean(dirs)), len(dirs))
+    speed = {a: float(np.mean([f for l, f in zip(labels, froudes) if l == a]))
+             for a in ("walk", "run", "dash") if a in labels}
+    if len(speed) == 3:
+        out["speeds"] = speed
+        out["ordering"] = speed["walk"] < speed["run"] < speed["dash"]
+    still = [f < STILL_FROUDE for l, f in zip(labels, froudes) if l in ("bow", "bye")]
+    if still:
+        out["still"] = (float(np.mean(still)), len(still))
+    return out
+
+
+def generated_items(module, items: Sequence[Item], seeds: int) -> List[List[Item]]:
+    """Per seed, one generation per test item on its own rig, of its length
+    (the ground-truth length is given)."""
+    from satagraph.pipelines.generate import generate_on
+    out = []
+    for seed in range(seeds):
+        row = []
+        for it in items:
+            motion = generate_on(module, it.captions[0], it.motion, it.seconds, seed)
+            feats = motion_to_features(canonicalize(motion, fps=FPS))
+            row.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
+        out.append(row)
+    return out
+
+
+def reconstructed_items(module, items: Sequence[Item]) -> List[Item]:
+    """Every test item sent through the generator's frozen SATA-RVQ (codes
+    of the whole window, decoded on its own rig)."""
+    from satagraph.data.collate import collate_clips
+    from satagraph.pipelines.generate import _skeleton_inputs, decode_on
+    out = []
+    with torch.no_grad():
+        for it in items:
+            canon, static, sem = _skeleton_inputs(module, it.motion)
+            clip = motion_to_features(canon).to_clip(0, None, sem)
+            codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
+            motion = decode_on(module, codes[0][: int(lengths[0])], canon, static, sem)
+            feats = motion_to_features(canonicalize(motion, fps=FPS))
+            out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
+    return out
+
+
+#: Probe prompts (``{}``: the subject) and the action each asks for.
+PROBE_PROMPTS: Tuple[Tuple[str, str], ...] = (
+    ("{} walks forward", "walk"), ("{} walks backward", "walk-back"),
+    ("{} walks forward and to the left", "walk-left"),
+    ("{} walks forward and to the right", "walk-right"), ("{} runs forward", "run"),
+    ("{} dashes forward", "dash"), ("{} bows", "bow"),
+    ("{} waves goodbye with one hand", "bye"))
+SUBJECTS = {"biped": "a person", "quadruped": "a quadruped", "bird": "a bird",
+            "hexapod": "an insect", "human": "a person", "dog": "a four-legged animal"}
+
+
+def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, Motion]]:
+    """One target per skeleton: the first zoo test rig of every body plan,
+    the first bandai test rig, and cmu 01_01 and a dog clip from the
+    manifest (name -> (subject, canonical motion))."""
+    out: Dict[str, Tuple[str, Motion]] = {}
+    for it in test:
+        key = f"zoo {it.skeleton}" if it.group == "zoo" else "bandai"
+        if it.motion is not None and key not in out:
+            out[key] = (SUBJECTS.get(it.skeleton, "a person"), it.motion)
+    if quick or not MANIFEST.is_file():
+        return out
+    files = read_manifest(MANIFEST)
+    for name, subject, dataset in (("cmu 01_01", "a person", "cmu"), ("dog", SUBJECTS["dog"],
+                                                                        "dog")):
+        picks = [f for f in files if f.dataset == dataset and f.split == "test"][:1]
+        kept, feats, _ = try_load_features(picks, {"fps": FPS})
+        if feats:
+            out[name] = (subject, features_to_motion(feats[0]))
+    return out
+
+
+def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
+                    seconds: float = 4.0) -> List[Dict[str, object]]:
+    """The generator's probes per skeleton: every probe prompt, :obj:`seeds`
+    seeds, :obj:`seconds` long."""
+    from satagraph.pipelines.generate import generate_on
+    rows = []
+    for name, (subject, target) in targets.items():
+        labels, travels, froudes = [], [], []
+        for prompt, label in PROBE_PROMPTS:
+            for seed in range(seeds):
+                motion = generate_on(module, prompt.format(subject), target, seconds, seed)
+                it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
+                             name, name)
+                labels.append(label), travels.append(it.travel), froudes.append(it.froude)
+        rows.append({"skeleton": name, "subject": subject,
+                     "probes": probes(labels, travels, froudes)})
+    return rows
+
+
+def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
+               recogniser: Recogniser, encode: Callable, reps: int,
+               extra: Dict[str, List[List[Item]]], seed: int) -> List[Dict[str, object]]:
+    """The rows of one group of test prompts: real, shuffled captions,
+    retrieval and the extra sets (reconstruction, generator seeds)."""
+    caps = [it.captions[0] for it in test]
+    _, reference = embed(model, encode, caps, [it.desc for it in test])
+    perm = np.random.default_rng(seed).permutation(len(test))
+    sets = {"real": [test], "shuffled captions": [[test[i] for i in perm]],
+            "retrieval (own rig)": [retrieve(train, caps, encode)], **extra}
+    rows = []
+    for kind, seeds in sets.items():
+        items = seeds[0]
+        groups = ([np.stack([s[i].desc for s in seeds]) for i in range(min(16, len(items)))]
+                  if len(seeds) > 1 else None)
+        same = kind in ("real", "shuffled captions")  # the test motions themselves
+        row = score(model, encode, caps, [it.desc for it in items],
+                    None if same else reference, reps, groups)
+        row.update(slide=float(np.mean([it.contact[0] for it in items])),
+                   penetration=float(np.mean([it.contact[1] for it in items])))
+        row.update(group=name, row=kind, action=recogniser.accuracy([it.desc for it in items],
+                                                              [it.label for it in test]),
+                   probes=probes([it.label for it in test], [it.travel for it in items],
+                                 [it.froude for it in items]))
+        rows.append(row)
+    return rows
+
+
+def fmt(value, digits: int = 3) -> str:
+    """A metric cell: ``mean ± half-width`` for a pair, a number, or blank."""
+    if value is None:
+        return ""
+    if isinstance(value, (tuple, list)):
+        return f"{value[0]:.{digits}f} ± {value[1]:.{digits}f}"
+    return f"{value:.{digits}f}"
+
+
+def probe_cell(p: Dict[str, object]) -> str:
+    """The probes of a row, in words."""
+    parts = []
+    if "direction" in p:
+        parts.append(f"dir {p['direction'][0]:.0%} (n={p['direction'][1]})")
+    if "ordering" in p:
+        s = p["speeds"]
+        parts.append(f"walk<run<dash {'yes' if p['ordering'] else 'NO'} "
+                     f"({s['walk']:.2f}/{s['run']:.2f}/{s['dash']:.2f})")
+    if "still" in p:
+        parts.append(f"still {p['still'][0]:.0%} (n={p['still'][1]})")
+    return "; ".join(parts)
+
+
+def table(rows: Sequence[Dict[str, object]]) -> str:
+    """The markdown table."""
+    head = ("| group | row | n | R@1 | R@2 | R@3 | matching | FID | KID | diversity | "
+            "multimodality | action acc | foot slide (H/s) | penetration (H) | probes |\n|"
+            + "---|" * 15)
+    lines = [head]
+    for r in rows:
+        kid = r["kid"]
+        lines.append(
+            f"| {r['group']} | {r['row']} | {r['n']} | {fmt(r.get('R@1'))} | "
+            f"{fmt(r.get('R@2'))} | {fmt(r.get('R@3'))} | {fmt(r['matching'])} | "
+            f"{fmt(r['fid'])} | {fmt(kid, 4)} | {fmt(r['diversity'])} | "
+            f"{fmt(r.get('multimodality'))} | {fmt(r['action'], 2)} | "
+            f"{fmt(r['slide'])} | {fmt(r['penetration'], 4)} | "
+            f"{probe_cell(r['probes'])} |")
+    return "\n".join(lines)
+
+
+def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
+             reps: Optional[int] = None, gen_seeds: int = 2) -> Tuple[List[Dict], Dict]:
+    """Train the evaluator and score every group; rows and run facts."""
+    start = time.perf_counter()
+    encoder = build_text_encoder("offline")
+    cache: Dict[str, torch.Tensor] = {}
+
+    def encode(texts: List[str]) -> torch.Tensor:
+        missing = [t for t in dict.fromkeys(texts) if t not in cache]
+        if missing:
+            cache.update(zip(missing, torch.as_tensor(encoder.encode(missing)).float()))
+        return torch.stack([cache[t] for t in texts])
+
+    train, test = real_items(quick, seed)
+    loaded = time.perf_counter()
+    steps = steps or (150 if quick else 3000)
+    model = train_evaluator(train, encode, steps, seed)
+    recogniser = train_recogniser(train, steps, seed)
+    module = None
+    if ckpt:
+        from satagraph.pipelines.generate import load_generator
+        module = load_generator(ckpt)
+    rows = []
+    for name in dict.fromkeys(it.group for it in test):
+        items = [it for it in test if it.group == name]
+        extra = {}
+        if module is not None:
+            extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
+            extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
+        rows += group_rows(name, items, train, model, recogniser, encode,
+                           reps or (3 if quick else 20), extra, seed)
+    if module is not None:
+        run_extra = skeleton_probes(module, skeleton_targets(test, quick), gen_seeds)
+    else:
+        run_extra = []
+    facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
+             "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "quick": quick,
+             "seconds_data": round(loaded - start, 1),
+             "seconds_total": round(time.perf_counter() - start, 1)}
+    return rows, {"facts": facts, "model": model, "recogniser": recogniser,
+                  "skeletons": run_extra}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ckpt", default=None, help="a t2m checkpoint (generator + RVQ)")
+    parser.add_argument("--quick", action="store_true", help="zoo only, seconds")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--steps", type=int, default=None, help="evaluator training steps")
+    parser.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
+    parser.add_argument("--save", default=str(ROOT / "runs" / "t2m_evaluator"),
+                        help="folder of the trained evaluator")
+    args = parser.parse_args(argv)
+    torch.set_num_threads(1)
+    warnings.simplefilter("ignore")
+    rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps)
+    name = "t2m_quick" if args.quick else "t2m"
+    command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
+    save = Path(args.save)
+    save.mkdir(parents=True, exist_ok=True)
+    torch.save({"state_dict": run["model"].state_dict(),
+                "recogniser": run["recogniser"].state_dict(),
+                "labels": run["recogniser"].labels, "command": command,
+                "facts": run["facts"]}, save / f"{name}_evaluator.pt")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    text = (f"# Text-to-motion evaluation\n\n`{command}`\n\n{json.dumps(run['facts'])}\n\n"
+            f"{table(rows)}\n")
+    if run["skeletons"]:
+        text += ("\nGenerator probes per skeleton (4 s, prompts of bandai's wording):\n\n"
+                 "| skeleton | subject | probes |\n|---|---|---|\n" + "\n".join(
+                     f"| {r['skeleton']} | {r['subject']} | {probe_cell(r['probes'])} |"
+                     for r in run["skeletons"]) + "\n")
+    (out / f"{name}.md").write_text(text)
+    (out / f"{name}.json").write_text(json.dumps({"facts": run["facts"], "rows": rows,
+                                                  "skeletons": run["skeletons"]},
+                                                 indent=1, default=str))
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,62 @@
+"""Text-to-motion generation metrics (issue 19, item 8) on known values."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satagraph.metrics.generation import (diversity, distribution_metrics, fid, kid,
+                                          matching_score, multimodality, r_precision,
+                                          replicate)
+
+
+def test_r_precision_perfect_and_shuffled():
+    rng = np.random.default_rng(0)
+    text = rng.normal(size=(64, 8))
+    assert r_precision(text, text).tolist() == [1.0, 1.0, 1.0]
+    shuffled = r_precision(text, text[rng.permutation(64)], top_k=3)
+    assert shuffled[2] < 0.3  # chance: 3/32
+
+
+def test_r_precision_counts_ranks():
+    # motion 0 is nearest to text 1, then its own text 0: rank 2
+    text = np.array([[0.0], [1.0]] + [[10.0 + i] for i in range(30)])
+    motion = text.copy()
+    motion[0] = [0.9]
+    out = r_precision(text, motion, top_k=2)
+    assert out[0] == pytest.approx(31 / 32) and out[1] == 1.0
+    with pytest.raises(ValueError):
+        r_precision(text[:10], motion[:10])
+
+
+def test_matching_score_and_diversity():
+    text = np.zeros((4, 2))
+    motion = np.array([[3.0, 4.0]] * 4)
+    assert matching_score(text, motion) == 5.0
+    two = np.array([[0.0, 0.0], [3.0, 4.0]])
+    assert diversity(two, pairs=50) == 5.0
+    assert multimodality([two, two * 2], pairs=10) == 7.5
+
+
+def test_fid_of_shifted_gaussians():
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(4000, 3))
+    assert fid(a, a) == pytest.approx(0.0, abs=1e-6)
+    assert fid(a, a + np.array([2.0, 0.0, 0.0])) == pytest.approx(4.0, abs=1e-6)
+    b = rng.normal(size=(4000, 3)) * 2.0  # trace term: 3 (1 + 4 - 2 * 2) = 3
+    assert fid(a, b) == pytest.approx(3.0, abs=0.3)
+
+
+def test_kid_is_unbiased_and_grows_with_shift():
+    rng = np.random.default_rng(0)
+    same = [kid(rng.normal(size=(50, 4)), rng.normal(size=(50, 4))) for _ in range(40)]
+    assert abs(np.mean(same)) < 3 * np.std(same) / np.sqrt(len(same))
+    assert kid(rng.normal(size=(50, 4)), rng.normal(size=(50, 4)) + 1.0) > 0.1
+
+
+def test_replicate_and_distribution_metrics():
+    mean, half = replicate(lambda rng: 1.0, times=5)
+    assert (mean, half) == (1.0, 0.0)
+    rng = np.random.default_rng(1)
+    out = distribution_metrics(rng.normal(size=(100, 3)), rng.normal(size=(100, 3)) + 3,
+                               times=3, size=64)
+    assert out["fid"][0] > 20 and out["kid"][0] > 0.5 and out["fid"][1] >= 0

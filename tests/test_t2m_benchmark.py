@@ -1,0 +1,32 @@
+"""benchmarks/t2m.py --quick (issue 19, item 8): zoo only, no shared data."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+import t2m  # noqa: E402
+
+
+def test_probes_read_direction_speed_and_stillness():
+    labels = ["walk", "walk-back", "walk-left", "walk-right", "run", "dash", "bow"]
+    travels = [np.array(v) for v in ([0, 3], [0.2, -3], [1, 2], [-1, 2], [0, 5], [0, 9],
+                                     [0, 0])]
+    out = t2m.probes(labels, travels, [0.3, 0.3, 0.3, 0.3, 0.6, 0.9, 0.01])
+    assert out["direction"] == (1.0, 4) and out["ordering"] and out["still"] == (1.0, 1)
+
+
+def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
+    torch.set_num_threads(1)
+    assert t2m.main(["--quick", "--out", str(tmp_path), "--save", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "t2m_quick.json").read_text())
+    rows = {r["row"]: r for r in result["rows"] if r["group"] == "zoo"}
+    assert {"real", "shuffled captions", "retrieval (own rig)"} <= set(rows)
+    assert result["facts"]["pool_size"] == 32
+    assert rows["real"]["R@3"][0] > rows["shuffled captions"]["R@3"][0] + 0.3
+    assert "| zoo | real |" in (tmp_path / "t2m_quick.md").read_text()
