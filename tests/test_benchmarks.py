@@ -194,6 +194,7 @@ def test_semantic_alignment_zoo_leg_pairs_in_order():
         assert t == 24 and c == t, misses
 
 
+@pytest.mark.slow
 def test_rig_reading_every_zoo_variant(tmp_path):
     # every zoo rig in all six up axes, in m, cm, inches and arbitrary units
     import rig_reading

@@ -1,6 +1,8 @@
 """benchmarks/t2m.py --quick (issue 19, item 8): zoo only, no shared data."""
 from __future__ import annotations
 
+import pytest
+
 import json
 import sys
 from pathlib import Path
@@ -21,6 +23,7 @@ def test_probes_read_direction_speed_and_stillness():
     assert out["direction"] == (1.0, 4) and out["ordering"] and out["still"] == (1.0, 1)
 
 
+@pytest.mark.slow
 def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     torch.set_num_threads(1)
     assert t2m.main(["--quick", "--out", str(tmp_path), "--save", str(tmp_path)]) == 0

@@ -49,6 +49,7 @@ def demo_builtin(demo, tmp_path_factory):
     return out, _run_demo(out, tiny, builtin=weights), weights
 
 
+@pytest.mark.slow
 def test_builtin_model_retargets_first_then_fine_tunes(demo_builtin, capsys):
     """With built-in weights the GIF comes from them in seconds; the
     fine-tune starts from them (same architecture) and both models' retargets
