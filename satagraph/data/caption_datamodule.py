@@ -19,18 +19,14 @@ A config's ``data`` section (``module: t2m``)::
 from __future__ import annotations
 
 import warnings
-from collections import Counter
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import lightning as L
-import torch
 from torch.utils.data import DataLoader, Dataset
 
-from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
-from satagraph.data.datamodule import semantic_embedder
-from satagraph.data.endless import MixedDataset, _keyed, is_zoo_entry, zoo_entry
-from satagraph.data.sampler import ResumableSampler
+from satagraph.data.datamodule import semantic_embedder, window_loader
+from satagraph.data.endless import MixedDataset, is_zoo_entry, zoo_entry
 from satagraph.datasets.sources import SPLITS, resolve_sources, select
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.data.captioned import FileCaptionWindows, ZooCaptionWindows
@@ -133,18 +129,8 @@ class CaptionDataModule(L.LightningDataModule):
         return MixedDataset(parts)
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
-        ds = self.datasets[split]
-        sampler = None
-        if shuffle:
-            weights = None
-            if self.balanced:
-                groups = Counter(ds.group(i) for i in range(len(ds)))
-                weights = [1.0 / groups[ds.group(i)] for i in range(len(ds))]
-            sampler = ResumableSampler(len(ds), weights, self.seed, keys=_keyed(ds))
-        gen = torch.Generator().manual_seed(self.seed)
-        return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
-                          collate_fn=collate_clips, num_workers=self.num_workers,
-                          persistent_workers=self.num_workers > 0, generator=gen)
+        return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
+                             self.balanced, self.num_workers)
 
     def train_dataloader(self) -> DataLoader:
         return self._loader("train", True)

@@ -84,7 +84,7 @@ class FrameBatch(Batch):
         :obj:`root`) or ``"stream"`` (:math:`S`, rows of
         :obj:`joint_static`)."""
         if level == "node":
-            return self.clip_height[self.stream_clip[self.node_stream]]
+            return self.clip_height[self.node_clip]
         if level == "frame":
             return self.clip_height[self.frame_clip]
         if level == "stream":

@@ -43,6 +43,29 @@ def semantic_embedder(encoder: Optional[str] = "offline",
     return embed
 
 
+def window_loader(ds, batch_size: int, seed: int, shuffle: bool, balanced: bool,
+                  num_workers: int = 0, collate: Callable = collate_clips,
+                  resume: Optional[Callable[[ResumableSampler], None]] = None) -> DataLoader:
+    """A loader of windows: shuffled by a :class:`ResumableSampler` (every
+    ``ds.group`` drawn equally often when :obj:`balanced`; :obj:`resume`
+    may move it to where a resumed run stopped), else in order."""
+    sampler = None
+    if shuffle:
+        weights = None
+        if balanced:
+            groups = [ds.group(i) for i in range(len(ds))]
+            counts = Counter(groups)
+            weights = [1.0 / counts[g] for g in groups]
+        sampler = ResumableSampler(len(ds), weights, seed, keys=_keyed(ds))
+        if resume is not None:
+            resume(sampler)
+    # a generator of its own: iterating never draws from the global state
+    gen = torch.Generator().manual_seed(seed)
+    return DataLoader(ds, batch_size=batch_size, sampler=sampler, collate_fn=collate,
+                      num_workers=num_workers, persistent_workers=num_workers > 0,
+                      generator=gen)
+
+
 class MotionDataModule(L.LightningDataModule):
     r"""Windows of motion from one or several BVH folders or manifests.
 
@@ -184,23 +207,10 @@ class MotionDataModule(L.LightningDataModule):
         return ds[0].semantic.shape[1]
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
-        ds = self.datasets[split]
-        sampler = None
-        if shuffle:
-            weights = None
-            if self.balanced:
-                groups = [ds.group(i) for i in range(len(ds))]
-                counts = Counter(groups)
-                weights = [1.0 / counts[g] for g in groups]
-            sampler = ResumableSampler(len(ds), weights, self.seed, keys=_keyed(ds))
-            self._resume(sampler)
-        # a generator of its own: iterating never draws from the global state
-        gen = torch.Generator().manual_seed(self.seed)
         collate = (PartnerCollate(self.seed) if self.pair_partners and split == "train"
                    else collate_clips)
-        return DataLoader(ds, batch_size=self.batch_size, sampler=sampler,
-                          collate_fn=collate, num_workers=self.num_workers,
-                          persistent_workers=self.num_workers > 0, generator=gen)
+        return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
+                             self.balanced, self.num_workers, collate, self._resume)
 
     def _resume(self, sampler: ResumableSampler) -> None:
         """Start the sampler where a resumed run stopped: the position a
