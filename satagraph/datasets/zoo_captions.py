@@ -22,6 +22,11 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
 * ``speed``: walks forward, speeding up or slowing down (about x2).
 * ``idle``: stands in place, swaying gently (snakes: lie in place swaying
   the raised front of the body).
+* ``start``: stands, then sets off and walks forward (legged plans; the
+  change is centred in the clip and takes 1.5 s).
+* ``stop``: walks forward, then slows to a halt and stands.
+* ``look``: stands in place turning its head, neck, tail and arms slowly
+  (legged plans).
 """
 from __future__ import annotations
 
@@ -51,7 +56,7 @@ TURN_WORDS = ((45.0, "veers"), (135.0, "turns"), (225.0, "turns around"),
 #: drifts of straight kinds (long walks) are told as veering.
 UNTOLD_TURN = 10.0
 DRIFT_TURN = 30.0
-_KIND_IN_NAME = re.compile(r"_(?P<kind>walk|trot|turn|speed|idle)(?:_\d+)?$")
+_KIND_IN_NAME = re.compile(r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
 
@@ -118,6 +123,13 @@ def _verbs(clip: ZooClip) -> List[str]:
             return ["lies in place, swaying the front of its body",
                     "rests with its head raised, swaying gently"]
         return ["stands still, swaying gently", "stands in place"]
+    if clip.kind == "start":
+        return ["stands still, then starts walking forward",
+                "sets off from a standstill and walks forward"]
+    if clip.kind == "stop":
+        return ["walks forward and comes to a stop", "slows down to a halt and stands still"]
+    if clip.kind == "look":
+        return ["stands in place, looking around", "stands still, turning its head"]
     if clip.kind == "turn":
         verb, side = _turn_phrase(clip.turn)
         if not side:

@@ -145,7 +145,7 @@ def test_zoo_turn_side_is_the_side_of_the_left_joints():
 def test_endless_zoo_captions_match_the_generated_motion():
     zoo = EndlessZoo(species=["biped", "quadruped", "crab"], noise=0.0, seed=3)
     kinds = collections.Counter()
-    for index in range(36):
+    for index in range(48):
         sample = zoo.sample(0, index, 65)
         facts = sample.facts
         assert facts is not None and facts.kind == sample.kind
@@ -163,11 +163,18 @@ def test_endless_zoo_captions_match_the_generated_motion():
             faster = speed[-5:].mean() > speed[:5].mean()
             assert ("speeding up" in words) == faster, words
             assert ("slowing down" in words) == (not faster), words
-        elif sample.kind == "idle":
+        elif sample.kind in ("idle", "look"):
             assert speed.max() < 0.05 * speed.mean() + 0.2 and "stands" in words
+            assert ("looking around" in words) == (sample.kind == "look"), words
+        elif sample.kind in ("start", "stop"):
+            moving_at_end = speed[-5:].mean() > speed[:5].mean()
+            assert moving_at_end == (sample.kind == "start"), (sample.kind, speed)
+            assert min(speed[:5].mean(), speed[-5:].mean()) < 0.02, speed
+            assert ("starts walking" in words or "sets off" in words) == moving_at_end, words
+            assert ("halt" in words or "stop" in words) == (not moving_at_end), words
         else:
             assert "forward" in words and " left" not in words and "right" not in words
-    assert set(kinds) >= {"walk", "turn", "speed", "idle"}
+    assert set(kinds) >= {"walk", "turn", "speed", "idle", "start", "stop", "look"}
 
 
 def test_zoo_phrasings_by_kind_and_species():

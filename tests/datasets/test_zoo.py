@@ -139,3 +139,31 @@ def test_cli_writes_files_and_manifest(tmp_path, capsys):
     assert len(files) == len(rows) and all(f.dataset == "zoo" for f in files)
     kinds = {row["path"].rsplit("_", 1)[1][:-4] for row in rows}
     assert kinds == set(CLIP_KINDS["bird"][:3])
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped", "hexapod"])
+def test_start_and_stop_stand_with_planted_feet(species):
+    """``start`` stands then walks, ``stop`` walks then stands, and whoever
+    stands keeps every foot still and on the ground."""
+    rig = zoo_rigs([species])[0]
+    for kind in ("start", "stop"):
+        motion = generate_clip(rig, kind, frames=150, seed=5)
+        pos = motion.global_positions()
+        speed = np.linalg.norm(np.diff(pos[:, 0, [0, 2]], axis=0), axis=1) * motion.fps
+        still = slice(0, 20) if kind == "start" else slice(-20, None)
+        moving = slice(-20, None) if kind == "start" else slice(0, 20)
+        assert speed[still].max() < 0.02 * rig.leg_length
+        assert speed[moving].mean() > 0.5 * rig.leg_length
+        standing = pos[still]
+        assert np.abs(np.diff(standing, axis=0)).max() < 0.002 * rig.leg_length
+        assert abs(pos[:, :, 1].min()) < 0.01 * rig.leg_length
+
+
+def test_look_turns_head_neck_and_tail_in_place():
+    rig = zoo_rigs(["quadruped"])[0]
+    motion = generate_clip(rig, "look", frames=120, seed=2)
+    idle = generate_clip(rig, "idle", frames=120, seed=2)
+    pos, still = (m.global_positions() - m.global_positions()[:, :1] for m in (motion, idle))
+    # every joint relative to the root moves more than in the idle of the same seed
+    assert np.ptp(pos, axis=0).max(-1).mean() > 1.5 * np.ptp(still, axis=0).max(-1).mean()
+    assert np.ptp(pos[:, 0, [0, 2]], axis=0).max() < 0.1 * rig.leg_length

@@ -163,3 +163,17 @@ def test_cli_dialect_options(tmp_path, capsys):
     assert {r["up_axis"] for r in _read(tmp_path / "w" / "manifest.tsv")} == {"-Y", "+X"}
     with pytest.raises(SystemExit):
         main(["zoo", str(out), "--up-axes", "W"])
+
+
+@pytest.mark.parametrize("species", ["biped", "crab", "fowl"])
+def test_axis_rest_puts_every_first_child_along_x(species):
+    """The Bandai / dog convention: each joint's first child lies on its +X."""
+    motion = MOTION if species == "biped" else generate_clip(RIGS[species], "walk", frames=10)
+    skel = change_rest_pose(motion, "axis", seed=2).skeleton
+    for j, kids in enumerate(skel.children):
+        if kids and np.linalg.norm(skel.offsets[kids[0]]) > 1e-9:
+            direction = skel.offsets[kids[0]] / np.linalg.norm(skel.offsets[kids[0]])
+            np.testing.assert_allclose(direction, [1.0, 0.0, 0.0], atol=1e-9)
+    # the roll about +X is random: other children do not all share one direction
+    other = [skel.offsets[k] for kids in skel.children for k in kids[1:]]
+    assert np.ptp(np.array(other)[:, 1:], axis=0).max() > 1e-3

@@ -7,7 +7,8 @@ composable step that keeps the motion itself exactly:
 - :func:`export_dialect`: another up axis (a proper rotation of the whole
   motion, rest pose included) and another unit (a uniform scale);
 - :func:`change_rest_pose`: another rest pose (A-pose, lying flat,
-  crouched, arbitrary), the local rotations re-solved so every frame keeps
+  crouched, arbitrary, every bone along its parent's +X as the Bandai and
+  dog files have it), the local rotations re-solved so every frame keeps
   its global joint positions;
 - :func:`add_name_noise`: exporter suffixes on every joint name
   (``Tail_01__x7Q``, ``Tail_01_v2``, ``Tail_01_a1b2c3``).
@@ -40,7 +41,7 @@ from satagraph.ops.fk import forward_kinematics_numpy
 UNITS: Dict[str, float] = {k: v for k, v in READ_UNITS.items()
                            if k in ("m", "cm", "mm", "in", "ft")}
 #: Rest poses of :func:`change_rest_pose`.
-REST_POSES = ("native", "apose", "flat", "crouched", "random", "frame")
+REST_POSES = ("native", "apose", "flat", "crouched", "random", "frame", "axis")
 #: Name-noise styles of :func:`add_name_noise`.
 NOISE_STYLES = ("tag", "version", "hash")
 
@@ -124,9 +125,14 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
     ``"flat"`` lays the whole rest pose on its back, ``"crouched"`` bends
     every chain of downward bones (hip +30, knee -60, ankle +30 degrees),
     ``"random"`` turns every joint by up to 35 degrees about a random axis.
+    ``"axis"`` turns every joint so that its first child's offset lies along
+    its +X, with a random roll about it (the rest pose is a line, as in
+    files exported with joint orients baked in: Bandai, the dog).
     ``"native"`` is the identity.
     """
     skel = motion.skeleton
+    if pose == "axis":
+        return _axis_rest(skel, np.random.default_rng(seed))
     rest = skel.rest_positions()
     local = np.broadcast_to(np.eye(3), (skel.num_joints, 3, 3)).copy()
     rng = np.random.default_rng(seed)
@@ -145,6 +151,34 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
             local[j] = _rot(0, np.radians(_crouch_angle(skel, rest, j)))
     positions = np.zeros((1, skel.num_joints, 3))
     return forward_kinematics_numpy(local[None], positions, skel.parents)[0][0]
+
+
+def _axis_rest(skel, rng: np.random.Generator) -> np.ndarray:
+    r"""Rest rotations :math:`A_j` with :math:`A_j o_c` along +X for each
+    joint's first child :math:`c` (:func:`set_rest_rotations` makes
+    :math:`A_{p(c)} o_c` the new offsets); joints without a child or with a
+    zero-length one keep their parent's."""
+    out = np.empty((skel.num_joints, 3, 3))
+    for j in range(skel.num_joints):
+        p = int(skel.parents[j])
+        kids = skel.children[j]
+        bone = skel.offsets[kids[0]] if kids else np.zeros(3)
+        if np.linalg.norm(bone) < 1e-9:
+            out[j] = out[p] if p >= 0 else np.eye(3)
+            continue
+        roll = _rot(0, rng.uniform(-np.pi, np.pi))
+        out[j] = roll @ _between(_unit(bone), np.array([1.0, 0.0, 0.0]))
+    return out
+
+
+def _between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking unit vector :obj:`a` to :obj:`b`."""
+    v, c = np.cross(a, b), float(np.dot(a, b))
+    if c < -1 + 1e-9:  # opposite: half a turn about any perpendicular axis
+        axis = _unit(np.cross(a, [0.0, 1.0, 0.0] if abs(a[1]) < 0.9 else [1.0, 0.0, 0.0]))
+        return 2 * np.outer(axis, axis) - np.eye(3)
+    k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + k + k @ k / (1 + c)
 
 
 def _crouch_angle(skel, rest: np.ndarray, j: int) -> float:

@@ -35,6 +35,14 @@ GAITS["fowl"] = GAITS["bird"]
 GAITS["longtail"] = GAITS["quadruped"]
 _IDLE_HZ = 0.3
 _PAD_SECONDS = 3.0
+#: Below this fraction of the gait's speed a step lifts its foot less
+#: (none at standstill), so the feet of a ``start`` or ``stop`` clip stay
+#: planted while the body stands; the gait phase never runs slower than
+#: :data:`_MIN_CADENCE` of its cruising rate.
+_LIFT_SPEED, _MIN_CADENCE = 0.35, 0.3
+#: ``look`` clips: head, neck, tail and arm joints (every swaying joint)
+#: turn by up to this many degrees, at 0.15-0.5 Hz.
+_LOOK_DEGREES = 30.0
 
 
 @dataclass
@@ -63,12 +71,15 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
     ramp = _smoothstep((t - mid + 0.75) / 1.5)
     v = speed * rng.uniform(0.85, 1.15) * np.ones_like(t)
     yaw = np.radians(rng.uniform(-4, 4)) * np.ones_like(t)
-    if kind == "idle":
+    if kind in ("idle", "look"):
         v[:], yaw[:] = 0.0, 0.0
     elif kind == "turn":
         rate = np.radians(rng.uniform(35, 70)) * rng.choice([-1.0, 1.0])
         yaw = rate * _smoothstep((t - 0.3 * mid) / 0.8)
         v *= 0.85
+    elif kind in ("start", "stop"):
+        v *= ramp if kind == "start" else 1.0 - ramp
+        yaw *= 0.0
     elif kind == "speed":
         lo, hi = speed * rng.uniform(0.5, 0.65), speed * rng.uniform(1.15, 1.3)
         a, b = (lo, hi) if rng.random() < 0.5 else (hi, lo)
@@ -134,8 +145,9 @@ def _leg_geometry(rig: ZooRig, leg: Leg) -> Tuple[np.ndarray, float, float, floa
 
 
 def _plan_feet(rig: ZooRig, clip: _Clip, phase: np.ndarray, gait: tuple,
-               idle: bool) -> _Feet:
-    """Planted / swinging ankle targets for every leg."""
+               idle: bool, lift_scale: np.ndarray) -> _Feet:
+    """Planted / swinging ankle targets for every leg, each step's lift
+    scaled per frame by :obj:`lift_scale`."""
     offsets, duty, _, _, lift = gait
     index = np.arange(len(phase), dtype=np.float64)
     targets, yaws = [], []
@@ -166,7 +178,7 @@ def _plan_feet(rig: ZooRig, clip: _Clip, phase: np.ndarray, gait: tuple,
         s = np.clip((f - duty) / (1.0 - duty), 0.0, 1.0)
         w = _smoothstep(s)[:, None]
         pos = (1 - w) * p0 + w * p1
-        pos[:, 1] += lift_h * np.sin(np.pi * s)
+        pos[:, 1] += lift_h * lift_scale * np.sin(np.pi * s)
         targets.append(pos)
         yaws.append((1 - w[:, 0]) * y0 + w[:, 0] * y1)
     return _Feet(np.array(targets), np.array(yaws))
@@ -193,19 +205,27 @@ def _two_bone(hip: np.ndarray, target: np.ndarray, l1: float, l2: float,
     return knee, _unit(knee - hip), _unit(end - knee)
 
 
-def _sway_rotation(sway: Optional[Sway], phase: np.ndarray) -> np.ndarray:
-    """Local rotations :math:`(T, 3, 3)` of a joint's sway."""
+def _sway_rotation(sway: Optional[Sway], phase: np.ndarray,
+                   scale: Optional[np.ndarray] = None) -> np.ndarray:
+    """Local rotations :math:`(T, 3, 3)` of a joint's sway, its amplitude
+    times :obj:`scale` per frame (:math:`(T,)`) when given."""
     if sway is None:
         return np.broadcast_to(np.eye(3), (len(phase), 3, 3))
     wave = np.sin(2 * np.pi * (sway.k * phase + sway.phase))[:, None]
+    if scale is not None:
+        wave = wave * scale[:, None]
     return _euler(sway.static[None] + sway.amplitude[None] * wave)
 
 
 def _pose(rig: ZooRig, root_pos: np.ndarray, root_rot: np.ndarray,
-          phase: np.ndarray, heading: np.ndarray,
-          feet: Optional[_Feet] = None) -> Tuple[np.ndarray, np.ndarray]:
+          phase: np.ndarray, heading: np.ndarray, feet: Optional[_Feet] = None,
+          extra: Optional[Dict[int, np.ndarray]] = None,
+          sway_scale: Optional[np.ndarray] = None) -> Tuple[np.ndarray, np.ndarray]:
     """Global rotations and positions by forward kinematics, legs by IK
-    when :obj:`feet` is given."""
+    when :obj:`feet` is given; :obj:`extra` maps joints to local rotations
+    :math:`(T, 3, 3)` applied after their sway, whose amplitude is scaled
+    per frame by :obj:`sway_scale`."""
+    extra = extra or {}
     skel = rig.skeleton
     frames, num = len(phase), skel.num_joints
     rot, pos = np.zeros((frames, num, 3, 3)), np.zeros((frames, num, 3))
@@ -218,8 +238,33 @@ def _pose(rig: ZooRig, root_pos: np.ndarray, root_rot: np.ndarray,
         if feet is not None and j in roles:
             fixed.update(_solve_leg(rig, roles[j], pos[:, j], heading, feet))
         rot[:, j] = fixed[j] if j in fixed else rot[:, p] @ _sway_rotation(
-            rig.sway.get(j), phase)
+            rig.sway.get(j), phase, sway_scale)
+        if j in extra and j not in fixed:
+            rot[:, j] = rot[:, j] @ extra[j]
     return rot, pos
+
+
+def _look(rig: ZooRig, time: np.ndarray, rng: np.random.Generator) -> Dict[int, np.ndarray]:
+    """Slow free turns of every swaying joint (head, neck, tail, arms,
+    spine): a sum of two sines about a random axis each, up to
+    :data:`_LOOK_DEGREES`."""
+    out = {}
+    for j in sorted(rig.sway):
+        if j == 0:
+            continue
+        axis = _unit(rng.normal(size=3))
+        hz, shift = rng.uniform(0.15, 0.5, 2), rng.uniform(0, 2 * np.pi, 2)
+        angle = np.radians(_LOOK_DEGREES) * rng.uniform(0.3, 1.0) * 0.5 * (
+            np.sin(2 * np.pi * hz[0] * time + shift[0]) + np.sin(2 * np.pi * hz[1] * time + shift[1]))
+        out[j] = _axis_rotations(axis, angle)
+    return out
+
+
+def _axis_rotations(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotations :math:`(T, 3, 3)` by :obj:`angle` about a unit axis."""
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    a = angle[:, None, None]
+    return np.eye(3) + np.sin(a) * k + (1 - np.cos(a)) * (k @ k)
 
 
 def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
@@ -239,13 +284,15 @@ def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
 
 def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
                  phase: np.ndarray, feet: _Feet, reach: float = 0.97,
-                 crouch: float = 0.95) -> np.ndarray:
+                 crouch: float = 0.95, extra: Optional[Dict[int, np.ndarray]] = None,
+                 sway_scale: Optional[np.ndarray] = None) -> np.ndarray:
     """Root height per frame: the rest stance (legs at most ``crouch``
     extended), lowered wherever a leg would need more than ``reach`` of its
     length to touch its target."""
     rest = rig.skeleton.rest_positions()
     flat = clip.position * np.array([1.0, 0.0, 1.0])
-    _, pos = _pose(rig, flat, root_rot, phase, clip.heading)
+    _, pos = _pose(rig, flat, root_rot, phase, clip.heading, extra=extra,
+                   sway_scale=sway_scale)
     base = -rest[:, 1].min()
     bounds = []
     for i, leg in enumerate(rig.legs):
@@ -281,22 +328,28 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     _, _, stride, speed, _ = gait
     length = rig.leg_length
     clip = _profile(kind, frames, fps, speed * length, rng)
-    idle = kind == "idle"
+    idle = kind in ("idle", "look")
     _trace(clip, rng.uniform(-np.pi, np.pi), idle, length, rng)
     if idle:
         freq = np.full_like(clip.speed, _IDLE_HZ)
     else:
-        freq = np.sqrt(clip.speed * speed * length) / (stride * length)
+        cadence = np.maximum(clip.speed, _MIN_CADENCE * speed * length)
+        freq = np.sqrt(cadence * speed * length) / (stride * length)
     phase = np.cumsum(freq) / fps
     phase = phase - phase[clip.pad] + rng.uniform(0, 1)
-    feet = _plan_feet(rig, clip, phase, gait, idle)
-    root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase)
-    height = _body_height(rig, clip, root_rot, phase, feet)
+    # slower than _LIFT_SPEED of the gait: shorter lifts and sways (none
+    # at standstill), so a start or stop stands still with planted feet
+    scale = np.ones_like(clip.speed) if idle else np.clip(
+        clip.speed / (_LIFT_SPEED * speed * length), 0.0, 1.0)
+    feet = _plan_feet(rig, clip, phase, gait, idle, scale)
+    root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase, scale)
+    extra = _look(rig, clip.time, rng) if kind == "look" else None
+    height = _body_height(rig, clip, root_rot, phase, feet, extra=extra, sway_scale=scale)
     root = clip.position * np.array([1.0, 0.0, 1.0])
     root[:, 1] = height
     if idle:
         root[:, 1] -= 0.01 * length * (1 + np.sin(2 * np.pi * phase))
-    rot, pos = _pose(rig, root, root_rot, phase, clip.heading, feet)
+    rot, pos = _pose(rig, root, root_rot, phase, clip.heading, feet, extra, scale)
     return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
 
 

@@ -20,15 +20,15 @@ from satagraph.datasets.zoo.rigs import ZooRig
 SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab",
            "spider", "longtail")
 CLIP_KINDS = {
-    "biped": ("walk", "turn", "speed", "idle"),
-    "quadruped": ("walk", "trot", "turn", "speed", "idle"),
-    "bird": ("walk", "turn", "speed", "idle"),
-    "hexapod": ("walk", "turn", "speed", "idle"),
+    "biped": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
+    "quadruped": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look"),
+    "bird": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
+    "hexapod": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
     "snake": ("walk", "turn", "speed", "idle"),
-    "fowl": ("walk", "turn", "speed", "idle"),
-    "crab": ("walk", "turn", "speed", "idle"),
-    "spider": ("walk", "turn", "speed", "idle"),
-    "longtail": ("walk", "trot", "turn", "speed", "idle"),
+    "fowl": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
+    "crab": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
+    "spider": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
+    "longtail": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look"),
 }
 
 VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {
