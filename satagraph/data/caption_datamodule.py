@@ -14,6 +14,7 @@ A config's ``data`` section (``module: t2m``)::
       min_frames: 32      # fewest frames per zoo clip
       batch_size: 16
       mirror: 0.5         # left/right mirroring of motion and captions
+      scale: 0.5          # bone scaling of the skeleton (training windows)
       semantic_encoder: offline   # the autoencoder's
 """
 from __future__ import annotations
@@ -72,6 +73,9 @@ class CaptionDataModule(L.LightningDataModule):
         batch_size (int): Windows per batch.
         mirror (float): Probability of mirroring a training window (motion
             and captions together).
+        scale (float): Probability of putting a training window on a
+            bone-scaled skeleton (see
+            :class:`~satagraph.data.captioned.CaptionWindows`).
         balanced (bool): Draw every (dataset, skeleton) group equally often.
         semantic_encoder (str, optional): Semantic encoder of the joints
             (the frozen autoencoder's).
@@ -88,8 +92,9 @@ class CaptionDataModule(L.LightningDataModule):
                  balanced: bool = True, semantic_encoder: Optional[str] = "offline",
                  preprocessing: Optional[Dict] = None, cache_dir: Optional[str] = None,
                  num_workers: int = 0, max_files: Optional[int] = None,
-                 seed: int = 0) -> None:
+                 seed: int = 0, scale: float = 0.0) -> None:
         super().__init__()
+        self.scale = float(scale)
         self.sources = list(sources) if isinstance(sources, (list, tuple)) else [sources]
         self.window, self.stride, self.min_frames = int(window), int(stride), int(min_frames)
         self.batch_size, self.mirror, self.balanced = int(batch_size), float(mirror), balanced
@@ -114,7 +119,8 @@ class CaptionDataModule(L.LightningDataModule):
     def _split(self, split: str, files, zoos, embed) -> Dataset:
         """The captioned windows of one split (training windows mirrored)."""
         kwargs = {"semantic": embed, "preprocessing": self.preprocessing,
-                  "mirror": self.mirror if split == "train" else 0.0}
+                  "mirror": self.mirror if split == "train" else 0.0,
+                  "scale": self.scale if split == "train" else 0.0}
         chosen = select(files, split)[: self.max_files or None]
         kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
         if bad:

@@ -35,7 +35,7 @@ from torch.utils.data import Dataset
 from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.dataset import DEFAULT_PREPROCESSING, _frames, window_starts
+from satagraph.data.dataset import DEFAULT_PREPROCESSING, WindowAugment, _frames, window_starts
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.datasets.sources import MotionFile
@@ -103,19 +103,30 @@ class CaptionWindows(Dataset):
             autoencoder's own.
         mirror (float): Probability of mirroring a training window with its
             captions.
-        seed (int): Seed of mirroring and caption choice.
+        scale (float): Probability of putting a training window on a
+            bone-scaled copy of its skeleton (every bone scaled per axis in
+            ``[low, high]`` of :class:`~satagraph.data.dataset.WindowAugment`;
+            the captions still hold: no word names a size).
+        seed (int): Seed of mirroring, scaling and caption choice.
         preprocessing (dict, optional): Overrides of
             :data:`~satagraph.data.dataset.DEFAULT_PREPROCESSING`.
     """
 
     def __init__(self, semantic: Optional[Callable] = None, mirror: float = 0.0,
-                 seed: int = 0, preprocessing: Optional[Mapping] = None) -> None:
+                 seed: int = 0, preprocessing: Optional[Mapping] = None,
+                 scale: float = 0.0) -> None:
         if not 0.0 <= mirror <= 1.0:
             raise ValueError(f"mirror must be in [0, 1], got {mirror}")
+        if not 0.0 <= scale <= 1.0:
+            raise ValueError(f"scale must be in [0, 1], got {scale}")
         self.semantic_fn, self.p_mirror, self.seed = semantic, float(mirror), int(seed)
+        self.p_scale = float(scale)
         self.config = dict(DEFAULT_PREPROCESSING, **(preprocessing or {}))
         self.contacts = (float(self.config["contact_height"]),
                          float(self.config["contact_speed"]))
+        self.scaler = WindowAugment(scale=1.0, mirror=0.0, drop=0.0, merge=0.0, insert=0.0,
+                                    rest=0.0, seed=self.seed, contact_height=self.contacts[0],
+                                    contact_speed=self.contacts[1])
         #: Keyed by ``(epoch, index)`` in training (see
         #: :class:`~satagraph.data.sampler.ResumableSampler`).
         self.keyed = True
@@ -137,7 +148,8 @@ class CaptionWindows(Dataset):
                   captions: Sequence[Caption], rng: Optional[np.random.Generator],
                   meta: Dict) -> MotionClip:
         """The item of frames ``start:stop``: mirrored with its captions at
-        probability :attr:`p_mirror` (training only), with a caption drawn."""
+        probability :attr:`p_mirror` and bone-scaled at :attr:`p_scale`
+        (training only), with a caption drawn."""
         mirrored = None
         if rng is not None and rng.random() < self.p_mirror:
             mirrored = mirror_features(feats, start, stop, self.contacts)
@@ -145,10 +157,15 @@ class CaptionWindows(Dataset):
             feats, lead = mirrored
             start, stop = lead, None
             captions = [c.mirrored() for c in captions]
+        scaled = rng is not None and rng.random() < self.p_scale
+        if scaled:
+            feats, start = self.scaler(feats, start, stop, int(rng.integers(2 ** 31)))
+            stop = None
         clip = feats.to_clip(start, stop, self.semantic(feats), meta)
         seconds = clip.num_frames / float(self.config["fps"])
         clip.meta.update(text=pick_caption(captions, rng), seconds=seconds,
-                         captions=[c.text for c in captions], mirrored=mirrored is not None)
+                         captions=[c.text for c in captions], mirrored=mirrored is not None,
+                         scaled=scaled)
         return clip
 
     @staticmethod

@@ -43,10 +43,11 @@ def _one_thread() -> Iterator[None]:
 
 
 def zoo_windows(count: int = 8, mirror: float = 0.0, seed: int = 0,
-                species=("biped", "quadruped")) -> ZooCaptionWindows:
+                species=("biped", "quadruped"), scale: float = 0.0) -> ZooCaptionWindows:
     """Captioned zoo clips of 16 to 40 frames."""
     return ZooCaptionWindows(EndlessZoo(species=list(species), seed=seed), count, 40, 16,
-                             semantic=semantic_embedder("offline"), mirror=mirror, seed=seed)
+                             semantic=semantic_embedder("offline"), mirror=mirror, seed=seed,
+                             scale=scale)
 
 
 def save_checkpoint(module: L.LightningModule, path: Path) -> Path:

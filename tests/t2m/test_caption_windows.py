@@ -4,6 +4,7 @@ together, and the data module's splits."""
 from __future__ import annotations
 
 import numpy as np
+import torch
 import pytest
 
 from satagraph.transforms.canonical import canonicalize
@@ -120,3 +121,19 @@ def test_real_captioned_windows_in_manifest_splits(tmp_path):
             assert clip.meta["text"] in expected
     test = data.datasets["test"]
     assert len(test) and all(test[i].meta["dataset"] == "bandai" for i in range(len(test)))
+
+
+def test_bone_scaling_changes_the_skeleton_not_the_caption_or_the_length():
+    plain, scaled = zoo_windows(4, scale=0.0), zoo_windows(4, scale=1.0)
+    for i in range(4):
+        a, b = plain[(1, i)], scaled[(1, i)]
+        assert b.meta["scaled"] and not a.meta["scaled"]
+        assert a.meta["captions"] == b.meta["captions"] and a.num_frames == b.num_frames
+        assert torch.isfinite(b.dynamic).all() and torch.isfinite(b.root).all()
+        lengths_a = a.static[:, :3].norm(dim=-1)
+        lengths_b = b.static[:, :3].norm(dim=-1)
+        ratio = lengths_b[lengths_a > 1e-6] / lengths_a[lengths_a > 1e-6]
+        assert ratio.std() > 0.01  # bones scaled unevenly
+        assert ((ratio > 0.5) & (ratio < 1.6)).all()
+    # evaluation windows are never scaled
+    assert not scaled[0].meta["scaled"]
