@@ -12,8 +12,11 @@ styles giant and sad):
 
 - **real**: the test motions with their own captions;
 - **shuffled captions**: the same, captions permuted (chance control);
-- **retrieval**: the nearest training clip by caption embedding, taken on
-  its own rig (no retargeting);
+- **retrieval (own rig)**: the nearest training clip by caption embedding,
+  taken on its own rig; with ``--ckpt`` also **retrieval (retargeted)**:
+  that clip retargeted through the generator's frozen SATA-RVQ onto the
+  test clip's rig and cut to its length (the baseline a generator must
+  beat on a rig it is asked for);
 - **reconstruction** / **generator** (with ``--ckpt``): the test motion sent
   through the generator's frozen SATA-RVQ; a generation for the caption on
   the test clip's rig, given the test clip's length (stated in the table).
@@ -138,7 +141,7 @@ def file_items(files, group: Callable[[object], str], window: int = 96, stride: 
 
 def real_items(quick: bool, seed: int) -> Tuple[List[Item], List[Item]]:
     """Training items (evaluator, retrieval) and test items."""
-    zoo_train = zoo_items("train", 128 if quick else 1200, seed)
+    zoo_train = zoo_items("train", 128 if quick else 1200, seed, keep=True)
     zoo_test = zoo_items("test", 64 if quick else 256, seed, keep=True)
     if quick or not MANIFEST.is_file():
         return zoo_train, zoo_test
@@ -149,7 +152,7 @@ def real_items(quick: bool, seed: int) -> Tuple[List[Item], List[Item]]:
     fit = [f for f in train if f.path not in seen]
     held = [f for f in train if f.path in seen]
     test = [f for f in select(files, "test") if f.dataset == "bandai"]
-    train_items = zoo_train + file_items(fit, lambda f: f.dataset)
+    train_items = zoo_train + file_items(fit, lambda f: f.dataset, keep=True)
     test_items = (zoo_test + file_items(held, lambda f: "bandai seen-style", keep=True)
                   + file_items(test, lambda f: "bandai unseen-style", keep=True))
     return train_items, test_items
@@ -376,20 +379,35 @@ def generated_items(module, items: Sequence[Item], seeds: int) -> List[List[Item
     return out
 
 
+def transfer(module, source: Motion, target: Motion) -> MotionFeatures:
+    """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
+    its own rig, decoded on :obj:`target`'s rig (canonical features)."""
+    from satagraph.data.collate import collate_clips
+    from satagraph.pipelines.generate import _skeleton_inputs, decode_on
+    with torch.no_grad():
+        canon, _, sem = _skeleton_inputs(module, source)
+        clip = motion_to_features(canon).to_clip(0, None, sem)
+        codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
+        canon_t, static_t, sem_t = _skeleton_inputs(module, target)
+        motion = decode_on(module, codes[0][: int(lengths[0])], canon_t, static_t, sem_t)
+    return motion_to_features(canonicalize(motion, fps=FPS))
+
+
 def reconstructed_items(module, items: Sequence[Item]) -> List[Item]:
     """Every test item sent through the generator's frozen SATA-RVQ (codes
     of the whole window, decoded on its own rig)."""
-    from satagraph.data.collate import collate_clips
-    from satagraph.pipelines.generate import _skeleton_inputs, decode_on
+    return [measure(transfer(module, it.motion, it.motion), it.captions, it.label, it.group,
+                    it.skeleton) for it in items]
+
+
+def retargeted_items(module, retrieved: Sequence[Item], items: Sequence[Item]) -> List[Item]:
+    """Each retrieved training clip, cut to its test item's length,
+    retargeted onto the test item's rig through the frozen SATA-RVQ."""
     out = []
-    with torch.no_grad():
-        for it in items:
-            canon, static, sem = _skeleton_inputs(module, it.motion)
-            clip = motion_to_features(canon).to_clip(0, None, sem)
-            codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
-            motion = decode_on(module, codes[0][: int(lengths[0])], canon, static, sem)
-            feats = motion_to_features(canonicalize(motion, fps=FPS))
-            out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
+    for got, it in zip(retrieved, items):
+        frames = min(got.motion.num_frames, it.motion.num_frames)
+        feats = transfer(module, got.motion.slice(0, frames), it.motion)
+        out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
     return out
 
 
@@ -446,14 +464,21 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
 
 def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                recogniser: Recogniser, encode: Callable, reps: int,
-               extra: Dict[str, List[List[Item]]], seed: int) -> List[Dict[str, object]]:
+               extra: Dict[str, List[List[Item]]], seed: int,
+               module=None) -> List[Dict[str, object]]:
     """The rows of one group of test prompts: real, shuffled captions,
-    retrieval and the extra sets (reconstruction, generator seeds)."""
+    retrieval (on its own rig; retargeted onto the test rig when a
+    generator's :obj:`module` is given) and the extra sets
+    (reconstruction, generator seeds)."""
     caps = [it.captions[0] for it in test]
     _, reference = embed(model, encode, caps, [it.desc for it in test])
     perm = np.random.default_rng(seed).permutation(len(test))
+    retrieved = retrieve(train, caps, encode)
     sets = {"real": [test], "shuffled captions": [[test[i] for i in perm]],
-            "retrieval (own rig)": [retrieve(train, caps, encode)], **extra}
+            "retrieval (own rig)": [retrieved]}
+    if module is not None:
+        sets["retrieval (retargeted)"] = [retargeted_items(module, retrieved, test)]
+    sets.update(extra)
     rows = []
     for kind, seeds in sets.items():
         items = seeds[0]
@@ -543,7 +568,7 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
             extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
         rows += group_rows(name, items, train, model, recogniser, encode,
-                           reps or (3 if quick else 20), extra, seed)
+                           reps or (3 if quick else 20), extra, seed, module)
     if module is not None:
         run_extra = skeleton_probes(module, skeleton_targets(test, quick), gen_seeds)
     else:
