@@ -76,7 +76,17 @@ def forward_kinematics(
 
     if levels is None:
         levels = fk_levels(parent)
-    parent = parent.to(rotation.device)
+    if rotation.dtype in (torch.float16, torch.bfloat16):
+        rotation = rotation.float()  # chains of products: never in half precision
+    with torch.autocast(rotation.device.type, enabled=False):
+        return _fk(rotation, offset, parent.to(rotation.device), levels)
+
+
+def _fk(rotation: Tensor, offset: Tensor, parent: Tensor,
+        levels: List[Tensor]) -> Tuple[Tensor, Tensor]:
+    """:func:`forward_kinematics` (autocast off, full precision)."""
+    import torch
+
     offset = offset.to(rotation.dtype).expand(*rotation.shape[:-2], 3)
     needs_grad = torch.is_grad_enabled() and (rotation.requires_grad
                                               or offset.requires_grad)

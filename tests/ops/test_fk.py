@@ -210,3 +210,22 @@ def test_numpy_fk_rejects_unordered_parents():
     with pytest.raises(ValueError, match="parents must come before"):
         forward_kinematics_numpy(np.eye(3)[None, None].repeat(2, 1), np.zeros((1, 2, 3)),
                                  np.array([1, -1]))
+
+
+@pytest.mark.parametrize("grad", [False, True])
+def test_runs_in_full_precision_under_bf16_autocast(grad):
+    """bf16 autocast of a training step must not put FK's chains of products
+    in half precision: same float32 result, with or without autograd."""
+    gen = torch.Generator().manual_seed(0)
+    rot = rotation_6d_to_matrix(torch.randn(5, 6, 6, generator=gen)).requires_grad_(grad)
+    off = torch.randn(6, 3, generator=gen)
+    parent = torch.tensor([-1, 0, 1, 2, 3, 4])
+    ref_rot, ref_pos = forward_kinematics(rot, off, parent)
+    with torch.autocast("cpu", dtype=torch.bfloat16):
+        glob_rot, glob_pos = forward_kinematics(rot, off, parent)
+    assert glob_rot.dtype == glob_pos.dtype == torch.float32
+    torch.testing.assert_close(glob_pos, ref_pos)
+    torch.testing.assert_close(glob_rot, ref_rot)
+    # half-precision input is promoted, not propagated
+    _, half_pos = forward_kinematics(rot.detach().bfloat16(), off, parent)
+    assert half_pos.dtype == torch.float32
