@@ -57,7 +57,7 @@ def _turn_keys(plain, mirrored):
 
 
 def test_mirroring_swaps_motion_and_caption_sides_together():
-    clip, flipped = _turn_keys(zoo_windows(24, mirror=0.0), zoo_windows(24, mirror=1.0))
+    clip, flipped = _turn_keys(zoo_windows(64, mirror=0.0), zoo_windows(64, mirror=1.0))
     assert flipped.meta["text"] == mirror_text(clip.meta["text"])
     assert flipped.meta["captions"] == [mirror_text(t) for t in clip.meta["captions"]]
     # the root turns the other way: yaw velocities change sign
