@@ -34,6 +34,45 @@ def axis_angle_matrix_numpy(angle: Union[float, np.ndarray],
     return out
 
 
+def rotation_about_numpy(axis: np.ndarray, angle: Union[float, np.ndarray]) -> np.ndarray:
+    r"""Rotations by :obj:`angle` radians about a unit :obj:`axis`
+    (Rodrigues' formula).
+
+    Shapes:
+        - **axis**: :math:`(3,)`
+        - **angle**: :math:`(*)`
+        - **output**: :math:`(*, 3, 3)`
+    """
+    k = _cross_matrix(np.asarray(axis, dtype=np.float64))
+    a = np.asarray(angle, dtype=np.float64)[..., None, None]
+    return np.eye(3) + np.sin(a) * k + (1 - np.cos(a)) * (k @ k)
+
+
+def rotation_between_numpy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    r"""The smallest rotation taking unit vector :obj:`a` onto unit vector
+    :obj:`b` (a half turn about a perpendicular axis when they are
+    opposite).
+
+    Shapes:
+        - **a**, **b**: :math:`(3,)`
+        - **output**: :math:`(3, 3)`
+    """
+    v, c = np.cross(a, b), float(np.dot(a, b))
+    if c < -1 + 1e-9:
+        axis = np.cross(a, [1.0, 0.0, 0.0])
+        if np.linalg.norm(axis) < 1e-6:
+            axis = np.cross(a, [0.0, 1.0, 0.0])
+        axis = axis / np.linalg.norm(axis)
+        return 2 * np.outer(axis, axis) - np.eye(3)
+    k = _cross_matrix(v)
+    return np.eye(3) + k + k @ k / (1 + c)
+
+
+def _cross_matrix(v: np.ndarray) -> np.ndarray:
+    """The matrix of ``v x .``."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
 def yaw_matrix_numpy(yaw: Union[float, np.ndarray]) -> np.ndarray:
     r"""Rotations about +Y by :obj:`yaw` radians;
     :func:`~satagraph.ops.rotation.yaw_matrix` in numpy.

@@ -8,22 +8,9 @@ import numpy as np
 
 from satagraph.transforms.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings
-from satagraph.ops.rotation_numpy import yaw_of
+from satagraph.ops.rotation_numpy import rotation_between_numpy, yaw_of
 from satagraph.sides import side_pairs
 from satagraph.skeleton import Skeleton
-
-
-def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Rotation taking unit vector a onto unit vector b (Rodrigues)."""
-    v, c = np.cross(a, b), float(np.dot(a, b))
-    if c < -1 + 1e-9:  # opposite: half turn about any perpendicular axis
-        axis = np.cross(a, [1.0, 0, 0])
-        if np.linalg.norm(axis) < 1e-6:
-            axis = np.cross(a, [0, 1.0, 0])
-        axis /= np.linalg.norm(axis)
-        return 2 * np.outer(axis, axis) - np.eye(3)
-    k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return np.eye(3) + k + k @ k / (1 + c)
 
 
 def detect_up_axis(motion: Motion) -> str:
@@ -184,7 +171,7 @@ def canonicalize(
     reading = read_rig(motion, up_axis, unit_scale)
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
-    up_rot = _rotation_between(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
+    up_rot = rotation_between_numpy(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
     moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
     forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
     yaw = -float(yaw_of(forward))  # rotate forward onto +Z

@@ -8,7 +8,8 @@ import torch
 
 from satagraph.motion import CanonicalTransform
 from satagraph.ops.rotation import axis_angle_matrix, yaw_matrix
-from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy,
+from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy, rotation_about_numpy,
+                                          rotation_between_numpy,
                                           yaw_matrix_numpy, yaw_of)
 
 
@@ -38,3 +39,26 @@ def test_canonical_transform_uses_the_rule():
     tf = CanonicalTransform(up_axis="+Y", up_rotation=np.eye(3), yaw=0.4, scale=1.0,
                             source_fps=30.0)
     assert np.allclose(tf.rotation, yaw_matrix_numpy(0.4))
+
+
+def test_rotation_about_an_axis_matches_the_coordinate_axes_and_keeps_its_axis():
+    angles = np.linspace(-3.0, 3.0, 7)
+    for i, name in enumerate("XYZ"):
+        axis = np.eye(3)[i]
+        np.testing.assert_allclose(rotation_about_numpy(axis, angles),
+                                   axis_angle_matrix_numpy(angles, name), atol=1e-12)
+    axis = np.array([1.0, 2.0, -2.0]) / 3.0
+    rot = rotation_about_numpy(axis, 0.7)
+    np.testing.assert_allclose(rot @ axis, axis, atol=1e-12)
+    np.testing.assert_allclose(rot @ rot.T, np.eye(3), atol=1e-12)
+    assert np.isclose(np.linalg.det(rot), 1.0)
+
+
+@pytest.mark.parametrize("b", [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.6, 0.0, 0.8],
+                               [0.0, 1.0, 0.0]])
+def test_rotation_between_takes_a_onto_b(b):
+    a = np.array([0.0, 1.0, 0.0])
+    rot = rotation_between_numpy(a, np.array(b))
+    np.testing.assert_allclose(rot @ a, b, atol=1e-12)
+    np.testing.assert_allclose(rot @ rot.T, np.eye(3), atol=1e-12)
+    assert np.isclose(np.linalg.det(rot), 1.0)

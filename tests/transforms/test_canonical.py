@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from satagraph.transforms.canonical import (_apply_rotation, _rotation_between,
+from satagraph.ops.rotation_numpy import rotation_between_numpy
+from satagraph.transforms.canonical import (_apply_rotation,
                                             canonicalize, decanonicalize,
                                             detect_up_axis, resample)
 from satagraph.io import read_bvh, write_bvh
@@ -26,7 +27,7 @@ def test_canonical_frame(human):
 
 
 def test_detects_and_undoes_z_up(human):
-    to_z = _rotation_between(np.array([0, 1.0, 0]), np.array([0, 0, 1.0]))
+    to_z = rotation_between_numpy(np.array([0, 1.0, 0]), np.array([0, 0, 1.0]))
     z_up = _apply_rotation(human, to_z, 1.0, np.zeros(3))
     assert detect_up_axis(z_up) == "+Z"
     a, b = canonicalize(human, fps=None), canonicalize(z_up, fps=None)

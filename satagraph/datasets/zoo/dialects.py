@@ -36,6 +36,7 @@ from satagraph.datasets.zoo.rigs import ZooRig, _rot, _unit
 from satagraph.datasets.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
+from satagraph.ops.rotation_numpy import rotation_about_numpy, rotation_between_numpy
 
 #: The standard units a zoo file may be written in (metres per unit).
 UNITS: Dict[str, float] = {k: v for k, v in READ_UNITS.items()
@@ -144,7 +145,7 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
     for j in range(skel.num_joints):
         if pose == "random" and skel.children[j]:
             axis = _unit(rng.normal(size=3))
-            local[j] = _axis_angle(axis, rng.uniform(0, np.radians(35)))
+            local[j] = rotation_about_numpy(axis, rng.uniform(0, np.radians(35)))
         elif pose == "apose" and sideways[j] and not (j and sideways[skel.parents[j]]):
             local[j] = _rot(2, -np.sign(bones[j, 0]) * np.radians(40))
         elif pose == "crouched" and bones[j, 1] < -0.7:
@@ -167,18 +168,8 @@ def _axis_rest(skel, rng: np.random.Generator) -> np.ndarray:
             out[j] = out[p] if p >= 0 else np.eye(3)
             continue
         roll = _rot(0, rng.uniform(-np.pi, np.pi))
-        out[j] = roll @ _between(_unit(bone), np.array([1.0, 0.0, 0.0]))
+        out[j] = roll @ rotation_between_numpy(_unit(bone), np.array([1.0, 0.0, 0.0]))
     return out
-
-
-def _between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The smallest rotation taking unit vector :obj:`a` to :obj:`b`."""
-    v, c = np.cross(a, b), float(np.dot(a, b))
-    if c < -1 + 1e-9:  # opposite: half a turn about any perpendicular axis
-        axis = _unit(np.cross(a, [0.0, 1.0, 0.0] if abs(a[1]) < 0.9 else [1.0, 0.0, 0.0]))
-        return 2 * np.outer(axis, axis) - np.eye(3)
-    k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return np.eye(3) + k + k @ k / (1 + c)
 
 
 def _crouch_angle(skel, rest: np.ndarray, j: int) -> float:
@@ -188,11 +179,6 @@ def _crouch_angle(skel, rest: np.ndarray, j: int) -> float:
     while p >= 0 and len(skel.children[p]) == 1 and _unit(rest[j] - rest[p])[1] < -0.7:
         k, j, p = k + 1, p, int(skel.parents[p])
     return (30.0, -60.0, 30.0, 0.0)[min(k, 3)]
-
-
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
 
 
 def change_rest_pose(motion: Motion, pose: str = "apose", seed: int = 0) -> Motion:

@@ -11,6 +11,7 @@ from satagraph.datasets.zoo.rigs import (Leg, Sway, ZooRig, _align, _euler,
                                          _is_below, _rot, _smoothstep, _unit)
 from satagraph.datasets.zoo.species import CLIP_KINDS
 from satagraph.motion import Motion
+from satagraph.ops.rotation_numpy import rotation_about_numpy
 from satagraph.skeleton import Skeleton
 
 
@@ -256,15 +257,8 @@ def _look(rig: ZooRig, time: np.ndarray, rng: np.random.Generator) -> Dict[int, 
         hz, shift = rng.uniform(0.15, 0.5, 2), rng.uniform(0, 2 * np.pi, 2)
         angle = np.radians(_LOOK_DEGREES) * rng.uniform(0.3, 1.0) * 0.5 * (
             np.sin(2 * np.pi * hz[0] * time + shift[0]) + np.sin(2 * np.pi * hz[1] * time + shift[1]))
-        out[j] = _axis_rotations(axis, angle)
+        out[j] = rotation_about_numpy(axis, angle)
     return out
-
-
-def _axis_rotations(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Rotations :math:`(T, 3, 3)` by :obj:`angle` about a unit axis."""
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    a = angle[:, None, None]
-    return np.eye(3) + np.sin(a) * k + (1 - np.cos(a)) * (k @ k)
 
 
 def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
