@@ -135,7 +135,10 @@ def run_train(args) -> int:
 
 def _load(args):
     from satagraph.experiment.train import load_module
+    from satagraph.io.weights import BUILTIN, builtin_notice
     module = load_module(args.ckpt)
+    if args.ckpt == BUILTIN:
+        print(f"satagraph: {builtin_notice()}", file=sys.stderr)
     return module, module.embed
 
 

@@ -74,6 +74,19 @@ def resolve_weights(name: PathLike) -> str:
     return str(path)
 
 
+def builtin_notice() -> str:
+    """One line on the built-in model, from its own metadata: what made it
+    and its provenance note (what it can and cannot do yet); shown by the
+    commands that fall back on it."""
+    meta = read_weights_metadata(resolve_weights(BUILTIN))
+    prov = meta.get("provenance") or {}
+    made = ", ".join(str(x) for x in (prov.get("command"), prov.get("minutes") and
+                                       f"{float(prov['minutes']):.0f} min",
+                                       prov.get("machine")) if x)
+    note = f": {prov['note']}" if prov.get("note") else ""
+    return f"using the built-in model ({made}){note}"
+
+
 def is_weights_file(path: PathLike) -> bool:
     """Whether :obj:`path` looks like a safetensors file (an 8-byte header
     length followed by ``{``), whatever its name."""
@@ -273,6 +286,6 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[
 
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "NO_BUILTIN",
-           "WeightsSizeError", "builtin_path", "resolve_weights", "is_weights_file",
+           "WeightsSizeError", "builtin_path", "builtin_notice", "resolve_weights", "is_weights_file",
            "module_hyper_parameters", "weights_payload", "save_weights",
            "read_weights_metadata", "load_weights", "load_weights_or_checkpoint"]

@@ -129,11 +129,20 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     assert "Traceback" not in err and not out.exists()
 
     shipped = tmp_path / "builtin.safetensors"
-    save_weights(build_tiny_module(), shipped)
+    save_weights(build_tiny_module(), shipped,
+                 provenance={"command": "satagraph train tiny", "minutes": 3.0,
+                             "note": "a test model: limbs in step on zoo rigs only"})
     monkeypatch.setattr(weights, "builtin_path", lambda: shipped)
+    capsys.readouterr()
     assert main(["reconstruct", str(clip), str(out)]) == 0
+    # the fallback says which model it used and what it can do, in one line
+    err = capsys.readouterr().err.strip()
+    assert err == ("satagraph: using the built-in model (satagraph train tiny, 3 min): "
+                   "a test model: limbs in step on zoo rigs only")
     assert main(["reconstruct", "--ckpt", "builtin", str(clip), str(out)]) == 0
-    assert out.is_file()
+    assert out.is_file() and "using the built-in model" in capsys.readouterr().err
+    assert main(["reconstruct", "--ckpt", str(shipped), str(clip), str(out)]) == 0
+    assert "built-in" not in capsys.readouterr().err
 
 
 def test_builtin_path_is_package_data() -> None:
