@@ -27,11 +27,13 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.experiment.config import load_config  # noqa: E402
 from satagraph.lightning import SATARVQModule  # noqa: E402
 from satagraph.lightning.text_to_motion import TextToMotionModule  # noqa: E402
 from satagraph.pipelines.generate import GenerationSettings, generate_on  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: (row name, generator config, autoencoder config).
 SIZES = (("t2m_tiny", "t2m_tiny", "t2m_rvq_tiny"), ("t2m_cpu", "t2m_cpu", "t2m_rvq_cpu"),
@@ -46,8 +48,6 @@ def build(generator: str, autoencoder: str, folder: Path) -> TextToMotionModule:
     ae = SATARVQModule(model=dict(ae_cfg["model"], semantic_channels=256),
                        meta={"module": "rvq", "semantic_encoder": "offline", "window": 64})
     zoo = EndlessZoo(species=["biped", "quadruped"])
-    from satagraph.data.features import motion_to_features
-    from satagraph.transforms.canonical import canonicalize
     feats = [motion_to_features(canonicalize(zoo.sample(0, i, 40).motion, up_axis="+Y",
                                              unit_scale=1.0)) for i in range(4)]
     ae.normalizer.fit(feats, [f"zoo {i}" for i in range(4)])

@@ -22,11 +22,10 @@ from __future__ import annotations
 import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
-import lightning as L
 from torch.utils.data import DataLoader, Dataset
 
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
-from satagraph.data.datamodule import semantic_embedder, window_loader
+from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
 from satagraph.data.endless import MixedDataset, is_zoo_entry, zoo_entry
 from satagraph.datasets.sources import SPLITS, resolve_sources, select
 from satagraph.datasets.zoo.endless import EndlessZoo
@@ -57,7 +56,7 @@ def zoo_caption_datasets(spec: Mapping[str, Any], split: str, window: int, min_f
     return out
 
 
-class CaptionDataModule(L.LightningDataModule):
+class CaptionDataModule(WindowDataModule):
     r"""Captioned windows of files and of the endless zoo, in the sources'
     own splits (a manifest's, the zoo's seed streams); nothing re-split.
 
@@ -137,15 +136,6 @@ class CaptionDataModule(L.LightningDataModule):
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
                              self.balanced, self.num_workers)
-
-    def train_dataloader(self) -> DataLoader:
-        return self._loader("train", True)
-
-    def val_dataloader(self) -> DataLoader:
-        return self._loader("val", False)
-
-    def test_dataloader(self) -> DataLoader:
-        return self._loader("test", False)
 
 
 __all__ = ["CaptionDataModule", "zoo_caption_datasets"]

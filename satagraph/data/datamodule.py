@@ -66,7 +66,25 @@ def window_loader(ds, batch_size: int, seed: int, shuffle: bool, balanced: bool,
                       generator=gen)
 
 
-class MotionDataModule(L.LightningDataModule):
+class WindowDataModule(L.LightningDataModule):
+    """The split loaders of a data module of windows: training shuffled,
+    validation and test in order; subclasses build them in
+    :meth:`_loader`."""
+
+    def _loader(self, split: str, shuffle: bool) -> DataLoader:
+        raise NotImplementedError
+
+    def train_dataloader(self) -> DataLoader:
+        return self._loader("train", True)
+
+    def val_dataloader(self) -> DataLoader:
+        return self._loader("val", False)
+
+    def test_dataloader(self) -> DataLoader:
+        return self._loader("test", False)
+
+
+class MotionDataModule(WindowDataModule):
     r"""Windows of motion from one or several BVH folders or manifests.
 
     Clips of different skeletons share a batch without padding (see
@@ -222,11 +240,3 @@ class MotionDataModule(L.LightningDataModule):
             if position is not None and not position["epoch_done"]:
                 sampler.resume(position["epoch"], position["batches"] * self.batch_size)
 
-    def train_dataloader(self) -> DataLoader:
-        return self._loader("train", True)
-
-    def val_dataloader(self) -> DataLoader:
-        return self._loader("val", False)
-
-    def test_dataloader(self) -> DataLoader:
-        return self._loader("test", False)

@@ -80,9 +80,9 @@ def builtin_notice() -> str:
     commands that fall back on it."""
     meta = read_weights_metadata(resolve_weights(BUILTIN))
     prov = meta.get("provenance") or {}
-    made = ", ".join(str(x) for x in (prov.get("command"), prov.get("minutes") and
-                                       f"{float(prov['minutes']):.0f} min",
-                                       prov.get("machine")) if x)
+    minutes = prov.get("minutes")
+    parts = (prov.get("command"), minutes and f"{float(minutes):.0f} min", prov.get("machine"))
+    made = ", ".join(str(part) for part in parts if part)
     note = f": {prov['note']}" if prov.get("note") else ""
     return f"using the built-in model ({made}){note}"
 

@@ -218,17 +218,15 @@ def _sway_rotation(sway: Optional[Sway], phase: np.ndarray,
     return _euler(sway.static[None] + sway.amplitude[None] * wave)
 
 
-def _pose(rig: ZooRig, root_pos: np.ndarray, root_rot: np.ndarray,
-          phase: np.ndarray, heading: np.ndarray, feet: Optional[_Feet] = None,
-          extra: Optional[Dict[int, np.ndarray]] = None,
-          sway_scale: Optional[np.ndarray] = None) -> Tuple[np.ndarray, np.ndarray]:
-    """Global rotations and positions by forward kinematics, legs by IK
-    when :obj:`feet` is given; :obj:`extra` maps joints to local rotations
-    :math:`(T, 3, 3)` applied after their sway, whose amplitude is scaled
-    per frame by :obj:`sway_scale`."""
-    extra = extra or {}
+def _pose(rig: ZooRig, root_pos: np.ndarray, root_rot: np.ndarray, heading: np.ndarray,
+          local: Dict[int, np.ndarray], feet: Optional[_Feet] = None
+          ) -> Tuple[np.ndarray, np.ndarray]:
+    """Global rotations and positions by forward kinematics: legs by IK
+    when :obj:`feet` is given, the other joints by their local rotations
+    :math:`(T, 3, 3)` in :obj:`local` (:func:`_local_rotations`; identity
+    where absent)."""
     skel = rig.skeleton
-    frames, num = len(phase), skel.num_joints
+    frames, num = len(root_rot), skel.num_joints
     rot, pos = np.zeros((frames, num, 3, 3)), np.zeros((frames, num, 3))
     rot[:, 0], pos[:, 0] = root_rot, root_pos
     fixed: Dict[int, np.ndarray] = {}
@@ -238,11 +236,26 @@ def _pose(rig: ZooRig, root_pos: np.ndarray, root_rot: np.ndarray,
         pos[:, j] = pos[:, p] + rot[:, p] @ skel.offsets[j]
         if feet is not None and j in roles:
             fixed.update(_solve_leg(rig, roles[j], pos[:, j], heading, feet))
-        rot[:, j] = fixed[j] if j in fixed else rot[:, p] @ _sway_rotation(
-            rig.sway.get(j), phase, sway_scale)
-        if j in extra and j not in fixed:
-            rot[:, j] = rot[:, j] @ extra[j]
+        if j in fixed:
+            rot[:, j] = fixed[j]
+        else:
+            rot[:, j] = rot[:, p] @ local[j] if j in local else rot[:, p]
     return rot, pos
+
+
+def _local_rotations(rig: ZooRig, phase: np.ndarray, scale: np.ndarray,
+                     extra: Optional[Dict[int, np.ndarray]] = None) -> Dict[int, np.ndarray]:
+    """Local rotations :math:`(T, 3, 3)` of every swaying joint but the
+    root: its sway (amplitude times :obj:`scale` per frame), then its
+    :obj:`extra` rotation where there is one (``look`` clips)."""
+    extra = extra or {}
+    out = {}
+    for j, sway in rig.sway.items():
+        if j:
+            out[j] = _sway_rotation(sway, phase, scale)
+            if j in extra:
+                out[j] = out[j] @ extra[j]
+    return out
 
 
 def _look(rig: ZooRig, time: np.ndarray, rng: np.random.Generator) -> Dict[int, np.ndarray]:
@@ -255,8 +268,8 @@ def _look(rig: ZooRig, time: np.ndarray, rng: np.random.Generator) -> Dict[int, 
             continue
         axis = _unit(rng.normal(size=3))
         hz, shift = rng.uniform(0.15, 0.5, 2), rng.uniform(0, 2 * np.pi, 2)
-        angle = np.radians(_LOOK_DEGREES) * rng.uniform(0.3, 1.0) * 0.5 * (
-            np.sin(2 * np.pi * hz[0] * time + shift[0]) + np.sin(2 * np.pi * hz[1] * time + shift[1]))
+        waves = np.sin(2 * np.pi * hz[:, None] * time[None] + shift[:, None])
+        angle = np.radians(_LOOK_DEGREES) * rng.uniform(0.3, 1.0) * waves.mean(axis=0)
         out[j] = rotation_about_numpy(axis, angle)
     return out
 
@@ -277,16 +290,14 @@ def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
 
 
 def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
-                 phase: np.ndarray, feet: _Feet, reach: float = 0.97,
-                 crouch: float = 0.95, extra: Optional[Dict[int, np.ndarray]] = None,
-                 sway_scale: Optional[np.ndarray] = None) -> np.ndarray:
+                 local: Dict[int, np.ndarray], feet: _Feet, reach: float = 0.97,
+                 crouch: float = 0.95) -> np.ndarray:
     """Root height per frame: the rest stance (legs at most ``crouch``
     extended), lowered wherever a leg would need more than ``reach`` of its
     length to touch its target."""
     rest = rig.skeleton.rest_positions()
     flat = clip.position * np.array([1.0, 0.0, 1.0])
-    _, pos = _pose(rig, flat, root_rot, phase, clip.heading, extra=extra,
-                   sway_scale=sway_scale)
+    _, pos = _pose(rig, flat, root_rot, clip.heading, local)
     base = -rest[:, 1].min()
     bounds = []
     for i, leg in enumerate(rig.legs):
@@ -297,7 +308,7 @@ def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
         vertical = np.sqrt(np.maximum((reach * (l1 + l2)) ** 2 - flat2, 0.0))
         bounds.append(feet.targets[i][:, 1] - pos[:, leg.upper, 1] + vertical)
     height = np.minimum(base, np.min(bounds, axis=0)) if bounds else np.full(
-        len(phase), base)
+        len(root_rot), base)
     return _smooth_min(height, int(round(0.1 * clip.fps)))
 
 
@@ -337,13 +348,14 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
         clip.speed / (_LIFT_SPEED * speed * length), 0.0, 1.0)
     feet = _plan_feet(rig, clip, phase, gait, idle, scale)
     root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase, scale)
-    extra = _look(rig, clip.time, rng) if kind == "look" else None
-    height = _body_height(rig, clip, root_rot, phase, feet, extra=extra, sway_scale=scale)
+    local = _local_rotations(rig, phase, scale,
+                             _look(rig, clip.time, rng) if kind == "look" else None)
+    height = _body_height(rig, clip, root_rot, local, feet)
     root = clip.position * np.array([1.0, 0.0, 1.0])
     root[:, 1] = height
     if idle:
         root[:, 1] -= 0.01 * length * (1 + np.sin(2 * np.pi * phase))
-    rot, pos = _pose(rig, root, root_rot, phase, clip.heading, feet, extra, scale)
+    rot, pos = _pose(rig, root, root_rot, clip.heading, local, feet)
     return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
 
 
