@@ -175,9 +175,9 @@ class WindowAugment:
         drop (float): Probability of dropping a leaf chain.
         merge (float): Probability of merging two trunk segments.
         insert (float): Probability of inserting a joint.
-        rest (float): Probability of taking a random frame's pose as the
-            rest pose (:func:`~satagraph.transforms.augment.rebase_rest`): the same
-            motion under another rest-pose convention.
+        rest (float): Probability of the same motion under another
+            rest-pose convention (:func:`~satagraph.transforms.augment.new_rest`:
+            a random frame's pose, or every bone along its joint's +X).
         low (float): Smallest per-axis bone scale.
         high (float): Largest per-axis bone scale.
         max_drop (int): Longest leaf chain dropped.

@@ -112,6 +112,39 @@ def set_rest_rotations(motion: Motion, rest: np.ndarray) -> Motion:
                         rotations=rotations, translations=translations)
 
 
+def axis_rest_rotations(skeleton: Skeleton) -> np.ndarray:
+    r"""Rest rotations :math:`A_j` of the ``axis`` convention (files exported
+    with joint orients baked in, e.g. Bandai and the dog): each joint's
+    first child :math:`c` lies on its +X (:func:`set_rest_rotations` makes
+    :math:`A_{p(c)} o_c` the new offsets), so the rest pose is a line.
+
+    The roll about the bone is fixed, not drawn: the static features of a
+    line show no roll for a single-child chain, so a decoder could not
+    tell a random one. Local +Y is the rig's left (+X) made orthogonal to
+    the bone, or its forward (+Z) for bones within 30 degrees of the
+    left-right axis; for a downward leg the knee's hinge is then local +Y
+    and forward +Z, as in Bandai's legs. Joints without a child, or with a
+    zero-length first bone, keep their parent's rotation.
+
+    Shapes:
+        - **output**: :math:`(J, 3, 3)`
+    """
+    out = np.empty((skeleton.num_joints, 3, 3))
+    for j in range(skeleton.num_joints):
+        kids, p = skeleton.children[j], int(skeleton.parents[j])
+        bone = skeleton.offsets[kids[0]] if kids else np.zeros(3)
+        if np.linalg.norm(bone) < 1e-9:
+            out[j] = out[p] if p >= 0 else np.eye(3)
+            continue
+        x = bone / np.linalg.norm(bone)
+        ref = np.array([1.0, 0.0, 0.0]) if abs(x[0]) < np.cos(np.radians(30)) \
+            else np.array([0.0, 0.0, 1.0])
+        y = ref - (ref @ x) * x
+        y /= np.linalg.norm(y)
+        out[j] = np.stack([x, y, np.cross(x, y)])
+    return out
+
+
 def _heading(rotation: np.ndarray) -> np.ndarray:
     """The rotation about +Y that turns +Z where :obj:`rotation` turns it."""
     return yaw_matrix_numpy(yaw_of(rotation @ np.array([0.0, 0.0, 1.0])))
@@ -369,7 +402,8 @@ class AugmentConfig:
     defaults of :class:`SkeletonAugment` and
     :class:`~satagraph.data.dataset.WindowAugment` too): probabilities of
     bone scaling, mirroring, dropping a leaf chain, merging two trunk
-    segments, inserting a joint and a new rest pose, the per-axis bone
+    segments, inserting a joint and a new rest pose (half of them a random
+    frame's pose, half the ``axis`` convention), the per-axis bone
     scale range and the longest leaf chain dropped. Only scaling and
     mirroring are on by default; a config switches the others on."""
 
@@ -397,7 +431,9 @@ class SkeletonAugment:
     scaling (:func:`scale_bones`), mirroring (:func:`mirror`), dropping a
     leaf chain (:func:`drop_leaf_chain`), merging two trunk segments
     (:func:`merge_segments`), inserting a joint (:func:`insert_joint`) and
-    taking a random frame's pose as the rest pose (:func:`rebase_rest`).
+    a new rest-pose convention: a random frame's pose (:func:`rebase_rest`)
+    or, as often, every bone along its joint's +X
+    (:func:`axis_rest_rotations`).
 
     Args:
         p_scale (float): Probability of scaling the bones.
@@ -454,6 +490,15 @@ class SkeletonAugment:
         if (s := draw(self.p_insert)) is not None:
             motion = insert_joint(motion, s)
         if (s := draw(self.p_rest)) is not None and motion.num_frames:
-            frame = int(np.random.default_rng(s).integers(motion.num_frames))
-            motion = rebase_rest(motion, frame)
+            motion = new_rest(motion, np.random.default_rng(s))
         return motion
+
+
+def new_rest(motion: Motion, rng: np.random.Generator) -> Motion:
+    """The same motion under another rest-pose convention: a random
+    frame's pose (:func:`rebase_rest`) or, with probability 1/2, the
+    ``axis`` convention (:func:`axis_rest_rotations`)."""
+    frame = int(rng.integers(motion.num_frames))
+    if rng.random() < 0.5:
+        return set_rest_rotations(motion, axis_rest_rotations(motion.skeleton))
+    return rebase_rest(motion, frame)

@@ -4,10 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.transforms.augment import (SkeletonAugment, drop_leaf_chain,
-                                          insert_joint, merge_segments, mirror,
-                                          mirror_pairs, paired, rebase_rest,
-                                          restructure, scale_bones, swap_side)
+from satagraph.transforms.augment import (SkeletonAugment, axis_rest_rotations,
+                                          drop_leaf_chain, insert_joint, merge_segments,
+                                          mirror, mirror_pairs, new_rest, paired,
+                                          rebase_rest, restructure, scale_bones,
+                                          set_rest_rotations, swap_side)
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import WindowAugment
 from satagraph.data.examples import example_motion
@@ -186,6 +187,32 @@ def test_rebase_rest_keeps_the_motion_and_takes_the_frames_pose(motion):
     assert rebased.skeleton.names == motion.skeleton.names
     with pytest.raises(ValueError, match="frame 16"):
         rebase_rest(motion, frame=16)
+
+
+def test_axis_rest_is_a_line_with_one_roll_convention():
+    """Every first child on its joint's +X; the roll is the documented one:
+    a downward leg has the rig's left on local +Y and forward on local +Z
+    (Bandai's legs), whatever the bone lengths."""
+    walk = generate_clip(RIGS["biped"], "walk", frames=8, seed=0)
+    for motion in (walk, scale_bones(walk, seed=3)):
+        rest = axis_rest_rotations(motion.skeleton)
+        moved = set_rest_rotations(motion, rest)
+        np.testing.assert_allclose(moved.global_positions(), motion.global_positions(),
+                                   atol=1e-9)
+        np.testing.assert_allclose(rest @ np.swapaxes(rest, -1, -2),
+                                   np.broadcast_to(np.eye(3), rest.shape), atol=1e-12)
+        knee = motion.skeleton.names.index("LeftLeg")
+        np.testing.assert_allclose(rest[knee] @ [1.0, 0.0, 0.0] @ [0.0, 1.0, 0.0], 1.0, atol=0.2)
+        np.testing.assert_allclose(rest[knee] @ [0.0, 0.0, 1.0] @ [0.0, 0.0, 1.0], 1.0, atol=0.2)
+
+
+def test_new_rest_draws_both_conventions_and_keeps_positions(motion):
+    drawn = [new_rest(motion, np.random.default_rng(s)) for s in range(8)]
+    lines = [m for m in drawn
+             if np.allclose(m.skeleton.offsets[m.skeleton.children[0][0]][1:], 0.0)]
+    assert 0 < len(lines) < len(drawn)
+    for m in drawn:
+        np.testing.assert_allclose(m.global_positions(), motion.global_positions(), atol=1e-9)
 
 
 def test_rebase_rest_makes_lying_rest_poses_upright(shared_data):

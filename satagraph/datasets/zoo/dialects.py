@@ -29,14 +29,14 @@ from typing import Dict, Iterator, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from satagraph.transforms.augment import rebase_rest, set_rest_rotations
+from satagraph.transforms.augment import axis_rest_rotations, rebase_rest, set_rest_rotations
 from satagraph.transforms.rig_reading import UNITS as READ_UNITS
 from satagraph.transforms.rig_reading import UP_AXES
 from satagraph.datasets.zoo.rigs import ZooRig, _rot, _unit
 from satagraph.datasets.zoo.species import CLIP_KINDS, zoo_rigs
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
-from satagraph.ops.rotation_numpy import rotation_about_numpy, rotation_between_numpy
+from satagraph.ops.rotation_numpy import rotation_about_numpy
 
 #: The standard units a zoo file may be written in (metres per unit).
 UNITS: Dict[str, float] = {k: v for k, v in READ_UNITS.items()
@@ -127,13 +127,14 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
     every chain of downward bones (hip +30, knee -60, ankle +30 degrees),
     ``"random"`` turns every joint by up to 35 degrees about a random axis.
     ``"axis"`` turns every joint so that its first child's offset lies along
-    its +X, with a random roll about it (the rest pose is a line, as in
-    files exported with joint orients baked in: Bandai, the dog).
+    its +X, with one roll convention (:func:`~satagraph.transforms.augment.axis_rest_rotations`;
+    the rest pose is a line, as in files exported with joint orients baked
+    in: Bandai, the dog).
     ``"native"`` is the identity.
     """
     skel = motion.skeleton
     if pose == "axis":
-        return _axis_rest(skel, np.random.default_rng(seed))
+        return axis_rest_rotations(skel)
     rest = skel.rest_positions()
     local = np.broadcast_to(np.eye(3), (skel.num_joints, 3, 3)).copy()
     rng = np.random.default_rng(seed)
@@ -152,24 +153,6 @@ def rest_pose_rotations(motion: Motion, pose: str, seed: int = 0) -> np.ndarray:
             local[j] = _rot(0, np.radians(_crouch_angle(skel, rest, j)))
     positions = np.zeros((1, skel.num_joints, 3))
     return forward_kinematics_numpy(local[None], positions, skel.parents)[0][0]
-
-
-def _axis_rest(skel, rng: np.random.Generator) -> np.ndarray:
-    r"""Rest rotations :math:`A_j` with :math:`A_j o_c` along +X for each
-    joint's first child :math:`c` (:func:`set_rest_rotations` makes
-    :math:`A_{p(c)} o_c` the new offsets); joints without a child or with a
-    zero-length one keep their parent's."""
-    out = np.empty((skel.num_joints, 3, 3))
-    for j in range(skel.num_joints):
-        p = int(skel.parents[j])
-        kids = skel.children[j]
-        bone = skel.offsets[kids[0]] if kids else np.zeros(3)
-        if np.linalg.norm(bone) < 1e-9:
-            out[j] = out[p] if p >= 0 else np.eye(3)
-            continue
-        roll = _rot(0, rng.uniform(-np.pi, np.pi))
-        out[j] = roll @ rotation_between_numpy(_unit(bone), np.array([1.0, 0.0, 0.0]))
-    return out
 
 
 def _crouch_angle(skel, rest: np.ndarray, j: int) -> float:
