@@ -48,7 +48,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from results_io import write_results  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
-from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
+from satagraph.pipelines.inference import REST_MODES, retarget_canonical  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.quality import most_active, retarget_quality  # noqa: E402
@@ -143,11 +143,11 @@ def joint_error(source: Motion, output: Motion) -> float:
     return float(err / max(source.height(), 1e-9))
 
 
-def measure(module, embed) -> Dict[str, List[dict]]:
+def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
     rows: Dict[str, List[dict]] = {"retarget": [], "reconstruction": []}
     for group, case, load in retarget_cases():
         source, sname, target, tname = load()
-        src, out = retarget_canonical(module, source, target, embed)
+        src, out = retarget_canonical(module, source, target, embed, rest=rest)
         quality = retarget_quality(src, out)
         quality["source_upright"] = retarget_quality(src, src, ("upright",))["upright"]
         rows["retarget"].append(dict(group=group, case=case, source=sname, target=tname,
@@ -156,7 +156,7 @@ def measure(module, embed) -> Dict[str, List[dict]]:
         motion = load()
         clip = motion.slice(0, min(motion.num_frames, RECON_FRAMES)) if group.startswith(
             "held") else most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))
-        src, out = retarget_canonical(module, clip, clip, embed)
+        src, out = retarget_canonical(module, clip, clip, embed, rest=rest)
         steps = retarget_quality(src, out, ("steps",))["steps"]
         rows["reconstruction"].append(dict(group=group, case=case, jp=joint_error(src, out),
                                            height=src.height(), steps=steps))
@@ -178,8 +178,9 @@ def _pct(value: Optional[float]) -> str:
     return "-" if value is None else f"{100 * value:.0f}%"
 
 
-def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float) -> str:
-    lines = [f"Model `{ckpt}`; {seconds:.0f} s on this machine.", "",
+def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto") -> str:
+    lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose; {seconds:.0f} s on "
+             "this machine.", "",
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
              "| travel ratio (0.8-1.25) | ground, % height (<= 3) | upright (>= 95%) "
              "| source upright | all targets met |",
@@ -203,8 +204,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--ckpt", default="builtin",
                         help="builtin (the package's weights), a checkpoint or a "
                              ".safetensors weights file")
-    parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--rest", choices=REST_MODES, default="auto",
+                        help="the rest pose every skeleton is shown to the model in "
+                             "(retarget_canonical's rest; default auto)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help=f"results path without suffix (default {OUT.relative_to(ROOT)}, "
+                             "with -file or -first-frame for the other --rest modes)")
     args = parser.parse_args(argv)
+    out = args.out or (OUT if args.rest == "auto" else OUT.with_name(f"{OUT.name}-{args.rest}"))
     if not (DATA / "manifest.tsv").is_file():
         print(f"pretrained.py: {DATA} not found: the real rows need ../shared/data",
               file=sys.stderr)
@@ -214,11 +221,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     embed = module.embed
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows = measure(module, embed)
-    text = table(rows, args.ckpt, time.perf_counter() - start)
+        rows = measure(module, embed, args.rest)
+    text = table(rows, args.ckpt, time.perf_counter() - start, args.rest)
     print(text)
-    write_results(args.out, "The built-in model (benchmarks/pretrained.py)", text,
-                  dict(rows, ckpt=args.ckpt))
+    write_results(out, "The built-in model (benchmarks/pretrained.py)", text,
+                  dict(rows, ckpt=args.ckpt, rest=args.rest))
     return 0
 
 

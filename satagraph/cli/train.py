@@ -88,6 +88,12 @@ def _common(p) -> None:
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
                    help="frames shared by consecutive windows (default: window / 4)")
+    p.add_argument("--rest", choices=("auto", "file", "first-frame"), default="auto",
+                   help="the rest pose the model sees each skeleton in: the file's, its "
+                   "first frame's pose, or auto (default): the first frame's for rigs "
+                   "whose rest pose is a line (every bone along its joint's +X, as "
+                   "Bandai's), else the file's; the output keeps the target file's "
+                   "rest pose either way")
 
 
 def _rig(p, prefix: str = "", what: str = "the input") -> None:
@@ -165,7 +171,7 @@ def run_reconstruct(args) -> int:
     check_output_path(args.output)
     module, embed = _load(args)
     motion = _read_checked(args, "input", module.fps)
-    out = reconstruct_motion(module, motion, embed, args.window, args.overlap)
+    out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
     return 0
@@ -179,7 +185,8 @@ def run_retarget(args) -> int:
     module, embed = _load(args)
     source = _read_checked(args, "source", module.fps)
     target = _read_checked(args, "target", module.fps, frames=False)
-    out = retarget_motion(module, source, target, embed, args.window, args.overlap)
+    out = retarget_motion(module, source, target, embed, args.window, args.overlap,
+                         rest=args.rest)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")

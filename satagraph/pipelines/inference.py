@@ -8,6 +8,7 @@ from typing import Callable, List, Optional, Tuple
 import numpy as np
 import torch
 
+from satagraph.transforms.augment import rebase_rotations, set_rest_rotations
 from satagraph.transforms.canonical import canonicalize, decanonicalize, resample_frames
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
@@ -116,9 +117,16 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
     return call_semantic(semantic, feats.skeleton, evidence_from_features(feats))
 
 
+#: How :func:`retarget_canonical` shows each skeleton to the model: in the
+#: rest pose of its file, re-rested on its first frame's pose, or the latter
+#: only where the file's rest is a line (:func:`is_line_rest`).
+REST_MODES = ("auto", "file", "first-frame")
+
+
 def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
-                    overlap: Optional[int] = None, fps: Optional[float] = None) -> Motion:
+                    overlap: Optional[int] = None, fps: Optional[float] = None,
+                    rest: str = "auto") -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -139,8 +147,17 @@ def retarget_motion(module, source: Motion, target: Motion,
         overlap (int, optional): Frames shared by consecutive windows
             (default: a quarter of the window).
         fps (float, optional): Feature frame rate (the model's, default 30).
+        rest (str): ``"file"`` shows both skeletons to the model in their
+            files' rest poses; ``"first-frame"`` re-rests each on its first
+            frame's pose (:func:`~satagraph.transforms.augment.rebase_rest`)
+            and undoes it on the output, so the written file keeps the
+            target's own rest either way; ``"auto"`` (default) re-rests only
+            the skeletons whose rest is no pose at all but a line
+            (:func:`is_line_rest`: every bone along its joint's +X, as
+            Bandai's and the dog's).
     """
-    _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps)
+    _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
+                                  rest)
     return from_canonical(canon, source)
 
 
@@ -154,25 +171,58 @@ def from_canonical(canon: Motion, source: Motion) -> Motion:
 
 def retarget_canonical(module, source: Motion, target: Motion,
                        semantic: Optional[Callable] = None, window: Optional[int] = None,
-                       overlap: Optional[int] = None, fps: Optional[float] = None
-                       ) -> Tuple[Motion, Motion]:
+                       overlap: Optional[int] = None, fps: Optional[float] = None,
+                       rest: str = "auto") -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
     :func:`~satagraph.transforms.canonical.decanonicalize` undoes). What
     :mod:`satagraph.quality` measures."""
+    if rest not in REST_MODES:
+        raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
     src_canon = canonicalize(source, fps=fps)
     tgt_canon = canonicalize(target, fps=fps)
-    tgt = static_features(tgt_canon)
-    q, r, _ = transfer(module, motion_to_features(src_canon), tgt, semantic, window, overlap)
+    src_rest, _ = _shown_rest(src_canon, rest)
+    tgt_rest, undo = _shown_rest(tgt_canon, rest)
+    tgt = static_features(tgt_rest)
+    q, r, _ = transfer(module, motion_to_features(src_rest), tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
-    return src_canon, features_to_motion(out_feats, q=q, r=r, use_positions=False)
+    out = features_to_motion(out_feats, q=q, r=r, use_positions=False)
+    if undo is not None:
+        out = set_rest_rotations(out, undo).with_(skeleton=tgt_canon.skeleton)
+    return src_canon, out
+
+
+def _shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:
+    """A canonical motion in the rest pose :obj:`rest` names, and the rest
+    rotations that undo it (``None``: unchanged; a skeleton without frames
+    keeps its file's rest)."""
+    if rest == "file" or not motion.num_frames or (
+            rest == "auto" and not is_line_rest(motion.skeleton)):
+        return motion, None
+    new = rebase_rotations(motion, 0)
+    return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
+
+
+def is_line_rest(skeleton, share: float = 0.8, degrees: float = 5.0) -> bool:
+    r"""Whether a rest pose is a line rather than a pose: at least
+    :obj:`share` of the joints with a child (of non-zero length) have their
+    first child within :obj:`degrees` of their local +X or -X (joint orients
+    baked into the offsets, as in the dog's files, or with the right side
+    mirrored onto -X, as in Bandai's)."""
+    dirs = [skeleton.offsets[kids[0]] for kids in skeleton.children
+            if kids and np.linalg.norm(skeleton.offsets[kids[0]]) > 1e-9]
+    if not dirs:
+        return False
+    dirs = np.array(dirs) / np.linalg.norm(dirs, axis=1, keepdims=True)
+    return bool((np.abs(dirs[:, 0]) >= np.cos(np.radians(degrees))).mean() >= share)
 
 
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
-                       window: Optional[int] = None,
-                       overlap: Optional[int] = None) -> Motion:
-    """Encode and decode a motion on its own skeleton."""
-    return retarget_motion(module, motion, motion, semantic, window, overlap)
+                       window: Optional[int] = None, overlap: Optional[int] = None,
+                       rest: str = "auto") -> Motion:
+    """Encode and decode a motion on its own skeleton (:obj:`rest`: see
+    :func:`retarget_motion`)."""
+    return retarget_motion(module, motion, motion, semantic, window, overlap, rest=rest)
 

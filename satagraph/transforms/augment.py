@@ -70,23 +70,33 @@ def rebase_rest(motion: Motion, frame: int = 0) -> Motion:
     Rigs differ in their rest-pose convention (T-pose, A-pose, every bone
     along one axis), so one pose has different local rotations on each.
     With :math:`A_j` the global rotation of joint :math:`j` in the new rest
-    pose, offsets become :math:`A_{p(j)} o_j` and local rotations
-    :math:`A_{p(j)} R_j A_j^\top` (:math:`A_{p(root)} = I`): global
-    positions are unchanged, and every joint's rotation is the identity at
-    :obj:`frame` except the root's heading change since frame 0.
+    pose (:func:`rebase_rotations`), offsets become :math:`A_{p(j)} o_j`
+    and local rotations :math:`A_{p(j)} R_j A_j^\top`
+    (:math:`A_{p(root)} = I`): global positions are unchanged, and every
+    joint's rotation is the identity at :obj:`frame` except the root's
+    heading change since frame 0.
 
     Args:
         motion (Motion): A motion (+Y up) with at least one frame.
         frame (int): The frame whose pose becomes the rest pose.
+    """
+    return set_rest_rotations(motion, rebase_rotations(motion, frame))
+
+
+def rebase_rotations(motion: Motion, frame: int = 0) -> np.ndarray:
+    r"""The global rest rotations :math:`A` of :func:`rebase_rest`; the
+    rest is undone by :func:`set_rest_rotations` with :math:`A^\top`.
+
+    Shapes:
+        - **output**: :math:`(J, 3, 3)`
     """
     if not 0 <= frame < motion.num_frames:
         raise ValueError(f"rebase_rest: frame {frame} of a {motion.num_frames}-frame motion")
     parents = motion.skeleton.parents
     pose = motion.rotations[frame].copy()
     pose[0] = _heading(motion.rotations[frame, 0] @ motion.rotations[0, 0].T).T @ pose[0]
-    rest = forward_kinematics_numpy(pose[None], motion.translations[frame:frame + 1],
+    return forward_kinematics_numpy(pose[None], motion.translations[frame:frame + 1],
                                     parents)[0][0]
-    return set_rest_rotations(motion, rest)
 
 
 def set_rest_rotations(motion: Motion, rest: np.ndarray) -> Motion:

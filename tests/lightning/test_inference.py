@@ -160,3 +160,51 @@ def test_reconstruct_keeps_skeleton_and_timing(build_tiny_module: Callable,
     out = reconstruct_motion(module, src, embed, window=16, overlap=4)
     assert_same_hierarchy(out.skeleton, src.skeleton, atol=1e-4)
     assert out.num_frames == src.num_frames and out.fps == src.fps
+
+
+def test_first_frame_rest_is_undone_on_the_target_rig(build_tiny_module: Callable,
+                                                      read_real: Callable[[str], Motion],
+                                                      embed: Callable,
+                                                      assert_same_hierarchy: Callable) -> None:
+    """``rest="first-frame"`` shows the model both rigs re-rested on their
+    first frame (Bandai's rest is a line) and writes the target's own rest
+    back: same hierarchy and offsets, other model input than ``"file"``
+    (and what ``"auto"`` does for these two rigs)."""
+    from satagraph.pipelines.inference import _shown_rest
+    module = build_tiny_module("vae")
+    src, tgt = read_real(BANDAI), read_real(DOG).slice(0, 10)
+    canon = canonicalize(tgt, fps=30)
+    shown, undo = _shown_rest(canon, "first-frame")
+    assert not np.allclose(shown.skeleton.offsets, canon.skeleton.offsets)
+    from satagraph.transforms.augment import set_rest_rotations
+    back = set_rest_rotations(shown, undo)
+    np.testing.assert_allclose(back.skeleton.offsets, canon.skeleton.offsets, atol=1e-9)
+    np.testing.assert_allclose(back.rotations, canon.rotations, atol=1e-9)
+    assert _shown_rest(canon.with_(rotations=canon.rotations[:0],
+                                   translations=canon.translations[:0]), "first-frame")[1] is None
+    plain = retarget_motion(module, src, tgt, embed, window=16, overlap=4, rest="file")
+    rested = retarget_motion(module, src, tgt, embed, window=16, overlap=4, rest="first-frame")
+    assert_same_hierarchy(rested.skeleton, tgt.skeleton, atol=1e-6)
+    assert rested.num_frames == src.num_frames
+    assert np.isfinite(rested.global_positions()).all()
+    assert np.abs(rested.global_positions() - plain.global_positions()).max() > 1e-3
+    auto = retarget_motion(module, src, tgt, embed, window=16, overlap=4)
+    np.testing.assert_allclose(auto.global_positions(), rested.global_positions(), atol=1e-9)
+    with pytest.raises(ValueError, match="rest must be one of"):
+        retarget_motion(module, src, tgt, embed, rest="tpose")
+
+
+def test_is_line_rest_finds_the_exporters_that_bake_joint_orients(
+        read_real: Callable[[str], Motion]) -> None:
+    """Bandai (right side on -X) and the dog lay every bone on their
+    joint's X axis; the CMU rig and the zoo's other rest poses are poses."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.datasets.zoo.dialects import change_rest_pose
+    from satagraph.pipelines.inference import is_line_rest
+    assert is_line_rest(canonicalize(read_real(BANDAI), fps=30).skeleton)
+    assert is_line_rest(canonicalize(read_real(DOG), fps=30).skeleton)
+    assert not is_line_rest(canonicalize(read_real(HUMAN), fps=30).skeleton)
+    walk = generate_clip(zoo_rigs(seed=0)[0], "walk", frames=4)
+    assert is_line_rest(change_rest_pose(walk, "axis").skeleton)
+    assert not any(is_line_rest(change_rest_pose(walk, r, seed=1).skeleton)
+                   for r in ("native", "apose", "flat", "crouched", "random", "frame"))
