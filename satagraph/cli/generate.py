@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from typing import List
 
@@ -23,12 +24,15 @@ def add_generate_parser(sub) -> None:
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
-        "(any species) with a text-to-motion checkpoint (`satagraph train t2m_tiny`). "
+        "(any species) with the built-in text-to-motion model or a checkpoint "
+        "(`satagraph train t2m_tiny`). "
         "OUT.bvh is on the target's own rig: its axes, units, rest pose and channel "
         "layout. With several --skeleton files, one file per skeleton: "
         "OUT_<skeleton>.bvh beside OUT.bvh (or <skeleton>.bvh inside OUT when it is a "
         "folder). The same seed gives the same motion. Works offline.")
-    p.add_argument("--ckpt", required=True, help="a text-to-motion checkpoint")
+    p.add_argument("--ckpt", default="builtin",
+                   help="a text-to-motion checkpoint or weights file, or builtin (the "
+                   "default: the small model shipped in the package)")
     p.add_argument("--text", required=True, help="the prompt, e.g. \"a person walks "
                    "forward and turns left\"; an empty text generates for the skeleton "
                    "alone (the model is trained with some text dropped)")
@@ -75,6 +79,7 @@ def run_generate(args) -> int:
     from satagraph.pipelines.generate import (GenerationSettings, generate_on, load_generator,
                                     output_paths, write_all)
     from satagraph.utils.files import check_output_path
+    from satagraph.io.weights import BUILTIN, builtin_notice
     import torch
     _split_output(args)
     if args.steps < 1 or args.threads < 1:
@@ -86,6 +91,8 @@ def run_generate(args) -> int:
         check_output_path(path)
     targets = _targets(args)
     module = load_generator(args.ckpt)
+    if args.ckpt == BUILTIN:
+        print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance)
     start = time.time()
     text = args.text.strip() or None

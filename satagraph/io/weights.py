@@ -40,6 +40,13 @@ FORMAT_VERSION = "1"
 MAX_WEIGHTS_BYTES = 8 * 1024 * 1024
 #: Name that resolves to the package's built-in weights.
 BUILTIN = "builtin"
+#: The package's built-in weights files (``satagraph/weights/``) by kind.
+BUILTIN_FILES = {"autoencoder": "builtin.safetensors",
+                 "text-to-motion": "t2m_builtin.safetensors"}
+#: How to make each kind when none ships.
+_BUILTIN_RECIPES = {"autoencoder": "`satagraph train pretrain_zoo`",
+                    "text-to-motion": "`satagraph train t2m_rvq_builtin` then "
+                                      "`satagraph train t2m_builtin`"}
 #: The one line shown when no built-in weights ship.
 NO_BUILTIN = ("no built-in weights are shipped in this version: train one with "
               "`satagraph train pretrain_zoo` or pass --ckpt")
@@ -52,39 +59,46 @@ class WeightsSizeError(ValueError):
     """A weights file over the size limit (pass ``force`` to write it)."""
 
 
-def builtin_path() -> Path:
-    """Where the package's built-in weights live
-    (``satagraph/weights/builtin.safetensors``; package data)."""
+def builtin_path(kind: str = "autoencoder") -> Path:
+    """Where the package's built-in weights of a kind live (package data:
+    ``satagraph/weights/``, see :data:`BUILTIN_FILES`)."""
     from importlib import resources
-    return Path(str(resources.files("satagraph.weights") / "builtin.safetensors"))
+    if kind not in BUILTIN_FILES:
+        raise ValueError(f"built-in weights kind must be one of {list(BUILTIN_FILES)}, "
+                         f"got {kind!r}")
+    return Path(str(resources.files("satagraph.weights") / BUILTIN_FILES[kind]))
 
 
-def resolve_weights(name: PathLike) -> str:
-    """A path for :obj:`name`: ``"builtin"`` gives the package's weights.
+def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
+    """A path for :obj:`name`: ``"builtin"`` gives the package's weights of
+    :obj:`kind` (:data:`BUILTIN_FILES`).
 
     Raises:
-        CheckpointError: ``"builtin"`` and no built-in weights ship
-            (:data:`NO_BUILTIN`).
+        CheckpointError: ``"builtin"`` and no built-in weights of that kind
+            ship (one line saying how to make them).
     """
     if os.fspath(name) != BUILTIN:
         return os.fspath(name)
-    path = builtin_path()
+    path = builtin_path(kind)
     if not path.is_file():
-        raise CheckpointError(NO_BUILTIN)
+        raise CheckpointError(NO_BUILTIN if kind == "autoencoder" else
+                              f"no built-in {kind} weights are shipped in this version: "
+                              f"train them with {_BUILTIN_RECIPES[kind]} or pass --ckpt")
     return str(path)
 
 
-def builtin_notice() -> str:
-    """One line on the built-in model, from its own metadata: what made it
+def builtin_notice(kind: str = "autoencoder") -> str:
+    """One line on a built-in model, from its own metadata: what made it
     and its provenance note (what it can and cannot do yet); shown by the
     commands that fall back on it."""
-    meta = read_weights_metadata(resolve_weights(BUILTIN))
+    meta = read_weights_metadata(resolve_weights(BUILTIN, kind))
     prov = meta.get("provenance") or {}
     minutes = prov.get("minutes")
     parts = (prov.get("command"), minutes and f"{float(minutes):.0f} min", prov.get("machine"))
     made = ", ".join(str(part) for part in parts if part)
     note = f": {prov['note']}" if prov.get("note") else ""
-    return f"using the built-in model ({made}){note}"
+    what = "model" if kind == "autoencoder" else f"{kind} model"
+    return f"using the built-in {what} ({made}){note}"
 
 
 def is_weights_file(path: PathLike) -> bool:
@@ -285,7 +299,8 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[
     return load_checkpoint(path, require=require)
 
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "NO_BUILTIN",
+__all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "BUILTIN_FILES",
+           "NO_BUILTIN",
            "WeightsSizeError", "builtin_path", "builtin_notice", "resolve_weights", "is_weights_file",
            "module_hyper_parameters", "weights_payload", "save_weights",
            "read_weights_metadata", "load_weights", "load_weights_or_checkpoint"]

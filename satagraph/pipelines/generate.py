@@ -53,8 +53,9 @@ class GenerationSettings:
     topk_ratio: float = 0.1
 
 
-def load_generator(ckpt: str):
-    """A trained text-to-motion module from a checkpoint, in eval mode.
+def load_generator(ckpt: str = "builtin"):
+    """A trained text-to-motion module from a checkpoint or weights file
+    (``"builtin"``: the one shipped in the package), in eval mode.
 
     Raises:
         CheckpointError: Missing or damaged file, another kind of
@@ -63,6 +64,8 @@ def load_generator(ckpt: str):
     """
     from satagraph.lightning.text_to_motion import TextToMotionModule
     from satagraph.experiment.train import load_module
+    from satagraph.io.weights import resolve_weights
+    ckpt = resolve_weights(ckpt, kind="text-to-motion")
     if not os.path.isfile(ckpt):
         raise CheckpointError(f"{ckpt}: no such checkpoint file")
     try:

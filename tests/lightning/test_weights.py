@@ -122,7 +122,7 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     clip = tmp_path / "walk.bvh"
     write_bvh(zoo_clip, clip)
     out = tmp_path / "out.bvh"
-    monkeypatch.setattr(weights, "builtin_path", lambda: tmp_path / "none.safetensors")
+    monkeypatch.setattr(weights, "builtin_path", lambda kind="autoencoder": tmp_path / "none.safetensors")
     assert main(["reconstruct", str(clip), str(out)]) == 2
     err = capsys.readouterr().err
     assert err.strip() == f"satagraph: error: {NO_BUILTIN}"
@@ -132,7 +132,7 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     save_weights(build_tiny_module(), shipped,
                  provenance={"command": "satagraph train tiny", "minutes": 3.0,
                              "note": "a test model: limbs in step on zoo rigs only"})
-    monkeypatch.setattr(weights, "builtin_path", lambda: shipped)
+    monkeypatch.setattr(weights, "builtin_path", lambda kind="autoencoder": shipped)
     capsys.readouterr()
     assert main(["reconstruct", str(clip), str(out)]) == 0
     # the fallback says which model it used and what it can do, in one line

@@ -134,3 +134,42 @@ def test_bad_numbers_are_one_line(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
     out = tmp_path / "x.bvh"
     assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--threads", "0") == 2
     assert "--threads" in _error(capsys) and not out.exists()
+
+
+def test_an_exported_weights_file_generates_like_its_checkpoint(t2m_ckpt, zoo_skeletons,
+                                                                 tmp_path):
+    """`export-weights` of a text-to-motion run (frozen autoencoder inside)
+    gives a safetensors file that `generate` reads: same motion, float32."""
+    weights = tmp_path / "t2m.safetensors"
+    assert main(["export-weights", str(t2m_ckpt), str(weights)]) == 0
+    a, b = tmp_path / "a.bvh", tmp_path / "b.bvh"
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], a, "--seconds", "1") == 0
+    assert _generate(weights, [zoo_skeletons["biped"]], b, "--seconds", "1") == 0
+    np.testing.assert_allclose(read_bvh(str(b)).rotations, read_bvh(str(a)).rotations,
+                               atol=1e-4)
+
+
+def test_builtin_generator_is_the_default_and_says_so(t2m_ckpt, zoo_skeletons, tmp_path,
+                                                      monkeypatch, capsys):
+    """Without --ckpt, generate uses the package's text-to-motion weights
+    (here a stand-in file) and says so in one line on stderr; without any,
+    one line says how to train them."""
+    from satagraph.io import weights
+    shipped = tmp_path / "t2m_builtin.safetensors"
+    assert main(["export-weights", str(t2m_ckpt), str(shipped), "--half",
+                 "--note", "a stand-in"]) == 0
+    monkeypatch.setattr(weights, "builtin_path",
+                        lambda kind="autoencoder": shipped if kind == "text-to-motion"
+                        else tmp_path / "none.safetensors")
+    out = tmp_path / "walk.bvh"
+    capsys.readouterr()
+    assert main(["generate", "--text", TEXT, "--skeleton", str(zoo_skeletons["biped"]),
+                 "--seconds", "1", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "using the built-in text-to-motion model" in err and "a stand-in" in err
+    _same_rig(out, zoo_skeletons["biped"])
+    shipped.unlink()
+    assert main(["generate", "--text", TEXT, "--skeleton", str(zoo_skeletons["biped"]),
+                 str(tmp_path / "none.bvh")]) == 2
+    line = _error(capsys)
+    assert "t2m_builtin" in line and not (tmp_path / "none.bvh").exists()
