@@ -27,6 +27,8 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
 * ``stop``: walks forward, then slows to a halt and stands.
 * ``look``: stands in place turning its head, neck, tail and arms slowly
   (legged plans).
+* ``jump``: stands, crouches, jumps (up to 0.6 leg lengths forward, or in
+  place) and lands (legged plans).
 """
 from __future__ import annotations
 
@@ -56,7 +58,8 @@ TURN_WORDS = ((45.0, "veers"), (135.0, "turns"), (225.0, "turns around"),
 #: drifts of straight kinds (long walks) are told as veering.
 UNTOLD_TURN = 10.0
 DRIFT_TURN = 30.0
-_KIND_IN_NAME = re.compile(r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look)(?:_\d+)?$")
+_KIND_IN_NAME = re.compile(
+    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
 
@@ -130,6 +133,8 @@ def _verbs(clip: ZooClip) -> List[str]:
         return ["walks forward and comes to a stop", "slows down to a halt and stands still"]
     if clip.kind == "look":
         return ["stands in place, looking around", "stands still, turning its head"]
+    if clip.kind == "jump":
+        return ["crouches and jumps", "jumps up and lands"]
     if clip.kind == "turn":
         verb, side = _turn_phrase(clip.turn)
         if not side:

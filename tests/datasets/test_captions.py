@@ -166,6 +166,8 @@ def test_endless_zoo_captions_match_the_generated_motion():
         elif sample.kind in ("idle", "look"):
             assert speed.max() < 0.05 * speed.mean() + 0.2 and "stands" in words
             assert ("looking around" in words) == (sample.kind == "look"), words
+        elif sample.kind == "jump":
+            assert "jumps" in words and "walks" not in words, words
         elif sample.kind in ("start", "stop"):
             moving_at_end = speed[-5:].mean() > speed[:5].mean()
             assert moving_at_end == (sample.kind == "start"), (sample.kind, speed)

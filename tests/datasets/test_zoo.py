@@ -167,3 +167,27 @@ def test_look_turns_head_neck_and_tail_in_place():
     # every joint relative to the root moves more than in the idle of the same seed
     assert np.ptp(pos, axis=0).max(-1).mean() > 1.5 * np.ptp(still, axis=0).max(-1).mean()
     assert np.ptp(pos[:, 0, [0, 2]], axis=0).max() < 0.1 * rig.leg_length
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped", "bird", "crab"])
+def test_jump_leaves_the_ground_with_every_foot_and_lands(species):
+    """``jump``: still feet on the ground, a crouch, a flight in which the
+    lowest joint is well above the ground, and a landing at most 0.6 leg
+    lengths ahead where the feet plant again."""
+    rig = zoo_rigs([species])[0]
+    motion = generate_clip(rig, "jump", frames=90, seed=4)
+    pos = motion.global_positions()
+    lowest, root = pos[:, :, 1].min(axis=1), pos[:, 0]
+    assert abs(lowest[:5]).max() < 0.01 * rig.leg_length
+    assert abs(lowest[-5:]).max() < 0.01 * rig.leg_length
+    assert lowest.max() > 0.1 * rig.leg_length
+    flight = lowest > 0.02 * rig.leg_length
+    # one flight of sqrt(8 rise / g): 0.1-0.6 s from a crab to a person
+    assert 3 <= flight.sum() and flight.sum() / motion.fps < 0.6
+    assert np.diff(flight.astype(int)).clip(0).sum() == 1
+    crouch = root[:np.argmax(flight), 1]
+    assert crouch.min() < root[0, 1] - 0.05 * rig.leg_length  # crouched before take-off
+    hop = np.linalg.norm(root[-1, [0, 2]] - root[0, [0, 2]])
+    assert hop < 0.7 * rig.leg_length
+    # feet stand still before take-off and after landing
+    assert np.abs(np.diff(pos[:10], axis=0)[:, :, [0, 2]]).max() < 0.01 * rig.leg_length

@@ -44,6 +44,10 @@ _LIFT_SPEED, _MIN_CADENCE = 0.35, 0.3
 #: ``look`` clips: head, neck, tail and arm joints (every swaying joint)
 #: turn by up to this many degrees, at 0.15-0.5 Hz.
 _LOOK_DEGREES = 30.0
+#: ``jump`` clips: height of the body's rise and forward hop (leg lengths;
+#: a hop of 0 jumps in place), crouch before take-off and after landing
+#: (leg lengths), gravity (m/s^2): the flight takes sqrt(8 rise / g).
+_JUMP_RISE, _JUMP_HOP, _JUMP_CROUCH, _GRAVITY = (0.15, 0.4), (0.0, 0.6), 0.12, 9.81
 
 
 @dataclass
@@ -57,6 +61,8 @@ class _Clip:
     yaw_rate: np.ndarray
     heading: Optional[np.ndarray] = None
     position: Optional[np.ndarray] = None
+    #: ``jump`` clips: take-off time (s, clip time) and flight time (s)
+    jump: Optional[Tuple[float, float]] = None
 
     @property
     def time(self) -> np.ndarray:
@@ -64,8 +70,9 @@ class _Clip:
 
 
 def _profile(kind: str, frames: int, fps: float, speed: float,
-             rng: np.random.Generator) -> _Clip:
-    """Speed and yaw-rate profiles of one clip kind."""
+             rng: np.random.Generator, length: float = 1.0) -> _Clip:
+    """Speed and yaw-rate profiles of one clip kind (:obj:`length`: the
+    leg length, the unit of a jump's hop)."""
     pad = int(_PAD_SECONDS * fps)
     t = (np.arange(frames + 2 * pad) - pad) / fps
     mid = 0.5 * frames / fps
@@ -85,6 +92,14 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
         lo, hi = speed * rng.uniform(0.5, 0.65), speed * rng.uniform(1.15, 1.3)
         a, b = (lo, hi) if rng.random() < 0.5 else (hi, lo)
         v = a + (b - a) * ramp
+    elif kind == "jump":
+        # still but for the flight, which carries the body forward at a
+        # constant speed (the hop's length over the flight time)
+        take_off = rng.uniform(0.3, 0.55) * 2 * mid
+        flight = np.sqrt(8 * rng.uniform(*_JUMP_RISE) * length / _GRAVITY)
+        hop = rng.uniform(*_JUMP_HOP) * length
+        v = np.where((t >= take_off) & (t < take_off + flight), hop / flight, 0.0)
+        return _Clip(fps, pad, v, 0.0 * yaw, jump=(take_off, flight))
     return _Clip(fps, pad, v, yaw)
 
 
@@ -332,8 +347,8 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     gait = GAITS["trot" if kind == "trot" else rig.species]
     _, _, stride, speed, _ = gait
     length = rig.leg_length
-    clip = _profile(kind, frames, fps, speed * length, rng)
-    idle = kind in ("idle", "look")
+    clip = _profile(kind, frames, fps, speed * length, rng, length)
+    idle = kind in ("idle", "look", "jump")
     _trace(clip, rng.uniform(-np.pi, np.pi), idle, length, rng)
     if idle:
         freq = np.full_like(clip.speed, _IDLE_HZ)
@@ -347,16 +362,54 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     scale = np.ones_like(clip.speed) if idle else np.clip(
         clip.speed / (_LIFT_SPEED * speed * length), 0.0, 1.0)
     feet = _plan_feet(rig, clip, phase, gait, idle, scale)
+    if clip.jump is not None:
+        scale = np.zeros_like(clip.speed)  # no sways: the body is tense
+        lift = _jump_lift(clip, length)
+        feet = _jump_feet(clip, feet, lift)
     root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase, scale)
     local = _local_rotations(rig, phase, scale,
                              _look(rig, clip.time, rng) if kind == "look" else None)
-    height = _body_height(rig, clip, root_rot, local, feet)
+    grounded = feet
+    if clip.jump is not None:  # the stance height, as if the feet stayed down
+        grounded = _Feet(feet.targets.copy(), feet.yaw)
+        grounded.targets[..., 1] = feet.targets[:, :1, 1]
+    height = _body_height(rig, clip, root_rot, local, grounded)
     root = clip.position * np.array([1.0, 0.0, 1.0])
     root[:, 1] = height
-    if idle:
+    if clip.jump is not None:
+        root[:, 1] += lift[0] - lift[1]
+    elif idle:
         root[:, 1] -= 0.01 * length * (1 + np.sin(2 * np.pi * phase))
     rot, pos = _pose(rig, root, root_rot, clip.heading, local, feet)
     return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
+
+
+def _jump_lift(clip: _Clip, length: float) -> Tuple[np.ndarray, np.ndarray]:
+    """Per frame of a jump: the body's ballistic rise (zero on the ground)
+    and its crouch (before take-off and after landing, feet planted)."""
+    take_off, flight = clip.jump
+    t = clip.time
+    s = np.clip((t - take_off) / flight, 0.0, 1.0)
+    rise = 0.5 * _GRAVITY * flight ** 2 * s * (1.0 - s)  # peak g T^2 / 8
+    dip = np.exp(-0.5 * ((t - take_off + 0.18) / 0.1) ** 2) \
+        + 0.8 * np.exp(-0.5 * ((t - take_off - flight - 0.12) / 0.1) ** 2)
+    return rise, _JUMP_CROUCH * length * dip
+
+
+def _jump_feet(clip: _Clip, feet: _Feet, lift: Tuple[np.ndarray, np.ndarray]) -> _Feet:
+    """A jump's ankle targets: planted where they stood until take-off,
+    carried through the air with the body (tucked up a little), planted
+    where the hop lands them."""
+    take_off, flight = clip.jump
+    s = np.clip((clip.time - take_off) / flight, 0.0, 1.0)
+    land = int(np.searchsorted(clip.time, take_off + flight))
+    land = min(land, len(clip.time) - 1)
+    shift = clip.position[land] - clip.position[clip.pad]
+    w = _smoothstep(s)[:, None]
+    targets = feet.targets + w[None] * shift[None, None] * np.array([1.0, 0.0, 1.0])
+    tuck = 0.15 * lift[0].max(initial=0.0) * np.sin(np.pi * s)
+    targets[..., 1] += (lift[0] + tuck)[None]
+    return _Feet(targets, feet.yaw)
 
 
 def _trace(clip: _Clip, heading: float, idle: bool, length: float,

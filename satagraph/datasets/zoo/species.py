@@ -20,15 +20,17 @@ from satagraph.datasets.zoo.rigs import ZooRig
 SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab",
            "spider", "longtail")
 CLIP_KINDS = {
-    "biped": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
-    "quadruped": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look"),
-    "bird": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
-    "hexapod": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
+    "biped": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "quadruped": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look",
+                  "jump"),
+    "bird": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "hexapod": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
     "snake": ("walk", "turn", "speed", "idle"),
-    "fowl": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
-    "crab": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
-    "spider": ("walk", "turn", "speed", "idle", "start", "stop", "look"),
-    "longtail": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look"),
+    "fowl": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "crab": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "spider": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "longtail": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look",
+                  "jump"),
 }
 
 VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {
