@@ -29,6 +29,8 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
   (legged plans).
 * ``jump``: stands, crouches, jumps (up to 0.6 leg lengths forward, or in
   place) and lands (legged plans).
+* ``reach``: stands and raises one arm forward or overhead, holds it and
+  lowers it again (bipeds).
 """
 from __future__ import annotations
 
@@ -59,7 +61,7 @@ TURN_WORDS = ((45.0, "veers"), (135.0, "turns"), (225.0, "turns around"),
 UNTOLD_TURN = 10.0
 DRIFT_TURN = 30.0
 _KIND_IN_NAME = re.compile(
-    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump)(?:_\d+)?$")
+    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
 
@@ -135,6 +137,8 @@ def _verbs(clip: ZooClip) -> List[str]:
         return ["stands in place, looking around", "stands still, turning its head"]
     if clip.kind == "jump":
         return ["crouches and jumps", "jumps up and lands"]
+    if clip.kind == "reach":
+        return ["stands and reaches out with one arm", "raises an arm and lowers it again"]
     if clip.kind == "turn":
         verb, side = _turn_phrase(clip.turn)
         if not side:

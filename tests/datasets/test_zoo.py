@@ -7,6 +7,8 @@ import csv
 import numpy as np
 import pytest
 
+from satagraph.datasets.zoo.rigs import _is_below
+
 from satagraph.cli import main
 from satagraph.semantics import describe_joints
 from satagraph.datasets.sources import read_manifest
@@ -191,3 +193,24 @@ def test_jump_leaves_the_ground_with_every_foot_and_lands(species):
     assert hop < 0.7 * rig.leg_length
     # feet stand still before take-off and after landing
     assert np.abs(np.diff(pos[:10], axis=0)[:, :, [0, 2]]).max() < 0.01 * rig.leg_length
+
+
+@pytest.mark.parametrize("variant", [0, 1, 2, 3])
+def test_reach_raises_one_hand_and_lowers_it_standing(variant):
+    """``reach`` (bipeds): against the idle of the same seed, one hand
+    rises to at least the shoulders' height and comes back, the rest of
+    the body does what the idle does."""
+    rig = zoo_rigs(["biped"])[variant]
+    reach = generate_clip(rig, "reach", frames=90, seed=variant).global_positions()
+    idle = generate_clip(rig, "idle", frames=90, seed=variant).global_positions()
+    skel = zoo_rigs(["biped"])[variant].skeleton
+    below = [np.array([j for j in range(skel.num_joints) if _is_below(skel, j, a)])
+             for a in rig.arms]
+    lift = [(reach[:, b, 1] - idle[:, b, 1]).max(axis=1) for b in below]
+    raised = int(np.argmax([l.max() for l in lift]))
+    arm = below[raised]
+    shoulder = idle[0, rig.arms[raised], 1] - idle[0, arm, 1].min()
+    assert lift[raised].max() > 0.8 * shoulder
+    assert abs(lift[raised][[0, -1]]).max() < 0.02 * shoulder
+    others = np.setdiff1d(np.arange(skel.num_joints), arm)
+    np.testing.assert_allclose(reach[:, others], idle[:, others], atol=1e-9)

@@ -47,6 +47,7 @@ def _arm(b: _Builder, parent: int, side: int, sx: float, h: float,
     f = b.key("lower_f", u, direction * b.jitter(0.17 * h), side=side)
     hd = b.key("hand_f", f, direction * b.jitter(0.15 * h), side=side)
     b.end(hd, direction * 0.1 * h)
+    b.arms.append(u)
     hang = -sx * (82.0 - down)
     b.swing(u, static=(0, 0, hang), amplitude=(-22, 0, 0), k=1.0,
             phase=0.5 * side - 0.19)

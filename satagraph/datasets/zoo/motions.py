@@ -48,6 +48,10 @@ _LOOK_DEGREES = 30.0
 #: a hop of 0 jumps in place), crouch before take-off and after landing
 #: (leg lengths), gravity (m/s^2): the flight takes sqrt(8 rise / g).
 _JUMP_RISE, _JUMP_HOP, _JUMP_CROUCH, _GRAVITY = (0.15, 0.4), (0.0, 0.6), 0.12, 9.81
+#: ``reach`` clips: how far one arm swings up from hanging (degrees: 60
+#: reaches forward and down, 90 straight ahead, 150 overhead), how long it
+#: rises (s) and holds (s).
+_REACH_DEGREES, _REACH_RISE, _REACH_HOLD = (60.0, 150.0), (0.5, 0.9), (0.3, 1.0)
 
 
 @dataclass
@@ -79,7 +83,7 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
     ramp = _smoothstep((t - mid + 0.75) / 1.5)
     v = speed * rng.uniform(0.85, 1.15) * np.ones_like(t)
     yaw = np.radians(rng.uniform(-4, 4)) * np.ones_like(t)
-    if kind in ("idle", "look"):
+    if kind in ("idle", "look", "reach"):
         v[:], yaw[:] = 0.0, 0.0
     elif kind == "turn":
         rate = np.radians(rng.uniform(35, 70)) * rng.choice([-1.0, 1.0])
@@ -289,6 +293,21 @@ def _look(rig: ZooRig, time: np.ndarray, rng: np.random.Generator) -> Dict[int, 
     return out
 
 
+def _reach(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
+           rng: np.random.Generator) -> Dict[int, np.ndarray]:
+    """One arm (drawn) swings up from its hanging pose about the body's
+    left-right axis, holds and comes back down, centred in the clip: the
+    upper arm's new local rotation."""
+    arm = rig.arms[int(rng.integers(len(rig.arms)))]
+    frames = len(clip.time) - 2 * clip.pad
+    mid = 0.5 * frames / clip.fps
+    rise, hold = rng.uniform(*_REACH_RISE), rng.uniform(*_REACH_HOLD)
+    up = _smoothstep((clip.time - (mid - hold / 2 - rise)) / rise)
+    down = _smoothstep((clip.time - (mid + hold / 2)) / rise)
+    angle = -np.radians(rng.uniform(*_REACH_DEGREES)) * (up - down)
+    return {arm: _rot(0, angle) @ local[arm]}
+
+
 def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
                feet: _Feet) -> Dict[int, np.ndarray]:
     """Global rotations of a leg's upper, lower and foot joints."""
@@ -348,7 +367,7 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     _, _, stride, speed, _ = gait
     length = rig.leg_length
     clip = _profile(kind, frames, fps, speed * length, rng, length)
-    idle = kind in ("idle", "look", "jump")
+    idle = kind in ("idle", "look", "jump", "reach")
     _trace(clip, rng.uniform(-np.pi, np.pi), idle, length, rng)
     if idle:
         freq = np.full_like(clip.speed, _IDLE_HZ)
@@ -369,6 +388,8 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase, scale)
     local = _local_rotations(rig, phase, scale,
                              _look(rig, clip.time, rng) if kind == "look" else None)
+    if kind == "reach":
+        local.update(_reach(rig, clip, local, rng))
     grounded = feet
     if clip.jump is not None:  # the stance height, as if the feet stayed down
         grounded = _Feet(feet.targets.copy(), feet.yaw)

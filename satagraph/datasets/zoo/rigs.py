@@ -156,6 +156,7 @@ class ZooRig:
         legs (list[Leg]): IK legs (empty for snakes).
         sway (dict): Joint index -> :class:`Sway` for the other joints.
         leg_length (float): Typical leg (or body) length in metres.
+        arms (list[int]): Upper-arm joints that can reach (left first).
     """
 
     name: str
@@ -164,6 +165,7 @@ class ZooRig:
     legs: List[Leg] = field(default_factory=list)
     sway: Dict[int, Sway] = field(default_factory=dict)
     leg_length: float = 1.0
+    arms: List[int] = field(default_factory=list)
 
 
 class _Builder:
@@ -177,6 +179,7 @@ class _Builder:
         self.ends: List[bool] = []
         self.sway: Dict[int, Sway] = {}
         self.legs: List[Leg] = []
+        self.arms: List[int] = []
 
     def add(self, name: str, parent: int, offset: Sequence[float],
             end: bool = False) -> int:
@@ -231,6 +234,7 @@ class _Builder:
         for leg in self.legs:
             leg.upper, leg.lower, leg.foot = (new[leg.upper], new[leg.lower],
                                               new[leg.foot])
+        self.arms = [new[j] for j in self.arms]
 
     def rig(self, name: str, species: str, leg_length: float) -> ZooRig:
         self.depth_first()
@@ -238,7 +242,7 @@ class _Builder:
         for leg in self.legs:
             leg.tips = [j for j in range(skel.num_joints)
                         if skel.is_leaf[j] and _is_below(skel, j, leg.foot)]
-        return ZooRig(name, species, skel, self.legs, self.sway, leg_length)
+        return ZooRig(name, species, skel, self.legs, self.sway, leg_length, self.arms)
 
 
 def _is_below(skel: Skeleton, j: int, ancestor: int) -> bool:

@@ -20,7 +20,7 @@ from satagraph.datasets.zoo.rigs import ZooRig
 SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab",
            "spider", "longtail")
 CLIP_KINDS = {
-    "biped": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "biped": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump", "reach"),
     "quadruped": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look",
                   "jump"),
     "bird": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
