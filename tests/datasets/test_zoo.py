@@ -7,13 +7,12 @@ import csv
 import numpy as np
 import pytest
 
-from satagraph.datasets.zoo.rigs import _is_below
-
 from satagraph.cli import main
 from satagraph.semantics import describe_joints
 from satagraph.datasets.sources import read_manifest
 from satagraph.datasets.zoo import (CLIP_KINDS, MANIFEST_COLUMNS, SPECIES,
                                     generate_clip, write_zoo, zoo_rigs)
+from satagraph.datasets.zoo.rigs import _is_below
 from satagraph.io import read_bvh, write_bvh
 from satagraph.motion import ground_contacts
 
