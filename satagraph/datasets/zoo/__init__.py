@@ -17,8 +17,11 @@ stance and swing intervals; a stance foot stays planted where it landed
 landing spot beside the moving body; two-bone IK with a knee pole poses the
 legs, and the body height is lowered wherever a planted foot would be out
 of reach. Clip kinds (:data:`CLIP_KINDS`): ``walk``, ``turn``, ``speed``
-(speed change), ``idle`` and ``trot`` (quadrupeds). Snakes slither: every
-joint follows the path of the head.
+(speed change), ``idle``, ``trot`` (quadrupeds), ``start`` and ``stop``
+(from and to a standstill), ``look`` (head, neck, tail and arms turning
+slowly), ``jump`` (crouch, flight, landing) and ``reach`` (bipeds: one arm
+raised and lowered). Snakes slither: every joint follows the path of the
+head.
 
 Exporter dialects (:mod:`satagraph.datasets.zoo.dialects`) re-express a clip
 exactly with another up axis (:data:`UP_AXES`), unit, rest pose and noisy
