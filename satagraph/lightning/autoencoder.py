@@ -78,7 +78,8 @@ class MotionAutoencoderModule(L.LightningModule):
         if self._retarget_weight() > 0 and rate != 1:
             raise ValueError(f"loss.retarget needs one latent per frame (decoded onto "
                              f"another skeleton's frames); {type(self.model).__name__} "
-                             f"has one per {rate} frames: set loss.retarget: 0")
+                             f"has one per {rate} frames: set loss.retarget and "
+                             "loss.retarget_root to 0")
 
     # -------------------------------------------------------- semantics
     def embed(self, skeleton, evidence=None) -> Tensor:
@@ -173,31 +174,47 @@ class MotionAutoencoderModule(L.LightningModule):
     # ----------------------------------------------------------- steps
     def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Named loss terms and their weighted sum under ``"loss"``; with a
-        ``retarget`` weight, also :meth:`retarget_loss` of ``out["z"]``."""
+        ``retarget`` or ``retarget_root`` weight, also the cross-skeleton
+        terms of :meth:`retarget_losses` of ``out["z"]``."""
         losses = self.criterion(out, batch, self.normalizer)
-        weight = self._retarget_weight()
-        if weight > 0 and "z" in out:
-            term = self.retarget_loss(out["z"], batch)
-            # logged every step (zero without a pair), so that every process
-            # of a distributed run logs the same keys
-            losses["retarget"] = out["z"].sum() * 0.0 if term is None else term
-            losses["loss"] = losses["loss"] + weight * losses["retarget"]
+        weights = {k: self._loss_weight(k) for k in ("retarget", "retarget_root")}
+        if any(w > 0 for w in weights.values()) and "z" in out:
+            terms = self.retarget_losses(out["z"], batch)
+            for name, weight in weights.items():
+                if weight > 0:
+                    # logged every step (zero without a pair), so that every
+                    # process of a distributed run logs the same keys
+                    losses[name] = out["z"].sum() * 0.0 if terms is None else terms[name]
+                    losses["loss"] = losses["loss"] + weight * losses[name]
         return losses
 
+    def _loss_weight(self, name: str) -> float:
+        return float(getattr(self.criterion, "weights", {}).get(name, 0.0))
+
     def _retarget_weight(self) -> float:
-        return float(getattr(self.criterion, "weights", {}).get("retarget", 0.0))
+        """The largest weight of the cross-skeleton terms (0: none is on)."""
+        return max(self._loss_weight("retarget"), self._loss_weight("retarget_root"))
 
     def retarget_loss(self, z: Tensor, batch) -> Optional[Tensor]:
-        """Unpaired cross-skeleton term: every clip's latents :obj:`z`
+        """The limb term of :meth:`retarget_losses` (``None`` when every
+        clip of the batch has the same skeleton)."""
+        terms = self.retarget_losses(z, batch)
+        return None if terms is None else terms["retarget"]
+
+    def retarget_losses(self, z: Tensor, batch) -> Optional[Dict[str, Tensor]]:
+        """Unpaired cross-skeleton terms: every clip's latents :obj:`z`
         decoded onto another skeleton of the batch must move the limb ends
-        like the source (:func:`~satagraph.losses.limb_velocity_loss`).
+        like the source (``retarget``:
+        :func:`~satagraph.losses.limb_velocity_loss`) and carry the root
+        like it (``retarget_root``: :func:`~satagraph.losses.root_transfer_loss`).
         Partners come with the batch (``batch.pairing``, collated by
         :class:`~satagraph.data.pairing.PartnerCollate`), else are drawn here
         from a generator seeded with the global step
         (:func:`~satagraph.data.pairing.partner_batch`). ``None`` when every
         clip of the batch has the same skeleton."""
+        from torch_geometric.utils import scatter
         from satagraph.data.pairing import pairing_to, partner_batch
-        from satagraph.losses import facing_positions, limb_velocity_loss
+        from satagraph.losses import facing_positions, limb_velocity_loss, root_transfer_loss
         pairing = getattr(batch, "pairing", None)
         if pairing is None:
             gen = torch.Generator().manual_seed(int(self.global_step))
@@ -209,7 +226,15 @@ class MotionAutoencoderModule(L.LightningModule):
         pred = self.denormalize_output(self.decode(z[pairing.frames], target),
                                        pairing.target)
         pos = facing_positions(pred["q"], pred["r"], pairing.target)
-        return limb_velocity_loss(batch.x[:, DYNAMIC_LAYOUT["x"]], pos, pairing)
+        source_x = batch.x[:, DYNAMIC_LAYOUT["x"]]
+        low_source = scatter(source_x[:, 1], batch.batch, 0, batch.num_graphs, "min")
+        low_target = scatter(pos[:, 1], pairing.target.batch, 0, pairing.target.num_graphs,
+                             "min")
+        return {"retarget": limb_velocity_loss(source_x, pos, pairing),
+                "retarget_root": root_transfer_loss(
+                    batch.root[pairing.frames], pred["r"],
+                    batch.heights("frame")[pairing.frames], pairing.target.heights("frame"),
+                    low_source[pairing.frames], low_target)}
 
     def _step(self, batch, stage: str) -> Tensor:
         out = self(batch)

@@ -54,16 +54,21 @@ term                    weight  definition
                                 skeleton-aware networks across species).
                                 Computed by the LightningModule, which holds
                                 the decoder
+``retarget_root``       0       the root of the same cross-skeleton decoding
+                                (off by default): yaw rate, ground speed in
+                                heights per second and the lowest joint's
+                                height over the character's, as the source's
+                                (:func:`root_transfer_loss`)
 ======================  ======  ==============================================
 """
 from satagraph.losses.motion_loss import DEFAULT_WEIGHTS, MotionLoss
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         time_difference, to_global)
 from satagraph.losses.terms import (contact_loss, foot_sliding_loss, limb_velocity_loss,
-                                    penetration_loss, rotation_loss, smoothness_loss,
-                                    velocity_loss)
+                                    penetration_loss, root_transfer_loss, rotation_loss,
+                                    smoothness_loss, velocity_loss)
 
 __all__ = ["DEFAULT_WEIGHTS", "MotionLoss", "POSITION_SCALE", "facing_positions",
            "position_scale", "time_difference", "to_global", "contact_loss",
-           "foot_sliding_loss", "limb_velocity_loss", "penetration_loss", "rotation_loss",
-           "smoothness_loss", "velocity_loss"]
+           "foot_sliding_loss", "limb_velocity_loss", "penetration_loss", "root_transfer_loss",
+           "rotation_loss", "smoothness_loss", "velocity_loss"]

@@ -16,7 +16,7 @@ from satagraph.typing import DYNAMIC_LAYOUT
 DEFAULT_WEIGHTS: Dict[str, float] = {
     "rotation": 5.0, "position": 0.01, "velocity": 1.0, "root": 10.0, "contact": 1.0,
     "foot_sliding": 6.0, "penetration": 0.1, "smoothness": 0.015, "kl": 1e-4,
-    "commit": 0.02, "retarget": 0.0,
+    "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0,
 }
 
 

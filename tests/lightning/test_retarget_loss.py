@@ -173,3 +173,38 @@ def test_partners_are_collated_with_the_batch_and_used_by_the_module(build_tiny_
     assert datamodule.pair_partners
     assert isinstance(datamodule.train_dataloader().collate_fn, PartnerCollate)
     datamodule.pair_partners = False
+
+
+def test_root_transfer_loss_is_zero_for_a_root_moving_alike_in_heights():
+    from satagraph.losses import root_transfer_loss
+    r_s = torch.tensor([[0.3, 0.1, 1.5, 0.9], [0.0, 0.0, 1.2, 0.95]])
+    h_s, h_t = torch.tensor([1.8, 1.8]), torch.tensor([0.6, 0.6])
+    low_s = torch.tensor([0.0, 0.18])
+    alike = torch.cat([r_s[:, :1], r_s[:, 1:3] * (h_t / h_s)[:, None], r_s[:, 3:] * 0.5], 1)
+    low_t = low_s * h_t / h_s
+    # the root's own height is the partner's business: only turn, speed and the lowest joint
+    assert root_transfer_loss(r_s, alike, h_s, h_t, low_s, low_t) < 1e-12
+    faster = alike.clone()
+    faster[:, 2] *= 2
+    floating = low_t + 0.1 * h_t
+    turning = alike.clone()
+    turning[:, 0] += 1.0
+    for r_t, low in ((faster, low_t), (alike, floating), (turning, low_t)):
+        assert root_transfer_loss(r_s, r_t, h_s, h_t, low_s, low) > 0.2
+
+
+def test_module_adds_the_root_term_with_gradients_to_the_decoder(build_tiny_module,
+                                                                 datamodule):
+    batch = _mixed_batch(datamodule)
+    module = build_tiny_module("vae")
+    module.train()
+    torch.manual_seed(0)
+    out = module(batch)
+    plain = module.compute_losses(out, batch)
+    module.criterion.weights["retarget_root"] = 0.3
+    losses = module.compute_losses(out, batch)
+    assert "retarget" not in losses and losses["retarget_root"] > 0
+    assert torch.allclose(losses["loss"], plain["loss"] + 0.3 * losses["retarget_root"])
+    losses["retarget_root"].backward()
+    grads = [p.grad for p in module.model.decoder.parameters() if p.grad is not None]
+    assert grads and any(g.abs().sum() > 0 for g in grads)

@@ -1,0 +1,68 @@
+"""The shipped text-to-motion model (``satagraph/weights/t2m_builtin.safetensors``):
+small, saying what made it and on which data (no Bandai, no dog), loaded
+offline, and generating on real skeletons of three species it never
+trained on."""
+from __future__ import annotations
+
+import json
+import socket
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from satagraph.cli import main
+from satagraph.io import read_bvh
+from satagraph.io.weights import MAX_WEIGHTS_BYTES, builtin_path, read_weights_metadata
+
+SHIPPED = builtin_path("text-to-motion")
+pytestmark = pytest.mark.skipif(not SHIPPED.is_file(),
+                                reason="no built-in text-to-motion weights ship in this checkout")
+
+
+def test_shipped_generator_describes_itself() -> None:
+    assert SHIPPED.stat().st_size <= MAX_WEIGHTS_BYTES
+    meta = read_weights_metadata(SHIPPED)
+    assert meta["module"] == "t2m"
+    assert "satagraph train t2m_builtin" in json.dumps(meta["provenance"])
+    hparams = meta["hyper_parameters"]
+    sources = json.dumps(hparams["meta"]["data"]["sources"]).lower()
+    autoencoder = json.dumps(hparams["model"]["autoencoder"]["hparams"]["meta"]["data"]
+                             ["sources"]).lower()
+    for used in (sources, autoencoder):
+        assert "zoo" in used and "ccbase" in used
+        assert "bandai" not in used and "dataset: dog" not in used
+    assert hparams["meta"]["text_encoder"]["id"].startswith("offline")
+
+
+def test_generate_without_ckpt_on_three_species_offline(
+        shared_data: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`satagraph generate` with no --ckpt, sockets refused: a Bandai human
+    and the dog (real rigs it never trained on, in cm) and a zoo bird of a
+    test seed get a finite motion each, on their own rigs, of the asked
+    length; the same seed gives the same file."""
+    def refuse(*args, **kwargs):
+        raise AssertionError("network access at run time")
+    monkeypatch.setattr(socket, "socket", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.datasets.zoo.dialects import export_dialect
+    from satagraph.io import write_bvh
+    bandai = shared_data / "bandai" / "dataset-1_walk_normal_001.bvh"
+    dog = shared_data / "dog" / "D1_001_KAN01_001.bvh"
+    bird = tmp_path / "bird.bvh"
+    write_bvh(export_dialect(generate_clip(zoo_rigs(["bird"], seed=911)[0], frames=4),
+                             scale=0.01), bird)  # in cm like the others
+    out = tmp_path / "out"
+    out.mkdir()
+    args = ["generate", "--text", "walks forward", "--seconds", "2", "--seed", "3",
+            "--skeleton", str(bandai), str(dog), str(bird), "--units", "cm", str(out)]
+    assert main(args) == 0
+    for src in (bandai, dog, bird):
+        motion, rig = read_bvh(out / src.name), read_bvh(src)
+        assert motion.skeleton.names == rig.skeleton.names
+        assert motion.num_frames == 60
+        assert np.isfinite(motion.global_positions()).all()
+    first = (out / dog.name).read_bytes()
+    assert main(args) == 0
+    assert (out / dog.name).read_bytes() == first
