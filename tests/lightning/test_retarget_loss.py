@@ -107,17 +107,23 @@ def test_limb_velocity_loss_is_height_normalised(datamodule):
     assert limb_velocity_loss(x, moved, pairing) > 1e-4
 
 
-def test_module_adds_the_weighted_retarget_term_with_gradients(build_tiny_module,
-                                                               datamodule):
-    batch = _mixed_batch(datamodule)
-    module = build_tiny_module("vae")
+def _losses_with(module, batch, name: str, weight: float):
+    """The module's losses of one forward pass without and with the
+    cross-skeleton term :obj:`name` at :obj:`weight`."""
     module.train()
     torch.manual_seed(0)
     out = module(batch)
     plain = module.compute_losses(out, batch)
+    module.criterion.weights[name] = weight
+    return out, plain, module.compute_losses(out, batch)
+
+
+def test_module_adds_the_weighted_retarget_term_with_gradients(build_tiny_module,
+                                                               datamodule):
+    batch = _mixed_batch(datamodule)
+    module = build_tiny_module("vae")
+    out, plain, losses = _losses_with(module, batch, "retarget", 0.5)
     assert "retarget" not in plain
-    module.criterion.weights["retarget"] = 0.5
-    losses = module.compute_losses(out, batch)
     assert losses["retarget"] > 0
     assert torch.allclose(losses["loss"], plain["loss"] + 0.5 * losses["retarget"])
     losses["retarget"].backward()
@@ -195,14 +201,8 @@ def test_root_transfer_loss_is_zero_for_a_root_moving_alike_in_heights():
 
 def test_module_adds_the_root_term_with_gradients_to_the_decoder(build_tiny_module,
                                                                  datamodule):
-    batch = _mixed_batch(datamodule)
     module = build_tiny_module("vae")
-    module.train()
-    torch.manual_seed(0)
-    out = module(batch)
-    plain = module.compute_losses(out, batch)
-    module.criterion.weights["retarget_root"] = 0.3
-    losses = module.compute_losses(out, batch)
+    _, plain, losses = _losses_with(module, _mixed_batch(datamodule), "retarget_root", 0.3)
     assert "retarget" not in losses and losses["retarget_root"] > 0
     assert torch.allclose(losses["loss"], plain["loss"] + 0.3 * losses["retarget_root"])
     losses["retarget_root"].backward()
