@@ -383,13 +383,12 @@ def transfer(module, source: Motion, target: Motion) -> MotionFeatures:
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
     its own rig, decoded on :obj:`target`'s rig (canonical features)."""
     from satagraph.data.collate import collate_clips
-    from satagraph.pipelines.generate import _skeleton_inputs, decode_on
+    from satagraph.pipelines.generate import decode_on, rig_inputs
     with torch.no_grad():
-        canon, _, sem = _skeleton_inputs(module, source)
-        clip = motion_to_features(canon).to_clip(0, None, sem)
+        rig = rig_inputs(module, source)
+        clip = motion_to_features(rig.shown).to_clip(0, None, rig.semantic)
         codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
-        canon_t, static_t, sem_t = _skeleton_inputs(module, target)
-        motion = decode_on(module, codes[0][: int(lengths[0])], canon_t, static_t, sem_t)
+        motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target))
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 

@@ -6,17 +6,19 @@ skeleton, the generators, and the id of the text encoder (checked when it
 is loaded). For every target skeleton:
 
 1. the target is brought into the model's canonical frame
-   (:func:`~satagraph.transforms.canonical.canonicalize`) and its static and
-   semantic features give :math:`f_{skel}`;
+   (:func:`~satagraph.transforms.canonical.canonicalize`; a rig whose rest
+   pose is a line is re-rested on its first frame, as
+   :func:`~satagraph.pipelines.inference.retarget_motion` does) and its
+   static and semantic features give :math:`f_{skel}`;
 2. the duration is the user's, or drawn from the length model given the
    text and the skeleton;
 3. the masked transformer decodes layer-0 codes (iterative re-masking,
    classifier-free guidance that drops the text only), the residual
    transformer the other layers;
 4. the autoencoder decodes the codes onto the target's frame graphs, and
-   the motion goes back to the target's own rig (axes, units, rest pose,
-   joint order, channel layout) with
-   :func:`~satagraph.transforms.canonical.decanonicalize`.
+   the motion goes back to the target's own rig (its rest pose, then axes,
+   units, joint order and channel layout with
+   :func:`~satagraph.transforms.canonical.decanonicalize`).
 
 Every skeleton draws from a generator seeded by :obj:`seed` alone, so the
 same seed gives the same motion, whatever other skeletons are asked for.
@@ -29,15 +31,18 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import List, Optional, Sequence
 
+import numpy as np
 import torch
 
 from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
-from satagraph.pipelines.inference import static_features, target_clip
+from satagraph.pipelines.inference import _shown_rest, static_features, target_clip
+from satagraph.transforms.augment import set_rest_rotations
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion
+from satagraph.data.features import MotionFeatures
 
 
 @dataclass(frozen=True)
@@ -82,14 +87,29 @@ def load_generator(ckpt: str = "builtin"):
     return module.eval()
 
 
-def _skeleton_inputs(module, target: Motion):
-    """Canonical target, its features and semantic embedding."""
+@dataclass(frozen=True)
+class RigInputs:
+    """A skeleton as the model sees it: the canonical motion, the motion
+    in the rest pose shown to the model (a line rest re-rested on its first
+    frame), its static features, semantic embedding, and the rest rotations
+    that undo the re-resting (``None``: none)."""
+
+    canon: Motion
+    shown: Motion
+    feats: MotionFeatures
+    semantic: Optional[torch.Tensor]
+    undo: Optional[np.ndarray]
+
+
+def rig_inputs(module, target: Motion) -> RigInputs:
+    """The :class:`RigInputs` of a target for :obj:`module`."""
     canon = canonicalize(target, fps=module.fps)
-    feats = static_features(canon)
+    shown, undo = _shown_rest(canon, "auto")
+    feats = static_features(shown)
     semantic = module.semantic_fn()
     sem = None if semantic is None else call_semantic(
         semantic, feats.skeleton, evidence_from_features(feats)).float()
-    return canon, feats, sem
+    return RigInputs(canon, shown, feats, sem, undo)
 
 
 def _frames(module, text_emb, skel_emb, seconds: Optional[float],
@@ -122,9 +142,9 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     """
     module.eval()
     gen = torch.Generator().manual_seed(int(seed))
-    canon, feats, sem = _skeleton_inputs(module, target)
+    rig = rig_inputs(module, target)
     device = module.device
-    skel_batch = collate_clips([target_clip(feats, 1, sem)]).to(device)
+    skel_batch = collate_clips([target_clip(rig.feats, 1, rig.semantic)]).to(device)
     skel_emb = module.skeleton_embedding(skel_batch)
     text_emb = None if text is None else module.encode_text([text])
     frames = _frames(module, text_emb, skel_emb, seconds, gen)
@@ -135,24 +155,27 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, settings.temperature,
                                      settings.topk_ratio, gen)
-    return decode_on(module, codes[0, :frames], canon, feats, sem)
+    return decode_on(module, codes[0, :frames], rig)
 
 
-def decode_on(module, codes: torch.Tensor, canon: Motion, feats, sem) -> Motion:
-    r"""Per-frame codes decoded onto a canonical target, back on its rig.
+def decode_on(module, codes: torch.Tensor, rig: RigInputs) -> Motion:
+    r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
+    its rig.
 
     Shapes:
         - **codes**: :math:`(T, Q)`
     """
     ae = module.autoencoder
-    frames, num = codes.size(0), feats.skeleton.num_joints
-    target = collate_clips([target_clip(feats, frames, sem)]).to(module.device)
+    frames, num = codes.size(0), rig.feats.skeleton.num_joints
+    target = collate_clips([target_clip(rig.feats, frames, rig.semantic)]).to(module.device)
     out = ae.decode_codes(codes, target)
     q = out["q"].view(frames, num, 6).cpu().double().numpy()
     r = out["r"].cpu().double().numpy()
-    done = replace(feats, q=q, r=r, fps=module.fps, transform=canon.transform)
+    done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
     motion = features_to_motion(done, q=q, r=r, use_positions=False)
-    return decanonicalize(motion, canon.transform, fps=module.fps)
+    if rig.undo is not None:
+        motion = set_rest_rotations(motion, rig.undo).with_(skeleton=rig.canon.skeleton)
+    return decanonicalize(motion, rig.canon.transform, fps=module.fps)
 
 
 def output_paths(output: str, skeletons: Sequence[str]) -> List[str]:
@@ -191,5 +214,6 @@ def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
         raise
 
 
-__all__ = ["GenerationSettings", "load_generator", "generate_on", "decode_on",
+__all__ = ["GenerationSettings", "RigInputs", "rig_inputs", "load_generator", "generate_on",
+           "decode_on",
            "output_paths", "write_all"]
