@@ -390,11 +390,8 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
                              _look(rig, clip.time, rng) if kind == "look" else None)
     if kind == "reach":
         local.update(_reach(rig, clip, local, rng))
-    grounded = feet
-    if clip.jump is not None:  # the stance height, as if the feet stayed down
-        grounded = _Feet(feet.targets.copy(), feet.yaw)
-        grounded.targets[..., 1] = feet.targets[:, :1, 1]
-    height = _body_height(rig, clip, root_rot, local, grounded)
+    height = _body_height(rig, clip, root_rot, local,
+                          feet if clip.jump is None else _grounded(feet))
     root = clip.position * np.array([1.0, 0.0, 1.0])
     root[:, 1] = height
     if clip.jump is not None:
@@ -415,6 +412,14 @@ def _jump_lift(clip: _Clip, length: float) -> Tuple[np.ndarray, np.ndarray]:
     dip = np.exp(-0.5 * ((t - take_off + 0.18) / 0.1) ** 2) \
         + 0.8 * np.exp(-0.5 * ((t - take_off - flight - 0.12) / 0.1) ** 2)
     return rise, _JUMP_CROUCH * length * dip
+
+
+def _grounded(feet: _Feet) -> _Feet:
+    """Ankle targets kept at their first frame's height (a jump's stance
+    height: as if the feet stayed down)."""
+    targets = feet.targets.copy()
+    targets[..., 1] = feet.targets[:, :1, 1]
+    return _Feet(targets, feet.yaw)
 
 
 def _jump_feet(clip: _Clip, feet: _Feet, lift: Tuple[np.ndarray, np.ndarray]) -> _Feet:
