@@ -47,9 +47,17 @@ BUILTIN_FILES = {"autoencoder": "builtin.safetensors",
 _BUILTIN_RECIPES = {"autoencoder": "`satagraph train pretrain_zoo`",
                     "text-to-motion": "`satagraph train t2m_rvq_builtin` then "
                                       "`satagraph train t2m_builtin`"}
-#: The one line shown when no built-in weights ship.
-NO_BUILTIN = ("no built-in weights are shipped in this version: train one with "
-              "`satagraph train pretrain_zoo` or pass --ckpt")
+
+
+def _no_builtin(kind: str) -> str:
+    """The one line shown when no built-in weights of :obj:`kind` ship."""
+    what = "" if kind == "autoencoder" else f" {kind}"
+    return (f"no built-in{what} weights are shipped in this version: train one with "
+            f"{_BUILTIN_RECIPES[kind]} or pass --ckpt")
+
+
+#: The one line shown when no built-in autoencoder weights ship.
+NO_BUILTIN = _no_builtin("autoencoder")
 #: Largest weights file read.
 _MAX_READ_BYTES = 1 << 30
 _HPARAM_KEYS = ("model", "loss", "optim", "fps", "meta")
@@ -81,9 +89,7 @@ def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
         return os.fspath(name)
     path = builtin_path(kind)
     if not path.is_file():
-        raise CheckpointError(NO_BUILTIN if kind == "autoencoder" else
-                              f"no built-in {kind} weights are shipped in this version: "
-                              f"train them with {_BUILTIN_RECIPES[kind]} or pass --ckpt")
+        raise CheckpointError(_no_builtin(kind))
     return str(path)
 
 

@@ -36,13 +36,12 @@ import torch
 
 from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.data.collate import collate_clips
-from satagraph.data.features import features_to_motion
+from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
-from satagraph.pipelines.inference import _shown_rest, static_features, target_clip
-from satagraph.transforms.augment import set_rest_rotations
+from satagraph.pipelines.inference import (restore_rest, shown_rest, static_features,
+                                           target_clip)
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion
-from satagraph.data.features import MotionFeatures
 
 
 @dataclass(frozen=True)
@@ -104,7 +103,7 @@ class RigInputs:
 def rig_inputs(module, target: Motion) -> RigInputs:
     """The :class:`RigInputs` of a target for :obj:`module`."""
     canon = canonicalize(target, fps=module.fps)
-    shown, undo = _shown_rest(canon, "auto")
+    shown, undo = shown_rest(canon, "auto")
     feats = static_features(shown)
     semantic = module.semantic_fn()
     sem = None if semantic is None else call_semantic(
@@ -172,9 +171,8 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs) -> Motion:
     q = out["q"].view(frames, num, 6).cpu().double().numpy()
     r = out["r"].cpu().double().numpy()
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
-    motion = features_to_motion(done, q=q, r=r, use_positions=False)
-    if rig.undo is not None:
-        motion = set_rest_rotations(motion, rig.undo).with_(skeleton=rig.canon.skeleton)
+    motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
+                          rig.undo, rig.canon.skeleton)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)
 
 
@@ -215,5 +213,4 @@ def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
 
 
 __all__ = ["GenerationSettings", "RigInputs", "rig_inputs", "load_generator", "generate_on",
-           "decode_on",
-           "output_paths", "write_all"]
+           "decode_on", "output_paths", "write_all"]

@@ -183,26 +183,33 @@ def retarget_canonical(module, source: Motion, target: Motion,
     fps = fps or float(getattr(module, "fps", 30.0))
     src_canon = canonicalize(source, fps=fps)
     tgt_canon = canonicalize(target, fps=fps)
-    src_rest, _ = _shown_rest(src_canon, rest)
-    tgt_rest, undo = _shown_rest(tgt_canon, rest)
+    src_rest, _ = shown_rest(src_canon, rest)
+    tgt_rest, undo = shown_rest(tgt_canon, rest)
     tgt = static_features(tgt_rest)
     q, r, _ = transfer(module, motion_to_features(src_rest), tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     out = features_to_motion(out_feats, q=q, r=r, use_positions=False)
-    if undo is not None:
-        out = set_rest_rotations(out, undo).with_(skeleton=tgt_canon.skeleton)
-    return src_canon, out
+    return src_canon, restore_rest(out, undo, tgt_canon.skeleton)
 
 
-def _shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:
-    """A canonical motion in the rest pose :obj:`rest` names, and the rest
-    rotations that undo it (``None``: unchanged; a skeleton without frames
-    keeps its file's rest)."""
+def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:
+    """A canonical motion in the rest pose :obj:`rest` (:data:`REST_MODES`)
+    names, and the rest rotations that undo it (``None``: unchanged; a
+    skeleton without frames keeps its file's rest); :func:`restore_rest`
+    undoes it."""
     if rest == "file" or not motion.num_frames or (
             rest == "auto" and not is_line_rest(motion.skeleton)):
         return motion, None
     new = rebase_rotations(motion, 0)
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
+
+
+def restore_rest(motion: Motion, undo: Optional[np.ndarray], skeleton) -> Motion:
+    """A motion decoded on a skeleton :func:`shown_rest` re-rested, back on
+    the original :obj:`skeleton` (unchanged when :obj:`undo` is ``None``)."""
+    if undo is None:
+        return motion
+    return set_rest_rotations(motion, undo).with_(skeleton=skeleton)
 
 
 def is_line_rest(skeleton, share: float = 0.8, degrees: float = 5.0) -> bool:

@@ -170,17 +170,17 @@ def test_first_frame_rest_is_undone_on_the_target_rig(build_tiny_module: Callabl
     first frame (Bandai's rest is a line) and writes the target's own rest
     back: same hierarchy and offsets, other model input than ``"file"``
     (and what ``"auto"`` does for these two rigs)."""
-    from satagraph.pipelines.inference import _shown_rest
+    from satagraph.pipelines.inference import shown_rest
     module = build_tiny_module("vae")
     src, tgt = read_real(BANDAI), read_real(DOG).slice(0, 10)
     canon = canonicalize(tgt, fps=30)
-    shown, undo = _shown_rest(canon, "first-frame")
+    shown, undo = shown_rest(canon, "first-frame")
     assert not np.allclose(shown.skeleton.offsets, canon.skeleton.offsets)
     from satagraph.transforms.augment import set_rest_rotations
     back = set_rest_rotations(shown, undo)
     np.testing.assert_allclose(back.skeleton.offsets, canon.skeleton.offsets, atol=1e-9)
     np.testing.assert_allclose(back.rotations, canon.rotations, atol=1e-9)
-    assert _shown_rest(canon.with_(rotations=canon.rotations[:0],
+    assert shown_rest(canon.with_(rotations=canon.rotations[:0],
                                    translations=canon.translations[:0]), "first-frame")[1] is None
     plain = retarget_motion(module, src, tgt, embed, window=16, overlap=4, rest="file")
     rested = retarget_motion(module, src, tgt, embed, window=16, overlap=4, rest="first-frame")

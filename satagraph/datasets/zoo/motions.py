@@ -103,7 +103,7 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
         flight = np.sqrt(8 * rng.uniform(*_JUMP_RISE) * length / _GRAVITY)
         hop = rng.uniform(*_JUMP_HOP) * length
         v = np.where((t >= take_off) & (t < take_off + flight), hop / flight, 0.0)
-        return _Clip(fps, pad, v, 0.0 * yaw, jump=(take_off, flight))
+        return _Clip(fps, pad, v, np.zeros_like(yaw), jump=(take_off, flight))
     return _Clip(fps, pad, v, yaw)
 
 
