@@ -7,7 +7,10 @@ rotation velocity ``v_q`` (6D of :math:`R_{t-1}^\top R_t`), velocity ``v_x``
 in :math:`F_t` (units per second) and contact ``c``. Per frame: root
 features ``r`` = (yaw velocity, x velocity, z velocity in :math:`F_{t-1}`,
 root height), velocities per second. Static per joint: ``X_l`` (rest offset
-from the parent) and ``X_g`` (rest position relative to the root); per bone:
+from the parent; zero for the root, whose file offset is where its
+translation starts, not a bone: a rig whose root offset is the hips' world
+position at frame 0, as Bandai's and the dog's files give it, would
+otherwise look like no other) and ``X_g`` (rest position relative to the root); per bone:
 (depth, reverse depth) of its child joint.
 
 :math:`F_t` is the rotation about +Y by the yaw of the root's facing axis
@@ -124,6 +127,18 @@ def _root_features(theta: np.ndarray, origin: np.ndarray, height: np.ndarray,
                      delta[:, 2] * fps, height], axis=1)
 
 
+def bone_offsets(skeleton: Skeleton) -> np.ndarray:
+    r"""``X_l``: each joint's rest offset from its parent, zero for the root
+    (it has no bone; its offset only places the character).
+
+    Shapes:
+        - **output**: :math:`(J, 3)`
+    """
+    out = skeleton.offsets.copy()
+    out[skeleton.parents < 0] = 0.0
+    return out
+
+
 def motion_to_features(
     motion: Motion,
     contact_height: float = CONTACT_HEIGHT,
@@ -161,7 +176,7 @@ def motion_to_features(
     height = motion.height()
     return MotionFeatures(
         skeleton=skel, fps=fps, height=height,
-        x_local=skel.offsets.copy(), x_global=skel.rest_positions(),
+        x_local=bone_offsets(skel), x_global=skel.rest_positions(),
         edge_attr=skel.edge_attr.astype(np.float64),
         q=_to_6d(local), x=x, x_rel=x_rel,
         v_q=_to_6d(prev.transpose(0, 1, 3, 2) @ local),

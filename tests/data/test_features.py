@@ -74,6 +74,21 @@ def test_features_invariant_to_world_yaw_and_position(dog_features):
     np.testing.assert_allclose(moved.r[1:], feats.r[1:], atol=1e-8)
 
 
+def test_root_offset_is_not_a_static_feature(dog_features):
+    """The dog's file places its root 4.7 m from the origin through the
+    root's OFFSET; X_l ignores it (the root has no bone) and every other
+    joint keeps its offset, so the same rig with its root offset zeroed has
+    the same static features."""
+    motion, feats = dog_features
+    assert np.linalg.norm(motion.skeleton.offsets[0]) > 1.0
+    np.testing.assert_array_equal(feats.x_local[0], 0.0)
+    np.testing.assert_array_equal(feats.x_local[1:], motion.skeleton.offsets[1:])
+    offsets = motion.skeleton.offsets.copy()
+    offsets[0] = 0.0
+    moved = motion_to_features(motion.with_(skeleton=motion.skeleton.replace(offsets=offsets)))
+    np.testing.assert_array_equal(moved.static, feats.static)
+
+
 def test_integrate_root_inverts_root_features(dog_features):
     motion, feats = dog_features
     _, origin = integrate_root(feats.r, feats.fps)

@@ -58,3 +58,25 @@ def test_builtin_retargets_a_real_human_onto_the_dog_offline(
     assert np.isfinite(result.rotations).all() and np.isfinite(result.translations).all()
     travel = np.linalg.norm(np.diff(result.translations[:, 0, [0, 2]], axis=0), axis=-1).sum()
     assert travel > 0.0  # the dog goes somewhere
+
+
+def test_builtin_reconstructs_a_real_rig_whose_root_offset_is_far_away(
+        shared_data: Path) -> None:
+    """Bandai's files give the root (after the static ``joint_Root`` is
+    folded away) the hips' world position at frame 0, 4 m from the origin,
+    as its offset. With that offset read as a bone, the built-in model
+    decoded a Bandai walk upside down (JP 62 % of the height, limbs out of
+    step); without it the walk comes back in step and on the ground."""
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import retarget_canonical
+    from satagraph.pipelines.quality import most_active, retarget_quality
+
+    motion = read_bvh(shared_data / "bandai" / "dataset-1_walk_sad_001.bvh")
+    clip = most_active(motion, 128)
+    module = load_module("builtin").eval()
+    src, out = retarget_canonical(module, clip, clip, module.embed)
+    frames = min(src.num_frames, out.num_frames)
+    jp = np.linalg.norm(src.global_positions()[:frames] - out.global_positions()[:frames],
+                        axis=-1).mean() / src.height()
+    quality = retarget_quality(src, out)
+    assert jp < 0.12 and quality["steps"] > 0.6 and abs(quality["ground"]) < 0.1
