@@ -198,10 +198,16 @@ class Motion:
         return self.slice(0, 1).global_positions()[0]
 
     def height(self) -> float:
-        """Character height: the larger vertical (+Y) extent of the rest pose
-        and of the first frame (rest poses are not always upright)."""
+        """Character height: the larger of the rest pose's vertical (+Y)
+        extent and the median extent over the frames. Rest poses are not
+        always upright (a line along +X for Bandai and the dog), and a clip
+        can start lying down (a dog's 0.30 m first frame in a clip it
+        mostly stands at 0.47 m)."""
         extent = float(np.ptp(self.skeleton.rest_positions()[:, 1]))
-        return max(extent, float(np.ptp(self.first_pose()[:, 1])))
+        if self.num_frames == 0:
+            return extent
+        posed = np.ptp(self.global_positions()[..., 1], axis=1)
+        return max(extent, float(np.median(posed)))
 
     def with_(self, **changes) -> "Motion":
         """A copy with some fields replaced; drops :obj:`raw_channels` unless
