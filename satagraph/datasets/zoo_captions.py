@@ -31,6 +31,11 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
   place) and lands (legged plans).
 * ``reach``: stands and raises one arm forward or overhead, holds it and
   lowers it again (bipeds).
+* ``back``: walks backward, facing forward (legged plans).
+* ``side``: walks facing forward while travelling 30-90 degrees to one side
+  (the sign of ``travel``: positive left), told as diagonally forward
+  below :data:`SIDESTEP` degrees and as sidestepping above (legged plans).
+* ``run``: the gait at about twice its walking speed (legged plans).
 """
 from __future__ import annotations
 
@@ -60,27 +65,32 @@ TURN_WORDS = ((45.0, "veers"), (135.0, "turns"), (225.0, "turns around"),
 #: drifts of straight kinds (long walks) are told as veering.
 UNTOLD_TURN = 10.0
 DRIFT_TURN = 30.0
+#: ``side`` clips travelling at least this many degrees off the facing
+#: direction are told as sidestepping, the others as walking diagonally.
+SIDESTEP = 60.0
 _KIND_IN_NAME = re.compile(
-    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach)(?:_\d+)?$")
+    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach|back|side|run)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
 
 @dataclass(frozen=True)
 class ZooClip:
     """What a zoo clip's captions may say: always the body plan and kind;
-    the turn (degrees, positive: left) and speeds where known."""
+    the turn and the direction of travel (degrees, positive: left) and
+    speeds where known."""
 
     species: str
     kind: str
     turn: Optional[float] = None
     speed_start: Optional[float] = None
     speed_end: Optional[float] = None
+    travel: Optional[float] = None
 
     @classmethod
     def of(cls, facts: ClipFacts) -> "ZooClip":
         """From the generator's facts."""
         return cls(facts.species, facts.kind, facts.turn, facts.speed_start,
-                   facts.speed_end)
+                   facts.speed_end, facts.travel)
 
 
 def _number(row: Mapping[str, str], key: str) -> Optional[float]:
@@ -101,7 +111,7 @@ def zoo_clip_of_row(row: Mapping[str, str]) -> Optional[ZooClip]:
     if species not in SPECIES or kind not in CLIP_KINDS[species]:
         return None
     return ZooClip(species, kind, _number(row, "turn_deg"), _number(row, "speed_start"),
-                   _number(row, "speed_end"))
+                   _number(row, "speed_end"), _number(row, "travel_deg"))
 
 
 def _turn_phrase(turn: Optional[float]) -> Tuple[str, str]:
@@ -139,6 +149,8 @@ def _verbs(clip: ZooClip) -> List[str]:
         return ["crouches and jumps", "jumps up and lands"]
     if clip.kind == "reach":
         return ["stands and reaches out with one arm", "raises an arm and lowers it again"]
+    if clip.kind in ("back", "side", "run"):
+        return _travel_verbs(clip, drift)
     if clip.kind == "turn":
         verb, side = _turn_phrase(clip.turn)
         if not side:
@@ -152,6 +164,20 @@ def _verbs(clip: ZooClip) -> List[str]:
                 f"starts slowly and {move} faster and faster{drift}"]
     return [f"{move} forward, slowing down{drift}",
             f"starts fast and {move} slower and slower{drift}"]
+
+
+def _travel_verbs(clip: ZooClip, drift: str) -> List[str]:
+    """Verb phrases of the walks that do not go straight ahead at a walk."""
+    if clip.kind == "run":
+        return [f"runs forward{drift}", f"runs{drift}"]
+    if clip.kind == "back":
+        return [f"walks backward{drift}", f"walks backwards{drift}"]
+    if clip.travel is None:
+        return ["walks to one side", "walks sideways"]
+    side = "left" if clip.travel > 0 else "right"
+    if abs(clip.travel) < SIDESTEP:
+        return [f"walks forward and to the {side}", f"walks diagonally to the {side}"]
+    return [f"steps sideways to the {side}", f"sidesteps to the {side}"]
 
 
 def _drift(clip: ZooClip) -> str:
@@ -176,4 +202,4 @@ def zoo_phrasings(clip: ZooClip) -> List[str]:
             for subject in ZOO_SUBJECTS[clip.species]]
 
 
-__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]
+__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]

@@ -176,9 +176,17 @@ def test_endless_zoo_captions_match_the_generated_motion():
             assert min(speed[:5].mean(), speed[-5:].mean()) < 0.02, speed
             assert ("starts walking" in words or "sets off" in words) == moving_at_end, words
             assert ("halt" in words or "stop" in words) == (not moving_at_end), words
+        elif sample.kind == "back":
+            assert "backward" in words and "forward" not in words, words
+        elif sample.kind == "side":
+            side = "left" if facts.travel > 0 else "right"
+            assert f" {side}" in words and ({"left", "right"} - {side}).pop() not in words
+        elif sample.kind == "run":
+            assert "runs" in words and "walks" not in words, words
         else:
             assert "forward" in words and " left" not in words and "right" not in words
-    assert set(kinds) >= {"walk", "turn", "speed", "idle", "start", "stop", "look"}
+    assert set(kinds) >= {"walk", "turn", "speed", "idle", "start", "stop", "look", "back",
+                          "side", "run"}
 
 
 def test_zoo_phrasings_by_kind_and_species():

@@ -213,3 +213,51 @@ def test_reach_raises_one_hand_and_lowers_it_standing(variant):
     assert abs(lift[raised][[0, -1]]).max() < 0.02 * shoulder
     others = np.setdiff1d(np.arange(skel.num_joints), arm)
     np.testing.assert_allclose(reach[:, others], idle[:, others], atol=1e-9)
+
+
+def _facing_travel(motion):
+    """Root displacement over the clip in the frame the character faces at
+    frame 0 (x: its left, z: forward), and the root's mean ground speed."""
+    from satagraph.transforms.canonical import canonicalize
+    pos = canonicalize(motion, fps=motion.fps).global_positions()[:, 0]
+    step = np.linalg.norm(np.diff(pos[:, [0, 2]], axis=0), axis=1) * motion.fps
+    return pos[-1, [0, 2]] - pos[0, [0, 2]], float(step.mean())
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped", "bird", "hexapod"])
+def test_back_side_and_run_travel_the_way_their_facts_say(species):
+    """``back`` travels backward, ``side`` to the side its facts give (more
+    sideways than forward above 60 degrees), ``run`` faster than the walk
+    of the same seed; feet stay on the ground (lowest joint) as in a walk."""
+    from satagraph.datasets.zoo import generate_clip_with_facts
+    rig = zoo_rigs([species])[0]
+    clips = {kind: generate_clip_with_facts(rig, kind, frames=90, seed=6)
+             for kind in ("walk", "back", "side", "run")}
+    (walk, _), (back, back_facts) = clips["walk"], clips["back"]
+    (side, side_facts), (run, run_facts) = clips["side"], clips["run"]
+    way, _ = _facing_travel(back)
+    assert back_facts.travel == 180.0 and way[1] < -0.5 * np.abs(way[0])
+    way, _ = _facing_travel(side)
+    assert 30.0 <= abs(side_facts.travel) <= 90.0
+    assert np.sign(way[0]) == np.sign(side_facts.travel)  # +x is the left
+    if abs(side_facts.travel) > 60.0:
+        assert abs(way[0]) > abs(way[1])
+    _, walk_speed = _facing_travel(walk)
+    _, run_speed = _facing_travel(run)
+    assert run_facts.travel == 0.0 and run_speed > 1.5 * walk_speed
+    for motion in (back, side, run):
+        lowest = motion.global_positions()[:, :, 1].min(axis=1)
+        assert abs(np.median(lowest)) < 0.01 * rig.leg_length
+
+
+def test_back_and_side_captions_say_the_way():
+    from satagraph.datasets.zoo import ClipFacts
+    from satagraph.datasets.zoo_captions import ZooClip, zoo_phrasings
+    said = {travel: " | ".join(zoo_phrasings(ZooClip.of(
+        ClipFacts("biped", kind, 3.0, 0.7, 0.7, 0.0, travel))))
+        for kind, travel in (("back", 180.0), ("side", 40.0), ("side", -80.0))}
+    assert "walks backward" in said[180.0]
+    assert "forward and to the left" in said[40.0] and "right" not in said[40.0]
+    assert "sideways to the right" in said[-80.0] and "left" not in said[-80.0]
+    run = zoo_phrasings(ZooClip.of(ClipFacts("quadruped", "run", 3.0, 2.0, 2.0, 0.0)))
+    assert all("runs" in text for text in run)

@@ -52,6 +52,12 @@ _JUMP_RISE, _JUMP_HOP, _JUMP_CROUCH, _GRAVITY = (0.15, 0.4), (0.0, 0.6), 0.12, 9
 #: reaches forward and down, 90 straight ahead, 150 overhead), how long it
 #: rises (s) and holds (s).
 _REACH_DEGREES, _REACH_RISE, _REACH_HOLD = (60.0, 150.0), (0.5, 0.9), (0.3, 1.0)
+#: Walks that do not go where the body faces: ``back`` at this share of the
+#: gait's speed, ``side`` at this share and this angle off the facing
+#: direction (degrees, to a random side: below 60 diagonally forward, above
+#: it sideways); ``run``: the gait at this multiple of its speed.
+_BACK_SPEED, _SIDE_SPEED, _SIDE_DEGREES, _RUN_SPEED = (
+    (0.45, 0.7), (0.4, 0.65), (30.0, 90.0), (1.8, 2.5))
 
 
 @dataclass
@@ -67,6 +73,9 @@ class _Clip:
     position: Optional[np.ndarray] = None
     #: ``jump`` clips: take-off time (s, clip time) and flight time (s)
     jump: Optional[Tuple[float, float]] = None
+    #: Direction of travel off the facing direction (radians, positive:
+    #: to the character's left): pi for ``back``, drawn for ``side``
+    travel: float = 0.0
 
     @property
     def time(self) -> np.ndarray:
@@ -104,6 +113,13 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
         hop = rng.uniform(*_JUMP_HOP) * length
         v = np.where((t >= take_off) & (t < take_off + flight), hop / flight, 0.0)
         return _Clip(fps, pad, v, np.zeros_like(yaw), jump=(take_off, flight))
+    if kind == "back":
+        return _Clip(fps, pad, v * rng.uniform(*_BACK_SPEED), yaw, travel=np.pi)
+    if kind == "side":
+        angle = np.radians(rng.uniform(*_SIDE_DEGREES)) * rng.choice([-1.0, 1.0])
+        return _Clip(fps, pad, v * rng.uniform(*_SIDE_SPEED), yaw, travel=float(angle))
+    if kind == "run":
+        v *= rng.uniform(*_RUN_SPEED)
     return _Clip(fps, pad, v, yaw)
 
 
@@ -123,6 +139,9 @@ class ClipFacts:
             turns to the character's left (+X of the canonical frame,
             counterclockwise seen from above). Snakes: the bend of their
             path, without the serpentine wave.
+        travel (float): Direction of travel off the facing direction in
+            degrees, positive to the left: 0 but for ``back`` (180) and
+            ``side`` (30-90 either way). Speeds are along it.
     """
 
     species: str
@@ -131,6 +150,7 @@ class ClipFacts:
     speed_start: float
     speed_end: float
     turn: float
+    travel: float = 0.0
 
 
 def _legged_facts(rig: ZooRig, kind: str, clip: _Clip, frames: int) -> ClipFacts:
@@ -140,7 +160,7 @@ def _legged_facts(rig: ZooRig, kind: str, clip: _Clip, frames: int) -> ClipFacts
     scale = 1.0 / rig.leg_length
     return ClipFacts(rig.species, kind, frames / clip.fps,
                      float(clip.speed[first] * scale), float(clip.speed[last] * scale),
-                     float(turn))
+                     float(turn), float(np.degrees(clip.travel)))
 
 
 # ------------------------------------------------------------ feet, IK
@@ -440,12 +460,13 @@ def _jump_feet(clip: _Clip, feet: _Feet, lift: Tuple[np.ndarray, np.ndarray]) ->
 
 def _trace(clip: _Clip, heading: float, idle: bool, length: float,
            rng: np.random.Generator) -> None:
-    """The root's heading and ground path from the speed and yaw rate,
-    starting at the origin with :obj:`heading`; idles sway sideways."""
+    """The root's heading and ground path from the speed and yaw rate (in
+    the direction :attr:`_Clip.travel` off the heading), starting at the
+    origin with :obj:`heading`; idles sway sideways."""
     psi = np.cumsum(clip.yaw_rate) / clip.fps
     clip.heading = psi - psi[clip.pad] + heading
-    fwd = np.stack([np.sin(clip.heading), np.zeros_like(clip.heading),
-                    np.cos(clip.heading)], axis=1)
+    way = clip.heading + clip.travel
+    fwd = np.stack([np.sin(way), np.zeros_like(way), np.cos(way)], axis=1)
     pos = np.cumsum(clip.speed[:, None] * fwd, axis=0) / clip.fps
     clip.position = pos - pos[clip.pad]
     if idle:

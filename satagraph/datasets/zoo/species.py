@@ -19,18 +19,21 @@ from satagraph.datasets.zoo.rigs import ZooRig
 #: long-tailed quadruped of about 100 joints.
 SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab",
            "spider", "longtail")
+#: Walks (``walk``, ``back``, ``side``, ``run``, ``trot``), ``turn``,
+#: ``speed`` changes, ``idle``, ``start``, ``stop``, ``look``, ``jump`` and
+#: ``reach`` (:mod:`satagraph.datasets.zoo.motions` says what each does).
+_LEGGED = ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump", "back", "side",
+           "run")
 CLIP_KINDS = {
-    "biped": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump", "reach"),
-    "quadruped": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look",
-                  "jump"),
-    "bird": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
-    "hexapod": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
+    "biped": _LEGGED + ("reach",),
+    "quadruped": _LEGGED + ("trot",),
+    "bird": _LEGGED,
+    "hexapod": _LEGGED,
     "snake": ("walk", "turn", "speed", "idle"),
-    "fowl": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
-    "crab": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
-    "spider": ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump"),
-    "longtail": ("walk", "trot", "turn", "speed", "idle", "start", "stop", "look",
-                  "jump"),
+    "fowl": _LEGGED,
+    "crab": _LEGGED,
+    "spider": _LEGGED,
+    "longtail": _LEGGED + ("trot",),
 }
 
 VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {

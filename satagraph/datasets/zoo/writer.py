@@ -22,7 +22,7 @@ PathLike = Union[str, "os.PathLike[str]"]
 MANIFEST_COLUMNS = ("path", "dataset", "skeleton", "species", "split", "fps",
                     "frames", "joints", "licence", "sha1", "up_axis", "scale",
                     "height_m", "rest_pose", "name_noise", "kind", "turn_deg",
-                    "speed_start", "speed_end")
+                    "speed_start", "speed_end", "travel_deg")
 LICENCE = "CC0 1.0"
 #: What the manifest's dialect columns mean: ``up_axis`` the file's up axis,
 #: ``scale`` metres per file unit, ``height_m`` the character's true height
@@ -30,8 +30,9 @@ LICENCE = "CC0 1.0"
 DIALECT_COLUMNS = ("up_axis", "scale", "height_m", "rest_pose", "name_noise")
 #: What the clip does (:class:`~satagraph.datasets.zoo.motions.ClipFacts`, the
 #: truth of its captions): ``kind``, ``turn_deg`` (positive: to the left),
-#: ``speed_start`` and ``speed_end`` in leg lengths per second.
-MOTION_COLUMNS = ("kind", "turn_deg", "speed_start", "speed_end")
+#: ``speed_start`` and ``speed_end`` in leg lengths per second, ``travel_deg``
+#: (direction of travel off the facing direction, positive: to the left).
+MOTION_COLUMNS = ("kind", "turn_deg", "speed_start", "speed_end", "travel_deg")
 
 
 # ---------------------------------------------------------------- writing
@@ -123,7 +124,7 @@ def _write_file(out: Path, rig: ZooRig, motion: Motion, facts: ClipFacts, stem: 
             "height_m": f"{height:.6f}", "rest_pose": dialect.rest,
             "name_noise": dialect.noise or "", "kind": facts.kind,
             "turn_deg": f"{facts.turn:+.1f}", "speed_start": f"{facts.speed_start:.3f}",
-            "speed_end": f"{facts.speed_end:.3f}"}
+            "speed_end": f"{facts.speed_end:.3f}", "travel_deg": f"{facts.travel:+.1f}"}
 
 
 def write_dialect_zoo(out_dir: PathLike, variants: Iterable[DialectVariant],
