@@ -19,21 +19,21 @@ from satagraph.datasets.zoo.rigs import ZooRig
 #: long-tailed quadruped of about 100 joints.
 SPECIES = ("biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab",
            "spider", "longtail")
-#: Walks (``walk``, ``back``, ``side``, ``run``, ``trot``), ``turn``,
-#: ``speed`` changes, ``idle``, ``start``, ``stop``, ``look``, ``jump`` and
-#: ``reach`` (:mod:`satagraph.datasets.zoo.motions` says what each does).
-_LEGGED = ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump", "back", "side",
-           "run")
+#: Clip kinds per body plan (:mod:`satagraph.datasets.zoo.motions` says what
+#: each does); kinds added later come last, so that a zoo written with the
+#: first kinds only (``write_zoo(clips=N)``) stays the same.
+_LEGGED = ("walk", "turn", "speed", "idle", "start", "stop", "look", "jump")
+_TRAVEL = ("back", "side", "run")
 CLIP_KINDS = {
-    "biped": _LEGGED + ("reach",),
-    "quadruped": _LEGGED + ("trot",),
-    "bird": _LEGGED,
-    "hexapod": _LEGGED,
+    "biped": _LEGGED + ("reach",) + _TRAVEL,
+    "quadruped": ("walk", "trot") + _LEGGED[1:] + _TRAVEL,
+    "bird": _LEGGED + _TRAVEL,
+    "hexapod": _LEGGED + _TRAVEL,
     "snake": ("walk", "turn", "speed", "idle"),
-    "fowl": _LEGGED,
-    "crab": _LEGGED,
-    "spider": _LEGGED,
-    "longtail": _LEGGED + ("trot",),
+    "fowl": _LEGGED + _TRAVEL,
+    "crab": _LEGGED + _TRAVEL,
+    "spider": _LEGGED + _TRAVEL,
+    "longtail": ("walk", "trot") + _LEGGED[1:] + _TRAVEL,
 }
 
 VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {
