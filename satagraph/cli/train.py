@@ -27,6 +27,7 @@ def add_train_parsers(sub) -> None:
     p = sub.add_parser("reconstruct", help="encode and decode a BVH on its own skeleton",
                        description="Sliding-window reconstruction of IN.bvh into OUT.bvh.")
     _common(p)
+    _ground(p, default=False)
     p.add_argument("input", metavar="IN.bvh")
     p.add_argument("output", metavar="OUT.bvh")
     _rig(p)
@@ -37,6 +38,7 @@ def add_train_parsers(sub) -> None:
                        "species); OUT.bvh is in the target's axes, units and channel layout "
                        "at the source's frame rate.")
     _common(p)
+    _ground(p, default=True)
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
@@ -94,6 +96,15 @@ def _common(p) -> None:
                    "whose rest pose is a line (every bone along its joint's +X, as "
                    "Bandai's), else the file's; the output keeps the target file's "
                    "rest pose either way")
+
+
+def _ground(p, default: bool) -> None:
+    import argparse
+    p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=default,
+                   help="move the output up or down by one constant so that its feet "
+                   "stand where the input's do, in character heights (--no-ground keeps "
+                   "the decoder's root height; default: "
+                   f"{'on' if default else 'off'})")
 
 
 def _rig(p, prefix: str = "", what: str = "the input") -> None:
@@ -171,7 +182,8 @@ def run_reconstruct(args) -> int:
     check_output_path(args.output)
     module, embed = _load(args)
     motion = _read_checked(args, "input", module.fps)
-    out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest)
+    out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
+                             args.ground)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
     return 0
@@ -186,7 +198,7 @@ def run_retarget(args) -> int:
     source = _read_checked(args, "source", module.fps)
     target = _read_checked(args, "target", module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
-                         rest=args.rest)
+                         rest=args.rest, ground=args.ground)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")

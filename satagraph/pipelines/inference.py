@@ -10,6 +10,7 @@ import torch
 
 from satagraph.transforms.augment import rebase_rotations, set_rest_rotations
 from satagraph.transforms.canonical import canonicalize, decanonicalize, resample_frames
+from satagraph.transforms.ground import ground_like
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import window_starts
@@ -126,7 +127,7 @@ REST_MODES = ("auto", "file", "first-frame")
 def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
-                    rest: str = "auto") -> Motion:
+                    rest: str = "auto", ground: bool = True) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -155,9 +156,13 @@ def retarget_motion(module, source: Motion, target: Motion,
             the skeletons whose rest is no pose at all but a line
             (:func:`is_line_rest`: every bone along its joint's +X, as
             Bandai's and the dog's).
+        ground (bool): Move the output up or down by one constant so that
+            its feet stand where the source's do, in character heights
+            (:func:`~satagraph.transforms.ground.ground_like`); ``False``
+            keeps the decoder's root height.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest)
+                                  rest, ground)
     return from_canonical(canon, source)
 
 
@@ -172,7 +177,7 @@ def from_canonical(canon: Motion, source: Motion) -> Motion:
 def retarget_canonical(module, source: Motion, target: Motion,
                        semantic: Optional[Callable] = None, window: Optional[int] = None,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
-                       rest: str = "auto") -> Tuple[Motion, Motion]:
+                       rest: str = "auto", ground: bool = True) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -188,8 +193,9 @@ def retarget_canonical(module, source: Motion, target: Motion,
     tgt = static_features(tgt_rest)
     q, r, _ = transfer(module, motion_to_features(src_rest), tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
-    out = features_to_motion(out_feats, q=q, r=r, use_positions=False)
-    return src_canon, restore_rest(out, undo, tgt_canon.skeleton)
+    out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
+                       tgt_canon.skeleton)
+    return src_canon, ground_like(out, src_canon) if ground else out
 
 
 def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:
@@ -228,8 +234,11 @@ def is_line_rest(skeleton, share: float = 0.8, degrees: float = 5.0) -> bool:
 
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
                        window: Optional[int] = None, overlap: Optional[int] = None,
-                       rest: str = "auto") -> Motion:
-    """Encode and decode a motion on its own skeleton (:obj:`rest`: see
-    :func:`retarget_motion`)."""
-    return retarget_motion(module, motion, motion, semantic, window, overlap, rest=rest)
+                       rest: str = "auto", ground: bool = False) -> Motion:
+    """Encode and decode a motion on its own skeleton (:obj:`rest` and
+    :obj:`ground`: see :func:`retarget_motion`; off by default here: on
+    its own skeleton the decoder's root height is closer than a shift that
+    matches the lowest joints of two different poses)."""
+    return retarget_motion(module, motion, motion, semantic, window, overlap, rest=rest,
+                           ground=ground)
 

@@ -1,0 +1,49 @@
+"""Grounding a decoded motion where its source stands."""
+from __future__ import annotations
+
+import numpy as np
+
+from satagraph.datasets.zoo import generate_clip, zoo_rigs
+from satagraph.transforms.canonical import canonicalize
+from satagraph.transforms.ground import ground_like, lowest_heights
+
+
+def _clip(species: str, kind: str = "walk", seed: int = 0):
+    return canonicalize(generate_clip(zoo_rigs([species])[0], kind, frames=60, seed=seed),
+                        fps=30.0)
+
+
+def _lifted(motion, dy):
+    trans = motion.translations.copy()
+    trans[:, 0, 1] += dy
+    return motion.with_(translations=trans)
+
+
+def test_a_floating_retarget_comes_down_by_one_constant():
+    """A quadruped floating 0.3 m (and bobbing as it did) is moved down so
+    that its median lowest joint is where the biped source's is, in
+    heights; frame-to-frame height changes are kept."""
+    source, target = _clip("biped"), _clip("quadruped", seed=1)
+    floating = _lifted(target, 0.3 + 0.05 * np.sin(np.arange(60) / 5.0))
+    out = ground_like(floating, source)
+    want = np.median(lowest_heights(source)) / source.height() * out.height()
+    assert abs(np.median(lowest_heights(out)) - want) < 1e-9
+    shift = out.translations[:, 0, 1] - floating.translations[:, 0, 1]
+    np.testing.assert_allclose(shift, shift[0])
+    np.testing.assert_array_equal(out.rotations, floating.rotations)
+    np.testing.assert_array_equal(out.translations[:, 1:], floating.translations[:, 1:])
+
+
+def test_the_source_height_above_the_floor_carries_over_in_heights():
+    """A source standing 10 % of its height above the floor puts a target
+    of another size 10 % of the target's height above it."""
+    source, target = _clip("biped"), _clip("bird", seed=2)
+    raised = _lifted(source, 0.1 * source.height() - np.median(lowest_heights(source)))
+    out = ground_like(target, raised)
+    np.testing.assert_allclose(np.median(lowest_heights(out)) / out.height(), 0.1, atol=1e-9)
+
+
+def test_a_motion_without_frames_is_unchanged():
+    source = _clip("biped")
+    empty = source.slice(0, 0)
+    assert ground_like(empty, source) is empty
