@@ -249,3 +249,23 @@ def ground_contacts(positions: np.ndarray, fps: float, size: float,
     slow = np.linalg.norm(vel, axis=-1) < speed * size
     slow[:1] = True
     return (positions[..., 1] < height * size) & slow
+
+
+def leg_length(positions: np.ndarray, size: float) -> float:
+    r"""The character's leg length: the root's median height above the
+    lowest joint (the hip height of a legged character), at least 5 % of
+    :obj:`size`. The unit of travel and ground speed across body plans (a
+    biped's legs are half its height, a quadruped's two thirds).
+
+    Args:
+        positions (np.ndarray): Joint positions, +Y up, the root first (any
+            horizontal frame: global or facing).
+        size (float): The character height (:meth:`Motion.height`).
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`
+    """
+    if len(positions) == 0:
+        return 0.5 * size
+    hip = np.median(positions[:, 0, 1] - positions[:, :, 1].min(axis=1))
+    return float(max(hip, 0.05 * max(size, 1e-9)))

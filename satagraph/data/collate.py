@@ -73,6 +73,9 @@ class FrameBatch(Batch):
         - **node_inner**: :math:`(N,)` whether the joint has children
         - **clip_height**: :math:`(B,)` character height of each clip
           (``meta["height"]``, 1 where the clip does not say)
+        - **clip_leg**: :math:`(B,)` leg length of each clip's character
+          (``meta["leg"]``, :func:`satagraph.motion.leg_length`; half the
+          height where the clip does not say)
         - **clip_limb_ends**: :math:`(B, 4)` each clip's limb-end joints
           (``meta["limb_ends"]`` in the order of
           :data:`~satagraph.semantics.LIMBS`, ``-1`` where missing)
@@ -83,14 +86,18 @@ class FrameBatch(Batch):
         (:math:`N`, rows of :obj:`x`), ``"frame"`` (:math:`G`, rows of
         :obj:`root`) or ``"stream"`` (:math:`S`, rows of
         :obj:`joint_static`)."""
-        if level == "node":
-            return self.clip_height[self.node_clip]
-        if level == "frame":
-            return self.clip_height[self.frame_clip]
-        if level == "stream":
-            return self.clip_height[self.stream_clip]
-        raise ValueError(f"FrameBatch.heights: unknown level {level!r} "
-                         "(node, frame or stream)")
+        return self._per_clip(self.clip_height, level, "heights")
+
+    def legs(self, level: str) -> Tensor:
+        r"""The clip leg length of every row, as :meth:`heights`."""
+        return self._per_clip(self.clip_leg, level, "legs")
+
+    def _per_clip(self, values: Tensor, level: str, name: str) -> Tensor:
+        index = {"node": "node_clip", "frame": "frame_clip", "stream": "stream_clip"}
+        if level not in index:
+            raise ValueError(f"FrameBatch.{name}: unknown level {level!r} "
+                             "(node, frame or stream)")
+        return values[getattr(self, index[level])]
 
 
 class _Group(NamedTuple):
@@ -194,6 +201,8 @@ def _structure(out: FrameBatch, clips: List[MotionClip]) -> None:
     out.node_inner = torch.zeros(index.numel(), dtype=torch.bool)
     out.node_inner[out.node_parent[out.node_parent >= 0]] = True
     out.clip_height = torch.tensor([float(c.meta.get("height", 1.0)) for c in clips])
+    out.clip_leg = torch.tensor([float(c.meta.get("leg", 0.5 * float(c.meta.get("height", 1.0))))
+                                 for c in clips])
     ends = [list(c.meta.get("limb_ends", ()))[:NUM_LIMBS] for c in clips]
     out.clip_limb_ends = torch.tensor([e + [-1] * (NUM_LIMBS - len(e)) for e in ends],
                                       dtype=torch.long).view(len(clips), NUM_LIMBS)

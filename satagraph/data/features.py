@@ -28,7 +28,7 @@ import torch
 
 from satagraph.data.clip import MotionClip
 from satagraph.motion import (CONTACT_HEIGHT, CONTACT_SPEED, CanonicalTransform, Motion,
-                              ground_contacts)
+                              ground_contacts, leg_length)
 from satagraph.ops.fk import forward_kinematics
 from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
@@ -72,6 +72,11 @@ class MotionFeatures:
         return self.q.shape[0]
 
     @property
+    def leg_length(self) -> float:
+        """:func:`satagraph.motion.leg_length` over every frame."""
+        return leg_length(self.x, self.height)
+
+    @property
     def dynamic(self) -> np.ndarray:
         """Per-joint features in :data:`DYNAMIC_LAYOUT` order,
         :math:`(T, J, 22)`."""
@@ -101,7 +106,8 @@ class MotionFeatures:
                       else torch.zeros(num, 0)),
             parents=torch.from_numpy(self.skeleton.parents),
             edge_attr=torch.from_numpy(self.edge_attr).float(),
-            meta=dict(meta or {}, height=self.height, fps=self.fps, start=start),
+            meta=dict(meta or {}, height=self.height, leg=self.leg_length, fps=self.fps,
+                      start=start),
         )
 
 

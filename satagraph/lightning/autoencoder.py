@@ -234,7 +234,8 @@ class MotionAutoencoderModule(L.LightningModule):
                 "retarget_root": root_transfer_loss(
                     batch.root[pairing.frames], pred["r"],
                     batch.heights("frame")[pairing.frames], pairing.target.heights("frame"),
-                    low_source[pairing.frames], low_target)}
+                    low_source[pairing.frames], low_target, batch.legs("frame")[pairing.frames],
+                    pairing.target.legs("frame"))}
 
     def _step(self, batch, stage: str) -> Tensor:
         out = self(batch)

@@ -71,28 +71,31 @@ LOWEST_SCALE = 10.0
 
 
 def root_transfer_loss(r_source: Tensor, r_target: Tensor, h_source: Tensor,
-                       h_target: Tensor, low_source: Tensor, low_target: Tensor) -> Tensor:
+                       h_target: Tensor, low_source: Tensor, low_target: Tensor,
+                       leg_source: Tensor, leg_target: Tensor) -> Tensor:
     r"""Unpaired cross-skeleton root term: a motion decoded onto another
     skeleton turns at the source's yaw rate (rad/s), moves its root over
-    the ground as many of its own heights per second as the source, and
-    keeps its lowest joint as many of its heights above the ground
-    (x :data:`LOWEST_SCALE`). The limb term (:func:`limb_velocity_loss`)
-    sees positions relative to the root only, so without this the
-    partner's root may drift, float or sink.
+    the ground as many of its own leg lengths per second as the source
+    (the unit in which a cat and a horse that walk alike travel alike:
+    :func:`satagraph.motion.leg_length`), and keeps its lowest joint as
+    many of its heights above the ground (x :data:`LOWEST_SCALE`). The limb
+    term (:func:`limb_velocity_loss`) sees positions relative to the root
+    only, so without this the partner's root may drift, float or sink.
 
     Shapes:
         - **r_source**, **r_target**: :math:`(G', 4)` root features (yaw
           rate, x/z velocity in the facing frame, height) of the source
           frames and of their decoding on the partner
-        - **h_source**, **h_target**, **low_source**, **low_target**:
-          :math:`(G',)` heights of the two characters and each frame's
-          lowest joint height
+        - **h_source**, **h_target**, **low_source**, **low_target**,
+          **leg_source**, **leg_target**: :math:`(G',)` heights of the two
+          characters, each frame's lowest joint height and the two leg
+          lengths
         - **output**: scalar
     """
     r_source = r_source.to(r_target.dtype)
     turn = (r_target[:, 0] - r_source[:, 0]).pow(2)
-    speed = (r_target[:, 1:3] / h_target[:, None]
-             - r_source[:, 1:3] / h_source[:, None]).pow(2).sum(-1)
+    speed = (r_target[:, 1:3] / leg_target[:, None]
+             - r_source[:, 1:3] / leg_source[:, None].to(r_target.dtype)).pow(2).sum(-1)
     low = (LOWEST_SCALE * (low_target / h_target - low_source.to(low_target.dtype) / h_source)
            ).pow(2)
     return (turn + speed + low).mean()

@@ -31,7 +31,7 @@ import numpy as np
 from satagraph.transforms.canonical import canonicalize, lateral_forward
 from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, describe_joints, limb_ends
-from satagraph.motion import Motion
+from satagraph.motion import Motion, leg_length as motion_leg_length
 
 #: Displacement interval of :func:`step_correlation` (frames at 30 fps, 0.1 s):
 #: the stepping band (1-3 Hz) without frame-to-frame capture jitter.
@@ -112,11 +112,8 @@ def step_correlation(source: Motion, output: Motion) -> float:
 
 
 def leg_length(canonical: Motion) -> float:
-    """The root's median height above the lowest joint (the hip height of a
-    legged character), at least 5% of the character's height."""
-    pos = canonical.global_positions()
-    hip = np.median(pos[:, 0, 1] - pos[:, :, 1].min(axis=1))
-    return float(max(hip, 0.05 * max(canonical.height(), 1e-9)))
+    """:func:`satagraph.motion.leg_length` of a canonical motion."""
+    return motion_leg_length(canonical.global_positions(), canonical.height())
 
 
 def root_travel(canonical: Motion) -> float:

@@ -2,6 +2,7 @@
 import glob
 
 import numpy as np
+import torch
 import pytest
 
 from satagraph.transforms.canonical import canonicalize
@@ -111,3 +112,17 @@ def test_velocities_match_positions(dog_features):
     speed = np.linalg.norm(pos[1:] - pos[:-1], axis=-1) * motion.fps
     np.testing.assert_allclose(np.linalg.norm(feats.v_x[1:], axis=-1), speed,
                                atol=1e-8)
+
+
+def test_clips_carry_their_leg_length(dog_features):
+    """Every clip says its character's leg length (the root's median height
+    above its lowest joint over the whole file), which the batch collates
+    beside the height: the dog's hips stand almost as high as its head."""
+    from satagraph.data.collate import collate_clips
+    from satagraph.motion import leg_length
+    motion, feats = dog_features
+    assert feats.leg_length == leg_length(motion.global_positions(), motion.height())
+    assert 0.8 < feats.leg_length / feats.height < 1.0
+    batch = collate_clips([feats.to_clip(0, 16), feats.to_clip(16, 40)])
+    assert torch.allclose(batch.clip_leg, torch.tensor([feats.leg_length] * 2).float())
+    assert torch.equal(batch.legs("frame"), batch.clip_leg[batch.frame_clip])

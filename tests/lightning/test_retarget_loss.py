@@ -181,22 +181,28 @@ def test_partners_are_collated_with_the_batch_and_used_by_the_module(build_tiny_
     datamodule.pair_partners = False
 
 
-def test_root_transfer_loss_is_zero_for_a_root_moving_alike_in_heights():
+def test_root_transfer_loss_is_zero_for_a_root_moving_alike_in_leg_lengths():
+    """Ground speed counts in leg lengths (a 1.8 m biped with 0.9 m legs and
+    a 0.6 m quadruped with 0.4 m legs walking alike), the lowest joint in
+    heights."""
     from satagraph.losses import root_transfer_loss
     r_s = torch.tensor([[0.3, 0.1, 1.5, 0.9], [0.0, 0.0, 1.2, 0.95]])
     h_s, h_t = torch.tensor([1.8, 1.8]), torch.tensor([0.6, 0.6])
+    leg_s, leg_t = torch.tensor([0.9, 0.9]), torch.tensor([0.4, 0.4])
     low_s = torch.tensor([0.0, 0.18])
-    alike = torch.cat([r_s[:, :1], r_s[:, 1:3] * (h_t / h_s)[:, None], r_s[:, 3:] * 0.5], 1)
+    alike = torch.cat([r_s[:, :1], r_s[:, 1:3] * (leg_t / leg_s)[:, None], r_s[:, 3:] * 0.5], 1)
     low_t = low_s * h_t / h_s
     # the root's own height is the partner's business: only turn, speed and the lowest joint
-    assert root_transfer_loss(r_s, alike, h_s, h_t, low_s, low_t) < 1e-12
+    assert root_transfer_loss(r_s, alike, h_s, h_t, low_s, low_t, leg_s, leg_t) < 1e-12
+    in_heights = alike.clone()
+    in_heights[:, 1:3] = r_s[:, 1:3] * (h_t / h_s)[:, None]  # alike in heights: too slow
     faster = alike.clone()
     faster[:, 2] *= 2
     floating = low_t + 0.1 * h_t
     turning = alike.clone()
     turning[:, 0] += 1.0
-    for r_t, low in ((faster, low_t), (alike, floating), (turning, low_t)):
-        assert root_transfer_loss(r_s, r_t, h_s, h_t, low_s, low) > 0.2
+    for r_t, low in ((faster, low_t), (alike, floating), (turning, low_t), (in_heights, low_t)):
+        assert root_transfer_loss(r_s, r_t, h_s, h_t, low_s, low, leg_s, leg_t) > 0.1
 
 
 def test_module_adds_the_root_term_with_gradients_to_the_decoder(build_tiny_module,
