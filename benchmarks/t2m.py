@@ -381,14 +381,16 @@ def generated_items(module, items: Sequence[Item], seeds: int) -> List[List[Item
 
 def transfer(module, source: Motion, target: Motion) -> MotionFeatures:
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
-    its own rig, decoded on :obj:`target`'s rig (canonical features)."""
+    its own rig, decoded on :obj:`target`'s rig and put on the floor as
+    generated motion is (canonical features)."""
     from satagraph.data.collate import collate_clips
     from satagraph.pipelines.generate import decode_on, rig_inputs
     with torch.no_grad():
         rig = rig_inputs(module, source)
         clip = motion_to_features(rig.shown).to_clip(0, None, rig.semantic)
         codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
-        motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target))
+        motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target),
+                           ground=True)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 

@@ -45,6 +45,10 @@ def add_generate_parser(sub) -> None:
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
+    p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=True,
+                   help="put the motion on the floor: one vertical shift, its median lowest "
+                   "joint at the floor (--no-ground keeps the decoder's root height; "
+                   "default: on)")
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "
                    "threads make a busy machine many times slower)")
@@ -93,7 +97,8 @@ def run_generate(args) -> int:
     module = load_generator(args.ckpt)
     if args.ckpt == BUILTIN:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
-    settings = GenerationSettings(steps=args.steps, guidance=args.guidance)
+    settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
+                                  ground=args.ground)
     start = time.time()
     text = args.text.strip() or None
     motions = [generate_on(module, text, t, args.seconds, args.seed, settings)

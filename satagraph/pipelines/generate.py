@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from satagraph.transforms.canonical import canonicalize, decanonicalize
+from satagraph.transforms.ground import ground_at
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
@@ -48,13 +49,17 @@ from satagraph.motion import Motion
 class GenerationSettings:
     """How to sample: decoding steps and guidance of the masked transformer
     (MoMask: 10 and 4), guidance of the residual transformer (MoMask: 5),
-    temperature and the share of codes top-k keeps."""
+    temperature and the share of codes top-k keeps; whether the motion is
+    put on the floor (:func:`~satagraph.transforms.ground.ground_at`: one
+    vertical shift, the median lowest joint at 0) or keeps the decoder's
+    root height."""
 
     steps: int = 10
     guidance: float = 4.0
     residual_guidance: float = 5.0
     temperature: float = 1.0
     topk_ratio: float = 0.1
+    ground: bool = True
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -154,12 +159,12 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, settings.temperature,
                                      settings.topk_ratio, gen)
-    return decode_on(module, codes[0, :frames], rig)
+    return decode_on(module, codes[0, :frames], rig, settings.ground)
 
 
-def decode_on(module, codes: torch.Tensor, rig: RigInputs) -> Motion:
+def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
-    its rig.
+    its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`).
 
     Shapes:
         - **codes**: :math:`(T, Q)`
@@ -173,6 +178,8 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs) -> Motion:
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
     motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
                           rig.undo, rig.canon.skeleton)
+    if ground:
+        motion = ground_at(motion)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)
 
 

@@ -6,7 +6,8 @@ decoded onto a biped leave the biped's feet 16 % of its height above the
 floor). :func:`ground_like` moves the whole motion up or down by one
 constant, so its vertical dynamics (bobbing, jumps) stay the decoder's and
 only the offset is set: the median height of its lowest joint, in its own
-character heights, becomes the source's.
+character heights, becomes the source's (:func:`ground_like`) or the floor
+(:func:`ground_at`, for generated motion, which has no source).
 """
 from __future__ import annotations
 
@@ -24,22 +25,35 @@ def lowest_heights(motion: Motion) -> np.ndarray:
     return motion.global_positions()[..., 1].min(axis=1)
 
 
-def ground_like(motion: Motion, reference: Motion) -> Motion:
+def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
     r""":obj:`motion` shifted along +Y by one constant so that the median
-    height of its lowest joint over its frames, over its character height,
-    is :obj:`reference`'s (both +Y up, floor at 0: canonical motions).
+    height of its lowest joint over its frames is :obj:`lift` times its
+    character height (0: standing on the floor; +Y up, floor at 0).
 
     Args:
-        motion (Motion): A decoded motion (a retarget or reconstruction).
-        reference (Motion): The motion it was decoded from.
+        motion (Motion): A decoded motion (canonical).
+        lift (float): Median lowest-joint height, in character heights.
     """
-    if motion.num_frames == 0 or reference.num_frames == 0:
+    if motion.num_frames == 0:
         return motion
-    want = float(np.median(lowest_heights(reference))) / max(reference.height(), 1e-9)
-    shift = want * motion.height() - float(np.median(lowest_heights(motion)))
+    shift = lift * motion.height() - float(np.median(lowest_heights(motion)))
     translations = motion.translations.copy()
     translations[:, 0, 1] += shift
     return motion.with_(translations=translations)
 
 
-__all__ = ["lowest_heights", "ground_like"]
+def ground_like(motion: Motion, reference: Motion) -> Motion:
+    r""":func:`ground_at` the median lowest-joint height of :obj:`reference`
+    (the motion :obj:`motion` was decoded from), in character heights.
+
+    Args:
+        motion (Motion): A decoded motion (a retarget or reconstruction).
+        reference (Motion): The motion it was decoded from.
+    """
+    if reference.num_frames == 0:
+        return motion
+    return ground_at(motion, float(np.median(lowest_heights(reference)))
+                     / max(reference.height(), 1e-9))
+
+
+__all__ = ["lowest_heights", "ground_at", "ground_like"]

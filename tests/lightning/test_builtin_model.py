@@ -86,7 +86,7 @@ def test_retarget_is_grounded_by_default_and_not_with_no_ground(tmp_path: Path) 
     """``retarget`` puts the output's feet where the source's are (one
     vertical shift of the whole clip: --no-ground differs by a constant
     root offset only): read back, its median lowest joint is within 2 % of
-    its height of the floor."""
+    its height of the target file's floor."""
     from satagraph.datasets.zoo import generate_clip, zoo_rigs
     from satagraph.io import write_bvh
     from satagraph.transforms.canonical import canonicalize
@@ -104,5 +104,5 @@ def test_retarget_is_grounded_by_default_and_not_with_no_ground(tmp_path: Path) 
     np.testing.assert_allclose(grounded.rotations, raw.rotations, atol=1e-6)
     shift = grounded.translations[:, 0] - raw.translations[:, 0]
     np.testing.assert_allclose(shift, np.broadcast_to(shift[0], shift.shape), atol=1e-4)
-    canon = canonicalize(grounded, fps=30.0)
+    canon = canonicalize(grounded, fps=30.0, floor=False)  # the target file's floor
     assert abs(np.median(lowest_heights(canon))) < 0.02 * canon.height()
