@@ -35,7 +35,8 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
 * ``side``: walks facing forward while travelling 30-90 degrees to one side
   (the sign of ``travel``: positive left), told as diagonally forward
   below :data:`SIDESTEP` degrees and as sidestepping above (legged plans).
-* ``run``: the gait at about twice its walking speed (legged plans).
+* ``run``: the gait at 1.8-2.5 times its walking speed (legged plans),
+  told as dashing from :data:`DASH` times it.
 """
 from __future__ import annotations
 
@@ -44,7 +45,7 @@ from dataclasses import dataclass
 from pathlib import PurePath
 from typing import Dict, List, Mapping, Optional, Tuple
 
-from satagraph.datasets.zoo import CLIP_KINDS, SPECIES, ClipFacts
+from satagraph.datasets.zoo import CLIP_KINDS, GAITS, SPECIES, ClipFacts
 
 #: Body plan -> subjects.
 ZOO_SUBJECTS: Dict[str, Tuple[str, ...]] = {
@@ -68,6 +69,9 @@ DRIFT_TURN = 30.0
 #: ``side`` clips travelling at least this many degrees off the facing
 #: direction are told as sidestepping, the others as walking diagonally.
 SIDESTEP = 60.0
+#: ``run`` clips at least this many times their gait's walking speed are
+#: told as dashing, the others as running.
+DASH = 2.15
 _KIND_IN_NAME = re.compile(
     r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach|back|side|run)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
@@ -169,7 +173,10 @@ def _verbs(clip: ZooClip) -> List[str]:
 def _travel_verbs(clip: ZooClip, drift: str) -> List[str]:
     """Verb phrases of the walks that do not go straight ahead at a walk."""
     if clip.kind == "run":
-        return [f"runs forward{drift}", f"runs{drift}"]
+        walk = GAITS[clip.species][3]
+        if clip.speed_start is not None and clip.speed_start >= DASH * walk:
+            return [f"dashes forward{drift}", f"sprints forward{drift}"]
+        return [f"runs forward{drift}", f"jogs forward{drift}"]
     if clip.kind == "back":
         return [f"walks backward{drift}", f"walks backwards{drift}"]
     if clip.travel is None:
@@ -202,4 +209,4 @@ def zoo_phrasings(clip: ZooClip) -> List[str]:
             for subject in ZOO_SUBJECTS[clip.species]]
 
 
-__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]
+__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "DASH", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]

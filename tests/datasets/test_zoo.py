@@ -260,4 +260,6 @@ def test_back_and_side_captions_say_the_way():
     assert "forward and to the left" in said[40.0] and "right" not in said[40.0]
     assert "sideways to the right" in said[-80.0] and "left" not in said[-80.0]
     run = zoo_phrasings(ZooClip.of(ClipFacts("quadruped", "run", 3.0, 2.0, 2.0, 0.0)))
-    assert all("runs" in text for text in run)
+    dash = zoo_phrasings(ZooClip.of(ClipFacts("quadruped", "run", 3.0, 2.4, 2.4, 0.0)))
+    assert all("runs" in text or "jogs" in text for text in run)
+    assert all("dashes" in text or "sprints" in text for text in dash)
