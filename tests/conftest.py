@@ -201,6 +201,27 @@ def assert_same_hierarchy() -> Callable[[Skeleton, Skeleton], None]:
     return _assert_same_hierarchy
 
 
+def _assert_grounded_pair(grounded_path: Path, raw_path: Path) -> None:
+    """Two outputs of one command with ``--ground`` and ``--no-ground``: the
+    same rotations, root paths one constant apart, and the grounded one's
+    median lowest joint within 2 % of its height of its file's floor."""
+    from satagraph.io import read_bvh
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.transforms.ground import lowest_heights
+    grounded, raw = read_bvh(grounded_path), read_bvh(raw_path)
+    np.testing.assert_allclose(grounded.rotations, raw.rotations, atol=1e-6)
+    shift = grounded.translations[:, 0] - raw.translations[:, 0]
+    np.testing.assert_allclose(shift, np.broadcast_to(shift[0], shift.shape), atol=1e-4)
+    canon = canonicalize(grounded, fps=30.0, floor=False)  # the file's own floor
+    assert abs(np.median(lowest_heights(canon))) < 0.02 * canon.height()
+
+
+@pytest.fixture
+def assert_grounded_pair() -> Callable[[Path, Path], None]:
+    """Checker of a ``--ground`` / ``--no-ground`` pair of output files."""
+    return _assert_grounded_pair
+
+
 @pytest.fixture(autouse=True)
 def _seed() -> None:
     """Every test starts from the same random state."""

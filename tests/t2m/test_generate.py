@@ -183,20 +183,14 @@ def test_builtin_generator_is_the_default_and_says_so(t2m_ckpt, zoo_skeletons, t
 
 
 def test_generated_motion_stands_on_the_floor_unless_no_ground(t2m_ckpt, zoo_skeletons,
-                                                               tmp_path):
+                                                               tmp_path,
+                                                               assert_grounded_pair):
     """By default the motion is shifted (one constant) so that its median
     lowest joint is on the floor; --no-ground differs by that shift only."""
-    from satagraph.transforms.canonical import canonicalize
-    from satagraph.transforms.ground import lowest_heights
     outs = {}
     for flag in ("--ground", "--no-ground"):
         outs[flag] = tmp_path / f"g{flag}.bvh"
         assert main(["generate", "--ckpt", str(t2m_ckpt), "--skeleton",
                      str(zoo_skeletons["quadruped"]), "--text", TEXT, "--seconds", "1",
                      flag, str(outs[flag])]) == 0
-    grounded, raw = read_bvh(outs["--ground"]), read_bvh(outs["--no-ground"])
-    np.testing.assert_allclose(grounded.rotations, raw.rotations, atol=1e-6)
-    shift = grounded.translations[:, 0] - raw.translations[:, 0]
-    np.testing.assert_allclose(shift, np.broadcast_to(shift[0], shift.shape), atol=1e-4)
-    canon = canonicalize(grounded, fps=30.0, floor=False)  # the target file's floor
-    assert abs(np.median(lowest_heights(canon))) < 0.02 * canon.height()
+    assert_grounded_pair(outs["--ground"], outs["--no-ground"])
