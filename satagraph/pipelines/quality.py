@@ -29,6 +29,7 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 
 from satagraph.transforms.canonical import canonicalize, lateral_forward
+from satagraph.transforms.ground import ground_level
 from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, describe_joints, limb_ends
 from satagraph.motion import Motion, leg_length as motion_leg_length
@@ -123,10 +124,9 @@ def root_travel(canonical: Motion) -> float:
 
 
 def ground_height(canonical: Motion) -> float:
-    """Median over frames of the lowest joint's height above the floor
-    (y = 0), as a fraction of the character's height; negative below."""
-    low = canonical.global_positions()[:, :, 1].min(axis=1)
-    return float(np.median(low) / max(canonical.height(), 1e-9))
+    """:func:`satagraph.transforms.ground.ground_level` of a canonical
+    motion: its median lowest joint above the floor, in its heights."""
+    return ground_level(canonical)
 
 
 def head_index(canonical: Motion) -> Optional[int]:

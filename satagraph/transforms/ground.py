@@ -25,6 +25,12 @@ def lowest_heights(motion: Motion) -> np.ndarray:
     return motion.global_positions()[..., 1].min(axis=1)
 
 
+def ground_level(motion: Motion) -> float:
+    """Median over frames of the lowest joint's height above the floor
+    (y = 0), as a fraction of the character's height; negative below."""
+    return float(np.median(lowest_heights(motion))) / max(motion.height(), 1e-9)
+
+
 def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
     r""":obj:`motion` shifted along +Y by one constant so that the median
     height of its lowest joint over its frames is :obj:`lift` times its
@@ -43,8 +49,8 @@ def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
 
 
 def ground_like(motion: Motion, reference: Motion) -> Motion:
-    r""":func:`ground_at` the median lowest-joint height of :obj:`reference`
-    (the motion :obj:`motion` was decoded from), in character heights.
+    r""":func:`ground_at` the :func:`ground_level` of :obj:`reference` (the
+    motion :obj:`motion` was decoded from).
 
     Args:
         motion (Motion): A decoded motion (a retarget or reconstruction).
@@ -52,8 +58,7 @@ def ground_like(motion: Motion, reference: Motion) -> Motion:
     """
     if reference.num_frames == 0:
         return motion
-    return ground_at(motion, float(np.median(lowest_heights(reference)))
-                     / max(reference.height(), 1e-9))
+    return ground_at(motion, ground_level(reference))
 
 
-__all__ = ["lowest_heights", "ground_at", "ground_like"]
+__all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like"]
