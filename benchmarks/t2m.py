@@ -57,6 +57,7 @@ from satagraph.data.features import (MotionFeatures, features_to_motion,  # noqa
 from satagraph.datasets.captions import captions_for  # noqa: E402
 from satagraph.datasets.sources import read_manifest, select  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.datasets.zoo_captions import ZooClip, dashes  # noqa: E402
 from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noqa: E402
                                           matching_score, multimodality, r_precision,
                                           replicate, subsample)
@@ -111,9 +112,24 @@ def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> Lis
         sample = zoo.sample(0, idx, int(rng.integers(33, 97)), stream, False)
         motion = canonicalize(sample.motion, fps=FPS, up_axis="+Y", unit_scale=1.0)
         caps = [c.text for c in captions_for(sample)]
-        out.append(measure(motion_to_features(motion), caps, sample.kind, "zoo",
+        out.append(measure(motion_to_features(motion), caps, zoo_label(sample), "zoo",
                            sample.species, keep))
     return out
+
+
+def zoo_label(sample) -> str:
+    """A zoo clip's label in the probes' (bandai's) vocabulary where it has
+    one: ``back`` walks are ``walk-back``, ``side`` walks ``walk-left`` /
+    ``walk-right`` by the side they travel to, ``run`` clips ``dash`` where
+    their captions say so; other kinds keep their name."""
+    facts = sample.facts
+    if sample.kind == "back":
+        return "walk-back"
+    if sample.kind == "side" and facts is not None:
+        return "walk-left" if facts.travel > 0 else "walk-right"
+    if sample.kind == "run" and facts is not None:
+        return "dash" if dashes(ZooClip.of(facts)) else "run"
+    return sample.kind
 
 
 def bandai_parts(path: str) -> Tuple[str, str]:

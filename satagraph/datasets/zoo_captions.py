@@ -173,8 +173,7 @@ def _verbs(clip: ZooClip) -> List[str]:
 def _travel_verbs(clip: ZooClip, drift: str) -> List[str]:
     """Verb phrases of the walks that do not go straight ahead at a walk."""
     if clip.kind == "run":
-        walk = GAITS[clip.species][3]
-        if clip.speed_start is not None and clip.speed_start >= DASH * walk:
+        if dashes(clip):
             return [f"dashes forward{drift}", f"sprints forward{drift}"]
         return [f"runs forward{drift}", f"jogs forward{drift}"]
     if clip.kind == "back":
@@ -185,6 +184,13 @@ def _travel_verbs(clip: ZooClip, drift: str) -> List[str]:
     if abs(clip.travel) < SIDESTEP:
         return [f"walks forward and to the {side}", f"walks diagonally to the {side}"]
     return [f"steps sideways to the {side}", f"sidesteps to the {side}"]
+
+
+def dashes(clip: ZooClip) -> bool:
+    """Whether a ``run`` clip is told as dashing: from :data:`DASH` times
+    its gait's walking speed."""
+    return (clip.kind == "run" and clip.speed_start is not None
+            and clip.speed_start >= DASH * GAITS[clip.species][3])
 
 
 def _drift(clip: ZooClip) -> str:
@@ -209,4 +215,4 @@ def zoo_phrasings(clip: ZooClip) -> List[str]:
             for subject in ZOO_SUBJECTS[clip.species]]
 
 
-__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "DASH", "ZooClip", "zoo_clip_of_row", "zoo_phrasings"]
+__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "DASH", "ZooClip", "dashes", "zoo_clip_of_row", "zoo_phrasings"]
