@@ -140,13 +140,17 @@ def last_checkpoint(trainer: L.Trainer) -> str:
 
 def init_weights(module: L.LightningModule, ckpt: str) -> None:
     """Load another run's weights into :obj:`module` for fine-tuning; the
-    module keeps its own normaliser (the new data's). :obj:`ckpt` is a
-    checkpoint, a ``.safetensors`` weights file or ``"builtin"``. Warns about
-    weights the checkpoint lacks or has in excess (e.g. another bottleneck)."""
+    module keeps its own normaliser (the new data's) and whatever its
+    ``init_keeps`` prefixes name (a text-to-motion module's frozen
+    autoencoder: the one its config gives, not the checkpoint's).
+    :obj:`ckpt` is a checkpoint, a ``.safetensors`` weights file or
+    ``"builtin"``. Warns about weights the checkpoint lacks or has in excess
+    (e.g. another bottleneck)."""
+    keep = ("normalizer.",) + tuple(getattr(module, "init_keeps", ()))
     state = load_weights_or_checkpoint(ckpt)["state_dict"]
-    state = {k: v for k, v in state.items() if not k.startswith("normalizer.")}
+    state = {k: v for k, v in state.items() if not k.startswith(keep)}
     result = module.load_state_dict(state, strict=False)
-    missing = [k for k in result.missing_keys if not k.startswith("normalizer.")]
+    missing = [k for k in result.missing_keys if not k.startswith(keep)]
     if missing or result.unexpected_keys:
         warnings.warn(f"--init-from {ckpt}: {len(missing)} weights not in the checkpoint "
                       f"(kept at initialisation: {missing[:5]}), "

@@ -105,6 +105,10 @@ class TextToMotionModule(L.LightningModule):
             autoencoder's), ``window``, ``data``.
     """
 
+    #: Weights ``--init-from`` leaves as built (:func:`~satagraph.experiment.train.init_weights`):
+    #: the frozen autoencoder is the one ``model.autoencoder`` names.
+    init_keeps = ("autoencoder.",)
+
     def __init__(self, model: Dict[str, Any], loss: Optional[Dict[str, float]] = None,
                  optim: Optional[Dict[str, float]] = None, fps: float = 30.0,
                  meta: Optional[Dict[str, Any]] = None) -> None:

@@ -153,3 +153,22 @@ def test_exported_weights_keep_the_text_encoder_record(t2m_ckpt, tmp_path):
     assert type(again).__name__ == "TextToMotionModule"
     assert again.meta["text_encoder"] == {"id": module.text_encoder.id, "width": 32}
     assert all(torch.equal(v, again.state_dict()[k]) for k, v in module.state_dict().items())
+
+
+def test_init_from_keeps_the_configured_autoencoder(autoencoder_ckpt, t2m_ckpt):
+    """``--init-from`` a text-to-motion checkpoint takes its generators and
+    leaves the frozen autoencoder the config names (here: a changed one),
+    not the checkpoint's."""
+    from satagraph.experiment.train import init_weights
+    module = build_t2m(autoencoder_ckpt)
+    saved = torch.load(t2m_ckpt, map_location="cpu", weights_only=False)["state_dict"]
+    with torch.no_grad():
+        for p in module.parameters():
+            p.add_(1.0)
+    ours = {k: v.clone() for k, v in module.state_dict().items() if k.startswith("autoencoder.")}
+    init_weights(module, str(t2m_ckpt))
+    state = module.state_dict()
+    for k, v in ours.items():
+        assert torch.equal(state[k], v), k
+    generator = [k for k in saved if k.startswith(("masked.", "residual."))]
+    assert generator and all(torch.equal(state[k], saved[k]) for k in generator)
