@@ -203,11 +203,8 @@ class Motion:
         always upright (a line along +X for Bandai and the dog), and a clip
         can start lying down (a dog's 0.30 m first frame in a clip it
         mostly stands at 0.47 m)."""
-        extent = float(np.ptp(self.skeleton.rest_positions()[:, 1]))
-        if self.num_frames == 0:
-            return extent
-        posed = np.ptp(self.global_positions()[..., 1], axis=1)
-        return max(extent, float(np.median(posed)))
+        return character_height(self.skeleton, self.global_positions()
+                                if self.num_frames else None)
 
     def with_(self, **changes) -> "Motion":
         """A copy with some fields replaced; drops :obj:`raw_channels` unless
@@ -249,6 +246,19 @@ def ground_contacts(positions: np.ndarray, fps: float, size: float,
     slow = np.linalg.norm(vel, axis=-1) < speed * size
     slow[:1] = True
     return (positions[..., 1] < height * size) & slow
+
+
+def character_height(skeleton: Skeleton, positions: Optional[np.ndarray] = None) -> float:
+    r""":meth:`Motion.height` of a skeleton and its global joint positions
+    (``None``: the rest pose only), for callers that have the positions.
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`
+    """
+    extent = float(np.ptp(skeleton.rest_positions()[:, 1]))
+    if positions is None or len(positions) == 0:
+        return extent
+    return max(extent, float(np.median(np.ptp(positions[..., 1], axis=1))))
 
 
 def leg_length(positions: np.ndarray, size: float) -> float:

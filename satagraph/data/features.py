@@ -28,7 +28,7 @@ import torch
 
 from satagraph.data.clip import MotionClip
 from satagraph.motion import (CONTACT_HEIGHT, CONTACT_SPEED, CanonicalTransform, Motion,
-                              ground_contacts, leg_length)
+                              character_height, ground_contacts, leg_length)
 from satagraph.ops.fk import forward_kinematics
 from satagraph.ops.rotation import matrix_to_rotation_6d, rotation_6d_to_matrix
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
@@ -179,7 +179,7 @@ def motion_to_features(
     local[:, 0] = inv @ root_rot
     prev = np.concatenate([local[:1], local[:-1]])
     disp = np.concatenate([np.zeros_like(pos[:1]), pos[1:] - pos[:-1]]) * fps
-    height = motion.height()
+    height = character_height(skel, pos)
     return MotionFeatures(
         skeleton=skel, fps=fps, height=height,
         x_local=bone_offsets(skel), x_global=skel.rest_positions(),

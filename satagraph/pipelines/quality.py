@@ -32,7 +32,7 @@ from satagraph.transforms.canonical import canonicalize, lateral_forward
 from satagraph.transforms.ground import ground_level
 from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, describe_joints, limb_ends
-from satagraph.motion import Motion, leg_length as motion_leg_length
+from satagraph.motion import Motion, character_height, leg_length as motion_leg_length
 
 #: Displacement interval of :func:`step_correlation` (frames at 30 fps, 0.1 s):
 #: the stepping band (1-3 Hz) without frame-to-frame capture jitter.
@@ -114,7 +114,8 @@ def step_correlation(source: Motion, output: Motion) -> float:
 
 def leg_length(canonical: Motion) -> float:
     """:func:`satagraph.motion.leg_length` of a canonical motion."""
-    return motion_leg_length(canonical.global_positions(), canonical.height())
+    pos = canonical.global_positions()
+    return motion_leg_length(pos, character_height(canonical.skeleton, pos))
 
 
 def root_travel(canonical: Motion) -> float:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from satagraph.motion import Motion
+from satagraph.motion import Motion, character_height
 
 
 def lowest_heights(motion: Motion) -> np.ndarray:
@@ -25,10 +25,19 @@ def lowest_heights(motion: Motion) -> np.ndarray:
     return motion.global_positions()[..., 1].min(axis=1)
 
 
+def _levels(motion: Motion) -> tuple:
+    """(median lowest-joint height, character height) from one forward
+    kinematics pass."""
+    pos = motion.global_positions()
+    return (float(np.median(pos[..., 1].min(axis=1))),
+            character_height(motion.skeleton, pos))
+
+
 def ground_level(motion: Motion) -> float:
     """Median over frames of the lowest joint's height above the floor
     (y = 0), as a fraction of the character's height; negative below."""
-    return float(np.median(lowest_heights(motion))) / max(motion.height(), 1e-9)
+    lowest, height = _levels(motion)
+    return lowest / max(height, 1e-9)
 
 
 def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
@@ -42,7 +51,8 @@ def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
     """
     if motion.num_frames == 0:
         return motion
-    shift = lift * motion.height() - float(np.median(lowest_heights(motion)))
+    lowest, height = _levels(motion)
+    shift = lift * height - lowest
     translations = motion.translations.copy()
     translations[:, 0, 1] += shift
     return motion.with_(translations=translations)
