@@ -36,6 +36,7 @@ A config (``module: t2m``, see ``experiments/t2m_tiny.yaml``)::
 from __future__ import annotations
 
 import copy
+import math
 import os
 from typing import Any, Dict, List, Optional, Tuple
 
@@ -53,11 +54,27 @@ from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTra
 
 #: Loss weights of the three models.
 DEFAULT_LOSS: Dict[str, float] = {"masked": 1.0, "residual": 1.0, "length": 0.1}
-#: AdamW with a linear warm-up over ``warmup_steps``, then constant
-#: (gradient clipping: ``optim.grad_clip`` of the config schema).
-DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200}
+#: AdamW with a linear warm-up over ``warmup_steps``, then constant, or,
+#: with ``decay_steps`` > 0, a cosine from ``lr`` down to ``floor * lr``
+#: over that many steps after the warm-up (gradient clipping:
+#: ``optim.grad_clip`` of the config schema).
+DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200,
+                                   "decay_steps": 0, "floor": 0.1}
 #: Checkpoint key of the text encoder's id and width.
 TEXT_ENCODER_KEY = "text_encoder"
+
+
+def lr_factor(step: int, warmup_steps: int, decay_steps: int, floor: float) -> float:
+    r"""The generator's schedule: a linear warm-up over :obj:`warmup_steps`,
+    then a cosine from 1 to :obj:`floor` over :obj:`decay_steps` (constant 1
+    when it is 0), then :obj:`floor`."""
+    warmup = max(int(warmup_steps), 1)
+    if step < warmup:
+        return (step + 1) / warmup
+    if decay_steps <= 0:
+        return 1.0
+    t = min(1.0, (step - warmup) / float(decay_steps))
+    return floor + (1.0 - floor) * 0.5 * (1.0 + math.cos(math.pi * t))
 
 
 def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
@@ -233,8 +250,9 @@ class TextToMotionModule(L.LightningModule):
         params = [p for p in self.parameters() if p.requires_grad]
         opt = torch.optim.AdamW(params, lr=float(self.optim["lr"]),
                                 weight_decay=float(self.optim["weight_decay"]))
-        warmup = max(int(self.optim["warmup_steps"]), 1)
-        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: min(1.0, (s + 1) / warmup))
+        args = (int(self.optim["warmup_steps"]), int(self.optim["decay_steps"]),
+                float(self.optim["floor"]))
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: lr_factor(s, *args))
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
 
     # ------------------------------------------------------------ checkpoints

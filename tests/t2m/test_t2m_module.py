@@ -172,3 +172,25 @@ def test_init_from_keeps_the_configured_autoencoder(autoencoder_ckpt, t2m_ckpt):
         assert torch.equal(state[k], v), k
     generator = [k for k in saved if k.startswith(("masked.", "residual."))]
     assert generator and all(torch.equal(state[k], saved[k]) for k in generator)
+
+
+def test_the_schedule_warms_up_then_follows_a_cosine_to_its_floor(autoencoder_ckpt):
+    from satagraph.lightning.text_to_motion import lr_factor
+    assert lr_factor(0, 10, 0, 0.1) == pytest.approx(0.1)
+    assert lr_factor(50, 10, 0, 0.1) == 1.0  # no decay: constant
+    assert lr_factor(10, 10, 100, 0.1) == pytest.approx(1.0)
+    assert lr_factor(60, 10, 100, 0.1) == pytest.approx(0.55)  # half way
+    assert lr_factor(110, 10, 100, 0.1) == pytest.approx(0.1)
+    assert lr_factor(500, 10, 100, 0.1) == pytest.approx(0.1)
+    module = build_t2m(autoencoder_ckpt)
+    module.optim.update(lr=1e-3, warmup_steps=2, decay_steps=4, floor=0.2)
+    conf = module.configure_optimizers()
+    opt, sched = conf["optimizer"], conf["lr_scheduler"]["scheduler"]
+    lrs = []
+    for _ in range(8):
+        lrs.append(opt.param_groups[0]["lr"])
+        opt.step()
+        sched.step()
+    assert lrs[:2] == pytest.approx([5e-4, 1e-3])
+    assert lrs[4] == pytest.approx(6e-4)
+    assert lrs[6:] == pytest.approx([2e-4, 2e-4])
