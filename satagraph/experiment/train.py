@@ -11,6 +11,7 @@ from typing import Any, Dict, Optional, Tuple
 
 import lightning as L
 import torch
+from torch import Tensor
 
 from satagraph.experiment.config import expand_path
 # module_class and register_module: re-exported, the registry's face here
@@ -138,24 +139,52 @@ def last_checkpoint(trainer: L.Trainer) -> str:
     return trainer.checkpoint_callback.last_model_path
 
 
+#: A VAE bottleneck's projection (mean, then log-variance) and an RVQ
+#: bottleneck's (the latent it quantises).
+_VAE_PROJ, _RVQ_PROJ = "model.bottleneck.lin.", "model.bottleneck.proj."
+
+
+def vae_to_rvq(state: Dict[str, Tensor], own: Dict[str, Tensor]) -> Dict[str, Tensor]:
+    r"""A VAE's weights for an RVQ module: the RVQ's projection starts as the
+    VAE's mean half, so that the decoder first sees the latents it was
+    trained on (the codebooks are then fitted to them by k-means). Other
+    states pass unchanged."""
+    key = _RVQ_PROJ + "weight"
+    if key not in own or _VAE_PROJ + "weight" not in state:
+        return state
+    width = own[key].shape[0]
+    out = {k: v for k, v in state.items() if not k.startswith(_VAE_PROJ)}
+    for part in ("weight", "bias"):
+        mean = state[_VAE_PROJ + part][:width]
+        if mean.shape == own[_RVQ_PROJ + part].shape:
+            out[_RVQ_PROJ + part] = mean
+    return out
+
+
 def init_weights(module: L.LightningModule, ckpt: str) -> None:
     """Load another run's weights into :obj:`module` for fine-tuning; the
     module keeps its own normaliser (the new data's) and whatever its
     ``init_keeps`` prefixes name (a text-to-motion module's frozen
     autoencoder: the one its config gives, not the checkpoint's).
     :obj:`ckpt` is a checkpoint, a ``.safetensors`` weights file or
-    ``"builtin"``. Warns about weights the checkpoint lacks or has in excess
-    (e.g. another bottleneck)."""
+    ``"builtin"``. A VAE's bottleneck starts an RVQ's (:func:`vae_to_rvq`).
+    Warns about weights the checkpoint lacks, has in excess (e.g. another
+    bottleneck) or has in another shape (e.g. another codebook size), which
+    keep their initialisation."""
     keep = ("normalizer.",) + tuple(getattr(module, "init_keeps", ()))
+    own = module.state_dict()
     state = load_weights_or_checkpoint(ckpt)["state_dict"]
-    state = {k: v for k, v in state.items() if not k.startswith(keep)}
+    state = vae_to_rvq({k: v for k, v in state.items() if not k.startswith(keep)}, own)
+    reshaped = [k for k, v in state.items() if k in own and own[k].shape != v.shape]
+    state = {k: v for k, v in state.items() if k not in reshaped}
     result = module.load_state_dict(state, strict=False)
-    missing = [k for k in result.missing_keys if not k.startswith(keep)]
-    if missing or result.unexpected_keys:
+    missing = [k for k in result.missing_keys if not k.startswith(keep) and k not in reshaped]
+    if missing or result.unexpected_keys or reshaped:
         warnings.warn(f"--init-from {ckpt}: {len(missing)} weights not in the checkpoint "
                       f"(kept at initialisation: {missing[:5]}), "
                       f"{len(result.unexpected_keys)} unused "
-                      f"({result.unexpected_keys[:5]})", stacklevel=2)
+                      f"({result.unexpected_keys[:5]}), {len(reshaped)} of another shape "
+                      f"(kept at initialisation: {reshaped[:5]})", stacklevel=2)
 
 
 def _spawns_workers(trainer: L.Trainer) -> bool:

@@ -98,13 +98,14 @@ def datamodule(_base_config: Dict[str, Any]) -> MotionDataModule:
 @pytest.fixture
 def build_tiny_module(tiny_config: Dict[str, Any],
                       datamodule: MotionDataModule) -> Callable[..., L.LightningModule]:
-    """Factory ``build_tiny_module(name="vae")``: a seeded tiny module with
-    the data module's normaliser."""
-    def build(name: str = "vae") -> L.LightningModule:
+    """Factory ``build_tiny_module(name="vae", **model)``: a seeded tiny
+    module with the data module's normaliser (``model``: config overrides)."""
+    def build(name: str = "vae", **model: Any) -> L.LightningModule:
         L.seed_everything(0, verbose=False)
         cfg = dict(tiny_config, module=name)
         if name == "rvq":
             cfg["model"] = dict(cfg["model"], codebook_size=16, num_quantizers=2)
+        cfg["model"] = dict(cfg["model"], **model)
         return build_module(cfg, datamodule)
     return build
 

@@ -84,6 +84,27 @@ def test_init_weights_loads_network_and_keeps_normalizer(build_tiny_module: Call
         init_weights(rvq, str(path))
     torch.testing.assert_close(rvq.model.encoder.state_dict(),
                                source.model.encoder.state_dict(), rtol=0, atol=0)
+    # ... and the RVQ's projection is the VAE's mean half (vae_to_rvq).
+    width = rvq.model.bottleneck.proj.out_features
+    torch.testing.assert_close(rvq.model.bottleneck.proj.weight,
+                               source.model.bottleneck.lin.weight[:width], rtol=0, atol=0)
+    torch.testing.assert_close(rvq.model.bottleneck.proj.bias,
+                               source.model.bottleneck.lin.bias[:width], rtol=0, atol=0)
+    # Weights of another shape (another codebook size) keep their
+    # initialisation, named in the warning; the others load.
+    rvq_path = tmp_path / "rvq.ckpt"
+    torch.save({"state_dict": rvq.state_dict()}, rvq_path)
+    small = build_tiny_module("rvq", codebook_size=8)
+    before = {k: v.clone() for k, v in small.state_dict().items()}
+    with pytest.warns(UserWarning, match=r"[1-9]\d* of another shape"):
+        init_weights(small, str(rvq_path))
+    loaded = rvq.state_dict()
+    reshaped = [k for k, v in small.state_dict().items() if v.shape != loaded[k].shape]
+    assert reshaped and all("codebook" in k or "embed" in k or "cluster" in k for k in reshaped)
+    for key, value in small.state_dict().items():
+        expected = before[key] if key in reshaped else loaded[key]
+        if not key.startswith("normalizer."):
+            torch.testing.assert_close(value, expected, rtol=0, atol=0, msg=key)
 
 
 # ------------------------------------------------------------------ schedule
