@@ -417,6 +417,20 @@ def reconstructed_items(module, items: Sequence[Item]) -> List[Item]:
                     it.skeleton) for it in items]
 
 
+def autoencoded_items(autoencoder, items: Sequence[Item]) -> List[Item]:
+    """Every test item encoded and decoded on its own rig by a plain
+    autoencoder (``--reference``: the ceiling an RVQ started from it could
+    reach), put on the floor as the other rows."""
+    from satagraph.pipelines.inference import reconstruct_motion
+    out = []
+    for it in items:
+        with torch.no_grad():
+            motion = reconstruct_motion(autoencoder, it.motion, autoencoder.embed, ground=True)
+        feats = motion_to_features(canonicalize(motion, fps=FPS))
+        out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
+    return out
+
+
 def retargeted_items(module, retrieved: Sequence[Item], items: Sequence[Item]) -> List[Item]:
     """Each retrieved training clip, cut to its test item's length,
     retargeted onto the test item's rig through the frozen SATA-RVQ."""
@@ -558,8 +572,11 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
 
 
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
-             reps: Optional[int] = None, gen_seeds: int = 2) -> Tuple[List[Dict], Dict]:
-    """Train the evaluator and score every group; rows and run facts."""
+             reps: Optional[int] = None, gen_seeds: int = 2,
+             reference: Optional[str] = None) -> Tuple[List[Dict], Dict]:
+    """Train the evaluator and score every group; rows and run facts
+    (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
+    file, whose reconstruction is one more row per group)."""
     start = time.perf_counter()
     encoder = build_text_encoder("offline")
     cache: Dict[str, torch.Tensor] = {}
@@ -579,10 +596,16 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     if ckpt:
         from satagraph.pipelines.generate import load_generator
         module = load_generator(ckpt)
+    autoencoder = None
+    if reference:
+        from satagraph.experiment.train import load_module
+        autoencoder = load_module(reference).eval()
     rows = []
     for name in dict.fromkeys(it.group for it in test):
         items = [it for it in test if it.group == name]
         extra = {}
+        if autoencoder is not None:
+            extra[f"reconstruction ({reference})"] = [autoencoded_items(autoencoder, items)]
         if module is not None:
             extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
@@ -593,7 +616,8 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     else:
         run_extra = []
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
-             "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "quick": quick,
+             "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "reference": reference,
+             "quick": quick,
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
     return rows, {"facts": facts, "model": model, "recogniser": recogniser,
@@ -609,10 +633,15 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     parser.add_argument("--save", default=str(ROOT / "runs" / "t2m_evaluator"),
                         help="folder of the trained evaluator")
+    parser.add_argument("--reference", default=None, metavar="AUTOENCODER",
+                        help="also a row of test motion through this autoencoder on its own "
+                             "rig (builtin, a checkpoint or weights file): the ceiling of "
+                             "an RVQ started from it")
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
-    rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps)
+    rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
+                         reference=args.reference)
     name = "t2m_quick" if args.quick else "t2m"
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)

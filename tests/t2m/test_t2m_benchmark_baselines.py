@@ -31,3 +31,21 @@ def test_retrieval_is_retargeted_onto_each_test_rig(t2m_ckpt: Path) -> None:
     same = t2m.retargeted_items(module, test[:1], test[:1])[0]
     recon = t2m.reconstructed_items(module, test[:1])[0]
     np.testing.assert_allclose(same.desc, recon.desc, atol=1e-5)
+
+
+def test_reference_autoencoder_row_reconstructs_each_test_clip() -> None:
+    """``--reference builtin``: each test clip through the built-in model on
+    its own rig keeps its captions and length and is described closer to
+    its own clip than to the others (zoo bipeds and quadrupeds, the body
+    plans the built-in model was trained on)."""
+    from satagraph.experiment.train import load_module
+    test = [it for it in t2m.zoo_items("test", 12, keep=True)
+            if it.skeleton in ("biped", "quadruped")][:4]
+    assert len(test) >= 3
+    out = t2m.autoencoded_items(load_module("builtin").eval(), test)
+    for got, it in zip(out, test):
+        assert got.captions == it.captions and got.skeleton == it.skeleton
+        assert abs(got.seconds - it.seconds) < 1.5 / t2m.FPS
+    own = np.array([[np.linalg.norm(a.desc - b.desc) for b in test] for a in out])
+    others = np.where(np.eye(len(test), dtype=bool), np.inf, own)
+    assert (own.diagonal() < others.min(axis=1)).mean() >= 0.75  # nearest to its own
