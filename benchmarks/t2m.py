@@ -28,6 +28,12 @@ on every group's motions: direction of travel (walk / back / left / right),
 Froude speed ordering walk < run < dash, stillness of bow and bye.
 
     python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
+        [--reference builtin] [--prompts val] [--guidance G] [--temperature T]
+
+``--prompts val`` scores the zoo's validation seeds instead of the test
+prompts (no Bandai groups): choose sampling settings there and report them
+on the test prompts. ``--reference`` adds a row of the test motion through
+a plain autoencoder (e.g. the built-in model).
 
 Writes ``benchmarks/results/t2m.md`` and ``.json`` (``--quick``:
 ``t2m_quick.*``), and the evaluator to ``runs/t2m_evaluator/``.
@@ -155,11 +161,13 @@ def file_items(files, group: Callable[[object], str], window: int = 96, stride: 
     return out
 
 
-def real_items(quick: bool, seed: int) -> Tuple[List[Item], List[Item]]:
-    """Training items (evaluator, retrieval) and test items."""
+def real_items(quick: bool, seed: int, prompts: str = "test") -> Tuple[List[Item], List[Item]]:
+    """Training items (evaluator, retrieval) and test items (:obj:`prompts`
+    ``"val"``: the zoo's validation seeds instead, and no file groups, for
+    choosing sampling settings away from the test prompts)."""
     zoo_train = zoo_items("train", 128 if quick else 1200, seed, keep=True)
-    zoo_test = zoo_items("test", 64 if quick else 256, seed, keep=True)
-    if quick or not MANIFEST.is_file():
+    zoo_test = zoo_items(prompts, 64 if quick else 256, seed, keep=True)
+    if quick or prompts != "test" or not MANIFEST.is_file():
         return zoo_train, zoo_test
     files = [f for f in read_manifest(MANIFEST) if f.dataset in ("bandai", "cmu", "ccbase")]
     train = sorted(select(files, "train"), key=lambda f: f.path)
@@ -380,15 +388,18 @@ def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
     return out
 
 
-def generated_items(module, items: Sequence[Item], seeds: int) -> List[List[Item]]:
+def generated_items(module, items: Sequence[Item], seeds: int,
+                    settings: Optional[object] = None) -> List[List[Item]]:
     """Per seed, one generation per test item on its own rig, of its length
-    (the ground-truth length is given)."""
-    from satagraph.pipelines.generate import generate_on
+    (the ground-truth length is given), with the sampling :obj:`settings`
+    (default: :class:`~satagraph.pipelines.generate.GenerationSettings`)."""
+    from satagraph.pipelines.generate import GenerationSettings, generate_on
+    settings = settings or GenerationSettings()
     out = []
     for seed in range(seeds):
         row = []
         for it in items:
-            motion = generate_on(module, it.captions[0], it.motion, it.seconds, seed)
+            motion = generate_on(module, it.captions[0], it.motion, it.seconds, seed, settings)
             feats = motion_to_features(canonicalize(motion, fps=FPS))
             row.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
         out.append(row)
@@ -477,16 +488,19 @@ def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, 
 
 
 def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
-                    seconds: float = 4.0) -> List[Dict[str, object]]:
+                    seconds: float = 4.0, settings: Optional[object] = None
+                    ) -> List[Dict[str, object]]:
     """The generator's probes per skeleton: every probe prompt, :obj:`seeds`
     seeds, :obj:`seconds` long."""
-    from satagraph.pipelines.generate import generate_on
+    from satagraph.pipelines.generate import GenerationSettings, generate_on
+    settings = settings or GenerationSettings()
     rows = []
     for name, (subject, target) in targets.items():
         labels, travels, froudes = [], [], []
         for prompt, label in PROBE_PROMPTS:
             for seed in range(seeds):
-                motion = generate_on(module, prompt.format(subject), target, seconds, seed)
+                motion = generate_on(module, prompt.format(subject), target, seconds, seed,
+                                     settings)
                 it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
                              name, name)
                 labels.append(label), travels.append(it.travel), froudes.append(it.froude)
@@ -573,10 +587,12 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
 
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
              reps: Optional[int] = None, gen_seeds: int = 2,
-             reference: Optional[str] = None) -> Tuple[List[Dict], Dict]:
+             reference: Optional[str] = None, prompts: str = "test",
+             settings: Optional[object] = None) -> Tuple[List[Dict], Dict]:
     """Train the evaluator and score every group; rows and run facts
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
-    file, whose reconstruction is one more row per group)."""
+    file, whose reconstruction is one more row per group; :obj:`prompts`:
+    see :func:`real_items`; :obj:`settings`: the generator's sampling)."""
     start = time.perf_counter()
     encoder = build_text_encoder("offline")
     cache: Dict[str, torch.Tensor] = {}
@@ -587,7 +603,7 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
             cache.update(zip(missing, torch.as_tensor(encoder.encode(missing)).float()))
         return torch.stack([cache[t] for t in texts])
 
-    train, test = real_items(quick, seed)
+    train, test = real_items(quick, seed, prompts)
     loaded = time.perf_counter()
     steps = steps or (150 if quick else 3000)
     model = train_evaluator(train, encode, steps, seed)
@@ -608,20 +624,31 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
             extra[f"reconstruction ({reference})"] = [autoencoded_items(autoencoder, items)]
         if module is not None:
             extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
-            extra["generator (GT length)"] = generated_items(module, items, gen_seeds)
+            extra["generator (GT length)"] = generated_items(module, items, gen_seeds, settings)
         rows += group_rows(name, items, train, model, recogniser, encode,
                            reps or (3 if quick else 20), extra, seed, module)
     if module is not None:
-        run_extra = skeleton_probes(module, skeleton_targets(test, quick), gen_seeds)
+        run_extra = skeleton_probes(module, skeleton_targets(test, quick or prompts != "test"),
+                                    gen_seeds, settings=settings)
     else:
         run_extra = []
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
              "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "reference": reference,
-             "quick": quick,
+             "quick": quick, "prompts": prompts,
+             "settings": None if settings is None else vars(settings),
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
     return rows, {"facts": facts, "model": model, "recogniser": recogniser,
                   "skeletons": run_extra}
+
+
+def sampling(args: argparse.Namespace) -> Optional[object]:
+    """The generator's sampling settings of the command line (``None``:
+    all defaults)."""
+    from satagraph.pipelines.generate import GenerationSettings
+    given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
+                                           "topk_ratio") if getattr(args, k) is not None}
+    return replace(GenerationSettings(), **given) if given else None
 
 
 def main(argv=None) -> int:
@@ -633,6 +660,14 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     parser.add_argument("--save", default=str(ROOT / "runs" / "t2m_evaluator"),
                         help="folder of the trained evaluator")
+    parser.add_argument("--prompts", choices=("test", "val"), default="test",
+                        help="val: the zoo's validation seeds only (choose sampling settings "
+                             "there, report test)")
+    parser.add_argument("--guidance", type=float, default=None,
+                        help="masked transformer guidance (default: generate's)")
+    parser.add_argument("--residual-guidance", type=float, default=None)
+    parser.add_argument("--temperature", type=float, default=None)
+    parser.add_argument("--topk-ratio", type=float, default=None)
     parser.add_argument("--reference", default=None, metavar="AUTOENCODER",
                         help="also a row of test motion through this autoencoder on its own "
                              "rig (builtin, a checkpoint or weights file): the ceiling of "
@@ -641,8 +676,9 @@ def main(argv=None) -> int:
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
-                         reference=args.reference)
-    name = "t2m_quick" if args.quick else "t2m"
+                         reference=args.reference, prompts=args.prompts,
+                         settings=sampling(args))
+    name = ("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)
     save.mkdir(parents=True, exist_ok=True)

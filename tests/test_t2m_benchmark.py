@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import pytest
 
+import argparse
 import json
 import sys
 from pathlib import Path
@@ -33,3 +34,15 @@ def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     assert result["facts"]["pool_size"] == 32
     assert rows["real"]["R@3"][0] > rows["shuffled captions"]["R@3"][0] + 0.3
     assert "| zoo | real |" in (tmp_path / "t2m_quick.md").read_text()
+
+
+def test_validation_prompts_and_sampling_settings():
+    """``--prompts val`` draws the zoo's validation seeds (other rigs than the
+    test prompts'); the sampling flags become GenerationSettings."""
+    val = t2m.zoo_items("val", 3)
+    test = t2m.zoo_items("test", 3)
+    assert all(not np.allclose(a.desc, b.desc) for a, b in zip(val, test))
+    unset = dict(guidance=None, residual_guidance=None, temperature=None, topk_ratio=None)
+    settings = t2m.sampling(argparse.Namespace(**dict(unset, guidance=2.5, temperature=0.7)))
+    assert (settings.guidance, settings.temperature, settings.steps) == (2.5, 0.7, 10)
+    assert t2m.sampling(argparse.Namespace(**unset)) is None
