@@ -25,7 +25,7 @@ import socket
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterator, List, Optional
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
 import lightning as L
 import numpy as np
@@ -293,10 +293,11 @@ def resume_checkpoint(checkpoints: Path) -> Path:
 
 
 class LossLog(L.Callback):
-    r"""Append ``step<TAB>loss`` (the exact float) to a file after every
-    training step, flushed at once: a record that survives ``kill -9``. A
-    resumed run appends the steps it replays; the last line of a step
-    counts (:func:`read_loss_log`).
+    r"""Append ``step<TAB>loss<TAB>time`` (the exact float, then the wall
+    clock in Unix seconds) to a file after every training step, flushed at
+    once: a record that survives ``kill -9``, and the time axis of a run's
+    learning curve (:func:`read_loss_times`). A resumed run appends the
+    steps it replays; the last line of a step counts (:func:`read_loss_log`).
 
     Args:
         path (str): The log file (``<run>/losses.tsv``).
@@ -312,17 +313,28 @@ class LossLog(L.Callback):
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path, "a") as f:
-            f.write(f"{trainer.global_step}\t{float(loss)!r}\n")
+            f.write(f"{trainer.global_step}\t{float(loss)!r}\t{time.time():.1f}\n")
 
 
 def read_loss_log(path: Path) -> Dict[int, float]:
     """``{step: loss}`` of a :class:`LossLog` file (the last line of each
     step)."""
-    out: Dict[int, float] = {}
+    return {step: loss for step, (loss, _) in _loss_lines(path).items()}
+
+
+def read_loss_times(path: Path) -> Dict[int, float]:
+    """``{step: Unix time}`` of a :class:`LossLog` file (the last line of
+    each step; lines written before times were logged are left out)."""
+    return {step: when for step, (_, when) in _loss_lines(path).items() if when is not None}
+
+
+def _loss_lines(path: Path) -> Dict[int, Tuple[float, Optional[float]]]:
+    out: Dict[int, Tuple[float, Optional[float]]] = {}
     for line in Path(path).read_text().splitlines():
-        step, _, loss = line.partition("\t")
-        if loss:
-            out[int(step)] = float(loss)
+        fields = line.split("\t")
+        if len(fields) >= 2 and fields[1]:
+            out[int(fields[0])] = (float(fields[1]),
+                                   float(fields[2]) if len(fields) > 2 else None)
     return out
 
 
@@ -359,5 +371,6 @@ def run_lock(run_dir: Path) -> Iterator[Path]:
 
 
 __all__ = ["TrainingStopped", "RunLockedError", "SafeCheckpointIO", "NonFiniteGuard",
-           "ResumeCheckpoint", "resume_checkpoint", "run_lock", "LossLog", "read_loss_log", "rng_states",
+           "ResumeCheckpoint", "resume_checkpoint", "run_lock", "LossLog", "read_loss_log",
+           "read_loss_times", "rng_states",
            "set_rng_states", "LAST", "PREVIOUS", "NONFINITE_MODES"]

@@ -213,3 +213,22 @@ def test_diverged_weights_are_refused(tiny_config: Dict[str, Any], tmp_path: Pat
     torch.save(ckpt, bad)
     with pytest.raises(CheckpointError, match="non-finite"):
         load_module(str(bad))
+
+
+def test_loss_log_keeps_the_wall_clock_and_reads_old_files(tmp_path: Path) -> None:
+    """``losses.tsv`` lines carry the time of the step (the x axis of a
+    learning curve against wall time); files written before without it
+    still read, and the last line of a replayed step counts."""
+    from types import SimpleNamespace
+    from satagraph.lightning.reliability import LossLog, read_loss_times
+    path = tmp_path / "losses.tsv"
+    path.write_text("1\t2.5\n")  # an old line, no time
+    log = LossLog(str(path))
+    trainer = SimpleNamespace(global_step=2, is_global_zero=True)
+    before = time.time()
+    log.on_train_batch_end(trainer, None, {"loss": torch.tensor(1.25)}, None, 0)
+    trainer.global_step = 3
+    log.on_train_batch_end(trainer, None, torch.tensor(0.5), None, 1)
+    assert read_loss_log(path) == {1: 2.5, 2: 1.25, 3: 0.5}
+    times = read_loss_times(path)
+    assert sorted(times) == [2, 3] and before - 1 <= times[2] <= times[3] <= time.time() + 1
