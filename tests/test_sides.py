@@ -9,7 +9,7 @@ import pytest
 from satagraph.sides import side_of, side_pairs, swap_side
 from satagraph.semantics.lexicon import parse_name
 from satagraph.transforms.augment import mirror_pairs
-from satagraph.transforms.canonical import _lateral_pairs
+from satagraph.transforms.canonical import lateral_pairs
 
 #: name, side, mirror image.
 TABLE = [
@@ -87,7 +87,7 @@ def test_pairs_follow_the_rule():
     assert side_pairs(names) == ([1, 3, 5], [2, 4, 6])
     assert list(mirror_pairs_of(names)) == [0, 2, 1, 4, 3, 6, 5, 7, 8]
     noisy = ["Hips", "LeftArm__x7Q", "rightarm__k3Z", "LHipJoint", "RHipJoint"]
-    assert _lateral_pairs(noisy) == ([1, 3], [2, 4])
+    assert lateral_pairs(noisy) == ([1, 3], [2, 4])
 
 
 def mirror_pairs_of(names):

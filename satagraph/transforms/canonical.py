@@ -22,7 +22,7 @@ def detect_up_axis(motion: Motion) -> str:
     return guess_up_axis(motion).axis
 
 
-def _lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
+def lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
     """Indices of left joints and their right counterparts (by
     :func:`satagraph.sides.side_pairs`, matched case-blind with exporter
     noise such as ``__x7Q`` removed)."""
@@ -40,7 +40,7 @@ def lateral_forward(positions: np.ndarray, names: List[str],
         - **positions**: :math:`(..., J, 3)`
         - **output**: :math:`(..., 3)`
     """
-    left, right = _lateral_pairs(names)
+    left, right = lateral_pairs(names)
     if not left:
         return None
     across = (positions[..., left, :] - positions[..., right, :]).mean(-2)

@@ -208,3 +208,36 @@ def test_is_line_rest_finds_the_exporters_that_bake_joint_orients(
     assert is_line_rest(change_rest_pose(walk, "axis").skeleton)
     assert not any(is_line_rest(change_rest_pose(walk, r, seed=1).skeleton)
                    for r in ("native", "apose", "flat", "crouched", "random", "frame"))
+
+
+def test_auto_rest_re_rests_captured_poses_but_not_designed_rests(
+        read_real: Callable[[str], Motion]) -> None:
+    """``rest="auto"`` re-rests a rig whose rest is a line or a captured
+    pose (left and right bent differently), not a designed rest: the real
+    rigs' and the zoo's T, A, crouched and flat rests bend both sides alike
+    (under 1.1 degrees), an arbitrary or captured rest does not."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.datasets.zoo.dialects import change_rest_pose
+    from satagraph.pipelines.inference import (POSED_REST_DEGREES, needs_rest,
+                                               rest_asymmetry, shown_rest)
+    for path in (HUMAN, BANDAI, DOG):
+        skel = canonicalize(read_real(path), fps=30).skeleton
+        assert rest_asymmetry(skel) < 1.1
+    assert not needs_rest(canonicalize(read_real(HUMAN), fps=30).skeleton)
+    assert needs_rest(canonicalize(read_real(BANDAI), fps=30).skeleton)  # a line
+    walk = generate_clip(zoo_rigs(seed=0)[0], "walk", frames=30)
+    for rest in ("native", "apose", "flat", "crouched"):
+        assert rest_asymmetry(change_rest_pose(walk, rest, seed=1).skeleton) < 0.5, rest
+        assert not needs_rest(change_rest_pose(walk, rest, seed=1).skeleton), rest
+    posed = change_rest_pose(walk, "random", seed=1)
+    assert rest_asymmetry(posed.skeleton) > POSED_REST_DEGREES and needs_rest(posed.skeleton)
+    canon = canonicalize(posed, fps=30)
+    shown, undo = shown_rest(canon, "auto")
+    assert undo is not None
+    np.testing.assert_allclose(shown.global_positions(), canon.global_positions(), atol=1e-6)
+    # rotating the whole rest pose changes nothing (no up axis or facing needed)
+    from satagraph.skeleton import Skeleton
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    skel = posed.skeleton
+    turned = Skeleton(skel.names, skel.parents, skel.offsets @ turn.T)
+    assert rest_asymmetry(turned) == pytest.approx(rest_asymmetry(skel), abs=1e-9)
