@@ -1,48 +1,118 @@
-"""Which rest to show the model: auto (line rests re-rested) vs first-frame,
-on zoo VALIDATION-stream clips (never in benchmarks/pretrained.py), per rest
-dialect; plus a rest-distance statistic per clip."""
-import sys, warnings, collections, json
-warnings.simplefilter("ignore")
-sys.path.insert(0, "benchmarks")
-import numpy as np, torch
-torch.set_num_threads(1)
-from pretrained import TRAIN_SPECIES, HOLDOUT
-from satagraph.datasets.zoo.endless import EndlessZoo
-from satagraph.pipelines.inference import retarget_canonical
-from satagraph.transforms.canonical import canonicalize
-from satagraph.experiment.train import load_module
-import satagraph.pipelines.inference as I
-NEW = I.needs_rest
-m = load_module(sys.argv[1] if len(sys.argv) > 1 else "builtin").eval()
-zoo = EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT)
-def angle(R):
-    return np.degrees(np.arccos(np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1, 1)))
-rows = []
-per = collections.Counter()
-for index in range(1500):
-    s = zoo.sample(0, index, 120, "val", False)
-    if s.species not in ("biped", "quadruped", "bird", "fowl") or s.kind not in ("walk", "trot", "run", "idle", "turn", "back", "side") or per[s.rest] >= 10:
-        continue
-    per[s.rest] += 1
-    c = canonicalize(s.motion, fps=30.)
-    kids = [j for j in range(1, c.skeleton.num_joints) if c.skeleton.children[j]]
-    dist = float(np.median(angle(c.rotations[:, kids])))
-    r = {"rest": s.rest, "species": s.species, "kind": s.kind, "dist": dist}
-    for mode in ("old", "auto", "first-frame"):
-        import satagraph.pipelines.inference as I
-        I.needs_rest = I.is_line_rest if mode == "old" else NEW
-        src, out = retarget_canonical(m, s.motion, s.motion, m.embed, ground=False, rest="auto" if mode == "old" else mode)
-        gs, go = src.global_positions(), out.global_positions(); n = min(len(gs), len(go))
-        h = src.height()
-        r[mode] = float(np.linalg.norm((gs[:n] - gs[:n, :1]) - (go[:n] - go[:n, :1]), axis=-1).mean() / h)
-    rows.append(r)
-    if sum(per.values()) >= 70: break
-json.dump(rows, open("/tmp/s25/reststudy.json", "w"))
-by = collections.defaultdict(list)
-for r in rows: by[r["rest"]].append(r)
-print("| rest | n | root-relative JP, old auto (median) | new auto | first-frame | new auto better than old |")
-for k, v in sorted(by.items()):
-    o = np.array([x["old"] for x in v]); a = np.array([x["auto"] for x in v]); f = np.array([x["first-frame"] for x in v])
-    print(f"| {k} | {len(v)} | {100*np.median(o):.1f} | {100*np.median(a):.1f} | {100*np.median(f):.1f} | {int((a < o - 1e-9).sum())}/{len(v)} (worse {int((a > o + 1e-9).sum())}) |")
-allo = np.array([x["old"] for x in rows]); alla = np.array([x["auto"] for x in rows]); allf = np.array([x["first-frame"] for x in rows])
-print(f"| all | {len(rows)} | {100*np.median(allo):.1f} | {100*np.median(alla):.1f} | {100*np.median(allf):.1f} | mean {100*allo.mean():.1f} / {100*alla.mean():.1f} / {100*allf.mean():.1f} |")
+"""Which rest pose to show the model (``--rest``): reconstruction error of the
+zoo's VALIDATION-seed rigs (never in ``benchmarks/pretrained.py``) per rest
+dialect, read in the file's rest, re-rested on the first frame, with the
+line-only rule of 26 Nov (re-rest a line rest only) and with ``auto``
+(:func:`satagraph.pipelines.inference.needs_rest`: a line or a captured
+pose). The error is root-relative (poses, not drift), in % of the height.
+
+    python benchmarks/rest_modes.py [--ckpt builtin] [--per-rest 10] [--out DIR]
+
+Prints a markdown table (and writes ``rest_modes.md`` / ``.json`` to
+``--out``).
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+import torch
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
+from satagraph.pipelines.inference import (is_line_rest, needs_rest,  # noqa: E402
+                                           retarget_canonical)
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
+
+#: The body plans of the built-in model's training (stage 1).
+SPECIES = ("biped", "quadruped", "bird", "fowl")
+KINDS = ("walk", "trot", "run", "idle", "turn", "back", "side")
+MODES = ("file", "first-frame", "auto")
+
+
+def pose_error(module, motion: Motion, rest: str) -> float:
+    """Root-relative joint error of a reconstruction, in heights."""
+    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False, rest=rest)
+    a, b = src.global_positions(), out.global_positions()
+    n = min(len(a), len(b))
+    rel = (a[:n] - a[:n, :1]) - (b[:n] - b[:n, :1])
+    return float(np.linalg.norm(rel, axis=-1).mean() / src.height())
+
+
+def validation_rows(module, per_rest: int, frames: int = 120) -> List[Dict]:
+    """Up to :obj:`per_rest` validation-seed clips of each rest dialect."""
+    zoo = EndlessZoo(species=list(SPECIES))
+    count: collections.Counter = collections.Counter()
+    rows = []
+    for index in range(3000):
+        sample = zoo.sample(0, index, frames, "val", False)
+        if sample.kind not in KINDS or count[sample.rest] >= per_rest:
+            continue
+        count[sample.rest] += 1
+        skeleton = canonicalize(sample.motion, fps=30.0).skeleton
+        row = {"rest": sample.rest, "species": sample.species, "kind": sample.kind,
+               "line": is_line_rest(skeleton), "re-rested by auto": needs_rest(skeleton)}
+        row.update({mode: pose_error(module, sample.motion, mode) for mode in MODES})
+        row["line only"] = row["first-frame"] if row["line"] else row["file"]
+        rows.append(row)
+        if len(rows) >= per_rest * 7:
+            break
+    return rows
+
+
+def table(rows: List[Dict]) -> str:
+    """Medians per rest dialect and over all clips (means beside)."""
+    cols = ("file", "first-frame", "line only", "auto")
+    out = ["| rest | n | " + " | ".join(cols) + " | auto re-rests | auto better / worse than line only |",
+           "|---|---:|" + "---:|" * len(cols) + "---:|---|"]
+    groups = collections.defaultdict(list)
+    for r in rows:
+        groups[r["rest"]].append(r)
+    for name, group in sorted(groups.items()) + [("all (median; mean)", rows)]:
+        med = [100 * np.median([r[c] for r in group]) for c in cols]
+        cells = [f"{m:.1f}" for m in med]
+        if group is rows:
+            cells = [f"{m:.1f}; {100 * np.mean([r[c] for r in group]):.1f}"
+                     for m, c in zip(med, cols)]
+        better = sum(r["auto"] < r["line only"] - 1e-9 for r in group)
+        worse = sum(r["auto"] > r["line only"] + 1e-9 for r in group)
+        share = np.mean([r["re-rested by auto"] for r in group])
+        out.append(f"| {name} | {len(group)} | " + " | ".join(cells)
+                   + f" | {100 * share:.0f}% | {better} / {worse} |")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ckpt", default="builtin")
+    parser.add_argument("--per-rest", type=int, default=10)
+    parser.add_argument("--out", type=Path, default=None)
+    args = parser.parse_args(argv)
+    torch.set_num_threads(1)
+    warnings.simplefilter("ignore")
+    start = time.perf_counter()
+    module = load_module(args.ckpt).eval()
+    rows = validation_rows(module, args.per_rest)
+    text = (f"Model `{args.ckpt}`, zoo validation seeds ({', '.join(SPECIES)}), root-relative "
+            f"reconstruction error in % of the height; {time.perf_counter() - start:.0f} s.\n\n"
+            + table(rows) + "\n")
+    print(text)
+    if args.out:
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "rest_modes.md").write_text(text)
+        (args.out / "rest_modes.json").write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -207,3 +207,28 @@ def test_rig_reading_every_zoo_variant(tmp_path):
     wrong = [r for r in rows if r["up_read"] != r["up_true"] and not r["flagged"]]
     assert not wrong, wrong
     assert all(r["units_ok"] for r in rows), [r for r in rows if not r["units_ok"]]
+
+
+def test_rest_modes_table_counts_what_auto_changes():
+    import rest_modes
+    rows = [{"rest": "random", "file": 0.08, "first-frame": 0.04, "line only": 0.08,
+             "auto": 0.04, "re-rested by auto": True},
+            {"rest": "native", "file": 0.03, "first-frame": 0.05, "line only": 0.03,
+             "auto": 0.03, "re-rested by auto": False}]
+    text = rest_modes.table(rows)
+    assert "| random | 1 | 8.0 | 4.0 | 8.0 | 4.0 | 100% | 1 / 0 |" in text
+    assert "| native | 1 | 3.0 | 5.0 | 3.0 | 3.0 | 0% | 0 / 0 |" in text
+    assert "| all (median; mean) | 2 |" in text
+
+
+@pytest.mark.slow
+def test_rest_modes_auto_is_first_frame_where_it_re_rests_else_the_file():
+    import rest_modes
+    from satagraph.experiment.train import load_module
+    rows = rest_modes.validation_rows(load_module("builtin").eval(), per_rest=1, frames=40)
+    assert {r["rest"] for r in rows} == {"native", "apose", "flat", "crouched", "random",
+                                          "frame", "axis"}
+    for r in rows:
+        same = r["first-frame"] if r["re-rested by auto"] else r["file"]
+        assert r["auto"] == pytest.approx(same, abs=1e-9), r
+    assert all(r["re-rested by auto"] for r in rows if r["rest"] in ("random", "axis"))

@@ -283,10 +283,10 @@ def needs_rest(skeleton) -> bool:
     r"""Whether ``rest="auto"`` re-rests a skeleton on its first frame: its
     rest is a line (:func:`is_line_rest`) or a pose left and right bend
     differently (:func:`rest_asymmetry` above
-    :data:`POSED_REST_DEGREES`). On the zoo's validation seeds the built-in
-    model reconstructs the latter at 3.4 % of the height re-rested against
-    7.9 % as read (arbitrary poses), and designed rests better as read
-    (experiments/PRETRAIN.md section 8)."""
+    :data:`POSED_REST_DEGREES`). On the zoo's validation seeds
+    (``benchmarks/rest_modes.py``) the built-in model reconstructs arbitrary
+    rest poses at 4.3 % of the height re-rested against 8.5 % as read, and
+    designed rests better as read."""
     if is_line_rest(skeleton):
         return True
     asym = rest_asymmetry(skeleton)
