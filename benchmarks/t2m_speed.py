@@ -37,6 +37,8 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: (row name, generator config, autoencoder config).
 SIZES = (("t2m_tiny", "t2m_tiny", "t2m_rvq_tiny"), ("t2m_cpu", "t2m_cpu", "t2m_rvq_cpu"),
+         ("t2m_builtin (SATA-RVQ of the built-in model's size)", "t2m_builtin",
+          "t2m_rvq_from_builtin"),
          ("t2m (paper-sized SATA-RVQ)", "t2m", "sata_rvq"))
 
 
