@@ -647,7 +647,8 @@ def sampling(args: argparse.Namespace) -> Optional[object]:
     all defaults)."""
     from satagraph.pipelines.generate import GenerationSettings
     given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
-                                           "topk_ratio") if getattr(args, k) is not None}
+                                           "topk_ratio", "residual_temperature", "layers")
+             if getattr(args, k, None) is not None}
     return replace(GenerationSettings(), **given) if given else None
 
 
@@ -668,6 +669,9 @@ def main(argv=None) -> int:
     parser.add_argument("--residual-guidance", type=float, default=None)
     parser.add_argument("--temperature", type=float, default=None)
     parser.add_argument("--topk-ratio", type=float, default=None)
+    parser.add_argument("--residual-temperature", type=float, default=None)
+    parser.add_argument("--layers", type=int, default=None,
+                        help="RVQ layers to decode (default: all)")
     parser.add_argument("--reference", default=None, metavar="AUTOENCODER",
                         help="also a row of test motion through this autoencoder on its own "
                              "rig (builtin, a checkpoint or weights file): the ceiling of "

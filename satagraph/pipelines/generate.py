@@ -49,16 +49,21 @@ from satagraph.motion import Motion
 class GenerationSettings:
     """How to sample: decoding steps and guidance of the masked transformer
     (MoMask: 10 and 4), guidance of the residual transformer (MoMask: 5),
-    temperature and the share of codes top-k keeps; whether the motion is
-    put on the floor (:func:`~satagraph.transforms.ground.ground_at`: one
-    vertical shift, the median lowest joint at 0) or keeps the decoder's
-    root height."""
+    temperature and the share of codes top-k keeps (``residual_temperature``:
+    the residual layers' own, default the same; 0 takes the most likely
+    code); how many RVQ layers to decode (``layers``: default all; the
+    layers above are left out, as the RVQ's quantiser dropout trained it
+    for); whether the motion is put on the floor
+    (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
+    median lowest joint at 0) or keeps the decoder's root height."""
 
     steps: int = 10
     guidance: float = 4.0
     residual_guidance: float = 5.0
     temperature: float = 1.0
     topk_ratio: float = 0.1
+    residual_temperature: Optional[float] = None
+    layers: Optional[int] = None
     ground: bool = True
 
 
@@ -156,10 +161,26 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps,
                                   settings.guidance, settings.temperature,
                                   settings.topk_ratio, gen)
+    temperature = (settings.temperature if settings.residual_temperature is None
+                   else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
-                                     settings.residual_guidance, settings.temperature,
-                                     settings.topk_ratio, gen)
-    return decode_on(module, codes[0, :frames], rig, settings.ground)
+                                     settings.residual_guidance, temperature,
+                                     settings.topk_ratio, gen, settings.layers)
+    return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
+                     settings.ground)
+
+
+def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
+    """Per-frame codes with the layers left out filled with ``-1`` (a
+    dropped layer to the RVQ).
+
+    Shapes:
+        - **codes**: :math:`(T, Q')`, **output**: :math:`(T, Q)`
+    """
+    missing = num_quantizers - codes.size(-1)
+    if missing <= 0:
+        return codes
+    return torch.cat([codes, codes.new_full((codes.size(0), missing), -1)], dim=-1)
 
 
 def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False) -> Motion:

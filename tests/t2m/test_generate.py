@@ -7,6 +7,7 @@ import socket
 from pathlib import Path
 
 import numpy as np
+import torch
 import pytest
 
 from satagraph.cli import main
@@ -194,3 +195,37 @@ def test_generated_motion_stands_on_the_floor_unless_no_ground(t2m_ckpt, zoo_ske
                      str(zoo_skeletons["quadruped"]), "--text", TEXT, "--seconds", "1",
                      flag, str(outs[flag])]) == 0
     assert_grounded_pair(outs["--ground"], outs["--no-ground"])
+
+
+def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
+        t2m_ckpt, zoo_skeletons, monkeypatch):
+    """``GenerationSettings.layers`` decodes the first layers only (the rest
+    -1, a dropped layer to the RVQ), after the same layer-0 codes; with a
+    residual temperature of 0 the residual layers no longer depend on the
+    seed (given the same layer 0)."""
+    from satagraph.io import read_bvh
+    from satagraph.pipelines import generate as G
+    module = G.load_generator(str(t2m_ckpt))
+    target = read_bvh(str(zoo_skeletons["biped"]))
+    seen = []
+    real = G.decode_on
+    monkeypatch.setattr(G, "decode_on", lambda m, codes, *a, **k: (seen.append(codes),
+                                                                     real(m, codes, *a, **k))[1])
+    full = G.GenerationSettings()
+    G.generate_on(module, TEXT, target, 1.0, 0, full)
+    G.generate_on(module, TEXT, target, 1.0, 0, G.GenerationSettings(layers=1))
+    assert seen[0].shape == seen[1].shape and seen[0].shape[1] == module.num_quantizers
+    assert (seen[1][:, 1:] == -1).all() and (seen[0][:, 1:] >= 0).all()
+    assert torch.equal(seen[0][:, 0], seen[1][:, 0])
+    # the same layer 0 for every seed: residual layers then vary with the
+    # seed when sampled, not when greedy
+    base = module.masked.generate
+    monkeypatch.setattr(module.masked, "generate",  # the generator comes last
+                        lambda *a: base(*a[:-1], torch.Generator().manual_seed(0)))
+    for settings in (full, G.GenerationSettings(residual_temperature=0.0)):
+        for seed in (0, 1):
+            G.generate_on(module, TEXT, target, 1.0, seed, settings)
+    sampled, greedy = seen[2:4], seen[4:6]
+    assert torch.equal(sampled[0][:, 0], sampled[1][:, 0])
+    assert not torch.equal(sampled[0], sampled[1])
+    assert torch.equal(greedy[0], greedy[1])
