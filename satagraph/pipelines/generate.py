@@ -49,11 +49,13 @@ from satagraph.motion import Motion
 class GenerationSettings:
     """How to sample: decoding steps and guidance of the masked transformer
     (MoMask: 10 and 4), guidance of the residual transformer (MoMask: 5),
-    temperature and the share of codes top-k keeps (``residual_temperature``:
-    the residual layers' own, default the same; 0 takes the most likely
-    code); how many RVQ layers to decode (``layers``: default all; the
-    layers above are left out, as the RVQ's quantiser dropout trained it
-    for); whether the motion is put on the floor
+    temperature and the share of codes top-k keeps; the residual layers'
+    own temperature (``residual_temperature``: 0, the most likely code, by
+    default: on the zoo's validation prompts it gave R@3 0.57 against 0.50
+    sampled at 1, FID 0.51 against 0.72, experiments/T2M.md section 11;
+    ``None``: the same as layer 0's); how many RVQ layers to decode
+    (``layers``: default all; the layers above are left out, as the RVQ's
+    quantiser dropout trained it for); whether the motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0) or keeps the decoder's root height."""
 
@@ -62,7 +64,7 @@ class GenerationSettings:
     residual_guidance: float = 5.0
     temperature: float = 1.0
     topk_ratio: float = 0.1
-    residual_temperature: Optional[float] = None
+    residual_temperature: Optional[float] = 0.0
     layers: Optional[int] = None
     ground: bool = True
 

@@ -211,7 +211,7 @@ def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
     real = G.decode_on
     monkeypatch.setattr(G, "decode_on", lambda m, codes, *a, **k: (seen.append(codes),
                                                                      real(m, codes, *a, **k))[1])
-    full = G.GenerationSettings()
+    full = G.GenerationSettings(residual_temperature=1.0)
     G.generate_on(module, TEXT, target, 1.0, 0, full)
     G.generate_on(module, TEXT, target, 1.0, 0, G.GenerationSettings(layers=1))
     assert seen[0].shape == seen[1].shape and seen[0].shape[1] == module.num_quantizers
