@@ -78,6 +78,9 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
 FPS = 30.0
+#: Latent smoothing of the SATA-RVQ decodings of the reconstruction and
+#: retargeted-retrieval rows: the generator's (``--smooth``).
+SMOOTH = [0.0]
 
 
 @dataclass
@@ -417,7 +420,7 @@ def transfer(module, source: Motion, target: Motion) -> MotionFeatures:
         clip = motion_to_features(rig.shown).to_clip(0, None, rig.semantic)
         codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
         motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target),
-                           ground=True)
+                           ground=True, smooth=SMOOTH[0])
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 
@@ -647,7 +650,8 @@ def sampling(args: argparse.Namespace) -> Optional[object]:
     all defaults)."""
     from satagraph.pipelines.generate import GenerationSettings
     given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
-                                           "topk_ratio", "residual_temperature", "layers")
+                                           "topk_ratio", "residual_temperature", "layers",
+                                           "smooth")
              if getattr(args, k, None) is not None}
     return replace(GenerationSettings(), **given) if given else None
 
@@ -672,6 +676,8 @@ def main(argv=None) -> int:
     parser.add_argument("--residual-temperature", type=float, default=None)
     parser.add_argument("--layers", type=int, default=None,
                         help="RVQ layers to decode (default: all)")
+    parser.add_argument("--smooth", type=float, default=None,
+                        help="latent smoothing in frames (default: generate's)")
     parser.add_argument("--reference", default=None, metavar="AUTOENCODER",
                         help="also a row of test motion through this autoencoder on its own "
                              "rig (builtin, a checkpoint or weights file): the ceiling of "
@@ -679,9 +685,11 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
+    settings = sampling(args)
+    from satagraph.pipelines.generate import GenerationSettings
+    SMOOTH[0] = (settings or GenerationSettings()).smooth
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
-                         reference=args.reference, prompts=args.prompts,
-                         settings=sampling(args))
+                         reference=args.reference, prompts=args.prompts, settings=settings)
     name = ("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)

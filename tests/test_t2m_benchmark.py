@@ -42,7 +42,8 @@ def test_validation_prompts_and_sampling_settings():
     val = t2m.zoo_items("val", 3)
     test = t2m.zoo_items("test", 3)
     assert all(not np.allclose(a.desc, b.desc) for a, b in zip(val, test))
-    unset = dict(guidance=None, residual_guidance=None, temperature=None, topk_ratio=None)
+    unset = dict(guidance=None, residual_guidance=None, temperature=None, topk_ratio=None,
+                 residual_temperature=None, layers=None, smooth=None)
     settings = t2m.sampling(argparse.Namespace(**dict(unset, guidance=2.5, temperature=0.7)))
     assert (settings.guidance, settings.temperature, settings.steps) == (2.5, 0.7, 10)
     assert t2m.sampling(argparse.Namespace(**unset)) is None

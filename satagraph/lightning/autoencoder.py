@@ -302,16 +302,20 @@ class SATARVQModule(MotionAutoencoderModule):
         return self.encode(self.normalize_batch(batch))["codes"]
 
     @torch.no_grad()
-    def decode_codes(self, codes: Tensor, target) -> Dict[str, Tensor]:
+    def decode_codes(self, codes: Tensor, target, smooth: float = 0.0) -> Dict[str, Tensor]:
         r"""Physical predictions (``q``, ``r``, contact logits ``c``) of
         per-frame codes decoded onto the frame graphs of :obj:`target` (a
         physical :class:`~satagraph.data.FrameBatch` whose frames match the
-        codes').
+        codes'), the dequantised latents first smoothed along each clip's
+        frames by a Gaussian of :obj:`smooth` frames
+        (:func:`~satagraph.ops.smoothing.gaussian_smooth`; 0: none).
 
         Shapes:
             - **codes**: :math:`(G, Q)`
         """
-        z = self.model.bottleneck.decode_codes(codes)
+        from satagraph.ops.smoothing import gaussian_smooth
+        z = gaussian_smooth(self.model.bottleneck.decode_codes(codes), target.clip_num_frames,
+                            smooth)
         return self.denormalize_output(self.decode(z, self.normalize_batch(target)), target)
 
 

@@ -55,7 +55,8 @@ class GenerationSettings:
     sampled at 1, FID 0.51 against 0.72, experiments/T2M.md section 11;
     ``None``: the same as layer 0's); how many RVQ layers to decode
     (``layers``: default all; the layers above are left out, as the RVQ's
-    quantiser dropout trained it for); whether the motion is put on the floor
+    quantiser dropout trained it for); a Gaussian smoothing of the decoded
+    latents over ``smooth`` frames (0: none); whether the motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0) or keeps the decoder's root height."""
 
@@ -66,6 +67,7 @@ class GenerationSettings:
     topk_ratio: float = 0.1
     residual_temperature: Optional[float] = 0.0
     layers: Optional[int] = None
+    smooth: float = 0.0
     ground: bool = True
 
 
@@ -169,7 +171,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
-                     settings.ground)
+                     settings.ground, settings.smooth)
 
 
 def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
@@ -185,9 +187,12 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
     return torch.cat([codes, codes.new_full((codes.size(0), missing), -1)], dim=-1)
 
 
-def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False) -> Motion:
+def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
+              smooth: float = 0.0) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
-    its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`).
+    its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`;
+    the latents smoothed over :obj:`smooth` frames first, see
+    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`).
 
     Shapes:
         - **codes**: :math:`(T, Q)`
@@ -195,7 +200,7 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False)
     ae = module.autoencoder
     frames, num = codes.size(0), rig.feats.skeleton.num_joints
     target = collate_clips([target_clip(rig.feats, frames, rig.semantic)]).to(module.device)
-    out = ae.decode_codes(codes, target)
+    out = ae.decode_codes(codes, target, smooth)
     q = out["q"].view(frames, num, 6).cpu().double().numpy()
     r = out["r"].cpu().double().numpy()
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
