@@ -79,8 +79,8 @@ MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
 FPS = 30.0
 #: Latent smoothing of the SATA-RVQ decodings of the reconstruction and
-#: retargeted-retrieval rows: the generator's (``--smooth``).
-SMOOTH = [0.0]
+#: retargeted-retrieval rows: the generator's (set by :func:`evaluate`).
+SMOOTH = [1.5]
 
 
 @dataclass
@@ -595,7 +595,10 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     """Train the evaluator and score every group; rows and run facts
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
     file, whose reconstruction is one more row per group; :obj:`prompts`:
-    see :func:`real_items`; :obj:`settings`: the generator's sampling)."""
+    see :func:`real_items`; :obj:`settings`: the generator's sampling, whose
+    latent smoothing the reconstruction and retrieval rows share)."""
+    from satagraph.pipelines.generate import GenerationSettings
+    SMOOTH[0] = (settings or GenerationSettings()).smooth
     start = time.perf_counter()
     encoder = build_text_encoder("offline")
     cache: Dict[str, torch.Tensor] = {}
@@ -685,11 +688,9 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
-    settings = sampling(args)
-    from satagraph.pipelines.generate import GenerationSettings
-    SMOOTH[0] = (settings or GenerationSettings()).smooth
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
-                         reference=args.reference, prompts=args.prompts, settings=settings)
+                         reference=args.reference, prompts=args.prompts,
+                         settings=sampling(args))
     name = ("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)
