@@ -27,6 +27,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from satagraph.datasets.zoo.dialects import REST_POSES  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
@@ -65,7 +66,7 @@ def validation_rows(module, per_rest: int, frames: int = 120) -> List[Dict]:
         row.update({mode: pose_error(module, sample.motion, mode) for mode in MODES})
         row["line only"] = row["first-frame"] if row["line"] else row["file"]
         rows.append(row)
-        if len(rows) >= per_rest * 7:
+        if len(rows) >= per_rest * len(REST_POSES):
             break
     return rows
 

@@ -68,6 +68,8 @@ from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noq
                                           matching_score, multimodality, r_precision,
                                           replicate, subsample)
 from satagraph.motion import Motion  # noqa: E402
+from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
+                                          generate_on, load_generator, rig_inputs)
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
                                                    describe_features, froude_speed,
                                                    leg_length)
@@ -78,9 +80,9 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
 FPS = 30.0
-#: Latent smoothing of the SATA-RVQ decodings of the reconstruction and
-#: retargeted-retrieval rows: the generator's (set by :func:`evaluate`).
-SMOOTH = [1.5]
+#: Latent smoothing (frames) of the SATA-RVQ decodings of the reconstruction
+#: and retargeted-retrieval rows unless told: generation's default.
+SMOOTH = GenerationSettings.smooth
 
 
 @dataclass
@@ -392,11 +394,10 @@ def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
 
 
 def generated_items(module, items: Sequence[Item], seeds: int,
-                    settings: Optional[object] = None) -> List[List[Item]]:
+                    settings: Optional[GenerationSettings] = None) -> List[List[Item]]:
     """Per seed, one generation per test item on its own rig, of its length
     (the ground-truth length is given), with the sampling :obj:`settings`
     (default: :class:`~satagraph.pipelines.generate.GenerationSettings`)."""
-    from satagraph.pipelines.generate import GenerationSettings, generate_on
     settings = settings or GenerationSettings()
     out = []
     for seed in range(seeds):
@@ -409,25 +410,25 @@ def generated_items(module, items: Sequence[Item], seeds: int,
     return out
 
 
-def transfer(module, source: Motion, target: Motion) -> MotionFeatures:
+def transfer(module, source: Motion, target: Motion, smooth: float = SMOOTH) -> MotionFeatures:
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
-    its own rig, decoded on :obj:`target`'s rig and put on the floor as
-    generated motion is (canonical features)."""
+    its own rig, decoded on :obj:`target`'s rig (latents smoothed over
+    :obj:`smooth` frames) and put on the floor as generated motion is
+    (canonical features)."""
     from satagraph.data.collate import collate_clips
-    from satagraph.pipelines.generate import decode_on, rig_inputs
     with torch.no_grad():
         rig = rig_inputs(module, source)
         clip = motion_to_features(rig.shown).to_clip(0, None, rig.semantic)
         codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
         motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target),
-                           ground=True, smooth=SMOOTH[0])
+                           ground=True, smooth=smooth)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 
-def reconstructed_items(module, items: Sequence[Item]) -> List[Item]:
+def reconstructed_items(module, items: Sequence[Item], smooth: float = SMOOTH) -> List[Item]:
     """Every test item sent through the generator's frozen SATA-RVQ (codes
     of the whole window, decoded on its own rig)."""
-    return [measure(transfer(module, it.motion, it.motion), it.captions, it.label, it.group,
+    return [measure(transfer(module, it.motion, it.motion, smooth), it.captions, it.label, it.group,
                     it.skeleton) for it in items]
 
 
@@ -445,13 +446,14 @@ def autoencoded_items(autoencoder, items: Sequence[Item]) -> List[Item]:
     return out
 
 
-def retargeted_items(module, retrieved: Sequence[Item], items: Sequence[Item]) -> List[Item]:
+def retargeted_items(module, retrieved: Sequence[Item], items: Sequence[Item],
+                     smooth: float = SMOOTH) -> List[Item]:
     """Each retrieved training clip, cut to its test item's length,
     retargeted onto the test item's rig through the frozen SATA-RVQ."""
     out = []
     for got, it in zip(retrieved, items):
         frames = min(got.motion.num_frames, it.motion.num_frames)
-        feats = transfer(module, got.motion.slice(0, frames), it.motion)
+        feats = transfer(module, got.motion.slice(0, frames), it.motion, smooth)
         out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
     return out
 
@@ -491,11 +493,10 @@ def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, 
 
 
 def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
-                    seconds: float = 4.0, settings: Optional[object] = None
+                    seconds: float = 4.0, settings: Optional[GenerationSettings] = None
                     ) -> List[Dict[str, object]]:
     """The generator's probes per skeleton: every probe prompt, :obj:`seeds`
     seeds, :obj:`seconds` long."""
-    from satagraph.pipelines.generate import GenerationSettings, generate_on
     settings = settings or GenerationSettings()
     rows = []
     for name, (subject, target) in targets.items():
@@ -515,7 +516,7 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
 def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                recogniser: Recogniser, encode: Callable, reps: int,
                extra: Dict[str, List[List[Item]]], seed: int,
-               module=None) -> List[Dict[str, object]]:
+               module=None, smooth: float = SMOOTH) -> List[Dict[str, object]]:
     """The rows of one group of test prompts: real, shuffled captions,
     retrieval (on its own rig; retargeted onto the test rig when a
     generator's :obj:`module` is given) and the extra sets
@@ -527,7 +528,7 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
     sets = {"real": [test], "shuffled captions": [[test[i] for i in perm]],
             "retrieval (own rig)": [retrieved]}
     if module is not None:
-        sets["retrieval (retargeted)"] = [retargeted_items(module, retrieved, test)]
+        sets["retrieval (retargeted)"] = [retargeted_items(module, retrieved, test, smooth)]
     sets.update(extra)
     rows = []
     for kind, seeds in sets.items():
@@ -591,14 +592,13 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
              reps: Optional[int] = None, gen_seeds: int = 2,
              reference: Optional[str] = None, prompts: str = "test",
-             settings: Optional[object] = None) -> Tuple[List[Dict], Dict]:
+             settings: Optional[GenerationSettings] = None) -> Tuple[List[Dict], Dict]:
     """Train the evaluator and score every group; rows and run facts
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
     file, whose reconstruction is one more row per group; :obj:`prompts`:
     see :func:`real_items`; :obj:`settings`: the generator's sampling, whose
     latent smoothing the reconstruction and retrieval rows share)."""
-    from satagraph.pipelines.generate import GenerationSettings
-    SMOOTH[0] = (settings or GenerationSettings()).smooth
+    settings = settings or GenerationSettings()
     start = time.perf_counter()
     encoder = build_text_encoder("offline")
     cache: Dict[str, torch.Tensor] = {}
@@ -616,7 +616,6 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     recogniser = train_recogniser(train, steps, seed)
     module = None
     if ckpt:
-        from satagraph.pipelines.generate import load_generator
         module = load_generator(ckpt)
     autoencoder = None
     if reference:
@@ -629,10 +628,11 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
         if autoencoder is not None:
             extra[f"reconstruction ({reference})"] = [autoencoded_items(autoencoder, items)]
         if module is not None:
-            extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items)]
+            extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items,
+                                                                      settings.smooth)]
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds, settings)
         rows += group_rows(name, items, train, model, recogniser, encode,
-                           reps or (3 if quick else 20), extra, seed, module)
+                           reps or (3 if quick else 20), extra, seed, module, settings.smooth)
     if module is not None:
         run_extra = skeleton_probes(module, skeleton_targets(test, quick or prompts != "test"),
                                     gen_seeds, settings=settings)
@@ -641,17 +641,16 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
              "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "reference": reference,
              "quick": quick, "prompts": prompts,
-             "settings": None if settings is None else vars(settings),
+             "settings": vars(settings),
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
     return rows, {"facts": facts, "model": model, "recogniser": recogniser,
                   "skeletons": run_extra}
 
 
-def sampling(args: argparse.Namespace) -> Optional[object]:
+def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     """The generator's sampling settings of the command line (``None``:
     all defaults)."""
-    from satagraph.pipelines.generate import GenerationSettings
     given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
                                            "smooth")

@@ -8,6 +8,7 @@ import lightning as L
 import torch
 from torch import Tensor, nn
 
+from satagraph.ops.smoothing import gaussian_smooth
 from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
@@ -313,7 +314,6 @@ class SATARVQModule(MotionAutoencoderModule):
         Shapes:
             - **codes**: :math:`(G, Q)`
         """
-        from satagraph.ops.smoothing import gaussian_smooth
         z = gaussian_smooth(self.model.bottleneck.decode_codes(codes), target.clip_num_frames,
                             smooth)
         return self.denormalize_output(self.decode(z, self.normalize_batch(target)), target)

@@ -64,7 +64,7 @@ DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_ste
 TEXT_ENCODER_KEY = "text_encoder"
 
 
-def lr_factor(step: int, warmup_steps: int, decay_steps: int, floor: float) -> float:
+def warmup_cosine(step: int, warmup_steps: int, decay_steps: int, floor: float) -> float:
     r"""The generator's schedule: a linear warm-up over :obj:`warmup_steps`,
     then a cosine from 1 to :obj:`floor` over :obj:`decay_steps` (constant 1
     when it is 0), then :obj:`floor`."""
@@ -252,7 +252,7 @@ class TextToMotionModule(L.LightningModule):
                                 weight_decay=float(self.optim["weight_decay"]))
         args = (int(self.optim["warmup_steps"]), int(self.optim["decay_steps"]),
                 float(self.optim["floor"]))
-        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: lr_factor(s, *args))
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: warmup_cosine(s, *args))
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
 
     # ------------------------------------------------------------ checkpoints

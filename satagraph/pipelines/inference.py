@@ -250,9 +250,11 @@ def rest_asymmetry(skeleton, shortest: float = 0.05) -> Optional[float]:
     mate = dict(zip(left, right))
     diffs = []
     for l, r in zip(left, right):
+        if skeleton.parents[l] < 0 or skeleton.parents[r] < 0:
+            continue
         for cl in skeleton.children[l]:
             cr = mate.get(cl)
-            if skeleton.parents[l] < 0 or cr not in skeleton.children[r]:
+            if cr not in skeleton.children[r]:
                 continue
             a = _bend(pos, skeleton.parents[l], l, cl, least)
             b = _bend(pos, skeleton.parents[r], r, cr, least)

@@ -175,13 +175,13 @@ def test_init_from_keeps_the_configured_autoencoder(autoencoder_ckpt, t2m_ckpt):
 
 
 def test_the_schedule_warms_up_then_follows_a_cosine_to_its_floor(autoencoder_ckpt):
-    from satagraph.lightning.text_to_motion import lr_factor
-    assert lr_factor(0, 10, 0, 0.1) == pytest.approx(0.1)
-    assert lr_factor(50, 10, 0, 0.1) == 1.0  # no decay: constant
-    assert lr_factor(10, 10, 100, 0.1) == pytest.approx(1.0)
-    assert lr_factor(60, 10, 100, 0.1) == pytest.approx(0.55)  # half way
-    assert lr_factor(110, 10, 100, 0.1) == pytest.approx(0.1)
-    assert lr_factor(500, 10, 100, 0.1) == pytest.approx(0.1)
+    from satagraph.lightning.text_to_motion import warmup_cosine
+    assert warmup_cosine(0, 10, 0, 0.1) == pytest.approx(0.1)
+    assert warmup_cosine(50, 10, 0, 0.1) == 1.0  # no decay: constant
+    assert warmup_cosine(10, 10, 100, 0.1) == pytest.approx(1.0)
+    assert warmup_cosine(60, 10, 100, 0.1) == pytest.approx(0.55)  # half way
+    assert warmup_cosine(110, 10, 100, 0.1) == pytest.approx(0.1)
+    assert warmup_cosine(500, 10, 100, 0.1) == pytest.approx(0.1)
     module = build_t2m(autoencoder_ckpt)
     module.optim.update(lr=1e-3, warmup_steps=2, decay_steps=4, floor=0.2)
     conf = module.configure_optimizers()
