@@ -163,7 +163,9 @@ def vae_to_rvq(state: Dict[str, Tensor], own: Dict[str, Tensor]) -> Dict[str, Te
 
 def init_weights(module: L.LightningModule, ckpt: str) -> None:
     """Load another run's weights into :obj:`module` for fine-tuning; the
-    module keeps its own normaliser (the new data's) and whatever its
+    module keeps its own normaliser (the new data's), unless parts of it
+    are frozen (``optim.frozen``: a frozen encoder reads the data as the
+    checkpoint's normaliser did, so that one loads), and whatever its
     ``init_keeps`` prefixes name (a text-to-motion module's frozen
     autoencoder: the one its config gives, not the checkpoint's).
     :obj:`ckpt` is a checkpoint, a ``.safetensors`` weights file or
@@ -171,7 +173,8 @@ def init_weights(module: L.LightningModule, ckpt: str) -> None:
     Warns about weights the checkpoint lacks, has in excess (e.g. another
     bottleneck) or has in another shape (e.g. another codebook size), which
     keep their initialisation."""
-    keep = ("normalizer.",) + tuple(getattr(module, "init_keeps", ()))
+    frozen = getattr(module, "frozen_parts", lambda: [])()
+    keep = ((() if frozen else ("normalizer.",)) + tuple(getattr(module, "init_keeps", ())))
     own = module.state_dict()
     state = load_weights_or_checkpoint(ckpt)["state_dict"]
     state = vae_to_rvq({k: v for k, v in state.items() if not k.startswith(keep)}, own)

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import copy
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional
 
 import lightning as L
 import torch
@@ -14,8 +14,8 @@ from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
 from satagraph.ops.motion_batch import batch_global_motion
 
-DEFAULT_OPTIM: Dict[str, float] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
-                                   "floor": 0.01}
+DEFAULT_OPTIM: Dict[str, Any] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
+                                 "floor": 0.01, "frozen": ()}
 
 
 def lr_factor(epoch: int, warmup_epochs: int, decay: float, floor: float) -> float:
@@ -55,7 +55,8 @@ class MotionAutoencoderModule(L.LightningModule):
         loss (dict, optional): Loss weights (see :mod:`satagraph.losses`).
         optim (dict, optional): ``lr``, ``warmup_epochs``, ``decay``,
             ``floor`` (``grad_clip`` is the trainer's, see
-            :mod:`satagraph.experiment.schema`).
+            :mod:`satagraph.experiment.schema`) and ``frozen``: parts not
+            trained (:meth:`frozen_parts`).
         fps (float): Frame rate the module was trained at (what inference
             resamples motion to); losses and metrics use each batch's own
             (:attr:`~satagraph.data.FrameBatch.fps`).
@@ -75,6 +76,8 @@ class MotionAutoencoderModule(L.LightningModule):
         self.normalizer = FeatureNormalizer()
         self.model = self.build_model(**model)
         self.criterion = self.build_loss(**(loss or {}))
+        for part in self.frozen_parts():
+            part.requires_grad_(False).eval()
         rate = int(getattr(self.model, "latent_rate", 1))
         if self._retarget_weight() > 0 and rate != 1:
             raise ValueError(f"loss.retarget needs one latent per frame (decoded onto "
@@ -270,8 +273,36 @@ class MotionAutoencoderModule(L.LightningModule):
         local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch)
         return motion_metrics(local_p, pos_p, local_t, pos_t, batch)
 
+    def frozen_parts(self) -> List[nn.Module]:
+        r"""The parts ``optim.frozen`` names (paths below the module, e.g.
+        ``model.encoder``, ``model.bottleneck``): left out of the optimiser
+        and kept in evaluation mode while training, so that a frozen
+        quantiser's codebooks do not move either. Fine-tuning a decoder
+        under frozen encoder and codebooks keeps a code sequence's meaning,
+        so a generator trained over those codes stays valid.
+
+        Raises:
+            ValueError: A name that is not a part of the module.
+        """
+        parts = []
+        for name in self.optim["frozen"] or ():
+            try:
+                parts.append(self.get_submodule(str(name)))
+            except AttributeError:
+                known = ", ".join(f"model.{n}" for n, _ in self.model.named_children())
+                raise ValueError(f"optim.frozen: {name!r} is not a part of "
+                                 f"{type(self).__name__}; its parts: {known}") from None
+        return parts
+
+    def train(self, mode: bool = True) -> "MotionAutoencoderModule":
+        super().train(mode)
+        for part in self.frozen_parts():
+            part.eval()
+        return self
+
     def configure_optimizers(self):
-        opt = torch.optim.Adam(self.parameters(), lr=self.optim["lr"])
+        params = [p for p in self.parameters() if p.requires_grad]
+        opt = torch.optim.Adam(params, lr=self.optim["lr"])
         sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda e: lr_factor(
             e, int(self.optim["warmup_epochs"]), self.optim["decay"], self.optim["floor"]))
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "epoch"}}

@@ -1,6 +1,7 @@
 """SATA LightningModules: checkpoints, optimiser schedule and logging."""
 from __future__ import annotations
 
+import copy
 import warnings
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Tuple
@@ -105,6 +106,57 @@ def test_init_weights_loads_network_and_keeps_normalizer(build_tiny_module: Call
         expected = before[key] if key in reshaped else loaded[key]
         if not key.startswith("normalizer."):
             torch.testing.assert_close(value, expected, rtol=0, atol=0, msg=key)
+
+
+def test_frozen_parts_keep_their_weights_codebooks_and_normaliser(
+        tiny_config: Dict[str, Any], datamodule, tmp_path: Path) -> None:
+    """``optim.frozen``: a decoder fine-tune under a frozen encoder and
+    quantiser; the codes of a batch stay the same, the decoder moves."""
+    from satagraph.experiment.train import build_module
+    L.seed_everything(0, verbose=False)
+    cfg = dict(tiny_config, module="rvq")
+    cfg["model"] = dict(cfg["model"], codebook_size=16, num_quantizers=2)
+    source = build_module(cfg, datamodule)
+    batch = next(iter(datamodule._loader("train", False)))
+    source.eval().codes(batch)  # codebooks initialised (k-means), as a trained RVQ's
+    with torch.no_grad():
+        source.normalizer.dynamic_mean.add_(0.5)
+    path = tmp_path / "source.ckpt"
+    torch.save({"state_dict": source.state_dict()}, path)
+
+    cfg["optim"] = dict(cfg["optim"], frozen=["model.encoder", "model.bottleneck"], lr=1e-2)
+    module = build_module(cfg, datamodule)
+    init_weights(module, str(path))
+    # the frozen encoder reads the data as the checkpoint's normaliser did
+    for key, value in _normalizer_state(module).items():
+        torch.testing.assert_close(value, _normalizer_state(source)[key], rtol=0, atol=0)
+    codes = copy.deepcopy(module).eval().codes(batch)
+    frozen = {k: v.clone() for k, v in module.state_dict().items()
+              if k.startswith(("model.encoder.", "model.bottleneck."))}
+    decoder = {k: v.clone() for k, v in module.model.decoder.state_dict().items()}
+    optimizer = module.configure_optimizers()["optimizer"]
+    assert sum(p.numel() for g in optimizer.param_groups for p in g["params"]) == sum(
+        p.numel() for p in module.model.decoder.parameters())
+    trainer = _quiet_trainer(max_steps=3, limit_val_batches=0)
+    trainer.fit(module, train_dataloaders=datamodule._loader("train", False))
+    assert module.train().model.decoder.training
+    assert not module.model.encoder.training and not module.model.bottleneck.training
+    for key, value in module.state_dict().items():
+        if key in frozen:  # codebooks too: no EMA update, no dead-code reset
+            torch.testing.assert_close(value, frozen[key], rtol=0, atol=0, msg=key)
+    moved = [k for k, v in module.model.decoder.state_dict().items()
+             if v.is_floating_point() and not torch.equal(v, decoder[k])]
+    assert moved
+    assert torch.equal(module.eval().codes(batch), codes)
+
+
+def test_frozen_names_a_part(tiny_config: Dict[str, Any], datamodule) -> None:
+    from satagraph.experiment.train import build_module
+    cfg = dict(tiny_config, module="vae")
+    cfg["optim"] = dict(cfg["optim"], frozen=["model.encodr"])
+    with pytest.raises(ValueError, match=r"optim.frozen: 'model.encodr' is not a part of "
+                                         r"SATAVAEModule; its parts: model.encoder"):
+        build_module(cfg, datamodule)
 
 
 # ------------------------------------------------------------------ schedule
