@@ -78,6 +78,10 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--minutes", type=float, help="training wall time in minutes")
     p.add_argument("--machine", metavar="TEXT", help="where it was trained")
     p.add_argument("--note", metavar="TEXT", help="free-text provenance")
+    p.add_argument("--decoder", metavar="RVQ.ckpt",
+                   help="(a text-to-motion model) decode with this SATA-RVQ's decoder: "
+                   "one fine-tuned from the generator's autoencoder with its encoder and "
+                   "codebooks frozen (optim.frozen); refused for any other")
     p.set_defaults(func=run_export_weights)
 
 
@@ -255,10 +259,15 @@ def run_export_weights(args) -> int:
     check_output_path(args.output)
     source = _export_source(args.source)
     module = load_module(source)
+    if args.decoder:
+        if not hasattr(module, "swap_decoder"):
+            raise ValueError(f"--decoder: {source} is not a text-to-motion model")
+        module.swap_decoder(args.decoder)
     provenance = {k: v for k, v in (("command", args.command), ("minutes", args.minutes),
                                     ("machine", args.machine), ("note", args.note))
                   if v is not None}
-    provenance.update(source=source, satagraph_version=__version__)
+    provenance.update(source=source, satagraph_version=__version__,
+                      **({"decoder": args.decoder} if args.decoder else {}))
     size = save_weights(module, args.output, half=args.half,
                         training_data=args.training_data, provenance=provenance,
                         force=args.force)

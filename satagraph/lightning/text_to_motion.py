@@ -105,6 +105,16 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     return module.eval(), stored
 
 
+def _same_weights(other: Optional[Tensor], own: Tensor) -> bool:
+    """Whether :obj:`other` is :obj:`own`, or rounds to it in half precision
+    (a generator loaded from a ``--half`` weights file)."""
+    if other is None or other.shape != own.shape:
+        return False
+    other = other.to(own.device)
+    return torch.equal(other.to(own.dtype), own) or (
+        other.is_floating_point() and torch.equal(other.half().to(own.dtype), own))
+
+
 class TextToMotionModule(L.LightningModule):
     r"""Masked + residual transformers, skeleton embedding and length model
     over a frozen SATA-RVQ's codes (see the module docstring).
@@ -174,6 +184,29 @@ class TextToMotionModule(L.LightningModule):
         super().train(mode)
         self.autoencoder.eval()
         return self
+
+    @torch.no_grad()
+    def swap_decoder(self, ckpt: str) -> None:
+        """Decode with the decoder of :obj:`ckpt`, a SATA-RVQ fine-tuned from
+        this generator's autoencoder with its encoder and codebooks frozen
+        (``optim.frozen``): the codes keep their meaning, so the generator
+        needs no retraining.
+
+        Raises:
+            CheckpointError: :obj:`ckpt`'s normaliser, encoder or codebooks
+                are not the generator's (stored in half precision or not).
+        """
+        from satagraph.experiment.train import load_module
+        theirs = load_module(ckpt).state_dict()
+        differ = [k for k, v in self.autoencoder.state_dict().items()
+                  if not k.startswith("model.decoder.") and not _same_weights(theirs.get(k), v)]
+        if differ:
+            raise CheckpointError(f"{ckpt}: {differ[0]} (and {len(differ) - 1} more) differ "
+                                  "from the generator's autoencoder: only a decoder fine-tuned "
+                                  "under its frozen encoder and codebooks (optim.frozen) keeps "
+                                  "the codes' meaning")
+        self.autoencoder.load_state_dict(theirs)
+        self.hparams["model"]["autoencoder"]["decoder"] = ckpt
 
     # ------------------------------------------------------------ inputs
     @property

@@ -229,3 +229,41 @@ def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
     assert torch.equal(sampled[0][:, 0], sampled[1][:, 0])
     assert not torch.equal(sampled[0], sampled[1])
     assert torch.equal(greedy[0], greedy[1])
+
+
+def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
+        t2m_ckpt, autoencoder_ckpt, zoo_skeletons, tmp_path, capsys):
+    """`export-weights --decoder`: the generator keeps its codes and decodes
+    with the new decoder (also from a half-precision file); a checkpoint
+    whose encoder moved is refused in one line, and nothing is written."""
+    from satagraph.experiment.train import load_module
+    from tests.t2m.conftest import save_checkpoint
+    tuned = load_module(str(autoencoder_ckpt))
+    with torch.no_grad():
+        for param in tuned.model.decoder.parameters():
+            param.add_(0.05 * torch.randn(param.shape, generator=torch.Generator().manual_seed(1)))
+    tuned_ckpt = save_checkpoint(tuned, tmp_path / "tuned.ckpt")
+    half = tmp_path / "half.safetensors"
+    assert main(["export-weights", str(t2m_ckpt), str(half), "--half"]) == 0
+    swapped = tmp_path / "swapped.safetensors"
+    assert main(["export-weights", str(half), str(swapped), "--decoder", str(tuned_ckpt)]) == 0
+    module, original = load_module(str(swapped)), load_module(str(half))
+    for name, value in module.autoencoder.state_dict().items():  # the tuned RVQ's ...
+        torch.testing.assert_close(value, tuned.state_dict()[name], rtol=0, atol=0, msg=name)
+        if not name.startswith("model.decoder."):  # ... whose other parts were the generator's
+            torch.testing.assert_close(value.half(), original.autoencoder.state_dict()[name]
+                                       .to(value.dtype).half(), rtol=0, atol=0, msg=name)
+    a, b = tmp_path / "a.bvh", tmp_path / "b.bvh"
+    assert _generate(half, [zoo_skeletons["biped"]], a, "--seconds", "1") == 0
+    assert _generate(swapped, [zoo_skeletons["biped"]], b, "--seconds", "1") == 0
+    assert np.abs(read_bvh(str(a)).rotations - read_bvh(str(b)).rotations).max() > 1e-3
+
+    with torch.no_grad():
+        next(tuned.model.encoder.parameters()).add_(0.1)
+    moved = save_checkpoint(tuned, tmp_path / "moved.ckpt")
+    capsys.readouterr()
+    bad = tmp_path / "bad.safetensors"
+    assert main(["export-weights", str(half), str(bad), "--decoder", str(moved)]) == 2
+    line = _error(capsys)
+    assert "moved.ckpt" in line and "model.encoder." in line and "optim.frozen" in line
+    assert not bad.exists()
