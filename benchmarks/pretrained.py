@@ -18,6 +18,10 @@ canonical frame at 30 fps), scored without a ground truth by
   (``--no-ground`` on the CLI), the model's share of the work.
 - **upright**: % of frames with the head above the hips (characters whose
   source is upright). Target >= 95 %.
+- **foot slide**: how fast the joints near the ground slide, in heights per
+  second (:func:`~satagraph.quality.foot_slide`), next to the source's. No
+  target in the issue; reported because a retarget that steps in time can
+  still skate.
 
 Reconstruction: JP, the mean global joint position error of a clip decoded
 onto its own skeleton, as % of the character's height, over each clip's
@@ -57,7 +61,7 @@ from satagraph.pipelines.inference import REST_MODES, retarget_canonical  # noqa
 from satagraph.transforms.ground import ground_like  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.quality import most_active, retarget_quality  # noqa: E402
+from satagraph.pipelines.quality import foot_slide, most_active, retarget_quality  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
@@ -68,6 +72,8 @@ ZOO_FRAMES, REAL_SECONDS, RECON_FRAMES = 120, 10.0, 128
 #: Body plans of the training zoo and the held-out ones (pretrain_zoo.yaml).
 TRAIN_SPECIES = ["biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab", "spider"]
 HOLDOUT = ["longtail", "spider/palps"]
+#: What each retarget row measures (foot sliding reported, no target).
+QUALITY = ("steps", "travel", "ground", "upright", "slide")
 TARGETS = {"steps_zoo": 0.8, "steps_real": 0.7, "travel": (0.8, 1.25), "ground": 0.03,
            "upright": 0.95, "jp_zoo": 0.05, "jp_real": 0.08}
 
@@ -157,8 +163,9 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
     for group, case, load in retarget_cases():
         source, sname, target, tname = load()
         src, raw = retarget_canonical(module, source, target, embed, rest=rest, ground=False)
-        quality = retarget_quality(src, ground_like(raw, src))
-        quality["source_upright"] = retarget_quality(src, src, ("upright",))["upright"]
+        quality = retarget_quality(src, ground_like(raw, src), QUALITY)
+        quality.update(source_upright=retarget_quality(src, src, ("upright",))["upright"],
+                       source_slide=foot_slide(src))
         quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]
         rows["retarget"].append(dict(group=group, case=case, source=sname, target=tname,
                                      **quality))
@@ -168,10 +175,13 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
             "held") else most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))
         src, raw = retarget_canonical(module, clip, clip, embed, rest=rest, ground=False)
         steps = retarget_quality(src, raw, ("steps",))["steps"]
+        grounded = ground_like(raw, src)
         rows["reconstruction"].append(dict(group=group, case=case,
                                            jp=joint_error(src, raw),
-                                           grounded_jp=joint_error(src, ground_like(raw, src)),
-                                           height=src.height(), steps=steps))
+                                           grounded_jp=joint_error(src, grounded),
+                                           height=src.height(), steps=steps,
+                                           slide=foot_slide(grounded),
+                                           source_slide=foot_slide(src)))
     return rows
 
 
@@ -190,27 +200,35 @@ def _pct(value: Optional[float]) -> str:
     return "-" if value is None else f"{100 * value:.0f}%"
 
 
+def _slide(row: dict) -> str:
+    if row.get("slide") is None:
+        return "-"
+    return f"{row['slide']:.2f} ({row['source_slide']:.2f})"
+
+
 def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto") -> str:
     lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose; {seconds:.0f} s on "
              "this machine.", "",
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
              "| travel ratio (0.8-1.25) | ground, % height (<= 3) "
              "| decoder's ground (--no-ground) | upright (>= 95%) "
-             "| source upright | all targets met |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---|"]
+             "| source upright | foot slide, H/s (source) | all targets met |",
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows["retarget"]:
         lines.append(f"| {r['group']} | {r['case']} | {r['source']} | {r['target']} "
                      f"| {r['steps']:+.2f} | {r['travel']:.2f} | {100 * r['ground']:+.1f} "
-                     f"| {100 * r['decoder_ground']:+.1f} | {_pct(r['upright'])} | {_pct(r['source_upright'])} | {_ok(r)} |")
+                     f"| {100 * r['decoder_ground']:+.1f} | {_pct(r['upright'])} | {_pct(r['source_upright'])} "
+                     f"| {_slide(r)} | {_ok(r)} |")
     lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met "
-              "| JP, grounded (--ground) | steps (same rig; diagnostic) |",
-              "|---|---|---:|---|---:|---:|"]
+              "| JP, grounded (--ground) | steps (same rig; diagnostic) "
+              "| foot slide, H/s (source) |",
+              "|---|---|---:|---|---:|---:|---:|"]
     for r in rows["reconstruction"]:
         limit = TARGETS["jp_zoo" if r["group"].startswith("held") else "jp_real"]
         steps = "-" if r.get("steps") is None else f"{r['steps']:+.2f}"
         lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
                      f"| {'yes' if r['jp'] <= limit else 'no'} | {100 * r['grounded_jp']:.1f} "
-                     f"| {steps} |")
+                     f"| {steps} | {_slide(r)} |")
     return "\n".join(lines) + "\n"
 
 

@@ -31,6 +31,7 @@ import numpy as np
 from satagraph.transforms.canonical import canonicalize, lateral_forward
 from satagraph.transforms.ground import ground_level
 from satagraph.data.features import motion_to_features
+from satagraph.pipelines.motion_descriptor import contact_quality
 from satagraph.semantics import LIMBS, describe_joints, limb_ends
 from satagraph.motion import Motion, character_height, leg_length as motion_leg_length
 
@@ -161,6 +162,13 @@ def most_active(motion: Motion, frames: int) -> Motion:
     return motion.slice(start, start + frames)
 
 
+def foot_slide(canonical: Motion) -> float:
+    """How fast the joints near the ground slide, in heights per second
+    (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): about
+    0.03-0.1 for captured and procedural walks, whose planted feet stay."""
+    return contact_quality(motion_to_features(canonical))[0]
+
+
 def retarget_quality(source: Motion, output: Motion,
                      keys: Sequence[str] = ("steps", "travel", "ground", "upright")
                      ) -> Dict[str, Optional[float]]:
@@ -174,8 +182,9 @@ def retarget_quality(source: Motion, output: Motion,
     Returns:
         dict: ``steps`` (:func:`step_correlation`), ``travel`` (the output's
         :func:`root_travel` over the source's), ``ground``
-        (:func:`ground_height` of the output) and ``upright``
-        (:func:`upright_fraction` of the output).
+        (:func:`ground_height` of the output), ``upright``
+        (:func:`upright_fraction` of the output) and, when asked for,
+        ``slide`` (:func:`foot_slide` of the output).
     """
     out: Dict[str, Optional[float]] = {}
     if "steps" in keys:
@@ -186,10 +195,12 @@ def retarget_quality(source: Motion, output: Motion,
         out["ground"] = ground_height(output)
     if "upright" in keys:
         out["upright"] = upright_fraction(output)
+    if "slide" in keys:
+        out["slide"] = foot_slide(output)
     return out
 
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel",
-           "ground_height", "head_index", "upright_fraction", "most_active",
+           "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
            "retarget_quality"]

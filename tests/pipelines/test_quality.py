@@ -9,7 +9,8 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
 from satagraph.datasets.zoo.endless import EndlessZoo
-from satagraph.pipelines.quality import (correlate, facing_axis, forward_tracks, ground_height,
+from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, forward_tracks,
+                                         ground_height,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, retarget_quality, root_travel,
                                          step_correlation, upright_fraction)
@@ -107,3 +108,20 @@ def test_travel_is_relative_to_the_leg_length():
     assert leg_length(big) == pytest.approx(2.5 * leg_length(walk))
     assert root_travel(big) == pytest.approx(root_travel(walk))
     assert root_travel(walk) > 0.5
+
+
+def test_foot_slide_tells_planted_feet_from_skating():
+    """A zoo walk plants its feet (under 0.15 heights/s of sliding, as
+    captured walks); the same steps with the root dragged forward at the
+    walk's own speed once more skate at about that speed; slide is
+    reported by retarget_quality when asked for."""
+    walk = _walk("biped")
+    planted = foot_slide(walk)
+    assert planted < 0.15
+    translations = walk.translations.copy()
+    path = translations[:, 0] - translations[:1, 0]
+    translations[:, 0] += path * np.array([1.0, 0.0, 1.0])  # twice the travel
+    speed = np.linalg.norm(np.diff(path[:, [0, 2]], axis=0), axis=-1).mean() * walk.fps
+    skating = foot_slide(walk.with_(translations=translations))
+    assert skating > planted + 0.5 * speed / walk.height()
+    assert retarget_quality(walk, walk, ("slide",)) == {"slide": pytest.approx(planted)}
