@@ -10,7 +10,8 @@ top-level keys of :class:`ExperimentConfig` and these sections:
   module's builder (see :mod:`satagraph.experiment.registry`); the
   autoencoders take the network's arguments, the
   :class:`~satagraph.losses.MotionLoss` weights and ``lr``,
-  ``warmup_epochs``, ``decay``, ``floor``. ``optim.grad_clip``
+  ``warmup_epochs``, ``decay``, ``floor``, ``frozen`` (parts not trained,
+  e.g. ``[model.encoder, model.bottleneck]``). ``optim.grad_clip``
   (:data:`GRAD_CLIP`) is the trainer's gradient clipping, for every module.
 - ``trainer``: keyword arguments of :class:`lightning.Trainer` and the
   keys of :class:`TrainerExtras`.
