@@ -31,6 +31,11 @@ term                    weight  definition
                                 output; the decoder here predicts logits)
 ``foot_sliding``        6       mean of true contact x horizontal global
                                 displacement per frame (SAME's ``cv``)
+``stance``              0       MSE of the horizontal per-frame displacement
+                                of joints in true contact relative to the root
+                                (facing frame), weighted by the contact: the
+                                stride, which ``foot_sliding`` leaves to the
+                                root as well (not in SAME; off by default)
 ``penetration``         0.1     mean of ``min(y, 0)^2`` of predicted positions
 ``smoothness``          0.015   mean squared norm of the deviation of the
                                 second time differences of global positions
@@ -66,9 +71,9 @@ from satagraph.losses.positions import (POSITION_SCALE, facing_positions, positi
                                         time_difference, to_global)
 from satagraph.losses.terms import (contact_loss, foot_sliding_loss, limb_velocity_loss,
                                     penetration_loss, root_transfer_loss, rotation_loss,
-                                    smoothness_loss, velocity_loss)
+                                    smoothness_loss, stance_loss, velocity_loss)
 
 __all__ = ["DEFAULT_WEIGHTS", "MotionLoss", "POSITION_SCALE", "facing_positions",
            "position_scale", "time_difference", "to_global", "contact_loss",
            "foot_sliding_loss", "limb_velocity_loss", "penetration_loss", "root_transfer_loss",
-           "rotation_loss", "smoothness_loss", "velocity_loss"]
+           "rotation_loss", "smoothness_loss", "stance_loss", "velocity_loss"]

@@ -10,13 +10,13 @@ from torch import Tensor, nn
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         to_global)
 from satagraph.losses.terms import (contact_loss, foot_sliding_loss, penetration_loss,
-                                    rotation_loss, smoothness_loss, velocity_loss)
+                                    rotation_loss, smoothness_loss, stance_loss, velocity_loss)
 from satagraph.typing import DYNAMIC_LAYOUT
 
 DEFAULT_WEIGHTS: Dict[str, float] = {
     "rotation": 5.0, "position": 0.01, "velocity": 1.0, "root": 10.0, "contact": 1.0,
     "foot_sliding": 6.0, "penetration": 0.1, "smoothness": 0.015, "kl": 1e-4,
-    "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0,
+    "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0, "stance": 0.0,
 }
 
 
@@ -78,6 +78,7 @@ class MotionLoss(nn.Module):
             "root": self._root(out, batch, normalizer),
             "contact": contact_loss(out["c"], c_true),
             "foot_sliding": foot_sliding_loss(glob_p, c_true, batch),
+            "stance": stance_loss(local_p, local_t, c_true, batch),
             "penetration": penetration_loss(local_p),
             "smoothness": smoothness_loss(glob_p, batch, smooth_ref, self.smooth_order),
         }

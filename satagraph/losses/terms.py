@@ -121,6 +121,24 @@ def foot_sliding_loss(pos_pred: Tensor, c_true: Tensor, batch) -> Tensor:
     return _masked_mean(step * c_true.reshape(-1), batch.node_time > 0)
 
 
+def stance_loss(local_pred: Tensor, local_true: Tensor, c_true: Tensor, batch) -> Tensor:
+    r"""Mean squared error of the per-frame horizontal displacement of the
+    joints in contact, relative to the root in the facing frame, weighted
+    by the true contact. A planted foot moves back under the body as fast as
+    the root moves forward; :func:`foot_sliding_loss` (global frame) can be
+    lowered by slowing the root, this term only by the stride.
+
+    Shapes:
+        - **local_pred**, **local_true**: :math:`(N, 3)` facing-frame
+          positions
+        - **c_true**: :math:`(N, 1)`
+    """
+    prev = batch.node_prev
+    diff = (local_pred - local_pred[prev]) - (local_true - local_true[prev])
+    value = diff[:, [0, 2]].pow(2).sum(-1) * c_true.reshape(-1).to(diff.dtype)
+    return _masked_mean(value, batch.node_time > 0)
+
+
 def penetration_loss(pos_pred: Tensor) -> Tensor:
     r"""Mean of :math:`\min(y, 0)^2` (the ground is at :math:`y = 0`).
 

@@ -164,8 +164,8 @@ def most_active(motion: Motion, frames: int) -> Motion:
 
 def foot_slide(canonical: Motion) -> float:
     """How fast the joints near the ground slide, in heights per second
-    (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): about
-    0.03-0.1 for captured and procedural walks, whose planted feet stay."""
+    (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): 0.02-0.12
+    for the zoo's and Bandai's walks and runs, whose planted feet stay."""
     return contact_quality(motion_to_features(canonical))[0]
 
 

@@ -13,13 +13,14 @@ from satagraph.data.features import motion_to_features
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.losses import (DEFAULT_WEIGHTS, MotionLoss, facing_positions,
                               foot_sliding_loss, penetration_loss, rotation_loss,
-                              smoothness_loss, time_difference, to_global,
+                              smoothness_loss, stance_loss, time_difference, to_global,
                               velocity_loss)
 from satagraph.ops.motion_batch import batch_global_motion
 from satagraph.ops.rotation import matrix_to_rotation_6d
 
 FPS = 30.0
-ZERO_AT_TARGET = ("rotation", "position", "velocity", "root", "contact", "smoothness")
+ZERO_AT_TARGET = ("rotation", "position", "velocity", "root", "contact", "smoothness",
+                  "stance")
 
 
 def walk_clip(frames: int = 20, start: int = 0) -> MotionClip:
@@ -149,6 +150,22 @@ def test_foot_sliding(batch):
     value = foot_sliding_loss(sliding, contact, batch).item()
     assert value == pytest.approx(0.5)  # horizontal only, mean over moving frames
     assert foot_sliding_loss(sliding, 0 * contact, batch).item() == 0.0
+
+
+def test_stance_is_the_stride_of_joints_in_contact(batch):
+    """Zero at the target; a constant offset of the facing-frame positions
+    costs nothing (no root in it); a contact joint whose stride is off by
+    (0.3, _, 0.4) per frame costs 0.25, vertical motion and joints out of
+    contact nothing."""
+    true = torch.randn(batch.num_nodes, 3, generator=torch.Generator().manual_seed(0))
+    contact = torch.ones(batch.num_nodes, 1)
+    assert stance_loss(true, true, contact, batch).item() == 0.0
+    assert stance_loss(true + 2.0, true, contact, batch).item() == pytest.approx(0.0, abs=1e-10)
+    off = true + batch.node_time.float()[:, None] * torch.tensor([[0.3, 5.0, 0.4]])
+    assert stance_loss(off, true, contact, batch).item() == pytest.approx(0.25)
+    assert stance_loss(off, true, 0 * contact, batch).item() == 0.0
+    half = (torch.arange(batch.num_nodes) % 2).float()[:, None]
+    assert 0 < stance_loss(off, true, half, batch).item() < 0.25
 
 
 def test_smoothness(batch):
