@@ -164,8 +164,8 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
         source, sname, target, tname = load()
         src, raw = retarget_canonical(module, source, target, embed, rest=rest, ground=False)
         quality = retarget_quality(src, ground_like(raw, src), QUALITY)
-        quality.update(source_upright=retarget_quality(src, src, ("upright",))["upright"],
-                       source_slide=foot_slide(src))
+        own = retarget_quality(src, src, ("upright", "slide"))
+        quality.update(source_upright=own["upright"], source_slide=own["slide"])
         quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]
         rows["retarget"].append(dict(group=group, case=case, source=sname, target=tname,
                                      **quality))
@@ -201,8 +201,6 @@ def _pct(value: Optional[float]) -> str:
 
 
 def _slide(row: dict) -> str:
-    if row.get("slide") is None:
-        return "-"
     return f"{row['slide']:.2f} ({row['source_slide']:.2f})"
 
 
