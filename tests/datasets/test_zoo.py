@@ -160,6 +160,33 @@ def test_start_and_stop_stand_with_planted_feet(species):
         assert abs(pos[:, :, 1].min()) < 0.01 * rig.leg_length
 
 
+def _elevation(v: np.ndarray) -> np.ndarray:
+    return np.degrees(np.arctan2(v[..., 1], np.linalg.norm(v[..., [0, 2]], axis=-1)))
+
+
+def test_quadrupeds_carry_neck_and_head_differently():
+    """Quadrupeds draw their carriage: over 24 rigs the neck rises 5-65
+    degrees (it was always 63) and the head points from well below to above
+    the horizontal, as the real dog's does (-10..+21); the feet still stand
+    on the ground."""
+    from satagraph.datasets.zoo.bodies import _quadruped
+    necks, heads = [], []
+    for seed in range(24):
+        rig = _quadruped("mixamo", np.random.default_rng(seed), "q", True)
+        motion = generate_clip(rig, "walk", frames=30, seed=seed)
+        pos, names = motion.global_positions(), motion.skeleton.names
+        neck, head = names.index("Neck"), names.index("Head")
+        tip = names.index("Head_end")
+        necks.append(_elevation(pos[:, head] - pos[:, neck]).mean())
+        heads.append(_elevation(pos[:, tip] - pos[:, head]).mean())
+        assert abs(pos[:, :, 1].min()) < 0.01 * rig.leg_length
+    assert min(necks) < 20 and max(necks) > 50
+    assert min(heads) < -30 and max(heads) > 10
+    again = _quadruped("mixamo", np.random.default_rng(3), "q", True)
+    first = _quadruped("mixamo", np.random.default_rng(3), "q", True)
+    assert np.array_equal(again.skeleton.offsets, first.skeleton.offsets)
+
+
 def test_look_turns_head_neck_and_tail_in_place():
     rig = zoo_rigs(["quadruped"])[0]
     motion = generate_clip(rig, "look", frames=120, seed=2)

@@ -81,6 +81,7 @@ def _quadruped(style: str, rng: np.random.Generator, name: str,
     if rng.random() < 0.5:
         jaw = b.key("jaw", head, (0, -0.04 * size, 0.05 * size))
         b.end(jaw, (0, -0.02 * size, 0.2 * size))
+    joints = []
     if tail:
         ntail = int(rng.integers(2, 7))
         joints = _chain(b, "tail", root, ntail, (0, 0.02 * size, -0.7 * size / ntail))
@@ -96,7 +97,35 @@ def _quadruped(style: str, rng: np.random.Generator, name: str,
         _leg(b, spine[-1], side, (arm, fore, paw), (width, -0.08 * size, 0.05 * size),
              True, s + "F", (0, 0, -1), girdle=(0.2 * width, -0.12 * size, 0),
              foot=(0, -1, 0.25))
+    _carriage(b, neck, head, joints)
     return b.rig(name, "quadruped", thigh + shin)
+
+
+#: Drawn carriage of a quadruped, in degrees: the neck's elevation above
+#: the back, then pitches (positive nose or tail down) of the whole neck's
+#: bend, of the head against the neck and of the whole tail. Real dogs
+#: hold the neck 8-43 degrees up and the head -10..+21 (``../shared/data``
+#: dog clips outside its test split); one fixed carriage (neck 63, head
+#: -42) taught the model a single head pose.
+_NECK_RISE, _NECK_PITCH = (5.0, 65.0), (-10.0, 25.0)
+_HEAD_PITCH, _TAIL_PITCH = (-40.0, 45.0), (-30.0, 45.0)
+
+
+def _carriage(b: _Builder, neck: Sequence[int], head: int, tail: Sequence[int]) -> None:
+    """Draw how a quadruped carries its neck, head and tail: the neck
+    bones' direction, and the static pitch of the sways (the swaying
+    around it is kept). Drawn last, so the rig's proportions and
+    everything drawn before stay as they were."""
+    rise = np.radians(b.rng.uniform(*_NECK_RISE))
+    for j in neck:
+        b.offsets[j] = np.linalg.norm(b.offsets[j]) * np.array([0.0, np.sin(rise), np.cos(rise)])
+    total = b.rng.uniform(*_NECK_PITCH)
+    for j in neck:
+        b.sway[j].static[0] = np.radians(total / len(neck))
+    b.sway[head].static[0] = np.radians(b.rng.uniform(*_HEAD_PITCH))
+    total = -b.rng.uniform(*_TAIL_PITCH)
+    for j in tail:
+        b.sway[j].static[0] = np.radians(total / len(tail))
 
 
 # ----------------------------------------------------------------- bird
