@@ -119,8 +119,9 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
 
 
 #: How :func:`retarget_canonical` shows each skeleton to the model: in the
-#: rest pose of its file, re-rested on its first frame's pose, or the latter
-#: only where the file's rest is a line or a captured pose (:func:`needs_rest`).
+#: rest pose of its file, re-rested on its first frame's pose, or re-rested on
+#: its first standing frame (:func:`standing_frame`) only where the file's
+#: rest is a line or a captured pose (:func:`needs_rest`).
 REST_MODES = ("auto", "file", "first-frame")
 
 
@@ -152,8 +153,9 @@ def retarget_motion(module, source: Motion, target: Motion,
             files' rest poses; ``"first-frame"`` re-rests each on its first
             frame's pose (:func:`~satagraph.transforms.augment.rebase_rest`)
             and undoes it on the output, so the written file keeps the
-            target's own rest either way; ``"auto"`` (default) re-rests only
-            the skeletons whose rest is no designed pose (:func:`needs_rest`):
+            target's own rest either way; ``"auto"`` (default) re-rests, on
+            the first frame in which the body stands (:func:`standing_frame`),
+            only the skeletons whose rest is no designed pose (:func:`needs_rest`):
             a line (:func:`is_line_rest`: every bone along its joint's +X,
             as Bandai's and the dog's) or a pose whose left and right sides
             bend differently (a captured frame, an arbitrary pose).
@@ -207,8 +209,24 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
     if rest == "file" or not motion.num_frames or (
             rest == "auto" and not needs_rest(motion.skeleton)):
         return motion, None
-    new = rebase_rotations(motion, 0)
+    new = rebase_rotations(motion, 0 if rest == "first-frame" else standing_frame(motion))
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
+
+
+#: Share of its greatest stance height at which a body counts as standing
+#: (:func:`standing_frame`).
+STANDING_SHARE = 0.95
+
+
+def standing_frame(motion: Motion) -> int:
+    r"""The first frame of a canonical motion (+Y up) in which the body
+    stands: its root at least :data:`STANDING_SHARE` as high above its
+    lowest joint as in any frame. What ``rest="auto"`` re-rests a skeleton
+    on, so that a clip that starts lying or sitting (many of the dog's)
+    does not show the model a curled-up skeleton."""
+    pos = motion.global_positions()
+    stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
+    return int(np.argmax(stance >= STANDING_SHARE * stance.max()))
 
 
 def restore_rest(motion: Motion, undo: Optional[np.ndarray], skeleton) -> Motion:
@@ -282,7 +300,7 @@ POSED_REST_DEGREES = 3.0
 
 
 def needs_rest(skeleton) -> bool:
-    r"""Whether ``rest="auto"`` re-rests a skeleton on its first frame: its
+    r"""Whether ``rest="auto"`` re-rests a skeleton (on a standing frame): its
     rest is a line (:func:`is_line_rest`) or a pose left and right bend
     differently (:func:`rest_asymmetry` above
     :data:`POSED_REST_DEGREES`). On the zoo's validation seeds

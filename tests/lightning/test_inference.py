@@ -188,10 +188,34 @@ def test_first_frame_rest_is_undone_on_the_target_rig(build_tiny_module: Callabl
     assert rested.num_frames == src.num_frames
     assert np.isfinite(rested.global_positions()).all()
     assert np.abs(rested.global_positions() - plain.global_positions()).max() > 1e-3
-    auto = retarget_motion(module, src, tgt, embed, window=16, overlap=4)
-    np.testing.assert_allclose(auto.global_positions(), rested.global_positions(), atol=1e-9)
+    # the first frame becomes the rest pose: every joint but the root unturned there
+    np.testing.assert_allclose(shown.rotations[0, 1:], np.broadcast_to(np.eye(3), (
+        canon.skeleton.num_joints - 1, 3, 3)), atol=1e-9)
     with pytest.raises(ValueError, match="rest must be one of"):
         retarget_motion(module, src, tgt, embed, rest="tpose")
+
+
+def test_auto_rest_re_rests_on_the_first_standing_frame(
+        read_real: Callable[[str], Motion]) -> None:
+    """``rest="auto"`` re-rests a line rest on the first frame in which the
+    body stands (root at least 95 % as high above the lowest joint as ever),
+    not on a first frame that lies: this dog clip starts on the floor and
+    gets up after about 3 s."""
+    from satagraph.pipelines.inference import STANDING_SHARE, shown_rest, standing_frame
+    canon = canonicalize(read_real("dog/D1_006_KAN01_002.bvh"), fps=30)
+    pos = canon.global_positions()
+    stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
+    k = standing_frame(canon)
+    assert stance[0] < 0.5 * stance.max()  # lying
+    assert k > 30 and stance[k] >= STANDING_SHARE * stance.max()
+    assert (stance[:k] < STANDING_SHARE * stance.max()).all()
+    shown, undo = shown_rest(canon, "auto")
+    eye = np.broadcast_to(np.eye(3), (canon.skeleton.num_joints - 1, 3, 3))
+    np.testing.assert_allclose(shown.rotations[k, 1:], eye, atol=1e-9)
+    assert not np.allclose(shown.rotations[0, 1:], eye, atol=1e-3)
+    np.testing.assert_allclose(shown.global_positions(), pos, atol=1e-6)
+    first, _ = shown_rest(canon, "first-frame")
+    np.testing.assert_allclose(first.rotations[0, 1:], eye, atol=1e-9)
 
 
 def test_is_line_rest_finds_the_exporters_that_bake_joint_orients(

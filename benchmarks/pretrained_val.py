@@ -1,0 +1,167 @@
+"""Choosing a built-in checkpoint on validation material only (issue 16).
+
+`benchmarks/pretrained.py` is the built-in model's test: its zoo rigs come
+from the endless zoo's test seeds and its real clips from the test splits.
+A checkpoint chosen on those rows would be tuned on its test set, so
+candidates are compared here instead, the same way (whole clips through
+:func:`~satagraph.pipelines.inference.retarget_canonical`, reconstruction
+on the clip's own rig, root path integrated over the clip):
+
+- **zoo**: clips of the validation seed stream, walking, trotting, running,
+  turning and changing speed, a few per training body plan (median per
+  plan: a plan the model cannot read yet gives errors in the hundreds);
+- **bandai**: a third of Bandai's validation split (never trained on);
+- **dog**: the dog clips outside its test split (never trained on: its
+  licence keeps it out of the shipped model's data).
+
+Columns per checkpoint: JP, the mean global joint position error in % of
+the character's height (median over a group's clips, mean in brackets);
+for the real groups also the joint error relative to the root (the pose
+alone), and how far the decoded facing drifts from the source's over a
+clip (degrees, mean absolute; for groups whose heads lead the body).
+
+    .venv/bin/python benchmarks/pretrained_val.py --ckpt builtin RUN/epoch=3.ckpt ... [--out P]
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from pretrained import DATA, HOLDOUT, RECON_FRAMES, TRAIN_SPECIES, joint_error, real_clip  # noqa: E402
+from results_io import write_results  # noqa: E402
+from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
+from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
+from satagraph.pipelines.quality import most_active  # noqa: E402
+
+OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
+#: Zoo clips per body plan, and the kinds that travel.
+ZOO_PER_PLAN, ZOO_KINDS = 3, ("walk", "trot", "run", "turn", "speed")
+
+
+def zoo_clips() -> List[Tuple[str, str, Motion]]:
+    """``(group, name, motion)`` of validation-seed zoo clips."""
+    zoo = EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT)
+    count: Dict[str, int] = {}
+    out = []
+    for index in range(600):
+        sample = zoo.sample(0, index, RECON_FRAMES, "val")
+        if sample.kind not in ZOO_KINDS or count.get(sample.species, 0) >= ZOO_PER_PLAN:
+            continue
+        count[sample.species] = count.get(sample.species, 0) + 1
+        out.append((f"zoo {sample.species}", f"{sample.plan} {sample.kind} ({sample.rest} rest)",
+                    sample.motion))
+    return out
+
+
+def real_clips() -> List[Tuple[str, str, Motion]]:
+    """Bandai's validation clips (every third) and the dog's non-test clips,
+    each cut to its most active :data:`RECON_FRAMES` frames at 30 fps."""
+    with open(DATA / "manifest.tsv", newline="") as handle:
+        rows = list(csv.DictReader(handle, delimiter="\t"))
+    bandai = [r["path"] for r in rows if r["dataset"] == "bandai" and r["split"] == "val"][::3]
+    dog = sorted(r["path"] for r in rows if r["dataset"] == "dog" and r["split"] != "test")
+    out = []
+    for group, paths in (("bandai (val)", bandai), ("dog (not test)", dog)):
+        for rel in paths:
+            motion = real_clip(rel)
+            out.append((group, rel, most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))))
+    return out
+
+
+def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]:
+    """Yaw (degrees, unwrapped) of the root-to-head direction, or None
+    when the rig has no head or it sits above the root (upright bodies)."""
+    heads = [j for j, n in enumerate(names) if "head" in n.lower() and "end" not in n.lower()]
+    if not heads:
+        return None
+    d = positions[:, heads[0]] - positions[:, 0]
+    if np.median(np.linalg.norm(d[:, [0, 2]], axis=-1)) < 0.5 * np.median(np.abs(d[:, 1])):
+        return None
+    return np.degrees(np.unwrap(np.arctan2(d[:, 0], d[:, 2])))
+
+
+def measure(module, motion: Motion) -> dict:
+    """JP, root-relative JP (fractions of the height) and facing drift."""
+    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False)
+    a, b = src.global_positions(), out.global_positions()
+    n = min(len(a), len(b))
+    a, b = a[:n], b[:n]
+    pose = np.linalg.norm((a - a[:, :1]) - (b - b[:, :1]), axis=-1).mean() / src.height()
+    fa, fb = _facing(a, src.skeleton.names), _facing(b, src.skeleton.names)
+    drift = None if fa is None or fb is None else float(np.abs((fb - fa) - (fb - fa)[0]).mean())
+    return dict(jp=joint_error(src, out), pose=float(pose), drift=drift)
+
+
+def summarise(values: List[dict]) -> dict:
+    jp = np.array([v["jp"] for v in values])
+    drift = [v["drift"] for v in values if v["drift"] is not None]
+    return dict(n=len(values), median=float(np.median(jp)), mean=float(jp.mean()),
+                pose=float(np.median([v["pose"] for v in values])),
+                drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None)
+
+
+def table(summary: Dict[str, Dict[str, dict]], seconds: float) -> str:
+    names = list(summary)
+    lines = [f"Validation material only (the zoo's validation seeds, Bandai's val split, the "
+             f"dog outside its test split); {seconds:.0f} s.", "",
+             "JP, % of the height: median (mean) over a group's clips; real groups also give "
+             "the median root-relative error (pose) and the mean facing drift (degrees).", "",
+             "| group | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
+             "|---|---:|" + "---:|" * len(names)]
+    for group in summary[names[0]]:
+        cells = []
+        for k in names:
+            s = summary[k][group]
+            cell = f"{100 * s['median']:.1f} ({100 * s['mean']:.1f})"
+            if not group.startswith("zoo"):
+                cell += f", pose {100 * s['pose']:.1f}"
+                if s["drift"] is not None:
+                    cell += f", drift {s['drift']:.0f}"
+            cells.append(cell)
+        lines.append(f"| {group} | {summary[names[0]][group]['n']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--ckpt", nargs="+", default=["builtin"],
+                        help="checkpoints, .safetensors weights files or builtin")
+    parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
+    args = parser.parse_args(argv)
+    if not (DATA / "manifest.tsv").is_file():
+        print(f"pretrained_val.py: {DATA} not found: the real groups need ../shared/data",
+              file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    clips = zoo_clips() + real_clips()
+    summary: Dict[str, Dict[str, dict]] = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for ckpt in args.ckpt:
+            module = load_module(ckpt).eval()
+            groups: Dict[str, List[dict]] = {}
+            for group, _, motion in clips:
+                groups.setdefault(group, []).append(measure(module, motion))
+            summary[ckpt] = {g: summarise(v) for g, v in groups.items()}
+    text = table(summary, time.perf_counter() - start)
+    print(text)
+    write_results(args.out, "Built-in model candidates on validation material "
+                  "(benchmarks/pretrained_val.py)", text, summary)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
