@@ -232,3 +232,33 @@ def test_rest_modes_auto_is_first_frame_where_it_re_rests_else_the_file():
         same = r["first-frame"] if r["re-rested by auto"] else r["file"]
         assert r["auto"] == pytest.approx(same, abs=1e-9), r
     assert all(r["re-rested by auto"] for r in rows if r["rest"] in ("random", "axis"))
+
+
+def test_pretrained_pose_error_leaves_out_the_root_path(tiny_motion):
+    """``joint_error(..., relative=True)`` is the pose's error alone: a
+    whole motion shifted by a constant has no pose error and a JP of the
+    shift over the height; the reconstruction table prints both."""
+    import pretrained
+    shift = tiny_motion.translations.copy()
+    shift[:, 0] += np.array([0.3, 0.0, 0.0])
+    moved = tiny_motion.with_(translations=shift)
+    height = tiny_motion.height()
+    assert pretrained.joint_error(tiny_motion, moved) == pytest.approx(0.3 / height)
+    assert pretrained.joint_error(tiny_motion, moved, relative=True) == pytest.approx(0.0, abs=1e-9)
+    row = dict(group="real, never trained", case="dog/x.bvh", jp=0.58, grounded_jp=0.58,
+               pose=0.41, height=0.46, steps=0.5, slide=0.37, source_slide=0.07)
+    text = pretrained.table({"retarget": [], "reconstruction": [row]}, "builtin", 1.0)
+    assert "| real, never trained | dog/x.bvh | 58.0 | no | 58.0 | 41.0 | +0.50 | 0.37 (0.07) |" in text
+
+
+def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
+    import pretrained_val
+    clips = [dict(jp=0.1, pose=0.05, drift=10.0), dict(jp=0.3, pose=0.07, drift=None),
+             dict(jp=0.2, pose=0.06, drift=20.0)]
+    s = pretrained_val.summarise(clips)
+    assert s["median"] == pytest.approx(0.2) and s["mean"] == pytest.approx(0.2)
+    assert s["pose"] == pytest.approx(0.06) and s["drift"] == pytest.approx(15.0)
+    assert pretrained_val.summarise(clips[1:2] + clips[:1])["drift"] is None
+    text = pretrained_val.table({"a.ckpt": {"zoo biped": s, "dog (not test)": s}}, 1.0)
+    assert "| zoo biped | 3 | 20.0 (20.0) |" in text
+    assert "| dog (not test) | 3 | 20.0 (20.0), pose 6.0, drift 15 |" in text
