@@ -48,7 +48,7 @@ from satagraph.pipelines.quality import most_active  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: Zoo clips per body plan, and the kinds that travel.
-ZOO_PER_PLAN, ZOO_KINDS = 3, ("walk", "trot", "run", "turn", "speed")
+ZOO_PER_PLAN, ZOO_KINDS = 6, ("walk", "trot", "run", "turn", "speed")
 
 
 def zoo_clips() -> List[Tuple[str, str, Motion]]:
