@@ -187,6 +187,36 @@ def test_quadrupeds_carry_neck_and_head_differently():
     assert np.array_equal(again.skeleton.offsets, first.skeleton.offsets)
 
 
+def test_quadrupeds_gallop_when_they_run():
+    """A quadruped's ``run`` gallops: faster than its trot (4-6 leg lengths
+    a second), the hind feet landing close together (phase lag about a
+    tenth of a stride, against half a stride in the walk), a moment with
+    every foot off the ground, and planted feet that do not slide."""
+    rig = zoo_rigs(["quadruped"])[0]
+    legs = {leg.key: leg.foot for leg in rig.legs}
+
+    def lag(motion) -> float:
+        pos = motion.global_positions()
+        a, b = (pos[:, legs[k], 2] - pos[:, 0, 2] for k in ("LH", "RH"))
+        fa, fb = np.fft.rfft(a - a.mean()), np.fft.rfft(b - b.mean())
+        k = np.argmax(np.abs(fa[1:])) + 1
+        return abs((np.angle(fb[k]) - np.angle(fa[k])) / (2 * np.pi) + 0.5) % 1 - 0.5
+
+    run, walk = (generate_clip(rig, k, frames=120, seed=3) for k in ("run", "walk"))
+    trot = generate_clip(rig, "trot", frames=120, seed=3)
+    speed = [np.linalg.norm(m.global_positions()[-1, 0, [0, 2]]
+                            - m.global_positions()[0, 0, [0, 2]]) / 4.0 / rig.leg_length
+             for m in (run, trot)]
+    assert speed[0] > 1.5 * speed[1] and 3.5 < speed[0] < 7.0
+    assert abs(lag(run)) < 0.2 and abs(lag(walk)) > 0.35
+    feet = run.global_positions()[:, [leg.tips[0] for leg in rig.legs]]
+    ground = feet[:, :, 1] < 0.01 * rig.leg_length
+    assert (~ground.any(axis=1)).any()  # suspension
+    step = np.linalg.norm(np.diff(feet[:, :, [0, 2]], axis=0), axis=-1)
+    planted = ground[1:] & ground[:-1]
+    assert step[planted].max() < 0.02 * rig.leg_length
+
+
 def test_look_turns_head_neck_and_tail_in_place():
     rig = zoo_rigs(["quadruped"])[0]
     motion = generate_clip(rig, "look", frames=120, seed=2)
