@@ -14,6 +14,12 @@ on the clip's own rig, root path integrated over the clip):
 - **dog**: the dog clips outside its test split (never trained on: its
   licence keeps it out of the shipped model's data).
 
+and retargets between validation rigs (zoo biped, quadruped and bird of the
+validation seeds; a Bandai validation walk and the dog's validation clips),
+scored as `benchmarks/pretrained.py` scores its rows: steps (limb timing
+against the source's) and travel (root distance in leg lengths over the
+source's; the issue's target 0.8-1.25).
+
 Columns per checkpoint: JP, the mean global joint position error in % of
 the character's height (median over a group's clips, mean in brackets);
 for the real groups also the joint error relative to the root (the pose
@@ -44,7 +50,7 @@ from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
-from satagraph.pipelines.quality import most_active  # noqa: E402
+from satagraph.pipelines.quality import most_active, retarget_quality  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: Zoo clips per body plan, and the kinds that travel.
@@ -81,6 +87,46 @@ def real_clips() -> List[Tuple[str, str, Motion]]:
     return out
 
 
+def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
+    """``(name, source, target)`` of validation retargets: zoo walks of
+    the validation seeds between bipeds, quadrupeds and birds (two pairs
+    each way), and a Bandai validation walk to and from the dog's
+    validation clips."""
+    zoo = EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT)
+    walks: Dict[str, List[Motion]] = {}
+    for index in range(300):
+        sample = zoo.sample(0, index, RECON_FRAMES, "val")
+        if sample.kind in ("walk", "trot") and sample.species in ("biped", "quadruped", "bird"):
+            walks.setdefault(sample.species, []).append(sample.motion)
+    out = []
+    for a, b in (("biped", "quadruped"), ("quadruped", "biped"), ("biped", "bird")):
+        for k in range(2):
+            out.append((f"zoo {a} -> {b}", walks[a][k], walks[b][k + 2]))
+    with open(DATA / "manifest.tsv", newline="") as handle:
+        rows = list(csv.DictReader(handle, delimiter="\t"))
+    walk = next(r["path"] for r in rows if r["dataset"] == "bandai" and r["split"] == "val"
+                and "_walk_" in r["path"])
+    human = real_clip(walk)
+    for rel in [r["path"] for r in rows if r["dataset"] == "dog" and r["split"] == "val"]:
+        dog = real_clip(rel)
+        out.append(("bandai -> dog", human, dog))
+        out.append(("dog -> bandai", most_active(dog, int(RECON_FRAMES * dog.fps / 30.0)), human))
+    return out
+
+
+def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]]) -> Dict[str, dict]:
+    """Mean steps and the share of travel ratios within 0.8-1.25 per pair
+    name."""
+    got: Dict[str, List[dict]] = {}
+    for name, source, target in pairs:
+        src, out = retarget_canonical(module, source, target, module.embed)
+        got.setdefault(name, []).append(retarget_quality(src, out, ("steps", "travel")))
+    return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
+                       travel=float(np.median([q["travel"] for q in v])),
+                       travel_ok=float(np.mean([0.8 <= q["travel"] <= 1.25 for q in v])))
+            for name, v in got.items()}
+
+
 def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]:
     """Yaw (degrees, unwrapped) of the root-to-head direction, or None
     when the rig has no head or it sits above the root (upright bodies)."""
@@ -113,7 +159,8 @@ def summarise(values: List[dict]) -> dict:
                 drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None)
 
 
-def table(summary: Dict[str, Dict[str, dict]], seconds: float) -> str:
+def table(summary: Dict[str, Dict[str, dict]], seconds: float,
+          retargets: Optional[Dict[str, Dict[str, dict]]] = None) -> str:
     names = list(summary)
     lines = [f"Validation material only (the zoo's validation seeds, Bandai's val split, the "
              f"dog outside its test split); {seconds:.0f} s.", "",
@@ -132,6 +179,15 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float) -> str:
                     cell += f", drift {s['drift']:.0f}"
             cells.append(cell)
         lines.append(f"| {group} | {summary[names[0]][group]['n']} | " + " | ".join(cells) + " |")
+    if retargets:
+        lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25).", "",
+                  "| retarget | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
+                  "|---|---:|" + "---:|" * len(names)]
+        for pair in retargets[names[0]]:
+            cells = [f"{r['steps']:+.2f}, {r['travel']:.2f} ({100 * r['travel_ok']:.0f}%)"
+                     for r in (retargets[k][pair] for k in names)]
+            lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)
+                         + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -147,7 +203,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 2
     start = time.perf_counter()
     clips = zoo_clips() + real_clips()
+    pairs = retarget_pairs()
     summary: Dict[str, Dict[str, dict]] = {}
+    retargets: Dict[str, Dict[str, dict]] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for ckpt in args.ckpt:
@@ -156,10 +214,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             for group, _, motion in clips:
                 groups.setdefault(group, []).append(measure(module, motion))
             summary[ckpt] = {g: summarise(v) for g, v in groups.items()}
-    text = table(summary, time.perf_counter() - start)
+            retargets[ckpt] = retarget_scores(module, pairs)
+    text = table(summary, time.perf_counter() - start, retargets)
     print(text)
     write_results(args.out, "Built-in model candidates on validation material "
-                  "(benchmarks/pretrained_val.py)", text, summary)
+                  "(benchmarks/pretrained_val.py)", text,
+                  {"reconstruction": summary, "retarget": retargets})
     return 0
 
 

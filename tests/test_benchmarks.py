@@ -262,3 +262,6 @@ def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s, "dog (not test)": s}}, 1.0)
     assert "| zoo biped | 3 | 20.0 (20.0) |" in text
     assert "| dog (not test) | 3 | 20.0 (20.0), pose 6.0, drift 15 |" in text
+    rt = {"a.ckpt": {"zoo biped -> bird": dict(n=2, steps=0.935, travel=0.88, travel_ok=0.5)}}
+    text = pretrained_val.table({"a.ckpt": {"zoo biped": s}}, 1.0, rt)
+    assert "| zoo biped -> bird | 2 | +0.94, 0.88 (50%) |" in text
