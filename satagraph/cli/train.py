@@ -20,7 +20,7 @@ def add_train_parsers(sub) -> None:
                    help="continue from the run's last checkpoint")
     p.add_argument("--init-from", metavar="CKPT",
                    help="start from another run's weights (fine-tuning): a checkpoint, "
-                   "a .safetensors weights file or builtin")
+                   "a .safetensors weights file, builtin or builtin-wide")
     _data_rig(p)
     p.set_defaults(func=run_train)
 
@@ -88,8 +88,10 @@ def add_train_parsers(sub) -> None:
 def _common(p) -> None:
     p.add_argument("--ckpt", default="builtin",
                    help="a checkpoint from `satagraph train`, a .safetensors weights "
-                   "file from `satagraph export-weights`, or builtin (the default: "
-                   "the weights shipped in the package)")
+                   "file from `satagraph export-weights`, builtin (the default: the "
+                   "weights shipped in the package, best on humans and four-legged "
+                   "animals) or builtin-wide (shipped too: every body plan of the zoo, "
+                   "insects, crabs, spiders and snakes as well)")
     p.add_argument("--window", type=int, default=None,
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
@@ -156,10 +158,10 @@ def run_train(args) -> int:
 
 def _load(args):
     from satagraph.experiment.train import load_module
-    from satagraph.io.weights import BUILTIN, builtin_notice
+    from satagraph.io.weights import builtin_notice, is_builtin
     module = load_module(args.ckpt)
-    if args.ckpt == BUILTIN:
-        print(f"satagraph: {builtin_notice()}", file=sys.stderr)
+    if is_builtin(args.ckpt):
+        print(f"satagraph: {builtin_notice(name=args.ckpt)}", file=sys.stderr)
     return module, module.embed
 
 

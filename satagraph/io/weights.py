@@ -43,6 +43,9 @@ BUILTIN = "builtin"
 #: The package's built-in weights files (``satagraph/weights/``) by kind.
 BUILTIN_FILES = {"autoencoder": "builtin.safetensors",
                  "text-to-motion": "t2m_builtin.safetensors"}
+#: Other built-in autoencoders, by the name that loads them (``--ckpt
+#: builtin-wide``): the same network trained on every body plan of the zoo.
+BUILTIN_VARIANTS = {"builtin-wide": "builtin_wide.safetensors"}
 #: How to make each kind when none ships.
 _BUILTIN_RECIPES = {"autoencoder": "`satagraph train pretrain_zoo`",
                     "text-to-motion": "`satagraph train t2m_rvq_builtin` then "
@@ -67,44 +70,66 @@ class WeightsSizeError(ValueError):
     """A weights file over the size limit (pass ``force`` to write it)."""
 
 
-def builtin_path(kind: str = "autoencoder") -> Path:
+def builtin_path(kind: str = "autoencoder", name: str = BUILTIN) -> Path:
     """Where the package's built-in weights of a kind live (package data:
-    ``satagraph/weights/``, see :data:`BUILTIN_FILES`)."""
+    ``satagraph/weights/``, see :data:`BUILTIN_FILES`); :obj:`name` picks
+    an autoencoder of :data:`BUILTIN_VARIANTS`."""
     from importlib import resources
     if kind not in BUILTIN_FILES:
         raise ValueError(f"built-in weights kind must be one of {list(BUILTIN_FILES)}, "
                          f"got {kind!r}")
-    return Path(str(resources.files("satagraph.weights") / BUILTIN_FILES[kind]))
+    if name != BUILTIN and (kind != "autoencoder" or name not in BUILTIN_VARIANTS):
+        raise ValueError(f"built-in {kind} weights are named {builtin_names(kind)}, "
+                         f"got {name!r}")
+    file = BUILTIN_FILES[kind] if name == BUILTIN else BUILTIN_VARIANTS[name]
+    return Path(str(resources.files("satagraph.weights") / file))
+
+
+def builtin_names(kind: str = "autoencoder") -> list:
+    """The names that load built-in weights of a kind."""
+    return [BUILTIN] + (list(BUILTIN_VARIANTS) if kind == "autoencoder" else [])
+
+
+def is_builtin(name: PathLike, kind: str = "autoencoder") -> bool:
+    """Whether :obj:`name` names built-in weights (:func:`builtin_names`)."""
+    return os.fspath(name) in builtin_names(kind)
 
 
 def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
     """A path for :obj:`name`: ``"builtin"`` gives the package's weights of
-    :obj:`kind` (:data:`BUILTIN_FILES`).
+    :obj:`kind` (:data:`BUILTIN_FILES`), ``"builtin-wide"`` its other
+    autoencoder (:data:`BUILTIN_VARIANTS`).
 
     Raises:
-        CheckpointError: ``"builtin"`` and no built-in weights of that kind
-            ship (one line saying how to make them).
+        CheckpointError: a built-in name whose weights do not ship (one
+            line saying how to make them).
     """
-    if os.fspath(name) != BUILTIN:
-        return os.fspath(name)
-    path = builtin_path(kind)
+    name = os.fspath(name)
+    if not is_builtin(name, kind):
+        return name
+    path = builtin_path(kind, name)
     if not path.is_file():
+        if name != BUILTIN:
+            raise CheckpointError(f"no {name} weights are shipped in this version: "
+                                  f"train one with `satagraph train pretrain_zoo_wide` "
+                                  "or pass another --ckpt")
         raise CheckpointError(_no_builtin(kind))
     return str(path)
 
 
-def builtin_notice(kind: str = "autoencoder") -> str:
+def builtin_notice(kind: str = "autoencoder", name: str = BUILTIN) -> str:
     """One line on a built-in model, from its own metadata: what made it
     and its provenance note (what it can and cannot do yet); shown by the
     commands that fall back on it."""
-    meta = read_weights_metadata(resolve_weights(BUILTIN, kind))
+    meta = read_weights_metadata(resolve_weights(name, kind))
     prov = meta.get("provenance") or {}
     minutes = prov.get("minutes")
     parts = (prov.get("command"), minutes and f"{float(minutes):.0f} min", prov.get("machine"))
     made = ", ".join(str(part) for part in parts if part)
     note = f": {prov['note']}" if prov.get("note") else ""
     what = "model" if kind == "autoencoder" else f"{kind} model"
-    return f"using the built-in {what} ({made}){note}"
+    which = "" if name == BUILTIN else f" {name}"
+    return f"using the built-in{which} {what} ({made}){note}"
 
 
 def is_weights_file(path: PathLike) -> bool:
@@ -306,7 +331,7 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[
 
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "BUILTIN_FILES",
-           "NO_BUILTIN",
-           "WeightsSizeError", "builtin_path", "builtin_notice", "resolve_weights", "is_weights_file",
+           "BUILTIN_VARIANTS", "NO_BUILTIN",
+           "WeightsSizeError", "builtin_path", "builtin_names", "is_builtin", "builtin_notice", "resolve_weights", "is_weights_file",
            "module_hyper_parameters", "weights_payload", "save_weights",
            "read_weights_metadata", "load_weights", "load_weights_or_checkpoint"]

@@ -25,7 +25,8 @@ def _run_demo(out: Path, argv, builtin: Optional[Path] = None) -> dict:
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SATAGRAPH_CACHE", str(out / "cache"))
         if builtin is not None:
-            mp.setattr("satagraph.io.weights.builtin_path", lambda kind="autoencoder": builtin)
+            mp.setattr("satagraph.io.weights.builtin_path",
+                       lambda kind="autoencoder", name="builtin": builtin)
         assert main(["demo", *argv, "--output", str(out), *SMALL]) == 0
     return json.loads((out / "summary.json").read_text())
 

@@ -122,7 +122,8 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     clip = tmp_path / "walk.bvh"
     write_bvh(zoo_clip, clip)
     out = tmp_path / "out.bvh"
-    monkeypatch.setattr(weights, "builtin_path", lambda kind="autoencoder": tmp_path / "none.safetensors")
+    monkeypatch.setattr(weights, "builtin_path",
+                        lambda kind="autoencoder", name="builtin": tmp_path / "none.safetensors")
     assert main(["reconstruct", str(clip), str(out)]) == 2
     err = capsys.readouterr().err
     assert err.strip() == f"satagraph: error: {NO_BUILTIN}"
@@ -132,7 +133,12 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     save_weights(build_tiny_module(), shipped,
                  provenance={"command": "satagraph train tiny", "minutes": 3.0,
                              "note": "a test model: limbs in step on zoo rigs only"})
-    monkeypatch.setattr(weights, "builtin_path", lambda kind="autoencoder": shipped)
+    assert main(["reconstruct", "--ckpt", "builtin-wide", str(clip), str(out)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "satagraph: error: no builtin-wide weights are shipped in this version: train one "
+        "with `satagraph train pretrain_zoo_wide` or pass another --ckpt")
+    monkeypatch.setattr(weights, "builtin_path",
+                        lambda kind="autoencoder", name="builtin": shipped)
     capsys.readouterr()
     assert main(["reconstruct", str(clip), str(out)]) == 0
     # the fallback says which model it used and what it can do, in one line
@@ -143,6 +149,20 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     assert out.is_file() and "using the built-in model" in capsys.readouterr().err
     assert main(["reconstruct", "--ckpt", str(shipped), str(clip), str(out)]) == 0
     assert "built-in" not in capsys.readouterr().err
+    assert main(["reconstruct", "--ckpt", "builtin-wide", str(clip), str(out)]) == 0
+    assert "using the built-in builtin-wide model (satagraph train tiny" in capsys.readouterr().err
+
+
+def test_builtin_names() -> None:
+    """``builtin`` names each kind's shipped weights; ``builtin-wide`` the
+    other autoencoder only; any other name is a path."""
+    assert weights.builtin_names() == ["builtin", "builtin-wide"]
+    assert weights.builtin_names("text-to-motion") == ["builtin"]
+    assert weights.is_builtin("builtin-wide") and not weights.is_builtin("builtin-wide", "text-to-motion")
+    assert weights.builtin_path(name="builtin-wide").name == "builtin_wide.safetensors"
+    assert weights.resolve_weights("runs/x.ckpt") == "runs/x.ckpt"
+    with pytest.raises(ValueError, match="named"):
+        weights.builtin_path("text-to-motion", "builtin-wide")
 
 
 def test_builtin_path_is_package_data() -> None:

@@ -167,7 +167,7 @@ def test_builtin_generator_is_the_default_and_says_so(t2m_ckpt, zoo_skeletons, t
     assert main(["export-weights", str(t2m_ckpt), str(shipped), "--half",
                  "--note", "a stand-in"]) == 0
     monkeypatch.setattr(weights, "builtin_path",
-                        lambda kind="autoencoder": shipped if kind == "text-to-motion"
+                        lambda kind="autoencoder", name="builtin": shipped if kind == "text-to-motion"
                         else tmp_path / "none.safetensors")
     out = tmp_path / "walk.bvh"
     capsys.readouterr()
