@@ -100,3 +100,32 @@ def test_retarget_is_grounded_by_default_and_not_with_no_ground(
         assert main(["retarget", str(source), "--target", str(target), flag,
                      str(outs[flag])]) == 0
     assert_grounded_pair(outs["--ground"], outs["--no-ground"])
+
+
+@pytest.mark.skipif(not builtin_path(name="builtin-wide").is_file(),
+                    reason="no builtin-wide weights ship in this checkout")
+def test_builtin_wide_reads_body_plans_the_default_cannot(no_network: None) -> None:
+    """``--ckpt builtin-wide`` (every body plan of the zoo): a hexapod and a
+    crab of the zoo's test seeds come back within a fifth of their height
+    (the default model, which never saw six or eight legs, is off by more
+    than their height), offline, from a file that describes itself."""
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import retarget_canonical
+
+    assert builtin_path(name="builtin-wide").stat().st_size <= MAX_WEIGHTS_BYTES
+    meta = read_weights_metadata(builtin_path(name="builtin-wide"))
+    assert "pretrain_zoo_wide" in json.dumps(meta["provenance"])
+    sources = json.dumps(meta["hyper_parameters"]["meta"]["data"]["sources"]).lower()
+    assert "bandai" not in sources and "dataset: dog" not in sources
+    zoo = EndlessZoo(species=["hexapod", "crab"])
+    wide, default = load_module("builtin-wide").eval(), load_module("builtin").eval()
+    for index in range(2):
+        motion = zoo.sample(0, index, 64, "test").motion
+        errors = []
+        for module in (wide, default):
+            src, out = retarget_canonical(module, motion, motion, module.embed, ground=False)
+            n = min(src.num_frames, out.num_frames)
+            errors.append(np.linalg.norm(src.global_positions()[:n] - out.global_positions()[:n],
+                                         axis=-1).mean() / src.height())
+        assert errors[0] < 0.2 and errors[1] > 0.5, errors
