@@ -33,13 +33,17 @@ def _assert_chain(skel, names, parent=None):
 @pytest.mark.slow
 def test_existing_species_unchanged():
     """The full zoo (new species included) writes the same files for the
-    existing species as the main branch before issue 15 did."""
+    existing species as the main branch before issue 15 did, but for the
+    quadrupeds, changed on purpose on 26 Nov (drawn carriage, galloping
+    runs): the other four plans' files are those of that day's main."""
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:
         rows = write_zoo(tmp, clips=2, seed=3, frames=12)
-    old = " ".join(r["sha1"] for r in rows if r["species"] in OLD_SPECIES)
-    assert hashlib.sha1(old.encode()).hexdigest() == "18fd172565dfb76c3f281278461b8d3384dad58f"
+    old = " ".join(r["sha1"] for r in rows
+                   if r["species"] in OLD_SPECIES and r["species"] != "quadruped")
+    assert hashlib.sha1(old.encode()).hexdigest() == "cd939fb4a56bc9ba9a21033698fc19abe39b026c"
+    assert any(r["species"] == "quadruped" for r in rows)
     assert SPECIES[:5] == OLD_SPECIES and set(NEW_SPECIES) <= set(SPECIES)
 
 
