@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any, Dict, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 import torch
 from torch import Tensor
@@ -85,7 +85,7 @@ def builtin_path(kind: str = "autoencoder", name: str = BUILTIN) -> Path:
     return Path(str(resources.files("satagraph.weights") / file))
 
 
-def builtin_names(kind: str = "autoencoder") -> list:
+def builtin_names(kind: str = "autoencoder") -> List[str]:
     """The names that load built-in weights of a kind."""
     return [BUILTIN] + (list(BUILTIN_VARIANTS) if kind == "autoencoder" else [])
 
@@ -111,7 +111,7 @@ def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
     if not path.is_file():
         if name != BUILTIN:
             raise CheckpointError(f"no {name} weights are shipped in this version: "
-                                  f"train one with `satagraph train pretrain_zoo_wide` "
+                                  "train one with `satagraph train pretrain_zoo_wide` "
                                   "or pass another --ckpt")
         raise CheckpointError(_no_builtin(kind))
     return str(path)
@@ -331,7 +331,7 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[
 
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "BUILTIN_FILES",
-           "BUILTIN_VARIANTS", "NO_BUILTIN",
-           "WeightsSizeError", "builtin_path", "builtin_names", "is_builtin", "builtin_notice", "resolve_weights", "is_weights_file",
+           "BUILTIN_VARIANTS", "NO_BUILTIN", "WeightsSizeError", "builtin_path",
+           "builtin_names", "is_builtin", "builtin_notice", "resolve_weights", "is_weights_file",
            "module_hyper_parameters", "weights_payload", "save_weights",
            "read_weights_metadata", "load_weights", "load_weights_or_checkpoint"]

@@ -386,8 +386,10 @@ def _smooth_min(x: np.ndarray, width: int) -> np.ndarray:
 
 def _gait(species: str, kind: str) -> str:
     """The :data:`GAITS` entry a clip kind of a species moves in."""
-    if kind == "trot" or (kind == "run" and species == "quadruped"):
-        return "trot" if kind == "trot" else "gallop"
+    if kind == "trot":
+        return "trot"
+    if kind == "run" and species == "quadruped":
+        return "gallop"
     return species
 
 
