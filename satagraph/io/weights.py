@@ -129,7 +129,7 @@ def builtin_notice(kind: str = "autoencoder", name: str = BUILTIN) -> str:
     note = f": {prov['note']}" if prov.get("note") else ""
     what = "model" if kind == "autoencoder" else f"{kind} model"
     which = "" if name == BUILTIN else f" {name}"
-    return f"using the built-in{which} {what} ({made}){note}"
+    return f"using the built-in {what}{which} ({made}){note}"
 
 
 def is_weights_file(path: PathLike) -> bool:

@@ -150,7 +150,7 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     assert main(["reconstruct", "--ckpt", str(shipped), str(clip), str(out)]) == 0
     assert "built-in" not in capsys.readouterr().err
     assert main(["reconstruct", "--ckpt", "builtin-wide", str(clip), str(out)]) == 0
-    assert "using the built-in builtin-wide model (satagraph train tiny" in capsys.readouterr().err
+    assert "using the built-in model builtin-wide (satagraph train tiny" in capsys.readouterr().err
 
 
 def test_builtin_names() -> None:
