@@ -151,6 +151,12 @@ def recon_cases() -> List[Tuple[str, str, Callable[[], Motion]]]:
     return zoo + real
 
 
+def recon_window(motion: Motion) -> Motion:
+    """A real clip's most active :data:`RECON_FRAMES` frames (at 30 fps;
+    at its own rate that many seconds)."""
+    return most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))
+
+
 def joint_error(source: Motion, output: Motion, relative: bool = False) -> float:
     """Mean global joint distance over the height (canonical motions); with
     :obj:`relative`, of the positions relative to the root (the pose alone,
@@ -176,7 +182,7 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
     for group, case, load in recon_cases():
         motion = load()
         clip = motion.slice(0, min(motion.num_frames, RECON_FRAMES)) if group.startswith(
-            "held") else most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))
+            "held") else recon_window(motion)
         src, raw = retarget_canonical(module, clip, clip, embed, rest=rest, ground=False)
         steps = retarget_quality(src, raw, ("steps",))["steps"]
         grounded = ground_like(raw, src)

@@ -31,12 +31,13 @@ clip (degrees, mean absolute; for groups whose heads lead the body).
 from __future__ import annotations
 
 import argparse
-import csv
+import os
 import sys
 import time
 import warnings
+from functools import lru_cache
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -44,26 +45,46 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from pretrained import DATA, HOLDOUT, RECON_FRAMES, TRAIN_SPECIES, joint_error, real_clip  # noqa: E402
+from pretrained import (DATA, HOLDOUT, TRAIN_SPECIES, RECON_FRAMES, joint_error,  # noqa: E402
+                        real_clip, recon_window)
 from results_io import write_results  # noqa: E402
-from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
+from satagraph.datasets.sources import read_manifest  # noqa: E402
+from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
-from satagraph.pipelines.quality import most_active, retarget_quality  # noqa: E402
+from satagraph.pipelines.quality import retarget_quality  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: Zoo clips per body plan, and the kinds that travel.
 ZOO_PER_PLAN, ZOO_KINDS = 6, ("walk", "trot", "run", "turn", "speed")
 
 
+@lru_cache(maxsize=None)
+def zoo_sample(index: int) -> ZooSample:
+    """Sample :obj:`index` of the zoo's validation stream (drawn once)."""
+    return EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT).sample(0, index, RECON_FRAMES, "val")
+
+
+@lru_cache(maxsize=None)
+def real_file(rel: str) -> Motion:
+    """:func:`pretrained.real_clip`, read once."""
+    return real_clip(rel)
+
+
+def manifest_paths(dataset: str, keep: Callable[[str], bool]) -> List[str]:
+    """Paths (relative to the data folder) of a dataset's files whose split
+    :obj:`keep` accepts, in the manifest's order."""
+    return [os.path.relpath(f.path, DATA) for f in read_manifest(DATA / "manifest.tsv", dataset)
+            if keep(f.split)]
+
+
 def zoo_clips() -> List[Tuple[str, str, Motion]]:
     """``(group, name, motion)`` of validation-seed zoo clips."""
-    zoo = EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT)
     count: Dict[str, int] = {}
     out = []
     for index in range(600):
-        sample = zoo.sample(0, index, RECON_FRAMES, "val")
+        sample = zoo_sample(index)
         if sample.kind not in ZOO_KINDS or count.get(sample.species, 0) >= ZOO_PER_PLAN:
             continue
         count[sample.species] = count.get(sample.species, 0) + 1
@@ -75,16 +96,11 @@ def zoo_clips() -> List[Tuple[str, str, Motion]]:
 def real_clips() -> List[Tuple[str, str, Motion]]:
     """Bandai's validation clips (every third) and the dog's non-test clips,
     each cut to its most active :data:`RECON_FRAMES` frames at 30 fps."""
-    with open(DATA / "manifest.tsv", newline="") as handle:
-        rows = list(csv.DictReader(handle, delimiter="\t"))
-    bandai = [r["path"] for r in rows if r["dataset"] == "bandai" and r["split"] == "val"][::3]
-    dog = sorted(r["path"] for r in rows if r["dataset"] == "dog" and r["split"] != "test")
-    out = []
-    for group, paths in (("bandai (val)", bandai), ("dog (not test)", dog)):
-        for rel in paths:
-            motion = real_clip(rel)
-            out.append((group, rel, most_active(motion, int(RECON_FRAMES * motion.fps / 30.0))))
-    return out
+    bandai = manifest_paths("bandai", lambda split: split == "val")[::3]
+    dog = sorted(manifest_paths("dog", lambda split: split != "test"))
+    return [(group, rel, recon_window(real_file(rel)))
+            for group, paths in (("bandai (val)", bandai), ("dog (not test)", dog))
+            for rel in paths]
 
 
 def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
@@ -92,25 +108,22 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
     the validation seeds between bipeds, quadrupeds and birds (two pairs
     each way), and a Bandai validation walk to and from the dog's
     validation clips."""
-    zoo = EndlessZoo(species=TRAIN_SPECIES, holdout=HOLDOUT)
     walks: Dict[str, List[Motion]] = {}
     for index in range(300):
-        sample = zoo.sample(0, index, RECON_FRAMES, "val")
+        sample = zoo_sample(index)
         if sample.kind in ("walk", "trot") and sample.species in ("biped", "quadruped", "bird"):
             walks.setdefault(sample.species, []).append(sample.motion)
     out = []
     for a, b in (("biped", "quadruped"), ("quadruped", "biped"), ("biped", "bird")):
         for k in range(2):
             out.append((f"zoo {a} -> {b}", walks[a][k], walks[b][k + 2]))
-    with open(DATA / "manifest.tsv", newline="") as handle:
-        rows = list(csv.DictReader(handle, delimiter="\t"))
-    walk = next(r["path"] for r in rows if r["dataset"] == "bandai" and r["split"] == "val"
-                and "_walk_" in r["path"])
-    human = real_clip(walk)
-    for rel in [r["path"] for r in rows if r["dataset"] == "dog" and r["split"] == "val"]:
-        dog = real_clip(rel)
+    walk = next(p for p in manifest_paths("bandai", lambda split: split == "val")
+                if "_walk_" in p)
+    human = real_file(walk)
+    for rel in manifest_paths("dog", lambda split: split == "val"):
+        dog = real_file(rel)
         out.append(("bandai -> dog", human, dog))
-        out.append(("dog -> bandai", most_active(dog, int(RECON_FRAMES * dog.fps / 30.0)), human))
+        out.append(("dog -> bandai", recon_window(dog), human))
     return out
 
 
@@ -142,13 +155,11 @@ def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]
 def measure(module, motion: Motion) -> dict:
     """JP, root-relative JP (fractions of the height) and facing drift."""
     src, out = retarget_canonical(module, motion, motion, module.embed, ground=False)
-    a, b = src.global_positions(), out.global_positions()
-    n = min(len(a), len(b))
-    a, b = a[:n], b[:n]
-    pose = np.linalg.norm((a - a[:, :1]) - (b - b[:, :1]), axis=-1).mean() / src.height()
-    fa, fb = _facing(a, src.skeleton.names), _facing(b, src.skeleton.names)
+    n = min(src.num_frames, out.num_frames)
+    fa = _facing(src.global_positions()[:n], src.skeleton.names)
+    fb = _facing(out.global_positions()[:n], src.skeleton.names)
     drift = None if fa is None or fb is None else float(np.abs((fb - fa) - (fb - fa)[0]).mean())
-    return dict(jp=joint_error(src, out), pose=float(pose), drift=drift)
+    return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True), drift=drift)
 
 
 def summarise(values: List[dict]) -> dict:

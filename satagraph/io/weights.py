@@ -46,14 +46,19 @@ BUILTIN_FILES = {"autoencoder": "builtin.safetensors",
 #: Other built-in autoencoders, by the name that loads them (``--ckpt
 #: builtin-wide``): the same network trained on every body plan of the zoo.
 BUILTIN_VARIANTS = {"builtin-wide": "builtin_wide.safetensors"}
-#: How to make each kind when none ships.
+#: How to make each kind (or named variant) when none ships.
 _BUILTIN_RECIPES = {"autoencoder": "`satagraph train pretrain_zoo`",
                     "text-to-motion": "`satagraph train t2m_rvq_builtin` then "
-                                      "`satagraph train t2m_builtin`"}
+                                      "`satagraph train t2m_builtin`",
+                    "builtin-wide": "`satagraph train pretrain_zoo_wide`"}
 
 
-def _no_builtin(kind: str) -> str:
-    """The one line shown when no built-in weights of :obj:`kind` ship."""
+def _no_builtin(kind: str, name: str = BUILTIN) -> str:
+    """The one line shown when the built-in weights :obj:`name` of
+    :obj:`kind` do not ship."""
+    if name != BUILTIN:
+        return (f"no {name} weights are shipped in this version: train one with "
+                f"{_BUILTIN_RECIPES[name]} or pass another --ckpt")
     what = "" if kind == "autoencoder" else f" {kind}"
     return (f"no built-in{what} weights are shipped in this version: train one with "
             f"{_BUILTIN_RECIPES[kind]} or pass --ckpt")
@@ -109,11 +114,7 @@ def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
         return name
     path = builtin_path(kind, name)
     if not path.is_file():
-        if name != BUILTIN:
-            raise CheckpointError(f"no {name} weights are shipped in this version: "
-                                  "train one with `satagraph train pretrain_zoo_wide` "
-                                  "or pass another --ckpt")
-        raise CheckpointError(_no_builtin(kind))
+        raise CheckpointError(_no_builtin(kind, name))
     return str(path)
 
 
