@@ -94,9 +94,34 @@ def rebase_rotations(motion: Motion, frame: int = 0) -> np.ndarray:
         raise ValueError(f"rebase_rest: frame {frame} of a {motion.num_frames}-frame motion")
     parents = motion.skeleton.parents
     pose = motion.rotations[frame].copy()
-    pose[0] = _heading(motion.rotations[frame, 0] @ motion.rotations[0, 0].T).T @ pose[0]
+    pose[0] = _turn_back(motion, frame) @ pose[0]
     return forward_kinematics_numpy(pose[None], motion.translations[frame:frame + 1],
                                     parents)[0][0]
+
+
+#: Tilt of the root between frame 0 and the re-rest frame (degrees) above
+#: which :func:`rebase_rotations` reads the turn from the body's facing:
+#: the root's heading is no measure of it once the body has rolled or
+#: pitched over (a dog lying on its side at frame 0, standing later).
+TURN_TILT = 30.0
+
+
+def _turn_back(motion: Motion, frame: int) -> np.ndarray:
+    """The rotation about +Y that undoes the body's turn from frame 0 to
+    :obj:`frame`: the root's heading change, or where the root tilted by
+    more than :data:`TURN_TILT` in between, the change of the facing of
+    the left/right joint pairs (the root's heading then as a fallback for
+    a skeleton without them)."""
+    relative = motion.rotations[frame, 0] @ motion.rotations[0, 0].T
+    up = np.array([0.0, 1.0, 0.0])
+    if np.degrees(np.arccos(np.clip(up @ relative @ up, -1.0, 1.0))) <= TURN_TILT:
+        return _heading(relative).T
+    from satagraph.transforms.canonical import lateral_forward  # imports this module
+    pos = motion.slice(0, frame + 1).global_positions()[[0, frame]]
+    facing = lateral_forward(pos, motion.skeleton.names, up)
+    if facing is None:
+        return _heading(relative).T
+    return yaw_matrix_numpy(yaw_of(facing[0]) - yaw_of(facing[1]))
 
 
 def set_rest_rotations(motion: Motion, rest: np.ndarray) -> Motion:

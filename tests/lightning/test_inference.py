@@ -218,6 +218,36 @@ def test_auto_rest_re_rests_on_the_first_standing_frame(
     np.testing.assert_allclose(first.rotations[0, 1:], eye, atol=1e-9)
 
 
+def test_auto_rest_of_a_dog_that_starts_on_its_side_faces_forward(
+        read_real: Callable[[str], Motion]) -> None:
+    """This dog lies on its side for 8 s (its root tilted 99 degrees from
+    where it stands): re-rested on its standing frame by the root's heading
+    change, its rest faced backwards and the built-in model walked it
+    tail first (Bandai -> dog steps -0.53); turned by its left/right pairs,
+    the rest faces +Z as the canonical frame 0 does, and a retarget onto
+    it walks head first."""
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import retarget_canonical, shown_rest, standing_frame
+    from satagraph.pipelines.quality import most_active
+    from satagraph.transforms.canonical import lateral_forward
+    from satagraph.transforms.rig_reading import with_rig
+    dog = with_rig(read_real("dog/D1_031_KAN01_001.bvh"), scale="cm")
+    canon = canonicalize(dog, fps=30)
+    assert standing_frame(canon) > 200
+    shown, _ = shown_rest(canon, "auto")
+    names = canon.skeleton.names
+    facing = lateral_forward(shown.skeleton.rest_positions(), names, np.array([0.0, 1.0, 0.0]))
+    assert facing[2] / np.linalg.norm(facing) > 0.99
+    module = load_module("builtin").eval()
+    walk = most_active(read_real("bandai/dataset-1_walk_sad_001.bvh"), 90)
+    _, out = retarget_canonical(module, walk, dog, module.embed)
+    pos = out.global_positions()
+    head = pos[1:, names.index("Head"), [0, 2]] - pos[1:, 0, [0, 2]]
+    step = np.diff(pos[:, 0, [0, 2]], axis=0)
+    cos = (head * step).sum(-1) / (np.linalg.norm(head, axis=-1) * np.linalg.norm(step, axis=-1))
+    assert np.median(cos) > 0.5
+
+
 def test_is_line_rest_finds_the_exporters_that_bake_joint_orients(
         read_real: Callable[[str], Motion]) -> None:
     """Bandai (right side on -X) and the dog lay every bone on their
