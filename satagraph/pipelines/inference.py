@@ -8,8 +8,11 @@ from typing import Callable, List, Optional, Tuple
 import numpy as np
 import torch
 
-from satagraph.transforms.augment import rebase_rotations, set_rest_rotations
-from satagraph.transforms.canonical import canonicalize, decanonicalize, resample_frames
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
+
+from satagraph.transforms.augment import TURN_TILT, rebase_rotations, set_rest_rotations
+from satagraph.transforms.canonical import (canonicalize, decanonicalize, lateral_forward,
+                                           resample_frames)
 from satagraph.transforms.ground import ground_like
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
@@ -184,21 +187,35 @@ def retarget_canonical(module, source: Motion, target: Motion,
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
-    :func:`~satagraph.transforms.canonical.decanonicalize` undoes). What
+    :func:`~satagraph.transforms.canonical.decanonicalize` undoes), the
+    source turned about +Y where :func:`source_features` turns it. What
     :mod:`satagraph.quality` measures."""
     if rest not in REST_MODES:
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
-    src_canon = canonicalize(source, fps=fps)
+    src_canon, src = source_features(canonicalize(source, fps=fps), rest)
     tgt_canon = canonicalize(target, fps=fps)
-    src_rest, _ = shown_rest(src_canon, rest)
     tgt_rest, undo = shown_rest(tgt_canon, rest)
     tgt = static_features(tgt_rest)
-    q, r, _ = transfer(module, motion_to_features(src_rest), tgt, semantic, window, overlap)
+    q, r, _ = transfer(module, src, tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
                        tgt_canon.skeleton)
     return src_canon, ground_like(out, src_canon) if ground else out
+
+
+def source_features(canon: Motion, rest: str) -> Tuple[Motion, MotionFeatures]:
+    """A canonical source and its features as the model is shown them: in
+    the rest pose :obj:`rest` names (:func:`shown_rest`), with the facing
+    axis of :func:`standing_facing_axis` where it has one, the motion then
+    turned about +Y so that this axis points to +Z at frame 0 (as the
+    features' own rule makes it)."""
+    shown, _ = shown_rest(canon, rest)
+    axis = standing_facing_axis(shown)
+    if axis is not None:
+        turn = yaw_matrix_numpy(-yaw_of(shown.rotations[0, 0] @ axis))
+        canon, shown = turn_world(canon, turn), turn_world(shown, turn)
+    return canon, motion_to_features(shown, facing_axis=axis)
 
 
 def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:
@@ -227,6 +244,44 @@ def standing_frame(motion: Motion) -> int:
     pos = motion.global_positions()
     stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
     return int(np.argmax(stance >= STANDING_SHARE * stance.max()))
+
+
+def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
+    r"""The root-local axis along the body's facing (the horizontal forward
+    of its left/right joint pairs) in the first frame in which it stands
+    (:func:`standing_frame`), as the source's facing axis of its features
+    (:func:`~satagraph.data.features.motion_to_features`) where the root
+    tilted by more than :data:`~satagraph.transforms.augment.TURN_TILT`
+    between frame 0 and that frame; else ``None`` (the features' own rule:
+    the axis pointing to +Z at frame 0), also without left/right pairs. A dog lying on its
+    side at frame 0 gave an axis that points up or sideways once it stands,
+    so its facing frames turned with every sway.
+
+    Shapes:
+        - **output**: :math:`(3,)`
+    """
+    if not motion.num_frames:
+        return None
+    frame, up = standing_frame(motion), np.array([0.0, 1.0, 0.0])
+    relative = motion.rotations[frame, 0] @ motion.rotations[0, 0].T
+    if np.degrees(np.arccos(np.clip(up @ relative @ up, -1.0, 1.0))) <= TURN_TILT:
+        return None
+    forward = lateral_forward(motion.global_positions()[frame], motion.skeleton.names, up)
+    if forward is None:
+        return None
+    forward = forward - up * forward.dot(up)
+    if np.linalg.norm(forward) < 1e-9:
+        return None
+    return motion.rotations[frame, 0].T @ (forward / np.linalg.norm(forward))
+
+
+def turn_world(motion: Motion, turn: np.ndarray) -> Motion:
+    """A motion turned as a whole about the world's origin by :obj:`turn`
+    (its root's rotations and translations)."""
+    rotations, translations = motion.rotations.copy(), motion.translations.copy()
+    rotations[:, 0] = turn @ rotations[:, 0]
+    translations[:, 0] = translations[:, 0] @ turn.T
+    return motion.with_(rotations=rotations, translations=translations)
 
 
 def restore_rest(motion: Motion, undo: Optional[np.ndarray], skeleton) -> Motion:

@@ -248,6 +248,39 @@ def test_auto_rest_of_a_dog_that_starts_on_its_side_faces_forward(
     assert np.median(cos) > 0.5
 
 
+def test_the_source_facing_axis_of_a_dog_that_starts_on_its_side(
+        read_real: Callable[[str], Motion]) -> None:
+    """The features' facing axis is the root-local axis that points to +Z
+    at frame 0; for this dog, lying on its side there, that axis points
+    nearly straight up once it stands (75-85 degrees out of the
+    horizontal), so its facing frames turned with every sway.
+    ``standing_facing_axis`` takes the body's facing where it stands
+    instead (within a few degrees of the horizontal) and leaves a walk
+    whose root stays upright to the features' rule; ``turn_world`` turns a
+    motion about the origin without changing it."""
+    from satagraph.pipelines.inference import (shown_rest, standing_facing_axis,
+                                               standing_frame, turn_world)
+    from satagraph.ops.rotation_numpy import yaw_matrix_numpy
+    from satagraph.transforms.rig_reading import with_rig
+    lying = canonicalize(with_rig(read_real("dog/D1_031_KAN01_001.bvh"), scale="cm"), fps=30)
+    rested, _ = shown_rest(lying, "auto")
+    axis = standing_facing_axis(rested)
+    k = standing_frame(rested)
+    stands = rested.rotations[k:k + 60, 0]
+
+    def elevation(direction: np.ndarray) -> np.ndarray:
+        return np.degrees(np.arcsin(np.abs(stands @ direction)[:, 1]))
+
+    assert np.median(elevation(axis)) < 10.0
+    assert np.median(elevation(rested.rotations[0, 0].T @ [0.0, 0.0, 1.0])) > 60.0
+    walk = canonicalize(read_real("bandai/dataset-1_walk_sad_001.bvh"), fps=30)
+    assert standing_facing_axis(shown_rest(walk, "auto")[0]) is None
+    turn = yaw_matrix_numpy(np.radians(70.0))
+    turned = turn_world(walk, turn)
+    np.testing.assert_allclose(turned.global_positions(), walk.global_positions() @ turn.T,
+                               atol=1e-9)
+
+
 def test_is_line_rest_finds_the_exporters_that_bake_joint_orients(
         read_real: Callable[[str], Motion]) -> None:
     """Bandai (right side on -X) and the dog lay every bone on their
