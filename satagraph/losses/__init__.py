@@ -24,6 +24,10 @@ term                    weight  definition
 ======================  ======  ==============================================
 ``rotation``            5       MSE of rotation matrices, joints with children
 ``position``            0.01    MSE of positions in the facing frame
+``global_position``     0       MSE of global positions (the root's path
+                                and yaw integrated over the window from
+                                ``r``, so a biased yaw rate or speed counts
+                                as the drift it causes; off by default)
 ``velocity``            1       MSE of per-frame global displacements
 ``root``                10      MSE of ``r`` (normalised when a normaliser is
                                 given, as SAME; physical otherwise)

@@ -14,7 +14,8 @@ from satagraph.losses.terms import (contact_loss, foot_sliding_loss, penetration
 from satagraph.typing import DYNAMIC_LAYOUT
 
 DEFAULT_WEIGHTS: Dict[str, float] = {
-    "rotation": 5.0, "position": 0.01, "velocity": 1.0, "root": 10.0, "contact": 1.0,
+    "rotation": 5.0, "position": 0.01, "global_position": 0.0, "velocity": 1.0,
+    "root": 10.0, "contact": 1.0,
     "foot_sliding": 6.0, "penetration": 0.1, "smoothness": 0.015, "kl": 1e-4,
     "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0, "stance": 0.0,
 }
@@ -74,6 +75,7 @@ class MotionLoss(nn.Module):
         terms = {
             "rotation": rotation_loss(out["q"], q_true, batch),
             "position": F.mse_loss(local_p, local_t),
+            "global_position": F.mse_loss(glob_p, glob_t),
             "velocity": velocity_loss(glob_p, glob_t, batch),
             "root": self._root(out, batch, normalizer),
             "contact": contact_loss(out["c"], c_true),

@@ -19,8 +19,8 @@ from satagraph.ops.motion_batch import batch_global_motion
 from satagraph.ops.rotation import matrix_to_rotation_6d
 
 FPS = 30.0
-ZERO_AT_TARGET = ("rotation", "position", "velocity", "root", "contact", "smoothness",
-                  "stance")
+ZERO_AT_TARGET = ("rotation", "position", "global_position", "velocity", "root", "contact",
+                  "smoothness", "stance")
 
 
 def walk_clip(frames: int = 20, start: int = 0) -> MotionClip:
@@ -118,6 +118,21 @@ def test_all_terms_have_finite_gradients(batch):
         if value.requires_grad:
             (gq, gr) = torch.autograd.grad(value, (q, r), allow_unused=True)
             assert all(g is None or torch.isfinite(g).all() for g in (gq, gr)), name
+
+
+def test_global_position_sees_the_drift_of_a_biased_yaw_rate(batch):
+    """A yaw rate off by a constant leaves every facing-frame position
+    right (``position`` 0) but turns the integrated path away from the
+    target's: ``global_position`` grows with the bias."""
+    crit = MotionLoss()
+    values = []
+    for bias in (0.1, 0.3):
+        out = perfect(batch)
+        out["r"][:, 0] += bias
+        terms = crit(out, batch, fps=FPS)
+        assert terms["position"].item() == pytest.approx(0.0, abs=1e-6)
+        values.append(terms["global_position"].item())
+    assert 0.0 < values[0] < values[1]
 
 
 def test_rotation_loss_ignores_leaves(batch):
