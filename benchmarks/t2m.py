@@ -70,6 +70,7 @@ from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noq
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
                                           generate_on, load_generator, rig_inputs)
+from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
                                                    describe_features, froude_speed,
                                                    leg_length)
@@ -418,7 +419,8 @@ def transfer(module, source: Motion, target: Motion, smooth: float = SMOOTH) -> 
     from satagraph.data.collate import collate_clips
     with torch.no_grad():
         rig = rig_inputs(module, source)
-        clip = motion_to_features(rig.shown).to_clip(0, None, rig.semantic)
+        clip = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module)).to_clip(
+            0, None, rig.semantic)
         codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
         motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target),
                            ground=True, smooth=smooth)

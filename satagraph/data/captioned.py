@@ -35,7 +35,8 @@ from torch.utils.data import Dataset
 from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.dataset import DEFAULT_PREPROCESSING, WindowAugment, _frames, window_starts
+from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, _frames,
+                                    feature_options, window_starts)
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.datasets.sources import MotionFile
@@ -49,7 +50,7 @@ WindowKey = Union[int, Tuple[int, int]]
 
 
 def mirror_features(feats: MotionFeatures, start: int, stop: int,
-                    contacts: Tuple[float, float]) -> Optional[Tuple[MotionFeatures, int]]:
+                    options: Dict[str, float]) -> Optional[Tuple[MotionFeatures, int]]:
     r"""Frames ``start:stop`` of a clip mirrored left/right (the character's
     X axis), featurised again with one frame before them where there is one
     (so that the first frame's velocities are the clip's).
@@ -58,7 +59,7 @@ def mirror_features(feats: MotionFeatures, start: int, stop: int,
         feats: Features of the clip.
         start: First frame.
         stop: Frame after the last.
-        contacts: Contact height and speed thresholds.
+        options: :func:`~satagraph.data.dataset.feature_options`.
 
     Returns:
         The mirrored features and the position of frame :obj:`start` in
@@ -71,7 +72,7 @@ def mirror_features(feats: MotionFeatures, start: int, stop: int,
     except ValueError:
         return None
     axis = feats.facing_axis * np.array([-1.0, 1.0, 1.0])  # the root turns with it
-    return motion_to_features(mirrored, *contacts, facing_axis=axis), lead
+    return motion_to_features(mirrored, **options, facing_axis=axis), lead
 
 
 def pick_caption(captions: Sequence[Caption], rng: Optional[np.random.Generator]) -> str:
@@ -122,11 +123,9 @@ class CaptionWindows(Dataset):
         self.semantic_fn, self.p_mirror, self.seed = semantic, float(mirror), int(seed)
         self.p_scale = float(scale)
         self.config = dict(DEFAULT_PREPROCESSING, **(preprocessing or {}))
-        self.contacts = (float(self.config["contact_height"]),
-                         float(self.config["contact_speed"]))
+        self.options = feature_options(self.config)
         self.scaler = WindowAugment(scale=1.0, mirror=0.0, drop=0.0, merge=0.0, insert=0.0,
-                                    rest=0.0, seed=self.seed, contact_height=self.contacts[0],
-                                    contact_speed=self.contacts[1])
+                                    rest=0.0, seed=self.seed, **self.options)
         #: Keyed by ``(epoch, index)`` in training (see
         #: :class:`~satagraph.data.sampler.ResumableSampler`).
         self.keyed = True
@@ -152,7 +151,7 @@ class CaptionWindows(Dataset):
         (training only), with a caption drawn."""
         mirrored = None
         if rng is not None and rng.random() < self.p_mirror:
-            mirrored = mirror_features(feats, start, stop, self.contacts)
+            mirrored = mirror_features(feats, start, stop, self.options)
         if mirrored is not None:
             feats, lead = mirrored
             start, stop = lead, None
@@ -281,7 +280,7 @@ class ZooCaptionWindows(CaptionWindows):
         sample = self.zoo.sample(draw, idx, frames + 1, self.stream, self.holdout)
         motion = canonicalize(sample.motion, fps=self.config["fps"], up_axis="+Y",
                               unit_scale=1.0, floor=self.config["floor"])
-        feats = motion_to_features(motion, *self.contacts)
+        feats = motion_to_features(motion, **self.options)
         meta = {"path": f"<zoo {self.stream} {draw} {idx}: {sample.plan} {sample.kind}>",
                 "dataset": self.dataset, "skeleton": sample.plan,
                 "species": sample.species, "kind": sample.kind}

@@ -29,7 +29,19 @@ from satagraph.skeleton import Skeleton
 DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "scale": None,
                                "floor": True,
                                "contact_height": CONTACT_HEIGHT,
-                               "contact_speed": CONTACT_SPEED}
+                               "contact_speed": CONTACT_SPEED,
+                               "facing_smooth": 0.0}
+
+#: The preprocessing keys that are options of
+#: :func:`~satagraph.data.features.motion_to_features`.
+FEATURE_OPTIONS = ("contact_height", "contact_speed", "facing_smooth")
+
+
+def feature_options(config: Optional[Mapping[str, Any]] = None) -> Dict[str, float]:
+    """The :func:`~satagraph.data.features.motion_to_features` options of a
+    preprocessing config (defaults where it has none)."""
+    config = dict(DEFAULT_PREPROCESSING, **(config or {}))
+    return {key: float(config[key]) for key in FEATURE_OPTIONS}
 
 #: ``data.augment`` defaults as a dict: the one set,
 #: :class:`~satagraph.transforms.augment.AugmentConfig`.
@@ -69,8 +81,7 @@ def preprocess_file(path: str, config: Dict) -> MotionFeatures:
     check_motion(motion, path, fps=config["fps"])
     motion = canonicalize(motion, fps=config["fps"], up_axis=config["up_axis"],
                           unit_scale=scale, floor=config["floor"])
-    feats = motion_to_features(motion, contact_height=config["contact_height"],
-                               contact_speed=config["contact_speed"])
+    feats = motion_to_features(motion, **feature_options(config))
     check_features(feats, path)
     return feats
 
@@ -185,6 +196,8 @@ class WindowAugment:
         contact_height (float): Contact height threshold (see
             :func:`~satagraph.data.motion_to_features`).
         contact_speed (float): Contact speed threshold.
+        facing_smooth (float): Facing yaw smoothing in seconds (see
+            :func:`~satagraph.data.motion_to_features`).
     """
 
     def __init__(self, scale: float = AUGMENT.scale, mirror: float = AUGMENT.mirror,
@@ -193,13 +206,15 @@ class WindowAugment:
                  high: float = AUGMENT.high, max_drop: int = AUGMENT.max_drop,
                  rest: float = AUGMENT.rest, seed: int = 0,
                  contact_height: float = CONTACT_HEIGHT,
-                 contact_speed: float = CONTACT_SPEED) -> None:
+                 contact_speed: float = CONTACT_SPEED, facing_smooth: float = 0.0) -> None:
         if not 0.0 <= mirror <= 1.0:
             raise ValueError("data.augment.mirror must be in [0, 1]")
         if not 0.0 < low <= high:
             raise ValueError(f"data.augment: need 0 < low <= high, got {low}, {high}")
         self.p_mirror, self.seed = float(mirror), int(seed)
-        self.contacts = (float(contact_height), float(contact_speed))
+        self.options = feature_options(dict(contact_height=contact_height,
+                                            contact_speed=contact_speed,
+                                            facing_smooth=facing_smooth))
         self.skeleton_augment = dict(p_scale=float(scale), p_mirror=0.0,
                                      p_drop=float(drop), p_merge=float(merge),
                                      p_insert=float(insert), p_rest=float(rest),
@@ -224,10 +239,8 @@ class WindowAugment:
         if unknown:
             raise ValueError(f"data.augment: unknown keys {unknown}; known: "
                              f"{sorted(AUGMENT_DEFAULTS)}")
-        config = dict(DEFAULT_PREPROCESSING, **(preprocessing or {}))
         return cls(**dict(AUGMENT_DEFAULTS, **spec), seed=seed,
-                   contact_height=config["contact_height"],
-                   contact_speed=config["contact_speed"])
+                   **feature_options(preprocessing))
 
     def __call__(self, feats: MotionFeatures, start: int, stop: int,
                  epoch: int = 0, index: int = 0) -> Tuple[MotionFeatures, int]:
@@ -249,7 +262,7 @@ class WindowAugment:
         augmented = augment(motion)
         # a new rest pose turns the root's local frame: turn its facing axis too
         axis = augmented.rotations[0, 0].T @ motion.rotations[0, 0] @ axis
-        out = motion_to_features(augmented, *self.contacts, facing_axis=axis)
+        out = motion_to_features(augmented, **self.options, facing_axis=axis)
         source = _frames(feats, slice(start - lead, stop))
         if not _plausible_root(out, source):
             # a guard, not a fix: bone scaling of ccbase/007_01 (a moving

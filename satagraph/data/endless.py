@@ -20,7 +20,8 @@ from torch.utils.data import Dataset
 
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton)
+from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton,
+                                    feature_options)
 from satagraph.data.features import MotionFeatures, motion_to_features
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
                                           evidence_from_features)
@@ -110,8 +111,7 @@ class EndlessZooDataset(Dataset):
         sample = self.zoo.sample(epoch, index, self.window + 1, self.stream, self.holdout)
         motion = canonicalize(sample.motion, fps=self.config["fps"], up_axis="+Y",
                               unit_scale=1.0, floor=self.config["floor"])
-        feats = motion_to_features(motion, contact_height=self.config["contact_height"],
-                                   contact_speed=self.config["contact_speed"])
+        feats = motion_to_features(motion, **feature_options(self.config))
         check_features(feats, f"<endless zoo {self.stream} {epoch} {index}>")
         return feats, sample
 

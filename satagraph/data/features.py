@@ -120,6 +120,24 @@ def _facing(root_rot: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return yaw_of(root_rot @ axis)
 
 
+def smooth_yaw(theta: np.ndarray, sigma: float) -> np.ndarray:
+    r"""A yaw track (radians) smoothed over time by a Gaussian of
+    :obj:`sigma` frames (unwrapped first, edges reflected), shifted to keep
+    its first value; unchanged for :obj:`sigma` :math:`\le 0`.
+
+    Shapes:
+        - **theta**, **output**: :math:`(T,)`
+    """
+    if sigma <= 0 or len(theta) < 2:
+        return theta
+    unwrapped = np.unwrap(theta)
+    reach = int(np.ceil(3 * sigma))
+    kernel = np.exp(-0.5 * (np.arange(-reach, reach + 1) / sigma) ** 2)
+    padded = np.pad(unwrapped, reach, mode="reflect" if len(theta) > reach else "edge")
+    smooth = np.convolve(padded, kernel / kernel.sum(), mode="valid")
+    return smooth - smooth[0] + theta[0]
+
+
 def _to_6d(rot: np.ndarray) -> np.ndarray:
     return matrix_to_rotation_6d(torch.from_numpy(rot)).numpy()
 
@@ -150,6 +168,7 @@ def motion_to_features(
     contact_height: float = CONTACT_HEIGHT,
     contact_speed: float = CONTACT_SPEED,
     facing_axis: Optional[np.ndarray] = None,
+    facing_smooth: float = 0.0,
 ) -> MotionFeatures:
     r"""Compute the features of a (canonical) motion.
 
@@ -162,6 +181,13 @@ def motion_to_features(
             heights per second.
         facing_axis (np.ndarray, optional): Root-local facing axis; by default
             the one pointing to +Z at frame 0.
+        facing_smooth (float, optional): Standard deviation in seconds of a
+            Gaussian over time applied to the facing yaw (:func:`smooth_yaw`):
+            the facing frame then turns with the body's heading, not with
+            every sway of the root (a trotting dog's pelvis swings its yaw
+            by hundreds of degrees a clip), and the sway goes to the root's
+            rotation, which is not integrated. 0 (default): the root's own
+            yaw in every frame. Lossless either way.
     """
     skel, fps = motion.skeleton, motion.fps
     glob_rot, pos = motion.global_transforms()
@@ -169,7 +195,7 @@ def motion_to_features(
     if facing_axis is None:
         facing_axis = (root_rot[0].T @ np.array([0.0, 0.0, 1.0])
                        if motion.num_frames else np.array([0.0, 0.0, 1.0]))
-    theta = _facing(root_rot, facing_axis)
+    theta = smooth_yaw(_facing(root_rot, facing_axis), facing_smooth * fps)
     inv = yaw_matrix_numpy(theta).transpose(0, 2, 1)
     origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
     x = np.einsum("tij,tkj->tki", inv, pos - origin[:, None])

@@ -12,7 +12,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import (MotionFeatures, features_to_motion,
                                      motion_to_features)
 from satagraph.datasets.sources import MotionFile
-from satagraph.pipelines.inference import transfer
+from satagraph.pipelines.inference import facing_smooth_of, transfer
 from satagraph.motion import Motion
 
 #: How each retargeting setting builds the target skeleton and its paired
@@ -88,7 +88,7 @@ def retarget_error_table(module, files: Sequence[MotionFile],
     counts: Dict[str, int] = defaultdict(int)
     for i, f in enumerate(files):
         src = canonicalize(f.read(), fps=fps).slice(0, max_frames)
-        src_f = motion_to_features(src)
+        src_f = motion_to_features(src, facing_smooth=facing_smooth_of(module))
         for group in (f.dataset, "all"):
             counts[group] += 1
         for setting in settings:

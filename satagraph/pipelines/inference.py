@@ -16,7 +16,7 @@ from satagraph.transforms.canonical import (canonicalize, decanonicalize, latera
 from satagraph.transforms.ground import ground_like
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
-from satagraph.data.dataset import window_starts
+from satagraph.data.dataset import feature_options, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion
@@ -193,7 +193,8 @@ def retarget_canonical(module, source: Motion, target: Motion,
     if rest not in REST_MODES:
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
-    src_canon, src = source_features(canonicalize(source, fps=fps), rest)
+    src_canon, src = source_features(canonicalize(source, fps=fps), rest,
+                                     facing_smooth_of(module))
     tgt_canon = canonicalize(target, fps=fps)
     tgt_rest, undo = shown_rest(tgt_canon, rest)
     tgt = static_features(tgt_rest)
@@ -204,18 +205,28 @@ def retarget_canonical(module, source: Motion, target: Motion,
     return src_canon, ground_like(out, src_canon) if ground else out
 
 
-def source_features(canon: Motion, rest: str) -> Tuple[Motion, MotionFeatures]:
+def facing_smooth_of(module) -> float:
+    """The facing smoothing (seconds) of the features :obj:`module` was
+    trained on (its config's ``data.preprocessing.facing_smooth``; 0 for a
+    module without one)."""
+    data = (getattr(module, "meta", None) or {}).get("data") or {}
+    return feature_options(data.get("preprocessing"))["facing_smooth"]
+
+
+def source_features(canon: Motion, rest: str, facing_smooth: float = 0.0
+                    ) -> Tuple[Motion, MotionFeatures]:
     """A canonical source and its features as the model is shown them: in
     the rest pose :obj:`rest` names (:func:`shown_rest`), with the facing
     axis of :func:`standing_facing_axis` where it has one, the motion then
     turned about +Y so that this axis points to +Z at frame 0 (as the
-    features' own rule makes it)."""
+    features' own rule makes it), the facing smoothed over
+    :obj:`facing_smooth` seconds (:func:`facing_smooth_of` the module)."""
     shown, _ = shown_rest(canon, rest)
     axis = standing_facing_axis(shown)
     if axis is not None:
         turn = yaw_matrix_numpy(-yaw_of(shown.rotations[0, 0] @ axis))
         canon, shown = turn_world(canon, turn), turn_world(shown, turn)
-    return canon, motion_to_features(shown, facing_axis=axis)
+    return canon, motion_to_features(shown, facing_axis=axis, facing_smooth=facing_smooth)
 
 
 def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:

@@ -138,3 +138,32 @@ def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
         out, _ = aug(feats, start, start + 32, 0, i)
         assert np.abs(out.r[:, :3]).max() <= bound
     assert aug.rejected > 0  # the bug is still there: the guard catches it
+
+
+def test_facing_smooth_is_a_preprocessing_option_end_to_end(shared_data):
+    """``data.preprocessing.facing_smooth`` reaches the features of a file,
+    of augmented windows and of a zoo clip, is part of the cache key, and
+    inference reads it back from a module's config (0 where none is set)."""
+    from satagraph.data.cache import cache_key
+    from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, feature_options,
+                                        preprocess_file)
+    from satagraph.data.endless import EndlessZooDataset
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    from satagraph.pipelines.inference import facing_smooth_of
+    path = str(shared_data / "dog" / "D1_009_KAN01_001.bvh")
+    config = dict(DEFAULT_PREPROCESSING, scale="cm")
+    smooth = dict(config, facing_smooth=0.25)
+    swing = [np.abs(preprocess_file(path, c).r[1:, 0]).mean() for c in (config, smooth)]
+    assert swing[1] < 0.25 * swing[0]
+    assert cache_key(path, config) != cache_key(path, smooth)
+    assert feature_options(smooth)["facing_smooth"] == 0.25
+    assert WindowAugment.from_config(True, 0, smooth).options["facing_smooth"] == 0.25
+    zoo = [EndlessZooDataset(EndlessZoo(["quadruped"]), windows=1, window=90,
+                             preprocessing={"facing_smooth": s}) for s in (0.0, 0.25)]
+    clips = [d[0] for d in zoo]
+    assert not torch.allclose(clips[0].root[:, 0], clips[1].root[:, 0])
+
+    class Trained:
+        meta = {"data": {"preprocessing": {"facing_smooth": 0.25}}}
+
+    assert facing_smooth_of(Trained()) == 0.25 and facing_smooth_of(object()) == 0.0

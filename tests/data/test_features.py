@@ -126,3 +126,34 @@ def test_clips_carry_their_leg_length(dog_features):
     batch = collate_clips([feats.to_clip(0, 16), feats.to_clip(16, 40)])
     assert torch.allclose(batch.clip_leg, torch.tensor([feats.leg_length] * 2).float())
     assert torch.equal(batch.legs("frame"), batch.clip_leg[batch.frame_clip])
+
+
+def test_facing_smoothing_keeps_the_motion_and_calms_the_yaw_rate(shared_data):
+    """A trotting dog's pelvis swings its yaw (the facing frame's) by
+    hundreds of degrees a clip: smoothed over a quarter second the facing
+    yaw rate keeps the clip's turn and loses most of its swing (into the
+    root's rotation), the first frame's yaw is kept, and the round trip
+    stays lossless."""
+    from satagraph.transforms.rig_reading import with_rig
+    motion = canonicalize(with_rig(read_bvh(shared_data / "dog" / "D1_009_KAN01_001.bvh"),
+                                   scale="cm"), fps=30)
+    plain, smooth = motion_to_features(motion), motion_to_features(motion, facing_smooth=0.25)
+    swing = [np.abs(f.r[1:, 0]).sum() / 30 for f in (plain, smooth)]
+    assert swing[1] < 0.25 * swing[0]
+    turn = [f.r[:, 0].sum() / 30 for f in (plain, smooth)]
+    assert abs(turn[1] - turn[0]) < np.radians(20)
+    assert smooth.r[0, 0] == pytest.approx(plain.r[0, 0], abs=1e-12)
+    back = features_to_motion(smooth)
+    err = np.abs(back.global_positions() - motion.global_positions()).max()
+    assert err <= 1e-6 * smooth.height
+    np.testing.assert_array_equal(smooth.x[..., 1], plain.x[..., 1])  # heights: no yaw
+
+
+def test_smooth_yaw_unwraps_across_pi():
+    """A steady turn through +-180 degrees stays a steady turn."""
+    from satagraph.data.features import smooth_yaw
+    theta = np.angle(np.exp(1j * np.linspace(2.5, 4.0, 40)))  # wraps at pi
+    out = smooth_yaw(theta, 3.0)
+    np.testing.assert_allclose(np.diff(out)[10:-10], np.diff(np.unwrap(theta))[10:-10], atol=1e-9)
+    assert out[0] == theta[0]
+    np.testing.assert_array_equal(smooth_yaw(theta, 0.0), theta)
