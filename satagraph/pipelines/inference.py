@@ -10,7 +10,7 @@ import torch
 
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 
-from satagraph.transforms.augment import TURN_TILT, rebase_rotations, set_rest_rotations
+from satagraph.transforms.augment import rebase_rotations, root_tilted, set_rest_rotations
 from satagraph.transforms.canonical import (canonicalize, decanonicalize, lateral_forward,
                                            resample_frames)
 from satagraph.transforms.ground import ground_like
@@ -262,11 +262,12 @@ def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     of its left/right joint pairs) in the first frame in which it stands
     (:func:`standing_frame`), as the source's facing axis of its features
     (:func:`~satagraph.data.features.motion_to_features`) where the root
-    tilted by more than :data:`~satagraph.transforms.augment.TURN_TILT`
-    between frame 0 and that frame; else ``None`` (the features' own rule:
-    the axis pointing to +Z at frame 0), also without left/right pairs. A dog lying on its
-    side at frame 0 gave an axis that points up or sideways once it stands,
-    so its facing frames turned with every sway.
+    tilted between frame 0 and that frame
+    (:func:`~satagraph.transforms.augment.root_tilted`); else ``None``
+    (the features' own rule: the axis pointing to +Z at frame 0), also
+    without left/right pairs. A dog lying on its side at frame 0 gave an
+    axis that points up or sideways once it stands, so its facing frames
+    turned with every sway.
 
     Shapes:
         - **output**: :math:`(3,)`
@@ -274,8 +275,7 @@ def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     if not motion.num_frames:
         return None
     frame, up = standing_frame(motion), np.array([0.0, 1.0, 0.0])
-    relative = motion.rotations[frame, 0] @ motion.rotations[0, 0].T
-    if np.degrees(np.arccos(np.clip(up @ relative @ up, -1.0, 1.0))) <= TURN_TILT:
+    if not root_tilted(motion, frame):
         return None
     forward = lateral_forward(motion.global_positions()[frame], motion.skeleton.names, up)
     if forward is None:

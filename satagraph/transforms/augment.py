@@ -106,15 +106,23 @@ def rebase_rotations(motion: Motion, frame: int = 0) -> np.ndarray:
 TURN_TILT = 30.0
 
 
+def root_tilted(motion: Motion, frame: int) -> bool:
+    """Whether the root tilted by more than :data:`TURN_TILT` between frame
+    0 and :obj:`frame` (+Y up): its heading then says nothing of how the
+    body turned."""
+    relative = motion.rotations[frame, 0] @ motion.rotations[0, 0].T
+    return bool(np.degrees(np.arccos(np.clip(relative[1, 1], -1.0, 1.0))) > TURN_TILT)
+
+
 def _turn_back(motion: Motion, frame: int) -> np.ndarray:
     """The rotation about +Y that undoes the body's turn from frame 0 to
-    :obj:`frame`: the root's heading change, or where the root tilted by
-    more than :data:`TURN_TILT` in between, the change of the facing of
-    the left/right joint pairs (the root's heading then as a fallback for
-    a skeleton without them)."""
+    :obj:`frame`: the root's heading change, or where the root tilted in
+    between (:func:`root_tilted`), the change of the facing of the
+    left/right joint pairs (the root's heading then as a fallback for a
+    skeleton without them)."""
     relative = motion.rotations[frame, 0] @ motion.rotations[0, 0].T
     up = np.array([0.0, 1.0, 0.0])
-    if np.degrees(np.arccos(np.clip(up @ relative @ up, -1.0, 1.0))) <= TURN_TILT:
+    if not root_tilted(motion, frame):
         return _heading(relative).T
     from satagraph.transforms.canonical import lateral_forward  # imports this module
     pos = motion.slice(0, frame + 1).global_positions()[[0, frame]]
