@@ -169,10 +169,12 @@ def fill(where: str, schema: type, values: Optional[Mapping[str, Any]]) -> Dict[
 
 def resolve_data(data: Optional[Mapping[str, Any]],
                  schema: type = DataConfig) -> Dict[str, Any]:
-    """The ``data`` section checked against :obj:`schema` (``augment``
-    included) and filled."""
+    """The ``data`` section checked against :obj:`schema` (``augment`` and
+    ``preprocessing`` included) and filled."""
+    from satagraph.data.dataset import DEFAULT_PREPROCESSING
     from satagraph.transforms.augment import AugmentConfig
     out = fill("data", schema, data)
+    check_keys("data.preprocessing", out.get("preprocessing") or {}, DEFAULT_PREPROCESSING)
     augment = out.get("augment")
     if isinstance(augment, Mapping):
         check_keys("data.augment", augment, (f.name for f in fields(AugmentConfig)))

@@ -16,6 +16,8 @@ from satagraph.experiment.schema import (GRAD_CLIP, CheckpointConfig, DataConfig
     ("seeds=1", r"unknown config key 'seeds' \(did you mean 'seed'\?\); known: "),
     ("data.batchsize=4", r"'data.batchsize' \(did you mean 'batch_size'\?\)"),
     ("data.augment={scael: 0.5}", r"'data.augment.scael' \(did you mean 'scale'\?\)"),
+    ("data.preprocessing={facing_smoth: 0.25}",
+     r"'data.preprocessing.facing_smoth' \(did you mean 'facing_smooth'\?\)"),
     ("logger.nmae=csv", r"'logger.nmae' \(did you mean 'name'\?\)"),
     ("checkpoint.every_n_step=5", r"did you mean 'every_n_steps'"),
     ("module=vea", r"unknown module 'vea' \(did you mean 'vae'\?\); known: .*padded_rvq"),
