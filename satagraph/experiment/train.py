@@ -197,6 +197,22 @@ def _spawns_workers(trainer: L.Trainer) -> bool:
     return getattr(launcher, "_start_method", None) in ("spawn", "forkserver")
 
 
+def check_init_features(payload: Dict[str, Any], cfg: Dict[str, Any], name: str) -> None:
+    """Refuses to start from weights whose features turn the facing frame
+    otherwise than :obj:`cfg`'s (``data.preprocessing.facing_smooth``): the
+    root features would mean something else to them."""
+    from satagraph.data.dataset import feature_options
+    meta = (payload.get("hyper_parameters") or {}).get("meta") or {}
+    if "data" not in meta:
+        return
+    theirs = feature_options(meta["data"].get("preprocessing"))["facing_smooth"]
+    ours = feature_options(data_section(cfg).get("preprocessing"))["facing_smooth"]
+    if theirs != ours:
+        raise ValueError(f"--init-from {name}: trained with data.preprocessing.facing_smooth="
+                         f"{theirs:g}, this config has {ours:g}; set "
+                         f"data.preprocessing.facing_smooth={theirs:g}")
+
+
 def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = None,
           **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
     r"""Train a model from a config dict (see ``experiments/``).
@@ -217,8 +233,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     if resume and not (run_dir / "checkpoints").is_dir():
         raise FileNotFoundError(f"--resume: no checkpoint at "
                                 f"{run_dir / 'checkpoints' / 'last.ckpt'}")
-    if init_from:
-        load_weights_or_checkpoint(init_from)  # a bad file fails before any work
+    if init_from:  # a bad file, or one of other features, fails before any work
+        check_init_features(load_weights_or_checkpoint(init_from), cfg, init_from)
     if cfg["threads"]:
         torch.set_num_threads(int(cfg["threads"]))
     with _lock(run_dir):

@@ -150,3 +150,26 @@ def test_default_wandb_logger_is_offline_under_run_dir(tiny_config: Dict[str, An
     finally:
         wandb.finish()
     assert not env_dir.exists() or not any(env_dir.rglob("offline-run-*"))
+
+
+def test_init_from_weights_of_other_facing_features_is_refused() -> None:
+    """Weights trained on smoothed facing frames (``data.preprocessing.
+    facing_smooth``) read root features another config would not give
+    them: ``--init-from`` says which value to set, in one line; equal
+    values, and files without a data section, pass."""
+    from satagraph.experiment.config import load_config
+    from satagraph.experiment.train import check_init_features
+
+    def payload(smooth: float) -> Dict[str, Any]:
+        return {"hyper_parameters": {"meta": {"data": {"preprocessing": {
+            "fps": 30.0, "facing_smooth": smooth}}}}}
+
+    cfg = load_config("tiny", [])
+    with pytest.raises(ValueError, match=r"^--init-from w.ckpt: trained with "
+                       r"data.preprocessing.facing_smooth=0.25, this config has 0; "
+                       r"set data.preprocessing.facing_smooth=0.25$"):
+        check_init_features(payload(0.25), cfg, "w.ckpt")
+    check_init_features(payload(0.0), cfg, "w.ckpt")
+    check_init_features({"state_dict": {}}, cfg, "w.ckpt")
+    smooth = load_config("tiny", ["data.preprocessing={facing_smooth: 0.25}"])
+    check_init_features(payload(0.25), smooth, "w.ckpt")
