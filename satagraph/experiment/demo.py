@@ -157,8 +157,8 @@ def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
     """The training config: :attr:`DemoOptions.config` with the data
     sources, run folder and training time of the demo, then the user's
     overrides. With :obj:`base` (the built-in model's hyperparameters) the
-    model, loss and window are the built-in model's and the learning rate a
-    fine-tune's."""
+    model, loss, window and facing smoothing are the built-in model's and
+    the learning rate a fine-tune's."""
     from satagraph.experiment.config import load_config, merge_overrides
     from satagraph.experiment.schema import resolve_config
 
@@ -166,8 +166,13 @@ def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
     cfg["data"]["sources"] = [str(s) for s in sources]
     cfg["output_dir"] = str(run_dir)
     if base is not None:
+        from satagraph.data.dataset import feature_options
         cfg["model"], cfg["loss"] = dict(base["model"]), dict(base.get("loss") or {})
-        cfg["data"]["window"] = int(base.get("meta", {}).get("window", cfg["data"]["window"]))
+        meta = base.get("meta", {})
+        cfg["data"]["window"] = int(meta.get("window", cfg["data"]["window"]))
+        smooth = feature_options((meta.get("data") or {}).get("preprocessing"))["facing_smooth"]
+        cfg["data"]["preprocessing"] = dict(cfg["data"].get("preprocessing") or {},
+                                            facing_smooth=smooth)
         cfg["optim"] = dict(cfg["optim"], **FINE_TUNE_OPTIM)
     if options.minutes is not None:
         cfg["trainer"]["max_time"] = {"minutes": float(options.minutes)}
