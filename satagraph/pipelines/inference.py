@@ -9,7 +9,6 @@ import numpy as np
 import torch
 
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
-
 from satagraph.transforms.augment import rebase_rotations, root_tilted, set_rest_rotations
 from satagraph.transforms.canonical import (canonicalize, decanonicalize, lateral_forward,
                                            resample_frames)
