@@ -251,7 +251,11 @@ def standing_frame(motion: Motion) -> int:
     lowest joint as in any frame. What ``rest="auto"`` re-rests a skeleton
     on, so that a clip that starts lying or sitting (many of the dog's)
     does not show the model a curled-up skeleton."""
-    pos = motion.global_positions()
+    return _standing(motion.global_positions())
+
+
+def _standing(pos: np.ndarray) -> int:
+    """:func:`standing_frame` of global joint positions :math:`(T, J, 3)`."""
     stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
     return int(np.argmax(stance >= STANDING_SHARE * stance.max()))
 
@@ -273,14 +277,13 @@ def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     """
     if not motion.num_frames:
         return None
-    frame, up = standing_frame(motion), np.array([0.0, 1.0, 0.0])
+    pos = motion.global_positions()
+    frame = _standing(pos)
     if not root_tilted(motion, frame):
         return None
-    forward = lateral_forward(motion.global_positions()[frame], motion.skeleton.names, up)
-    if forward is None:
-        return None
-    forward = forward - up * forward.dot(up)
-    if np.linalg.norm(forward) < 1e-9:
+    # across x up: already horizontal
+    forward = lateral_forward(pos[frame], motion.skeleton.names, np.array([0.0, 1.0, 0.0]))
+    if forward is None or np.linalg.norm(forward) < 1e-9:
         return None
     return motion.rotations[frame, 0].T @ (forward / np.linalg.norm(forward))
 
