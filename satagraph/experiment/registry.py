@@ -29,7 +29,8 @@ import importlib
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Iterable, Optional
 
-from satagraph.experiment.schema import DataConfig, check_keys, unknown_key_error
+from satagraph.experiment.schema import (TRAINER_OPTIM, DataConfig, check_keys,
+                                         unknown_key_error)
 
 
 @dataclass(frozen=True)
@@ -76,7 +77,8 @@ class ModuleEntry:
         model_keys (callable, optional): The ``model`` keys the builder
             takes (checked before building; ``None``: not checked).
         optim_keys (iterable, optional): The ``optim`` keys it takes
-            besides ``grad_clip`` (``None``: not checked).
+            besides the trainer's (:data:`~satagraph.experiment.schema.TRAINER_OPTIM`;
+            ``None``: not checked).
     """
 
     name: str
@@ -93,7 +95,7 @@ class ModuleEntry:
         if self.model_keys is not None:
             check_keys("model", sections.model, self.model_keys())
         if self.optim_keys is not None:
-            check_keys("optim", sections.optim, set(self.optim_keys) | {"grad_clip"})
+            check_keys("optim", sections.optim, set(self.optim_keys) | set(TRAINER_OPTIM))
 
 
 _REGISTRY: Dict[str, ModuleEntry] = {}

@@ -12,7 +12,8 @@ top-level keys of :class:`ExperimentConfig` and these sections:
   :class:`~satagraph.losses.MotionLoss` weights and ``lr``,
   ``warmup_epochs``, ``decay``, ``floor``, ``frozen`` (parts not trained,
   e.g. ``[model.encoder, model.bottleneck]``). ``optim.grad_clip``
-  (:data:`GRAD_CLIP`) is the trainer's gradient clipping, for every module.
+  (:data:`GRAD_CLIP`) is the trainer's gradient clipping and ``optim.ema``
+  (:data:`EMA`) its moving average of the weights, for every module.
 - ``trainer``: keyword arguments of :class:`lightning.Trainer` and the
   keys of :class:`TrainerExtras`.
 - ``logger`` (:class:`LoggerConfig`), ``checkpoint``
@@ -31,6 +32,11 @@ from typing import Any, Dict, Iterable, Mapping, Optional
 #: Default of ``optim.grad_clip``: gradient norm clipping of the trainer
 #: (Lightning's ``gradient_clip_val``), its only owner.
 GRAD_CLIP = 0.5
+#: Default of ``optim.ema``: the decay of an exponential moving average of
+#: the weights, validated and checkpointed in their place (0: none).
+EMA = 0.0
+#: The ``optim`` keys of the trainer, taken by every module.
+TRAINER_OPTIM = ("grad_clip", "ema")
 
 
 @dataclass
@@ -199,7 +205,7 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
     The ``data`` section is checked against the module's data schema
     (:class:`DataConfig` unless it registered another); the module's own
-    sections (``model``, ``loss``, ``optim`` but ``grad_clip``) are checked
+    sections (``model``, ``loss``, ``optim`` but :data:`TRAINER_OPTIM`) are checked
     when it is built.
 
     Raises:
@@ -214,10 +220,11 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
     out["checkpoint"] = fill("checkpoint", CheckpointConfig, out["checkpoint"])
     out["optim"] = dict(out["optim"] or {})
     out["optim"].setdefault("grad_clip", GRAD_CLIP)
+    out["optim"].setdefault("ema", EMA)
     out["model"], out["loss"] = dict(out["model"] or {}), dict(out["loss"] or {})
     return out
 
 
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
-           "TrainerExtras", "GRAD_CLIP", "resolve_config", "resolve_data", "fill",
+           "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config", "resolve_data", "fill",
            "check_keys", "unknown_key_error", "defaults", "signature_schema"]

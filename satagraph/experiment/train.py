@@ -109,7 +109,9 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     gradients handled by :class:`NonFiniteGuard` (``nonfinite``: ``stop`` or
     ``skip``), checkpoints written atomically and loaded safely
     (:class:`SafeCheckpointIO`); ``loss_log: true`` appends every step's
-    loss to ``<run>/losses.tsv`` (:class:`LossLog`)."""
+    loss to ``<run>/losses.tsv`` (:class:`LossLog`); ``optim.ema`` > 0
+    validates and checkpoints a moving average of the weights
+    (:func:`weight_average`)."""
     from lightning.pytorch.callbacks import ModelCheckpoint, RichProgressBar
     cfg = resolve_config(cfg)
     opts = resolve_trainer(dict(cfg["trainer"], **overrides))
@@ -121,7 +123,9 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     best = ModelCheckpoint(dirpath=str(folder), save_last=False,
                            monitor=opts.pop("monitor"), mode="min")
     guard = NonFiniteGuard(cfg["nonfinite"], str(resume.last_path))
-    callbacks = [best, resume, guard] + list(opts.pop("callbacks", None) or [])
+    # the average is updated before any checkpoint of the same step is written
+    callbacks = [weight_average(cfg["optim"]["ema"])] if cfg["optim"]["ema"] else []
+    callbacks += [best, resume, guard] + list(opts.pop("callbacks", None) or [])
     if cfg["loss_log"]:
         callbacks.append(LossLog(str(run_dir / "losses.tsv")))
     if opts.pop("progress"):
@@ -129,6 +133,25 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
     return L.Trainer(default_root_dir=str(run_dir), logger=build_logger(cfg, run_dir),
                      callbacks=callbacks, plugins=plugins, **opts)
+
+
+def weight_average(decay: float):
+    r"""An exponential moving average of the weights, updated after every
+    optimiser step (:math:`\bar\theta \leftarrow d\,\bar\theta + (1 - d)\,\theta`,
+    a horizon of about :math:`1 / (1 - d)` steps): validation, the best
+    checkpoint's choice and every checkpoint's ``state_dict`` (what
+    ``--init-from``, :func:`load_module` and the weights export read) are
+    the average's; the optimiser's own weights go on in
+    ``current_model_state`` and resume from there. Buffers (codebooks,
+    normalisers) follow the trained module unaveraged.
+
+    Raises:
+        ValueError: :obj:`decay` outside (0, 1).
+    """
+    from lightning.pytorch.callbacks import EMAWeightAveraging
+    if not 0.0 < float(decay) < 1.0:
+        raise ValueError(f"optim.ema must be 0 (none) or a decay in (0, 1), got {decay!r}")
+    return EMAWeightAveraging(decay=float(decay), use_buffers=False)
 
 
 def last_checkpoint(trainer: L.Trainer) -> str:

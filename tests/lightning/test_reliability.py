@@ -232,3 +232,42 @@ def test_loss_log_keeps_the_wall_clock_and_reads_old_files(tmp_path: Path) -> No
     assert read_loss_log(path) == {1: 2.5, 2: 1.25, 3: 0.5}
     times = read_loss_times(path)
     assert sorted(times) == [2, 3] and before - 1 <= times[2] <= times[3] <= time.time() + 1
+
+
+def test_ema_checkpoints_the_average_and_resumes_the_trained_weights(
+        tiny_config: Dict[str, Any]) -> None:
+    """``optim.ema``: every checkpoint's ``state_dict`` (what loading and
+    ``--init-from`` read) is the moving average, the optimiser's weights go
+    on in ``current_model_state``; ``--resume`` takes both back."""
+    decay = 0.5
+    cfg = dict(copy.deepcopy(tiny_config), checkpoint={"every_n_steps": 1})
+    cfg["optim"] = dict(cfg.get("optim") or {}, ema=decay)
+    train(cfg, max_steps=2)
+    folder = Path(cfg["output_dir"]) / "checkpoints"
+    first, second = load_checkpoint(folder / PREVIOUS), load_checkpoint(folder / LAST)
+    assert (first["global_step"], second["global_step"]) == (1, 2)
+    # step 1: the average starts at the weights; step 2: d * avg + (1 - d) * weights
+    name = next(k for k, v in second["state_dict"].items()
+                if v.is_floating_point() and not torch.equal(
+                    v, first["current_model_state"][k]))
+    expected = (decay * first["current_model_state"][name]
+                + (1 - decay) * second["current_model_state"][name])
+    torch.testing.assert_close(first["state_dict"][name], first["current_model_state"][name])
+    torch.testing.assert_close(second["state_dict"][name], expected)
+    assert not torch.equal(second["state_dict"][name], second["current_model_state"][name])
+    module = load_module(str(folder / LAST))
+    torch.testing.assert_close(module.state_dict()[name], expected)
+
+    module, _, trainer, _ = train(cfg, resume=True, max_steps=3)
+    assert trainer.global_step == 3
+    third = load_checkpoint(folder / LAST)
+    torch.testing.assert_close(
+        third["state_dict"][name],
+        decay * expected + (1 - decay) * third["current_model_state"][name])
+
+
+@pytest.mark.parametrize("decay", [1.0, -0.1])
+def test_ema_outside_its_range_is_one_line(tiny_config: Dict[str, Any], decay: float) -> None:
+    cfg = dict(copy.deepcopy(tiny_config), optim={"ema": decay})
+    with pytest.raises(ValueError, match=r"optim.ema must be 0 \(none\) or a decay in"):
+        train(cfg, max_steps=1)
