@@ -12,10 +12,11 @@ canonical frame at 30 fps), scored without a ground truth by
   Target 0.8-1.25.
 - **ground**: median lowest-joint height, % of the character's height.
   Target |ground| <= 3 %. Retargets are grounded by default
-  (:func:`~satagraph.transforms.ground.ground_like`: one vertical shift
-  that puts the feet where the source's are, in character heights), which
-  meets this by construction; the table also gives the decoder's own value
-  (``--no-ground`` on the CLI), the model's share of the work.
+  (:func:`~satagraph.transforms.ground.ground_retarget`: one vertical shift
+  that stands the retarget as the target character stands in its own clip,
+  in character heights), which meets this where that clip does; the table
+  also gives the decoder's own value (``--no-ground`` on the CLI), the
+  model's share of the work.
 - **upright**: % of frames with the head above the hips (characters whose
   source is upright). Target >= 95 %.
 - **foot slide**: how fast the joints near the ground slide, in heights per
@@ -59,8 +60,9 @@ from results_io import write_results  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.pipelines.inference import REST_MODES, retarget_canonical  # noqa: E402
-from satagraph.transforms.ground import ground_like  # noqa: E402
+from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.quality import foot_slide, most_active, retarget_quality  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
@@ -173,7 +175,8 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
     for group, case, load in retarget_cases():
         source, sname, target, tname = load()
         src, raw = retarget_canonical(module, source, target, embed, rest=rest, ground=False)
-        quality = retarget_quality(src, ground_like(raw, src), QUALITY)
+        tgt = canonicalize(target, fps=float(module.fps))
+        quality = retarget_quality(src, ground_retarget(raw, src, tgt), QUALITY)
         own = retarget_quality(src, src, ("upright", "slide"))
         quality.update(source_upright=own["upright"], source_slide=own["slide"])
         quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]

@@ -12,7 +12,7 @@ from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.transforms.augment import rebase_rotations, root_tilted, set_rest_rotations
 from satagraph.transforms.canonical import (canonicalize, decanonicalize, lateral_forward,
                                            resample_frames)
-from satagraph.transforms.ground import ground_like
+from satagraph.transforms.ground import ground_retarget
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import feature_options, window_starts
@@ -162,8 +162,10 @@ def retarget_motion(module, source: Motion, target: Motion,
             as Bandai's and the dog's) or a pose whose left and right sides
             bend differently (a captured frame, an arbitrary pose).
         ground (bool): Move the output up or down by one constant so that
-            its feet stand where the source's do, in character heights
-            (:func:`~satagraph.transforms.ground.ground_like`); ``False``
+            it stands as the target character does in :obj:`target`'s
+            frames (its median lowest joint, in its heights), as the source
+            does for a target without frames
+            (:func:`~satagraph.transforms.ground.ground_retarget`); ``False``
             keeps the decoder's root height.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
@@ -201,7 +203,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
                        tgt_canon.skeleton)
-    return src_canon, ground_like(out, src_canon) if ground else out
+    return src_canon, ground_retarget(out, src_canon, tgt_canon) if ground else out
 
 
 def facing_smooth_of(module) -> float:

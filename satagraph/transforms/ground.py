@@ -6,8 +6,9 @@ decoded onto a biped leave the biped's feet 16 % of its height above the
 floor). :func:`ground_like` moves the whole motion up or down by one
 constant, so its vertical dynamics (bobbing, jumps) stay the decoder's and
 only the offset is set: the median height of its lowest joint, in its own
-character heights, becomes the source's (:func:`ground_like`) or the floor
-(:func:`ground_at`, for generated motion, which has no source).
+character heights, becomes that of a reference (:func:`ground_like`): for a
+retarget, the target character's own clip (:func:`ground_retarget`), or the
+floor (:func:`ground_at`, for generated motion, which has no source).
 """
 from __future__ import annotations
 
@@ -71,4 +72,21 @@ def ground_like(motion: Motion, reference: Motion) -> Motion:
     return ground_at(motion, ground_level(reference))
 
 
-__all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like"]
+def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
+    r"""A retarget stood on the floor as the target character stands in its
+    own clip: :func:`ground_like` :obj:`target` where it has frames, else
+    :obj:`source`. How high a rig's lowest joint sits above the floor is the
+    rig's own (the dog's paw end sites stay 4-5 cm, 8-10 % of its height,
+    above the floor its tail touches): copied from the source, a dog's
+    offset left a human retarget hovering 9 % of its height up.
+
+    Args:
+        motion (Motion): The decoded retarget (canonical).
+        source (Motion): The canonical source it was decoded from.
+        target (Motion): The canonical target clip (its skeleton and, where
+            it has frames, how it stands).
+    """
+    return ground_like(motion, target if target.num_frames else source)
+
+
+__all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget"]

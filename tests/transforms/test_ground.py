@@ -1,11 +1,11 @@
-"""Grounding a decoded motion where its source stands."""
+"""Grounding a decoded motion: where its source or its target stands."""
 from __future__ import annotations
 
 import numpy as np
 
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
 from satagraph.transforms.canonical import canonicalize
-from satagraph.transforms.ground import ground_like, lowest_heights
+from satagraph.transforms.ground import ground_like, ground_retarget, lowest_heights
 
 
 def _clip(species: str, kind: str = "walk", seed: int = 0):
@@ -47,3 +47,18 @@ def test_a_motion_without_frames_is_unchanged():
     source = _clip("biped")
     empty = source.slice(0, 0)
     assert ground_like(empty, source) is empty
+
+
+def test_a_retarget_stands_as_its_target_stands_not_as_its_source():
+    """A source whose lowest joint stays 9 % of its height above the floor
+    (the dog's paw end sites) does not lift a retarget: it stands as the
+    target clip does; a target without frames falls back to the source."""
+    source, target = _clip("quadruped"), _clip("biped", seed=1)
+    offset = _lifted(source, 0.09 * source.height() - np.median(lowest_heights(source)))
+    floating = _lifted(_clip("biped", seed=2), 0.4)
+    out = ground_retarget(floating, offset, target)
+    np.testing.assert_allclose(np.median(lowest_heights(out)) / out.height(),
+                               np.median(lowest_heights(target)) / target.height(), atol=1e-9)
+    assert abs(np.median(lowest_heights(out))) < 0.03 * out.height()
+    out = ground_retarget(floating, offset, target.slice(0, 0))
+    np.testing.assert_allclose(np.median(lowest_heights(out)) / out.height(), 0.09, atol=1e-9)
