@@ -22,8 +22,9 @@ source's; the issue's target 0.8-1.25).
 
 Columns per checkpoint: JP, the mean global joint position error in % of
 the character's height (median over a group's clips, mean in brackets);
-for the real groups also the joint error relative to the root (the pose
-alone), and how far the decoded facing drifts from the source's over a
+for the real groups also the joint error relative to the root, the same
+with each frame turned about +Y onto the source's (the pose alone, without
+the decoded facing's drift), and how far the decoded facing drifts from the source's over a
 clip (degrees, mean absolute; for groups whose heads lead the body).
 
     .venv/bin/python benchmarks/pretrained_val.py --ckpt builtin RUN/epoch=3.ckpt ... [--out P]
@@ -159,7 +160,8 @@ def measure(module, motion: Motion) -> dict:
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
     drift = None if fa is None or fb is None else float(np.abs((fb - fa) - (fb - fa)[0]).mean())
-    return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True), drift=drift)
+    return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True),
+                local=joint_error(src, out, heading=True), drift=drift)
 
 
 def summarise(values: List[dict]) -> dict:
@@ -167,6 +169,7 @@ def summarise(values: List[dict]) -> dict:
     drift = [v["drift"] for v in values if v["drift"] is not None]
     return dict(n=len(values), median=float(np.median(jp)), mean=float(jp.mean()),
                 pose=float(np.median([v["pose"] for v in values])),
+                local=float(np.median([v["local"] for v in values])),
                 drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None)
 
 
@@ -176,7 +179,9 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
     lines = [f"Validation material only (the zoo's validation seeds, Bandai's val split, the "
              f"dog outside its test split); {seconds:.0f} s.", "",
              "JP, % of the height: median (mean) over a group's clips; real groups also give "
-             "the median root-relative error (pose) and the mean facing drift (degrees).", "",
+             "the median root-relative error (pose; in brackets with each frame turned about "
+             "+Y onto the source's: the pose alone, without the decoded facing's drift) and the "
+             "mean facing drift (degrees).", "",
              "| group | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
              "|---|---:|" + "---:|" * len(names)]
     for group in summary[names[0]]:
@@ -185,7 +190,7 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
             s = summary[k][group]
             cell = f"{100 * s['median']:.1f} ({100 * s['mean']:.1f})"
             if not group.startswith("zoo"):
-                cell += f", pose {100 * s['pose']:.1f}"
+                cell += f", pose {100 * s['pose']:.1f} ({100 * s['local']:.1f})"
                 if s["drift"] is not None:
                     cell += f", drift {s['drift']:.0f}"
             cells.append(cell)

@@ -246,22 +246,55 @@ def test_pretrained_pose_error_leaves_out_the_root_path(tiny_motion):
     assert pretrained.joint_error(tiny_motion, moved) == pytest.approx(0.3 / height)
     assert pretrained.joint_error(tiny_motion, moved, relative=True) == pytest.approx(0.0, abs=1e-9)
     row = dict(group="real, never trained", case="dog/x.bvh", jp=0.58, grounded_jp=0.58,
-               pose=0.41, height=0.46, steps=0.5, slide=0.37, source_slide=0.07)
+               pose=0.41, local=0.12, height=0.46, steps=0.5, slide=0.37, source_slide=0.07)
     text = pretrained.table({"retarget": [], "reconstruction": [row]}, "builtin", 1.0)
-    assert "| real, never trained | dog/x.bvh | 58.0 | no | 58.0 | 41.0 | +0.50 | 0.37 (0.07) |" in text
+    assert ("| real, never trained | dog/x.bvh | 58.0 | no | 58.0 | 41.0 | 12.0 | +0.50 "
+            "| 0.37 (0.07) |") in text
+    del row["local"]  # results measured before the column
+    text = pretrained.table({"retarget": [], "reconstruction": [row]}, "builtin", 1.0)
+    assert "| 58.0 | 41.0 | - | +0.50 |" in text
+
+
+def test_pretrained_heading_free_pose_error_leaves_out_the_facing_drift(tiny_motion):
+    """``joint_error(..., heading=True)``: an output whose whole body turns
+    about +Y by a growing angle (a drifting decoded facing) has a root-
+    relative error but no heading-free one; a changed pose keeps its error."""
+    import pretrained
+    from satagraph.transforms.canonical import canonicalize
+    motion = canonicalize(tiny_motion, fps=30.0)
+    pos = motion.global_positions()
+    yaw = np.linspace(0.0, 0.8, motion.num_frames)[:, None]
+    rel = pos - pos[:, :1]
+    turned = rel.copy()
+    turned[..., 0] = np.cos(yaw) * rel[..., 0] + np.sin(yaw) * rel[..., 2]
+    turned[..., 2] = np.cos(yaw) * rel[..., 2] - np.sin(yaw) * rel[..., 0]
+    np.testing.assert_allclose(pretrained.turned_onto(rel, turned), rel, atol=1e-9)
+    rotations = motion.rotations.copy()
+    c, s = np.cos(yaw[:, 0]), np.sin(yaw[:, 0])
+    spin = np.zeros((motion.num_frames, 3, 3))
+    spin[:, 0, 0], spin[:, 0, 2], spin[:, 1, 1], spin[:, 2, 0], spin[:, 2, 2] = c, s, 1, -s, c
+    rotations[:, 0] = spin @ rotations[:, 0]
+    drifted = motion.with_(rotations=rotations)
+    assert pretrained.joint_error(motion, drifted, relative=True) > 0.01
+    assert pretrained.joint_error(motion, drifted, heading=True) == pytest.approx(0.0, abs=1e-9)
+    bent = motion.rotations.copy()
+    bent[:, 1:] = np.swapaxes(bent[:, 1:], -1, -2)  # every joint's rotation inverted
+    changed = motion.with_(rotations=bent)
+    assert pretrained.joint_error(motion, changed, heading=True) > 0.01
 
 
 def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
     import pretrained_val
-    clips = [dict(jp=0.1, pose=0.05, drift=10.0), dict(jp=0.3, pose=0.07, drift=None),
-             dict(jp=0.2, pose=0.06, drift=20.0)]
+    clips = [dict(jp=0.1, pose=0.05, local=0.02, drift=10.0),
+             dict(jp=0.3, pose=0.07, local=0.04, drift=None),
+             dict(jp=0.2, pose=0.06, local=0.03, drift=20.0)]
     s = pretrained_val.summarise(clips)
     assert s["median"] == pytest.approx(0.2) and s["mean"] == pytest.approx(0.2)
     assert s["pose"] == pytest.approx(0.06) and s["drift"] == pytest.approx(15.0)
     assert pretrained_val.summarise(clips[1:2] + clips[:1])["drift"] is None
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s, "dog (not test)": s}}, 1.0)
     assert "| zoo biped | 3 | 20.0 (20.0) |" in text
-    assert "| dog (not test) | 3 | 20.0 (20.0), pose 6.0, drift 15 |" in text
+    assert "| dog (not test) | 3 | 20.0 (20.0), pose 6.0 (3.0), drift 15 |" in text
     rt = {"a.ckpt": {"zoo biped -> bird": dict(n=2, steps=0.935, travel=0.88, travel_ok=0.5)}}
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s}}, 1.0, rt)
     assert "| zoo biped -> bird | 2 | +0.94, 0.88 (50%) |" in text
