@@ -205,8 +205,8 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
     The ``data`` section is checked against the module's data schema
     (:class:`DataConfig` unless it registered another); the module's own
-    sections (``model``, ``loss``, ``optim`` but :data:`TRAINER_OPTIM`) are checked
-    when it is built.
+    sections (``model``, ``loss``, ``optim`` but :data:`TRAINER_OPTIM`) are
+    checked when it is built.
 
     Raises:
         ValueError: An unknown key (one line: the key, the known ones and
@@ -226,5 +226,6 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
 
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
-           "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config", "resolve_data", "fill",
-           "check_keys", "unknown_key_error", "defaults", "signature_schema"]
+           "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config",
+           "resolve_data", "fill", "check_keys", "unknown_key_error", "defaults",
+           "signature_schema"]

@@ -135,7 +135,7 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
                      callbacks=callbacks, plugins=plugins, **opts)
 
 
-def weight_average(decay: float):
+def weight_average(decay: float) -> L.Callback:
     r"""An exponential moving average of the weights, updated after every
     optimiser step (:math:`\bar\theta \leftarrow d\,\bar\theta + (1 - d)\,\theta`,
     a horizon of about :math:`1 / (1 - d)` steps): validation, the best
