@@ -182,8 +182,8 @@ def joint_error(source: Motion, output: Motion, relative: bool = False,
     """Mean global joint distance over the height (canonical motions); with
     :obj:`relative`, of the positions relative to the root (without the
     root path's drift); with :obj:`heading` as well, each output frame
-    turned about +Y onto the source's first (:func:`turned_onto`): the pose
-    alone, without the drift of the decoded facing either."""
+    turned about +Y onto the source's same frame (:func:`turned_onto`): the
+    pose alone, without the drift of the decoded facing either."""
     frames = min(source.num_frames, output.num_frames)
     a, b = source.global_positions()[:frames], output.global_positions()[:frames]
     if relative or heading:

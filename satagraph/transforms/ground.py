@@ -76,7 +76,7 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     r"""A retarget stood on the floor as the target character stands in its
     own clip: :func:`ground_like` :obj:`target` where it has frames, else
     :obj:`source`. How high a rig's lowest joint sits above the floor is the
-    rig's own (the dog's paw end sites stay 4-5 cm, 8-10 % of its height,
+    rig's own (the dog's paw end sites stay 3-6 cm, 6-11 % of its height,
     above the floor its tail touches): copied from the source, a dog's
     offset left a human retarget hovering 9 % of its height up.
 
