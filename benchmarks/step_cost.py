@@ -1,5 +1,5 @@
 """Where a training step of the built-in model's config goes, and what
-bf16, batch and window sizes buy on a CPU (issue 16, item 4).
+bf16, batch and window sizes buy on a CPU or a GPU (issue 16, item 4).
 
 Builds the ``pretrain_zoo`` module (its model and loss sections; ``--width``
 changes the hidden width, 256 being the paper's) on endless-zoo walks and
@@ -8,9 +8,11 @@ backward, clipping, Adam) for each combination of precision (float32, or
 bf16 autocast on the CPU), batch size and window length: best and median
 of ``--steps`` steps after two warm-ups, and windows and frames per second.
 With ``--profile``, the top operators of one float32 step
-(``torch.profiler``).
+(``torch.profiler``). ``--device cuda`` times on the GPU (synchronised;
+the peak memory a step allocated is a column of its own) and profiles its
+kernels.
 
-    python benchmarks/step_cost.py [--widths 64,256] [--threads 1] [--profile]
+    python benchmarks/step_cost.py [--widths 64,256] [--threads 1] [--profile] [--device cuda]
 
 Run it on an idle machine (it times).
 """
@@ -50,16 +52,28 @@ def build(width: int):
 
 
 def batches(module, feats, batch: int, window: int, count: int):
-    """:obj:`count` batches of :obj:`batch` windows of :obj:`window` frames."""
+    """:obj:`count` batches of :obj:`batch` windows of :obj:`window` frames,
+    on the module's device."""
     clips = [f.to_clip(a, a + window, module.embed(f.skeleton))
              for f in feats for a in range(0, FRAMES - window + 1, window // 2)]
     gen = torch.Generator().manual_seed(0)
+    device = next(module.parameters()).device
     return [collate_clips([clips[i] for i in torch.randperm(len(clips), generator=gen)[:batch]])
-            for _ in range(count)]
+            .to(device) for _ in range(count)]
+
+
+def _device(module) -> torch.device:
+    return next(module.parameters()).device
+
+
+def _sync(device: torch.device) -> None:
+    if device.type == "cuda":
+        torch.cuda.synchronize(device)
 
 
 def step(module, opt, batch, bf16: bool) -> None:
-    ctx = (torch.autocast("cpu", dtype=torch.bfloat16) if bf16 else contextlib.nullcontext())
+    kind = _device(module).type
+    ctx = (torch.autocast(kind, dtype=torch.bfloat16) if bf16 else contextlib.nullcontext())
     with ctx:
         loss = module.compute_losses(module(batch), batch)["loss"]
     opt.zero_grad()
@@ -71,10 +85,12 @@ def step(module, opt, batch, bf16: bool) -> None:
 def time_steps(module, feats, batch: int, window: int, bf16: bool, steps: int) -> List[float]:
     opt = torch.optim.Adam(module.parameters(), lr=1e-4)
     data = batches(module, feats, batch, window, steps + 2)
-    out = []
+    out, device = [], _device(module)
     for i, b in enumerate(data):
+        _sync(device)
         start = time.perf_counter()
         step(module, opt, b, bf16)
+        _sync(device)
         if i >= 2:
             out.append(time.perf_counter() - start)
     return out
@@ -84,10 +100,23 @@ def profile(module, feats, top: int = 12) -> str:
     from torch.profiler import ProfilerActivity, profile as prof
     opt = torch.optim.Adam(module.parameters(), lr=1e-4)
     data = batches(module, feats, 8, 32, 2)
+    cuda = _device(module).type == "cuda"
     step(module, opt, data[0], False)
-    with prof(activities=[ProfilerActivity.CPU]) as p:
+    activities = [ProfilerActivity.CPU] + ([ProfilerActivity.CUDA] if cuda else [])
+    with prof(activities=activities) as p:
         step(module, opt, data[1], False)
-    return p.key_averages().table(sort_by="self_cpu_time_total", row_limit=top)
+        _sync(_device(module))
+    key = "self_device_time_total" if cuda else "self_cpu_time_total"
+    return p.key_averages().table(sort_by=key, row_limit=top)
+
+
+def peak_memory(device: torch.device) -> str:
+    """GiB the steps since the last reset allocated at most (GPU only)."""
+    if device.type != "cuda":
+        return ""
+    peak = torch.cuda.max_memory_allocated(device) / 2 ** 30
+    torch.cuda.reset_peak_memory_stats(device)
+    return f"{peak:.2f}"
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -98,13 +127,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--steps", type=int, default=4)
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--profile", action="store_true")
+    parser.add_argument("--device", default="cpu", help="cpu or cuda")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
-    print(f"{args.threads} thread(s)\n\n| width | batch | window | precision | best step (s) "
-          "| median (s) | windows/s | frames/s | bf16 speed-up |\n|---:|---:|---:|---|---:|---:"
-          "|---:|---:|---:|")
+    device = torch.device(args.device)
+    where = torch.cuda.get_device_name(device) if device.type == "cuda" else "CPU"
+    print(f"{where}, {args.threads} thread(s)\n\n| width | batch | window | precision "
+          "| best step (s) | median (s) | windows/s | frames/s | bf16 speed-up "
+          "| peak GiB |\n|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|")
     for width in map(int, args.widths.split(",")):
         module, feats = build(width)
+        module.to(device)
         for batch in map(int, args.batches.split(",")):
             for window in map(int, args.windows.split(",")):
                 best: Dict[bool, float] = {}
@@ -115,7 +148,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     print(f"| {width} | {batch} | {window} | {'bf16' if bf16 else 'float32'} "
                           f"| {min(times):.3f} | {statistics.median(times):.3f} "
                           f"| {batch / min(times):.1f} | {batch * window / min(times):.0f} "
-                          f"| {ratio} |", flush=True)
+                          f"| {ratio} | {peak_memory(device)} |", flush=True)
         if args.profile:
             print(f"\nwidth {width}, batch 8, window 32, float32:\n")
             print(profile(module, feats))

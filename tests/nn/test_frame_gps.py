@@ -62,3 +62,17 @@ def test_attention_gradients_match():
     dense, _ = ref.attn(h, h, h, key_padding_mask=~mask, need_weights=False)
     grad_ref, = torch.autograd.grad(dense[mask].square().sum(), x)
     torch.testing.assert_close(grad_ours, grad_ref, atol=1e-4, rtol=1e-4)
+
+
+def test_mixed_skeletons_under_autocast_keep_the_attention_dtype():
+    # A float32 input whose attention autocast computes in bf16 (as CUDA's
+    # autocast does after a float32 layer norm): the gathered output takes
+    # the attention's dtype instead of failing in index_copy.
+    frames = collate_clips(make_clips(MIXED))
+    ours, _ = gps_pair()
+    x = torch.randn(frames.num_nodes, 16)
+    with torch.autocast("cpu", dtype=torch.bfloat16):
+        got = frame_self_attention(ours.attn, x, frames)
+    expected = frame_self_attention(ours.attn, x, frames)
+    assert got.dtype == torch.bfloat16
+    torch.testing.assert_close(got.float(), expected, atol=0.05, rtol=0.05)

@@ -77,8 +77,8 @@ def frame_self_attention(attn: nn.MultiheadAttention, x: Tensor, frames) -> Tens
         if index is None:
             return dense_self_attention(attn, x.view(-1, count, channels)).view(-1, channels)
         h = dense_self_attention(attn, x[index].view(-1, count, channels))
-        if out is None:
-            out = x.new_empty(x.shape)
+        if out is None:  # the attention's dtype: autocast may lower it
+            out = h.new_empty(x.shape)
         out = out.index_copy(0, index, h.view(-1, channels))
     return out
 
