@@ -153,6 +153,7 @@ class TextToMotionModule(L.LightningModule):
         self.meta.setdefault(TEXT_ENCODER_KEY, text_encoder_state(self.text_encoder))
         self.hparams["meta"] = self.meta
         self._check_semantic_encoder()
+        self._check_facing()
         self.build(model)
 
     # ------------------------------------------------------------ build
@@ -163,6 +164,21 @@ class TextToMotionModule(L.LightningModule):
         if self.meta["semantic_encoder"] != own:
             raise ValueError(f"data.semantic_encoder {self.meta['semantic_encoder']!r} is not "
                              f"the autoencoder's ({own!r})")
+
+    def _check_facing(self) -> None:
+        """The data's facing frame must be the autoencoder's
+        (``data.preprocessing.facing_smooth``): its codes of root features
+        turned another way would be codes of other motion. Skipped where
+        either side does not record its data (older checkpoints)."""
+        from satagraph.data.dataset import feature_options
+        ours, theirs = self.meta.get("data"), self.autoencoder.meta.get("data")
+        if not isinstance(ours, dict) or not isinstance(theirs, dict):
+            return
+        want = feature_options(theirs.get("preprocessing"))["facing_smooth"]
+        have = feature_options(ours.get("preprocessing"))["facing_smooth"]
+        if want != have:
+            raise ValueError(f"data.preprocessing.facing_smooth={have:g} is not the autoencoder's "
+                             f"({want:g}); set data.preprocessing.facing_smooth={want:g}")
 
     def build(self, model: Dict[str, Any]) -> None:
         """The skeleton embedding, the two transformers and the length model."""

@@ -194,3 +194,19 @@ def test_the_schedule_warms_up_then_follows_a_cosine_to_its_floor(autoencoder_ck
     assert lrs[:2] == pytest.approx([5e-4, 1e-3])
     assert lrs[4] == pytest.approx(6e-4)
     assert lrs[6:] == pytest.approx([2e-4, 2e-4])
+
+
+def test_facing_frame_must_be_the_autoencoders(autoencoder_ckpt, tmp_path):
+    from satagraph.io.checkpoint import load_checkpoint
+    payload = load_checkpoint(autoencoder_ckpt)
+    payload["hyper_parameters"]["meta"]["data"] = {"preprocessing": {"facing_smooth": 0.25}}
+    smoothed = tmp_path / "smoothed.ckpt"
+    torch.save(payload, smoothed)
+
+    def build(facing):
+        return build_module({"module": "t2m",
+                             "model": {"autoencoder": str(smoothed), "text_encoder": "offline:16"},
+                             "data": {"sources": [], "preprocessing": {"facing_smooth": facing}}})
+    with pytest.raises(ValueError, match=r"facing_smooth=0 is not the autoencoder's \(0.25\)"):
+        build(0.0)
+    assert build(0.25).meta["data"]["preprocessing"]["facing_smooth"] == 0.25
