@@ -223,10 +223,13 @@ def _spawns_workers(trainer: L.Trainer) -> bool:
 def check_init_features(payload: Dict[str, Any], cfg: Dict[str, Any], name: str) -> None:
     """Refuses to start from weights whose features turn the facing frame
     otherwise than :obj:`cfg`'s (``data.preprocessing.facing_smooth``): the
-    root features would mean something else to them."""
+    root features would mean something else to them. A module that keeps
+    its own autoencoder rather than the checkpoint's (``init_keeps``: a
+    text-to-motion generator) is not asked: it checks its data against that
+    autoencoder when built."""
     from satagraph.data.dataset import feature_options
     meta = (payload.get("hyper_parameters") or {}).get("meta") or {}
-    if "data" not in meta:
+    if "data" not in meta or getattr(module_class(cfg["module"]), "init_keeps", ()):
         return
     theirs = feature_options(meta["data"].get("preprocessing"))["facing_smooth"]
     ours = feature_options(data_section(cfg).get("preprocessing"))["facing_smooth"]

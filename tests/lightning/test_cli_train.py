@@ -173,3 +173,5 @@ def test_init_from_weights_of_other_facing_features_is_refused() -> None:
     check_init_features({"state_dict": {}}, cfg, "w.ckpt")
     smooth = load_config("tiny", ["data.preprocessing={facing_smooth: 0.25}"])
     check_init_features(payload(0.25), smooth, "w.ckpt")
+    # a generator keeps its own autoencoder: the checkpoint's facing is not its data's
+    check_init_features(payload(0.0), dict(smooth, module="t2m"), "w.ckpt")
