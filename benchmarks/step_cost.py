@@ -57,9 +57,8 @@ def batches(module, feats, batch: int, window: int, count: int):
     clips = [f.to_clip(a, a + window, module.embed(f.skeleton))
              for f in feats for a in range(0, FRAMES - window + 1, window // 2)]
     gen = torch.Generator().manual_seed(0)
-    device = next(module.parameters()).device
     return [collate_clips([clips[i] for i in torch.randperm(len(clips), generator=gen)[:batch]])
-            .to(device) for _ in range(count)]
+            .to(_device(module)) for _ in range(count)]
 
 
 def _device(module) -> torch.device:
