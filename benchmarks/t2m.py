@@ -25,7 +25,9 @@ Metrics (:mod:`satagraph.metrics.generation`): R@1/2/3 in pools of 32 and
 FID / KID, each with a 95% half-width over replications; matching score,
 diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinematic probes
 on every group's motions: direction of travel (walk / back / left / right),
-Froude speed ordering walk < run < dash, stillness of bow and bye.
+Froude speed ordering walk < run < dash, stillness of bow and bye; and the
+same probes per skeleton (one rig a body plan, real rigs too), every probe
+prompt with ``--probe-seeds`` seeds (6: 24 walking generations a skeleton).
 
     python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
         [--reference builtin] [--prompts val] [--guidance G] [--temperature T]
@@ -365,6 +367,9 @@ def travel_direction(travel: np.ndarray) -> str:
 DIRECTIONS = {"walk": "forward", "walk-back": "back", "walk-left": "left",
               "walk-right": "right"}
 STILL_FROUDE = 0.1
+#: Seeds of every per-skeleton probe prompt: 6 give 24 walking generations a
+#: skeleton (one case moves its direction by 4 points; with 2 it was 12.5).
+PROBE_SEEDS = 6
 
 
 def direction_ok(label: str, travel: np.ndarray) -> bool:
@@ -594,13 +599,17 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
              reps: Optional[int] = None, gen_seeds: int = 2,
              reference: Optional[str] = None, prompts: str = "test",
-             settings: Optional[GenerationSettings] = None) -> Tuple[List[Dict], Dict]:
+             settings: Optional[GenerationSettings] = None,
+             probe_seeds: Optional[int] = None) -> Tuple[List[Dict], Dict]:
     """Train the evaluator and score every group; rows and run facts
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
     file, whose reconstruction is one more row per group; :obj:`prompts`:
     see :func:`real_items`; :obj:`settings`: the generator's sampling, whose
-    latent smoothing the reconstruction and retrieval rows share)."""
+    latent smoothing the reconstruction and retrieval rows share;
+    :obj:`probe_seeds`: seeds of every per-skeleton probe prompt, by
+    default :data:`PROBE_SEEDS`, 2 when :obj:`quick`)."""
     settings = settings or GenerationSettings()
+    probe_seeds = probe_seeds or (2 if quick else PROBE_SEEDS)
     start = time.perf_counter()
     encoder = build_text_encoder("offline")
     cache: Dict[str, torch.Tensor] = {}
@@ -637,12 +646,12 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
                            reps or (3 if quick else 20), extra, seed, module, settings.smooth)
     if module is not None:
         run_extra = skeleton_probes(module, skeleton_targets(test, quick or prompts != "test"),
-                                    gen_seeds, settings=settings)
+                                    probe_seeds, settings=settings)
     else:
         run_extra = []
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
              "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "reference": reference,
-             "quick": quick, "prompts": prompts,
+             "quick": quick, "prompts": prompts, "probe_seeds": probe_seeds,
              "settings": vars(settings),
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
@@ -682,6 +691,9 @@ def main(argv=None) -> int:
                         help="RVQ layers to decode (default: all)")
     parser.add_argument("--smooth", type=float, default=None,
                         help="latent smoothing in frames (default: generate's)")
+    parser.add_argument("--probe-seeds", type=int, default=None,
+                        help=f"seeds of every per-skeleton probe prompt (default {PROBE_SEEDS}, "
+                             "2 with --quick)")
     parser.add_argument("--reference", default=None, metavar="AUTOENCODER",
                         help="also a row of test motion through this autoencoder on its own "
                              "rig (builtin, a checkpoint or weights file): the ceiling of "
@@ -691,7 +703,7 @@ def main(argv=None) -> int:
     warnings.simplefilter("ignore")
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
                          reference=args.reference, prompts=args.prompts,
-                         settings=sampling(args))
+                         settings=sampling(args), probe_seeds=args.probe_seeds)
     name = ("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)
