@@ -99,12 +99,13 @@ def profile(module, feats, top: int = 12) -> str:
     from torch.profiler import ProfilerActivity, profile as prof
     opt = torch.optim.Adam(module.parameters(), lr=1e-4)
     data = batches(module, feats, 8, 32, 2)
-    cuda = _device(module).type == "cuda"
+    device = _device(module)
+    cuda = device.type == "cuda"
     step(module, opt, data[0], False)
     activities = [ProfilerActivity.CPU] + ([ProfilerActivity.CUDA] if cuda else [])
     with prof(activities=activities) as p:
         step(module, opt, data[1], False)
-        _sync(_device(module))
+        _sync(device)
     key = "self_device_time_total" if cuda else "self_cpu_time_total"
     return p.key_averages().table(sort_by=key, row_limit=top)
 

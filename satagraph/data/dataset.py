@@ -43,6 +43,13 @@ def feature_options(config: Optional[Mapping[str, Any]] = None) -> Dict[str, flo
     config = dict(DEFAULT_PREPROCESSING, **(config or {}))
     return {key: float(config[key]) for key in FEATURE_OPTIONS}
 
+
+def data_facing_smooth(data: Optional[Mapping[str, Any]]) -> float:
+    """The facing smoothing (seconds) of a ``data`` section's features
+    (its ``preprocessing.facing_smooth``; 0 where it sets none): what a
+    model trained on them reads the root's facing frame with."""
+    return feature_options((data or {}).get("preprocessing"))["facing_smooth"]
+
 #: ``data.augment`` defaults as a dict: the one set,
 #: :class:`~satagraph.transforms.augment.AugmentConfig`.
 AUGMENT_DEFAULTS: Dict[str, float] = asdict(AUGMENT)

@@ -166,13 +166,12 @@ def demo_config(options: DemoOptions, sources: Sequence[str], run_dir: Path,
     cfg["data"]["sources"] = [str(s) for s in sources]
     cfg["output_dir"] = str(run_dir)
     if base is not None:
-        from satagraph.data.dataset import feature_options
+        from satagraph.data.dataset import data_facing_smooth
         cfg["model"], cfg["loss"] = dict(base["model"]), dict(base.get("loss") or {})
         meta = base.get("meta", {})
         cfg["data"]["window"] = int(meta.get("window", cfg["data"]["window"]))
-        smooth = feature_options((meta.get("data") or {}).get("preprocessing"))["facing_smooth"]
         cfg["data"]["preprocessing"] = dict(cfg["data"].get("preprocessing") or {},
-                                            facing_smooth=smooth)
+                                            facing_smooth=data_facing_smooth(meta.get("data")))
         cfg["optim"] = dict(cfg["optim"], **FINE_TUNE_OPTIM)
     if options.minutes is not None:
         cfg["trainer"]["max_time"] = {"minutes": float(options.minutes)}

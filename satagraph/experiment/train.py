@@ -227,12 +227,11 @@ def check_init_features(payload: Dict[str, Any], cfg: Dict[str, Any], name: str)
     its own autoencoder rather than the checkpoint's (``init_keeps``: a
     text-to-motion generator) is not asked: it checks its data against that
     autoencoder when built."""
-    from satagraph.data.dataset import feature_options
+    from satagraph.data.dataset import data_facing_smooth
     meta = (payload.get("hyper_parameters") or {}).get("meta") or {}
     if "data" not in meta or getattr(module_class(cfg["module"]), "init_keeps", ()):
         return
-    theirs = feature_options(meta["data"].get("preprocessing"))["facing_smooth"]
-    ours = feature_options(data_section(cfg).get("preprocessing"))["facing_smooth"]
+    theirs, ours = data_facing_smooth(meta["data"]), data_facing_smooth(data_section(cfg))
     if theirs != ours:
         raise ValueError(f"--init-from {name}: trained with data.preprocessing.facing_smooth="
                          f"{theirs:g}, this config has {ours:g}; set "

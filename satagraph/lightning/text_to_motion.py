@@ -170,12 +170,11 @@ class TextToMotionModule(L.LightningModule):
         (``data.preprocessing.facing_smooth``): its codes of root features
         turned another way would be codes of other motion. Skipped where
         either side does not record its data (older checkpoints)."""
-        from satagraph.data.dataset import feature_options
+        from satagraph.data.dataset import data_facing_smooth
         ours, theirs = self.meta.get("data"), self.autoencoder.meta.get("data")
         if not isinstance(ours, dict) or not isinstance(theirs, dict):
             return
-        want = feature_options(theirs.get("preprocessing"))["facing_smooth"]
-        have = feature_options(ours.get("preprocessing"))["facing_smooth"]
+        want, have = data_facing_smooth(theirs), data_facing_smooth(ours)
         if want != have:
             raise ValueError(f"data.preprocessing.facing_smooth={have:g} is not the autoencoder's "
                              f"({want:g}); set data.preprocessing.facing_smooth={want:g}")

@@ -15,7 +15,7 @@ from satagraph.transforms.canonical import (canonicalize, decanonicalize, latera
 from satagraph.transforms.ground import ground_retarget
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
-from satagraph.data.dataset import feature_options, window_starts
+from satagraph.data.dataset import data_facing_smooth, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion
@@ -210,8 +210,7 @@ def facing_smooth_of(module) -> float:
     """The facing smoothing (seconds) of the features :obj:`module` was
     trained on (its config's ``data.preprocessing.facing_smooth``; 0 for a
     module without one)."""
-    data = (getattr(module, "meta", None) or {}).get("data") or {}
-    return feature_options(data.get("preprocessing"))["facing_smooth"]
+    return data_facing_smooth((getattr(module, "meta", None) or {}).get("data"))
 
 
 def source_features(canon: Motion, rest: str, facing_smooth: float = 0.0
