@@ -10,7 +10,7 @@ import torch
 
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.transforms.augment import rebase_rotations, root_tilted, set_rest_rotations
-from satagraph.transforms.canonical import (canonicalize, decanonicalize, lateral_forward,
+from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.ground import ground_retarget
 from satagraph.data.clip import MotionClip
@@ -263,7 +263,8 @@ def _standing(pos: np.ndarray) -> int:
 
 def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     r"""The root-local axis along the body's facing (the horizontal forward
-    of its left/right joint pairs) in the first frame in which it stands
+    of its left/right joint pairs nearest the root,
+    :func:`~satagraph.transforms.canonical.body_forward`) in the first frame in which it stands
     (:func:`standing_frame`), as the source's facing axis of its features
     (:func:`~satagraph.data.features.motion_to_features`) where the root
     tilted between frame 0 and that frame
@@ -283,7 +284,7 @@ def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     if not root_tilted(motion, frame):
         return None
     # across x up: already horizontal
-    forward = lateral_forward(pos[frame], motion.skeleton.names, np.array([0.0, 1.0, 0.0]))
+    forward = body_forward(pos[frame], motion.skeleton, np.array([0.0, 1.0, 0.0]))
     if forward is None or np.linalg.norm(forward) < 1e-9:
         return None
     return motion.rotations[frame, 0].T @ (forward / np.linalg.norm(forward))

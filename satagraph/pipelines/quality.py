@@ -28,7 +28,7 @@ from typing import Dict, Optional, Sequence
 
 import numpy as np
 
-from satagraph.transforms.canonical import canonicalize, lateral_forward
+from satagraph.transforms.canonical import body_forward, canonicalize
 from satagraph.transforms.ground import ground_level
 from satagraph.data.features import motion_to_features
 from satagraph.pipelines.motion_descriptor import contact_quality
@@ -42,14 +42,15 @@ LAG = 3
 
 def facing_axis(canonical: Motion) -> Optional[np.ndarray]:
     r"""Root-local facing axis of a canonical motion: the mean over its
-    frames of the horizontal forward direction (from left/right joint pairs)
+    frames of the horizontal forward direction (from the left/right joint
+    pairs nearest the root, :func:`~satagraph.transforms.canonical.body_forward`)
     in the root's frame; ``None`` without left/right pairs.
 
     Shapes:
         output: :math:`(3,)`.
     """
     rot, pos = canonical.global_transforms()
-    forward = lateral_forward(pos, canonical.skeleton.names, np.array([0.0, 1.0, 0.0]))
+    forward = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
     if forward is None:
         return None
     forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-9)

@@ -124,9 +124,9 @@ def _turn_back(motion: Motion, frame: int) -> np.ndarray:
     up = np.array([0.0, 1.0, 0.0])
     if not root_tilted(motion, frame):
         return _heading(relative).T
-    from satagraph.transforms.canonical import lateral_forward  # imports this module
+    from satagraph.transforms.canonical import body_forward  # imports this module
     pos = motion.slice(0, frame + 1).global_positions()[[0, frame]]
-    facing = lateral_forward(pos, motion.skeleton.names, up)
+    facing = body_forward(pos, motion.skeleton, up)
     if facing is None:
         return _heading(relative).T
     return yaw_matrix_numpy(yaw_of(facing[0]) - yaw_of(facing[1]))

@@ -47,14 +47,69 @@ def lateral_forward(positions: np.ndarray, names: List[str],
     return np.cross(across, up)
 
 
+#: A left/right pair gives the facing (:func:`facing_pairs`) only if its
+#: joints stand at least this share of the pose's extent apart: CMU's
+#: ``LHipJoint`` sits on the hips.
+FACING_PAIR_GAP = 0.02
+
+
+def facing_pairs(skeleton: Skeleton, pose: np.ndarray) -> Tuple[List[int], List[int]]:
+    r"""The left/right joint pairs that give a body's facing: of the pairs
+    :func:`lateral_pairs` finds, those fewest hops from the root among the
+    ones at least :data:`FACING_PAIR_GAP` of the pose's extent apart (the
+    hips of a human or a dog, the legs' roots of a zoo rig); every pair
+    where none is that far apart.
+
+    Hands and feet swing with the stride: read from every pair, a walk's
+    first frame turns its facing with the stride's phase (15 degrees on
+    average, up to 50, on zoo bipeds and quadrupeds), and with it the
+    facing frame of the clip's features; the pairs nearest the root move
+    with the root.
+
+    Shapes:
+        - **pose**: :math:`(J, 3)`, the global joint positions of one frame
+    """
+    left, right = lateral_pairs(skeleton.names)
+    if not left:
+        return left, right
+    left, right = np.asarray(left), np.asarray(right)
+    gap = np.linalg.norm(pose[left] - pose[right], axis=-1)
+    apart = gap >= FACING_PAIR_GAP * max(float(np.ptp(pose, axis=0).max()), 1e-9)
+    if not apart.any():
+        return left.tolist(), right.tolist()
+    hops = np.minimum(skeleton.depth[left], skeleton.depth[right])
+    keep = apart & (hops == hops[apart].min())
+    return left[keep].tolist(), right[keep].tolist()
+
+
+def body_forward(positions: np.ndarray, skeleton: Skeleton,
+                 up: np.ndarray) -> Optional[np.ndarray]:
+    r""":func:`lateral_forward` over the :func:`facing_pairs` (chosen on
+    the first frame given): the body's facing, the one rule every reader of
+    it uses (canonicalisation, re-rests of tilted clips, the retarget
+    quality measures). ``None`` without left/right pairs.
+
+    Shapes:
+        - **positions**: :math:`(..., J, 3)`
+        - **output**: :math:`(..., 3)`
+    """
+    first = positions.reshape(-1, *positions.shape[-2:])[0]
+    left, right = facing_pairs(skeleton, first)
+    if not left:
+        return None
+    across = (positions[..., left, :] - positions[..., right, :]).mean(-2)
+    return np.cross(across, up)
+
+
 def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
     r"""Horizontal facing direction at frame 0 (unit vector, world axes).
 
-    From left/right joint pairs found by name (``Left*``/``Right*``, ``L_``,
-    ``.L``, ``_r``, ...): forward = across x up with across = left - right.
-    Falls back to the root's local +Z axis.
+    From the left/right joint pairs nearest the root (:func:`body_forward`;
+    pairs found by name: ``Left*``/``Right*``, ``L_``, ``.L``, ``_r``, ...):
+    forward = across x up with across = left - right. Falls back to the
+    root's local +Z axis.
     """
-    forward = lateral_forward(motion.first_pose(), motion.skeleton.names, up)
+    forward = body_forward(motion.first_pose(), motion.skeleton, up)
     if forward is None or np.linalg.norm(forward - up * forward.dot(up)) < 1e-8:
         root = motion.rotations[0, 0] if motion.num_frames else np.eye(3)
         forward = root[:, 2]

@@ -229,14 +229,15 @@ def test_auto_rest_of_a_dog_that_starts_on_its_side_faces_forward(
     from satagraph.experiment.train import load_module
     from satagraph.pipelines.inference import retarget_canonical, shown_rest, standing_frame
     from satagraph.pipelines.quality import most_active
-    from satagraph.transforms.canonical import lateral_forward
+    from satagraph.transforms.canonical import body_forward
     from satagraph.transforms.rig_reading import with_rig
     dog = with_rig(read_real("dog/D1_031_KAN01_001.bvh"), scale="cm")
     canon = canonicalize(dog, fps=30)
     assert standing_frame(canon) > 200
     shown, _ = shown_rest(canon, "auto")
     names = canon.skeleton.names
-    facing = lateral_forward(shown.skeleton.rest_positions(), names, np.array([0.0, 1.0, 0.0]))
+    facing = body_forward(shown.skeleton.rest_positions(), shown.skeleton,
+                          np.array([0.0, 1.0, 0.0]))
     assert facing[2] / np.linalg.norm(facing) > 0.99
     module = load_module("builtin").eval()
     walk = most_active(read_real("bandai/dataset-1_walk_sad_001.bvh"), 90)
