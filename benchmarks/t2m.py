@@ -25,8 +25,9 @@ Metrics (:mod:`satagraph.metrics.generation`): R@1/2/3 in pools of 32 and
 FID / KID, each with a 95% half-width over replications; matching score,
 diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinematic probes
 on every group's motions: direction of travel (walk / back / left / right),
-Froude speed ordering walk < run < dash, stillness of bow and bye; and the
-same probes per skeleton (one rig a body plan, real rigs too), every probe
+Froude speed ordering walk < run < dash, stillness of bow and bye, how far
+forward motions travel off the body's facing (``sideways``, median degrees:
+a crabwise walk); and the same probes per skeleton (one rig a body plan, real rigs too), every probe
 prompt with ``--probe-seeds`` seeds (6: 24 walking generations a skeleton).
 
     python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
@@ -78,7 +79,8 @@ from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E40
                                                    leg_length)
 from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.semantics.limbs import limb_end_index  # noqa: E402
-from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.ops.rotation_numpy import yaw_matrix_numpy  # noqa: E402
+from satagraph.transforms.canonical import body_forward, canonicalize  # noqa: E402
 
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
@@ -101,6 +103,7 @@ class Item:
     froude: float
     travel: np.ndarray  # final ground displacement in the start facing frame, leg lengths
     contact: Tuple[float, float]  # foot sliding (heights/s), penetration (heights)
+    sideways: float = float("nan")  # degrees between travel and facing (see sideways)
     motion: Optional[Motion] = field(default=None, repr=False)
 
 
@@ -114,7 +117,27 @@ def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
     motion = features_to_motion(feats) if keep else None
     return Item(describe_features(feats, ends), captions, label, group, skeleton,
                 feats.num_frames / feats.fps, froude_speed(feats, ends), travel,
-                contact_quality(feats), motion)
+                contact_quality(feats), sideways(feats, travel), motion)
+
+
+#: Travel (leg lengths) below which a motion has no direction to compare.
+SIDEWAYS_TRAVEL = 0.5
+
+
+def sideways(feats: MotionFeatures, travel: np.ndarray) -> float:
+    r"""Degrees between a motion's net travel and its body's mean facing
+    over the clip (the left/right pairs nearest the root,
+    :func:`~satagraph.transforms.canonical.body_forward`): about 0 for a
+    walk, 90 for a side-step, large for a body that walks crabwise; NaN
+    without left/right pairs or under :data:`SIDEWAYS_TRAVEL` leg lengths
+    of travel (:obj:`travel`, in the start facing frame)."""
+    facing = body_forward(feats.x, feats.skeleton, np.array([0.0, 1.0, 0.0]))
+    if facing is None or np.linalg.norm(travel) < SIDEWAYS_TRAVEL:
+        return float("nan")
+    theta, _ = integrate_root(feats.r, feats.fps)
+    world = np.einsum("tij,tj->ti", yaw_matrix_numpy(theta), facing).sum(0)
+    gap = np.arctan2(travel[0], travel[1]) - np.arctan2(world[0], world[2])
+    return float(abs(np.degrees((gap + np.pi) % (2 * np.pi) - np.pi)))
 
 
 def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:
@@ -380,11 +403,22 @@ def direction_ok(label: str, travel: np.ndarray) -> bool:
     return travel_direction(travel) == want
 
 
+#: Actions that travel the way the body faces (:func:`sideways` is read on them).
+FORWARD = ("walk", "run", "dash")
+
+
 def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
-           froudes: Sequence[float]) -> Dict[str, object]:
-    """Direction accuracy, walk < run < dash ordering of mean Froude speed
-    and share of still bow / bye motions, over labelled motions."""
+           froudes: Sequence[float], gaps: Optional[Sequence[float]] = None
+           ) -> Dict[str, object]:
+    """Direction accuracy, walk < run < dash ordering of mean Froude speed,
+    share of still bow / bye motions and, with :obj:`gaps` (:func:`sideways`
+    per motion), their median over the forward actions (:data:`FORWARD`),
+    over labelled motions."""
     out: Dict[str, object] = {}
+    if gaps is not None:
+        ahead = [g for l, g in zip(labels, gaps) if l in FORWARD and np.isfinite(g)]
+        if ahead:
+            out["sideways"] = (float(np.median(ahead)), len(ahead))
     dirs = [direction_ok(l, t) for l, t in zip(labels, travels) if l in DIRECTIONS]
     if dirs:
         out["direction"] = (float(np.mean(dirs)), len(dirs))
@@ -507,7 +541,7 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
     settings = settings or GenerationSettings()
     rows = []
     for name, (subject, target) in targets.items():
-        labels, travels, froudes = [], [], []
+        labels, travels, froudes, gaps = [], [], [], []
         for prompt, label in PROBE_PROMPTS:
             for seed in range(seeds):
                 motion = generate_on(module, prompt.format(subject), target, seconds, seed,
@@ -515,8 +549,9 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
                 it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
                              name, name)
                 labels.append(label), travels.append(it.travel), froudes.append(it.froude)
+                gaps.append(it.sideways)
         rows.append({"skeleton": name, "subject": subject,
-                     "probes": probes(labels, travels, froudes)})
+                     "probes": probes(labels, travels, froudes, gaps)})
     return rows
 
 
@@ -550,7 +585,7 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
         row.update(group=name, row=kind, action=recogniser.accuracy([it.desc for it in items],
                                                               [it.label for it in test]),
                    probes=probes([it.label for it in test], [it.travel for it in items],
-                                 [it.froude for it in items]))
+                                 [it.froude for it in items], [it.sideways for it in items]))
         rows.append(row)
     return rows
 
@@ -575,6 +610,8 @@ def probe_cell(p: Dict[str, object]) -> str:
                      f"({s['walk']:.2f}/{s['run']:.2f}/{s['dash']:.2f})")
     if "still" in p:
         parts.append(f"still {p['still'][0]:.0%} (n={p['still'][1]})")
+    if "sideways" in p:
+        parts.append(f"sideways {p['sideways'][0]:.0f} deg (n={p['sideways'][1]})")
     return "; ".join(parts)
 
 

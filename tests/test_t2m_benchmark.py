@@ -24,6 +24,28 @@ def test_probes_read_direction_speed_and_stillness():
     assert out["direction"] == (1.0, 4) and out["ordering"] and out["still"] == (1.0, 1)
 
 
+def test_sideways_reads_travel_against_the_body_facing():
+    """A zoo walk travels the way its hips face (a few degrees); its root
+    velocity turned 60 degrees in the facing frame walks crabwise, and the
+    probe reads 60 more; the forward actions' median goes in the probes."""
+    from dataclasses import replace
+    from satagraph.data.features import motion_to_features
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.transforms.canonical import canonicalize
+    rig = [r for r in zoo_rigs(seed=1) if r.species == "quadruped"][0]
+    feats = motion_to_features(canonicalize(generate_clip(rig, "walk", frames=90, seed=0),
+                                            fps=30.0))
+    walk = t2m.measure(feats, [], "walk", "zoo", "quadruped")
+    c, s = np.cos(np.radians(60)), np.sin(np.radians(60))
+    r = feats.r.copy()
+    r[:, 1], r[:, 2] = c * feats.r[:, 1] + s * feats.r[:, 2], -s * feats.r[:, 1] + c * feats.r[:, 2]
+    crab = t2m.measure(replace(feats, r=r), [], "walk", "zoo", "quadruped")
+    assert walk.sideways < 8.0 and abs(crab.sideways - walk.sideways - 60.0) < 8.0
+    out = t2m.probes(["walk", "bow", "run"], [walk.travel, crab.travel, crab.travel],
+                     [0.3, 0.0, 0.6], [walk.sideways, crab.sideways, crab.sideways])
+    assert out["sideways"] == (np.median([walk.sideways, crab.sideways]), 2)
+
+
 @pytest.mark.slow
 def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     torch.set_num_threads(1)
