@@ -78,7 +78,7 @@ ZOO_FRAMES, REAL_SECONDS, RECON_FRAMES = 120, 10.0, 128
 TRAIN_SPECIES = ["biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab", "spider"]
 HOLDOUT = ["longtail", "spider/palps"]
 #: What each retarget row measures (foot sliding reported, no target).
-QUALITY = ("steps", "travel", "ground", "upright", "slide")
+QUALITY = ("steps", "travel", "ground", "upright", "slide", "sideways")
 TARGETS = {"steps_zoo": 0.8, "steps_real": 0.7, "travel": (0.8, 1.25), "ground": 0.03,
            "upright": 0.95, "jp_zoo": 0.05, "jp_real": 0.08}
 
@@ -243,6 +243,12 @@ def _pct(value: Optional[float]) -> str:
     return "-" if value is None else f"{100 * value:.0f}%"
 
 
+def _degrees(value: Optional[float]) -> str:
+    """The sideways cell (``quality.heading_gap`` off the source's): "-"
+    where either does not travel, or in results measured before it."""
+    return "-" if value is None else f"{value:.0f}"
+
+
 def _slide(row: dict) -> str:
     return f"{row['slide']:.2f} ({row['source_slide']:.2f})"
 
@@ -253,13 +259,13 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
              "| travel ratio (0.8-1.25) | ground, % height (<= 3) "
              "| decoder's ground (--no-ground) | upright (>= 95%) "
-             "| source upright | foot slide, H/s (source) | all targets met |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+             "| source upright | foot slide, H/s (source) | sideways, deg | all targets met |",
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows["retarget"]:
         lines.append(f"| {r['group']} | {r['case']} | {r['source']} | {r['target']} "
                      f"| {r['steps']:+.2f} | {r['travel']:.2f} | {100 * r['ground']:+.1f} "
                      f"| {100 * r['decoder_ground']:+.1f} | {_pct(r['upright'])} | {_pct(r['source_upright'])} "
-                     f"| {_slide(r)} | {_ok(r)} |")
+                     f"| {_slide(r)} | {_degrees(r.get('sideways'))} | {_ok(r)} |")
     lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met "
               "| JP, grounded (--ground) | root-relative JP | pose alone (also heading-free) "
               "| steps (same rig; diagnostic) | foot slide, H/s (source) |",

@@ -129,16 +129,25 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
 
 
 def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]]) -> Dict[str, dict]:
-    """Mean steps and the share of travel ratios within 0.8-1.25 per pair
-    name."""
+    """Mean steps, the share of travel ratios within 0.8-1.25 and the
+    median of ``sideways`` (degrees off the source's heading gap,
+    :func:`~satagraph.pipelines.quality.heading_gap`) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
         src, out = retarget_canonical(module, source, target, module.embed)
-        got.setdefault(name, []).append(retarget_quality(src, out, ("steps", "travel")))
+        got.setdefault(name, []).append(retarget_quality(src, out,
+                                                         ("steps", "travel", "sideways")))
     return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
                        travel=float(np.median([q["travel"] for q in v])),
-                       travel_ok=float(np.mean([0.8 <= q["travel"] <= 1.25 for q in v])))
+                       travel_ok=float(np.mean([0.8 <= q["travel"] <= 1.25 for q in v])),
+                       sideways=_median([q["sideways"] for q in v]))
             for name, v in got.items()}
+
+
+def _median(values: Sequence[Optional[float]]) -> Optional[float]:
+    """The median of the values that are not ``None`` (``None`` if none are)."""
+    kept = [v for v in values if v is not None]
+    return float(np.median(kept)) if kept else None
 
 
 def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]:
@@ -196,11 +205,13 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
             cells.append(cell)
         lines.append(f"| {group} | {summary[names[0]][group]['n']} | " + " | ".join(cells) + " |")
     if retargets:
-        lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25).", "",
+        lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25), "
+                  "median degrees sideways of the source's heading.", "",
                   "| retarget | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
                   "|---|---:|" + "---:|" * len(names)]
         for pair in retargets[names[0]]:
             cells = [f"{r['steps']:+.2f}, {r['travel']:.2f} ({100 * r['travel_ok']:.0f}%)"
+                     + ("" if r.get("sideways") is None else f", {r['sideways']:.0f} deg")
                      for r in (retargets[k][pair] for k in names)]
             lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)
                          + " |")

@@ -74,13 +74,13 @@ from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
                                           generate_on, load_generator, rig_inputs)
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
+from satagraph.pipelines.quality import heading_gap  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
                                                    describe_features, froude_speed,
                                                    leg_length)
 from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.semantics.limbs import limb_end_index  # noqa: E402
-from satagraph.ops.rotation_numpy import yaw_matrix_numpy  # noqa: E402
-from satagraph.transforms.canonical import body_forward, canonicalize  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
@@ -114,30 +114,18 @@ def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
     _, origin = integrate_root(feats.r[1:], feats.fps)
     leg = max(leg_length(feats.skeleton, ends, feats.height), 1e-6)
     travel = (origin[-1] - origin[0])[[0, 2]] / leg
-    motion = features_to_motion(feats) if keep else None
+    motion = features_to_motion(feats)
     return Item(describe_features(feats, ends), captions, label, group, skeleton,
                 feats.num_frames / feats.fps, froude_speed(feats, ends), travel,
-                contact_quality(feats), sideways(feats, travel), motion)
+                contact_quality(feats), sideways(motion), motion if keep else None)
 
 
-#: Travel (leg lengths) below which a motion has no direction to compare.
-SIDEWAYS_TRAVEL = 0.5
-
-
-def sideways(feats: MotionFeatures, travel: np.ndarray) -> float:
-    r"""Degrees between a motion's net travel and its body's mean facing
-    over the clip (the left/right pairs nearest the root,
-    :func:`~satagraph.transforms.canonical.body_forward`): about 0 for a
-    walk, 90 for a side-step, large for a body that walks crabwise; NaN
-    without left/right pairs or under :data:`SIDEWAYS_TRAVEL` leg lengths
-    of travel (:obj:`travel`, in the start facing frame)."""
-    facing = body_forward(feats.x, feats.skeleton, np.array([0.0, 1.0, 0.0]))
-    if facing is None or np.linalg.norm(travel) < SIDEWAYS_TRAVEL:
-        return float("nan")
-    theta, _ = integrate_root(feats.r, feats.fps)
-    world = np.einsum("tij,tj->ti", yaw_matrix_numpy(theta), facing).sum(0)
-    gap = np.arctan2(travel[0], travel[1]) - np.arctan2(world[0], world[2])
-    return float(abs(np.degrees((gap + np.pi) % (2 * np.pi) - np.pi)))
+def sideways(motion: Motion) -> float:
+    """:func:`~satagraph.pipelines.quality.heading_gap` of a canonical
+    motion, unsigned: degrees between where it travels and where its body
+    faces (a crabwise walk); NaN where it has none."""
+    gap = heading_gap(motion)
+    return float("nan") if gap is None else abs(gap)
 
 
 def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:

@@ -17,6 +17,9 @@ computed the same way on the source and on the output:
   height, as a fraction of the character's height (0: feet on the floor).
 * :func:`upright_fraction`: the share of frames whose head is above the
   hips (``None`` for a skeleton without a head).
+* :func:`heading_gap`: the angle between where the body travels and where
+  it faces (0 for a walk, 90 for a side-step); a retarget should keep the
+  source's (``sideways``: the difference).
 
 All of them take canonical motions (:func:`~satagraph.transforms.canonical.canonicalize`:
 +Y up, metres, floor at 0); :func:`retarget_quality` compares a source with
@@ -150,6 +153,37 @@ def upright_fraction(canonical: Motion) -> Optional[float]:
     return float((pos[:, head, 1] > pos[:, 0, 1]).mean())
 
 
+#: Travel (leg lengths) below which a motion has no direction to compare
+#: with its facing (:func:`heading_gap`).
+HEADING_TRAVEL = 0.5
+
+
+def heading_gap(canonical: Motion) -> Optional[float]:
+    r"""Signed degrees from the body's mean facing over the clip (its
+    left/right pairs nearest the root,
+    :func:`~satagraph.transforms.canonical.body_forward`) to the root's net
+    horizontal travel, positive to the left (+X of a body facing +Z): about
+    0 for a walk, 90 for a side-step; a body that walks crabwise shows the
+    angle. ``None`` without left/right pairs, or under
+    :data:`HEADING_TRAVEL` leg lengths of travel."""
+    pos = canonical.global_positions()
+    facing = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
+    travel = pos[-1, 0] - pos[0, 0]
+    if facing is None or np.linalg.norm(travel[[0, 2]]) < HEADING_TRAVEL * leg_length(canonical):
+        return None
+    facing = (facing / np.maximum(np.linalg.norm(facing, axis=-1, keepdims=True), 1e-9)).sum(0)
+    gap = np.arctan2(travel[0], travel[2]) - np.arctan2(facing[0], facing[2])
+    return float(np.degrees((gap + np.pi) % (2 * np.pi) - np.pi))
+
+
+def _sideways(source: Motion, output: Motion) -> Optional[float]:
+    """Degrees between the output's :func:`heading_gap` and the source's."""
+    a, b = heading_gap(source), heading_gap(output)
+    if a is None or b is None:
+        return None
+    return float(abs((b - a + 180.0) % 360.0 - 180.0))
+
+
 def most_active(motion: Motion, frames: int) -> Motion:
     """The :obj:`frames`-long slice of :obj:`motion` (at its own frame rate)
     whose limb ends move most."""
@@ -185,7 +219,9 @@ def retarget_quality(source: Motion, output: Motion,
         :func:`root_travel` over the source's), ``ground``
         (:func:`ground_height` of the output), ``upright``
         (:func:`upright_fraction` of the output) and, when asked for,
-        ``slide`` (:func:`foot_slide` of the output).
+        ``slide`` (:func:`foot_slide` of the output) and ``sideways``
+        (degrees between the output's :func:`heading_gap` and the source's;
+        ``None`` where either has none).
     """
     out: Dict[str, Optional[float]] = {}
     if "steps" in keys:
@@ -198,10 +234,12 @@ def retarget_quality(source: Motion, output: Motion,
         out["upright"] = upright_fraction(output)
     if "slide" in keys:
         out["slide"] = foot_slide(output)
+    if "sideways" in keys:
+        out["sideways"] = _sideways(source, output)
     return out
 
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel",
            "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
-           "retarget_quality"]
+           "HEADING_TRAVEL", "heading_gap", "retarget_quality"]

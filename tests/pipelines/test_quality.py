@@ -10,7 +10,7 @@ from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, forward_tracks,
-                                         ground_height,
+                                         ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, retarget_quality, root_travel,
                                          step_correlation, upright_fraction)
@@ -125,3 +125,23 @@ def test_foot_slide_tells_planted_feet_from_skating():
     skating = foot_slide(walk.with_(translations=translations))
     assert skating > planted + 0.5 * speed / walk.height()
     assert retarget_quality(walk, walk, ("slide",)) == {"slide": pytest.approx(planted)}
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped"])
+def test_heading_gap_tells_a_walk_from_a_side_step_and_a_crab(species):
+    """A zoo walk travels the way its hips face (under a degree), the zoo's
+    side walks (which go diagonally) about 50 degrees off; the walk's root path turned 60 degrees
+    to the left about its start, the body still facing ahead, is 60
+    degrees more: retarget_quality's sideways reads the difference."""
+    from satagraph.ops.rotation_numpy import yaw_matrix_numpy
+    walk = _walk(species)
+    assert abs(heading_gap(walk)) < 2.0
+    assert 40.0 < abs(heading_gap(_walk(species, "side"))) < 65.0
+    translations = walk.translations.copy()
+    start = translations[:1, 0]
+    translations[:, 0] = (translations[:, 0] - start) @ yaw_matrix_numpy(np.radians(60)).T + start
+    crab = walk.with_(translations=translations)
+    assert heading_gap(crab) - heading_gap(walk) == pytest.approx(60.0, abs=1e-6)
+    assert retarget_quality(walk, crab, ("sideways",))["sideways"] == pytest.approx(60.0, abs=1e-6)
+    translations[:, 0] = start  # a walk on the spot
+    assert heading_gap(walk.with_(translations=translations)) is None
