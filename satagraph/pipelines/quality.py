@@ -169,7 +169,8 @@ def heading_gap(canonical: Motion) -> Optional[float]:
     pos = canonical.global_positions()
     facing = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
     travel = pos[-1, 0] - pos[0, 0]
-    if facing is None or np.linalg.norm(travel[[0, 2]]) < HEADING_TRAVEL * leg_length(canonical):
+    leg = motion_leg_length(pos, character_height(canonical.skeleton, pos))
+    if facing is None or np.linalg.norm(travel[[0, 2]]) < HEADING_TRAVEL * leg:
         return None
     facing = (facing / np.maximum(np.linalg.norm(facing, axis=-1, keepdims=True), 1e-9)).sum(0)
     gap = np.arctan2(travel[0], travel[2]) - np.arctan2(facing[0], facing[2])

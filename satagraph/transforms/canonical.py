@@ -40,7 +40,12 @@ def lateral_forward(positions: np.ndarray, names: List[str],
         - **positions**: :math:`(..., J, 3)`
         - **output**: :math:`(..., 3)`
     """
-    left, right = lateral_pairs(names)
+    return _across_forward(positions, *lateral_pairs(names), up)
+
+
+def _across_forward(positions: np.ndarray, left: List[int], right: List[int],
+                    up: np.ndarray) -> Optional[np.ndarray]:
+    """``across x up`` over the given pairs (``None`` without pairs)."""
     if not left:
         return None
     across = (positions[..., left, :] - positions[..., right, :]).mean(-2)
@@ -94,11 +99,7 @@ def body_forward(positions: np.ndarray, skeleton: Skeleton,
         - **output**: :math:`(..., 3)`
     """
     first = positions.reshape(-1, *positions.shape[-2:])[0]
-    left, right = facing_pairs(skeleton, first)
-    if not left:
-        return None
-    across = (positions[..., left, :] - positions[..., right, :]).mean(-2)
-    return np.cross(across, up)
+    return _across_forward(positions, *facing_pairs(skeleton, first), up)
 
 
 def detect_forward(motion: Motion, up: np.ndarray) -> np.ndarray:
