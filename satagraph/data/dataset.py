@@ -50,6 +50,7 @@ def data_facing_smooth(data: Optional[Mapping[str, Any]]) -> float:
     model trained on them reads the root's facing frame with."""
     return feature_options((data or {}).get("preprocessing"))["facing_smooth"]
 
+
 #: ``data.augment`` defaults as a dict: the one set,
 #: :class:`~satagraph.transforms.augment.AugmentConfig`.
 AUGMENT_DEFAULTS: Dict[str, float] = asdict(AUGMENT)

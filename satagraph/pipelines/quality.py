@@ -117,9 +117,10 @@ def step_correlation(source: Motion, output: Motion) -> float:
     return mean_correlation(correlate(limb_tracks(source), limb_tracks(output)))
 
 
-def leg_length(canonical: Motion) -> float:
-    """:func:`satagraph.motion.leg_length` of a canonical motion."""
-    pos = canonical.global_positions()
+def leg_length(canonical: Motion, positions: Optional[np.ndarray] = None) -> float:
+    """:func:`satagraph.motion.leg_length` of a canonical motion (from its
+    global joint positions where the caller has them)."""
+    pos = canonical.global_positions() if positions is None else positions
     return motion_leg_length(pos, character_height(canonical.skeleton, pos))
 
 
@@ -169,8 +170,8 @@ def heading_gap(canonical: Motion) -> Optional[float]:
     pos = canonical.global_positions()
     facing = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
     travel = pos[-1, 0] - pos[0, 0]
-    leg = motion_leg_length(pos, character_height(canonical.skeleton, pos))
-    if facing is None or np.linalg.norm(travel[[0, 2]]) < HEADING_TRAVEL * leg:
+    if facing is None or (np.linalg.norm(travel[[0, 2]])
+                          < HEADING_TRAVEL * leg_length(canonical, pos)):
         return None
     facing = (facing / np.maximum(np.linalg.norm(facing, axis=-1, keepdims=True), 1e-9)).sum(0)
     gap = np.arctan2(travel[0], travel[2]) - np.arctan2(facing[0], facing[2])
