@@ -27,7 +27,8 @@ diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinemati
 on every group's motions: direction of travel (walk / back / left / right),
 Froude speed ordering walk < run < dash, stillness of bow and bye, how far
 forward motions travel off the body's facing (``sideways``, median degrees:
-a crabwise walk); and the same probes per skeleton (one rig a body plan, real rigs too), every probe
+a crabwise walk) and how fast their facing turns (``turn``, median degrees
+a second: real forward walks and runs turn 2-3); and the same probes per skeleton (one rig a body plan, real rigs too), every probe
 prompt with ``--probe-seeds`` seeds (6: 24 walking generations a skeleton).
 
     python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
@@ -74,7 +75,7 @@ from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
                                           generate_on, load_generator, rig_inputs)
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
-from satagraph.pipelines.quality import heading_gap  # noqa: E402
+from satagraph.pipelines.quality import heading_gap, turn_rate  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
                                                    describe_features, froude_speed,
                                                    leg_length)
@@ -104,6 +105,7 @@ class Item:
     travel: np.ndarray  # final ground displacement in the start facing frame, leg lengths
     contact: Tuple[float, float]  # foot sliding (heights/s), penetration (heights)
     sideways: float = float("nan")  # degrees between travel and facing (see sideways)
+    turn: float = float("nan")  # signed degrees a second the facing turns (see turning)
     motion: Optional[Motion] = field(default=None, repr=False)
 
 
@@ -117,7 +119,8 @@ def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
     motion = features_to_motion(feats)
     return Item(describe_features(feats, ends), captions, label, group, skeleton,
                 feats.num_frames / feats.fps, froude_speed(feats, ends), travel,
-                contact_quality(feats), sideways(motion), motion if keep else None)
+                contact_quality(feats), sideways(motion), turning(motion),
+                motion if keep else None)
 
 
 def sideways(motion: Motion) -> float:
@@ -126,6 +129,13 @@ def sideways(motion: Motion) -> float:
     faces (a crabwise walk); NaN where it has none."""
     gap = heading_gap(motion)
     return float("nan") if gap is None else abs(gap)
+
+
+def turning(motion: Motion) -> float:
+    """:func:`~satagraph.pipelines.quality.turn_rate` of a canonical motion
+    (signed degrees a second, positive to the left); NaN where it has none."""
+    rate = turn_rate(motion)
+    return float("nan") if rate is None else rate
 
 
 def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:
@@ -395,18 +405,28 @@ def direction_ok(label: str, travel: np.ndarray) -> bool:
 FORWARD = ("walk", "run", "dash")
 
 
+def _forward_median(labels: Sequence[str], values: Optional[Sequence[float]]
+                    ) -> Optional[Tuple[float, int]]:
+    """Median and count of the finite magnitudes of :obj:`values` over the
+    forward actions (:data:`FORWARD`); ``None`` where there are none."""
+    if values is None:
+        return None
+    ahead = [abs(v) for l, v in zip(labels, values) if l in FORWARD and np.isfinite(v)]
+    return (float(np.median(ahead)), len(ahead)) if ahead else None
+
+
 def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
-           froudes: Sequence[float], gaps: Optional[Sequence[float]] = None
-           ) -> Dict[str, object]:
+           froudes: Sequence[float], gaps: Optional[Sequence[float]] = None,
+           turns: Optional[Sequence[float]] = None) -> Dict[str, object]:
     """Direction accuracy, walk < run < dash ordering of mean Froude speed,
     share of still bow / bye motions and, with :obj:`gaps` (:func:`sideways`
-    per motion), their median over the forward actions (:data:`FORWARD`),
-    over labelled motions."""
+    per motion) and :obj:`turns` (:func:`turning`), their median magnitude
+    over the forward actions (:data:`FORWARD`), over labelled motions."""
     out: Dict[str, object] = {}
-    if gaps is not None:
-        ahead = [g for l, g in zip(labels, gaps) if l in FORWARD and np.isfinite(g)]
-        if ahead:
-            out["sideways"] = (float(np.median(ahead)), len(ahead))
+    for key, values in (("sideways", gaps), ("turn", turns)):
+        found = _forward_median(labels, values)
+        if found is not None:
+            out[key] = found
     dirs = [direction_ok(l, t) for l, t in zip(labels, travels) if l in DIRECTIONS]
     if dirs:
         out["direction"] = (float(np.mean(dirs)), len(dirs))
@@ -529,7 +549,7 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
     settings = settings or GenerationSettings()
     rows = []
     for name, (subject, target) in targets.items():
-        labels, travels, froudes, gaps = [], [], [], []
+        labels, travels, froudes, gaps, turns = [], [], [], [], []
         for prompt, label in PROBE_PROMPTS:
             for seed in range(seeds):
                 motion = generate_on(module, prompt.format(subject), target, seconds, seed,
@@ -537,9 +557,9 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
                 it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
                              name, name)
                 labels.append(label), travels.append(it.travel), froudes.append(it.froude)
-                gaps.append(it.sideways)
+                gaps.append(it.sideways), turns.append(it.turn)
         rows.append({"skeleton": name, "subject": subject,
-                     "probes": probes(labels, travels, froudes, gaps)})
+                     "probes": probes(labels, travels, froudes, gaps, turns)})
     return rows
 
 
@@ -573,7 +593,8 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
         row.update(group=name, row=kind, action=recogniser.accuracy([it.desc for it in items],
                                                               [it.label for it in test]),
                    probes=probes([it.label for it in test], [it.travel for it in items],
-                                 [it.froude for it in items], [it.sideways for it in items]))
+                                 [it.froude for it in items], [it.sideways for it in items],
+                                 [it.turn for it in items]))
         rows.append(row)
     return rows
 
@@ -600,6 +621,8 @@ def probe_cell(p: Dict[str, object]) -> str:
         parts.append(f"still {p['still'][0]:.0%} (n={p['still'][1]})")
     if "sideways" in p:
         parts.append(f"sideways {p['sideways'][0]:.0f} deg (n={p['sideways'][1]})")
+    if "turn" in p:
+        parts.append(f"turn {p['turn'][0]:.1f} deg/s (n={p['turn'][1]})")
     return "; ".join(parts)
 
 

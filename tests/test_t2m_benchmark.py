@@ -46,6 +46,29 @@ def test_sideways_reads_travel_against_the_body_facing():
     assert out["sideways"] == (np.median([walk.sideways, crab.sideways]), 2)
 
 
+def test_turn_reads_how_fast_the_facing_turns():
+    """A zoo walk keeps its facing (a few degrees a second); the same root
+    features with 20 degrees a second of yaw rate added read exactly 20
+    more; the forward actions' median magnitude goes in the probes."""
+    from dataclasses import replace
+    from satagraph.data.features import motion_to_features
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.transforms.canonical import canonicalize
+    rig = [r for r in zoo_rigs(seed=1) if r.species == "biped"][0]
+    feats = motion_to_features(canonicalize(generate_clip(rig, "walk", frames=90, seed=0),
+                                            fps=30.0))
+    walk = t2m.measure(feats, [], "walk", "zoo", "biped")
+    r = feats.r.copy()
+    r[:, 0] += np.radians(20.0)
+    turned = t2m.measure(replace(feats, r=r), [], "walk", "zoo", "biped")
+    assert abs(walk.turn) < 5.0
+    assert turned.turn - walk.turn == pytest.approx(20.0, abs=1e-6)
+    out = t2m.probes(["walk", "bow", "run"], [walk.travel] * 3, [0.3, 0.0, 0.6],
+                     turns=[walk.turn, turned.turn, -turned.turn])
+    assert out["turn"] == (np.median([abs(walk.turn), abs(turned.turn)]), 2)
+    assert t2m.probe_cell(out).endswith(f"; turn {out['turn'][0]:.1f} deg/s (n=2)")
+
+
 @pytest.mark.slow
 def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     torch.set_num_threads(1)

@@ -20,6 +20,8 @@ computed the same way on the source and on the output:
 * :func:`heading_gap`: the angle between where the body travels and where
   it faces (0 for a walk, 90 for a side-step); a retarget should keep the
   source's (``sideways``: the difference).
+* :func:`turn_rate`: how fast the body's facing turns over the clip, in
+  degrees per second (2-3 for the zoo's forward walks and runs).
 
 All of them take canonical motions (:func:`~satagraph.transforms.canonical.canonicalize`:
 +Y up, metres, floor at 0); :func:`retarget_quality` compares a source with
@@ -178,6 +180,27 @@ def heading_gap(canonical: Motion) -> Optional[float]:
     return float(np.degrees((gap + np.pi) % (2 * np.pi) - np.pi))
 
 
+#: Seconds averaged at each end of a clip by :func:`turn_rate` (about half
+#: a stride, so that the sway of the hips does not count as a turn).
+TURN_EDGE = 0.25
+
+
+def turn_rate(canonical: Motion) -> Optional[float]:
+    r"""Signed degrees per second by which the body's facing (its left/right
+    pairs nearest the root, :func:`~satagraph.transforms.canonical.body_forward`)
+    turns from the clip's start to its end, positive to the left: the
+    unwrapped facing yaw averaged over :data:`TURN_EDGE` seconds at each end.
+    ``None`` without left/right pairs or for a clip under twice that long."""
+    pos = canonical.global_positions()
+    facing = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
+    edge = max(1, int(round(TURN_EDGE * canonical.fps)))
+    if facing is None or canonical.num_frames < 2 * edge:
+        return None
+    yaw = np.unwrap(np.arctan2(facing[:, 0], facing[:, 2]))
+    seconds = (canonical.num_frames - edge) / canonical.fps
+    return float(np.degrees(yaw[-edge:].mean() - yaw[:edge].mean()) / seconds)
+
+
 def _sideways(source: Motion, output: Motion) -> Optional[float]:
     """Degrees between the output's :func:`heading_gap` and the source's."""
     a, b = heading_gap(source), heading_gap(output)
@@ -244,4 +267,4 @@ def retarget_quality(source: Motion, output: Motion,
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel",
            "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
-           "HEADING_TRAVEL", "heading_gap", "retarget_quality"]
+           "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "retarget_quality"]

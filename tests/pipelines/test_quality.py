@@ -13,7 +13,7 @@ from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, for
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, retarget_quality, root_travel,
-                                         step_correlation, upright_fraction)
+                                         step_correlation, turn_rate, upright_fraction)
 
 
 def _walk(species: str, kind: str = "walk", frames: int = 90):
@@ -145,3 +145,25 @@ def test_heading_gap_tells_a_walk_from_a_side_step_and_a_crab(species):
     assert retarget_quality(walk, crab, ("sideways",))["sideways"] == pytest.approx(60.0, abs=1e-6)
     translations[:, 0] = start  # a walk on the spot
     assert heading_gap(walk.with_(translations=translations)) is None
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped"])
+def test_turn_rate_reads_a_straight_walk_and_a_turned_one(species):
+    """A zoo walk keeps its facing (under 8 degrees a second: the hips'
+    sway is averaged out at both ends); the same walk turned progressively
+    to the left about +Y, 60 degrees from its first frame to its last,
+    reads exactly 60 over its duration more, and to the right as much less."""
+    from satagraph.ops.rotation_numpy import yaw_matrix_numpy
+    walk = _walk(species)
+    base = turn_rate(walk)
+    assert abs(base) < 8.0
+    for sign in (1.0, -1.0):
+        yaw = yaw_matrix_numpy(np.radians(sign * 60.0) * np.linspace(0.0, 1.0, walk.num_frames))
+        rotations = walk.rotations.copy()
+        rotations[:, 0] = yaw @ rotations[:, 0]
+        translations = walk.translations.copy()
+        translations[:, 0] = np.einsum("tij,tj->ti", yaw, translations[:, 0])
+        turned = walk.with_(rotations=rotations, translations=translations)
+        expected = sign * 60.0 / ((walk.num_frames - 1) / walk.fps)
+        assert turn_rate(turned) - base == pytest.approx(expected, abs=1e-6)
+    assert turn_rate(walk.slice(0, 10)) is None  # shorter than both ends
