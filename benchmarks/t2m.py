@@ -28,8 +28,9 @@ on every group's motions: direction of travel (walk / back / left / right),
 Froude speed ordering walk < run < dash, stillness of bow and bye, how far
 forward motions travel off the body's facing (``sideways``, median degrees:
 a crabwise walk) and how fast their facing turns (``turn``, median degrees
-a second: real forward walks and runs turn 2-3); and the same probes per skeleton (one rig a body plan, real rigs too), every probe
-prompt with ``--probe-seeds`` seeds (6: 24 walking generations a skeleton).
+a second: real forward walks and runs turn 2-3); and the same probes per
+skeleton (one rig a body plan, real rigs too), every probe prompt with
+``--probe-seeds`` seeds (6: 24 walking generations a skeleton).
 
     python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
         [--reference builtin] [--prompts val] [--guidance G] [--temperature T]

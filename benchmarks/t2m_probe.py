@@ -3,10 +3,10 @@ a first part of item 8): for each skeleton file and prompt, several seeds
 of ``satagraph generate``'s motion are read back in the canonical frame
 (+Y up, metres, facing +Z at frame 0) and measured:
 
-- **turn**: degrees the body's facing turns from start to end (positive: to
-  the left; :func:`~satagraph.pipelines.quality.turn_rate` times the time
-  between its two averaged ends), mean over seeds, and the share of seeds
-  turning the prompt's way (left / right prompts);
+- **turn**: degrees a second by which the body's facing turns from start to
+  end (positive: to the left; :func:`~satagraph.pipelines.quality.turn_rate`),
+  mean over seeds, and the share of seeds turning the prompt's way (left /
+  right prompts);
 - **speed**: mean ground speed of the root in m/s (still prompts should be
   slow, walks faster);
 - **time**: median wall time of one generation (10 decoding steps,
@@ -37,7 +37,7 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.transforms.rig_reading import normalize_up_axis, parse_units, with_rig  # noqa: E402
 from satagraph.pipelines.generate import generate_on, load_generator  # noqa: E402
-from satagraph.pipelines.quality import TURN_EDGE, turn_rate  # noqa: E402
+from satagraph.pipelines.quality import turn_rate  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 
@@ -54,13 +54,12 @@ PROMPTS: Tuple[Tuple[str, str], ...] = (
 
 
 def turn_and_speed(motion: Motion, fps: float = 30.0) -> Tuple[float, float]:
-    """Degrees turned (left positive; 0 for a body without left/right pairs)
-    and mean root ground speed (m/s) of a motion, in the canonical frame."""
+    """Turn rate (degrees a second, left positive; 0 for a body without
+    left/right pairs) and mean root ground speed (m/s) of a motion, in the
+    canonical frame."""
     canon = canonicalize(motion, fps=fps)
-    rate = turn_rate(canon) or 0.0
-    seconds = (canon.num_frames - max(1, int(round(TURN_EDGE * fps)))) / fps
     feats = motion_to_features(canon)
-    return rate * seconds, float(np.linalg.norm(feats.r[:, 1:3], axis=1).mean())
+    return turn_rate(canon) or 0.0, float(np.linalg.norm(feats.r[:, 1:3], axis=1).mean())
 
 
 def probe(module, subject: str, target: Motion, seconds: float,
@@ -98,7 +97,7 @@ def main(argv=None) -> int:
     torch.set_num_threads(args.threads)
     warnings.simplefilter("ignore")
     module = load_generator(args.ckpt)
-    print("| skeleton | prompt | turn (deg, mean) | seeds turning the asked way | "
+    print("| skeleton | prompt | turn (deg/s, mean) | seeds turning the asked way | "
           "speed (m/s) | time (s) |\n|---|---|---|---|---|---|")
     for item in args.skeleton:
         plan, _, path = item.partition("=")
@@ -107,7 +106,7 @@ def main(argv=None) -> int:
         for row in probe(module, SUBJECTS.get(plan, "a character"), target, args.seconds,
                          args.seeds):
             way = "" if np.isnan(row["right_way"]) else f"{row['right_way']:.0%}"
-            print(f"| {plan} | {row['text']} | {row['turn']:+.0f} | {way} | "
+            print(f"| {plan} | {row['text']} | {row['turn']:+.1f} | {way} | "
                   f"{row['speed']:.2f} | {row['time']:.2f} |")
     return 0
 
