@@ -124,19 +124,21 @@ def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
                 motion if keep else None)
 
 
+def _or_nan(value: Optional[float]) -> float:
+    return float("nan") if value is None else float(value)
+
+
 def sideways(motion: Motion) -> float:
     """:func:`~satagraph.pipelines.quality.heading_gap` of a canonical
     motion, unsigned: degrees between where it travels and where its body
     faces (a crabwise walk); NaN where it has none."""
-    gap = heading_gap(motion)
-    return float("nan") if gap is None else abs(gap)
+    return abs(_or_nan(heading_gap(motion)))
 
 
 def turning(motion: Motion) -> float:
     """:func:`~satagraph.pipelines.quality.turn_rate` of a canonical motion
     (signed degrees a second, positive to the left); NaN where it has none."""
-    rate = turn_rate(motion)
-    return float("nan") if rate is None else rate
+    return _or_nan(turn_rate(motion))
 
 
 def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:

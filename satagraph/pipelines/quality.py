@@ -29,7 +29,7 @@ its retarget.
 """
 from __future__ import annotations
 
-from typing import Dict, Optional, Sequence
+from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -43,6 +43,18 @@ from satagraph.motion import Motion, character_height, leg_length as motion_leg_
 #: Displacement interval of :func:`step_correlation` (frames at 30 fps, 0.1 s):
 #: the stepping band (1-3 Hz) without frame-to-frame capture jitter.
 LAG = 3
+
+
+def _body_facing(canonical: Motion) -> Tuple[np.ndarray, Optional[np.ndarray]]:
+    r"""Global joint positions of a canonical motion and its body's
+    horizontal forward per frame (:func:`~satagraph.transforms.canonical.body_forward`
+    about +Y; ``None`` without left/right pairs).
+
+    Shapes:
+        output: :math:`(T, J, 3)` and :math:`(T, 3)`.
+    """
+    pos = canonical.global_positions()
+    return pos, body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
 
 
 def facing_axis(canonical: Motion) -> Optional[np.ndarray]:
@@ -169,8 +181,7 @@ def heading_gap(canonical: Motion) -> Optional[float]:
     0 for a walk, 90 for a side-step; a body that walks crabwise shows the
     angle. ``None`` without left/right pairs, or under
     :data:`HEADING_TRAVEL` leg lengths of travel."""
-    pos = canonical.global_positions()
-    facing = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
+    pos, facing = _body_facing(canonical)
     travel = pos[-1, 0] - pos[0, 0]
     if facing is None or (np.linalg.norm(travel[[0, 2]])
                           < HEADING_TRAVEL * leg_length(canonical, pos)):
@@ -191,8 +202,7 @@ def turn_rate(canonical: Motion) -> Optional[float]:
     turns from the clip's start to its end, positive to the left: the
     unwrapped facing yaw averaged over :data:`TURN_EDGE` seconds at each end.
     ``None`` without left/right pairs or for a clip under twice that long."""
-    pos = canonical.global_positions()
-    facing = body_forward(pos, canonical.skeleton, np.array([0.0, 1.0, 0.0]))
+    _, facing = _body_facing(canonical)
     edge = max(1, int(round(TURN_EDGE * canonical.fps)))
     if facing is None or canonical.num_frames < 2 * edge:
         return None
