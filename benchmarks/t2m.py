@@ -284,16 +284,37 @@ class Recogniser(nn.Module):
     def forward(self, desc: torch.Tensor) -> torch.Tensor:
         return self.net((desc - self.mean) / self.std)
 
-    def accuracy(self, descs: Sequence[np.ndarray], labels: Sequence[str]) -> Optional[float]:
-        """Share of motions (of a label it knows) classified as the label
-        their prompt asks for."""
+    def predict(self, descs: Sequence[np.ndarray], labels: Sequence[str]
+                ) -> List[Tuple[str, str]]:
+        """``(asked, recognised)`` label pairs of the motions whose asked
+        label it knows."""
         known = [(d, l) for d, l in zip(descs, labels) if l in self.labels]
         if not known:
-            return None
+            return []
         with torch.no_grad():
             pred = self(torch.tensor(np.stack([d for d, _ in known]),
                                      dtype=torch.float32)).argmax(1).tolist()
-        return float(np.mean([self.labels[p] == l for p, (_, l) in zip(pred, known)]))
+        return [(l, self.labels[p]) for p, (_, l) in zip(pred, known)]
+
+    def accuracy(self, descs: Sequence[np.ndarray], labels: Sequence[str]) -> Optional[float]:
+        """Share of motions (of a label it knows) classified as the label
+        their prompt asks for."""
+        pairs = self.predict(descs, labels)
+        return float(np.mean([a == b for a, b in pairs])) if pairs else None
+
+    def by_label(self, descs: Sequence[np.ndarray], labels: Sequence[str]
+                 ) -> Dict[str, Dict[str, object]]:
+        """Per asked label: ``n``, the share recognised as it and the label
+        recognised most often instead (``None`` when never wrong)."""
+        out: Dict[str, Dict[str, object]] = {}
+        for asked in sorted(set(labels)):
+            got = [b for a, b in self.predict(descs, labels) if a == asked]
+            if not got:
+                continue
+            wrong = [b for b in got if b != asked]
+            out[asked] = {"n": len(got), "accuracy": 1.0 - len(wrong) / len(got),
+                          "instead": max(set(wrong), key=wrong.count) if wrong else None}
+        return out
 
 
 def train_recogniser(items: Sequence[Item], steps: int, seed: int,
@@ -593,8 +614,9 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                     None if same else reference, reps, groups)
         row.update(slide=float(np.mean([it.contact[0] for it in items])),
                    penetration=float(np.mean([it.contact[1] for it in items])))
-        row.update(group=name, row=kind, action=recogniser.accuracy([it.desc for it in items],
-                                                              [it.label for it in test]),
+        descs, labels = [it.desc for it in items], [it.label for it in test]
+        row.update(group=name, row=kind, action=recogniser.accuracy(descs, labels),
+                   action_by_label=recogniser.by_label(descs, labels),
                    probes=probes([it.label for it in test], [it.travel for it in items],
                                  [it.froude for it in items], [it.sideways for it in items],
                                  [it.turn for it in items]))
@@ -645,6 +667,29 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
             f"{fmt(r['slide'])} | {fmt(r['penetration'], 4)} | "
             f"{probe_cell(r['probes'])} |")
     return "\n".join(lines)
+
+
+def action_table(rows: Sequence[Dict[str, object]]) -> str:
+    """Action accuracy per asked action of each group's rows, with the
+    action recognised most often instead."""
+    out = []
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group and r["row"] != "shuffled captions"]
+        asked = list(dict.fromkeys(a for r in mine for a in r["action_by_label"]))
+        if not asked:
+            continue
+        out += [f"\nAction accuracy per asked action, {group} (most often recognised "
+                "instead):\n", "| action | n | " + " | ".join(r["row"] for r in mine) + " |",
+                "|---|---:|" + "---|" * len(mine)]
+        for a in asked:
+            cells = []
+            for r in mine:
+                c = r["action_by_label"].get(a)
+                cells.append("" if c is None else f"{c['accuracy']:.2f}"
+                             + (f" ({c['instead']})" if c["instead"] else ""))
+            n = next(r["action_by_label"][a]["n"] for r in mine if a in r["action_by_label"])
+            out.append(f"| {a} | {n} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n" if out else ""
 
 
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
@@ -767,6 +812,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     text = (f"# Text-to-motion evaluation\n\n`{command}`\n\n{json.dumps(run['facts'])}\n\n"
             f"{table(rows)}\n")
+    text += action_table(rows)
     if run["skeletons"]:
         text += ("\nGenerator probes per skeleton (4 s, prompts of bandai's wording):\n\n"
                  "| skeleton | subject | probes |\n|---|---|---|\n" + "\n".join(

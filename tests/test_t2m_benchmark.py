@@ -78,7 +78,31 @@ def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     assert {"real", "shuffled captions", "retrieval (own rig)"} <= set(rows)
     assert result["facts"]["pool_size"] == 32
     assert rows["real"]["R@3"][0] > rows["shuffled captions"]["R@3"][0] + 0.3
-    assert "| zoo | real |" in (tmp_path / "t2m_quick.md").read_text()
+    text = (tmp_path / "t2m_quick.md").read_text()
+    assert "| zoo | real |" in text and "Action accuracy per asked action, zoo" in text
+    by_label = rows["real"]["action_by_label"]
+    n = sum(c["n"] for c in by_label.values())
+    assert rows["real"]["action"] == pytest.approx(
+        sum(c["n"] * c["accuracy"] for c in by_label.values()) / n)
+
+
+def test_recogniser_reports_accuracy_per_asked_action():
+    """A recogniser that always answers ``walk``: right on every walk, wrong
+    on every run (recognised as a walk instead), and labels it does not know
+    are left out."""
+    model = t2m.Recogniser(2, ["run", "walk"])
+    with torch.no_grad():
+        for p in model.parameters():
+            p.zero_()
+        model.net[-1].bias.copy_(torch.tensor([0.0, 1.0]))
+    descs = [np.zeros(2)] * 5
+    labels = ["walk", "walk", "run", "run", "bow"]
+    assert model.accuracy(descs, labels) == 0.5
+    assert model.by_label(descs, labels) == {
+        "run": {"n": 2, "accuracy": 0.0, "instead": "walk"},
+        "walk": {"n": 2, "accuracy": 1.0, "instead": None}}
+    rows = [{"group": "zoo", "row": "real", "action_by_label": model.by_label(descs, labels)}]
+    assert "| run | 2 | 0.00 (walk) |" in t2m.action_table(rows)
 
 
 def test_validation_prompts_and_sampling_settings():
