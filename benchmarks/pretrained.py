@@ -10,6 +10,10 @@ canonical frame at 30 fps), scored without a ground truth by
   zoo rigs, >= 0.7 on the real rigs.
 - **travel**: the retarget's root path in leg lengths over the source's.
   Target 0.8-1.25.
+- **stride** (diagnostic): how far the limb ends swing fore and aft
+  relative to the root, in leg lengths, over the source's
+  (:func:`~satagraph.quality.stride`); a retarget that travels as far as
+  its source on a shorter stride skates.
 - **ground**: median lowest-joint height, % of the character's height.
   Target |ground| <= 3 %. Retargets are grounded by default
   (:func:`~satagraph.transforms.ground.ground_retarget`: one vertical shift
@@ -78,7 +82,7 @@ ZOO_FRAMES, REAL_SECONDS, RECON_FRAMES = 120, 10.0, 128
 TRAIN_SPECIES = ["biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab", "spider"]
 HOLDOUT = ["longtail", "spider/palps"]
 #: What each retarget row measures (foot sliding reported, no target).
-QUALITY = ("steps", "travel", "ground", "upright", "slide", "sideways")
+QUALITY = ("steps", "travel", "stride", "ground", "upright", "slide", "sideways")
 TARGETS = {"steps_zoo": 0.8, "steps_real": 0.7, "travel": (0.8, 1.25), "ground": 0.03,
            "upright": 0.95, "jp_zoo": 0.05, "jp_real": 0.08}
 
@@ -210,14 +214,15 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
         clip = motion.slice(0, min(motion.num_frames, RECON_FRAMES)) if group.startswith(
             "held") else recon_window(motion)
         src, raw = retarget_canonical(module, clip, clip, embed, rest=rest, ground=False)
-        steps = retarget_quality(src, raw, ("steps",))["steps"]
+        same_rig = retarget_quality(src, raw, ("steps", "stride"))
         grounded = ground_like(raw, src)
         rows["reconstruction"].append(dict(group=group, case=case,
                                            jp=joint_error(src, raw),
                                            pose=joint_error(src, raw, relative=True),
                                            local=joint_error(src, raw, heading=True),
                                            grounded_jp=joint_error(src, grounded),
-                                           height=src.height(), steps=steps,
+                                           height=src.height(), steps=same_rig["steps"],
+                                           stride=same_rig["stride"],
                                            slide=foot_slide(grounded),
                                            source_slide=foot_slide(src)))
     return rows
@@ -249,6 +254,12 @@ def _degrees(value: Optional[float]) -> str:
     return "-" if value is None else f"{value:.0f}"
 
 
+def _ratio(value: Optional[float]) -> str:
+    """A ratio cell; "-" where there is none (no limb ends, or results
+    measured before it)."""
+    return "-" if value is None else f"{value:.2f}"
+
+
 def _slide(row: dict) -> str:
     return f"{row['slide']:.2f} ({row['source_slide']:.2f})"
 
@@ -257,25 +268,28 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
     lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose; {seconds:.0f} s on "
              "this machine.", "",
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
-             "| travel ratio (0.8-1.25) | ground, % height (<= 3) "
+             "| travel ratio (0.8-1.25) | stride ratio (diagnostic) | ground, % height (<= 3) "
              "| decoder's ground (--no-ground) | upright (>= 95%) "
              "| source upright | foot slide, H/s (source) | sideways, deg | all targets met |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows["retarget"]:
         lines.append(f"| {r['group']} | {r['case']} | {r['source']} | {r['target']} "
-                     f"| {r['steps']:+.2f} | {r['travel']:.2f} | {100 * r['ground']:+.1f} "
+                     f"| {r['steps']:+.2f} | {r['travel']:.2f} | {_ratio(r.get('stride'))} "
+                     f"| {100 * r['ground']:+.1f} "
                      f"| {100 * r['decoder_ground']:+.1f} | {_pct(r['upright'])} | {_pct(r['source_upright'])} "
                      f"| {_slide(r)} | {_degrees(r.get('sideways'))} | {_ok(r)} |")
     lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met "
               "| JP, grounded (--ground) | root-relative JP | pose alone (also heading-free) "
-              "| steps (same rig; diagnostic) | foot slide, H/s (source) |",
-              "|---|---|---:|---|---:|---:|---:|---:|---:|"]
+              "| steps (same rig; diagnostic) | stride ratio (diagnostic) "
+              "| foot slide, H/s (source) |",
+              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|"]
     for r in rows["reconstruction"]:
         limit = TARGETS["jp_zoo" if r["group"].startswith("held") else "jp_real"]
         steps = "-" if r.get("steps") is None else f"{r['steps']:+.2f}"
         lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
                      f"| {'yes' if r['jp'] <= limit else 'no'} | {100 * r['grounded_jp']:.1f} "
-                     f"| {100 * r['pose']:.1f} | {_local(r)} | {steps} | {_slide(r)} |")
+                     f"| {100 * r['pose']:.1f} | {_local(r)} | {steps} "
+                     f"| {_ratio(r.get('stride'))} | {_slide(r)} |")
     return "\n".join(lines) + "\n"
 
 

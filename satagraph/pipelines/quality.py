@@ -13,6 +13,9 @@ computed the same way on the source and on the output:
 * :func:`root_travel`: the root's horizontal path length divided by the
   leg length (the root's median height above the lowest joint), so that a
   cat and a horse that walk alike travel alike.
+* :func:`stride`: how far the limb ends swing fore and aft relative to the
+  root, in leg lengths; a retarget that travels as far as its source on a
+  shorter stride skates.
 * :func:`ground_height`: the median over frames of the lowest joint's
   height, as a fraction of the character's height (0: feet on the floor).
 * :func:`upright_fraction`: the share of frames whose head is above the
@@ -144,6 +147,20 @@ def root_travel(canonical: Motion) -> float:
     return float(np.linalg.norm(np.diff(xz, axis=0), axis=-1).sum() / leg_length(canonical))
 
 
+def stride(canonical: Motion) -> Optional[float]:
+    """How far the limb ends swing fore and aft relative to the root, in
+    leg lengths: the mean over limbs of the spread (10th to 90th
+    percentile) of :func:`limb_tracks`. A walk whose feet stay planted
+    swings them as far as the root travels in a stance; a retarget whose
+    stride is shorter than its source's while it travels as far skates.
+    ``None`` for a skeleton without limb ends."""
+    tracks = limb_tracks(canonical)
+    if not tracks:
+        return None
+    spread = [np.percentile(t, 90) - np.percentile(t, 10) for t in tracks.values()]
+    return float(np.mean(spread) / leg_length(canonical))
+
+
 def ground_height(canonical: Motion) -> float:
     """:func:`satagraph.transforms.ground.ground_level` of a canonical
     motion: its median lowest joint above the floor, in its heights."""
@@ -256,13 +273,17 @@ def retarget_quality(source: Motion, output: Motion,
         (:func:`upright_fraction` of the output) and, when asked for,
         ``slide`` (:func:`foot_slide` of the output) and ``sideways``
         (degrees between the output's :func:`heading_gap` and the source's;
-        ``None`` where either has none).
+        ``None`` where either has none) and ``stride`` (the output's
+        :func:`stride` over the source's).
     """
     out: Dict[str, Optional[float]] = {}
     if "steps" in keys:
         out["steps"] = step_correlation(source, output)
     if "travel" in keys:
         out["travel"] = root_travel(output) / max(root_travel(source), 1e-9)
+    if "stride" in keys:
+        a, b = stride(source), stride(output)
+        out["stride"] = None if a is None or b is None else b / max(a, 1e-9)
     if "ground" in keys:
         out["ground"] = ground_height(output)
     if "upright" in keys:
@@ -275,6 +296,6 @@ def retarget_quality(source: Motion, output: Motion,
 
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
-           "mean_correlation", "step_correlation", "leg_length", "root_travel",
+           "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride",
            "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "retarget_quality"]

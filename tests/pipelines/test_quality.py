@@ -13,7 +13,7 @@ from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, for
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, retarget_quality, root_travel,
-                                         step_correlation, turn_rate, upright_fraction)
+                                         step_correlation, stride, turn_rate, upright_fraction)
 
 
 def _walk(species: str, kind: str = "walk", frames: int = 90):
@@ -125,6 +125,25 @@ def test_foot_slide_tells_planted_feet_from_skating():
     skating = foot_slide(walk.with_(translations=translations))
     assert skating > planted + 0.5 * speed / walk.height()
     assert retarget_quality(walk, walk, ("slide",)) == {"slide": pytest.approx(planted)}
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped"])
+def test_stride_reads_the_limb_swing_in_leg_lengths(species):
+    """A walk swings its limb ends fore and aft by a sizeable share of its
+    leg (whatever the character's size); its first pose dragged along the
+    same path has no stride at all, and retarget_quality gives the
+    output's stride over the source's."""
+    walk = _walk(species)
+    swing = stride(walk)
+    assert 0.2 < swing < 1.5
+    big = walk.with_(skeleton=walk.skeleton.replace(offsets=walk.skeleton.offsets * 2.5),
+                     translations=walk.translations * 2.5)
+    assert stride(big) == pytest.approx(swing, rel=1e-6)
+    rotations = np.repeat(walk.rotations[:1], walk.num_frames, axis=0)
+    frozen = walk.with_(rotations=rotations)
+    assert stride(frozen) < 0.02 * swing
+    assert retarget_quality(walk, walk, ("stride",)) == {"stride": pytest.approx(1.0)}
+    assert retarget_quality(walk, frozen, ("stride",))["stride"] < 0.02
 
 
 @pytest.mark.parametrize("species", ["biped", "quadruped"])
