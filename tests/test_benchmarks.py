@@ -246,13 +246,14 @@ def test_pretrained_pose_error_leaves_out_the_root_path(tiny_motion):
     assert pretrained.joint_error(tiny_motion, moved) == pytest.approx(0.3 / height)
     assert pretrained.joint_error(tiny_motion, moved, relative=True) == pytest.approx(0.0, abs=1e-9)
     row = dict(group="real, never trained", case="dog/x.bvh", jp=0.58, grounded_jp=0.58,
-               pose=0.41, local=0.12, height=0.46, steps=0.5, slide=0.37, source_slide=0.07)
+               pose=0.41, local=0.12, height=0.46, steps=0.5, stride=0.75, slide=0.37,
+               source_slide=0.07)
     text = pretrained.table({"retarget": [], "reconstruction": [row]}, "builtin", 1.0)
     assert ("| real, never trained | dog/x.bvh | 58.0 | no | 58.0 | 41.0 | 12.0 | +0.50 "
-            "| 0.37 (0.07) |") in text
-    del row["local"]  # results measured before the column
+            "| 0.75 | 0.37 (0.07) |") in text
+    del row["local"], row["stride"]  # results measured before the columns
     text = pretrained.table({"retarget": [], "reconstruction": [row]}, "builtin", 1.0)
-    assert "| 58.0 | 41.0 | - | +0.50 |" in text
+    assert "| 58.0 | 41.0 | - | +0.50 | - |" in text
 
 
 def test_pretrained_heading_free_pose_error_leaves_out_the_facing_drift(tiny_motion):
