@@ -129,18 +129,20 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
 
 
 def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]]) -> Dict[str, dict]:
-    """Mean steps, the share of travel ratios within 0.8-1.25 and the
+    """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
-    :func:`~satagraph.pipelines.quality.heading_gap`) per pair name."""
+    :func:`~satagraph.pipelines.quality.heading_gap`) and of the stride
+    ratio (:func:`~satagraph.pipelines.quality.stride`) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
         src, out = retarget_canonical(module, source, target, module.embed)
-        got.setdefault(name, []).append(retarget_quality(src, out,
-                                                         ("steps", "travel", "sideways")))
+        got.setdefault(name, []).append(retarget_quality(src, out, ("steps", "travel",
+                                                                    "sideways", "stride")))
     return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
                        travel=float(np.median([q["travel"] for q in v])),
                        travel_ok=float(np.mean([0.8 <= q["travel"] <= 1.25 for q in v])),
-                       sideways=_median([q["sideways"] for q in v]))
+                       sideways=_median([q["sideways"] for q in v]),
+                       stride=_median([q["stride"] for q in v]))
             for name, v in got.items()}
 
 
@@ -163,14 +165,17 @@ def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]
 
 
 def measure(module, motion: Motion) -> dict:
-    """JP, root-relative JP (fractions of the height) and facing drift."""
+    """JP, root-relative JP (fractions of the height), facing drift and the
+    stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
+    source)."""
     src, out = retarget_canonical(module, motion, motion, module.embed, ground=False)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
     drift = None if fa is None or fb is None else float(np.abs((fb - fa) - (fb - fa)[0]).mean())
     return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True),
-                local=joint_error(src, out, heading=True), drift=drift)
+                local=joint_error(src, out, heading=True), drift=drift,
+                stride=retarget_quality(src, out, ("stride",))["stride"])
 
 
 def summarise(values: List[dict]) -> dict:
@@ -179,7 +184,8 @@ def summarise(values: List[dict]) -> dict:
     return dict(n=len(values), median=float(np.median(jp)), mean=float(jp.mean()),
                 pose=float(np.median([v["pose"] for v in values])),
                 local=float(np.median([v["local"] for v in values])),
-                drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None)
+                drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None,
+                stride=_median([v.get("stride") for v in values]))
 
 
 def table(summary: Dict[str, Dict[str, dict]], seconds: float,
@@ -190,7 +196,8 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
              "JP, % of the height: median (mean) over a group's clips; real groups also give "
              "the median root-relative error (pose; in brackets with each frame turned about "
              "+Y onto the source's: the pose alone, without the decoded facing's drift) and the "
-             "mean facing drift (degrees).", "",
+             "mean facing drift (degrees); stride: the median stride ratio (limb ends' "
+             "fore-aft swing, output over source).", "",
              "| group | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
              "|---|---:|" + "---:|" * len(names)]
     for group in summary[names[0]]:
@@ -202,16 +209,19 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
                 cell += f", pose {100 * s['pose']:.1f} ({100 * s['local']:.1f})"
                 if s["drift"] is not None:
                     cell += f", drift {s['drift']:.0f}"
+            if s.get("stride") is not None:
+                cell += f", stride {s['stride']:.2f}"
             cells.append(cell)
         lines.append(f"| {group} | {summary[names[0]][group]['n']} | " + " | ".join(cells) + " |")
     if retargets:
         lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25), "
-                  "median degrees sideways of the source's heading.", "",
+                  "median degrees sideways of the source's heading, median stride ratio.", "",
                   "| retarget | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
                   "|---|---:|" + "---:|" * len(names)]
         for pair in retargets[names[0]]:
             cells = [f"{r['steps']:+.2f}, {r['travel']:.2f} ({100 * r['travel_ok']:.0f}%)"
                      + ("" if r.get("sideways") is None else f", {r['sideways']:.0f} deg")
+                     + ("" if r.get("stride") is None else f", stride {r['stride']:.2f}")
                      for r in (retargets[k][pair] for k in names)]
             lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)
                          + " |")

@@ -299,3 +299,10 @@ def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
     rt = {"a.ckpt": {"zoo biped -> bird": dict(n=2, steps=0.935, travel=0.88, travel_ok=0.5)}}
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s}}, 1.0, rt)
     assert "| zoo biped -> bird | 2 | +0.94, 0.88 (50%) |" in text
+    strides = [dict(c, stride=v) for c, v in zip(clips, (0.7, None, 0.8))]
+    s = pretrained_val.summarise(strides)
+    assert s["stride"] == pytest.approx(0.75)
+    rt["a.ckpt"]["zoo biped -> bird"]["stride"] = 0.66
+    text = pretrained_val.table({"a.ckpt": {"zoo biped": s}}, 1.0, rt)
+    assert "| zoo biped | 3 | 20.0 (20.0), stride 0.75 |" in text
+    assert "| zoo biped -> bird | 2 | +0.94, 0.88 (50%), stride 0.66 |" in text
