@@ -307,8 +307,9 @@ class Recogniser(nn.Module):
         """Per asked label: ``n``, the share recognised as it and the label
         recognised most often instead (``None`` when never wrong)."""
         out: Dict[str, Dict[str, object]] = {}
+        pairs = self.predict(descs, labels)
         for asked in sorted(set(labels)):
-            got = [b for a, b in self.predict(descs, labels) if a == asked]
+            got = [b for a, b in pairs if a == asked]
             if not got:
                 continue
             wrong = [b for b in got if b != asked]

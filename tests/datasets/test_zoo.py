@@ -167,7 +167,7 @@ def _elevation(v: np.ndarray) -> np.ndarray:
 def test_quadrupeds_carry_neck_and_head_differently():
     """Quadrupeds draw their carriage: over 24 rigs the neck rises from
     below the horizontal to well above it (it was always 63 degrees; the
-    real dog carries it 9-28 up and lower when sniffing) and the head
+    real dog carries it 8-28 up and lower when sniffing) and the head
     points from well below to above the horizontal, as the dog's does
     (-10..+21); the feet still stand on the ground."""
     from satagraph.datasets.zoo.bodies import _quadruped
