@@ -246,8 +246,9 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
         The panels (source first), the ground truth file, the mean joint
         position error of the rescaled human against it, relative to the
         height (see :func:`pose_error`), and per target the
-        :func:`~satagraph.quality.retarget_quality` of its retarget (with
-        the source's own root travel, ``source_travel``, in leg lengths).
+        :func:`~satagraph.quality.retarget_quality` of its retarget, its
+        stride included (with the source's own root travel,
+        ``source_travel``, in leg lengths).
     """
     from satagraph.transforms.augment import scale_bones
     from satagraph.pipelines.inference import from_canonical, retarget_canonical
@@ -265,8 +266,9 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
     qualities: Dict[str, Dict] = {}
     for title, target in targets:
         src, canon = retarget_canonical(module, source, target, embed, window, window // 4)
-        qualities[title.split(":")[0]] = dict(retarget_quality(src, canon),
-                                              source_travel=root_travel(src))
+        quality = retarget_quality(src, canon, ("steps", "travel", "stride", "ground",
+                                                "upright"))
+        qualities[title.split(":")[0]] = dict(quality, source_travel=root_travel(src))
         stem = title.split(": ")[1] + ("_rescaled" if title.startswith("rescaled") else "")
         panels.append(Panel(title, from_canonical(canon, source),
                             str(folder / f"walk_on_{stem}.bvh")))
@@ -279,9 +281,12 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
 
 def quality_note(qualities: Dict[str, Dict], error: float) -> str:
     """One line per model: each target's in-step correlation with the source
-    (1 = every limb in step, 0 = chance or still) and its root travel
-    against the source's (1.00 = as far, in leg lengths)."""
+    (1 = every limb in step, 0 = chance or still), its root travel against
+    the source's (1.00 = as far, in leg lengths) and its stride against the
+    source's (how far the limb ends swing; where it is shorter than the
+    travel, the feet skate)."""
     parts = [f"{name} steps {q['steps']:+.2f} travel {q['travel']:.2f}x"
+             + ("" if q.get("stride") is None else f" stride {q['stride']:.2f}x")
              for name, q in qualities.items()]
     return ("; ".join(parts) + f"; rescaled human joint error {100 * error:.1f}% of "
             "its height vs the bone-scaled ground truth")
@@ -414,7 +419,9 @@ def format_summary(result: DemoResult) -> str:
     if any(step.quality for step in result.steps):
         lines.append("  steps: correlation of each limb end's forward swing with the source's "
                      "(+1 in step, 0 chance or standing still); travel: root distance in leg "
-                     "lengths against the source's (1.00x = as far)")
+                     "lengths against the source's (1.00x = as far); stride: how far the limb "
+                     "ends swing fore and aft against the source's (a stride shorter than the "
+                     "travel: the feet skate)")
     return "\n".join(lines)
 
 
