@@ -50,6 +50,7 @@ import json
 import sys
 import time
 import warnings
+from collections import Counter
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
@@ -305,16 +306,17 @@ class Recogniser(nn.Module):
     def by_label(self, descs: Sequence[np.ndarray], labels: Sequence[str]
                  ) -> Dict[str, Dict[str, object]]:
         """Per asked label: ``n``, the share recognised as it and the label
-        recognised most often instead (``None`` when never wrong)."""
+        recognised most often instead (the first met among equals; ``None``
+        when never wrong)."""
         out: Dict[str, Dict[str, object]] = {}
         pairs = self.predict(descs, labels)
         for asked in sorted(set(labels)):
             got = [b for a, b in pairs if a == asked]
             if not got:
                 continue
-            wrong = [b for b in got if b != asked]
-            out[asked] = {"n": len(got), "accuracy": 1.0 - len(wrong) / len(got),
-                          "instead": max(set(wrong), key=wrong.count) if wrong else None}
+            wrong = Counter(b for b in got if b != asked)
+            out[asked] = {"n": len(got), "accuracy": 1.0 - sum(wrong.values()) / len(got),
+                          "instead": wrong.most_common(1)[0][0] if wrong else None}
         return out
 
 

@@ -147,14 +147,16 @@ def root_travel(canonical: Motion) -> float:
     return float(np.linalg.norm(np.diff(xz, axis=0), axis=-1).sum() / leg_length(canonical))
 
 
-def stride(canonical: Motion) -> Optional[float]:
+def stride(canonical: Motion, tracks: Optional[Dict[str, np.ndarray]] = None
+           ) -> Optional[float]:
     """How far the limb ends swing fore and aft relative to the root, in
     leg lengths: the mean over limbs of the spread (10th to 90th
     percentile) of :func:`limb_tracks`. A walk whose feet stay planted
     swings them as far as the root travels in a stance; a retarget whose
     stride is shorter than its source's while it travels as far skates.
-    ``None`` for a skeleton without limb ends."""
-    tracks = limb_tracks(canonical)
+    ``None`` for a skeleton without limb ends (:obj:`tracks`: its
+    :func:`limb_tracks` where the caller has them)."""
+    tracks = limb_tracks(canonical) if tracks is None else tracks
     if not tracks:
         return None
     spread = [np.percentile(t, 90) - np.percentile(t, 10) for t in tracks.values()]
@@ -277,12 +279,14 @@ def retarget_quality(source: Motion, output: Motion,
         :func:`stride` over the source's).
     """
     out: Dict[str, Optional[float]] = {}
+    if "steps" in keys or "stride" in keys:  # both read the limb tracks
+        tracks = limb_tracks(source), limb_tracks(output)
     if "steps" in keys:
-        out["steps"] = step_correlation(source, output)
+        out["steps"] = mean_correlation(correlate(*tracks))
     if "travel" in keys:
         out["travel"] = root_travel(output) / max(root_travel(source), 1e-9)
     if "stride" in keys:
-        a, b = stride(source), stride(output)
+        a, b = stride(source, tracks[0]), stride(output, tracks[1])
         out["stride"] = None if a is None or b is None else b / max(a, 1e-9)
     if "ground" in keys:
         out["ground"] = ground_height(output)
