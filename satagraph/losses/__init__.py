@@ -40,6 +40,11 @@ term                    weight  definition
                                 (facing frame), weighted by the contact: the
                                 stride, which ``foot_sliding`` leaves to the
                                 root as well (not in SAME; off by default)
+``amplitude``           0       MSE of every joint's standard deviation over
+                                its clip, per axis, in the facing frame: the
+                                swing of the limbs, which the mean squared
+                                errors shrink where the phase is unsure (not
+                                in SAME; off by default)
 ``penetration``         0.1     mean of ``min(y, 0)^2`` of predicted positions
 ``smoothness``          0.015   mean squared norm of the deviation of the
                                 second time differences of global positions
@@ -73,11 +78,11 @@ term                    weight  definition
 from satagraph.losses.motion_loss import DEFAULT_WEIGHTS, MotionLoss
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         time_difference, to_global)
-from satagraph.losses.terms import (contact_loss, foot_sliding_loss, limb_velocity_loss,
+from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss, limb_velocity_loss,
                                     penetration_loss, root_transfer_loss, rotation_loss,
                                     smoothness_loss, stance_loss, velocity_loss)
 
 __all__ = ["DEFAULT_WEIGHTS", "MotionLoss", "POSITION_SCALE", "facing_positions",
-           "position_scale", "time_difference", "to_global", "contact_loss",
+           "position_scale", "time_difference", "to_global", "amplitude_loss", "contact_loss",
            "foot_sliding_loss", "limb_velocity_loss", "penetration_loss", "root_transfer_loss",
            "rotation_loss", "smoothness_loss", "stance_loss", "velocity_loss"]

@@ -139,6 +139,33 @@ def stance_loss(local_pred: Tensor, local_true: Tensor, c_true: Tensor, batch) -
     return _masked_mean(value, batch.node_time > 0)
 
 
+def amplitude_loss(local_pred: Tensor, local_true: Tensor, batch) -> Tensor:
+    r"""Mean squared difference of every joint's spread over its clip: the
+    standard deviation over time of each axis of the facing-frame position
+    (relative to the root's ground projection), predicted against true.
+    The mean squared position error is lowest, for a decoder unsure of a
+    limb's phase, at a motion of smaller swing; this term scores the swing
+    itself (how far a foot reaches fore and aft, how high it lifts), not
+    where in it each frame is.
+
+    Shapes:
+        - **local_pred**, **local_true**: :math:`(N, 3)` facing-frame
+          positions
+        - **output**: scalar
+    """
+    return (_spread(local_pred, batch) - _spread(local_true, batch)).pow(2).sum(-1).mean()
+
+
+def _spread(pos: Tensor, batch) -> Tensor:
+    """Standard deviation over time of each stream's (clip joint's)
+    positions, :math:`(S, 3)`."""
+    from torch_geometric.utils import scatter
+    size = int(batch.num_streams)
+    mean = scatter(pos, batch.node_stream, 0, size, "mean")
+    var = scatter((pos - mean[batch.node_stream]).pow(2), batch.node_stream, 0, size, "mean")
+    return (var + 1e-6).sqrt()
+
+
 def penetration_loss(pos_pred: Tensor) -> Tensor:
     r"""Mean of :math:`\min(y, 0)^2` (the ground is at :math:`y = 0`).
 
@@ -164,4 +191,4 @@ def smoothness_loss(pos_pred: Tensor, batch, pos_true: Optional[Tensor] = None,
 
 
 __all__ = ["rotation_loss", "velocity_loss", "limb_velocity_loss", "contact_loss",
-           "foot_sliding_loss", "penetration_loss", "smoothness_loss"]
+           "foot_sliding_loss", "amplitude_loss", "penetration_loss", "smoothness_loss"]

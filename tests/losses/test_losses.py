@@ -11,7 +11,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.examples import example_motion
 from satagraph.data.features import motion_to_features
 from satagraph.data.normalizer import FeatureNormalizer
-from satagraph.losses import (DEFAULT_WEIGHTS, MotionLoss, facing_positions,
+from satagraph.losses import (DEFAULT_WEIGHTS, MotionLoss, amplitude_loss, facing_positions,
                               foot_sliding_loss, penetration_loss, rotation_loss,
                               smoothness_loss, stance_loss, time_difference, to_global,
                               velocity_loss)
@@ -20,7 +20,7 @@ from satagraph.ops.rotation import matrix_to_rotation_6d
 
 FPS = 30.0
 ZERO_AT_TARGET = ("rotation", "position", "global_position", "velocity", "root", "contact",
-                  "smoothness", "stance")
+                  "smoothness", "stance", "amplitude")
 
 
 def walk_clip(frames: int = 20, start: int = 0) -> MotionClip:
@@ -181,6 +181,27 @@ def test_stance_is_the_stride_of_joints_in_contact(batch):
     assert stance_loss(off, true, 0 * contact, batch).item() == 0.0
     half = (torch.arange(batch.num_nodes) % 2).float()[:, None]
     assert 0 < stance_loss(off, true, half, batch).item() < 0.25
+
+
+def test_amplitude_scores_the_swing_not_the_phase(batch):
+    """Zero at the target, for a constant offset and for the motion played
+    mirrored about each joint's mean (same swing, every frame wrong); a
+    swing of half the size costs a quarter of the true spreads' mean
+    squared norm, and its gradient widens the swing."""
+    true = torch.randn(batch.num_nodes, 3, generator=torch.Generator().manual_seed(0))
+    assert amplitude_loss(true, true, batch).item() == 0.0
+    assert amplitude_loss(true + 2.0, true, batch).item() == pytest.approx(0.0, abs=1e-6)
+    mean = torch.zeros(batch.num_streams, 3).index_reduce_(
+        0, batch.node_stream, true, "mean", include_self=False)[batch.node_stream]
+    assert amplitude_loss(2 * mean - true, true, batch).item() == pytest.approx(0.0, abs=1e-6)
+    spread = true.new_zeros(batch.num_streams, 3).index_reduce_(
+        0, batch.node_stream, (true - mean).pow(2), "mean", include_self=False)
+    half = (mean + 0.5 * (true - mean)).requires_grad_(True)
+    loss = amplitude_loss(half, true, batch)
+    assert loss.item() == pytest.approx(0.25 * spread.sum(-1).mean().item(), rel=1e-4)
+    loss.backward()
+    wider = (half - 0.1 * half.grad).detach()
+    assert amplitude_loss(wider, true, batch) < loss
 
 
 def test_smoothness(batch):
