@@ -253,6 +253,17 @@ def _export_source(source: str) -> str:
     return source
 
 
+def _previous_provenance(source: str) -> dict:
+    """``{"previous": ...}``: the provenance of a weights file re-exported
+    (a new decoder, half precision), so that how it was first trained
+    stays with it; ``{}`` for a checkpoint."""
+    from satagraph.io.weights import is_weights_file, read_weights_metadata
+    if not is_weights_file(source):
+        return {}
+    previous = read_weights_metadata(source).get("provenance") or {}
+    return {"previous": previous} if previous else {}
+
+
 def run_export_weights(args) -> int:
     from satagraph import __version__
     from satagraph.utils.files import check_output_path
@@ -269,7 +280,8 @@ def run_export_weights(args) -> int:
                                     ("machine", args.machine), ("note", args.note))
                   if v is not None}
     provenance.update(source=source, satagraph_version=__version__,
-                      **({"decoder": args.decoder} if args.decoder else {}))
+                      **({"decoder": args.decoder} if args.decoder else {}),
+                      **_previous_provenance(source))
     size = save_weights(module, args.output, half=args.half,
                         training_data=args.training_data, provenance=provenance,
                         force=args.force)

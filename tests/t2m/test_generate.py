@@ -246,7 +246,13 @@ def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
     half = tmp_path / "half.safetensors"
     assert main(["export-weights", str(t2m_ckpt), str(half), "--half"]) == 0
     swapped = tmp_path / "swapped.safetensors"
-    assert main(["export-weights", str(half), str(swapped), "--decoder", str(tuned_ckpt)]) == 0
+    assert main(["export-weights", str(half), str(swapped), "--decoder", str(tuned_ckpt),
+                 "--minutes", "3"]) == 0
+    from satagraph.io.weights import read_weights_metadata
+    provenance = read_weights_metadata(swapped)["provenance"]  # the first export's stays
+    assert provenance["decoder"] == str(tuned_ckpt) and provenance["minutes"] == 3.0
+    assert provenance["previous"] == read_weights_metadata(half)["provenance"]
+    assert provenance["previous"]["source"] == str(t2m_ckpt)
     module, original = load_module(str(swapped)), load_module(str(half))
     for name, value in module.autoencoder.state_dict().items():  # the tuned RVQ's ...
         torch.testing.assert_close(value, tuned.state_dict()[name], rtol=0, atol=0, msg=name)
