@@ -74,7 +74,7 @@ from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noq
                                           matching_score, multimodality, r_precision,
                                           replicate, subsample)
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
+from satagraph.pipelines.generate import (GenerationSettings, decode_on, encode_windows,  # noqa: E402
                                           generate_on, load_generator, rig_inputs)
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.quality import heading_gap, turn_rate  # noqa: E402
@@ -489,15 +489,13 @@ def transfer(module, source: Motion, target: Motion, smooth: float = SMOOTH) -> 
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
     its own rig, decoded on :obj:`target`'s rig (latents smoothed over
     :obj:`smooth` frames) and put on the floor as generated motion is
-    (canonical features)."""
-    from satagraph.data.collate import collate_clips
+    (canonical features); both in the RVQ's training windows."""
     with torch.no_grad():
         rig = rig_inputs(module, source)
-        clip = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module)).to_clip(
-            0, None, rig.semantic)
-        codes, lengths = module.batch_codes(collate_clips([clip]).to(module.device))
-        motion = decode_on(module, codes[0][: int(lengths[0])], rig_inputs(module, target),
-                           ground=True, smooth=smooth)
+        feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
+        codes = encode_windows(module.autoencoder, feats, rig.semantic)
+        motion = decode_on(module, codes, rig_inputs(module, target), ground=True,
+                           smooth=smooth)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 

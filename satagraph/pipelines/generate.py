@@ -29,7 +29,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 import torch
@@ -39,8 +39,8 @@ from satagraph.transforms.ground import ground_at
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
-from satagraph.pipelines.inference import (restore_rest, shown_rest, static_features,
-                                           target_clip)
+from satagraph.pipelines.inference import (default_windows, restore_rest, shown_rest,
+                                           static_features, target_clip, window_plan)
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion
 
@@ -195,23 +195,65 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
     its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`;
     the latents smoothed over :obj:`smooth` frames first, see
-    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`).
+    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`). Decoded window
+    by window (:func:`decode_windows`).
 
     Shapes:
         - **codes**: :math:`(T, Q)`
     """
-    ae = module.autoencoder
     frames, num = codes.size(0), rig.feats.skeleton.num_joints
-    target = collate_clips([target_clip(rig.feats, frames, rig.semantic)]).to(module.device)
-    out = ae.decode_codes(codes, target, smooth)
-    q = out["q"].view(frames, num, 6).cpu().double().numpy()
-    r = out["r"].cpu().double().numpy()
+    q, r = decode_windows(module.autoencoder, codes, rig, smooth)
+    q = q.view(frames, num, 6).cpu().double().numpy()
+    r = r.cpu().double().numpy()
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
     motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
                           rig.undo, rig.canon.skeleton)
     if ground:
         motion = ground_at(motion)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)
+
+
+def encode_windows(autoencoder, feats: MotionFeatures,
+                   semantic: Optional[torch.Tensor] = None) -> torch.Tensor:
+    r"""Per-frame codes of a motion's features by a SATA-RVQ, in its
+    training windows as :func:`decode_windows` decodes them (each window's
+    frames before the previous window's stop left out).
+
+    Shapes:
+        - **output**: :math:`(T, Q)`
+    """
+    window, overlap = default_windows(autoencoder)
+    device = next(autoencoder.parameters()).device
+    codes = []
+    for start, stop, keep in window_plan(feats.num_frames, window, overlap):
+        batch = collate_clips([feats.to_clip(start, stop, semantic)]).to(device)
+        codes.append(autoencoder.codes(batch)[keep - start:])
+    return torch.cat(codes)
+
+
+def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,
+                   smooth: float = 0.0) -> Tuple[torch.Tensor, torch.Tensor]:
+    r"""Physical ``q`` and ``r`` of per-frame codes decoded onto :obj:`rig`
+    in the autoencoder's training windows, a quarter of each shared with
+    the next and cropped as :func:`~satagraph.pipelines.inference.transfer`
+    does (:func:`~satagraph.pipelines.inference.window_plan`). The temporal
+    layers' sinusoidal positions were learnt on that many frames; decoded
+    whole, a 4-second walk lost its pace after the 64 frames the shipped
+    RVQ was trained on (root speed falling to a third of the source's).
+
+    Shapes:
+        - **codes**: :math:`(T, Q)`
+        - **output**: :math:`(T \cdot J, 6)` and :math:`(T, 4)`
+    """
+    window, overlap = default_windows(autoencoder)
+    qs, rs = [], []
+    for start, stop, keep in window_plan(codes.size(0), window, overlap):
+        target = collate_clips([target_clip(rig.feats, stop - start, rig.semantic)])
+        out = autoencoder.decode_codes(codes[start:stop], target.to(codes.device), smooth)
+        num = rig.feats.skeleton.num_joints
+        qs.append(out["q"].view(stop - start, num, 6)[keep - start:].reshape(-1, 6))
+        rs.append(out["r"][keep - start:])
+    return torch.cat(qs), torch.cat(rs)
 
 
 def output_paths(output: str, skeletons: Sequence[str]) -> List[str]:

@@ -273,3 +273,42 @@ def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
     line = _error(capsys)
     assert "moved.ckpt" in line and "model.encoder." in line and "optim.frozen" in line
     assert not bad.exists()
+
+
+def test_codes_go_through_the_autoencoder_in_its_training_windows(t2m_ckpt, monkeypatch):
+    """A motion longer than the RVQ's training window (32 frames here) is
+    encoded and decoded window by window: no call sees more frames than the
+    window, the first window's frames are what that window alone gives, and
+    a motion within one window is decoded exactly as in one call."""
+    from satagraph.data.collate import collate_clips
+    from satagraph.data.features import motion_to_features
+    from satagraph.datasets.zoo import zoo_rigs
+    from satagraph.datasets.zoo.motions import generate_clip
+    from satagraph.pipelines.generate import (decode_windows, encode_windows, load_generator,
+                                              rig_inputs)
+    from satagraph.pipelines.inference import facing_smooth_of, target_clip
+    module = load_generator(str(t2m_ckpt))
+    ae = module.autoencoder
+    assert ae.meta["window"] == 32
+    rig = next(r for r in zoo_rigs(["biped"], seed=5))
+    inputs = rig_inputs(module, generate_clip(rig, "walk", frames=80, seed=0))
+    feats = motion_to_features(inputs.shown, facing_smooth=facing_smooth_of(module))
+    seen = []
+    codes_of, decode = ae.codes, ae.decode_codes
+    monkeypatch.setattr(ae, "codes", lambda batch: seen.append(batch.num_graphs) or codes_of(batch))
+    monkeypatch.setattr(ae, "decode_codes", lambda c, t, s=0.0: seen.append(c.size(0))
+                        or decode(c, t, s))
+    codes = encode_windows(ae, feats, inputs.semantic)
+    q, r = decode_windows(ae, codes, inputs)
+    assert codes.shape == (80, module.num_quantizers) and bool((codes >= 0).all())
+    assert r.shape == (80, 4) and q.shape == (80 * feats.skeleton.num_joints, 6)
+    assert len(seen) == 6 and max(seen) <= 32  # 3 windows (stride 24) each way
+    first = codes_of(collate_clips([feats.to_clip(0, 32, inputs.semantic)]))
+    assert torch.equal(codes[:32], first)
+    alone = decode(codes[:32], collate_clips([target_clip(inputs.feats, 32, inputs.semantic)]))
+    torch.testing.assert_close(r[:32], alone["r"])
+    short = codes[:20]
+    q_short, r_short = decode_windows(ae, short, inputs)
+    whole = decode(short, collate_clips([target_clip(inputs.feats, 20, inputs.semantic)]))
+    torch.testing.assert_close(r_short, whole["r"])
+    torch.testing.assert_close(q_short, whole["q"])
