@@ -38,6 +38,7 @@ from __future__ import annotations
 import copy
 import math
 import os
+import warnings
 from typing import Any, Dict, List, Optional, Tuple
 
 import lightning as L
@@ -178,6 +179,24 @@ class TextToMotionModule(L.LightningModule):
         if want != have:
             raise ValueError(f"data.preprocessing.facing_smooth={have:g} is not the autoencoder's "
                              f"({want:g}); set data.preprocessing.facing_smooth={want:g}")
+
+    def setup(self, stage: str) -> None:
+        if stage == "fit":
+            self._warn_window()
+
+    def _warn_window(self) -> None:
+        """Warns when the data's windows are longer than the autoencoder's
+        training windows: :meth:`batch_codes` encodes each window whole, so
+        the codes past the autoencoder's window come from temporal layers
+        past the positions they learnt (``experiments/T2M.md`` section 18)."""
+        data = self.meta.get("data") if isinstance(self.meta.get("data"), dict) else {}
+        ours, theirs = data.get("window"), self.autoencoder.meta.get("window")
+        if ours and theirs and int(ours) > int(theirs):
+            warnings.warn(f"data.window={int(ours)} is longer than the autoencoder's training "
+                          f"window ({int(theirs)} frames): the codes of the frames past it come "
+                          f"from an encoder beyond the positions it learnt; set data.window="
+                          f"{int(theirs)} or train the autoencoder on {int(ours)}-frame windows",
+                          stacklevel=2)
 
     def build(self, model: Dict[str, Any]) -> None:
         """The skeleton embedding, the two transformers and the length model."""

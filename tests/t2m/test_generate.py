@@ -312,3 +312,20 @@ def test_codes_go_through_the_autoencoder_in_its_training_windows(t2m_ckpt, monk
     whole = decode(short, collate_clips([target_clip(inputs.feats, 20, inputs.semantic)]))
     torch.testing.assert_close(r_short, whole["r"])
     torch.testing.assert_close(q_short, whole["q"])
+
+
+def test_training_on_windows_longer_than_the_autoencoders_warns(autoencoder_ckpt, recwarn):
+    """A generator whose data windows are longer than its RVQ's (32 frames
+    here) is warned when it starts to fit; one within them is not."""
+    from satagraph.lightning.text_to_motion import TextToMotionModule
+    from tests.t2m.conftest import T2M_MODEL
+    for window, warns in ((64, True), (32, False)):
+        module = TextToMotionModule(model=dict(T2M_MODEL, autoencoder=str(autoencoder_ckpt)),
+                                    meta={"module": "t2m", "semantic_encoder": "offline",
+                                          "data": {"window": window}})
+        recwarn.clear()
+        module.setup("fit")
+        found = [str(w.message) for w in recwarn if "training window" in str(w.message)]
+        assert bool(found) == warns
+        if warns:
+            assert "data.window=64" in found[0] and "(32 frames)" in found[0]
