@@ -45,6 +45,10 @@ term                    weight  definition
                                 swing of the limbs, which the mean squared
                                 errors shrink where the phase is unsure (not
                                 in SAME; off by default)
+``limb_amplitude``      0       the same over the limb ends only
+                                (``FrameBatch.clip_limb_ends``): the stride
+                                and the feet's lift, not the wings' or the
+                                tail's swing (off by default)
 ``penetration``         0.1     mean of ``min(y, 0)^2`` of predicted positions
 ``smoothness``          0.015   mean squared norm of the deviation of the
                                 second time differences of global positions
@@ -78,11 +82,13 @@ term                    weight  definition
 from satagraph.losses.motion_loss import DEFAULT_WEIGHTS, MotionLoss
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         time_difference, to_global)
-from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss, limb_velocity_loss,
+from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss,
+                                    limb_end_streams, limb_velocity_loss,
                                     penetration_loss, root_transfer_loss, rotation_loss,
                                     smoothness_loss, stance_loss, velocity_loss)
 
 __all__ = ["DEFAULT_WEIGHTS", "MotionLoss", "POSITION_SCALE", "facing_positions",
            "position_scale", "time_difference", "to_global", "amplitude_loss", "contact_loss",
+           "limb_end_streams",
            "foot_sliding_loss", "limb_velocity_loss", "penetration_loss", "root_transfer_loss",
            "rotation_loss", "smoothness_loss", "stance_loss", "velocity_loss"]

@@ -9,7 +9,8 @@ from torch import Tensor, nn
 
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         to_global)
-from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss, penetration_loss,
+from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss,
+                                    limb_end_streams, penetration_loss,
                                     rotation_loss, smoothness_loss, stance_loss, velocity_loss)
 from satagraph.typing import DYNAMIC_LAYOUT
 
@@ -18,7 +19,7 @@ DEFAULT_WEIGHTS: Dict[str, float] = {
     "root": 10.0, "contact": 1.0,
     "foot_sliding": 6.0, "penetration": 0.1, "smoothness": 0.015, "kl": 1e-4,
     "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0, "stance": 0.0,
-    "amplitude": 0.0,
+    "amplitude": 0.0, "limb_amplitude": 0.0,
 }
 
 
@@ -83,6 +84,7 @@ class MotionLoss(nn.Module):
             "foot_sliding": foot_sliding_loss(glob_p, c_true, batch),
             "stance": stance_loss(local_p, local_t, c_true, batch),
             "amplitude": amplitude_loss(local_p, local_t, batch),
+            "limb_amplitude": amplitude_loss(local_p, local_t, batch, limb_end_streams(batch)),
             "penetration": penetration_loss(local_p),
             "smoothness": smoothness_loss(glob_p, batch, smooth_ref, self.smooth_order),
         }

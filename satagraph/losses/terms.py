@@ -139,21 +139,39 @@ def stance_loss(local_pred: Tensor, local_true: Tensor, c_true: Tensor, batch) -
     return _masked_mean(value, batch.node_time > 0)
 
 
-def amplitude_loss(local_pred: Tensor, local_true: Tensor, batch) -> Tensor:
+def amplitude_loss(local_pred: Tensor, local_true: Tensor, batch,
+                   streams: Optional[Tensor] = None) -> Tensor:
     r"""Mean squared difference of every joint's spread over its clip: the
     standard deviation over time of each axis of the facing-frame position
     (relative to the root's ground projection), predicted against true.
     The mean squared position error is lowest, for a decoder unsure of a
     limb's phase, at a motion of smaller swing; this term scores the swing
     itself (how far a foot reaches fore and aft, how high it lifts), not
-    where in it each frame is.
+    where in it each frame is. :obj:`streams` keeps some joints only
+    (e.g. :func:`limb_end_streams`; zero when it is empty).
 
     Shapes:
         - **local_pred**, **local_true**: :math:`(N, 3)` facing-frame
           positions
+        - **streams**: :math:`(S',)` stream (clip joint) indices
         - **output**: scalar
     """
-    return (_spread(local_pred, batch) - _spread(local_true, batch)).pow(2).sum(-1).mean()
+    diff = (_spread(local_pred, batch) - _spread(local_true, batch)).pow(2).sum(-1)
+    if streams is not None:
+        diff = diff[streams]
+    return diff.mean() if diff.numel() else diff.sum()
+
+
+def limb_end_streams(batch) -> Tensor:
+    r"""Streams (clip joints) of every clip's limb ends
+    (:attr:`~satagraph.data.FrameBatch.clip_limb_ends`).
+
+    Shapes:
+        - **output**: :math:`(S',)`
+    """
+    first = batch.clip_num_joints.cumsum(0) - batch.clip_num_joints
+    ends = batch.clip_limb_ends.to(first.device)
+    return (first[:, None] + ends)[ends >= 0]
 
 
 def _spread(pos: Tensor, batch) -> Tensor:
@@ -191,4 +209,5 @@ def smoothness_loss(pos_pred: Tensor, batch, pos_true: Optional[Tensor] = None,
 
 
 __all__ = ["rotation_loss", "velocity_loss", "limb_velocity_loss", "contact_loss",
-           "foot_sliding_loss", "amplitude_loss", "penetration_loss", "smoothness_loss"]
+           "foot_sliding_loss", "amplitude_loss", "limb_end_streams", "penetration_loss",
+           "smoothness_loss"]

@@ -12,6 +12,7 @@ from satagraph.data.examples import example_motion
 from satagraph.data.features import motion_to_features
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.losses import (DEFAULT_WEIGHTS, MotionLoss, amplitude_loss, facing_positions,
+                              limb_end_streams,
                               foot_sliding_loss, penetration_loss, rotation_loss,
                               smoothness_loss, stance_loss, time_difference, to_global,
                               velocity_loss)
@@ -202,6 +203,24 @@ def test_amplitude_scores_the_swing_not_the_phase(batch):
     loss.backward()
     wider = (half - 0.1 * half.grad).detach()
     assert amplitude_loss(wider, true, batch) < loss
+
+
+def test_limb_amplitude_sees_the_limb_ends_alone(batch):
+    """`limb_end_streams` are each clip's limb-end joints as streams; a
+    swing shrunk on other joints costs the limb term nothing, on a limb end
+    it costs both terms."""
+    batch.clip_limb_ends = torch.tensor([[2, 4, -1, -1], [1, -1, -1, -1], [3, 0, -1, -1]])
+    first = [0] + batch.clip_num_joints.cumsum(0).tolist()[:-1]
+    streams = limb_end_streams(batch)
+    assert streams.tolist() == [2, 4, first[1] + 1, first[2] + 3, first[2]]
+    true = torch.randn(batch.num_nodes, 3, generator=torch.Generator().manual_seed(1))
+    other = torch.ones(batch.num_streams, dtype=torch.bool)
+    other[streams] = False
+    for shrunk, limb_cost in ((other, False), (~other, True)):
+        pred = true.clone()
+        pred[shrunk[batch.node_stream]] *= 0.5
+        assert amplitude_loss(pred, true, batch).item() > 0
+        assert (amplitude_loss(pred, true, batch, streams).item() > 0) == limb_cost
 
 
 def test_smoothness(batch):
