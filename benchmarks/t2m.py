@@ -74,8 +74,9 @@ from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noq
                                           matching_score, multimodality, r_precision,
                                           replicate, subsample)
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.generate import (GenerationSettings, decode_on, encode_windows,  # noqa: E402
-                                          generate_on, load_generator, rig_inputs)
+from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
+                                          encode_windows, generate_on, load_generator,
+                                          rig_inputs)
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.quality import heading_gap, turn_rate  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
