@@ -295,7 +295,8 @@ def test_codes_go_through_the_autoencoder_in_its_training_windows(t2m_ckpt, monk
     feats = motion_to_features(inputs.shown, facing_smooth=facing_smooth_of(module))
     seen = []
     codes_of, decode = ae.codes, ae.decode_codes
-    monkeypatch.setattr(ae, "codes", lambda batch: seen.append(batch.num_graphs) or codes_of(batch))
+    monkeypatch.setattr(ae, "codes",
+                        lambda batch: seen.append(batch.num_graphs) or codes_of(batch))
     monkeypatch.setattr(ae, "decode_codes", lambda c, t, s=0.0: seen.append(c.size(0))
                         or decode(c, t, s))
     codes = encode_windows(ae, feats, inputs.semantic)
