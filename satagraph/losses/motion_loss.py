@@ -9,9 +9,9 @@ from torch import Tensor, nn
 
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         to_global)
-from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss,
-                                    limb_end_streams, penetration_loss,
-                                    rotation_loss, smoothness_loss, stance_loss, velocity_loss)
+from satagraph.losses.terms import (contact_loss, foot_sliding_loss, limb_end_streams,
+                                    penetration_loss, rotation_loss, smoothness_loss,
+                                    spread_error, stance_loss, stream_mean, velocity_loss)
 from satagraph.typing import DYNAMIC_LAYOUT
 
 DEFAULT_WEIGHTS: Dict[str, float] = {
@@ -74,6 +74,7 @@ class MotionLoss(nn.Module):
         local_p, glob_p = self._positions(out["q"], out["r"], batch, fps)
         local_t, glob_t = self._positions(q_true, batch.root.to(out["r"].dtype), batch, fps)
         smooth_ref = glob_t if self.smooth_match_target else None
+        spread = spread_error(local_p, local_t, batch)  # both amplitude terms
         terms = {
             "rotation": rotation_loss(out["q"], q_true, batch),
             "position": F.mse_loss(local_p, local_t),
@@ -83,8 +84,8 @@ class MotionLoss(nn.Module):
             "contact": contact_loss(out["c"], c_true),
             "foot_sliding": foot_sliding_loss(glob_p, c_true, batch),
             "stance": stance_loss(local_p, local_t, c_true, batch),
-            "amplitude": amplitude_loss(local_p, local_t, batch),
-            "limb_amplitude": amplitude_loss(local_p, local_t, batch, limb_end_streams(batch)),
+            "amplitude": stream_mean(spread),
+            "limb_amplitude": stream_mean(spread, limb_end_streams(batch)),
             "penetration": penetration_loss(local_p),
             "smoothness": smoothness_loss(glob_p, batch, smooth_ref, self.smooth_order),
         }

@@ -156,10 +156,27 @@ def amplitude_loss(local_pred: Tensor, local_true: Tensor, batch,
         - **streams**: :math:`(S',)` stream (clip joint) indices
         - **output**: scalar
     """
-    diff = (_spread(local_pred, batch) - _spread(local_true, batch)).pow(2).sum(-1)
+    return stream_mean(spread_error(local_pred, local_true, batch), streams)
+
+
+def spread_error(local_pred: Tensor, local_true: Tensor, batch) -> Tensor:
+    r"""Squared difference of every stream's (clip joint's) spread over its
+    clip, predicted against true, summed over the axes (what
+    :func:`amplitude_loss` averages).
+
+    Shapes:
+        - **local_pred**, **local_true**: :math:`(N, 3)`
+        - **output**: :math:`(S,)`
+    """
+    return (_spread(local_pred, batch) - _spread(local_true, batch)).pow(2).sum(-1)
+
+
+def stream_mean(values: Tensor, streams: Optional[Tensor] = None) -> Tensor:
+    """Mean of per-stream :obj:`values` over :obj:`streams` (all when
+    ``None``; zero when empty)."""
     if streams is not None:
-        diff = diff[streams]
-    return diff.mean() if diff.numel() else diff.sum()
+        values = values[streams]
+    return values.mean() if values.numel() else values.sum()
 
 
 def limb_end_streams(batch) -> Tensor:
@@ -209,5 +226,5 @@ def smoothness_loss(pos_pred: Tensor, batch, pos_true: Optional[Tensor] = None,
 
 
 __all__ = ["rotation_loss", "velocity_loss", "limb_velocity_loss", "contact_loss",
-           "foot_sliding_loss", "amplitude_loss", "limb_end_streams", "penetration_loss",
-           "smoothness_loss"]
+           "foot_sliding_loss", "amplitude_loss", "spread_error", "stream_mean",
+           "limb_end_streams", "penetration_loss", "smoothness_loss"]

@@ -246,11 +246,11 @@ def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,
         - **output**: :math:`(T \cdot J, 6)` and :math:`(T, 4)`
     """
     window, overlap = default_windows(autoencoder)
+    num = rig.feats.skeleton.num_joints
     qs, rs = [], []
     for start, stop, keep in window_plan(codes.size(0), window, overlap):
         target = collate_clips([target_clip(rig.feats, stop - start, rig.semantic)])
         out = autoencoder.decode_codes(codes[start:stop], target.to(codes.device), smooth)
-        num = rig.feats.skeleton.num_joints
         qs.append(out["q"].view(stop - start, num, 6)[keep - start:].reshape(-1, 6))
         rs.append(out["r"][keep - start:])
     return torch.cat(qs), torch.cat(rs)

@@ -128,10 +128,15 @@ def mean_correlation(correlations: Dict[str, float]) -> float:
     return float(np.mean([0.0 if np.isnan(v) else v for v in correlations.values()]))
 
 
-def step_correlation(source: Motion, output: Motion) -> float:
+def step_correlation(source: Motion, output: Motion,
+                     tracks: Optional[Tuple[Dict[str, np.ndarray], Dict[str, np.ndarray]]] = None
+                     ) -> float:
     """:func:`mean_correlation` of the limb-end step correlations of two
-    canonical motions at the same frame rate."""
-    return mean_correlation(correlate(limb_tracks(source), limb_tracks(output)))
+    canonical motions at the same frame rate (:obj:`tracks`: their
+    :func:`limb_tracks` where the caller has them)."""
+    if tracks is None:
+        tracks = limb_tracks(source), limb_tracks(output)
+    return mean_correlation(correlate(*tracks))
 
 
 def leg_length(canonical: Motion, positions: Optional[np.ndarray] = None) -> float:
@@ -282,7 +287,7 @@ def retarget_quality(source: Motion, output: Motion,
     if "steps" in keys or "stride" in keys:  # both read the limb tracks
         tracks = limb_tracks(source), limb_tracks(output)
     if "steps" in keys:
-        out["steps"] = mean_correlation(correlate(*tracks))
+        out["steps"] = step_correlation(source, output, tracks)
     if "travel" in keys:
         out["travel"] = root_travel(output) / max(root_travel(source), 1e-9)
     if "stride" in keys:
