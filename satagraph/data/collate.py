@@ -92,6 +92,32 @@ class FrameBatch(Batch):
         r"""The clip leg length of every row, as :meth:`heights`."""
         return self._per_clip(self.clip_leg, level, "legs")
 
+    def to_clip_list(self) -> List[MotionClip]:
+        r"""The batch's clips back as :class:`MotionClip` objects on the CPU
+        (what :func:`collate_clips` takes): ``collate_clips(b.to_clip_list())``
+        rebuilds :obj:`b`. :meth:`to_data_list` gives frame graphs instead."""
+        frames, joints = self.clip_num_frames.tolist(), self.clip_num_joints.tolist()
+        nodes = [t * j for t, j in zip(frames, joints)]
+        bones = [t * 2 * (j - 1) for t, j in zip(frames, joints)]
+        offsets = [_exclusive_cumsum(v).tolist() for v in (nodes, frames, joints, bones)]
+        return [self._clip(i, *spans) for i, spans in enumerate(zip(*offsets))]
+
+    def _clip(self, i: int, node: int, frame: int, stream: int, edge: int) -> MotionClip:
+        """Clip :obj:`i`, whose nodes, frames, streams and edges start at
+        the given offsets."""
+        num_frames, num_joints = int(self.clip_num_frames[i]), int(self.clip_num_joints[i])
+        streams = slice(stream, stream + num_joints)
+        parents = self.stream_parent[streams]
+        return MotionClip(
+            dynamic=self.x[node:node + num_frames * num_joints].view(
+                num_frames, num_joints, -1).cpu(),
+            root=self.root[frame:frame + num_frames].cpu(),
+            static=self.joint_static[streams].cpu(),
+            semantic=self.joint_semantic[streams].cpu(),
+            parents=torch.where(parents < 0, -1, parents - stream).cpu(),
+            edge_attr=self.edge_attr[edge:edge + 2 * (num_joints - 1)].cpu(),
+            meta=self.meta[i])
+
     def _per_clip(self, values: Tensor, level: str, name: str) -> Tensor:
         index = {"node": "node_clip", "frame": "frame_clip", "stream": "stream_clip"}
         if level not in index:

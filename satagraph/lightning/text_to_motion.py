@@ -38,7 +38,6 @@ from __future__ import annotations
 import copy
 import math
 import os
-import warnings
 from typing import Any, Dict, List, Optional, Tuple
 
 import lightning as L
@@ -50,6 +49,7 @@ from satagraph.semantics import build_text_encoder
 from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
 from satagraph.data.captioned import batch_seconds, batch_texts
 from satagraph.io.checkpoint import CheckpointError
+from satagraph.pipelines.inference import default_windows, window_codes
 from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTransformer,
                                      SkeletonEmbedding, skeleton_graph, split_codes)
 
@@ -180,24 +180,6 @@ class TextToMotionModule(L.LightningModule):
             raise ValueError(f"data.preprocessing.facing_smooth={have:g} is not the autoencoder's "
                              f"({want:g}); set data.preprocessing.facing_smooth={want:g}")
 
-    def setup(self, stage: str) -> None:
-        if stage == "fit":
-            self._warn_window()
-
-    def _warn_window(self) -> None:
-        """Warns when the data's windows are longer than the autoencoder's
-        training windows: :meth:`batch_codes` encodes each window whole, so
-        the codes past the autoencoder's window come from temporal layers
-        past the positions they learnt (``experiments/T2M.md`` section 18)."""
-        data = self.meta.get("data") if isinstance(self.meta.get("data"), dict) else {}
-        ours, theirs = data.get("window"), self.autoencoder.meta.get("window")
-        if ours and theirs and int(ours) > int(theirs):
-            warnings.warn(f"data.window={int(ours)} is longer than the autoencoder's training "
-                          f"window ({int(theirs)} frames): the codes of the frames past it come "
-                          f"from an encoder beyond the positions it learnt; set data.window="
-                          f"{int(theirs)} or train the autoencoder on {int(ours)}-frame windows",
-                          stacklevel=2)
-
     def build(self, model: Dict[str, Any]) -> None:
         """The skeleton embedding, the two transformers and the length model."""
         ae = self.autoencoder
@@ -249,14 +231,21 @@ class TextToMotionModule(L.LightningModule):
 
     @torch.no_grad()
     def batch_codes(self, batch) -> Tuple[Tensor, Tensor]:
-        r"""Codes of every window by the frozen autoencoder.
+        r"""Codes of every window by the frozen autoencoder, in its own
+        training windows where the data's are longer
+        (:func:`~satagraph.pipelines.inference.window_codes`), as
+        :func:`~satagraph.pipelines.generate.decode_on` decodes them.
 
         Shapes:
             - **output**: codes :math:`(B, T_{max}, Q)` (``-1`` after each
               window) and frames :math:`(B,)`
         """
         lengths = batch.clip_num_frames
-        return split_codes(self.autoencoder.codes(batch), lengths), lengths
+        if batch.max_time <= default_windows(self.autoencoder)[0]:
+            codes = self.autoencoder.codes(batch)
+        else:
+            codes = torch.cat(window_codes(self.autoencoder, batch.to_clip_list()))
+        return split_codes(codes, lengths.to(codes.device)), lengths
 
     def skeleton_embedding(self, batch) -> Tensor:
         r""":math:`f_{skel}` of every clip's skeleton (static features

@@ -40,7 +40,8 @@ from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.pipelines.inference import (default_windows, restore_rest, shown_rest,
-                                           static_features, target_clip, window_plan)
+                                           static_features, target_clip, window_codes,
+                                           window_plan)
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion
 
@@ -216,19 +217,13 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
 def encode_windows(autoencoder, feats: MotionFeatures,
                    semantic: Optional[torch.Tensor] = None) -> torch.Tensor:
     r"""Per-frame codes of a motion's features by a SATA-RVQ, in its
-    training windows as :func:`decode_windows` decodes them (each window's
-    frames before the previous window's stop left out).
+    training windows as :func:`decode_windows` decodes them
+    (:func:`~satagraph.pipelines.inference.window_codes`).
 
     Shapes:
         - **output**: :math:`(T, Q)`
     """
-    window, overlap = default_windows(autoencoder)
-    device = next(autoencoder.parameters()).device
-    codes = []
-    for start, stop, keep in window_plan(feats.num_frames, window, overlap):
-        batch = collate_clips([feats.to_clip(start, stop, semantic)]).to(device)
-        codes.append(autoencoder.codes(batch)[keep - start:])
-    return torch.cat(codes)
+    return window_codes(autoencoder, [feats.to_clip(semantic=semantic)])[0]
 
 
 def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,

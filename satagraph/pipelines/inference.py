@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Callable, List, Optional, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 import torch
@@ -32,6 +32,36 @@ def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tu
     starts = window_starts(num_frames, window, window - overlap)
     keep = [0] + [start + window for start in starts[:-1]]
     return [(start, min(start + window, num_frames), k) for start, k in zip(starts, keep)]
+
+
+def clip_frames(clip: MotionClip, start: int, stop: int) -> MotionClip:
+    """Frames ``start:stop`` of :obj:`clip` (its static parts shared)."""
+    meta = dict(clip.meta, start=int(clip.meta.get("start", 0)) + start)
+    return replace(clip, dynamic=clip.dynamic[start:stop], root=clip.root[start:stop],
+                   meta=meta)
+
+
+@torch.no_grad()
+def window_codes(autoencoder, clips: Sequence[MotionClip]) -> List[torch.Tensor]:
+    r"""Per-frame codes of every clip by a SATA-RVQ, encoded in its
+    training windows (:func:`default_windows`, :func:`window_plan`; all
+    windows of all clips in one batch), each window's frames before the
+    previous window's stop left out. The temporal layers' sinusoidal
+    positions were learnt on that many frames: codes of a longer clip
+    encoded whole are codes of an encoder past its positions.
+
+    Shapes:
+        - **output**: one :math:`(T_b, Q)` tensor per clip
+    """
+    window, overlap = default_windows(autoencoder)
+    plans = [window_plan(clip.num_frames, window, overlap) for clip in clips]
+    pieces = [clip_frames(clip, start, stop)
+              for clip, plan in zip(clips, plans) for start, stop, _ in plan]
+    device = next(autoencoder.parameters()).device
+    codes = iter(autoencoder.codes(collate_clips(pieces).to(device)).split(
+        [piece.num_frames for piece in pieces]))
+    return [torch.cat([next(codes)[keep - start:] for start, _, keep in plan])
+            for plan in plans]
 
 
 def target_clip(feats: MotionFeatures, num_frames: int,

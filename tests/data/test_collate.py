@@ -210,6 +210,24 @@ def test_forward_kinematics_over_batch(clips):
         node += num
 
 
+def test_to_clip_list_gives_back_the_clips(clips):
+    """Every clip's tensors and meta come back; collated again, the batch
+    is the same batch (single-joint clips included)."""
+    gen = torch.Generator().manual_seed(3)
+    clips = clips + [random_clip(1, 4, gen)]
+    batch = collate_clips(clips)
+    back = batch.to_clip_list()
+    assert len(back) == len(clips)
+    for ours, theirs in zip(back, clips):
+        for key in ("dynamic", "root", "static", "semantic", "parents", "edge_attr"):
+            assert torch.equal(getattr(ours, key), getattr(theirs, key).to(getattr(ours, key)))
+        assert ours.meta == theirs.meta
+    again = collate_clips(back)
+    for key in batch.keys():
+        if isinstance(batch[key], torch.Tensor):
+            assert torch.equal(again[key], batch[key]), key
+
+
 def test_empty_raises():
     with pytest.raises(ValueError):
         collate_clips([])

@@ -295,15 +295,16 @@ def test_codes_go_through_the_autoencoder_in_its_training_windows(t2m_ckpt, monk
     feats = motion_to_features(inputs.shown, facing_smooth=facing_smooth_of(module))
     seen = []
     codes_of, decode = ae.codes, ae.decode_codes
-    monkeypatch.setattr(ae, "codes",
-                        lambda batch: seen.append(batch.num_graphs) or codes_of(batch))
-    monkeypatch.setattr(ae, "decode_codes", lambda c, t, s=0.0: seen.append(c.size(0))
-                        or decode(c, t, s))
+    monkeypatch.setattr(ae, "codes", lambda batch: seen.append(
+        batch.clip_num_frames.tolist()) or codes_of(batch))
+    monkeypatch.setattr(ae, "decode_codes", lambda c, t, s=0.0: seen.append(
+        t.clip_num_frames.tolist()) or decode(c, t, s))
     codes = encode_windows(ae, feats, inputs.semantic)
     q, r = decode_windows(ae, codes, inputs)
     assert codes.shape == (80, module.num_quantizers) and bool((codes >= 0).all())
     assert r.shape == (80, 4) and q.shape == (80 * feats.skeleton.num_joints, 6)
-    assert len(seen) == 6 and max(seen) <= 32  # 3 windows (stride 24) each way
+    # 3 windows (stride 24): encoded in one batch, decoded one by one
+    assert seen == [[32, 32, 32], [32], [32], [32]]
     first = codes_of(collate_clips([feats.to_clip(0, 32, inputs.semantic)]))
     assert torch.equal(codes[:32], first)
     alone = decode(codes[:32], collate_clips([target_clip(inputs.feats, 32, inputs.semantic)]))
@@ -315,18 +316,32 @@ def test_codes_go_through_the_autoencoder_in_its_training_windows(t2m_ckpt, monk
     torch.testing.assert_close(q_short, whole["q"])
 
 
-def test_training_on_windows_longer_than_the_autoencoders_warns(autoencoder_ckpt, recwarn):
-    """A generator whose data windows are longer than its RVQ's (32 frames
-    here) is warned when it starts to fit; one within them is not."""
-    from satagraph.lightning.text_to_motion import TextToMotionModule
-    from tests.t2m.conftest import T2M_MODEL
-    for window, warns in ((64, True), (32, False)):
-        module = TextToMotionModule(model=dict(T2M_MODEL, autoencoder=str(autoencoder_ckpt)),
-                                    meta={"module": "t2m", "semantic_encoder": "offline",
-                                          "data": {"window": window}})
-        recwarn.clear()
-        module.setup("fit")
-        found = [str(w.message) for w in recwarn if "training window" in str(w.message)]
-        assert bool(found) == warns
-        if warns:
-            assert "data.window=64" in found[0] and "(32 frames)" in found[0]
+def test_generator_trains_on_codes_of_the_autoencoders_windows(t2m_ckpt):
+    """A training batch of windows longer than the RVQ's (32 frames here)
+    gets the codes `generate` decodes: each clip's codes in the RVQ's
+    windows, as `encode_windows` gives them; a batch within one window is
+    encoded whole, as before."""
+    from satagraph.data.collate import collate_clips
+    from satagraph.data.dataset import _frames
+    from satagraph.data.features import motion_to_features
+    from satagraph.datasets.zoo import zoo_rigs
+    from satagraph.datasets.zoo.motions import generate_clip
+    from satagraph.pipelines.generate import encode_windows, load_generator, rig_inputs
+    from satagraph.pipelines.inference import facing_smooth_of
+    module = load_generator(str(t2m_ckpt))
+    feats, semantic = [], []
+    for rig, action in zip(zoo_rigs(["biped", "quadruped"], seed=5), ("walk", "run")):
+        inputs = rig_inputs(module, generate_clip(rig, action, frames=70, seed=1))
+        feats.append(motion_to_features(inputs.shown, facing_smooth=facing_smooth_of(module)))
+        semantic.append(inputs.semantic)
+    clips = [f.to_clip(0, t, s) for f, s, t in zip(feats, semantic, (70, 50))]
+    codes, lengths = module.batch_codes(collate_clips(clips))
+    assert lengths.tolist() == [70, 50] and codes.shape == (2, 70, module.num_quantizers)
+    for k, (f, s, t) in enumerate(zip(feats, semantic, (70, 50))):
+        want = encode_windows(module.autoencoder, _frames(f, slice(0, t)), s)
+        assert torch.equal(codes[k, :t], want)
+        assert bool((codes[k, t:] == -1).all())
+    one = collate_clips([feats[0].to_clip(0, 30, semantic[0])])
+    assert torch.equal(module.batch_codes(one)[0][0], module.autoencoder.codes(one))
+    whole = module.autoencoder.codes(collate_clips(clips[:1]))
+    assert not torch.equal(codes[0], whole)  # past frame 32 the windows differ
