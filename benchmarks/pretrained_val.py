@@ -128,14 +128,15 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
     return out
 
 
-def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]]) -> Dict[str, dict]:
+def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
+                    plant: bool = False) -> Dict[str, dict]:
     """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
     :func:`~satagraph.pipelines.quality.heading_gap`) and of the stride
     ratio (:func:`~satagraph.pipelines.quality.stride`) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
-        src, out = retarget_canonical(module, source, target, module.embed)
+        src, out = retarget_canonical(module, source, target, module.embed, plant=plant)
         got.setdefault(name, []).append(retarget_quality(src, out, ("steps", "travel",
                                                                     "sideways", "stride")))
     return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
@@ -164,11 +165,12 @@ def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]
     return np.degrees(np.unwrap(np.arctan2(d[:, 0], d[:, 2])))
 
 
-def measure(module, motion: Motion) -> dict:
+def measure(module, motion: Motion, plant: bool = False) -> dict:
     """JP, root-relative JP (fractions of the height), facing drift and the
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
     source)."""
-    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False)
+    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False,
+                                  plant=plant)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
@@ -233,6 +235,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--ckpt", nargs="+", default=["builtin"],
                         help="checkpoints, .safetensors weights files or builtin")
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
+    parser.add_argument("--plant", action="store_true",
+                        help="plant the feet of every output (retarget_canonical's plant)")
     args = parser.parse_args(argv)
     if not (DATA / "manifest.tsv").is_file():
         print(f"pretrained_val.py: {DATA} not found: the real groups need ../shared/data",
@@ -249,9 +253,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             module = load_module(ckpt).eval()
             groups: Dict[str, List[dict]] = {}
             for group, _, motion in clips:
-                groups.setdefault(group, []).append(measure(module, motion))
+                groups.setdefault(group, []).append(measure(module, motion, args.plant))
             summary[ckpt] = {g: summarise(v) for g, v in groups.items()}
-            retargets[ckpt] = retarget_scores(module, pairs)
+            retargets[ckpt] = retarget_scores(module, pairs, args.plant)
     text = table(summary, time.perf_counter() - start, retargets)
     print(text)
     write_results(args.out, "Built-in model candidates on validation material "

@@ -89,9 +89,6 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
 FPS = 30.0
-#: Latent smoothing (frames) of the SATA-RVQ decodings of the reconstruction
-#: and retargeted-retrieval rows unless told: generation's default.
-SMOOTH = GenerationSettings.smooth
 
 
 @dataclass
@@ -486,24 +483,27 @@ def generated_items(module, items: Sequence[Item], seeds: int,
     return out
 
 
-def transfer(module, source: Motion, target: Motion, smooth: float = SMOOTH) -> MotionFeatures:
+def transfer(module, source: Motion, target: Motion,
+             settings: Optional[GenerationSettings] = None) -> MotionFeatures:
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
-    its own rig, decoded on :obj:`target`'s rig (latents smoothed over
-    :obj:`smooth` frames) and put on the floor as generated motion is
-    (canonical features); both in the RVQ's training windows."""
+    its own rig, decoded on :obj:`target`'s rig as generated motion is
+    (the latent smoothing and the planting of :obj:`settings`, on the
+    floor; canonical features); both in the RVQ's training windows."""
+    settings = settings or GenerationSettings()
     with torch.no_grad():
         rig = rig_inputs(module, source)
         feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
         codes = encode_windows(module.autoencoder, feats, rig.semantic)
         motion = decode_on(module, codes, rig_inputs(module, target), ground=True,
-                           smooth=smooth)
+                           smooth=settings.smooth, plant=settings.plant)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 
-def reconstructed_items(module, items: Sequence[Item], smooth: float = SMOOTH) -> List[Item]:
+def reconstructed_items(module, items: Sequence[Item],
+                        settings: Optional[GenerationSettings] = None) -> List[Item]:
     """Every test item sent through the generator's frozen SATA-RVQ (codes
     of the whole window, decoded on its own rig)."""
-    return [measure(transfer(module, it.motion, it.motion, smooth), it.captions, it.label, it.group,
+    return [measure(transfer(module, it.motion, it.motion, settings), it.captions, it.label, it.group,
                     it.skeleton) for it in items]
 
 
@@ -522,13 +522,13 @@ def autoencoded_items(autoencoder, items: Sequence[Item]) -> List[Item]:
 
 
 def retargeted_items(module, retrieved: Sequence[Item], items: Sequence[Item],
-                     smooth: float = SMOOTH) -> List[Item]:
+                     settings: Optional[GenerationSettings] = None) -> List[Item]:
     """Each retrieved training clip, cut to its test item's length,
     retargeted onto the test item's rig through the frozen SATA-RVQ."""
     out = []
     for got, it in zip(retrieved, items):
         frames = min(got.motion.num_frames, it.motion.num_frames)
-        feats = transfer(module, got.motion.slice(0, frames), it.motion, smooth)
+        feats = transfer(module, got.motion.slice(0, frames), it.motion, settings)
         out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
     return out
 
@@ -592,7 +592,8 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
 def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                recogniser: Recogniser, encode: Callable, reps: int,
                extra: Dict[str, List[List[Item]]], seed: int,
-               module=None, smooth: float = SMOOTH) -> List[Dict[str, object]]:
+               module=None, settings: Optional[GenerationSettings] = None
+               ) -> List[Dict[str, object]]:
     """The rows of one group of test prompts: real, shuffled captions,
     retrieval (on its own rig; retargeted onto the test rig when a
     generator's :obj:`module` is given) and the extra sets
@@ -604,7 +605,7 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
     sets = {"real": [test], "shuffled captions": [[test[i] for i in perm]],
             "retrieval (own rig)": [retrieved]}
     if module is not None:
-        sets["retrieval (retargeted)"] = [retargeted_items(module, retrieved, test, smooth)]
+        sets["retrieval (retargeted)"] = [retargeted_items(module, retrieved, test, settings)]
     sets.update(extra)
     rows = []
     for kind, seeds in sets.items():
@@ -703,7 +704,7 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
     file, whose reconstruction is one more row per group; :obj:`prompts`:
     see :func:`real_items`; :obj:`settings`: the generator's sampling, whose
-    latent smoothing the reconstruction and retrieval rows share;
+    latent smoothing and planting the reconstruction and retrieval rows share;
     :obj:`probe_seeds`: seeds of every per-skeleton probe prompt, by
     default :data:`PROBE_SEEDS`, 2 when :obj:`quick`)."""
     settings = settings or GenerationSettings()
@@ -737,11 +738,10 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
         if autoencoder is not None:
             extra[f"reconstruction ({reference})"] = [autoencoded_items(autoencoder, items)]
         if module is not None:
-            extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items,
-                                                                      settings.smooth)]
+            extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items, settings)]
             extra["generator (GT length)"] = generated_items(module, items, gen_seeds, settings)
         rows += group_rows(name, items, train, model, recogniser, encode,
-                           reps or (3 if quick else 20), extra, seed, module, settings.smooth)
+                           reps or (3 if quick else 20), extra, seed, module, settings)
     if module is not None:
         run_extra = skeleton_probes(module, skeleton_targets(test, quick or prompts != "test"),
                                     probe_seeds, settings=settings)
@@ -762,7 +762,7 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     all defaults)."""
     given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
-                                           "smooth")
+                                           "smooth", "plant")
              if getattr(args, k, None) is not None}
     return replace(GenerationSettings(), **given) if given else None
 
@@ -789,6 +789,8 @@ def main(argv=None) -> int:
                         help="RVQ layers to decode (default: all)")
     parser.add_argument("--smooth", type=float, default=None,
                         help="latent smoothing in frames (default: generate's)")
+    parser.add_argument("--plant", action=argparse.BooleanOptionalAction, default=None,
+                        help="plant the feet of decoded motion (default: generate's)")
     parser.add_argument("--probe-seeds", type=int, default=None,
                         help=f"seeds of every per-skeleton probe prompt (default {PROBE_SEEDS}, "
                              "2 with --quick)")

@@ -74,3 +74,12 @@ def positive_int(text: str) -> int:
 
 __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
            "read_with_rig"]
+
+
+def add_plant_argument(parser: argparse.ArgumentParser) -> None:
+    """``--plant``: hold the output's limb ends still through their stances
+    (:func:`~satagraph.transforms.foot_plant.plant_feet`)."""
+    parser.add_argument("--plant", action="store_true",
+                        help="hold each foot still on the floor while it stands, bending the "
+                        "leg to reach it (a decoded stride is often short and its feet "
+                        "glide; default: off)")

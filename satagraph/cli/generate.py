@@ -20,7 +20,7 @@ def _seconds(text: str) -> float:
 
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
-    from satagraph.cli.arguments import add_rig_arguments
+    from satagraph.cli.arguments import add_plant_argument, add_rig_arguments
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
@@ -49,6 +49,7 @@ def add_generate_parser(sub) -> None:
                    help="put the motion on the floor: one vertical shift, its median lowest "
                    "joint at the floor (--no-ground keeps the decoder's root height; "
                    "default: on)")
+    add_plant_argument(p)
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "
                    "threads make a busy machine many times slower)")
@@ -98,7 +99,7 @@ def run_generate(args) -> int:
     if args.ckpt == BUILTIN:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
-                                  ground=args.ground)
+                                  ground=args.ground, plant=args.plant)
     start = time.time()
     text = args.text.strip() or None
     motions = [generate_on(module, text, t, args.seconds, args.seed, settings)

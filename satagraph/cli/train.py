@@ -10,6 +10,7 @@ from typing import List
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
+    from satagraph.cli.arguments import add_plant_argument
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config in experiments/ "
                        "(or a path), with dotted overrides, e.g. "
@@ -39,6 +40,7 @@ def add_train_parsers(sub) -> None:
                        "at the source's frame rate.")
     _common(p)
     _ground(p, default=True)
+    add_plant_argument(p)
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
@@ -204,7 +206,7 @@ def run_retarget(args) -> int:
     source = _read_checked(args, "source", module.fps)
     target = _read_checked(args, "target", module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
-                         rest=args.rest, ground=args.ground)
+                         rest=args.rest, ground=args.ground, plant=args.plant)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")

@@ -51,26 +51,33 @@ def rotation_about_numpy(axis: np.ndarray, angle: Union[float, np.ndarray]) -> n
 def rotation_between_numpy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     r"""The smallest rotation taking unit vector :obj:`a` onto unit vector
     :obj:`b` (a half turn about a perpendicular axis when they are
-    opposite).
+    opposite), for one pair or a batch.
 
     Shapes:
-        - **a**, **b**: :math:`(3,)`
-        - **output**: :math:`(3, 3)`
+        - **a**, **b**: :math:`(\ldots, 3)`
+        - **output**: :math:`(\ldots, 3, 3)`
     """
-    v, c = np.cross(a, b), float(np.dot(a, b))
-    if c < -1 + 1e-9:
-        axis = np.cross(a, [1.0, 0.0, 0.0])
-        if np.linalg.norm(axis) < 1e-6:
-            axis = np.cross(a, [0.0, 1.0, 0.0])
-        axis = axis / np.linalg.norm(axis)
-        return 2 * np.outer(axis, axis) - np.eye(3)
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
+    v, c = np.cross(a, b), np.einsum("...i,...i->...", a, b)
     k = _cross_matrix(v)
-    return np.eye(3) + k + k @ k / (1 + c)
+    opposite = c < -1 + 1e-9
+    scale = 1.0 / np.where(opposite, 1.0, 1.0 + c)
+    out = np.eye(3) + k + (k @ k) * scale[..., None, None]
+    if opposite.any():
+        axis = np.cross(a[opposite], [1.0, 0.0, 0.0])
+        small = np.linalg.norm(axis, axis=-1) < 1e-6
+        axis[small] = np.cross(a[opposite][small], [0.0, 1.0, 0.0])
+        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+        out[opposite] = 2 * axis[:, :, None] * axis[:, None, :] - np.eye(3)
+    return out
 
 
 def _cross_matrix(v: np.ndarray) -> np.ndarray:
-    """The matrix of ``v x .``."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    r"""The matrices of ``v x .``, :math:`(\ldots, 3, 3)`."""
+    zero = np.zeros_like(v[..., 0])
+    return np.stack([np.stack([zero, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], zero, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], zero], -1)], -2)
 
 
 def yaw_matrix_numpy(yaw: Union[float, np.ndarray]) -> np.ndarray:

@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from satagraph.transforms.canonical import canonicalize, decanonicalize
+from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.ground import ground_at
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
@@ -62,7 +63,9 @@ class GenerationSettings:
     foot sliding 0.99 against 1.32 heights a second; 0: none); whether the
     motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
-    median lowest joint at 0) or keeps the decoder's root height."""
+    median lowest joint at 0) or keeps the decoder's root height; whether
+    the limb ends are held still through their stances
+    (:func:`~satagraph.transforms.foot_plant.plant_feet`)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -73,6 +76,7 @@ class GenerationSettings:
     layers: Optional[int] = None
     smooth: float = 1.5
     ground: bool = True
+    plant: bool = False
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -175,7 +179,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
-                     settings.ground, settings.smooth)
+                     settings.ground, settings.smooth, settings.plant)
 
 
 def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
@@ -192,11 +196,13 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
 
 
 def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
-              smooth: float = 0.0) -> Motion:
+              smooth: float = 0.0, plant: bool = False) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
     its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`;
     the latents smoothed over :obj:`smooth` frames first, see
-    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`). Decoded window
+    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`; the feet held
+    through their stances with :obj:`plant`:
+    :func:`~satagraph.transforms.foot_plant.plant_feet`). Decoded window
     by window (:func:`decode_windows`).
 
     Shapes:
@@ -211,6 +217,8 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
                           rig.undo, rig.canon.skeleton)
     if ground:
         motion = ground_at(motion)
+    if plant:
+        motion = plant_feet(motion)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)
 
 

@@ -12,6 +12,7 @@ from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.transforms.augment import rebase_rotations, root_tilted, set_rest_rotations
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
+from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.ground import ground_retarget
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
@@ -160,7 +161,7 @@ REST_MODES = ("auto", "file", "first-frame")
 def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
-                    rest: str = "auto", ground: bool = True) -> Motion:
+                    rest: str = "auto", ground: bool = True, plant: bool = False) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -197,9 +198,11 @@ def retarget_motion(module, source: Motion, target: Motion,
             does for a target without frames
             (:func:`~satagraph.transforms.ground.ground_retarget`); ``False``
             keeps the decoder's root height.
+        plant (bool): Hold the limb ends still through their stances
+            (:func:`~satagraph.transforms.foot_plant.plant_feet`).
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest, ground)
+                                  rest, ground, plant)
     return from_canonical(canon, source)
 
 
@@ -214,7 +217,8 @@ def from_canonical(canon: Motion, source: Motion) -> Motion:
 def retarget_canonical(module, source: Motion, target: Motion,
                        semantic: Optional[Callable] = None, window: Optional[int] = None,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
-                       rest: str = "auto", ground: bool = True) -> Tuple[Motion, Motion]:
+                       rest: str = "auto", ground: bool = True,
+                       plant: bool = False) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -233,7 +237,8 @@ def retarget_canonical(module, source: Motion, target: Motion,
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
                        tgt_canon.skeleton)
-    return src_canon, ground_retarget(out, src_canon, tgt_canon) if ground else out
+    out = ground_retarget(out, src_canon, tgt_canon) if ground else out
+    return src_canon, plant_feet(out) if plant else out
 
 
 def facing_smooth_of(module) -> float:

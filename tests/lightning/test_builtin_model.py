@@ -103,6 +103,47 @@ def test_retarget_is_grounded_by_default_and_not_with_no_ground(
     assert_grounded_pair(outs["--ground"], outs["--no-ground"])
 
 
+def test_retarget_plant_holds_the_stance_feet_and_keeps_the_rest(tmp_path: Path) -> None:
+    """``retarget --plant`` bends only the legs: the root path and every
+    joint outside the limb chains are those of the plain retarget, the
+    hind feet move less while they stand, and the stride lengthens."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io import write_bvh
+    from satagraph.pipelines.quality import stride
+    from satagraph.semantics import limb_ends
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.transforms.foot_plant import limb_chain
+
+    source, target = tmp_path / "quad.bvh", tmp_path / "biped.bvh"
+    write_bvh(generate_clip(zoo_rigs(["quadruped"])[2], "walk", frames=90, seed=3), source)
+    write_bvh(generate_clip(zoo_rigs(["biped"])[1], "walk", frames=30, seed=4), target)
+    outs = {}
+    for flags in ((), ("--plant",)):
+        outs[flags] = tmp_path / f"out{len(flags)}.bvh"
+        assert main(["retarget", str(source), "--target", str(target), *flags,
+                     str(outs[flags])]) == 0
+    plain, planted = (canonicalize(read_bvh(outs[f])) for f in ((), ("--plant",)))
+    skeleton = plain.skeleton
+    ends = limb_ends(skeleton)
+    bent = {j for end in ends.values() for j in limb_chain(skeleton.parents, end)}
+    below = {j for j in range(skeleton.num_joints) if any(
+        a in bent for a in _ancestors(skeleton.parents, j))}
+    kept = [j for j in range(skeleton.num_joints) if j not in bent | below]
+    a, b = plain.global_positions(), planted.global_positions()
+    np.testing.assert_allclose(b[:, kept], a[:, kept], atol=1e-3 * plain.height())
+    feet = [ends[limb] for limb in ("left hind", "right hind")]
+    speed = [np.linalg.norm(np.diff(p[:, feet][..., [0, 2]], axis=0), axis=-1) for p in (a, b)]
+    low = np.quantile(speed[0], 0.3)  # the slowest frames of the plain feet: their stances
+    assert speed[1][speed[0] < low].mean() < 0.7 * speed[0][speed[0] < low].mean()
+    assert stride(planted) > stride(plain)
+
+
+def _ancestors(parents, joint: int):
+    while joint >= 0:
+        yield joint
+        joint = int(parents[joint])
+
+
 @pytest.mark.skipif(not builtin_path(name="builtin-wide").is_file(),
                     reason="no builtin-wide weights ship in this checkout")
 def test_builtin_wide_reads_body_plans_the_default_cannot(no_network: None) -> None:

@@ -62,3 +62,23 @@ def test_rotation_between_takes_a_onto_b(b):
     np.testing.assert_allclose(rot @ a, b, atol=1e-12)
     np.testing.assert_allclose(rot @ rot.T, np.eye(3), atol=1e-12)
     assert np.isclose(np.linalg.det(rot), 1.0)
+
+
+def test_rotation_between_is_batched():
+    """A batch (opposite pairs included) gives each pair's own rotation."""
+    gen = np.random.default_rng(0)
+    a = gen.normal(size=(7, 3))
+    a /= np.linalg.norm(a, axis=-1, keepdims=True)
+    b = gen.normal(size=(7, 3))
+    b /= np.linalg.norm(b, axis=-1, keepdims=True)
+    b[2], b[5] = -a[2], a[5]  # a half turn, and no turn
+    a[4] = b[4] = [1.0, 0.0, 0.0]
+    b[4] = -b[4]  # opposite along the first fallback axis
+    rot = rotation_between_numpy(a, b)
+    assert rot.shape == (7, 3, 3)
+    np.testing.assert_allclose(np.einsum("nij,nj->ni", rot, a), b, atol=1e-12)
+    np.testing.assert_allclose(rot @ rot.transpose(0, 2, 1), np.broadcast_to(np.eye(3), (7, 3, 3)),
+                               atol=1e-12)
+    np.testing.assert_allclose(rot[5], np.eye(3), atol=1e-12)
+    for k in range(7):
+        np.testing.assert_allclose(rot[k], rotation_between_numpy(a[k], b[k]), atol=1e-12)

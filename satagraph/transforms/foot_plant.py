@@ -1,0 +1,202 @@
+r"""Planting the feet of a decoded motion where they touch the ground.
+
+A decoder unsure of a limb's phase plays its swing short while the root
+travels at the source's speed, so the feet glide over the floor
+(``experiments/T2M.md`` section 17: reconstructed walks whose feet slide
+at 0.8 heights a second, against 0.03 for the real ones). On any
+skeleton, :func:`plant_feet` finds the frames where each limb end
+(:func:`~satagraph.semantics.limb_ends`) is low and slow relative to the
+body (:func:`stance_frames`), holds it at one floor position through each
+such stance (fading in and out over :data:`BLEND_FRAMES`), and bends the
+limb's single-child chain above it to reach there (FABRIK,
+:func:`reach`). The root, the limbs in the air and every other joint are
+left as decoded; the limb's end keeps its pose relative to its parent.
+"""
+from __future__ import annotations
+
+from typing import List, Optional, Sequence
+
+import numpy as np
+
+from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion, character_height
+from satagraph.ops.rotation_numpy import rotation_between_numpy
+
+#: Most bones above a limb end that :func:`plant_feet` bends.
+MAX_CHAIN_BONES = 3
+#: Frames over which a planted position fades in before a stance and out after it.
+BLEND_FRAMES = 4
+#: Fewest frames of a stance that is planted.
+MIN_STANCE = 3
+#: A stance's limb end is below this many :data:`~satagraph.motion.CONTACT_HEIGHT`.
+HEIGHT_FACTOR = 2.0
+#: ... and slower than :data:`~satagraph.motion.CONTACT_SPEED` plus this
+#: fraction of the root's horizontal speed (a gliding stance foot moves
+#: with a fraction of the body's speed, a swinging one faster than it).
+ROOT_SPEED_FACTOR = 0.5
+
+
+def limb_chain(parents: Sequence[int], end: int, max_bones: int = MAX_CHAIN_BONES) -> List[int]:
+    """The joints from a limb's top down to :obj:`end`: :obj:`end`'s
+    ancestors while each has that one child, at most :obj:`max_bones`
+    bones, top first (the top's position is its parent's business)."""
+    children = np.bincount(np.asarray(parents)[1:], minlength=len(parents))
+    chain = [int(end)]
+    while len(chain) <= max_bones:
+        parent = int(parents[chain[-1]])
+        if parent < 0 or children[parent] != 1:
+            break
+        chain.append(parent)
+    return chain[::-1]
+
+
+def stance_frames(track: np.ndarray, lowest: np.ndarray, root: np.ndarray, fps: float,
+                  height: float, floor: float = 0.0) -> np.ndarray:
+    r"""Frames where a limb stands: the lowest joint of its end's subtree
+    (:obj:`lowest`, its height) within :data:`HEIGHT_FACTOR` contact
+    heights of the floor, and the end horizontally slower than the contact
+    speed plus :data:`ROOT_SPEED_FACTOR` of the root's, in runs of at least
+    :data:`MIN_STANCE` frames (+Y up).
+
+    Shapes:
+        - **track**, **root**: :math:`(T, 3)` positions, **lowest**: :math:`(T,)`
+        - **output**: :math:`(T,)` bool
+    """
+    def speed(x: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(np.gradient(x[:, [0, 2]], axis=0), axis=-1) * fps
+
+    if len(track) < 2:
+        return np.zeros(len(track), dtype=bool)
+    low = lowest - floor < HEIGHT_FACTOR * CONTACT_HEIGHT * height
+    slow = speed(track) < CONTACT_SPEED * height + ROOT_SPEED_FACTOR * speed(root)
+    return _drop_short(low & slow, MIN_STANCE)
+
+
+def subtree(children: Sequence[Sequence[int]], joint: int) -> List[int]:
+    """:obj:`joint` and all its descendants."""
+    out, todo = [], [int(joint)]
+    while todo:
+        out.append(todo.pop())
+        todo.extend(children[out[-1]])
+    return out
+
+
+def _runs(mask: np.ndarray) -> List[tuple]:
+    """``(start, stop)`` of every run of ``True``."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def _drop_short(mask: np.ndarray, shortest: int) -> np.ndarray:
+    out = mask.copy()
+    for start, stop in _runs(mask):
+        if stop - start < shortest:
+            out[start:stop] = False
+    return out
+
+
+def planted_track(track: np.ndarray, stance: np.ndarray, blend: int = BLEND_FRAMES
+                  ) -> np.ndarray:
+    r"""Where the limb end should be: through each stance, its mean
+    horizontal position over the stance (the height as decoded), faded in
+    over :obj:`blend` frames before and out after it.
+
+    Shapes:
+        - **track**: :math:`(T, 3)`, **stance**: :math:`(T,)`
+        - **output**: :math:`(T, 3)`
+    """
+    frames = np.arange(len(track))
+    weight = np.zeros(len(track))
+    lock = track.copy()
+    for start, stop in _runs(stance):
+        gap = np.maximum(np.maximum(start - frames, frames - (stop - 1)), 0)
+        w = np.clip(1.0 - gap / (blend + 1.0), 0.0, 1.0)
+        take = w > weight
+        weight[take] = w[take]
+        lock[np.ix_(take, [0, 2])] = track[start:stop][:, [0, 2]].mean(axis=0)
+    out = track.copy()
+    out[:, [0, 2]] += weight[:, None] * (lock[:, [0, 2]] - track[:, [0, 2]])
+    return out
+
+
+def reach(chain: np.ndarray, target: np.ndarray, iterations: int = 10) -> np.ndarray:
+    r"""FABRIK: the chain's joints moved, bone lengths kept and its first
+    joint fixed, so that its last joint reaches :obj:`target` (or points at
+    it, stretched, when out of reach), every frame at once.
+
+    Shapes:
+        - **chain**: :math:`(T, n + 1, 3)`, **target**: :math:`(T, 3)`
+        - **output**: :math:`(T, n + 1, 3)`
+    """
+    lengths = np.linalg.norm(np.diff(chain, axis=1), axis=-1)
+    out, base = chain.copy(), chain[:, 0].copy()
+
+    def place(anchor: np.ndarray, toward: np.ndarray, length: np.ndarray) -> np.ndarray:
+        d = toward - anchor
+        norm = np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-12)
+        return anchor + d / norm * length[:, None]
+
+    for _ in range(iterations):
+        out[:, -1] = target
+        for i in range(chain.shape[1] - 2, -1, -1):
+            out[:, i] = place(out[:, i + 1], out[:, i], lengths[:, i])
+        out[:, 0] = base
+        for i in range(chain.shape[1] - 1):
+            out[:, i + 1] = place(out[:, i], out[:, i + 1], lengths[:, i])
+    return out
+
+
+def _bend(motion: Motion, chain: List[int], goal: np.ndarray, frames: np.ndarray) -> Motion:
+    """Local rotations of the chain's joints (top first) turned so that
+    each bone points at its joint's goal position, on :obj:`frames` only."""
+    rotations, parents = motion.rotations.copy(), motion.skeleton.parents
+    for i, joint in enumerate(chain[:-1]):
+        glob, pos = motion.with_(rotations=rotations).global_transforms()
+        here, there = pos[frames, joint], goal[frames, i + 1]
+        u, v = pos[frames, chain[i + 1]] - here, there - here
+        u /= np.maximum(np.linalg.norm(u, axis=-1, keepdims=True), 1e-12)
+        v /= np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+        turned = rotation_between_numpy(u, v) @ glob[frames, joint]
+        parent = glob[frames, parents[joint]] if parents[joint] >= 0 else np.eye(3)
+        rotations[frames, joint] = np.swapaxes(parent, -1, -2) @ turned
+    return motion.with_(rotations=rotations)
+
+
+def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
+    r""":obj:`motion` with each limb end held still on the floor through
+    its stances (see the module's text; +Y up, the floor at the median
+    height of the lowest joint, as :func:`~satagraph.transforms.ground.ground_at`
+    sets it).
+
+    Args:
+        motion (Motion): A decoded motion, canonical.
+        ends (sequence of int, optional): The limb ends to plant (default:
+            :func:`~satagraph.semantics.limb_ends` of its skeleton).
+    """
+    if motion.num_frames < 2:
+        return motion
+    if ends is None:
+        from satagraph.semantics import limb_ends  # the semantics import torch
+        ends = list(limb_ends(motion.skeleton).values())
+    pos = motion.global_positions()
+    height = character_height(motion.skeleton, pos)
+    floor = float(np.median(pos[..., 1].min(axis=1)))
+    for end in ends:
+        chain = limb_chain(motion.skeleton.parents, end)
+        if len(chain) < 3:  # one bone cannot bend
+            continue
+        track = pos[:, end]
+        lowest = pos[:, subtree(motion.skeleton.children, end), 1].min(axis=1)
+        stance = stance_frames(track, lowest, pos[:, 0], motion.fps, height, floor)
+        target = planted_track(track, stance)
+        frames = np.flatnonzero(np.linalg.norm(target - track, axis=-1) > 1e-9)
+        if not len(frames):
+            continue
+        goal = reach(pos[:, chain], target)
+        motion = _bend(motion, chain, goal, frames)
+        pos = motion.global_positions()
+    return motion
+
+
+__all__ = ["BLEND_FRAMES", "MAX_CHAIN_BONES", "MIN_STANCE", "limb_chain", "plant_feet",
+           "planted_track", "reach", "stance_frames",
+           "subtree"]

@@ -1,0 +1,116 @@
+"""Feet held through their stances: chains, stances, locks, FABRIK, and a
+gliding leg planted."""
+from __future__ import annotations
+
+import numpy as np
+
+from satagraph.motion import Motion
+from satagraph.ops.rotation_numpy import rotation_about_numpy
+from satagraph.skeleton import Skeleton
+from satagraph.transforms.foot_plant import (BLEND_FRAMES, limb_chain, plant_feet, planted_track,
+                                             reach, stance_frames)
+
+FPS = 30.0
+# root (hips), spine, hip, knee, foot, toe: the hip's parent branches
+PARENTS = np.array([-1, 0, 0, 2, 3, 4])
+OFFSETS = np.array([[0, 0, 0], [0, 0.6, 0], [0.1, 0, 0], [0, -0.45, 0], [0, -0.45, 0],
+                    [0, -0.03, 0.1]], dtype=float)
+
+
+def gliding_leg(frames: int = 20, root_speed: float = 0.6, back_speed: float = 0.3) -> Motion:
+    """The root travels +Z at :obj:`root_speed` while the straight leg swings
+    back at only :obj:`back_speed` (its foot glides forward at the
+    difference, close to the floor)."""
+    skeleton = Skeleton(names=["Hips", "Spine", "LeftUpLeg", "LeftLeg", "LeftFoot",
+                               "LeftToe"], parents=PARENTS, offsets=OFFSETS)
+    t = (np.arange(frames) - (frames - 1) / 2) / FPS
+    rotations = np.broadcast_to(np.eye(3), (frames, 6, 3, 3)).copy()
+    rotations[:, 2] = rotation_about_numpy(np.array([1.0, 0, 0]), np.arcsin(back_speed * t / 0.9))
+    translations = np.broadcast_to(OFFSETS, (frames, 6, 3)).copy()
+    translations[:, 0] = np.stack([np.zeros(frames), np.full(frames, 0.95),
+                                   root_speed * (t - t[0])], -1)
+    return Motion(skeleton, rotations, translations, fps=FPS)
+
+
+def test_limb_chain_stops_below_a_branching_joint_and_at_max_bones():
+    assert limb_chain(PARENTS, 4) == [2, 3, 4]  # the hips branch: the hip is the top
+    assert limb_chain(PARENTS, 5) == [2, 3, 4, 5]
+    assert limb_chain(PARENTS, 5, max_bones=2) == [3, 4, 5]
+    assert limb_chain(PARENTS, 1) == [1]  # the root's child: no bone to bend
+
+
+def test_stance_is_low_and_slow_relative_to_the_body():
+    frames = 30
+    root = np.stack([np.zeros(frames), np.ones(frames), np.linspace(0, 1, frames)], -1)
+    track = root.copy()
+    track[:, 1] = 0.0
+    track[10:20, 2] = track[10, 2]  # stands still for 10 frames
+    lowest = np.where(np.arange(frames) < 25, 0.0, 0.5)  # lifted from frame 25
+    stance = stance_frames(track, lowest, root, FPS, height=1.7)
+    assert stance[11:19].all() and not stance[25:].any()
+    # a stand of two frames is too short to count
+    short = np.zeros(frames, dtype=bool)
+    track2 = root.copy()
+    track2[:, 1] = 0.0
+    track2[5:7, 2] = track2[5, 2]
+    track2[:, 2] += np.arange(frames) * 0.1  # otherwise fast
+    assert (stance_frames(track2, np.zeros(frames), root, FPS, 1.7) == short).all()
+
+
+def test_planted_track_holds_the_mean_and_fades():
+    frames = 30
+    track = np.stack([np.linspace(0, 1, frames), np.full(frames, 0.02),
+                      np.linspace(0, 2, frames)], -1)
+    stance = np.zeros(frames, dtype=bool)
+    stance[10:20] = True
+    out = planted_track(track, stance)
+    mean = track[10:20][:, [0, 2]].mean(axis=0)
+    np.testing.assert_allclose(out[10:20][:, [0, 2]], np.broadcast_to(mean, (10, 2)))
+    np.testing.assert_allclose(out[:, 1], track[:, 1])  # the height as decoded
+    far = np.r_[:10 - BLEND_FRAMES, 20 + BLEND_FRAMES:frames]
+    np.testing.assert_allclose(out[far], track[far])
+    half = 10 - (BLEND_FRAMES + 1) // 2  # halfway through the fade in
+    assert 0.0 < np.linalg.norm(out[half] - track[half]) < np.linalg.norm(mean - track[half][[0, 2]])
+
+
+def test_reach_keeps_bones_and_base_and_reaches():
+    gen = np.random.default_rng(0)
+    chain = np.cumsum(gen.normal(size=(5, 4, 3)) * 0.3, axis=1)
+    lengths = np.linalg.norm(np.diff(chain, axis=1), axis=-1)
+    near = chain[:, 0] + 0.5 * (chain[:, -1] - chain[:, 0])  # inside reach
+    out = reach(chain, near, iterations=30)
+    np.testing.assert_allclose(np.linalg.norm(np.diff(out, axis=1), axis=-1), lengths, atol=1e-9)
+    np.testing.assert_allclose(out[:, 0], chain[:, 0])
+    np.testing.assert_allclose(out[:, -1], near, atol=1e-3)
+    far = chain[:, 0] + np.array([10.0, 0, 0])  # out of reach: stretched towards it
+    out = reach(chain, far)
+    np.testing.assert_allclose(np.linalg.norm(out[:, -1] - out[:, 0], axis=-1), lengths.sum(-1),
+                               atol=1e-6)
+
+
+def test_a_gliding_foot_is_held_and_the_rest_kept():
+    motion = gliding_leg()
+    before = motion.global_positions()
+    planted = plant_feet(motion, ends=[4])
+    after = planted.global_positions()
+    glide = np.ptp(before[:, 4, 2])
+    assert glide > 0.09  # the foot glides 0.1 m
+    middle = slice(BLEND_FRAMES, -BLEND_FRAMES)
+    assert np.ptp(after[middle, 4, 2]) < 0.02 * glide  # held
+    np.testing.assert_allclose(after[:, 4, 0], 0.1, atol=1e-9)  # in its plane
+    np.testing.assert_allclose(after[:, :2], before[:, :2])  # root, spine
+    np.testing.assert_allclose(planted.translations, motion.translations)
+    # the leg bends, its bones do not stretch
+    for a, b in ((2, 3), (3, 4), (4, 5)):
+        np.testing.assert_allclose(np.linalg.norm(after[:, b] - after[:, a], axis=-1),
+                                   np.linalg.norm(OFFSETS[b]), atol=1e-9)
+    # the toe keeps its pose relative to the foot's parent bone
+    np.testing.assert_allclose(planted.rotations[:, 4], motion.rotations[:, 4])
+
+
+def test_a_standing_foot_and_a_swinging_limb_stay_as_they_are():
+    fast = gliding_leg(root_speed=3.0, back_speed=0.3)  # the foot moves faster than a stance
+    np.testing.assert_allclose(plant_feet(fast, ends=[4]).rotations, fast.rotations)
+    still = gliding_leg(root_speed=0.0, back_speed=0.0)
+    np.testing.assert_allclose(plant_feet(still, ends=[4]).global_positions(),
+                               still.global_positions(), atol=1e-9)
