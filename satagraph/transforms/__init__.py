@@ -1,14 +1,15 @@
 """Motion-to-motion transforms: reading a rig (up axis, units),
-canonicalisation (+Y up, facing +Z, metres, one frame rate) and skeleton
-augmentation (bone scaling, mirroring, restructuring). Imported lazily:
-numpy only."""
+canonicalisation (+Y up, facing +Z, metres, one frame rate), skeleton
+augmentation (bone scaling, mirroring, restructuring) and planting a
+decoded motion's feet. Imported lazily: numpy only."""
 from satagraph._lazy import lazy_exports
 
 _CANONICAL = ("canonicalize", "decanonicalize", "detect_up_axis", "resample")
 _EXPORTS = {**dict.fromkeys(_CANONICAL, "satagraph.transforms.canonical"),
             **dict.fromkeys(("read_rig", "with_rig"), "satagraph.transforms.rig_reading"),
             **dict.fromkeys(("SkeletonAugment", "mirror", "scale_bones"),
-                            "satagraph.transforms.augment")}
+                            "satagraph.transforms.augment"),
+            "plant_feet": "satagraph.transforms.foot_plant"}
 __all__ = [*_CANONICAL, "read_rig", "with_rig", "SkeletonAugment", "mirror",
-           "scale_bones"]
+           "scale_bones", "plant_feet"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -20,6 +20,7 @@ import numpy as np
 
 from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion, character_height
 from satagraph.ops.rotation_numpy import rotation_between_numpy
+from satagraph.semantics.limbs import limb_ends
 
 #: Most bones above a limb end that :func:`plant_feet` bends.
 MAX_CHAIN_BONES = 3
@@ -175,7 +176,6 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     if motion.num_frames < 2:
         return motion
     if ends is None:
-        from satagraph.semantics import limb_ends  # the semantics import torch
         ends = list(limb_ends(motion.skeleton).values())
     pos = motion.global_positions()
     height = character_height(motion.skeleton, pos)
