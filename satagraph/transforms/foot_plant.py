@@ -5,8 +5,9 @@ travels at the source's speed, so the feet glide over the floor
 (``experiments/T2M.md`` section 17: reconstructed walks whose feet slide
 at 0.8 heights a second, against 0.03 for the real ones). On any
 skeleton, :func:`plant_feet` finds the frames where each limb end
-(:func:`~satagraph.semantics.limb_ends`) is low and slow relative to the
-body (:func:`stance_frames`), holds it at one floor position through each
+(:func:`~satagraph.semantics.limb_ends`) stands: the lowest joint below
+it near the floor, the end slow next to the body (:func:`stance_frames`).
+It holds the end at one floor position through each
 such stance (fading in and out over :data:`BLEND_FRAMES`), and bends the
 limb's single-child chain above it to reach there (FABRIK,
 :func:`reach`). The root, the limbs in the air and every other joint are
