@@ -100,12 +100,14 @@ class FrameBatch(Batch):
         nodes = [t * j for t, j in zip(frames, joints)]
         bones = [t * 2 * (j - 1) for t, j in zip(frames, joints)]
         offsets = [_exclusive_cumsum(v).tolist() for v in (nodes, frames, joints, bones)]
-        return [self._clip(i, *spans) for i, spans in enumerate(zip(*offsets))]
+        return [self._clip(i, frames[i], joints[i], *spans)
+                for i, spans in enumerate(zip(*offsets))]
 
-    def _clip(self, i: int, node: int, frame: int, stream: int, edge: int) -> MotionClip:
-        """Clip :obj:`i`, whose nodes, frames, streams and edges start at
-        the given offsets."""
-        num_frames, num_joints = int(self.clip_num_frames[i]), int(self.clip_num_joints[i])
+    def _clip(self, i: int, num_frames: int, num_joints: int, node: int, frame: int,
+              stream: int, edge: int) -> MotionClip:
+        """Clip :obj:`i` of :obj:`num_frames` frames and :obj:`num_joints`
+        joints, whose nodes, frames, streams and edges start at the given
+        offsets."""
         streams = slice(stream, stream + num_joints)
         parents = self.stream_parent[streams]
         return MotionClip(

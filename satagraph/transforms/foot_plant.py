@@ -19,9 +19,10 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
-from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion, character_height
+from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion
 from satagraph.ops.rotation_numpy import rotation_between_numpy
 from satagraph.semantics.limbs import limb_ends
+from satagraph.transforms.ground import levels
 
 #: Most bones above a limb end that :func:`plant_feet` bends.
 MAX_CHAIN_BONES = 3
@@ -179,8 +180,7 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     if ends is None:
         ends = list(limb_ends(motion.skeleton).values())
     pos = motion.global_positions()
-    height = character_height(motion.skeleton, pos)
-    floor = float(np.median(pos[..., 1].min(axis=1)))
+    floor, height = levels(motion.skeleton, pos)
     for end in ends:
         chain = limb_chain(motion.skeleton.parents, end)
         if len(chain) < 3:  # one bone cannot bend

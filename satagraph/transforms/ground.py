@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from satagraph.motion import Motion, character_height
+from satagraph.skeleton import Skeleton
 
 
 def lowest_heights(motion: Motion) -> np.ndarray:
@@ -26,12 +27,20 @@ def lowest_heights(motion: Motion) -> np.ndarray:
     return motion.global_positions()[..., 1].min(axis=1)
 
 
+def levels(skeleton: Skeleton, positions: np.ndarray) -> tuple:
+    r"""(median over frames of the lowest joint's height, character height)
+    of a motion's global positions (+Y up).
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`
+    """
+    return (float(np.median(positions[..., 1].min(axis=1))),
+            character_height(skeleton, positions))
+
+
 def _levels(motion: Motion) -> tuple:
-    """(median lowest-joint height, character height) from one forward
-    kinematics pass."""
-    pos = motion.global_positions()
-    return (float(np.median(pos[..., 1].min(axis=1))),
-            character_height(motion.skeleton, pos))
+    """:func:`levels` from one forward kinematics pass."""
+    return levels(motion.skeleton, motion.global_positions())
 
 
 def ground_level(motion: Motion) -> float:
