@@ -7,6 +7,8 @@ import sys
 import time
 from typing import List
 
+from satagraph.cli.arguments import positive_int
+
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
@@ -86,6 +88,21 @@ def add_train_parsers(sub) -> None:
                    "codebooks frozen (optim.frozen); refused for any other")
     p.set_defaults(func=run_export_weights)
 
+    p = sub.add_parser("code-bank", help="code a text-to-motion config's training windows "
+                       "once, for fast training (data.code_bank)",
+                       description="Draw WINDOWS training windows of a text-to-motion "
+                       "config (module: t2m; every epoch of the endless zoo new rigs and "
+                       "clips, augmented as in training), code them with its frozen "
+                       "autoencoder (model.autoencoder) and write them to OUT.safetensors. "
+                       "Train on it with `satagraph train CONFIG data.code_bank=OUT`.")
+    p.add_argument("config", help="a text-to-motion config name or path")
+    p.add_argument("output", metavar="OUT.safetensors")
+    p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
+    p.add_argument("--windows", type=positive_int, required=True,
+                   help="windows to draw")
+    p.add_argument("--device", default="cpu", help="where to run the autoencoder")
+    p.set_defaults(func=run_code_bank)
+
 
 def _common(p) -> None:
     p.add_argument("--ckpt", default="builtin",
@@ -155,6 +172,47 @@ def run_train(args) -> int:
     print(f"trained {cfg['name']} for {trainer.current_epoch} epochs in "
           f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
           f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")
+    return 0
+
+
+def run_code_bank(args) -> int:
+    """Write a code bank (:func:`~satagraph.data.code_bank.draw_code_bank`)."""
+    import lightning as L
+    import torch
+
+    from satagraph.data.code_bank import draw_code_bank
+    from satagraph.experiment.config import load_config
+    from satagraph.experiment.train import build_datamodule, build_module, check_config
+    from satagraph.utils.files import check_output_path
+    cfg = check_config(load_config(args.config, list(args.overrides)))
+    if cfg["module"] != "t2m":
+        raise ValueError(f"{args.config}: module {cfg['module']!r} is not a text-to-motion "
+                         "model (module: t2m)")
+    if cfg["data"].get("code_bank"):
+        raise ValueError(f"{args.config}: a code bank is drawn from the sources; "
+                         "unset data.code_bank")
+    check_output_path(args.output, create_parent=True)
+    if cfg["threads"]:
+        torch.set_num_threads(int(cfg["threads"]))
+    L.seed_everything(int(cfg["seed"]), workers=True)
+    dm = build_datamodule(cfg)
+    dm.setup("fit")
+    module = build_module(cfg, dm).eval().to(args.device)
+    loader = dm.train_dataloader()
+    start = time.time()
+
+    def batches(epoch: int):
+        if hasattr(loader.sampler, "set_epoch"):
+            loader.sampler.set_epoch(epoch)
+        return (batch.to(args.device) for batch in loader)
+
+    def progress(count: int) -> None:
+        print(f"\r{count} windows, {time.time() - start:.0f} s", end="", file=sys.stderr)
+
+    bank = draw_code_bank(module, batches, args.windows, progress)
+    bank.save(args.output)
+    print(f"\nwrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
+          f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)
     return 0
 
 

@@ -22,7 +22,11 @@ from __future__ import annotations
 import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
+import torch
 from torch.utils.data import DataLoader, Dataset
+
+from satagraph.data.code_bank import CodeBank
+from satagraph.utils.files import check_input_file
 
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
@@ -84,6 +88,10 @@ class CaptionDataModule(WindowDataModule):
         num_workers (int): DataLoader workers.
         max_files (int, optional): At most this many files per split.
         seed (int): Seed of sampling, mirroring and caption choice.
+        code_bank (str, optional): Train on the windows of this
+            :class:`~satagraph.data.code_bank.CodeBank` (``satagraph
+            code-bank``) instead of coding the sources' windows every step;
+            validation and test stay on the sources.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -91,8 +99,11 @@ class CaptionDataModule(WindowDataModule):
                  balanced: bool = True, semantic_encoder: Optional[str] = "offline",
                  preprocessing: Optional[Dict] = None, cache_dir: Optional[str] = None,
                  num_workers: int = 0, max_files: Optional[int] = None,
-                 seed: int = 0, scale: float = 0.0) -> None:
+                 seed: int = 0, scale: float = 0.0, code_bank: Optional[str] = None) -> None:
         super().__init__()
+        self.code_bank = code_bank
+        #: The training bank (``code_bank``), read by :meth:`setup`.
+        self.bank: Optional[CodeBank] = None
         self.scale = float(scale)
         self.sources = list(sources) if isinstance(sources, (list, tuple)) else [sources]
         self.window, self.stride, self.min_frames = int(window), int(stride), int(min_frames)
@@ -114,6 +125,9 @@ class CaptionDataModule(WindowDataModule):
             self.datasets[split] = self._split(split, files, zoos, embed)
         if not len(self.datasets["train"]):
             raise ValueError(f"no captioned training windows in {self.sources!r}")
+        if self.code_bank:
+            check_input_file(self.code_bank, "code bank (data.code_bank)")
+            self.bank = CodeBank.load(self.code_bank)
 
     def _split(self, split: str, files, zoos, embed) -> Dataset:
         """The captioned windows of one split (training windows mirrored)."""
@@ -134,6 +148,10 @@ class CaptionDataModule(WindowDataModule):
         return MixedDataset(parts)
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
+        if split == "train" and self.bank is not None:
+            return DataLoader(self.bank, batch_size=self.batch_size, shuffle=shuffle,
+                              collate_fn=self.bank.collate,
+                              generator=torch.Generator().manual_seed(self.seed))
         return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
                              self.balanced, self.num_workers)
 

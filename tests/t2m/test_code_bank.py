@@ -1,0 +1,127 @@
+"""Code banks: a banked batch gives the losses of the frame batch it was
+coded from, banks round-trip through their file, belong to one autoencoder
+(its decoder aside), refuse damaged files by name, and `satagraph code-bank`
+then `satagraph train ... data.code_bank=` train end to end."""
+from __future__ import annotations
+
+import copy
+
+import pytest
+import torch
+
+from satagraph.cli import main
+from satagraph.data.code_bank import (CodeBank, CodeBatch, autoencoder_fingerprint,
+                                      bank_batch, concat_banks)
+from satagraph.experiment.config import load_config
+from satagraph.experiment.train import train
+from tests.t2m.conftest import T2M_MODEL, build_t2m, zoo_batch
+
+
+@pytest.fixture(scope="module")
+def banked(autoencoder_ckpt):
+    module = build_t2m(autoencoder_ckpt)
+    batch = zoo_batch(5, mirror=0.5)
+    return module, batch, bank_batch(module, batch)
+
+
+def test_a_banked_batch_gives_the_losses_of_its_frame_batch(banked):
+    module, batch, bank = banked
+    coded = bank.collate(range(len(bank)))
+    assert isinstance(coded, CodeBatch) and coded.texts == [m["text"] for m in batch.meta]
+    module.train()
+    live = module.compute_losses(batch, torch.Generator().manual_seed(3))
+    fast = module.compute_losses(coded, torch.Generator().manual_seed(3))
+    for key in ("masked", "residual", "length", "loss"):
+        torch.testing.assert_close(fast[key], live[key])
+    fast["loss"].backward()
+    assert module.skeleton.lin.weight.grad.abs().sum() > 0
+
+
+def test_a_bank_round_trips_through_its_file_and_gathers_any_order(banked, tmp_path):
+    module, batch, bank = banked
+    bank.save(tmp_path / "bank.safetensors")
+    back = CodeBank.load(tmp_path / "bank.safetensors")
+    assert back.texts == bank.texts and back.fingerprint == bank.fingerprint
+    assert torch.equal(back.codes.long(), bank.codes.long())
+    torch.testing.assert_close(back.x.float(), bank.x.half().float())
+    one, other = bank.collate([3, 0]), back.collate([3, 0])
+    assert torch.equal(one.codes, other.codes) and torch.equal(one.num_frames, other.num_frames)
+    assert torch.equal(one.skeleton.edge_index, other.skeleton.edge_index)
+    # window 3 first: its codes are the frame batch's clip 3
+    live, frames = module.batch_codes(batch)
+    assert torch.equal(one.codes[0, :frames[3]], live[3, :frames[3]])
+    assert one.skeleton.root.tolist() == [0, int(bank.num_nodes[3])]
+    joined = concat_banks([bank, back])
+    assert len(joined) == 2 * len(bank) and joined.collate([len(bank) + 1]).texts == \
+        [bank.texts[1]]
+
+
+def test_a_bank_belongs_to_its_autoencoder_decoder_aside(banked):
+    module, _, bank = banked
+    other = copy.deepcopy(module.autoencoder)
+    with torch.no_grad():
+        next(other.model.decoder.parameters()).add_(1.0)
+    assert autoencoder_fingerprint(other) == bank.fingerprint
+    bank.check_autoencoder(other)
+    with torch.no_grad():
+        next(other.model.encoder.parameters()).add_(1.0)
+    with pytest.raises(ValueError, match="another autoencoder"):
+        bank.check_autoencoder(other, "my.safetensors")
+
+
+def test_damaged_and_foreign_files_are_named(tmp_path):
+    from safetensors.torch import save_file
+    bad = tmp_path / "bad.safetensors"
+    bad.write_bytes(b"\x00" * 64)
+    with pytest.raises(ValueError, match="bad.safetensors"):
+        CodeBank.load(bad)
+    foreign = tmp_path / "weights.safetensors"
+    save_file({"w": torch.zeros(2)}, foreign)
+    with pytest.raises(ValueError, match="weights.safetensors: not a satagraph code bank"):
+        CodeBank.load(foreign)
+    with pytest.raises(ValueError, match="2 frame counts"):
+        CodeBank(torch.zeros(3, 2), torch.tensor([1, 2]), torch.zeros(2, 4), torch.tensor([-1]),
+                 torch.tensor([1]), torch.tensor([1.0]), ["one"], "x")
+
+
+def _tiny_overrides(autoencoder_ckpt, run):
+    out = [f"model.autoencoder={autoencoder_ckpt}", f"output_dir={run}",
+           "model.text_encoder=offline:32",
+           "data.sources=[{zoo: endless, species: [biped], windows_per_epoch: 4, "
+           "val_windows: 4, test_windows: 4}]",
+           "data.window=24", "data.min_frames=12", "data.batch_size=4",
+           "trainer.max_epochs=2", "trainer.max_time=null", "trainer.limit_val_batches=1",
+           "trainer.enable_model_summary=false", "loss_log=false"]
+    for key in ("skeleton", "masked", "residual", "length"):
+        out += [f"model.{key}.{k}={v}" for k, v in T2M_MODEL[key].items()]
+    return out
+
+
+def test_satagraph_code_bank_then_train_on_it(autoencoder_ckpt, tmp_path, capsys):
+    path = tmp_path / "bank.safetensors"
+    overrides = _tiny_overrides(autoencoder_ckpt, tmp_path / "run")
+    assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "6"]) == 0
+    bank = CodeBank.load(path)
+    # two epochs of 4 zoo windows: the second epoch's rigs are new ones
+    assert len(bank) == 8 and len(set(bank.texts)) > 1
+    assert int(bank.num_frames.min()) >= 12 and int(bank.num_frames.max()) <= 24
+    module, dm, trainer, _ = train(load_config("t2m_tiny", overrides +
+                                               [f"data.code_bank={path}"]))
+    assert dm.bank is not None and trainer.global_step == 4  # 2 epochs of 2 banked batches
+    assert "val_loss" in trainer.callback_metrics
+    bank.fingerprint = "of another autoencoder"
+    bank.save(path)
+    with pytest.raises(ValueError, match="bank.safetensors: its codes are of another"):
+        train(load_config("t2m_tiny", overrides + [f"data.code_bank={path}",
+                                                   f"output_dir={tmp_path / 'run2'}"]))
+
+
+def test_code_bank_refuses_what_it_cannot_bank(autoencoder_ckpt, tmp_path, capsys):
+    path = tmp_path / "bank.safetensors"
+    assert main(["code-bank", "tiny", str(path), "--windows", "2"]) == 2
+    assert "is not a text-to-motion model" in capsys.readouterr().err
+    overrides = _tiny_overrides(autoencoder_ckpt, tmp_path / "run")
+    assert main(["code-bank", "t2m_tiny", str(path), *overrides, f"data.code_bank={path}",
+                 "--windows", "2"]) == 2
+    assert "unset data.code_bank" in capsys.readouterr().err
+    assert not path.exists()
