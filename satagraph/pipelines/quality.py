@@ -168,6 +168,25 @@ def stride(canonical: Motion, tracks: Optional[Dict[str, np.ndarray]] = None
     return float(np.mean(spread) / leg_length(canonical))
 
 
+def cadence(canonical: Motion, tracks: Optional[Dict[str, np.ndarray]] = None
+            ) -> Optional[float]:
+    """The gait's frequency in Hz: the median over limb ends of the
+    dominant frequency of each :func:`limb_tracks` fore-aft track
+    (Hann-windowed spectrum, the constant left out). A walk's limbs swing
+    once a stride, so a glide with no gait reads low. ``None`` for a
+    skeleton without limb ends or a motion of fewer than 4 frames."""
+    tracks = limb_tracks(canonical) if tracks is None else tracks
+    if not tracks or canonical.num_frames < 4:
+        return None
+    peaks = []
+    for track in tracks.values():
+        track = track - track.mean()
+        spectrum = np.abs(np.fft.rfft(track * np.hanning(len(track))))
+        freqs = np.fft.rfftfreq(len(track), 1.0 / canonical.fps)
+        peaks.append(freqs[1:][np.argmax(spectrum[1:])])
+    return float(np.median(peaks))
+
+
 def ground_height(canonical: Motion) -> float:
     """:func:`satagraph.transforms.ground.ground_level` of a canonical
     motion: its median lowest joint above the floor, in its heights."""
@@ -305,6 +324,6 @@ def retarget_quality(source: Motion, output: Motion,
 
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
-           "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride",
+           "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
            "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "retarget_quality"]

@@ -13,7 +13,8 @@ from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, for
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, retarget_quality, root_travel,
-                                         step_correlation, stride, turn_rate, upright_fraction)
+                                         step_correlation, stride, turn_rate, upright_fraction,
+                                         cadence)
 
 
 def _walk(species: str, kind: str = "walk", frames: int = 90):
@@ -144,6 +145,21 @@ def test_stride_reads_the_limb_swing_in_leg_lengths(species):
     assert stride(frozen) < 0.02 * swing
     assert retarget_quality(walk, walk, ("stride",)) == {"stride": pytest.approx(1.0)}
     assert retarget_quality(walk, frozen, ("stride",))["stride"] < 0.02
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped"])
+def test_cadence_reads_the_gait_frequency(species):
+    """A zoo walk's limbs swing at a walking rate; the same frames played
+    at half the frame rate swing at half of it, and a copy with the
+    limbs swinging twice as fast (every second frame, repeated to the same
+    length) at about twice of it."""
+    walk = _walk(species, frames=120)
+    rate = cadence(walk)
+    assert 0.6 < rate < 2.5
+    assert cadence(walk.with_(fps=walk.fps / 2)) == pytest.approx(rate / 2)
+    fast = np.concatenate([walk.rotations[::2], walk.rotations[::2]])
+    assert cadence(walk.with_(rotations=fast)) == pytest.approx(2 * rate, abs=0.3)
+    assert cadence(walk.slice(0, 3)) is None
 
 
 @pytest.mark.parametrize("species", ["biped", "quadruped"])

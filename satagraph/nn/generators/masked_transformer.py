@@ -177,10 +177,12 @@ class MaskedTransformer(nn.Module):
     def generate(self, text_emb: Optional[Tensor], skel_emb: Tensor, lengths: Tensor,
                  steps: int = 10, guidance: float = 4.0, temperature: float = 1.0,
                  topk_ratio: Optional[float] = 0.1,
-                 generator: Optional[torch.Generator] = None) -> Tensor:
+                 generator: Optional[torch.Generator] = None,
+                 known: Optional[Tensor] = None, keep: Optional[Tensor] = None) -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
-        as [MASK]; at step :math:`i` of :obj:`steps` (:math:`n`) the
-        :math:`\mathrm{round}(r_i L)` least confident tokens (at least one),
+        as [MASK] (but the :obj:`keep` positions of :obj:`known`, which stay
+        as given: infilling); at step :math:`i` of :obj:`steps` (:math:`n`) the
+        :math:`\mathrm{round}(r_i L)` least confident free tokens (at least one),
         :math:`r_i = f + (1 - f)\cos(\pi i / (2(n-1)))` with :math:`f` =
         :obj:`mask_floor` (as in training), are re-masked and re-drawn from
         the guided logits (top-k keeping :obj:`topk_ratio` of the codes,
@@ -197,6 +199,10 @@ class MaskedTransformer(nn.Module):
             temperature (float, optional): Sampling temperature.
             topk_ratio (float, optional): Share of codes kept by top-k.
             generator (torch.Generator, optional): Source of randomness.
+            known (Tensor, optional): Tokens :math:`(B, T)` at the token
+                rate (:meth:`to_tokens`), read where :obj:`keep` is set.
+            keep (Tensor, optional): :math:`(B, T)` bool, the tokens of
+                :obj:`known` to keep (:math:`L` counts the others).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
@@ -206,17 +212,22 @@ class MaskedTransformer(nn.Module):
             tok_lengths = token_lengths(lengths, self.pool)
             valid = length_mask(tok_lengths, int(tok_lengths.max()))
             ids = torch.full(valid.shape, self.mask_id, dtype=torch.long, device=valid.device)
+            keep = torch.zeros_like(valid) if keep is None else keep[:, :valid.size(1)] & valid
+            if known is not None:
+                ids = torch.where(keep, known[:, :valid.size(1)], ids)
             ids = ids.masked_fill(~valid, self.pad_id)
-            scores = torch.zeros(valid.shape, device=valid.device).masked_fill(~valid, float("inf"))
+            fixed = ~valid | keep
+            scores = torch.zeros(valid.shape, device=valid.device).masked_fill(fixed, float("inf"))
+            free = (~fixed).sum(-1)
             for step in range(steps):
                 ratio = self.mask_floor + (1 - self.mask_floor) * math.cos(
                     math.pi / 2 * step / max(steps - 1, 1))
-                count = torch.round(ratio * tok_lengths).clamp(min=1).long()
-                remask = lowest_ranked(scores, count) & valid
+                count = torch.round(ratio * free).clamp(min=1).long()
+                remask = lowest_ranked(scores, count) & ~fixed
                 ids = ids.masked_fill(remask, self.mask_id)
                 logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
                 pred = sample_logits(logits, temperature, topk_ratio, generator)
                 ids = torch.where(remask, pred, ids)
                 conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
-                scores = conf.masked_fill(~remask, 1e5).masked_fill(~valid, float("inf"))
+                scores = conf.masked_fill(~remask, 1e5).masked_fill(fixed, float("inf"))
             return self.to_frames(ids, lengths)

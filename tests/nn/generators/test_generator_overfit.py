@@ -70,3 +70,21 @@ def test_residual_transformer_generates_what_it_memorised(data):
                              temperature=0.0)
         assert same_real(got, codes, lengths), guidance
         assert got[1, 9:].eq(model.pad_id).all()
+
+
+def test_masked_transformer_infills_around_kept_tokens(masked, data):
+    """Kept tokens stay as given, whatever they are; the others are filled
+    in (here: the memorised ones back); keeping all returns them."""
+    codes, text, skel, lengths = data
+    known = codes[..., 0].clone()
+    keep = torch.zeros_like(known, dtype=torch.bool)
+    keep[:, ::3] = True
+    foreign = known.masked_fill(keep, 0)  # kept tokens no training sequence has there
+    got = masked.generate(text, skel, lengths, temperature=0.0, known=foreign, keep=keep)
+    real = torch.arange(12) < lengths.unsqueeze(-1)
+    assert got[keep & real].eq(0).all() and got[1, 9:].eq(masked.pad_id).all()
+    back = masked.generate(text, skel, lengths, temperature=0.0, known=known, keep=keep)
+    assert same_real(back, codes[..., 0], lengths)
+    every = torch.ones_like(keep)
+    assert same_real(masked.generate(text, skel, lengths, known=foreign, keep=every),
+                     foreign, lengths)

@@ -1,0 +1,188 @@
+"""Do generated walks have a gait? (issue 19; experiments/T2M.md sections 19-20)
+
+For each body plan and validation-style rig seed, the zoo's real walk on
+that rig is compared with "<subject> walks forward" generated on it (4 s,
+several seeds), read back in the canonical frame:
+
+- **Froude**: root ground speed over sqrt(g * leg length);
+- **stride**: fore-aft swing of the limb ends in leg lengths
+  (:func:`~satagraph.pipelines.quality.stride`);
+- **cadence**: the limbs' dominant fore-aft frequency in Hz
+  (:func:`~satagraph.pipelines.quality.cadence`).
+
+With ``--infill`` the masked transformer is also given the real walk's own
+layer-0 tokens, every k-th of them kept (k = 1, 2, 4, 8; "none": nothing
+kept, plain generation), and fills in the rest (the residual layers by the
+residual transformer, as in generation): the stride over the real walk's
+and the cadence say how long a gap it fills by the gait's rhythm.
+
+    .venv/bin/python benchmarks/t2m_gait.py --ckpt shipped=builtin cand=run.safetensors \\
+        [--plans biped quadruped bird] [--rig-seeds 911 912] [--seeds 3] [--infill] \\
+        [--json OUT.json]
+
+Prints markdown tables.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+import torch
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from satagraph.data.collate import collate_clips  # noqa: E402
+from satagraph.data.features import motion_to_features  # noqa: E402
+from satagraph.datasets.zoo import zoo_rigs  # noqa: E402
+from satagraph.datasets.zoo.motions import generate_clip  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
+from satagraph.pipelines.generate import (GenerationSettings, _all_layers, decode_on,  # noqa: E402
+                                          encode_windows, generate_on, load_generator,
+                                          rig_inputs)
+from satagraph.pipelines.inference import facing_smooth_of, target_clip  # noqa: E402
+from satagraph.pipelines.motion_descriptor import froude_speed  # noqa: E402
+from satagraph.pipelines.quality import cadence, stride  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
+
+#: Subject of the walking prompt per body plan (the zoo captions' wording).
+SUBJECTS = {"biped": "a person", "quadruped": "a four-legged animal", "bird": "a bird",
+            "hexapod": "an insect"}
+#: Tokens kept in the infill test: every k-th (``None``: none).
+EVERY = (1, 2, 4, 8, None)
+
+
+def gait(motion: Motion) -> List[float]:
+    """Froude speed, stride and cadence of a canonical motion."""
+    return [froude_speed(motion_to_features(motion)), stride(motion) or 0.0,
+            cadence(motion) or 0.0]
+
+
+def real_walk(plan: str, rig_seed: int, frames: int = 120) -> Motion:
+    """The zoo's walk on the first rig of :obj:`plan` drawn with :obj:`rig_seed`."""
+    rig = zoo_rigs([plan], seed=rig_seed)[0]
+    return canonicalize(generate_clip(rig, "walk", frames=frames, seed=1), fps=30.0)
+
+
+@torch.no_grad()
+def infill(module, text: str, real: Motion, every: Optional[int], seed: int,
+           settings: GenerationSettings) -> Motion:
+    """:obj:`real` re-generated with every :obj:`every`-th of its own
+    layer-0 tokens kept (``None``: none kept)."""
+    rig = rig_inputs(module, real)
+    feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
+    codes = encode_windows(module.autoencoder, feats, rig.semantic)
+    lengths = torch.tensor([codes.size(0)])
+    tokens, _ = module.masked.to_tokens(codes[None], lengths)
+    keep = torch.zeros_like(tokens, dtype=torch.bool)
+    if every is not None:
+        keep[:, ::every] = True
+    skel_emb = module.skeleton_embedding(collate_clips([target_clip(rig.feats, 1, rig.semantic)]))
+    text_emb = module.encode_text([text])
+    gen = torch.Generator().manual_seed(seed)
+    base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps, settings.guidance,
+                                  settings.temperature, settings.topk_ratio, gen,
+                                  known=tokens, keep=keep)
+    full = module.residual.generate(base, text_emb, skel_emb, lengths,
+                                    settings.residual_guidance, settings.residual_temperature,
+                                    settings.topk_ratio, gen, settings.layers)
+    out = decode_on(module, _all_layers(full[0, :codes.size(0)], module.num_quantizers), rig,
+                    settings.ground, settings.smooth)
+    return canonicalize(out, fps=30.0)
+
+
+def walk_rows(models: Dict[str, object], plans: Sequence[str], rig_seeds: Sequence[int],
+              seeds: int) -> Dict[str, Dict[str, List[float]]]:
+    """Mean Froude, stride and cadence per row (real, then each model) and plan."""
+    out: Dict[str, Dict[str, List[float]]] = {"real": {}}
+    for plan in plans:
+        reals = [real_walk(plan, s) for s in rig_seeds]
+        out["real"][plan] = np.mean([gait(r) for r in reals], 0).tolist()
+        for name, module in models.items():
+            rows = [gait(canonicalize(generate_on(module, f"{SUBJECTS[plan]} walks forward", r,
+                                                  4.0, seed), fps=30.0))
+                    for r in reals for seed in range(seeds)]
+            out.setdefault(name, {})[plan] = np.mean(rows, 0).tolist()
+    return out
+
+
+def infill_rows(models: Dict[str, object], plans: Sequence[str], rig_seeds: Sequence[int],
+                seeds: int) -> Dict[str, Dict[str, List[float]]]:
+    """Per model and ``plan/every``: stride over the real walk's, cadence,
+    the real walk's cadence."""
+    settings = GenerationSettings()
+    out: Dict[str, Dict[str, List[float]]] = {}
+    for name, module in models.items():
+        for plan in plans:
+            for every in EVERY:
+                rows = []
+                for rig_seed in rig_seeds:
+                    real = real_walk(plan, rig_seed)
+                    for seed in range(seeds):
+                        got = infill(module, f"{SUBJECTS[plan]} walks forward", real, every,
+                                     seed, settings)
+                        rows.append([(stride(got) or 0.0) / stride(real), cadence(got) or 0.0,
+                                     cadence(real)])
+                out.setdefault(name, {})[f"{plan}/{every or 'none'}"] = np.mean(rows, 0).tolist()
+    return out
+
+
+def walk_table(rows: Dict[str, Dict[str, List[float]]], plans: Sequence[str]) -> str:
+    head = " / ".join(plans)
+    lines = [f"| row | Froude ({head}) | stride, leg lengths | cadence, Hz |", "|---|---|---|---|"]
+    for name, per_plan in rows.items():
+        cells = [" / ".join(f"{per_plan[p][k]:.2f}" for p in plans) for k in range(3)]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def infill_table(rows: Dict[str, Dict[str, List[float]]], plans: Sequence[str]) -> str:
+    kept = [f"every {k}" if k else "none" for k in EVERY]
+    lines = ["| model, plan | " + " | ".join(f"{k}: stride ratio, Hz" for k in kept) +
+             " | real Hz |", "|---|" + "---|" * (len(kept) + 1)]
+    for name, cells in rows.items():
+        for plan in plans:
+            vals = [cells[f"{plan}/{k or 'none'}"] for k in EVERY]
+            lines.append(f"| {name}, {plan} | " + " | ".join(f"{v[0]:.2f}, {v[1]:.2f}"
+                                                             for v in vals) +
+                         f" | {vals[0][2]:.2f} |")
+    return "\n".join(lines)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--ckpt", nargs="+", default=["shipped=builtin"],
+                        help="NAME=CKPT (a checkpoint, a weights file or builtin)")
+    parser.add_argument("--plans", nargs="+", default=["biped", "quadruped", "bird"],
+                        choices=sorted(SUBJECTS))
+    parser.add_argument("--rig-seeds", nargs="+", type=int, default=[911, 912])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--infill", action="store_true",
+                        help="also the infill test (biped and quadruped)")
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--json", metavar="FILE")
+    args = parser.parse_args(argv)
+    torch.set_num_threads(args.threads)
+    warnings.simplefilter("ignore")
+    models = {}
+    for spec in args.ckpt:
+        name, _, path = spec.rpartition("=")
+        models[name or path] = load_generator(path).eval()
+    result = {"walks": walk_rows(models, args.plans, args.rig_seeds, args.seeds)}
+    print(walk_table(result["walks"], args.plans))
+    if args.infill:
+        plans = [p for p in args.plans if p in ("biped", "quadruped")]
+        result["infill"] = infill_rows(models, plans, args.rig_seeds, max(1, args.seeds - 1))
+        print()
+        print(infill_table(result["infill"], plans))
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=1))
+
+
+if __name__ == "__main__":
+    main()
