@@ -120,3 +120,18 @@ def zoo_skeletons(tmp_path_factory: pytest.TempPathFactory) -> dict:
         write_bvh(motion, path)
         out[rig.species] = path
     return out
+
+
+def tiny_train_overrides(autoencoder_ckpt: Path, run: Path, windows: int = 8) -> list:
+    """Overrides of ``t2m_tiny`` for a few steps of the tiny module on
+    :obj:`windows` zoo bipeds an epoch (two epochs, one validation batch)."""
+    out = [f"model.autoencoder={autoencoder_ckpt}", f"output_dir={run}",
+           "model.text_encoder=offline:32",
+           f"data.sources=[{{zoo: endless, species: [biped], windows_per_epoch: {windows}, "
+           "val_windows: 4, test_windows: 4}]",
+           "data.window=24", "data.min_frames=12", "data.batch_size=4",
+           "trainer.max_epochs=2", "trainer.max_time=null", "trainer.limit_val_batches=1",
+           "trainer.enable_model_summary=false", "loss_log=false"]
+    for key in ("skeleton", "masked", "residual", "length"):
+        out += [f"model.{key}.{k}={v}" for k, v in T2M_MODEL[key].items()]
+    return out

@@ -14,7 +14,7 @@ from satagraph.data.code_bank import (CodeBank, CodeBatch, autoencoder_fingerpri
                                       bank_batch, concat_banks)
 from satagraph.experiment.config import load_config
 from satagraph.experiment.train import train
-from tests.t2m.conftest import T2M_MODEL, build_t2m, zoo_batch
+from tests.t2m.conftest import build_t2m, tiny_train_overrides, zoo_batch
 
 
 @pytest.fixture(scope="module")
@@ -84,22 +84,9 @@ def test_damaged_and_foreign_files_are_named(tmp_path):
                  torch.tensor([1]), torch.tensor([1.0]), ["one"], "x")
 
 
-def _tiny_overrides(autoencoder_ckpt, run):
-    out = [f"model.autoencoder={autoencoder_ckpt}", f"output_dir={run}",
-           "model.text_encoder=offline:32",
-           "data.sources=[{zoo: endless, species: [biped], windows_per_epoch: 4, "
-           "val_windows: 4, test_windows: 4}]",
-           "data.window=24", "data.min_frames=12", "data.batch_size=4",
-           "trainer.max_epochs=2", "trainer.max_time=null", "trainer.limit_val_batches=1",
-           "trainer.enable_model_summary=false", "loss_log=false"]
-    for key in ("skeleton", "masked", "residual", "length"):
-        out += [f"model.{key}.{k}={v}" for k, v in T2M_MODEL[key].items()]
-    return out
-
-
 def test_satagraph_code_bank_then_train_on_it(autoencoder_ckpt, tmp_path, capsys):
     path = tmp_path / "bank.safetensors"
-    overrides = _tiny_overrides(autoencoder_ckpt, tmp_path / "run")
+    overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "run", windows=4)
     assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "6"]) == 0
     bank = CodeBank.load(path)
     # two epochs of 4 zoo windows: the second epoch's rigs are new ones
@@ -120,7 +107,7 @@ def test_code_bank_refuses_what_it_cannot_bank(autoencoder_ckpt, tmp_path, capsy
     path = tmp_path / "bank.safetensors"
     assert main(["code-bank", "tiny", str(path), "--windows", "2"]) == 2
     assert "is not a text-to-motion model" in capsys.readouterr().err
-    overrides = _tiny_overrides(autoencoder_ckpt, tmp_path / "run")
+    overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "run", windows=4)
     assert main(["code-bank", "t2m_tiny", str(path), *overrides, f"data.code_bank={path}",
                  "--windows", "2"]) == 2
     assert "unset data.code_bank" in capsys.readouterr().err

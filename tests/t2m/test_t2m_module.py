@@ -12,7 +12,7 @@ import torch
 from satagraph.experiment.config import load_config
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.experiment.train import build_module, load_module, train
-from tests.t2m.conftest import build_t2m, save_checkpoint, zoo_batch
+from tests.t2m.conftest import build_t2m, save_checkpoint, tiny_train_overrides, zoo_batch
 
 
 def test_codes_come_from_the_frozen_autoencoder(autoencoder_ckpt):
@@ -108,17 +108,7 @@ def test_semantic_encoder_must_be_the_autoencoders(autoencoder_ckpt):
 
 def test_satagraph_train_t2m_selects_on_validation(autoencoder_ckpt, tmp_path):
     """`satagraph train t2m_tiny` (module: t2m) end to end for a few steps."""
-    from tests.t2m.conftest import T2M_MODEL
-    overrides = [f"model.autoencoder={autoencoder_ckpt}", f"output_dir={tmp_path / 'run'}",
-                 "model.text_encoder=offline:32",
-                 "data.sources=[{zoo: endless, species: [biped], windows_per_epoch: 8, "
-                 "val_windows: 4, test_windows: 4}]",
-                 "data.window=24", "data.min_frames=12", "data.batch_size=4",
-                 "trainer.max_epochs=2", "trainer.max_time=null",
-                 "trainer.limit_val_batches=1", "trainer.enable_model_summary=false",
-                 "loss_log=false"]
-    for key in ("skeleton", "masked", "residual", "length"):
-        overrides += [f"model.{key}.{k}={v}" for k, v in T2M_MODEL[key].items()]
+    overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "run")
     cfg = load_config("t2m_tiny", overrides)
     module, data, trainer, run_dir = train(cfg)
     best = trainer.checkpoint_callback
