@@ -762,7 +762,7 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     all defaults)."""
     given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
-                                           "smooth", "plant")
+                                           "smooth", "plant", "choice_temperature")
              if getattr(args, k, None) is not None}
     return replace(GenerationSettings(), **given) if given else None
 
@@ -785,6 +785,9 @@ def main(argv=None) -> int:
     parser.add_argument("--temperature", type=float, default=None)
     parser.add_argument("--topk-ratio", type=float, default=None)
     parser.add_argument("--residual-temperature", type=float, default=None)
+    parser.add_argument("--choice-temperature", type=float, default=None,
+                        help="Gumbel noise on which tokens iterative decoding keeps "
+                        "(MaskGIT: 4.5; default 0)")
     parser.add_argument("--layers", type=int, default=None,
                         help="RVQ layers to decode (default: all)")
     parser.add_argument("--smooth", type=float, default=None,

@@ -77,6 +77,7 @@ class GenerationSettings:
     smooth: float = 1.5
     ground: bool = True
     plant: bool = False
+    choice_temperature: float = 0.0
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -172,7 +173,8 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     lengths = torch.tensor([frames], device=device)
     base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps,
                                   settings.guidance, settings.temperature,
-                                  settings.topk_ratio, gen)
+                                  settings.topk_ratio, gen,
+                                  choice_temperature=settings.choice_temperature)
     temperature = (settings.temperature if settings.residual_temperature is None
                    else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,

@@ -12,7 +12,7 @@ from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes,
                                            unpool_codes)
 from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided,
                                               lowest_ranked, mask_ratio, random_mask,
-                                              sample_logits, uniform)
+                                              ranking_scores, sample_logits, uniform)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
                                                        masked_cross_entropy)
@@ -178,7 +178,8 @@ class MaskedTransformer(nn.Module):
                  steps: int = 10, guidance: float = 4.0, temperature: float = 1.0,
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None,
-                 known: Optional[Tensor] = None, keep: Optional[Tensor] = None) -> Tensor:
+                 known: Optional[Tensor] = None, keep: Optional[Tensor] = None,
+                 choice_temperature: float = 0.0) -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
         as [MASK] (but the :obj:`keep` positions of :obj:`known`, which stay
         as given: infilling); at step :math:`i` of :obj:`steps` (:math:`n`) the
@@ -203,6 +204,10 @@ class MaskedTransformer(nn.Module):
                 rate (:meth:`to_tokens`), read where :obj:`keep` is set.
             keep (Tensor, optional): :math:`(B, T)` bool, the tokens of
                 :obj:`known` to keep (:math:`L` counts the others).
+            choice_temperature (float, optional): Gumbel noise on the
+                ranking of which tokens to re-mask, fading over the steps
+                (MaskGIT: 4.5; 0: by confidence alone, see
+                :func:`~satagraph.nn.generators.sampling.ranking_scores`).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
@@ -229,5 +234,6 @@ class MaskedTransformer(nn.Module):
                 pred = sample_logits(logits, temperature, topk_ratio, generator)
                 ids = torch.where(remask, pred, ids)
                 conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
+                conf = ranking_scores(conf, choice_temperature, (step + 1) / steps, generator)
                 scores = conf.masked_fill(~remask, 1e5).masked_fill(fixed, float("inf"))
             return self.to_frames(ids, lengths)

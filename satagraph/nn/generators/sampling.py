@@ -53,6 +53,27 @@ def lowest_ranked(scores: Tensor, count: Tensor) -> Tensor:
     return ranks < count.unsqueeze(-1)
 
 
+def ranking_scores(confidence: Tensor, temperature: float, progress: float,
+                   generator: Optional[torch.Generator] = None) -> Tensor:
+    r"""What iterative decoding ranks tokens by to re-mask the lowest: the
+    confidence itself (:obj:`temperature` 0), or MaskGIT's noised log
+    confidence :math:`\log p + \tau (1 - s)\,g` with Gumbel noise
+    :math:`g`, :math:`\tau` = :obj:`temperature` and :math:`s` =
+    :obj:`progress` (the share of steps done, so the noise fades out).
+    Without noise, the positions next to a kept token are the most
+    confident (a copy of it) and are kept next: runs of one code grow over
+    the sequence (``experiments/T2M.md`` section 20).
+
+    Shapes:
+        - **confidence**: :math:`(B, T)` probabilities, **output**: :math:`(B, T)`
+    """
+    if temperature <= 0:
+        return confidence
+    u = uniform(confidence.shape, generator, confidence.device).clamp(1e-20, 1 - 1e-7)
+    gumbel = -torch.log(-torch.log(u))
+    return confidence.clamp_min(1e-30).log() + temperature * (1.0 - progress) * gumbel
+
+
 def random_mask(valid: Tensor, ratio: Tensor,
                 generator: Optional[torch.Generator] = None) -> Tensor:
     r"""A uniformly random subset of :math:`\mathrm{round}(r_b\,n_b)` (at

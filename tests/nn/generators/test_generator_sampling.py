@@ -9,7 +9,7 @@ import torch
 from satagraph.nn.generators import (corrupt_tokens, cosine_schedule, guided, mask_ratio,
                                      random_mask, residual_layer_schedule, sample_logits,
                                      top_k_filter)
-from satagraph.nn.generators.sampling import lowest_ranked
+from satagraph.nn.generators.sampling import lowest_ranked, ranking_scores
 
 K = 16
 
@@ -112,3 +112,16 @@ def test_guidance_math():
     assert torch.equal(guided(cond, uncond, 1.0), cond)
     torch.testing.assert_close(guided(cond, uncond, 0.0), uncond)
     torch.testing.assert_close(guided(cond, uncond, 4.0), uncond + 4 * (cond - uncond))
+
+
+def test_ranking_scores_noise_fades_with_the_steps():
+    conf = torch.tensor([[0.9, 0.5, 0.1, 0.7]])
+    assert torch.equal(ranking_scores(conf, 0.0, 0.3), conf)
+    torch.testing.assert_close(ranking_scores(conf, 4.5, 1.0), conf.log())
+    gen = lambda: torch.Generator().manual_seed(0)  # noqa: E731
+    early = ranking_scores(conf, 4.5, 0.0, gen())
+    assert torch.equal(early, ranking_scores(conf, 4.5, 0.0, gen()))  # seeded
+    # noise of scale 4.5 reorders a ranking of log-probabilities a few nats apart
+    orders = {tuple(ranking_scores(conf, 4.5, 0.0, torch.Generator().manual_seed(s))
+                    .argsort().tolist()[0]) for s in range(20)}
+    assert len(orders) > 3
