@@ -27,35 +27,30 @@ import torch
 from torch import Tensor
 from torch.utils.data import Dataset
 
-from satagraph.nn.generators.skeleton_embedding import SkeletonGraph, skeleton_graph
-from satagraph.nn.generators.skeleton_topology import parents_to_edge_index
-from satagraph.nn.generators.codes import length_mask, split_codes
-
 PathLike = Union[str, Path]
 #: Format tag in a bank file's metadata.
 FORMAT = "satagraph-code-bank/1"
 
 
 class CodeBatch(NamedTuple):
-    r"""A batch of banked windows: what a text-to-motion step reads.
+    r"""A batch of banked windows: what a text-to-motion step reads (the
+    model turns the parents into bones and splits the codes per window).
 
     Shapes:
-        - **codes**: :math:`(B, T_{max}, Q)` (``-1`` after each window),
-          **num_frames**: :math:`(B,)`, **seconds**: :math:`(B,)`
-        - **skeleton**: one graph per window (see
-          :class:`~satagraph.nn.generators.SkeletonGraph`)
+        - **codes**: :math:`(G, Q)` code stacks, window after window,
+          **num_frames**: :math:`(B,)`
+        - **x**: :math:`(S, F)` skeleton node features, **parent**:
+          :math:`(S,)` parent node (``-1``: a root), **node_clip**:
+          :math:`(S,)` window of every node
+        - **seconds**: :math:`(B,)` durations
     """
     codes: Tensor
     num_frames: Tensor
+    x: Tensor
+    parent: Tensor
+    node_clip: Tensor
     texts: List[str]
-    skeleton: SkeletonGraph
     seconds: Tensor
-
-    def to(self, device: Any) -> "CodeBatch":
-        """The batch on :obj:`device`."""
-        graph = SkeletonGraph(*(t.to(device) for t in self.skeleton))
-        return CodeBatch(self.codes.to(device), self.num_frames.to(device), self.texts,
-                         graph, self.seconds.to(device))
 
     def __len__(self) -> int:
         return len(self.texts)
@@ -123,11 +118,23 @@ class CodeBank(Dataset):
             raise IndexError(f"window {index} of a bank of {len(self)}")
         return index % len(self)
 
+    @classmethod
+    def of_batch(cls, codes: Tensor, num_frames: Tensor, x: Tensor, parent: Tensor,
+                 node_clip: Tensor, seconds: Tensor, texts: Sequence[str],
+                 fingerprint: str) -> "CodeBank":
+        """A bank of one batch's windows, given as a :class:`CodeBatch`
+        holds them (parents indexing the batch's nodes)."""
+        nodes = torch.bincount(node_clip, minlength=num_frames.numel())
+        start = _offsets(nodes)[:-1][node_clip]
+        local = torch.where(parent < 0, -1, parent - start)
+        return cls(codes.cpu(), num_frames.cpu(), x.detach().cpu(), local.cpu(), nodes.cpu(),
+                   seconds.cpu(), texts, fingerprint)
+
     def collate(self, indices: Sequence[int]) -> CodeBatch:
         """The :class:`CodeBatch` of windows :obj:`indices` (a loader's
         ``collate_fn``)."""
         index = torch.as_tensor(list(indices), dtype=torch.long)
-        frames, nodes = self.num_frames[index], self.num_nodes[index]
+        nodes = self.num_nodes[index]
         codes = torch.cat([self.codes[self._frame_start[i]:self._frame_start[i + 1]]
                            for i in index.tolist()]).long()
         x = torch.cat([self.x[self._node_start[i]:self._node_start[i + 1]]
@@ -136,9 +143,8 @@ class CodeBank(Dataset):
                            for i in index.tolist()])
         clip = torch.arange(len(index)).repeat_interleave(nodes)
         parent = torch.where(local < 0, -1, local + _offsets(nodes)[:-1][clip])
-        edge_index, root = parents_to_edge_index(parent)
-        return CodeBatch(split_codes(codes, frames), frames, [self.texts[i] for i in index],
-                         SkeletonGraph(x, edge_index, clip, root), self.seconds[index])
+        return CodeBatch(codes, self.num_frames[index], x, parent, clip,
+                         [self.texts[i] for i in index], self.seconds[index])
 
     # ------------------------------------------------------------ files
     def save(self, path: PathLike) -> None:
@@ -187,24 +193,6 @@ class CodeBank(Dataset):
                              "`satagraph code-bank`")
 
 
-def bank_batch(module: Any, batch: Any) -> CodeBank:
-    r"""The windows of one :class:`~satagraph.data.FrameBatch` as a bank,
-    coded by ``module``'s frozen autoencoder
-    (:meth:`~satagraph.lightning.TextToMotionModule.batch_codes`)."""
-    from satagraph.data.captioned import batch_seconds, batch_texts
-    codes, frames = module.batch_codes(batch)
-    graph = skeleton_graph(module.autoencoder.normalize_batch(batch))
-    nodes = torch.bincount(graph.batch, minlength=len(frames))
-    parent = torch.full((graph.x.size(0),), -1, dtype=torch.long)
-    parent[graph.edge_index[1]] = graph.edge_index[0]
-    start = _offsets(nodes)[:-1][graph.batch]
-    local = torch.where(parent < 0, -1, parent - start)
-    real = codes[length_mask(frames, codes.size(1))]
-    return CodeBank(real.cpu(), frames.cpu(), graph.x.detach().cpu(), local.cpu(), nodes.cpu(),
-                    batch_seconds(batch), batch_texts(batch),
-                    autoencoder_fingerprint(module.autoencoder))
-
-
 def concat_banks(banks: Iterable[CodeBank]) -> CodeBank:
     """One bank of several of the same autoencoder."""
     banks = list(banks)
@@ -225,7 +213,8 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
     autoencoder.
 
     Args:
-        module: A :class:`~satagraph.lightning.TextToMotionModule`.
+        module: A :class:`~satagraph.lightning.TextToMotionModule` (its
+            :meth:`~satagraph.lightning.TextToMotionModule.bank_batch`).
         loader_for_epoch (callable): Epoch -> iterable of
             :class:`~satagraph.data.FrameBatch`.
         windows (int): Windows wanted.
@@ -236,7 +225,7 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
         while count < windows:
             before = count
             for batch in loader_for_epoch(epoch):
-                parts.append(bank_batch(module, batch))
+                parts.append(module.bank_batch(batch))
                 count += len(parts[-1])
                 if progress is not None:
                     progress(count)
@@ -248,5 +237,4 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
     return concat_banks(parts)
 
 
-__all__ = ["CodeBank", "CodeBatch", "autoencoder_fingerprint", "bank_batch", "concat_banks",
-           "draw_code_bank"]
+__all__ = ["CodeBank", "CodeBatch", "autoencoder_fingerprint", "concat_banks", "draw_code_bank"]

@@ -51,11 +51,12 @@ from satagraph.data.datamodule import semantic_embedder
 from satagraph.semantics import build_text_encoder
 from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
 from satagraph.data.captioned import batch_seconds, batch_texts
-from satagraph.data.code_bank import CodeBatch
+from satagraph.data.code_bank import CodeBank, CodeBatch, autoencoder_fingerprint
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.pipelines.inference import default_windows, window_codes
 from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTransformer,
-                                     SkeletonEmbedding, skeleton_graph, split_codes)
+                                     SkeletonEmbedding, merge_codes, parents_to_edge_index,
+                                     skeleton_graph, split_codes)
 
 #: Loss weights of the three models.
 DEFAULT_LOSS: Dict[str, float] = {"masked": 1.0, "residual": 1.0, "length": 0.1}
@@ -251,6 +252,18 @@ class TextToMotionModule(L.LightningModule):
             codes = torch.cat(window_codes(self.autoencoder, batch.to_clip_list()))
         return split_codes(codes, lengths.to(codes.device)), lengths
 
+    @torch.no_grad()
+    def bank_batch(self, batch) -> CodeBank:
+        """The windows of a :class:`~satagraph.data.FrameBatch` as a
+        :class:`~satagraph.data.code_bank.CodeBank`: their codes
+        (:meth:`batch_codes`), skeletons (as :meth:`skeleton_embedding`
+        reads them), captions and durations."""
+        codes, lengths = self.batch_codes(batch)
+        graph = skeleton_graph(self.autoencoder.normalize_batch(batch))
+        return CodeBank.of_batch(merge_codes(codes, lengths), lengths, graph.x,
+                                 batch.stream_parent, graph.batch, batch_seconds(batch),
+                                 batch_texts(batch), autoencoder_fingerprint(self.autoencoder))
+
     def skeleton_embedding(self, batch) -> Tensor:
         r""":math:`f_{skel}` of every clip's skeleton (static features
         normalised as the autoencoder's).
@@ -276,9 +289,10 @@ class TextToMotionModule(L.LightningModule):
                        ) -> Dict[str, Tensor]:
         """The three losses, their weighted sum (``loss``) and accuracies."""
         if isinstance(batch, CodeBatch):
-            codes, lengths, texts = batch.codes, batch.num_frames, batch.texts
-            skel = self.skeleton(*batch.skeleton)
-            seconds = batch.seconds
+            lengths, texts, seconds = batch.num_frames, batch.texts, batch.seconds
+            codes = split_codes(batch.codes, lengths)
+            edge_index, root = parents_to_edge_index(batch.parent)
+            skel = self.skeleton(batch.x, edge_index, batch.node_clip, root)
         else:
             codes, lengths = self.batch_codes(batch)
             texts, skel = batch_texts(batch), self.skeleton_embedding(batch)

@@ -11,7 +11,7 @@ import torch
 
 from satagraph.cli import main
 from satagraph.data.code_bank import (CodeBank, CodeBatch, autoencoder_fingerprint,
-                                      bank_batch, concat_banks)
+                                      concat_banks)
 from satagraph.experiment.config import load_config
 from satagraph.experiment.train import train
 from tests.t2m.conftest import build_t2m, tiny_train_overrides, zoo_batch
@@ -21,7 +21,7 @@ from tests.t2m.conftest import build_t2m, tiny_train_overrides, zoo_batch
 def banked(autoencoder_ckpt):
     module = build_t2m(autoencoder_ckpt)
     batch = zoo_batch(5, mirror=0.5)
-    return module, batch, bank_batch(module, batch)
+    return module, batch, module.bank_batch(batch)
 
 
 def test_a_banked_batch_gives_the_losses_of_its_frame_batch(banked):
@@ -45,12 +45,18 @@ def test_a_bank_round_trips_through_its_file_and_gathers_any_order(banked, tmp_p
     assert torch.equal(back.codes.long(), bank.codes.long())
     torch.testing.assert_close(back.x.float(), bank.x.half().float())
     one, other = bank.collate([3, 0]), back.collate([3, 0])
-    assert torch.equal(one.codes, other.codes) and torch.equal(one.num_frames, other.num_frames)
-    assert torch.equal(one.skeleton.edge_index, other.skeleton.edge_index)
-    # window 3 first: its codes are the frame batch's clip 3
+    for key in ("codes", "num_frames", "parent", "node_clip", "texts", "seconds"):
+        assert getattr(one, key) == getattr(other, key) if key == "texts" else \
+            torch.equal(getattr(one, key), getattr(other, key)), key
+    torch.testing.assert_close(one.x.half().float(), other.x)
+    # window 3 first: its codes and skeleton are the frame batch's clip 3
     live, frames = module.batch_codes(batch)
-    assert torch.equal(one.codes[0, :frames[3]], live[3, :frames[3]])
-    assert one.skeleton.root.tolist() == [0, int(bank.num_nodes[3])]
+    first = int(frames[3])
+    assert torch.equal(one.codes[:first], live[3, :first])
+    nodes = batch.stream_clip == 3
+    assert one.node_clip.tolist() == [0] * int(nodes.sum()) + [1] * int((batch.stream_clip == 0).sum())
+    local = batch.stream_parent[nodes] - int(nodes.nonzero()[0])
+    assert torch.equal(one.parent[:int(nodes.sum())], local.clamp(min=-1))
     joined = concat_banks([bank, back])
     assert len(joined) == 2 * len(bank) and joined.collate([len(bank) + 1]).texts == \
         [bank.texts[1]]

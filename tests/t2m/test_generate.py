@@ -221,7 +221,7 @@ def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
     # seed when sampled, not when greedy
     base = module.masked.generate
     monkeypatch.setattr(module.masked, "generate",  # the generator comes last
-                        lambda *a: base(*a[:-1], torch.Generator().manual_seed(0)))
+                        lambda *a, **k: base(*a[:-1], torch.Generator().manual_seed(0), **k))
     for settings in (full, G.GenerationSettings(residual_temperature=0.0)):
         for seed in (0, 1):
             G.generate_on(module, TEXT, target, 1.0, seed, settings)
