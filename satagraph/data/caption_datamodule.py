@@ -26,14 +26,13 @@ import torch
 from torch.utils.data import DataLoader, Dataset
 
 from satagraph.data.code_bank import CodeBank
-from satagraph.utils.files import check_input_file
-
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
 from satagraph.data.endless import MixedDataset, is_zoo_entry, zoo_entry
 from satagraph.datasets.sources import SPLITS, resolve_sources, select
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.data.captioned import FileCaptionWindows, ZooCaptionWindows
+from satagraph.utils.files import check_input_file
 
 
 def zoo_caption_datasets(spec: Mapping[str, Any], split: str, window: int, min_frames: int,
