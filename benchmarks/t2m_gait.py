@@ -37,15 +37,13 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from satagraph.data.collate import collate_clips  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.datasets.zoo import zoo_rigs  # noqa: E402
 from satagraph.datasets.zoo.motions import generate_clip  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.generate import (GenerationSettings, _all_layers, decode_on,  # noqa: E402
-                                          encode_windows, generate_on, load_generator,
-                                          rig_inputs)
-from satagraph.pipelines.inference import facing_smooth_of, target_clip  # noqa: E402
+from satagraph.pipelines.generate import (GenerationSettings, encode_windows,  # noqa: E402
+                                          generate_on, load_generator, rig_inputs)
+from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.motion_descriptor import froude_speed  # noqa: E402
 from satagraph.pipelines.quality import cadence, stride  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
@@ -77,22 +75,12 @@ def infill(module, text: str, real: Motion, every: Optional[int], seed: int,
     rig = rig_inputs(module, real)
     feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
     codes = encode_windows(module.autoencoder, feats, rig.semantic)
-    lengths = torch.tensor([codes.size(0)])
-    tokens, _ = module.masked.to_tokens(codes[None], lengths)
+    tokens, _ = module.masked.to_tokens(codes[None], torch.tensor([codes.size(0)]))
     keep = torch.zeros_like(tokens, dtype=torch.bool)
     if every is not None:
         keep[:, ::every] = True
-    skel_emb = module.skeleton_embedding(collate_clips([target_clip(rig.feats, 1, rig.semantic)]))
-    text_emb = module.encode_text([text])
-    gen = torch.Generator().manual_seed(seed)
-    base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps, settings.guidance,
-                                  settings.temperature, settings.topk_ratio, gen,
-                                  known=tokens, keep=keep)
-    full = module.residual.generate(base, text_emb, skel_emb, lengths,
-                                    settings.residual_guidance, settings.residual_temperature,
-                                    settings.topk_ratio, gen, settings.layers)
-    out = decode_on(module, _all_layers(full[0, :codes.size(0)], module.num_quantizers), rig,
-                    settings.ground, settings.smooth)
+    out = generate_on(module, text, real, codes.size(0) / module.fps, seed, settings,
+                      known=tokens, keep=keep)
     return canonicalize(out, fps=30.0)
 
 
@@ -116,18 +104,18 @@ def infill_rows(models: Dict[str, object], plans: Sequence[str], rig_seeds: Sequ
     """Per model and ``plan/every``: stride over the real walk's, cadence,
     the real walk's cadence."""
     settings = GenerationSettings()
+    reals = {plan: [real_walk(plan, s) for s in rig_seeds] for plan in plans}
     out: Dict[str, Dict[str, List[float]]] = {}
     for name, module in models.items():
         for plan in plans:
             for every in EVERY:
                 rows = []
-                for rig_seed in rig_seeds:
-                    real = real_walk(plan, rig_seed)
+                for real in reals[plan]:
+                    swing, rate = stride(real), cadence(real)
                     for seed in range(seeds):
                         got = infill(module, f"{SUBJECTS[plan]} walks forward", real, every,
                                      seed, settings)
-                        rows.append([(stride(got) or 0.0) / stride(real), cadence(got) or 0.0,
-                                     cadence(real)])
+                        rows.append([(stride(got) or 0.0) / swing, cadence(got) or 0.0, rate])
                 out.setdefault(name, {})[f"{plan}/{every or 'none'}"] = np.mean(rows, 0).tolist()
     return out
 

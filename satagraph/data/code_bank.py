@@ -221,11 +221,12 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
         progress (callable, optional): Called with the count so far.
     """
     parts, count, epoch = [], 0, 0
+    fingerprint = autoencoder_fingerprint(module.autoencoder)  # once: it hashes every weight
     with torch.no_grad():
         while count < windows:
             before = count
             for batch in loader_for_epoch(epoch):
-                parts.append(module.bank_batch(batch))
+                parts.append(module.bank_batch(batch, fingerprint))
                 count += len(parts[-1])
                 if progress is not None:
                     progress(count)

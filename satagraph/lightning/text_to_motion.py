@@ -254,16 +254,18 @@ class TextToMotionModule(L.LightningModule):
         return split_codes(codes, lengths.to(codes.device)), lengths
 
     @torch.no_grad()
-    def bank_batch(self, batch) -> CodeBank:
+    def bank_batch(self, batch, fingerprint: Optional[str] = None) -> CodeBank:
         """The windows of a :class:`~satagraph.data.FrameBatch` as a
         :class:`~satagraph.data.code_bank.CodeBank`: their codes
         (:meth:`batch_codes`), skeletons (as :meth:`skeleton_embedding`
-        reads them), captions and durations."""
+        reads them), captions and durations (:obj:`fingerprint`: the
+        autoencoder's, where the caller has it)."""
         codes, lengths = self.batch_codes(batch)
         graph = skeleton_graph(self.autoencoder.normalize_batch(batch))
+        fingerprint = fingerprint or autoencoder_fingerprint(self.autoencoder)
         return CodeBank.of_batch(merge_codes(codes, lengths), lengths, graph.x,
                                  batch.stream_parent, graph.batch, batch_seconds(batch),
-                                 batch_texts(batch), autoencoder_fingerprint(self.autoencoder))
+                                 batch_texts(batch), fingerprint)
 
     def skeleton_embedding(self, batch) -> Tensor:
         r""":math:`f_{skel}` of every clip's skeleton (static features

@@ -145,7 +145,9 @@ def _frames(module, text_emb, skel_emb, seconds: Optional[float],
 
 @torch.no_grad()
 def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[float] = None,
-                seed: int = 0, settings: GenerationSettings = GenerationSettings()) -> Motion:
+                seed: int = 0, settings: GenerationSettings = GenerationSettings(),
+                known: Optional[torch.Tensor] = None,
+                keep: Optional[torch.Tensor] = None) -> Motion:
     r"""A motion for :obj:`text` on :obj:`target`'s skeleton, on its own rig.
 
     Args:
@@ -158,6 +160,10 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
             model).
         seed (int): Seed of every draw.
         settings (GenerationSettings): Sampling settings.
+        known (Tensor, optional): Layer-0 tokens :math:`(1, T)` to infill
+            around (see :meth:`~satagraph.nn.generators.MaskedTransformer.generate`).
+        keep (Tensor, optional): :math:`(1, T)` bool, which of :obj:`known`
+            to keep.
 
     Returns:
         Motion: On the target's rig at the model's frame rate.
@@ -174,6 +180,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps,
                                   settings.guidance, settings.temperature,
                                   settings.topk_ratio, gen,
+                                  known=known, keep=keep,
                                   choice_temperature=settings.choice_temperature)
     temperature = (settings.temperature if settings.residual_temperature is None
                    else settings.residual_temperature)

@@ -231,6 +231,28 @@ def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
     assert torch.equal(greedy[0], greedy[1])
 
 
+def test_generate_on_infills_around_kept_tokens(t2m_ckpt, zoo_skeletons, monkeypatch):
+    """``generate_on(known=, keep=)``: the kept layer-0 tokens are decoded
+    as given, over their frames (one token every ``pool`` frames)."""
+    from satagraph.io import read_bvh
+    from satagraph.pipelines import generate as G
+    module = G.load_generator(str(t2m_ckpt))
+    target = read_bvh(str(zoo_skeletons["biped"]))
+    seen = []
+    real = G.decode_on
+    monkeypatch.setattr(G, "decode_on", lambda m, codes, *a, **k: (seen.append(codes),
+                                                                     real(m, codes, *a, **k))[1])
+    frames, pool = 30, module.masked.pool
+    known = torch.arange(-(-frames // pool)).remainder(module.masked.num_codes)[None]
+    keep = torch.zeros_like(known, dtype=torch.bool)
+    keep[:, ::2] = True
+    G.generate_on(module, TEXT, target, frames / module.fps, 0, known=known, keep=keep)
+    layer0 = seen[0][:, 0]
+    assert layer0.numel() == frames
+    for token in keep[0].nonzero().view(-1).tolist():
+        assert (layer0[token * pool:(token + 1) * pool] == known[0, token]).all()
+
+
 def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
         t2m_ckpt, autoencoder_ckpt, zoo_skeletons, tmp_path, capsys):
     """`export-weights --decoder`: the generator keeps its codes and decodes
