@@ -7,7 +7,7 @@ import sys
 import time
 from typing import List
 
-from satagraph.cli.arguments import positive_int
+from satagraph.cli.arguments import positive_float, positive_int
 
 
 def add_train_parsers(sub) -> None:
@@ -100,6 +100,9 @@ def add_train_parsers(sub) -> None:
     p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
     p.add_argument("--windows", type=positive_int, required=True,
                    help="windows to draw")
+    p.add_argument("--max-minutes", type=positive_float, default=None,
+                   help="stop drawing after this long and write the windows drawn "
+                   "(default: no limit)")
     p.add_argument("--device", default="cpu", help="where to run the autoencoder")
     p.set_defaults(func=run_code_bank)
 
@@ -209,7 +212,8 @@ def run_code_bank(args) -> int:
     def progress(count: int) -> None:
         print(f"\r{count} windows, {time.time() - start:.0f} s", end="", file=sys.stderr)
 
-    bank = draw_code_bank(module, batches, args.windows, progress)
+    bank = draw_code_bank(module, batches, args.windows, progress,
+                          None if args.max_minutes is None else 60.0 * args.max_minutes)
     bank.save(args.output)
     print(f"\nwrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
           f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import time
 from pathlib import Path
 from typing import Any, Iterable, List, NamedTuple, Optional, Sequence, Union
 
@@ -206,11 +207,13 @@ def concat_banks(banks: Iterable[CodeBank]) -> CodeBank:
 
 
 def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
-                   progress: Optional[Any] = None) -> CodeBank:
+                   progress: Optional[Any] = None,
+                   max_seconds: Optional[float] = None) -> CodeBank:
     r"""At least :obj:`windows` training windows banked: batches of
     ``loader_for_epoch(epoch)`` for epochs 0, 1, ... (each epoch of the
     endless zoo draws new rigs and clips) coded by ``module``'s frozen
-    autoencoder.
+    autoencoder; fewer where :obj:`max_seconds` runs out first (the batch
+    in hand is kept, so at least one is).
 
     Args:
         module: A :class:`~satagraph.lightning.TextToMotionModule` (its
@@ -219,8 +222,10 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
             :class:`~satagraph.data.FrameBatch`.
         windows (int): Windows wanted.
         progress (callable, optional): Called with the count so far.
+        max_seconds (float, optional): Stop drawing after this long.
     """
     parts, count, epoch = [], 0, 0
+    deadline = None if max_seconds is None else time.monotonic() + max_seconds
     fingerprint = autoencoder_fingerprint(module.autoencoder)  # once: it hashes every weight
     with torch.no_grad():
         while count < windows:
@@ -230,10 +235,13 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
                 count += len(parts[-1])
                 if progress is not None:
                     progress(count)
-                if count >= windows:
+                if count >= windows or (deadline is not None
+                                        and time.monotonic() >= deadline):
                     break
             if count == before:
                 raise ValueError("the training loader gave no windows")
+            if deadline is not None and time.monotonic() >= deadline:
+                break
             epoch += 1
     return concat_banks(parts)
 

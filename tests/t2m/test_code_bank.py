@@ -11,7 +11,7 @@ import torch
 
 from satagraph.cli import main
 from satagraph.data.code_bank import (CodeBank, CodeBatch, autoencoder_fingerprint,
-                                      concat_banks)
+                                      concat_banks, draw_code_bank)
 from satagraph.experiment.config import load_config
 from satagraph.experiment.train import train
 from tests.t2m.conftest import build_t2m, tiny_train_overrides, zoo_batch
@@ -107,6 +107,21 @@ def test_satagraph_code_bank_then_train_on_it(autoencoder_ckpt, tmp_path, capsys
     with pytest.raises(ValueError, match="bank.safetensors: its codes are of another"):
         train(load_config("t2m_tiny", overrides + [f"data.code_bank={path}",
                                                    f"output_dir={tmp_path / 'run2'}"]))
+
+
+def test_drawing_stops_when_its_time_is_up_with_the_batch_in_hand(banked):
+    module, batch, coded = banked
+    n, epochs = len(coded), []
+
+    def loader_for_epoch(epoch):
+        epochs.append(epoch)
+        return [batch, batch, batch]
+
+    bank = draw_code_bank(module, loader_for_epoch, windows=1000, max_seconds=0.0)
+    assert len(bank) == n and epochs == [0]
+    bank = draw_code_bank(module, loader_for_epoch, windows=4 * n)
+    assert len(bank) == 4 * n and epochs == [0, 0, 1]
+    assert torch.equal(bank.codes[:coded.codes.size(0)], coded.codes)
 
 
 def test_code_bank_refuses_what_it_cannot_bank(autoencoder_ckpt, tmp_path, capsys):
