@@ -762,7 +762,8 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     all defaults)."""
     given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
-                                           "smooth", "plant", "choice_temperature")
+                                           "smooth", "plant", "choice_temperature",
+                                           "spread")
              if getattr(args, k, None) is not None}
     return replace(GenerationSettings(), **given) if given else None
 
@@ -788,6 +789,9 @@ def main(argv=None) -> int:
     parser.add_argument("--choice-temperature", type=float, default=None,
                         help="Gumbel noise on which tokens iterative decoding keeps "
                         "(MaskGIT: 4.5; default 0)")
+    parser.add_argument("--spread", type=float, default=None,
+                        help="keep each decoding step's tokens this share of their mean "
+                        "gap apart (default 0: by confidence alone)")
     parser.add_argument("--layers", type=int, default=None,
                         help="RVQ layers to decode (default: all)")
     parser.add_argument("--smooth", type=float, default=None,

@@ -8,7 +8,13 @@ several seeds), read back in the canonical frame:
 - **stride**: fore-aft swing of the limb ends in leg lengths
   (:func:`~satagraph.pipelines.quality.stride`);
 - **cadence**: the limbs' dominant fore-aft frequency in Hz
-  (:func:`~satagraph.pipelines.quality.cadence`).
+  (:func:`~satagraph.pipelines.quality.cadence`);
+- **heading gap**: degrees between the body's facing and its travel
+  (:func:`~satagraph.pipelines.quality.heading_gap`): 0 for a walk, the
+  crab angle of a walk read as a side-step.
+
+``--spread`` adds a row per model and spread of the decoding
+(:class:`~satagraph.pipelines.generate.GenerationSettings`).
 
 With ``--infill`` the masked transformer is also given the real walk's own
 layer-0 tokens, every k-th of them kept (k = 1, 2, 4, 8; "none": nothing
@@ -18,7 +24,7 @@ and the cadence say how long a gap it fills by the gait's rhythm.
 
     .venv/bin/python benchmarks/t2m_gait.py --ckpt shipped=builtin cand=run.safetensors \\
         [--plans biped quadruped bird] [--rig-seeds 911 912] [--seeds 3] [--infill] \\
-        [--json OUT.json]
+        [--spread 0 1] [--json OUT.json]
 
 Prints markdown tables.
 """
@@ -29,7 +35,7 @@ import json
 import sys
 import warnings
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import torch
@@ -45,7 +51,7 @@ from satagraph.pipelines.generate import (GenerationSettings, encode_windows,  #
                                           generate_on, load_generator, rig_inputs)
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.motion_descriptor import froude_speed  # noqa: E402
-from satagraph.pipelines.quality import cadence, stride  # noqa: E402
+from satagraph.pipelines.quality import cadence, heading_gap, stride  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: Subject of the walking prompt per body plan (the zoo captions' wording).
@@ -56,9 +62,10 @@ EVERY = (1, 2, 4, 8, None)
 
 
 def gait(motion: Motion) -> List[float]:
-    """Froude speed, stride and cadence of a canonical motion."""
+    """Froude speed, stride, cadence and heading gap of a canonical motion."""
+    gap = heading_gap(motion)
     return [froude_speed(motion_to_features(motion)), stride(motion) or 0.0,
-            cadence(motion) or 0.0]
+            cadence(motion) or 0.0, float("nan") if gap is None else gap]
 
 
 def real_walk(plan: str, rig_seed: int, frames: int = 120) -> Motion:
@@ -84,29 +91,29 @@ def infill(module, text: str, real: Motion, every: Optional[int], seed: int,
     return canonicalize(out, fps=30.0)
 
 
-def walk_rows(models: Dict[str, object], plans: Sequence[str], rig_seeds: Sequence[int],
-              seeds: int) -> Dict[str, Dict[str, List[float]]]:
-    """Mean Froude, stride and cadence per row (real, then each model) and plan."""
+def walk_rows(models: Dict[str, Tuple[object, GenerationSettings]], plans: Sequence[str],
+              rig_seeds: Sequence[int], seeds: int) -> Dict[str, Dict[str, List[float]]]:
+    """Mean Froude, stride, cadence and heading gap per row (real, then each
+    model with its settings) and plan."""
     out: Dict[str, Dict[str, List[float]]] = {"real": {}}
     for plan in plans:
         reals = [real_walk(plan, s) for s in rig_seeds]
-        out["real"][plan] = np.mean([gait(r) for r in reals], 0).tolist()
-        for name, module in models.items():
+        out["real"][plan] = np.nanmean([gait(r) for r in reals], 0).tolist()
+        for name, (module, settings) in models.items():
             rows = [gait(canonicalize(generate_on(module, f"{SUBJECTS[plan]} walks forward", r,
-                                                  4.0, seed), fps=30.0))
+                                                  4.0, seed, settings), fps=30.0))
                     for r in reals for seed in range(seeds)]
-            out.setdefault(name, {})[plan] = np.mean(rows, 0).tolist()
+            out.setdefault(name, {})[plan] = np.nanmean(rows, 0).tolist()
     return out
 
 
-def infill_rows(models: Dict[str, object], plans: Sequence[str], rig_seeds: Sequence[int],
-                seeds: int) -> Dict[str, Dict[str, List[float]]]:
+def infill_rows(models: Dict[str, Tuple[object, GenerationSettings]], plans: Sequence[str],
+                rig_seeds: Sequence[int], seeds: int) -> Dict[str, Dict[str, List[float]]]:
     """Per model and ``plan/every``: stride over the real walk's, cadence,
     the real walk's cadence."""
-    settings = GenerationSettings()
     reals = {plan: [real_walk(plan, s) for s in rig_seeds] for plan in plans}
     out: Dict[str, Dict[str, List[float]]] = {}
-    for name, module in models.items():
+    for name, (module, settings) in models.items():
         for plan in plans:
             for every in EVERY:
                 rows = []
@@ -122,9 +129,11 @@ def infill_rows(models: Dict[str, object], plans: Sequence[str], rig_seeds: Sequ
 
 def walk_table(rows: Dict[str, Dict[str, List[float]]], plans: Sequence[str]) -> str:
     head = " / ".join(plans)
-    lines = [f"| row | Froude ({head}) | stride, leg lengths | cadence, Hz |", "|---|---|---|---|"]
+    lines = [f"| row | Froude ({head}) | stride, leg lengths | cadence, Hz | heading gap, deg |",
+             "|---|---|---|---|---|"]
     for name, per_plan in rows.items():
         cells = [" / ".join(f"{per_plan[p][k]:.2f}" for p in plans) for k in range(3)]
+        cells.append(" / ".join(f"{per_plan[p][3]:+.1f}" for p in plans))
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -152,6 +161,8 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--infill", action="store_true",
                         help="also the infill test (biped and quadruped)")
+    parser.add_argument("--spread", nargs="+", type=float, default=[0.0],
+                        help="decoding spreads to try (a row each; default 0)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--json", metavar="FILE")
     args = parser.parse_args(argv)
@@ -160,7 +171,10 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     models = {}
     for spec in args.ckpt:
         name, _, path = spec.rpartition("=")
-        models[name or path] = load_generator(path).eval()
+        module = load_generator(path).eval()
+        for spread in args.spread:
+            row = name or path if args.spread == [0.0] else f"{name or path}, spread {spread:g}"
+            models[row] = (module, GenerationSettings(spread=spread))
     result = {"walks": walk_rows(models, args.plans, args.rig_seeds, args.seeds)}
     print(walk_table(result["walks"], args.plans))
     if args.infill:

@@ -65,7 +65,12 @@ class GenerationSettings:
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0) or keeps the decoder's root height; whether
     the limb ends are held still through their stances
-    (:func:`~satagraph.transforms.foot_plant.plant_feet`)."""
+    (:func:`~satagraph.transforms.foot_plant.plant_feet`); MaskGIT's Gumbel
+    noise on which tokens each decoding step keeps (``choice_temperature``)
+    and how far apart it keeps them (``spread``, a share of their mean gap,
+    :func:`~satagraph.nn.generators.sampling.spread_choice`; 0: by
+    confidence alone, runs of one code grow, ``experiments/T2M.md`` sections
+    20-21)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -78,6 +83,7 @@ class GenerationSettings:
     ground: bool = True
     plant: bool = False
     choice_temperature: float = 0.0
+    spread: float = 0.0
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -181,7 +187,8 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                   settings.guidance, settings.temperature,
                                   settings.topk_ratio, gen,
                                   known=known, keep=keep,
-                                  choice_temperature=settings.choice_temperature)
+                                  choice_temperature=settings.choice_temperature,
+                                  spread=settings.spread)
     temperature = (settings.temperature if settings.residual_temperature is None
                    else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,

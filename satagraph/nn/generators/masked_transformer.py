@@ -12,7 +12,8 @@ from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes,
                                            unpool_codes)
 from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided,
                                               lowest_ranked, mask_ratio, random_mask,
-                                              ranking_scores, sample_logits, uniform)
+                                              ranking_scores, sample_logits, spread_choice,
+                                              uniform)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
                                                        masked_cross_entropy)
@@ -173,13 +174,25 @@ class MaskedTransformer(nn.Module):
                           targets, corruption, drop)
 
     # ------------------------------------------------------------ generation
+    @staticmethod
+    def _remask(scores: Tensor, fixed: Tensor, valid: Tensor, count: Tensor,
+                spread: float) -> Tensor:
+        """The :obj:`count` tokens drawn last to draw again: the lowest
+        ranked, or (:obj:`spread` > 0) all but those
+        :func:`~satagraph.nn.generators.sampling.spread_choice` keeps."""
+        if spread <= 0:
+            return lowest_ranked(scores, count) & ~fixed
+        fresh = (scores < 1e5) & ~fixed
+        kept = spread_choice(scores, fresh, valid & ~fresh, fresh.sum(-1) - count, spread)
+        return fresh & ~kept
+
     @torch.no_grad()
     def generate(self, text_emb: Optional[Tensor], skel_emb: Tensor, lengths: Tensor,
                  steps: int = 10, guidance: float = 4.0, temperature: float = 1.0,
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None,
                  known: Optional[Tensor] = None, keep: Optional[Tensor] = None,
-                 choice_temperature: float = 0.0) -> Tensor:
+                 choice_temperature: float = 0.0, spread: float = 0.0) -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
         as [MASK] (but the :obj:`keep` positions of :obj:`known`, which stay
         as given: infilling); at step :math:`i` of :obj:`steps` (:math:`n`) the
@@ -208,6 +221,10 @@ class MaskedTransformer(nn.Module):
                 ranking of which tokens to re-mask, fading over the steps
                 (MaskGIT: 4.5; 0: by confidence alone, see
                 :func:`~satagraph.nn.generators.sampling.ranking_scores`).
+            spread (float, optional): Keep the tokens of each step spread
+                over time, :obj:`spread` of the mean gap apart where the
+                ranking allows (0: by rank alone, see
+                :func:`~satagraph.nn.generators.sampling.spread_choice`).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
@@ -228,7 +245,7 @@ class MaskedTransformer(nn.Module):
                 ratio = self.mask_floor + (1 - self.mask_floor) * math.cos(
                     math.pi / 2 * step / max(steps - 1, 1))
                 count = torch.round(ratio * free).clamp(min=1).long()
-                remask = lowest_ranked(scores, count) & ~fixed
+                remask = self._remask(scores, fixed, valid, count, spread)
                 ids = ids.masked_fill(remask, self.mask_id)
                 logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
                 pred = sample_logits(logits, temperature, topk_ratio, generator)

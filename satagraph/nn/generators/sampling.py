@@ -74,6 +74,50 @@ def ranking_scores(confidence: Tensor, temperature: float, progress: float,
     return confidence.clamp_min(1e-30).log() + temperature * (1.0 - progress) * gumbel
 
 
+def spread_choice(scores: Tensor, candidates: Tensor, locked: Tensor, count: Tensor,
+                  spread: float) -> Tensor:
+    r"""``True`` at :obj:`count` of the :obj:`candidates` of every row,
+    chosen by highest :obj:`scores` but spread over time: a candidate is
+    passed over while it lies closer than
+    :math:`d = \lfloor s\,T_b / (k_b + 1) \rfloor` tokens to a
+    :obj:`locked` or already chosen position (:math:`s` = :obj:`spread`,
+    :math:`T_b` the row's candidates and locked positions, :math:`k_b` the
+    locked ones after the choice); what that leaves short is filled by score.
+    Iterative decoding that keeps the most confident tokens keeps copies of
+    their neighbours first (``experiments/T2M.md`` section 20); kept tokens
+    spread apart make the transformer predict the phases between them.
+
+    Shapes:
+        - **scores**, **candidates**, **locked**: :math:`(B, T)`,
+          **count**: :math:`(B,)`, **output**: :math:`(B, T)`
+    """
+    chosen = torch.zeros_like(candidates)
+    order = scores.masked_fill(~candidates, float("-inf")).argsort(dim=-1, descending=True)
+    for b in range(scores.size(0)):
+        want, size = int(count[b]), int(candidates[b].sum())
+        if want <= 0 or size == 0:
+            continue
+        picks = order[b, :size].tolist()
+        gap = int(spread * (size + int(locked[b].sum())) / (int(locked[b].sum()) + want + 1))
+        blocked = [False] * scores.size(1)
+        for t in locked[b].nonzero().flatten().tolist():
+            _block(blocked, t, gap)
+        taken = []
+        for t in picks:
+            if len(taken) < want and not blocked[t]:
+                taken.append(t)
+                _block(blocked, t, gap)
+        seen = set(taken)
+        rest = [t for t in picks if t not in seen]
+        chosen[b, taken + rest[:want - len(taken)]] = True
+    return chosen
+
+
+def _block(blocked: list, t: int, gap: int) -> None:
+    for u in range(max(t - gap + 1, 0), min(t + gap, len(blocked))):
+        blocked[u] = True
+
+
 def random_mask(valid: Tensor, ratio: Tensor,
                 generator: Optional[torch.Generator] = None) -> Tensor:
     r"""A uniformly random subset of :math:`\mathrm{round}(r_b\,n_b)` (at

@@ -60,6 +60,8 @@ def test_masked_transformer_generates_what_it_memorised(masked, data):
     noisy = masked.generate(text, skel, lengths, temperature=0.0, choice_temperature=4.5,
                             generator=torch.Generator().manual_seed(0))
     assert same_real(noisy, codes[..., 0], lengths)  # any order of choice, the same codes
+    spread = masked.generate(text, skel, lengths, temperature=0.0, spread=1.0)
+    assert same_real(spread, codes[..., 0], lengths)
     swapped = masked.generate(text.flip(0), skel, lengths.flip(0), temperature=0.0)
     assert torch.equal(swapped[0, :9], codes[1, :9, 0])  # the text decides the sequence
 

@@ -9,7 +9,7 @@ import torch
 from satagraph.nn.generators import (corrupt_tokens, cosine_schedule, guided, mask_ratio,
                                      random_mask, residual_layer_schedule, sample_logits,
                                      top_k_filter)
-from satagraph.nn.generators.sampling import lowest_ranked, ranking_scores
+from satagraph.nn.generators.sampling import lowest_ranked, ranking_scores, spread_choice
 
 K = 16
 
@@ -125,3 +125,34 @@ def test_ranking_scores_noise_fades_with_the_steps():
     orders = {tuple(ranking_scores(conf, 4.5, 0.0, torch.Generator().manual_seed(s))
                     .argsort().tolist()[0]) for s in range(20)}
     assert len(orders) > 3
+
+
+def test_spread_choice_keeps_the_best_apart_and_fills_what_it_lacks():
+    scores = torch.tensor([[0.9, 0.95, 0.8, 0.1, 0.2, 0.3, 0.85, 0.5]])
+    every = torch.ones(1, 8, dtype=torch.bool)
+    none = torch.zeros(1, 8, dtype=torch.bool)
+    # gap 8 / 3 -> 2: 0.95 at 1, then its neighbours 0 and 2 are passed over for 6
+    assert spread_choice(scores, every, none, torch.tensor([2]), 1.0)[0].nonzero().flatten().tolist() == [1, 6]
+    # spread 0: by score alone, as lowest_ranked would keep them
+    assert torch.equal(spread_choice(scores, every, none, torch.tensor([2]), 0.0),
+                       lowest_ranked(-scores, torch.tensor([2])))
+    # a locked token blocks its neighbours (gap 8 / 4 -> 2: 6 is passed over for 7)
+    locked = none.clone()
+    locked[0, 5] = True
+    got = spread_choice(scores, ~locked, locked, torch.tensor([2]), 1.0)[0]
+    assert got.nonzero().flatten().tolist() == [1, 7]
+    # more wanted than fit apart: the rest by score, never a locked one
+    got = spread_choice(scores, ~locked, locked, torch.tensor([7]), 1.0)[0]
+    assert got.sum() == 7 and not got[5]
+
+
+def test_spread_choice_rows_are_independent():
+    gen = torch.Generator().manual_seed(0)
+    scores = torch.rand(4, 30, generator=gen)
+    cand = torch.rand(4, 30, generator=gen) > 0.3
+    count = torch.tensor([0, 1, 5, 20]).clamp(max=cand.sum(-1))
+    got = spread_choice(scores, cand, ~cand, count, 0.5)
+    assert torch.equal(got.sum(-1), count) and not (got & ~cand).any()
+    for b in range(4):
+        assert torch.equal(spread_choice(scores[b:b + 1], cand[b:b + 1], ~cand[b:b + 1],
+                                         count[b:b + 1], 0.5)[0], got[b])

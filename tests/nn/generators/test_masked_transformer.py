@@ -193,14 +193,14 @@ def test_gradients_reach_the_skeleton_embedding():
     assert model.backbone.condition.skel_proj.weight.grad.abs().sum() > 0
 
 
-@pytest.mark.parametrize("floor", [0.0, 0.5])
-def test_decoding_steps_remask_on_the_training_schedule(conditions, floor):
+@pytest.mark.parametrize("floor, spread", [(0.0, 0.0), (0.5, 0.0), (0.0, 1.0)])
+def test_decoding_steps_remask_on_the_training_schedule(conditions, floor, spread):
     text, skel, lengths = conditions
     model = tiny_masked(mask_floor=floor)
     masked_counts = []
     model.token_emb.register_forward_hook(
         lambda mod, args, out: masked_counts.append(args[0].eq(model.mask_id).sum(-1)))
-    model.generate(text, skel, lengths, steps=5, guidance=1.0)
+    model.generate(text, skel, lengths, steps=5, guidance=1.0, spread=spread)
     assert len(masked_counts) == 5
     assert torch.equal(masked_counts[0], lengths)  # all masked at first
     for count in masked_counts:
