@@ -82,8 +82,9 @@ def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     assert "| zoo | real |" in text and "Action accuracy per asked action, zoo" in text
     by_label = rows["real"]["action_by_label"]
     n = sum(c["n"] for c in by_label.values())
-    assert rows["real"]["action"] == pytest.approx(
-        sum(c["n"] * c["accuracy"] for c in by_label.values()) / n)
+    share, half = rows["real"]["action"]
+    assert share == pytest.approx(sum(c["n"] * c["accuracy"] for c in by_label.values()) / n)
+    assert half == pytest.approx(1.96 * (share * (1 - share) / n) ** 0.5)
 
 
 def test_recogniser_reports_accuracy_per_asked_action():
@@ -98,6 +99,8 @@ def test_recogniser_reports_accuracy_per_asked_action():
     descs = [np.zeros(2)] * 5
     labels = ["walk", "walk", "run", "run", "bow"]
     assert model.accuracy(descs, labels) == 0.5
+    share, half = model.accuracy_interval(descs, labels)
+    assert share == 0.5 and half == pytest.approx(1.96 * 0.5 / 2)  # 4 known motions
     assert model.by_label(descs, labels) == {
         "run": {"n": 2, "accuracy": 0.0, "instead": "walk"},
         "walk": {"n": 2, "accuracy": 1.0, "instead": None}}
