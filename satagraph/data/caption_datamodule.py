@@ -20,12 +20,13 @@ A config's ``data`` section (``module: t2m``)::
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import torch
 from torch.utils.data import DataLoader, Dataset
 
-from satagraph.data.code_bank import CodeBank
+from satagraph.data.code_bank import CodeBank, concat_banks
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
 from satagraph.data.endless import MixedDataset, is_zoo_entry, zoo_entry
@@ -87,10 +88,10 @@ class CaptionDataModule(WindowDataModule):
         num_workers (int): DataLoader workers.
         max_files (int, optional): At most this many files per split.
         seed (int): Seed of sampling, mirroring and caption choice.
-        code_bank (str, optional): Train on the windows of this
+        code_bank (str or list, optional): Train on the windows of this
             :class:`~satagraph.data.code_bank.CodeBank` (``satagraph
-            code-bank``) instead of coding the sources' windows every step;
-            validation and test stay on the sources.
+            code-bank``), or of these joined, instead of coding the sources'
+            windows every step; validation and test stay on the sources.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -98,9 +99,11 @@ class CaptionDataModule(WindowDataModule):
                  balanced: bool = True, semantic_encoder: Optional[str] = "offline",
                  preprocessing: Optional[Dict] = None, cache_dir: Optional[str] = None,
                  num_workers: int = 0, max_files: Optional[int] = None,
-                 seed: int = 0, scale: float = 0.0, code_bank: Optional[str] = None) -> None:
+                 seed: int = 0, scale: float = 0.0,
+                 code_bank: Optional[Union[str, Sequence[str]]] = None) -> None:
         super().__init__()
-        self.code_bank = code_bank
+        self.code_bank = (None if not code_bank else str(code_bank)
+                          if isinstance(code_bank, (str, Path)) else [str(p) for p in code_bank])
         #: The training bank (``code_bank``), read by :meth:`setup`.
         self.bank: Optional[CodeBank] = None
         self.scale = float(scale)
@@ -125,8 +128,18 @@ class CaptionDataModule(WindowDataModule):
         if not len(self.datasets["train"]):
             raise ValueError(f"no captioned training windows in {self.sources!r}")
         if self.code_bank:
-            check_input_file(self.code_bank, "code bank (data.code_bank)")
-            self.bank = CodeBank.load(self.code_bank)
+            self.bank = self._read_banks()
+
+    def _read_banks(self) -> CodeBank:
+        """The bank of ``code_bank``, several joined into one."""
+        paths = self.code_bank if isinstance(self.code_bank, list) else [self.code_bank]
+        for path in paths:
+            check_input_file(path, "code bank (data.code_bank)")
+        banks = [CodeBank.load(path) for path in paths]
+        if len({bank.fingerprint for bank in banks}) > 1:
+            raise ValueError(f"data.code_bank: {', '.join(paths)} hold the codes of different "
+                             "autoencoders")
+        return banks[0] if len(banks) == 1 else concat_banks(banks)
 
     def _split(self, split: str, files, zoos, embed) -> Dataset:
         """The captioned windows of one split (training windows mirrored)."""

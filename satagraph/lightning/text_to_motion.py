@@ -324,7 +324,9 @@ class TextToMotionModule(L.LightningModule):
         """A code bank (``data.code_bank``) must hold this autoencoder's codes."""
         bank = getattr(getattr(self.trainer, "datamodule", None), "bank", None)
         if bank is not None:
-            bank.check_autoencoder(self.autoencoder, self.trainer.datamodule.code_bank)
+            where = self.trainer.datamodule.code_bank
+            bank.check_autoencoder(self.autoencoder,
+                                   ", ".join(where) if isinstance(where, list) else where)
 
     def training_step(self, batch, batch_idx: int) -> Tensor:
         return self._step(batch, "train")

@@ -109,6 +109,25 @@ def test_satagraph_code_bank_then_train_on_it(autoencoder_ckpt, tmp_path, capsys
                                                    f"output_dir={tmp_path / 'run2'}"]))
 
 
+def test_several_banks_are_joined_and_foreign_ones_named(banked, tmp_path):
+    from satagraph.data.caption_datamodule import CaptionDataModule
+    _, _, coded = banked
+    bank = copy.copy(coded)
+    bank.save(tmp_path / "a.safetensors")
+    bank.save(tmp_path / "b.safetensors")
+    paths = [str(tmp_path / "a.safetensors"), str(tmp_path / "b.safetensors")]
+    joined = CaptionDataModule([], code_bank=paths)._read_banks()
+    assert len(joined) == 2 * len(coded) and joined.texts == 2 * list(coded.texts)
+    assert torch.equal(joined.codes, torch.cat([coded.codes, coded.codes]))
+    bank.fingerprint = "another"
+    bank.save(tmp_path / "b.safetensors")
+    with pytest.raises(ValueError, match="a.safetensors, .*b.safetensors hold the codes of"):
+        CaptionDataModule([], code_bank=paths)._read_banks()
+    with pytest.raises(ValueError, match="missing.safetensors"):
+        CaptionDataModule([], code_bank=[paths[0], str(tmp_path / "missing.safetensors")]
+                          )._read_banks()
+
+
 def test_drawing_stops_when_its_time_is_up_with_the_batch_in_hand(banked):
     module, batch, coded = banked
     n, epochs = len(coded), []
