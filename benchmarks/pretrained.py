@@ -38,12 +38,17 @@ with the decoder's root height (``reconstruct``'s
 default) and grounded as the retargets are. Target <= 5 % on held-out zoo rigs, <= 8 % on bandai and
 the dog.
 
+The built-in model is the one the commands use by default (``--ckpt
+auto``): ``builtin``, or ``builtin-wide`` where a rig has six or more legs or
+none (:mod:`satagraph.pipelines.builtin_choice`); rows read with the latter
+name it.
+
 Held-out zoo rigs come from the endless zoo's test seed stream (rigs never
 drawn in training) and from its held-out body plans (``longtail``, ``spider/palps``);
 bandai and the dog were never trained on (CC BY-NC 4.0), nor was the CMU
 skeleton's test split.
 
-    .venv/bin/python benchmarks/pretrained.py [--ckpt builtin|RUN.ckpt|W.safetensors]
+    .venv/bin/python benchmarks/pretrained.py [--ckpt auto|builtin|RUN.ckpt|W.safetensors]
 
 Writes benchmarks/results/pretrained.md and .json.
 """
@@ -72,6 +77,7 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.quality import foot_slide, most_active, retarget_quality  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
+from satagraph.pipelines.builtin_choice import AUTO, choose_builtin  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 OUT = ROOT / "benchmarks" / "results" / "pretrained"
@@ -197,10 +203,34 @@ def joint_error(source: Motion, output: Motion, relative: bool = False,
     return float(np.linalg.norm(a - b, axis=-1).mean() / max(source.height(), 1e-9))
 
 
-def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
+def model_picker(ckpt: str) -> Callable[[Sequence[Motion]], Tuple[object, str]]:
+    """Motions -> (model, its name): :obj:`ckpt` for all, or with ``auto``
+    the built-in model :func:`~satagraph.pipelines.builtin_choice.choose_builtin`
+    picks for their rigs (both loaded once)."""
+    if ckpt != AUTO:
+        module = load_module(ckpt).eval()
+        return lambda motions: (module, ckpt)
+    modules = {name: load_module(name).eval() for name in ("builtin", "builtin-wide")}
+
+    def pick(motions: Sequence[Motion]) -> Tuple[object, str]:
+        name = choose_builtin([m.skeleton for m in motions]).name
+        return modules[name], name
+    return pick
+
+
+def _named(case: str, model: str, ckpt: str) -> str:
+    """The case, with the model ``auto`` chose where it is not ``builtin``."""
+    return f"{case} [{model}]" if ckpt == AUTO and model != "builtin" else case
+
+
+def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
+            ckpt: str = "builtin") -> Dict[str, List[dict]]:
     rows: Dict[str, List[dict]] = {"retarget": [], "reconstruction": []}
     for group, case, load in retarget_cases():
         source, sname, target, tname = load()
+        module, model = pick([source, target])
+        embed = module.embed
+        case = _named(case, model, ckpt)
         src, raw = retarget_canonical(module, source, target, embed, rest=rest, ground=False)
         tgt = canonicalize(target, fps=float(module.fps))
         quality = retarget_quality(src, ground_retarget(raw, src, tgt), QUALITY)
@@ -208,15 +238,18 @@ def measure(module, embed, rest: str = "auto") -> Dict[str, List[dict]]:
         quality.update(source_upright=own["upright"], source_slide=own["slide"])
         quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]
         rows["retarget"].append(dict(group=group, case=case, source=sname, target=tname,
-                                     **quality))
+                                     model=model, **quality))
     for group, case, load in recon_cases():
         motion = load()
+        module, model = pick([motion])
+        embed = module.embed
+        case = _named(case, model, ckpt)
         clip = motion.slice(0, min(motion.num_frames, RECON_FRAMES)) if group.startswith(
             "held") else recon_window(motion)
         src, raw = retarget_canonical(module, clip, clip, embed, rest=rest, ground=False)
         same_rig = retarget_quality(src, raw, ("steps", "stride"))
         grounded = ground_like(raw, src)
-        rows["reconstruction"].append(dict(group=group, case=case,
+        rows["reconstruction"].append(dict(group=group, case=case, model=model,
                                            jp=joint_error(src, raw),
                                            pose=joint_error(src, raw, relative=True),
                                            local=joint_error(src, raw, heading=True),
@@ -295,9 +328,11 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--ckpt", default="builtin",
-                        help="builtin (the package's weights), a checkpoint or a "
-                             ".safetensors weights file")
+    parser.add_argument("--ckpt", default=AUTO,
+                        help="auto (the default, as the commands': the built-in model "
+                             "chosen by the rigs; rows it reads with builtin-wide say so), "
+                             "builtin, builtin-wide, a checkpoint or a .safetensors "
+                             "weights file")
     parser.add_argument("--rest", choices=REST_MODES, default="auto",
                         help="the rest pose every skeleton is shown to the model in "
                              "(retarget_canonical's rest; default auto)")
@@ -311,11 +346,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               file=sys.stderr)
         return 2
     start = time.perf_counter()
-    module = load_module(args.ckpt).eval()
-    embed = module.embed
+    pick = model_picker(args.ckpt)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows = measure(module, embed, args.rest)
+        rows = measure(pick, args.rest, args.ckpt)
     text = table(rows, args.ckpt, time.perf_counter() - start, args.rest)
     print(text)
     write_results(out, "The built-in model (benchmarks/pretrained.py)", text,

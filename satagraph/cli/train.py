@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 import time
-from typing import List
+from typing import List, Sequence
 
 from satagraph.cli.arguments import positive_float, positive_int
 
@@ -108,12 +108,13 @@ def add_train_parsers(sub) -> None:
 
 
 def _common(p) -> None:
-    p.add_argument("--ckpt", default="builtin",
+    p.add_argument("--ckpt", default="auto",
                    help="a checkpoint from `satagraph train`, a .safetensors weights "
-                   "file from `satagraph export-weights`, builtin (the default: the "
-                   "weights shipped in the package, best on humans and four-legged "
-                   "animals) or builtin-wide (shipped too: every body plan of the zoo, "
-                   "insects, crabs, spiders and snakes as well)")
+                   "file from `satagraph export-weights`, builtin (weights shipped in "
+                   "the package, best on humans and animals of four limbs or fewer), "
+                   "builtin-wide (shipped too: every body plan of the zoo, insects, "
+                   "crabs, spiders and snakes as well) or auto (the default: builtin, "
+                   "or builtin-wide where a rig has six or more legs or none)")
     p.add_argument("--window", type=int, default=None,
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
@@ -220,29 +221,39 @@ def run_code_bank(args) -> int:
     return 0
 
 
-def _load(args):
+def _load(args, motions: Sequence, paths: Sequence[str]):
+    """The model of ``--ckpt`` (``auto``: the built-in one for the rigs of
+    :obj:`motions`, :mod:`~satagraph.pipelines.builtin_choice`), saying on
+    stderr which built-in model is used and why."""
     from satagraph.experiment.train import load_module
     from satagraph.io.weights import builtin_notice, is_builtin
-    module = load_module(args.ckpt)
-    if is_builtin(args.ckpt):
-        print(f"satagraph: {builtin_notice(name=args.ckpt)}", file=sys.stderr)
+    from satagraph.pipelines.builtin_choice import AUTO, choose_builtin
+    name, why = args.ckpt, ""
+    if name == AUTO:
+        name, reason = choose_builtin([m.skeleton for m in motions], paths)
+        why = f" (--ckpt auto: {reason})"
+    module = load_module(name)
+    if is_builtin(name):
+        print(f"satagraph: {builtin_notice(name=name)}{why}", file=sys.stderr)
     return module, module.embed
 
 
-def _read_checked(args, key: str, fps: float, frames: bool = True):
+def _read(args, key: str):
     """The BVH file ``args.<key>`` with its ``--[target-]up-axis`` /
-    ``--[target-]units``, checked for inference
-    (:mod:`satagraph.data.validate`); :obj:`frames`: also its timing and
-    values (a target needs only its skeleton)."""
+    ``--[target-]units``."""
     from satagraph.cli.arguments import read_with_rig
+    return read_with_rig(getattr(args, key), args, "target" if key == "target" else "")
+
+
+def _check(motion, path: str, fps: float, frames: bool = True) -> None:
+    """:obj:`motion` checked for inference (:mod:`satagraph.data.validate`);
+    :obj:`frames`: also its timing and values (a target needs only its
+    skeleton)."""
     from satagraph.data.validate import check_motion, check_skeleton
-    path = getattr(args, key)
-    motion = read_with_rig(path, args, "target" if key == "target" else "")
     if frames:
         check_motion(motion, path, fps=fps)
     else:
         check_skeleton(motion, path)
-    return motion
 
 
 def run_reconstruct(args) -> int:
@@ -250,8 +261,9 @@ def run_reconstruct(args) -> int:
     from satagraph.io import write_bvh
     from satagraph.utils.files import check_output_path
     check_output_path(args.output)
-    module, embed = _load(args)
-    motion = _read_checked(args, "input", module.fps)
+    motion = _read(args, "input")
+    module, embed = _load(args, [motion], [args.input])
+    _check(motion, args.input, module.fps)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
                              args.ground)
     write_bvh(out, args.output)
@@ -264,9 +276,10 @@ def run_retarget(args) -> int:
     from satagraph.io import write_bvh
     from satagraph.utils.files import check_output_path
     check_output_path(args.output)
-    module, embed = _load(args)
-    source = _read_checked(args, "source", module.fps)
-    target = _read_checked(args, "target", module.fps, frames=False)
+    source, target = _read(args, "source"), _read(args, "target")
+    module, embed = _load(args, [source, target], [args.source, args.target])
+    _check(source, args.source, module.fps)
+    _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant)
     write_bvh(out, args.output)

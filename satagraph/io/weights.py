@@ -110,6 +110,10 @@ def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
             line saying how to make them).
     """
     name = os.fspath(name)
+    if name == "auto" and kind == "autoencoder" and not os.path.exists(name):
+        raise CheckpointError("auto picks a built-in model by the rigs a command reads "
+                              "(satagraph.pipelines.builtin_choice.choose_builtin); name "
+                              "builtin or builtin-wide here")
     if not is_builtin(name, kind):
         return name
     path = builtin_path(kind, name)

@@ -172,3 +172,47 @@ def test_builtin_wide_reads_body_plans_the_default_cannot(no_network: None) -> N
             errors.append(np.linalg.norm(src.global_positions()[:n] - out.global_positions()[:n],
                                          axis=-1).mean() / src.height())
         assert errors[0] < 0.2 and errors[1] > 0.5, errors
+
+
+def test_auto_picks_the_builtin_model_by_the_rigs(tmp_path: Path, capsys) -> None:
+    """``--ckpt auto`` (the default) reads a zoo hexapod with ``builtin-wide``
+    (saying why, byte for byte its output) and a biped with ``builtin``; a
+    retarget from the biped onto the hexapod is one model for both: the
+    wide one."""
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    from satagraph.io import write_bvh
+    files = {}
+    for plan in ("hexapod", "biped"):
+        files[plan] = tmp_path / f"{plan}.bvh"
+        write_bvh(EndlessZoo(species=[plan]).sample(0, 0, 48, "test").motion, files[plan])
+    out = {name: tmp_path / f"{name}.bvh" for name in ("auto", "wide", "builtin", "plain")}
+    assert main(["reconstruct", str(files["hexapod"]), str(out["auto"])]) == 0
+    err = capsys.readouterr().err
+    assert "using the built-in model builtin-wide" in err and \
+        "(--ckpt auto: hexapod.bvh: 6 legs in pairs)" in err
+    assert main(["reconstruct", "--ckpt", "builtin-wide", str(files["hexapod"]),
+                 str(out["wide"])]) == 0
+    assert out["auto"].read_bytes() == out["wide"].read_bytes()
+    capsys.readouterr()
+    assert main(["reconstruct", str(files["biped"]), str(out["plain"])]) == 0
+    assert "using the built-in model (" in capsys.readouterr().err
+    assert main(["reconstruct", "--ckpt", "builtin", str(files["biped"]),
+                 str(out["builtin"])]) == 0
+    assert out["plain"].read_bytes() == out["builtin"].read_bytes()
+    capsys.readouterr()
+    assert main(["retarget", str(files["biped"]), "--target", str(files["hexapod"]),
+                 str(tmp_path / "onto.bvh")]) == 0
+    assert "builtin-wide" in capsys.readouterr().err
+
+
+def test_choose_builtin_reads_the_plan_from_the_joints() -> None:
+    from satagraph.datasets.zoo import zoo_rigs
+    from satagraph.pipelines.builtin_choice import choose_builtin
+    rigs = {plan: zoo_rigs([plan], seed=911)[0].skeleton
+            for plan in ("biped", "quadruped", "bird", "hexapod", "spider", "snake")}
+    for plan in ("biped", "quadruped", "bird"):
+        assert choose_builtin([rigs[plan]]).name == "builtin", plan
+    assert choose_builtin([rigs["biped"], rigs["spider"]], ["a.bvh", "b.bvh"]) == \
+        ("builtin-wide", "b.bvh: 8 legs in pairs")
+    assert choose_builtin([rigs["snake"]]) == ("builtin-wide", "skeleton 0: no limbs")
+    assert choose_builtin([rigs["hexapod"]]).reason == "skeleton 0: 6 legs in pairs"

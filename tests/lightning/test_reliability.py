@@ -186,8 +186,10 @@ def test_loading_is_safe_and_errors_are_one_line(
     cases = {evil: "safe loading refuses", raw: "not a readable checkpoint", truncated: "not a readable checkpoint",
              text: "not a readable checkpoint", good: "no model hyperparameters",
              tmp_path: "is a directory"}
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=16)
+    clip = next((tmp_path / "zoo").rglob("*.bvh"))  # a good input: the model is what fails
     for path, words in cases.items():
-        code = main(["reconstruct", "--ckpt", str(path), str(text), str(tmp_path / "o.bvh")])
+        code = main(["reconstruct", "--ckpt", str(path), str(clip), str(tmp_path / "o.bvh")])
         err = capsys.readouterr().err
         assert code == 2 and err.count("\n") == 1, err
         assert err.startswith(f"satagraph: error: {path}") and words in err, err

@@ -144,7 +144,8 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     # the fallback says which model it used and what it can do, in one line
     err = capsys.readouterr().err.strip()
     assert err == ("satagraph: using the built-in model (satagraph train tiny, 3 min): "
-                   "a test model: limbs in step on zoo rigs only")
+                   "a test model: limbs in step on zoo rigs only (--ckpt auto: humans and "
+                   "animals of four limbs or fewer)")
     assert main(["reconstruct", "--ckpt", "builtin", str(clip), str(out)]) == 0
     assert out.is_file() and "using the built-in model" in capsys.readouterr().err
     assert main(["reconstruct", "--ckpt", str(shipped), str(clip), str(out)]) == 0
@@ -163,6 +164,8 @@ def test_builtin_names() -> None:
     assert weights.resolve_weights("runs/x.ckpt") == "runs/x.ckpt"
     with pytest.raises(ValueError, match="named"):
         weights.builtin_path("text-to-motion", "builtin-wide")
+    with pytest.raises(CheckpointError, match="auto picks a built-in model by the rigs"):
+        weights.resolve_weights("auto")
 
 
 def test_builtin_path_is_package_data() -> None:
