@@ -231,10 +231,10 @@ def _load(args, motions: Sequence, paths: Sequence[str]):
     name, why = args.ckpt, ""
     if name == AUTO:
         name, reason = choose_builtin([m.skeleton for m in motions], paths)
-        why = f" (--ckpt auto: {reason})"
+        why = f"--ckpt auto ({reason}): "
     module = load_module(name)
     if is_builtin(name):
-        print(f"satagraph: {builtin_notice(name=name)}{why}", file=sys.stderr)
+        print(f"satagraph: {why}{builtin_notice(name=name)}", file=sys.stderr)
     return module, module.embed
 
 

@@ -188,14 +188,15 @@ def test_auto_picks_the_builtin_model_by_the_rigs(tmp_path: Path, capsys) -> Non
     out = {name: tmp_path / f"{name}.bvh" for name in ("auto", "wide", "builtin", "plain")}
     assert main(["reconstruct", str(files["hexapod"]), str(out["auto"])]) == 0
     err = capsys.readouterr().err
-    assert "using the built-in model builtin-wide" in err and \
-        "(--ckpt auto: hexapod.bvh: 6 legs in pairs)" in err
+    assert err.startswith("satagraph: --ckpt auto (hexapod.bvh: 6 legs in pairs): using the "
+                          "built-in model builtin-wide (")
     assert main(["reconstruct", "--ckpt", "builtin-wide", str(files["hexapod"]),
                  str(out["wide"])]) == 0
     assert out["auto"].read_bytes() == out["wide"].read_bytes()
     capsys.readouterr()
     assert main(["reconstruct", str(files["biped"]), str(out["plain"])]) == 0
-    assert "using the built-in model (" in capsys.readouterr().err
+    assert "auto (humans and animals of four limbs or fewer): using the built-in model (" \
+        in capsys.readouterr().err
     assert main(["reconstruct", "--ckpt", "builtin", str(files["biped"]),
                  str(out["builtin"])]) == 0
     assert out["plain"].read_bytes() == out["builtin"].read_bytes()

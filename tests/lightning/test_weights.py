@@ -143,9 +143,9 @@ def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip:
     assert main(["reconstruct", str(clip), str(out)]) == 0
     # the fallback says which model it used and what it can do, in one line
     err = capsys.readouterr().err.strip()
-    assert err == ("satagraph: using the built-in model (satagraph train tiny, 3 min): "
-                   "a test model: limbs in step on zoo rigs only (--ckpt auto: humans and "
-                   "animals of four limbs or fewer)")
+    assert err == ("satagraph: --ckpt auto (humans and animals of four limbs or fewer): "
+                   "using the built-in model (satagraph train tiny, 3 min): "
+                   "a test model: limbs in step on zoo rigs only")
     assert main(["reconstruct", "--ckpt", "builtin", str(clip), str(out)]) == 0
     assert out.is_file() and "using the built-in model" in capsys.readouterr().err
     assert main(["reconstruct", "--ckpt", str(shipped), str(clip), str(out)]) == 0
