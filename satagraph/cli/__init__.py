@@ -410,9 +410,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = build_parser()
     args = parse_args(parser, argv)
     retain_freed_memory()  # batches of frame graphs: no page faults per call
-    before = warnings.formatwarning
+    before, shown = warnings.formatwarning, warnings.showwarning
     if not args.traceback:
         warnings.formatwarning = _format_warning
+    warnings.showwarning = _once(shown)
     try:
         code = args.func(args)
     except (BVHError, CommandError, OSError, ValueError) as err:
@@ -421,8 +422,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
         return 2
     finally:
-        warnings.formatwarning = before
+        warnings.formatwarning, warnings.showwarning = before, shown
     return int(code or 0)
+
+
+def _once(show):
+    """:func:`warnings.showwarning` that shows each warning line once per
+    command (a file's rig is read again at each step that canonicalises
+    it)."""
+    seen = set()
+
+    def show_once(message, category, filename, lineno, file=None, line=None):
+        key = (category, str(message))
+        if key not in seen:
+            seen.add(key)
+            show(message, category, filename, lineno, file, line)
+    return show_once
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -378,3 +378,14 @@ def test_overrides_may_follow_options():
         parse_args(parser, ["train", "tiny", "--init-from", "x.ckpt", "stray"])
     with pytest.raises(SystemExit):
         parse_args(parser, ["inspect", "f.bvh", "a=1"])
+
+
+def test_each_warning_line_is_shown_once_per_command():
+    """A file's rig is read again at every step that canonicalises it; the
+    command shows each of its warnings once (other lines still pass)."""
+    shown = []
+    once = cli._once(lambda message, *rest: shown.append(str(message)))
+    for text in ("a.bvh: units unknown", "a.bvh: units unknown", "b.bvh: up axis guessed",
+                 "a.bvh: units unknown"):
+        once(UserWarning(text), UserWarning, "f.py", 1)
+    assert shown == ["a.bvh: units unknown", "b.bvh: up axis guessed"]
