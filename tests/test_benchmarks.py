@@ -306,3 +306,17 @@ def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s}}, 1.0, rt)
     assert "| zoo biped | 3 | 20.0 (20.0), stride 0.75 |" in text
     assert "| zoo biped -> bird | 2 | +0.94, 0.88 (50%), stride 0.66 |" in text
+
+
+def test_t2m_gait_reads_a_real_walk_as_a_straight_gait():
+    """benchmarks/t2m_gait.py's row of a real zoo walk: it travels where it
+    faces (heading gap about 0), its limbs swing at a walk's cadence, and
+    the table gives every plan its cell."""
+    import t2m_gait
+    froude, swing, cadence, gap = t2m_gait.gait(t2m_gait.real_walk("biped", 911))
+    assert 0.1 < froude < 1.0 and swing > 0.2 and 0.8 < cadence < 2.0
+    assert abs(gap) < 2.0
+    text = t2m_gait.walk_table({"real": {"biped": [froude, swing, cadence, gap]}}, ["biped"])
+    assert text.splitlines()[0].endswith("heading gap, deg |")
+    assert text.splitlines()[-1] == (f"| real | {froude:.2f} | {swing:.2f} | {cadence:.2f} "
+                                     f"| {gap:+.1f} |")
