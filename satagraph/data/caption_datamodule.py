@@ -60,6 +60,15 @@ def zoo_caption_datasets(spec: Mapping[str, Any], split: str, window: int, min_f
     return out
 
 
+def _bank_paths(code_bank) -> Union[None, str, List[str]]:
+    """``data.code_bank`` as one path, a list of them, or ``None``."""
+    if not code_bank:
+        return None
+    if isinstance(code_bank, (str, Path)):
+        return str(code_bank)
+    return [str(path) for path in code_bank]
+
+
 class CaptionDataModule(WindowDataModule):
     r"""Captioned windows of files and of the endless zoo, in the sources'
     own splits (a manifest's, the zoo's seed streams); nothing re-split.
@@ -102,8 +111,7 @@ class CaptionDataModule(WindowDataModule):
                  seed: int = 0, scale: float = 0.0,
                  code_bank: Optional[Union[str, Sequence[str]]] = None) -> None:
         super().__init__()
-        self.code_bank = (None if not code_bank else str(code_bank)
-                          if isinstance(code_bank, (str, Path)) else [str(p) for p in code_bank])
+        self.code_bank = _bank_paths(code_bank)
         #: The training bank (``code_bank``), read by :meth:`setup`.
         self.bank: Optional[CodeBank] = None
         self.scale = float(scale)

@@ -5,7 +5,7 @@ reproducible."""
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Optional
+from typing import List, NamedTuple, Optional
 
 import torch
 from torch import Tensor
@@ -94,26 +94,34 @@ def spread_choice(scores: Tensor, candidates: Tensor, locked: Tensor, count: Ten
     chosen = torch.zeros_like(candidates)
     order = scores.masked_fill(~candidates, float("-inf")).argsort(dim=-1, descending=True)
     for b in range(scores.size(0)):
-        want, size = int(count[b]), int(candidates[b].sum())
-        if want <= 0 or size == 0:
-            continue
-        picks = order[b, :size].tolist()
-        gap = int(spread * (size + int(locked[b].sum())) / (int(locked[b].sum()) + want + 1))
-        blocked = [False] * scores.size(1)
-        for t in locked[b].nonzero().flatten().tolist():
-            _block(blocked, t, gap)
-        taken = []
-        for t in picks:
-            if len(taken) < want and not blocked[t]:
-                taken.append(t)
-                _block(blocked, t, gap)
-        seen = set(taken)
-        rest = [t for t in picks if t not in seen]
-        chosen[b, taken + rest[:want - len(taken)]] = True
+        picks = order[b, :int(candidates[b].sum())].tolist()
+        taken = _spread_row(picks, locked[b].nonzero().flatten().tolist(), int(count[b]),
+                            spread, scores.size(1))
+        chosen[b, taken] = True
     return chosen
 
 
-def _block(blocked: list, t: int, gap: int) -> None:
+def _spread_row(picks: List[int], locked: List[int], want: int, spread: float,
+                length: int) -> List[int]:
+    """:func:`spread_choice` of one row: :obj:`want` of :obj:`picks` (best
+    first), apart from each other and from :obj:`locked` where they can be."""
+    if want <= 0 or not picks:
+        return []
+    gap = int(spread * (len(picks) + len(locked)) / (len(locked) + want + 1))
+    blocked = [False] * length
+    for t in locked:
+        _block(blocked, t, gap)
+    taken = []
+    for t in picks:
+        if len(taken) < want and not blocked[t]:
+            taken.append(t)
+            _block(blocked, t, gap)
+    seen = set(taken)
+    return taken + [t for t in picks if t not in seen][:want - len(taken)]
+
+
+def _block(blocked: List[bool], t: int, gap: int) -> None:
+    """Marks the positions closer than :obj:`gap` to :obj:`t`."""
     for u in range(max(t - gap + 1, 0), min(t + gap, len(blocked))):
         blocked[u] = True
 
