@@ -223,41 +223,48 @@ def _named(case: str, model: str, ckpt: str) -> str:
     return f"{case} [{model}]" if ckpt == AUTO and model != "builtin" else case
 
 
+def retarget_row(module, source: Motion, target: Motion, rest: str = "auto") -> dict:
+    """The quality of one retarget (grounded as the CLI's), with the
+    source's own upright share and slide and the decoder's own ground."""
+    src, raw = retarget_canonical(module, source, target, module.embed, rest=rest, ground=False)
+    tgt = canonicalize(target, fps=float(module.fps))
+    quality = retarget_quality(src, ground_retarget(raw, src, tgt), QUALITY)
+    own = retarget_quality(src, src, ("upright", "slide"))
+    quality.update(source_upright=own["upright"], source_slide=own["slide"])
+    quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]
+    return quality
+
+
+def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
+    """The joint errors, steps, stride and slide of one reconstruction."""
+    src, raw = retarget_canonical(module, clip, clip, module.embed, rest=rest, ground=False)
+    same_rig = retarget_quality(src, raw, ("steps", "stride"))
+    grounded = ground_like(raw, src)
+    return dict(jp=joint_error(src, raw), pose=joint_error(src, raw, relative=True),
+                local=joint_error(src, raw, heading=True),
+                grounded_jp=joint_error(src, grounded), height=src.height(),
+                steps=same_rig["steps"], stride=same_rig["stride"],
+                slide=foot_slide(grounded), source_slide=foot_slide(src))
+
+
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
             ckpt: str = "builtin") -> Dict[str, List[dict]]:
+    """Every retarget and reconstruction row, each read by ``pick``'s model."""
     rows: Dict[str, List[dict]] = {"retarget": [], "reconstruction": []}
     for group, case, load in retarget_cases():
         source, sname, target, tname = load()
         module, model = pick([source, target])
-        embed = module.embed
-        case = _named(case, model, ckpt)
-        src, raw = retarget_canonical(module, source, target, embed, rest=rest, ground=False)
-        tgt = canonicalize(target, fps=float(module.fps))
-        quality = retarget_quality(src, ground_retarget(raw, src, tgt), QUALITY)
-        own = retarget_quality(src, src, ("upright", "slide"))
-        quality.update(source_upright=own["upright"], source_slide=own["slide"])
-        quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]
-        rows["retarget"].append(dict(group=group, case=case, source=sname, target=tname,
-                                     model=model, **quality))
+        rows["retarget"].append(dict(group=group, case=_named(case, model, ckpt), source=sname,
+                                     target=tname, model=model,
+                                     **retarget_row(module, source, target, rest)))
     for group, case, load in recon_cases():
         motion = load()
         module, model = pick([motion])
-        embed = module.embed
-        case = _named(case, model, ckpt)
         clip = motion.slice(0, min(motion.num_frames, RECON_FRAMES)) if group.startswith(
             "held") else recon_window(motion)
-        src, raw = retarget_canonical(module, clip, clip, embed, rest=rest, ground=False)
-        same_rig = retarget_quality(src, raw, ("steps", "stride"))
-        grounded = ground_like(raw, src)
-        rows["reconstruction"].append(dict(group=group, case=case, model=model,
-                                           jp=joint_error(src, raw),
-                                           pose=joint_error(src, raw, relative=True),
-                                           local=joint_error(src, raw, heading=True),
-                                           grounded_jp=joint_error(src, grounded),
-                                           height=src.height(), steps=same_rig["steps"],
-                                           stride=same_rig["stride"],
-                                           slide=foot_slide(grounded),
-                                           source_slide=foot_slide(src)))
+        rows["reconstruction"].append(dict(group=group, case=_named(case, model, ckpt),
+                                           model=model,
+                                           **reconstruction_row(module, clip, rest)))
     return rows
 
 
