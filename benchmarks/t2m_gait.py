@@ -91,27 +91,26 @@ def infill(module, text: str, real: Motion, every: Optional[int], seed: int,
     return canonicalize(out, fps=30.0)
 
 
-def walk_rows(models: Dict[str, Tuple[object, GenerationSettings]], plans: Sequence[str],
-              rig_seeds: Sequence[int], seeds: int) -> Dict[str, Dict[str, List[float]]]:
+def walk_rows(models: Dict[str, Tuple[object, GenerationSettings]],
+              reals: Dict[str, List[Motion]], seeds: int) -> Dict[str, Dict[str, List[float]]]:
     """Mean Froude, stride, cadence and heading gap per row (real, then each
-    model with its settings) and plan."""
+    model with its settings) and plan (the keys of :obj:`reals`, each plan's
+    real walks)."""
     out: Dict[str, Dict[str, List[float]]] = {"real": {}}
-    for plan in plans:
-        reals = [real_walk(plan, s) for s in rig_seeds]
-        out["real"][plan] = np.nanmean([gait(r) for r in reals], 0).tolist()
+    for plan, walks in reals.items():
+        out["real"][plan] = np.nanmean([gait(r) for r in walks], 0).tolist()
         for name, (module, settings) in models.items():
             rows = [gait(canonicalize(generate_on(module, f"{SUBJECTS[plan]} walks forward", r,
                                                   4.0, seed, settings), fps=30.0))
-                    for r in reals for seed in range(seeds)]
+                    for r in walks for seed in range(seeds)]
             out.setdefault(name, {})[plan] = np.nanmean(rows, 0).tolist()
     return out
 
 
 def infill_rows(models: Dict[str, Tuple[object, GenerationSettings]], plans: Sequence[str],
-                rig_seeds: Sequence[int], seeds: int) -> Dict[str, Dict[str, List[float]]]:
+                reals: Dict[str, List[Motion]], seeds: int) -> Dict[str, Dict[str, List[float]]]:
     """Per model and ``plan/every``: stride over the real walk's, cadence,
     the real walk's cadence."""
-    reals = {plan: [real_walk(plan, s) for s in rig_seeds] for plan in plans}
     out: Dict[str, Dict[str, List[float]]] = {}
     for name, (module, settings) in models.items():
         for plan in plans:
@@ -173,13 +172,14 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
         name, _, path = spec.rpartition("=")
         module = load_generator(path).eval()
         for spread in args.spread:
-            row = name or path if args.spread == [0.0] else f"{name or path}, spread {spread:g}"
+            row = (name or path) if args.spread == [0.0] else f"{name or path}, spread {spread:g}"
             models[row] = (module, GenerationSettings(spread=spread))
-    result = {"walks": walk_rows(models, args.plans, args.rig_seeds, args.seeds)}
+    reals = {plan: [real_walk(plan, s) for s in args.rig_seeds] for plan in args.plans}
+    result = {"walks": walk_rows(models, reals, args.seeds)}
     print(walk_table(result["walks"], args.plans))
     if args.infill:
         plans = [p for p in args.plans if p in ("biped", "quadruped")]
-        result["infill"] = infill_rows(models, plans, args.rig_seeds, max(1, args.seeds - 1))
+        result["infill"] = infill_rows(models, plans, reals, max(1, args.seeds - 1))
         print()
         print(infill_table(result["infill"], plans))
     if args.json:

@@ -60,12 +60,12 @@ def zoo_caption_datasets(spec: Mapping[str, Any], split: str, window: int, min_f
     return out
 
 
-def _bank_paths(code_bank) -> Union[None, str, List[str]]:
-    """``data.code_bank`` as one path, a list of them, or ``None``."""
+def _bank_paths(code_bank) -> List[str]:
+    """``data.code_bank`` (one path, several, or none) as a list."""
     if not code_bank:
-        return None
+        return []
     if isinstance(code_bank, (str, Path)):
-        return str(code_bank)
+        return [str(code_bank)]
     return [str(path) for path in code_bank]
 
 
@@ -111,6 +111,7 @@ class CaptionDataModule(WindowDataModule):
                  seed: int = 0, scale: float = 0.0,
                  code_bank: Optional[Union[str, Sequence[str]]] = None) -> None:
         super().__init__()
+        #: The bank files (``code_bank``, as a list; empty: none).
         self.code_bank = _bank_paths(code_bank)
         #: The training bank (``code_bank``), read by :meth:`setup`.
         self.bank: Optional[CodeBank] = None
@@ -140,13 +141,12 @@ class CaptionDataModule(WindowDataModule):
 
     def _read_banks(self) -> CodeBank:
         """The bank of ``code_bank``, several joined into one."""
-        paths = self.code_bank if isinstance(self.code_bank, list) else [self.code_bank]
-        for path in paths:
+        for path in self.code_bank:
             check_input_file(path, "code bank (data.code_bank)")
-        banks = [CodeBank.load(path) for path in paths]
+        banks = [CodeBank.load(path) for path in self.code_bank]
         if len({bank.fingerprint for bank in banks}) > 1:
-            raise ValueError(f"data.code_bank: {', '.join(paths)} hold the codes of different "
-                             "autoencoders")
+            raise ValueError(f"data.code_bank: {', '.join(self.code_bank)} hold the codes of "
+                             "different autoencoders")
         return banks[0] if len(banks) == 1 else concat_banks(banks)
 
     def _split(self, split: str, files, zoos, embed) -> Dataset:

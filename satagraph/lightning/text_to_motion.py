@@ -324,9 +324,7 @@ class TextToMotionModule(L.LightningModule):
         """A code bank (``data.code_bank``) must hold this autoencoder's codes."""
         bank = getattr(getattr(self.trainer, "datamodule", None), "bank", None)
         if bank is not None:
-            where = self.trainer.datamodule.code_bank
-            bank.check_autoencoder(self.autoencoder,
-                                   ", ".join(where) if isinstance(where, list) else where)
+            bank.check_autoencoder(self.autoencoder, ", ".join(self.trainer.datamodule.code_bank))
 
     def training_step(self, batch, batch_idx: int) -> Tensor:
         return self._step(batch, "train")

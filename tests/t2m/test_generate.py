@@ -197,20 +197,26 @@ def test_generated_motion_stands_on_the_floor_unless_no_ground(t2m_ckpt, zoo_ske
     assert_grounded_pair(outs["--ground"], outs["--no-ground"])
 
 
+def _decoded_codes(t2m_ckpt, zoo_skeletons, monkeypatch):
+    """The generator, the zoo biped, and the list every code stack that
+    ``generate_on`` decodes is appended to."""
+    from satagraph.io import read_bvh
+    from satagraph.pipelines import generate as G
+    seen = []
+    real = G.decode_on
+    monkeypatch.setattr(G, "decode_on", lambda m, codes, *a, **k: (seen.append(codes),
+                                                                     real(m, codes, *a, **k))[1])
+    return G.load_generator(str(t2m_ckpt)), read_bvh(str(zoo_skeletons["biped"])), seen
+
+
 def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
         t2m_ckpt, zoo_skeletons, monkeypatch):
     """``GenerationSettings.layers`` decodes the first layers only (the rest
     -1, a dropped layer to the RVQ), after the same layer-0 codes; with a
     residual temperature of 0 the residual layers no longer depend on the
     seed (given the same layer 0)."""
-    from satagraph.io import read_bvh
     from satagraph.pipelines import generate as G
-    module = G.load_generator(str(t2m_ckpt))
-    target = read_bvh(str(zoo_skeletons["biped"]))
-    seen = []
-    real = G.decode_on
-    monkeypatch.setattr(G, "decode_on", lambda m, codes, *a, **k: (seen.append(codes),
-                                                                     real(m, codes, *a, **k))[1])
+    module, target, seen = _decoded_codes(t2m_ckpt, zoo_skeletons, monkeypatch)
     full = G.GenerationSettings(residual_temperature=1.0)
     G.generate_on(module, TEXT, target, 1.0, 0, full)
     G.generate_on(module, TEXT, target, 1.0, 0, G.GenerationSettings(layers=1))
@@ -234,14 +240,8 @@ def test_fewer_layers_and_a_greedy_residual_change_only_what_they_name(
 def test_generate_on_infills_around_kept_tokens(t2m_ckpt, zoo_skeletons, monkeypatch):
     """``generate_on(known=, keep=)``: the kept layer-0 tokens are decoded
     as given, over their frames (one token every ``pool`` frames)."""
-    from satagraph.io import read_bvh
     from satagraph.pipelines import generate as G
-    module = G.load_generator(str(t2m_ckpt))
-    target = read_bvh(str(zoo_skeletons["biped"]))
-    seen = []
-    real = G.decode_on
-    monkeypatch.setattr(G, "decode_on", lambda m, codes, *a, **k: (seen.append(codes),
-                                                                     real(m, codes, *a, **k))[1])
+    module, target, seen = _decoded_codes(t2m_ckpt, zoo_skeletons, monkeypatch)
     frames, pool = 30, module.masked.pool
     known = torch.arange(-(-frames // pool)).remainder(module.masked.num_codes)[None]
     keep = torch.zeros_like(known, dtype=torch.bool)
