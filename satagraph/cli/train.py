@@ -121,7 +121,7 @@ def _common(p) -> None:
                    help="frames shared by consecutive windows (default: window / 4)")
     p.add_argument("--rest", choices=("auto", "file", "first-frame"), default="auto",
                    help="the rest pose the model sees each skeleton in: the file's, its "
-                   "first frame's pose, or auto (default): the pose of the first frame "
+                   "first frame's pose, or auto (default): its mean pose over the frames "
                    "in which the body stands, for rigs whose rest pose is a line (every "
                    "bone along its joint's +X, as Bandai's) or a captured pose, else the "
                    "file's; the output keeps the target file's rest pose either way")

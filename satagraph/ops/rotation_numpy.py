@@ -101,3 +101,18 @@ def yaw_of(direction: np.ndarray) -> np.ndarray:
         - **output**: :math:`(*)`
     """
     return np.arctan2(direction[..., 0], direction[..., 2])
+
+
+def mean_rotation_numpy(rotations: np.ndarray) -> np.ndarray:
+    r"""The chordal mean of rotations over the first axis: the rotation
+    nearest (in the Frobenius norm) to their arithmetic mean, the
+    special-orthogonal Procrustes solution of
+    :func:`roma.special_procrustes` in numpy.
+
+    Shapes:
+        - **rotations**: :math:`(N, *, 3, 3)`
+        - **output**: :math:`(*, 3, 3)`
+    """
+    u, _, vt = np.linalg.svd(np.asarray(rotations, dtype=np.float64).mean(axis=0))
+    u[..., :, -1] *= np.sign(np.linalg.det(u @ vt))[..., None]
+    return u @ vt

@@ -7,7 +7,7 @@ is loaded). For every target skeleton:
 
 1. the target is brought into the model's canonical frame
    (:func:`~satagraph.transforms.canonical.canonicalize`; a rig whose rest
-   pose is a line is re-rested on its first standing frame, as
+   pose is a line is re-rested on its mean standing pose, as
    :func:`~satagraph.pipelines.inference.retarget_motion` does) and its
    static and semantic features give :math:`f_{skel}`;
 2. the duration is the user's, or drawn from the length model given the

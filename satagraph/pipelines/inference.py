@@ -9,7 +9,8 @@ import numpy as np
 import torch
 
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
-from satagraph.transforms.augment import rebase_rotations, root_tilted, set_rest_rotations
+from satagraph.transforms.augment import (mean_pose_rotations, rebase_rotations, root_tilted,
+                                         set_rest_rotations)
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.foot_plant import plant_feet
@@ -153,7 +154,7 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
 
 #: How :func:`retarget_canonical` shows each skeleton to the model: in the
 #: rest pose of its file, re-rested on its first frame's pose, or re-rested on
-#: its first standing frame (:func:`standing_frame`) only where the file's
+#: its mean standing pose (:func:`standing_frames`) only where the file's
 #: rest is a line or a captured pose (:func:`needs_rest`).
 REST_MODES = ("auto", "file", "first-frame")
 
@@ -187,7 +188,9 @@ def retarget_motion(module, source: Motion, target: Motion,
             frame's pose (:func:`~satagraph.transforms.augment.rebase_rest`)
             and undoes it on the output, so the written file keeps the
             target's own rest either way; ``"auto"`` (default) re-rests, on
-            the first frame in which the body stands (:func:`standing_frame`),
+            the mean pose of the frames in which the body stands
+            (:func:`standing_frames`,
+            :func:`~satagraph.transforms.augment.mean_pose_rotations`),
             only the skeletons whose rest is no designed pose (:func:`needs_rest`):
             a line (:func:`is_line_rest`: every bone along its joint's +X,
             as Bandai's and the dog's) or a pose whose left and right sides
@@ -272,7 +275,10 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
     if rest == "file" or not motion.num_frames or (
             rest == "auto" and not needs_rest(motion.skeleton)):
         return motion, None
-    new = rebase_rotations(motion, 0 if rest == "first-frame" else standing_frame(motion))
+    if rest == "first-frame":
+        new = rebase_rotations(motion, 0)
+    else:
+        new = mean_pose_rotations(motion, standing_frames(motion), standing_frame(motion))
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
 
 
@@ -284,16 +290,30 @@ STANDING_SHARE = 0.95
 def standing_frame(motion: Motion) -> int:
     r"""The first frame of a canonical motion (+Y up) in which the body
     stands: its root at least :data:`STANDING_SHARE` as high above its
-    lowest joint as in any frame. What ``rest="auto"`` re-rests a skeleton
-    on, so that a clip that starts lying or sitting (many of the dog's)
-    does not show the model a curled-up skeleton."""
+    lowest joint as in any frame: the frame whose root orientation the
+    rest of ``rest="auto"`` takes, so that a clip that starts lying or
+    sitting (many of the dog's) does not show the model a curled-up
+    skeleton."""
     return _standing(motion.global_positions())
+
+
+def standing_frames(motion: Motion) -> np.ndarray:
+    """Every frame of a canonical motion in which the body stands (as
+    :func:`standing_frame` counts it): the frames whose mean pose
+    ``rest="auto"`` shows the model."""
+    return np.flatnonzero(_stands(motion.global_positions()))
 
 
 def _standing(pos: np.ndarray) -> int:
     """:func:`standing_frame` of global joint positions :math:`(T, J, 3)`."""
+    return int(np.argmax(_stands(pos)))
+
+
+def _stands(pos: np.ndarray) -> np.ndarray:
+    """Per frame :math:`(T,)`: whether the root stands at least
+    :data:`STANDING_SHARE` as high above the lowest joint as ever."""
     stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
-    return int(np.argmax(stance >= STANDING_SHARE * stance.max()))
+    return stance >= STANDING_SHARE * stance.max()
 
 
 def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
@@ -405,7 +425,7 @@ POSED_REST_DEGREES = 3.0
 
 
 def needs_rest(skeleton) -> bool:
-    r"""Whether ``rest="auto"`` re-rests a skeleton (on a standing frame): its
+    r"""Whether ``rest="auto"`` re-rests a skeleton (on its mean standing pose): its
     rest is a line (:func:`is_line_rest`) or a pose left and right bend
     differently (:func:`rest_asymmetry` above
     :data:`POSED_REST_DEGREES`). On the zoo's validation seeds

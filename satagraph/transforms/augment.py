@@ -13,7 +13,7 @@ import numpy as np
 
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
-from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
+from satagraph.ops.rotation_numpy import mean_rotation_numpy, yaw_matrix_numpy, yaw_of
 from satagraph.sides import side_pairs, swap_side  # noqa: F401 (re-exported)
 from satagraph.skeleton import Skeleton
 
@@ -92,11 +92,34 @@ def rebase_rotations(motion: Motion, frame: int = 0) -> np.ndarray:
     """
     if not 0 <= frame < motion.num_frames:
         raise ValueError(f"rebase_rest: frame {frame} of a {motion.num_frames}-frame motion")
-    parents = motion.skeleton.parents
-    pose = motion.rotations[frame].copy()
+    return _pose_rest(motion, motion.rotations[frame].copy(), frame)
+
+
+def mean_pose_rotations(motion: Motion, frames: Sequence[int], root_frame: int) -> np.ndarray:
+    r"""Global rest rotations :math:`A` (as :func:`rebase_rotations`') of
+    the mean pose of :obj:`frames`: each joint's local rotation averaged
+    over them (:func:`~satagraph.ops.rotation_numpy.mean_rotation_numpy`),
+    the root's taken from :obj:`root_frame` and turned to face like frame
+    0. A walk's mean pose has its legs side by side where any one of its
+    frames has one forward.
+
+    Shapes:
+        - **output**: :math:`(J, 3, 3)`
+    """
+    frames = np.asarray(frames, dtype=np.int64)
+    if not len(frames) or frames.min() < 0 or frames.max() >= motion.num_frames:
+        raise ValueError(f"mean_pose_rotations: frames outside a {motion.num_frames}-frame motion")
+    pose = mean_rotation_numpy(motion.rotations[frames])
+    pose[0] = motion.rotations[root_frame, 0]
+    return _pose_rest(motion, pose, root_frame)
+
+
+def _pose_rest(motion: Motion, pose: np.ndarray, frame: int) -> np.ndarray:
+    """Global rotations of local :obj:`pose` :math:`(J, 3, 3)`, its root
+    turned back by the body's turn from frame 0 to :obj:`frame`."""
     pose[0] = _turn_back(motion, frame) @ pose[0]
     return forward_kinematics_numpy(pose[None], motion.translations[frame:frame + 1],
-                                    parents)[0][0]
+                                    motion.skeleton.parents)[0][0]
 
 
 #: Tilt of the root between frame 0 and the re-rest frame (degrees) above

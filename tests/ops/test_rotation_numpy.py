@@ -8,8 +8,8 @@ import torch
 
 from satagraph.motion import CanonicalTransform
 from satagraph.ops.rotation import axis_angle_matrix, yaw_matrix
-from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy, rotation_about_numpy,
-                                          rotation_between_numpy,
+from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy, mean_rotation_numpy,
+                                          rotation_about_numpy, rotation_between_numpy,
                                           yaw_matrix_numpy, yaw_of)
 
 
@@ -82,3 +82,31 @@ def test_rotation_between_is_batched():
     np.testing.assert_allclose(rot[5], np.eye(3), atol=1e-12)
     for k in range(7):
         np.testing.assert_allclose(rot[k], rotation_between_numpy(a[k], b[k]), atol=1e-12)
+
+
+def test_mean_rotation_of_turns_about_one_axis_is_the_mean_turn():
+    """Turns about one axis by 10, 30 and 50 degrees average to 30 (the
+    spread is symmetric); equal rotations average to themselves."""
+    angles = np.radians([10.0, 30.0, 50.0])
+    for axis in "XYZ":
+        mean = mean_rotation_numpy(axis_angle_matrix_numpy(angles, axis))
+        np.testing.assert_allclose(mean, axis_angle_matrix_numpy(np.radians(30.0), axis),
+                                   atol=1e-12)
+    r = rotation_about_numpy(np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0), 1.2)
+    np.testing.assert_allclose(mean_rotation_numpy(np.stack([r, r, r])), r, atol=1e-12)
+
+
+def test_mean_rotation_is_a_batched_rotation_and_turns_with_its_inputs():
+    """The mean is a proper rotation per batch entry, and turning every
+    input by A on the left and B on the right turns the mean the same way."""
+    rng = np.random.default_rng(0)
+    axes = rng.normal(size=(5, 4, 3))
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    rots = rotation_about_numpy(axes, rng.uniform(0, 1.5, size=(5, 4)))
+    mean = mean_rotation_numpy(rots)
+    assert mean.shape == (4, 3, 3)
+    np.testing.assert_allclose(mean @ np.swapaxes(mean, -1, -2),
+                               np.broadcast_to(np.eye(3), (4, 3, 3)), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(mean), 1.0, atol=1e-12)
+    a, b = rotation_about_numpy(np.array([0.0, 0.6, 0.8]), 0.7), yaw_matrix_numpy(2.0)
+    np.testing.assert_allclose(mean_rotation_numpy(a @ rots @ b), a @ mean @ b, atol=1e-12)

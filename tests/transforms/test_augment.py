@@ -6,8 +6,8 @@ import pytest
 
 from satagraph.transforms.augment import (SkeletonAugment, axis_rest_rotations,
                                           drop_leaf_chain, insert_joint, merge_segments,
-                                          mirror, mirror_pairs, new_rest, paired,
-                                          rebase_rest, restructure, scale_bones,
+                                          mean_pose_rotations, mirror, mirror_pairs,
+                                          new_rest, paired, rebase_rest, rebase_rotations, restructure, scale_bones,
                                           set_rest_rotations, swap_side)
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.dataset import WindowAugment
@@ -187,6 +187,42 @@ def test_rebase_rest_keeps_the_motion_and_takes_the_frames_pose(motion):
     assert rebased.skeleton.names == motion.skeleton.names
     with pytest.raises(ValueError, match="frame 16"):
         rebase_rest(motion, frame=16)
+
+
+def test_mean_pose_rest_averages_the_frames_and_keeps_the_motion(motion):
+    """The mean pose of one frame is that frame's rest; over a walk's
+    frames every joint but the root averages to no turn in the new rest,
+    which keeps the motion, the bone lengths and the root's facing."""
+    np.testing.assert_allclose(mean_pose_rotations(motion, [5], 5),
+                               rebase_rotations(motion, 5), atol=1e-12)
+    rest = mean_pose_rotations(motion, range(16), 5)
+    rebased = set_rest_rotations(motion, rest)
+    _valid(rebased)
+    np.testing.assert_allclose(rebased.global_positions(), motion.global_positions(), atol=1e-9)
+    local = rebased.rotations[:, 1:]
+    u, _, vt = np.linalg.svd(local.mean(axis=0))
+    np.testing.assert_allclose(u @ vt, np.broadcast_to(np.eye(3), u.shape), atol=1e-9)
+    np.testing.assert_allclose(rest[0], rebase_rotations(motion, 5)[0], atol=1e-12)
+    with pytest.raises(ValueError, match="frames outside a 16-frame motion"):
+        mean_pose_rotations(motion, [3, 16], 3)
+    with pytest.raises(ValueError, match="frames outside"):
+        mean_pose_rotations(motion, [], 3)
+
+
+def test_mean_pose_rest_of_a_walk_has_its_legs_side_by_side():
+    """In any frame of a walk one leg is forward of the other; in the walk's
+    mean pose the two feet are nearly level fore and aft (within a tenth of the gap
+    in the frame where they are furthest apart)."""
+    walk = generate_clip(RIGS["biped"], "walk", frames=60, seed=0)
+    names = walk.skeleton.names
+    feet = [names.index(n) for n in names if "foot" in n.lower() and "end" not in n.lower()][:2]
+    canon = canonicalize(walk, fps=30)
+    pos = canon.global_positions()[:, feet]
+    gap = np.abs(pos[:, 0, 2] - pos[:, 1, 2]).max()
+    rest = set_rest_rotations(canon, mean_pose_rotations(canon, range(60), 0)).skeleton
+    feet_rest = rest.rest_positions()[feet]
+    assert gap > 0.1 * canon.height()
+    assert abs(feet_rest[0, 2] - feet_rest[1, 2]) < 0.1 * gap
 
 
 @pytest.mark.parametrize("species", ["biped", "quadruped", "hexapod"])
