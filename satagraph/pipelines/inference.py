@@ -362,18 +362,26 @@ def restore_rest(motion: Motion, undo: Optional[np.ndarray], skeleton) -> Motion
     return set_rest_rotations(motion, undo).with_(skeleton=skeleton)
 
 
-def is_line_rest(skeleton, share: float = 0.8, degrees: float = 5.0) -> bool:
+def is_line_rest(skeleton, share: float = 0.8, degrees: float = 10.0) -> bool:
     r"""Whether a rest pose is a line rather than a pose: at least
-    :obj:`share` of the joints with a child (of non-zero length) have their
-    first child within :obj:`degrees` of their local +X or -X (joint orients
-    baked into the offsets, as in the dog's files, or with the right side
-    mirrored onto -X, as in Bandai's)."""
-    dirs = [skeleton.offsets[kids[0]] for kids in skeleton.children
-            if kids and np.linalg.norm(skeleton.offsets[kids[0]]) > 1e-9]
-    if not dirs:
+    :obj:`share` of the bone length (each joint below the root to its first
+    child; a root's offset is often a helper's, as Bandai's ``joint_Root``
+    on the floor under the hips) lies
+    within :obj:`degrees` of one direction, as exporters that bake joint
+    orients into the offsets write it: along +X or -X (the dog's files, and
+    Bandai's with the right side mirrored onto -X), or all one way along Y
+    or Z (Reallusion's CC rigs point every bone up, +Y, legs included).
+    A body's designed rest has bones both up (the spine) and down (the
+    legs), and forward and back (a snake's or a tail's line is at most
+    three quarters one way on the zoo's rigs)."""
+    bones = np.array([skeleton.offsets[kids[0]] for kids in skeleton.children[1:] if kids])
+    length = np.linalg.norm(bones, axis=1) if len(bones) else np.zeros(0)
+    if not length.sum() > 1e-9:
         return False
-    dirs = np.array(dirs) / np.linalg.norm(dirs, axis=1, keepdims=True)
-    return bool((np.abs(dirs[:, 0]) >= np.cos(np.radians(degrees))).mean() >= share)
+    unit = bones / np.maximum(length, 1e-12)[:, None]
+    ways = np.stack([np.abs(unit[:, 0]), unit[:, 1], -unit[:, 1], unit[:, 2], -unit[:, 2]],
+                    axis=1) >= np.cos(np.radians(degrees))
+    return bool((length @ ways).max() / length.sum() >= share)
 
 
 def rest_asymmetry(skeleton, shortest: float = 0.05) -> Optional[float]:

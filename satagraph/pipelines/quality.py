@@ -23,6 +23,8 @@ computed the same way on the source and on the output:
 * :func:`heading_gap`: the angle between where the body travels and where
   it faces (0 for a walk, 90 for a side-step); a retarget should keep the
   source's (``sideways``: the difference).
+* :func:`posture`: whether each joint rides as high above the root as in
+  the target character's own clip (the correlation over joints).
 * :func:`turn_rate`: how fast the body's facing turns over the clip, in
   degrees per second (2-3 for the zoo's forward walks and runs).
 
@@ -282,9 +284,31 @@ def foot_slide(canonical: Motion) -> float:
     return contact_quality(motion_to_features(canonical))[0]
 
 
+def posture(canonical: Motion, reference: Motion) -> Optional[float]:
+    """How the joints of a motion are carried against how the same rig
+    carries them in :obj:`reference` (its own clip): the Pearson
+    correlation, over joints, of each joint's median height above the root
+    (``None`` for rigs that differ or a body without height to compare):
+    near 1 where each joint rides where the character's own clip has it
+    (0.82-1.00 for the built-in model's retargets between the zoo's plans
+    and real rigs); a retarget with one leg pointing up read 0.37."""
+    if canonical.skeleton.names != reference.skeleton.names:
+        return None
+    a, b = _carried(canonical), _carried(reference)
+    if a.std() < 1e-9 or b.std() < 1e-9:
+        return None
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def _carried(canonical: Motion) -> np.ndarray:
+    """Each joint's median height above the root :math:`(J,)`."""
+    pos = canonical.global_positions()
+    return np.median(pos[..., 1] - pos[:, :1, 1], axis=0)
+
+
 def retarget_quality(source: Motion, output: Motion,
-                     keys: Sequence[str] = ("steps", "travel", "ground", "upright")
-                     ) -> Dict[str, Optional[float]]:
+                     keys: Sequence[str] = ("steps", "travel", "ground", "upright"),
+                     target: Optional[Motion] = None) -> Dict[str, Optional[float]]:
     r"""The quality numbers of a retarget next to the source's.
 
     Args:
@@ -300,7 +324,9 @@ def retarget_quality(source: Motion, output: Motion,
         ``slide`` (:func:`foot_slide` of the output) and ``sideways``
         (degrees between the output's :func:`heading_gap` and the source's;
         ``None`` where either has none) and ``stride`` (the output's
-        :func:`stride` over the source's).
+        :func:`stride` over the source's), and ``posture`` (:func:`posture`
+        of the output against :obj:`target`, the target rig's own canonical
+        clip; ``None`` without one).
     """
     out: Dict[str, Optional[float]] = {}
     if "steps" in keys or "stride" in keys:  # both read the limb tracks
@@ -320,10 +346,13 @@ def retarget_quality(source: Motion, output: Motion,
         out["slide"] = foot_slide(output)
     if "sideways" in keys:
         out["sideways"] = _sideways(source, output)
+    if "posture" in keys:
+        out["posture"] = None if target is None else posture(output, target)
     return out
 
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
            "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
-           "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "retarget_quality"]
+           "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
+           "retarget_quality"]

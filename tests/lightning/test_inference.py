@@ -304,6 +304,52 @@ def test_is_line_rest_finds_the_exporters_that_bake_joint_orients(
                    for r in ("native", "apose", "flat", "crouched", "random", "frame"))
 
 
+@pytest.mark.parametrize("turn,line", [((2, 90.0), True), ((2, -90.0), True),
+                                       ((1, -90.0), True), ((1, 90.0), True),
+                                       ((0, 0.0), True)])
+def test_is_line_rest_finds_every_bone_pointing_one_way(turn, line: bool) -> None:
+    """The axis rest turned so that every bone points up (+Y, as
+    Reallusion's CC rigs export it), down, forward or back is a line as
+    well; the zoo walk's own rest, whose spine points up and legs down, is
+    not, nor is a snake or a long tail lying forward (at most three
+    quarters of the bone length one way on the zoo's rigs)."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.ops.rotation_numpy import axis_angle_matrix_numpy
+    from satagraph.pipelines.inference import is_line_rest
+    from satagraph.transforms.augment import axis_rest_rotations, set_rest_rotations
+    walk = generate_clip(zoo_rigs(seed=0)[0], "walk", frames=4)
+    axis, degrees = turn
+    rest = axis_angle_matrix_numpy(np.radians(degrees), "XYZ"[axis]) @ axis_rest_rotations(
+        walk.skeleton)
+    turned = set_rest_rotations(walk, rest)
+    np.testing.assert_allclose(turned.global_positions(), walk.global_positions(), atol=1e-9)
+    assert is_line_rest(turned.skeleton) is line
+    assert not is_line_rest(walk.skeleton)
+
+
+def test_retarget_onto_a_rig_whose_bones_all_point_up(read_real: Callable[[str], Motion]
+                                                      ) -> None:
+    """Reallusion's CC_Base rig (ccbase) rests with every bone up, legs
+    included. Read as the file has it, the built-in model walked a human
+    onto it with one leg pointing up (posture 0.37 from a CMU walk: each
+    joint's height above the root against the rig's own clip); ``rest="auto"`` re-rests it
+    on its mean standing pose and the retarget carries it as its own clip
+    does, in step."""
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import is_line_rest, retarget_canonical
+    from satagraph.pipelines.quality import most_active, posture, retarget_quality
+    target = read_real("ccbase/007_07.bvh")
+    assert is_line_rest(canonicalize(target, fps=30).skeleton)
+    module = load_module("builtin").eval()
+    walk = most_active(read_real("cmu/01_01.bvh"), 240)
+    own = canonicalize(target, fps=30)
+    src, out = retarget_canonical(module, walk, target, module.embed)
+    quality = retarget_quality(src, out, ("steps", "posture"), target=own)
+    assert quality["posture"] > 0.95 and quality["steps"] > 0.7
+    _, read_as_is = retarget_canonical(module, walk, target, module.embed, rest="file")
+    assert posture(read_as_is, own) < 0.6
+
+
 def test_auto_rest_re_rests_captured_poses_but_not_designed_rests(
         read_real: Callable[[str], Motion]) -> None:
     """``rest="auto"`` re-rests a rig whose rest is a line or a captured

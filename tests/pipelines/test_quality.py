@@ -12,7 +12,7 @@ from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, forward_tracks,
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
-                                         most_active, retarget_quality, root_travel,
+                                         most_active, posture, retarget_quality, root_travel,
                                          step_correlation, stride, turn_rate, upright_fraction,
                                          cadence)
 
@@ -76,6 +76,29 @@ def test_a_walk_scores_as_its_own_perfect_retarget():
     assert abs(quality["ground"]) < 0.03
     assert quality["upright"] == 1.0
     assert walk.skeleton.names[head_index(walk)].lower().endswith("head")
+
+
+def test_posture_tells_a_leg_pointing_up_from_the_rigs_own_carriage():
+    """A walk carries its joints as its own clip does (posture 1, and
+    still 1 for a copy shifted up or turned about +Y: heights above the
+    root); with one leg turned half over at the hip, its foot above the
+    root, posture falls well below; another rig has no posture."""
+    from satagraph.ops.rotation_numpy import rotation_about_numpy, yaw_matrix_numpy
+    walk = _walk("biped")
+    assert posture(walk, walk) == pytest.approx(1.0)
+    rotations, translations = walk.rotations.copy(), walk.translations.copy()
+    rotations[:, 0] = yaw_matrix_numpy(1.0) @ rotations[:, 0]
+    translations[:, 0] += [0.3, 0.2, -0.1]
+    assert posture(walk.with_(rotations=rotations, translations=translations),
+                   walk) == pytest.approx(1.0)
+    hip = next(j for j, n in enumerate(walk.skeleton.names) if n.lower().endswith("upleg"))
+    rotations = walk.rotations.copy()
+    rotations[:, hip] = rotation_about_numpy(np.array([1.0, 0.0, 0.0]), np.pi) @ rotations[:, hip]
+    broken = walk.with_(rotations=rotations)
+    assert posture(broken, walk) < 0.8
+    assert retarget_quality(walk, broken, ("posture",), target=walk)["posture"] < 0.8
+    assert retarget_quality(walk, walk, ("posture",))["posture"] is None
+    assert posture(walk, _walk("quadruped")) is None
 
 
 def test_a_still_or_sliding_body_is_caught():
