@@ -123,7 +123,8 @@ def _common(p) -> None:
                    help="the rest pose the model sees each skeleton in: the file's, its "
                    "first frame's pose, or auto (default): its mean pose over the frames "
                    "in which the body stands, for rigs whose rest pose is a line (every "
-                   "bone along its joint's +X, as Bandai's) or a captured pose, else the "
+                   "bone along its joint's X as Bandai's, or all up as Reallusion's) or a "
+                   "captured pose, else the "
                    "file's; the output keeps the target file's rest pose either way")
 
 

@@ -438,7 +438,7 @@ def needs_rest(skeleton) -> bool:
     differently (:func:`rest_asymmetry` above
     :data:`POSED_REST_DEGREES`). On the zoo's validation seeds
     (``benchmarks/rest_modes.py``) the built-in model reconstructs arbitrary
-    rest poses at 3.8 % of the height re-rested against 7.6 % as read, and
+    rest poses at 3.1 % of the height re-rested against 7.5 % as read, and
     designed rests better as read."""
     if is_line_rest(skeleton):
         return True
