@@ -55,6 +55,7 @@ from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
 from satagraph.pipelines.quality import retarget_quality  # noqa: E402
+from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: Zoo clips per body plan, and the kinds that travel.
@@ -107,8 +108,9 @@ def real_clips() -> List[Tuple[str, str, Motion]]:
 def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
     """``(name, source, target)`` of validation retargets: zoo walks of
     the validation seeds between bipeds, quadrupeds and birds (two pairs
-    each way), and a Bandai validation walk to and from the dog's
-    validation clips."""
+    each way), a Bandai validation walk to and from the dog's
+    validation clips, and onto the validation clips of Reallusion's
+    CC_Base rig (ccbase: every bone up in its files' rest)."""
     walks: Dict[str, List[Motion]] = {}
     for index in range(300):
         sample = zoo_sample(index)
@@ -125,6 +127,8 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
         dog = real_file(rel)
         out.append(("bandai -> dog", human, dog))
         out.append(("dog -> bandai", recon_window(dog), human))
+    for rel in manifest_paths("ccbase", lambda split: split == "val"):
+        out.append(("bandai -> CC_Base rig", human, real_file(rel)))
     return out
 
 
@@ -132,19 +136,29 @@ def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
                     plant: bool = False) -> Dict[str, dict]:
     """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
-    :func:`~satagraph.pipelines.quality.heading_gap`) and of the stride
-    ratio (:func:`~satagraph.pipelines.quality.stride`) per pair name."""
+    :func:`~satagraph.pipelines.quality.heading_gap`), of the stride
+    ratio (:func:`~satagraph.pipelines.quality.stride`) and the lowest
+    posture (:func:`~satagraph.pipelines.quality.posture` against the
+    target's own clip) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
         src, out = retarget_canonical(module, source, target, module.embed, plant=plant)
-        got.setdefault(name, []).append(retarget_quality(src, out, ("steps", "travel",
-                                                                    "sideways", "stride")))
+        own = canonicalize(target, fps=float(module.fps))
+        got.setdefault(name, []).append(retarget_quality(
+            src, out, ("steps", "travel", "sideways", "stride", "posture"), target=own))
     return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
                        travel=float(np.median([q["travel"] for q in v])),
                        travel_ok=float(np.mean([0.8 <= q["travel"] <= 1.25 for q in v])),
                        sideways=_median([q["sideways"] for q in v]),
-                       stride=_median([q["stride"] for q in v]))
+                       stride=_median([q["stride"] for q in v]),
+                       posture=_lowest([q["posture"] for q in v]))
             for name, v in got.items()}
+
+
+def _lowest(values: Sequence[Optional[float]]) -> Optional[float]:
+    """The least of the values that are not ``None`` (``None`` if none are)."""
+    kept = [v for v in values if v is not None]
+    return float(min(kept)) if kept else None
 
 
 def _median(values: Sequence[Optional[float]]) -> Optional[float]:
@@ -217,13 +231,15 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
         lines.append(f"| {group} | {summary[names[0]][group]['n']} | " + " | ".join(cells) + " |")
     if retargets:
         lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25), "
-                  "median degrees sideways of the source's heading, median stride ratio.", "",
+                  "median degrees sideways of the source's heading, median stride ratio, "
+                  "lowest posture.", "",
                   "| retarget | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
                   "|---|---:|" + "---:|" * len(names)]
         for pair in retargets[names[0]]:
             cells = [f"{r['steps']:+.2f}, {r['travel']:.2f} ({100 * r['travel_ok']:.0f}%)"
                      + ("" if r.get("sideways") is None else f", {r['sideways']:.0f} deg")
                      + ("" if r.get("stride") is None else f", stride {r['stride']:.2f}")
+                     + ("" if r.get("posture") is None else f", posture {r['posture']:.2f}")
                      for r in (retargets[k][pair] for k in names)]
             lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)
                          + " |")

@@ -14,7 +14,8 @@ from satagraph.transforms.augment import (mean_pose_rotations, rebase_rotations,
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.foot_plant import plant_feet
-from satagraph.transforms.ground import ground_retarget
+from satagraph.transforms.ground import (STANDING_SHARE, ground_retarget, stands,  # noqa: F401
+                                         standing_frame, standing_frames)
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
@@ -282,40 +283,6 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
 
 
-#: Share of its greatest stance height at which a body counts as standing
-#: (:func:`standing_frame`).
-STANDING_SHARE = 0.95
-
-
-def standing_frame(motion: Motion) -> int:
-    r"""The first frame of a canonical motion (+Y up) in which the body
-    stands: its root at least :data:`STANDING_SHARE` as high above its
-    lowest joint as in any frame: the frame whose root orientation the
-    rest of ``rest="auto"`` takes, so that a clip that starts lying or
-    sitting (many of the dog's) does not show the model a curled-up
-    skeleton."""
-    return _standing(motion.global_positions())
-
-
-def standing_frames(motion: Motion) -> np.ndarray:
-    """Every frame of a canonical motion in which the body stands (as
-    :func:`standing_frame` counts it): the frames whose mean pose
-    ``rest="auto"`` shows the model."""
-    return np.flatnonzero(_stands(motion.global_positions()))
-
-
-def _standing(pos: np.ndarray) -> int:
-    """:func:`standing_frame` of global joint positions :math:`(T, J, 3)`."""
-    return int(np.argmax(_stands(pos)))
-
-
-def _stands(pos: np.ndarray) -> np.ndarray:
-    """Per frame :math:`(T,)`: whether the root stands at least
-    :data:`STANDING_SHARE` as high above the lowest joint as ever."""
-    stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
-    return stance >= STANDING_SHARE * stance.max()
-
-
 def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     r"""The root-local axis along the body's facing (the horizontal forward
     of its left/right joint pairs nearest the root,
@@ -335,7 +302,7 @@ def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     if not motion.num_frames:
         return None
     pos = motion.global_positions()
-    frame = _standing(pos)
+    frame = int(np.argmax(stands(pos)))
     if not root_tilted(motion, frame):
         return None
     # across x up: already horizontal

@@ -39,7 +39,7 @@ from typing import Dict, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph.transforms.canonical import body_forward, canonicalize
-from satagraph.transforms.ground import ground_level
+from satagraph.transforms.ground import ground_level, standing_frames
 from satagraph.data.features import motion_to_features
 from satagraph.pipelines.motion_descriptor import contact_quality
 from satagraph.semantics import LIMBS, describe_joints, limb_ends
@@ -286,7 +286,9 @@ def foot_slide(canonical: Motion) -> float:
 
 def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     """How the joints of a motion are carried against how the same rig
-    carries them in :obj:`reference` (its own clip): the Pearson
+    carries them where it stands in :obj:`reference` (its own clip,
+    :func:`~satagraph.transforms.ground.standing_frames`: a dog's clip
+    that lies most of the time still shows how it stands): the Pearson
     correlation, over joints, of each joint's median height above the root
     (``None`` for rigs that differ or a body without height to compare):
     near 1 where each joint rides where the character's own clip has it
@@ -294,16 +296,17 @@ def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     and real rigs); a retarget with one leg pointing up read 0.37."""
     if canonical.skeleton.names != reference.skeleton.names:
         return None
-    a, b = _carried(canonical), _carried(reference)
+    a, b = _carried(canonical.global_positions()), _carried(
+        reference.global_positions()[standing_frames(reference)])
     if a.std() < 1e-9 or b.std() < 1e-9:
         return None
     return float(np.corrcoef(a, b)[0, 1])
 
 
-def _carried(canonical: Motion) -> np.ndarray:
-    """Each joint's median height above the root :math:`(J,)`."""
-    pos = canonical.global_positions()
-    return np.median(pos[..., 1] - pos[:, :1, 1], axis=0)
+def _carried(positions: np.ndarray) -> np.ndarray:
+    """Each joint's median height above the root :math:`(J,)` of global
+    positions :math:`(T, J, 3)`."""
+    return np.median(positions[..., 1] - positions[:, :1, 1], axis=0)
 
 
 def retarget_quality(source: Motion, output: Motion,

@@ -98,4 +98,42 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     return ground_like(motion, target if target.num_frames else source)
 
 
-__all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget"]
+#: Share of its greatest stance height at which a body counts as standing
+#: (:func:`standing_frame`).
+STANDING_SHARE = 0.95
+
+
+def standing_frame(motion: Motion) -> int:
+    r"""The first frame of a canonical motion (+Y up) in which the body
+    stands: its root at least :data:`STANDING_SHARE` as high above its
+    lowest joint as in any frame: the frame whose root orientation the
+    rest of ``rest="auto"`` takes
+    (:func:`~satagraph.pipelines.inference.shown_rest`), so that a clip
+    that starts lying or sitting (many of the dog's) does not show the
+    model a curled-up skeleton."""
+    return int(np.argmax(stands(motion.global_positions())))
+
+
+def standing_frames(motion: Motion) -> np.ndarray:
+    """Every frame of a canonical motion in which the body stands (as
+    :func:`standing_frame` counts it): the frames whose mean pose
+    ``rest="auto"`` shows the model, and where
+    :func:`~satagraph.pipelines.quality.posture` reads how a character
+    carries itself."""
+    return np.flatnonzero(stands(motion.global_positions()))
+
+
+def stands(positions: np.ndarray) -> np.ndarray:
+    r"""Per frame, whether the root stands at least :data:`STANDING_SHARE`
+    as high above the lowest joint as in any frame.
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)` global, +Y up
+        - **output**: :math:`(T,)` bool
+    """
+    stance = positions[:, 0, 1] - positions[:, :, 1].min(axis=1)
+    return stance >= STANDING_SHARE * stance.max()
+
+
+__all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
+           "STANDING_SHARE", "standing_frame", "standing_frames", "stands"]

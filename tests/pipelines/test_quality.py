@@ -101,6 +101,24 @@ def test_posture_tells_a_leg_pointing_up_from_the_rigs_own_carriage():
     assert posture(walk, _walk("quadruped")) is None
 
 
+def test_posture_reads_a_dog_that_lies_most_of_its_clip_where_it_stands(read_real):
+    """This dog lies on its side for most of its clip: measured against
+    every frame, its own standing frames would read as a poor posture
+    (its joints' heights above the root are those of a lying body); the
+    reference is where it stands, so its standing stretch reads near 1."""
+    from satagraph.transforms.ground import standing_frames
+    from satagraph.transforms.rig_reading import with_rig
+    dog = canonicalize(with_rig(read_real("dog/D1_031_KAN01_001.bvh"), scale="cm"), fps=30.0)
+    frames = standing_frames(dog)
+    assert len(frames) < 0.1 * dog.num_frames
+    standing = dog.with_(rotations=dog.rotations[frames], translations=dog.translations[frames])
+    assert posture(standing, dog) > 0.99
+    every = np.median(dog.global_positions()[..., 1] - dog.global_positions()[:, :1, 1], axis=0)
+    own = np.median(standing.global_positions()[..., 1]
+                    - standing.global_positions()[:, :1, 1], axis=0)
+    assert np.corrcoef(own, every)[0, 1] < 0.9
+
+
 def test_a_still_or_sliding_body_is_caught():
     """A frozen copy of the walk (its first pose in every frame) travels 0 and
     has no steps; lifted by half its height it floats; turned upside down
