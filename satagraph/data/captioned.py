@@ -35,7 +35,7 @@ from torch.utils.data import Dataset
 from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, _frames,
+from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, _frames, shown_as,
                                     feature_options, window_starts)
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
@@ -280,7 +280,7 @@ class ZooCaptionWindows(CaptionWindows):
         sample = self.zoo.sample(draw, idx, frames + 1, self.stream, self.holdout)
         motion = canonicalize(sample.motion, fps=self.config["fps"], up_axis="+Y",
                               unit_scale=1.0, floor=self.config["floor"])
-        feats = motion_to_features(motion, **self.options)
+        feats = motion_to_features(shown_as(motion, self.config), **self.options)
         meta = {"path": f"<zoo {self.stream} {draw} {idx}: {sample.plan} {sample.kind}>",
                 "dataset": self.dataset, "skeleton": sample.plan,
                 "species": sample.species, "kind": sample.kind}

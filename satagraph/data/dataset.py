@@ -14,6 +14,7 @@ from satagraph.transforms.augment import AUGMENT, SkeletonAugment
 from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
 from satagraph.transforms.canonical import canonicalize
+from satagraph.transforms.rest import REST_MODES, shown_rest
 from satagraph.data.clip import MotionClip
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
@@ -22,7 +23,7 @@ from satagraph.semantics.limbs import limb_end_index
 from satagraph.datasets.sources import MotionFile
 from satagraph.data.validate import check_features, check_motion
 from satagraph.io import BVHError, read_bvh
-from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED
+from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion
 from satagraph.skeleton import Skeleton
 
 #: Preprocessing defaults; every key is part of the cache key.
@@ -30,7 +31,7 @@ DEFAULT_PREPROCESSING: Dict = {"fps": 30.0, "up_axis": None, "scale": None,
                                "floor": True,
                                "contact_height": CONTACT_HEIGHT,
                                "contact_speed": CONTACT_SPEED,
-                               "facing_smooth": 0.0}
+                               "facing_smooth": 0.0, "rest": "file"}
 
 #: The preprocessing keys that are options of
 #: :func:`~satagraph.data.features.motion_to_features`.
@@ -42,6 +43,25 @@ def feature_options(config: Optional[Mapping[str, Any]] = None) -> Dict[str, flo
     preprocessing config (defaults where it has none)."""
     config = dict(DEFAULT_PREPROCESSING, **(config or {}))
     return {key: float(config[key]) for key in FEATURE_OPTIONS}
+
+
+def shown_as(motion: Motion, config: Optional[Mapping[str, Any]] = None) -> Motion:
+    r"""A canonical motion in the rest pose a preprocessing config's
+    ``rest`` names (:func:`~satagraph.transforms.rest.shown_rest`):
+    ``"file"`` (the default) as read; ``"auto"`` as inference shows a rig
+    (a line or captured rest re-rested on its mean standing pose), so that a
+    model trains on rigs as it will be shown them; ``"first-frame"``."""
+    rest = _rest_mode(config)
+    return motion if rest == "file" else shown_rest(motion, rest)[0]
+
+
+def _rest_mode(config: Optional[Mapping[str, Any]]) -> str:
+    """A preprocessing config's ``rest``, checked."""
+    rest = dict(DEFAULT_PREPROCESSING, **(config or {}))["rest"]
+    if rest not in REST_MODES:
+        raise ValueError(f"data.preprocessing.rest must be one of {list(REST_MODES)}, "
+                         f"got {rest!r}")
+    return rest
 
 
 def data_facing_smooth(data: Optional[Mapping[str, Any]]) -> float:
@@ -89,7 +109,7 @@ def preprocess_file(path: str, config: Dict) -> MotionFeatures:
     check_motion(motion, path, fps=config["fps"])
     motion = canonicalize(motion, fps=config["fps"], up_axis=config["up_axis"],
                           unit_scale=scale, floor=config["floor"])
-    feats = motion_to_features(motion, **feature_options(config))
+    feats = motion_to_features(shown_as(motion, config), **feature_options(config))
     check_features(feats, path)
     return feats
 
@@ -206,6 +226,8 @@ class WindowAugment:
         contact_speed (float): Contact speed threshold.
         facing_smooth (float): Facing yaw smoothing in seconds (see
             :func:`~satagraph.data.motion_to_features`).
+        show_rest (str): The rest pose each augmented window is shown in
+            (:func:`shown_as`; ``data.preprocessing.rest``).
     """
 
     def __init__(self, scale: float = AUGMENT.scale, mirror: float = AUGMENT.mirror,
@@ -214,7 +236,8 @@ class WindowAugment:
                  high: float = AUGMENT.high, max_drop: int = AUGMENT.max_drop,
                  rest: float = AUGMENT.rest, seed: int = 0,
                  contact_height: float = CONTACT_HEIGHT,
-                 contact_speed: float = CONTACT_SPEED, facing_smooth: float = 0.0) -> None:
+                 contact_speed: float = CONTACT_SPEED, facing_smooth: float = 0.0,
+                 show_rest: str = "file") -> None:
         if not 0.0 <= mirror <= 1.0:
             raise ValueError("data.augment.mirror must be in [0, 1]")
         if not 0.0 < low <= high:
@@ -223,6 +246,7 @@ class WindowAugment:
         self.options = feature_options(dict(contact_height=contact_height,
                                             contact_speed=contact_speed,
                                             facing_smooth=facing_smooth))
+        self.show_rest = {"rest": _rest_mode({"rest": show_rest})}
         self.skeleton_augment = dict(p_scale=float(scale), p_mirror=0.0,
                                      p_drop=float(drop), p_merge=float(merge),
                                      p_insert=float(insert), p_rest=float(rest),
@@ -248,7 +272,7 @@ class WindowAugment:
             raise ValueError(f"data.augment: unknown keys {unknown}; known: "
                              f"{sorted(AUGMENT_DEFAULTS)}")
         return cls(**dict(AUGMENT_DEFAULTS, **spec), seed=seed,
-                   **feature_options(preprocessing))
+                   **feature_options(preprocessing), show_rest=_rest_mode(preprocessing))
 
     def __call__(self, feats: MotionFeatures, start: int, stop: int,
                  epoch: int = 0, index: int = 0) -> Tuple[MotionFeatures, int]:
@@ -267,7 +291,7 @@ class WindowAugment:
                 pass  # asymmetric skeleton: left as it is
         augment = SkeletonAugment(**self.skeleton_augment,
                                   seed=int(rng.integers(2 ** 31)))
-        augmented = augment(motion)
+        augmented = shown_as(augment(motion), self.show_rest)
         # a new rest pose turns the root's local frame: turn its facing axis too
         axis = augmented.rotations[0, 0].T @ motion.rotations[0, 0] @ axis
         out = motion_to_features(augmented, **self.options, facing_axis=axis)

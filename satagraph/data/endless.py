@@ -20,7 +20,7 @@ from torch.utils.data import Dataset
 
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton,
+from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton, shown_as,
                                     feature_options)
 from satagraph.data.features import MotionFeatures, motion_to_features
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
@@ -111,7 +111,7 @@ class EndlessZooDataset(Dataset):
         sample = self.zoo.sample(epoch, index, self.window + 1, self.stream, self.holdout)
         motion = canonicalize(sample.motion, fps=self.config["fps"], up_axis="+Y",
                               unit_scale=1.0, floor=self.config["floor"])
-        feats = motion_to_features(motion, **feature_options(self.config))
+        feats = motion_to_features(shown_as(motion, self.config), **feature_options(self.config))
         check_features(feats, f"<endless zoo {self.stream} {epoch} {index}>")
         return feats, sample
 

@@ -1,7 +1,7 @@
 """Motion-to-motion transforms: reading a rig (up axis, units),
 canonicalisation (+Y up, facing +Z, metres, one frame rate), skeleton
-augmentation (bone scaling, mirroring, restructuring) and planting a
-decoded motion's feet. Imported lazily: numpy only."""
+augmentation (bone scaling, mirroring, restructuring), the rest pose a rig
+is shown to a model in and planting a decoded motion's feet. Imported lazily: numpy only."""
 from satagraph._lazy import lazy_exports
 
 _CANONICAL = ("canonicalize", "decanonicalize", "detect_up_axis", "resample")
@@ -9,7 +9,8 @@ _EXPORTS = {**dict.fromkeys(_CANONICAL, "satagraph.transforms.canonical"),
             **dict.fromkeys(("read_rig", "with_rig"), "satagraph.transforms.rig_reading"),
             **dict.fromkeys(("SkeletonAugment", "mirror", "scale_bones"),
                             "satagraph.transforms.augment"),
-            "plant_feet": "satagraph.transforms.foot_plant"}
+            "plant_feet": "satagraph.transforms.foot_plant",
+            **dict.fromkeys(("shown_rest", "needs_rest"), "satagraph.transforms.rest")}
 __all__ = [*_CANONICAL, "read_rig", "with_rig", "SkeletonAugment", "mirror",
-           "scale_bones", "plant_feet"]
+           "scale_bones", "plant_feet", "shown_rest", "needs_rest"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

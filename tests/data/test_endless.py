@@ -56,6 +56,27 @@ def test_holdout_plans_are_never_drawn_in_training() -> None:
         EndlessZoo(["crab"], holdout=["crab"])
 
 
+def test_endless_windows_in_the_rest_inference_shows(tmp_path: Path) -> None:
+    """With ``data.preprocessing.rest: auto`` a zoo window drawn with a
+    line (axis) or captured rest is shown re-rested, as inference shows
+    such a rig; with the default (``file``) as drawn. The motion is the
+    same either way."""
+    from satagraph.data.features import features_to_motion
+    from satagraph.transforms.rest import is_line_rest, needs_rest
+    plain = EndlessZooDataset(EndlessZoo(["biped"]), windows=8, window=16)
+    shown = EndlessZooDataset(EndlessZoo(["biped"]), windows=8, window=16,
+                              preprocessing={"rest": "auto"})
+    drawn = [plain.features(0, i) for i in range(40)]
+    posed = [i for i, (f, s) in enumerate(drawn) if needs_rest(f.skeleton)]
+    assert posed and len(posed) < len(drawn)
+    for i in posed[:3] + [next(i for i in range(40) if i not in posed)]:
+        a, b = drawn[i][0], shown.features(0, i)[0]
+        assert not is_line_rest(b.skeleton)
+        np.testing.assert_allclose(features_to_motion(a).global_positions(),
+                                   features_to_motion(b).global_positions(), atol=1e-6)
+        assert np.allclose(a.static, b.static) is (i not in posed)
+
+
 def test_window_clips_and_entry_checks(tmp_path: Path) -> None:
     ds = EndlessZooDataset(EndlessZoo(["bird"]), windows=4, window=16,
                            semantic=semantic_embedder("offline", str(tmp_path)))

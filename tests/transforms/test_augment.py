@@ -296,3 +296,27 @@ def test_window_augment_rest_changes_rotations_not_positions(shared_data):
         np.testing.assert_allclose(getattr(rebased, key), getattr(plain, key), atol=1e-8)
     assert np.abs(rebased.q - plain.q).max() > 0.5
     assert np.abs(rebased.static - plain.static).max() > 0.1
+
+
+def test_window_augment_shows_windows_as_inference_shows_rigs(shared_data):
+    """``data.preprocessing.rest: auto`` (``show_rest``): an augmented
+    window whose rest became a line or a captured frame is shown re-rested
+    on its mean standing pose, as ``retarget``'s ``rest="auto"`` shows a
+    rig, so no line rest reaches the model; the positions, root features
+    and contacts stay; an unknown mode is refused by name."""
+    from satagraph.transforms.rest import is_line_rest
+    from satagraph.data.features import features_to_motion
+    feats = motion_to_features(canonicalize(
+        read_bvh(shared_data / "dog" / "D1_001_KAN01_001.bvh"), fps=30))
+    assert is_line_rest(feats.skeleton)
+    plain, _ = WindowAugment(scale=0, mirror=0)(feats, 10, 42, 0, 0)
+    shown, _ = WindowAugment(scale=0, mirror=0, rest=1.0, show_rest="auto")(feats, 10, 42, 0, 0)
+    for key in ("x", "r", "c"):
+        np.testing.assert_allclose(getattr(shown, key), getattr(plain, key), atol=1e-8)
+    assert not is_line_rest(shown.skeleton)
+    as_is, _ = WindowAugment(scale=0, mirror=0, show_rest="file")(feats, 10, 42, 0, 0)
+    assert is_line_rest(as_is.skeleton)
+    np.testing.assert_allclose(features_to_motion(shown).global_positions(),
+                               features_to_motion(plain).global_positions(), atol=1e-6)
+    with pytest.raises(ValueError, match="data.preprocessing.rest must be one of"):
+        WindowAugment(show_rest="mean")
