@@ -3,7 +3,8 @@ zoo's VALIDATION-seed rigs (never in ``benchmarks/pretrained.py``) per rest
 dialect, read in the file's rest, re-rested on the first frame, with the
 line-only rule of 26 Nov (re-rest a line rest on the first frame only) and
 with ``auto`` (:func:`satagraph.pipelines.inference.needs_rest`: a line or a
-captured pose, re-rested on its mean standing pose). The error is root-relative (poses, not drift), in % of the height.
+captured pose, re-rested on its mean standing pose). The error is root-relative
+(poses, not drift), in % of the height.
 
     python benchmarks/rest_modes.py [--ckpt builtin] [--per-rest 10] [--out DIR]
 

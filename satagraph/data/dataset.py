@@ -246,7 +246,7 @@ class WindowAugment:
         self.options = feature_options(dict(contact_height=contact_height,
                                             contact_speed=contact_speed,
                                             facing_smooth=facing_smooth))
-        self.show_rest = {"rest": _rest_mode({"rest": show_rest})}
+        self.show_rest = _rest_mode({"rest": show_rest})
         self.skeleton_augment = dict(p_scale=float(scale), p_mirror=0.0,
                                      p_drop=float(drop), p_merge=float(merge),
                                      p_insert=float(insert), p_rest=float(rest),
@@ -291,7 +291,7 @@ class WindowAugment:
                 pass  # asymmetric skeleton: left as it is
         augment = SkeletonAugment(**self.skeleton_augment,
                                   seed=int(rng.integers(2 ** 31)))
-        augmented = shown_as(augment(motion), self.show_rest)
+        augmented = shown_as(augment(motion), {"rest": self.show_rest})
         # a new rest pose turns the root's local frame: turn its facing axis too
         axis = augmented.rotations[0, 0].T @ motion.rotations[0, 0] @ axis
         out = motion_to_features(augmented, **self.options, facing_axis=axis)
