@@ -16,7 +16,7 @@ import numpy as np
 from satagraph.motion import Motion
 from satagraph.transforms.augment import (mean_pose_rotations, rebase_rotations,
                                           set_rest_rotations)
-from satagraph.transforms.ground import standing_frame, standing_frames
+from satagraph.transforms.ground import standing_frames
 
 #: How a rig is shown to a model
 #: (:func:`~satagraph.pipelines.inference.retarget_canonical`'s ``rest``,
@@ -38,7 +38,8 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
     if rest == "first-frame":
         new = rebase_rotations(motion, 0)
     else:
-        new = mean_pose_rotations(motion, standing_frames(motion), standing_frame(motion))
+        frames = standing_frames(motion)  # the first is the standing frame
+        new = mean_pose_rotations(motion, frames, int(frames[0]))
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
 
 
