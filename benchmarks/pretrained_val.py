@@ -58,6 +58,8 @@ from satagraph.pipelines.quality import retarget_quality  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
+#: ``--settle`` -> the settings measured.
+SETTLE = {"off": (False,), "on": (True,), "both": (False, True)}
 #: Zoo clips per body plan, and the kinds that travel.
 ZOO_PER_PLAN, ZOO_KINDS = 6, ("walk", "trot", "run", "turn", "speed")
 
@@ -133,7 +135,7 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
 
 
 def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
-                    plant: bool = False) -> Dict[str, dict]:
+                    plant: bool = False, settle: bool = False) -> Dict[str, dict]:
     """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
     :func:`~satagraph.pipelines.quality.heading_gap`), of the stride
@@ -142,7 +144,8 @@ def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
     target's own clip) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
-        src, out = retarget_canonical(module, source, target, module.embed, plant=plant)
+        src, out = retarget_canonical(module, source, target, module.embed, plant=plant,
+                                      settle=settle)
         own = canonicalize(target, fps=float(module.fps))
         got.setdefault(name, []).append(retarget_quality(
             src, out, ("steps", "travel", "sideways", "stride", "posture"), target=own))
@@ -179,12 +182,12 @@ def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]
     return np.degrees(np.unwrap(np.arctan2(d[:, 0], d[:, 2])))
 
 
-def measure(module, motion: Motion, plant: bool = False) -> dict:
+def measure(module, motion: Motion, plant: bool = False, settle: bool = False) -> dict:
     """JP, root-relative JP (fractions of the height), facing drift and the
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
     source)."""
     src, out = retarget_canonical(module, motion, motion, module.embed, ground=False,
-                                  plant=plant)
+                                  plant=plant, settle=settle)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
@@ -253,6 +256,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     parser.add_argument("--plant", action="store_true",
                         help="plant the feet of every output (retarget_canonical's plant)")
+    parser.add_argument("--settle", choices=("off", "on", "both"), default="on",
+                        help="hold the root still where the decoded body stands still "
+                             "(retarget_canonical's settle); both: each checkpoint twice, "
+                             "the second column named '+settle'")
     args = parser.parse_args(argv)
     if not (DATA / "manifest.tsv").is_file():
         print(f"pretrained_val.py: {DATA} not found: the real groups need ../shared/data",
@@ -267,11 +274,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.simplefilter("ignore")
         for ckpt in args.ckpt:
             module = load_module(ckpt).eval()
-            groups: Dict[str, List[dict]] = {}
-            for group, _, motion in clips:
-                groups.setdefault(group, []).append(measure(module, motion, args.plant))
-            summary[ckpt] = {g: summarise(v) for g, v in groups.items()}
-            retargets[ckpt] = retarget_scores(module, pairs, args.plant)
+            for settle in SETTLE[args.settle]:
+                name = f"{ckpt} +settle" if settle and args.settle == "both" else ckpt
+                groups: Dict[str, List[dict]] = {}
+                for group, _, motion in clips:
+                    groups.setdefault(group, []).append(
+                        measure(module, motion, args.plant, settle))
+                summary[name] = {g: summarise(v) for g, v in groups.items()}
+                retargets[name] = retarget_scores(module, pairs, args.plant, settle)
     text = table(summary, time.perf_counter() - start, retargets)
     print(text)
     write_results(args.out, "Built-in model candidates on validation material "

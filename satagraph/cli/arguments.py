@@ -83,3 +83,12 @@ def add_plant_argument(parser: argparse.ArgumentParser) -> None:
                         help="hold each foot still on the floor while it stands, bending the "
                         "leg to reach it (a decoded stride is often short and its feet "
                         "glide; default: off)")
+
+
+def add_settle_argument(parser: argparse.ArgumentParser) -> None:
+    """``--settle/--no-settle``: hold the output's root still where its
+    body stands still (:func:`~satagraph.transforms.still_root.settle_root`)."""
+    parser.add_argument("--settle", action=argparse.BooleanOptionalAction, default=True,
+                        help="hold the root still where the decoded body stands still (a "
+                        "foot on the ground, no limb moving): a decoder can drift a "
+                        "standing body away (--no-settle keeps its root path; default: on)")

@@ -12,7 +12,7 @@ from satagraph.cli.arguments import positive_float, positive_int
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
-    from satagraph.cli.arguments import add_plant_argument
+    from satagraph.cli.arguments import add_plant_argument, add_settle_argument
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config in experiments/ "
                        "(or a path), with dotted overrides, e.g. "
@@ -31,6 +31,7 @@ def add_train_parsers(sub) -> None:
                        description="Sliding-window reconstruction of IN.bvh into OUT.bvh.")
     _common(p)
     _ground(p, default=False)
+    add_settle_argument(p)
     p.add_argument("input", metavar="IN.bvh")
     p.add_argument("output", metavar="OUT.bvh")
     _rig(p)
@@ -43,6 +44,7 @@ def add_train_parsers(sub) -> None:
     _common(p)
     _ground(p, default=True)
     add_plant_argument(p)
+    add_settle_argument(p)
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
@@ -266,7 +268,7 @@ def run_reconstruct(args) -> int:
     module, embed = _load(args, [motion], [args.input])
     _check(motion, args.input, module.fps)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
-                             args.ground)
+                             args.ground, args.settle)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
     return 0
@@ -282,7 +284,8 @@ def run_retarget(args) -> int:
     _check(source, args.source, module.fps)
     _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
-                         rest=args.rest, ground=args.ground, plant=args.plant)
+                         rest=args.rest, ground=args.ground, plant=args.plant,
+                         settle=args.settle)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")

@@ -15,6 +15,7 @@ from satagraph.transforms.rest import (POSED_REST_DEGREES, REST_MODES, is_line_r
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.foot_plant import plant_feet
+from satagraph.transforms.still_root import settle_root
 from satagraph.transforms.ground import (STANDING_SHARE, ground_retarget, stands,  # noqa: F401
                                          standing_frame, standing_frames)
 from satagraph.data.clip import MotionClip
@@ -157,7 +158,8 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
 def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
-                    rest: str = "auto", ground: bool = True, plant: bool = False) -> Motion:
+                    rest: str = "auto", ground: bool = True, plant: bool = False,
+                    settle: bool = True) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -198,9 +200,13 @@ def retarget_motion(module, source: Motion, target: Motion,
             keeps the decoder's root height.
         plant (bool): Hold the limb ends still through their stances
             (:func:`~satagraph.transforms.foot_plant.plant_feet`).
+        settle (bool): Hold the root still where the decoded body stands
+            still (:func:`~satagraph.transforms.still_root.settle_root`;
+            ``experiments/PRETRAIN.md`` section 24); ``False`` keeps the
+            decoder's root path throughout.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest, ground, plant)
+                                  rest, ground, plant, settle)
     return from_canonical(canon, source)
 
 
@@ -216,7 +222,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        semantic: Optional[Callable] = None, window: Optional[int] = None,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
                        rest: str = "auto", ground: bool = True,
-                       plant: bool = False) -> Tuple[Motion, Motion]:
+                       plant: bool = False, settle: bool = True) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -231,10 +237,11 @@ def retarget_canonical(module, source: Motion, target: Motion,
     tgt_canon = canonicalize(target, fps=fps)
     tgt_rest, undo = shown_rest(tgt_canon, rest)
     tgt = static_features(tgt_rest)
-    q, r, _ = transfer(module, src, tgt, semantic, window, overlap)
+    q, r, c = transfer(module, src, tgt, semantic, window, overlap)
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
     out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
                        tgt_canon.skeleton)
+    out = settle_root(out, c) if settle else out
     out = ground_retarget(out, src_canon, tgt_canon) if ground else out
     return src_canon, plant_feet(out) if plant else out
 
@@ -302,11 +309,13 @@ def turn_world(motion: Motion, turn: np.ndarray) -> Motion:
 
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
                        window: Optional[int] = None, overlap: Optional[int] = None,
-                       rest: str = "auto", ground: bool = False) -> Motion:
-    """Encode and decode a motion on its own skeleton (:obj:`rest` and
-    :obj:`ground`: see :func:`retarget_motion`; off by default here: on
-    its own skeleton the decoder's root height is closer than a shift that
-    matches the lowest joints of two different poses)."""
+                       rest: str = "auto", ground: bool = False,
+                       settle: bool = True) -> Motion:
+    """Encode and decode a motion on its own skeleton (:obj:`rest`,
+    :obj:`ground` and :obj:`settle`: see :func:`retarget_motion`; ground
+    is off by default here: on its own skeleton the decoder's root height
+    is closer than a shift that matches the lowest joints of two
+    different poses)."""
     return retarget_motion(module, motion, motion, semantic, window, overlap, rest=rest,
-                           ground=ground)
+                           ground=ground, settle=settle)
 

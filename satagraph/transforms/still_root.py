@@ -1,0 +1,114 @@
+r"""Holding a decoded root still where the decoded body stands still.
+
+A decoder can contradict itself: on a clip where a dog stands, the
+built-in model predicts all four paws on the ground and barely moves them
+relative to the body, yet moves the root at two heights a second
+(``experiments/PRETRAIN.md`` section 24). Its pose says "standing", its
+root velocity says "running", and the reconstruction drifts away.
+
+:func:`settle_root` applies a zero-velocity update, as inertial navigation
+does with a foot that is known to rest: a frame is *still*
+(:func:`still_frames`) when some joint is predicted in contact and no
+limb end (:func:`~satagraph.semantics.limb_ends`) moves horizontally
+relative to the root faster than :data:`STILL_SPEED` character heights a
+second anywhere within :data:`STILL_WINDOW` seconds. On still frames the
+root's horizontal step is the one that keeps the contact joints where
+they are; elsewhere, the decoder's. A walking body swings a limb end
+relative to its root at about twice its travel speed, so walks, runs and
+slow starts keep the decoded path; a body in the air (no contact) keeps it
+too. The root's height, every rotation and so the facing stay as decoded.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from satagraph.motion import Motion, character_height
+from satagraph.semantics.limbs import limb_ends
+
+#: Fastest horizontal speed of a limb end relative to the root, in
+#: character heights a second, on a still frame.
+STILL_SPEED = 0.5
+#: Seconds around a frame over which every limb end must stay that slow.
+STILL_WINDOW = 0.3
+#: Contact probability above which a joint counts as on the ground.
+CONTACT_PROB = 0.5
+
+
+def _window_max(x: np.ndarray, width: int) -> np.ndarray:
+    """The largest value of :obj:`x` within a centred window of
+    :obj:`width` samples (edges repeated)."""
+    if width <= 1 or len(x) == 0:
+        return x
+    pad = width // 2
+    return sliding_window_view(np.pad(x, (pad, width - 1 - pad), mode="edge"), width).max(-1)
+
+
+def still_frames(positions: np.ndarray, contacts: np.ndarray, ends, fps: float,
+                 height: float) -> np.ndarray:
+    r"""Steps (frame ``t`` to ``t + 1``) on which the body stands still:
+    some joint in contact at both frames (:data:`CONTACT_PROB`), and every
+    limb end of :obj:`ends` horizontally slower relative to the root than
+    :data:`STILL_SPEED` heights a second throughout :data:`STILL_WINDOW`
+    seconds around it (+Y up).
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`, **contacts**: :math:`(T, J)`
+          probabilities
+        - **output**: :math:`(T - 1,)` bool
+    """
+    ends = list(ends)
+    if len(positions) < 2 or not ends:
+        return np.zeros(max(len(positions) - 1, 0), dtype=bool)
+    rel = positions[:, ends, :] - positions[:, :1, :]
+    speed = np.linalg.norm(np.diff(rel[..., [0, 2]], axis=0), axis=-1).max(axis=1) * fps
+    slow = _window_max(speed, int(round(STILL_WINDOW * fps)) | 1) < STILL_SPEED * height
+    touching = (np.minimum(contacts[1:], contacts[:-1]) > CONTACT_PROB).any(axis=1)
+    return slow & touching
+
+
+def contact_steps(positions: np.ndarray, contacts: np.ndarray) -> np.ndarray:
+    r"""The root's step from each frame to the next that keeps the joints
+    in contact in place: minus the contact-weighted mean step of their
+    positions relative to the root (zero where nothing touches).
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`, **contacts**: :math:`(T, J)`
+        - **output**: :math:`(T - 1, 3)`
+    """
+    weight = np.minimum(contacts[1:], contacts[:-1])
+    weight = np.where(weight > CONTACT_PROB, weight, 0.0)
+    rel = positions - positions[:, :1]
+    step = (weight[..., None] * np.diff(rel, axis=0)).sum(axis=1)
+    return -step / np.maximum(weight.sum(axis=1), 1e-12)[:, None]
+
+
+def settle_root(motion: Motion, contacts: np.ndarray) -> Motion:
+    r""":obj:`motion` with its root held where the body stands still (see
+    the module's text): on :func:`still_frames`, the root's horizontal step
+    is :func:`contact_steps`' (+Y up, canonical).
+
+    Args:
+        motion (Motion): A decoded motion, canonical.
+        contacts (np.ndarray): The decoder's contact probability per frame
+            and joint, in :obj:`motion`'s joint order.
+
+    Shapes:
+        - **contacts**: :math:`(T, J)`
+    """
+    if contacts.shape != (motion.num_frames, motion.num_joints):
+        raise ValueError(f"settle_root: contacts must be [{motion.num_frames}, "
+                         f"{motion.num_joints}], got {list(contacts.shape)}")
+    if motion.num_frames < 2:
+        return motion
+    pos = motion.global_positions()
+    ends = limb_ends(motion.skeleton).values()
+    still = still_frames(pos, contacts, ends, motion.fps,
+                         character_height(motion.skeleton, pos))
+    if not still.any():
+        return motion
+    root = motion.translations[:, 0]
+    step = np.where(still[:, None], contact_steps(pos, contacts), np.diff(root, axis=0))
+    translations = motion.translations.copy()
+    translations[1:, 0, [0, 2]] = root[0, [0, 2]] + np.cumsum(step[:, [0, 2]], axis=0)
+    return motion.with_(translations=translations)
