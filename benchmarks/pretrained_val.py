@@ -10,6 +10,8 @@ on the clip's own rig, root path integrated over the clip):
 - **zoo**: clips of the validation seed stream, walking, trotting, running,
   turning and changing speed, a few per training body plan (median per
   plan: a plan the model cannot read yet gives errors in the hundreds);
+  and, one group per kind, sidesteps, backward walks, starts, stops, jumps
+  and idles of its bipeds, quadrupeds, birds and fowl (two per plan);
 - **bandai**: a third of Bandai's validation split (never trained on);
 - **dog**: the dog clips outside its test split (never trained on: its
   licence keeps it out of the shipped model's data).
@@ -60,6 +62,9 @@ from satagraph.transforms.canonical import canonicalize  # noqa: E402
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: ``--settle`` -> the settings measured.
 SETTLE = {"off": (False,), "on": (True,), "both": (False, True)}
+#: Kinds of the zoo's other groups (one group each), per plan of these plans.
+MORE_KINDS = ("side", "back", "start", "stop", "jump", "idle")
+KIND_PLANS, KIND_PER_PLAN = ("biped", "quadruped", "bird", "fowl"), 2
 #: Zoo clips per body plan, and the kinds that travel.
 ZOO_PER_PLAN, ZOO_KINDS = 6, ("walk", "trot", "run", "turn", "speed")
 
@@ -95,6 +100,24 @@ def zoo_clips() -> List[Tuple[str, str, Motion]]:
         out.append((f"zoo {sample.species}", f"{sample.plan} {sample.kind} ({sample.rest} rest)",
                     sample.motion))
     return out
+
+
+def zoo_kind_clips() -> List[Tuple[str, str, Motion]]:
+    """``(group, name, motion)`` of validation-seed zoo clips of the kinds
+    :data:`MORE_KINDS`, one group per kind, :data:`KIND_PER_PLAN` per
+    plan of :data:`KIND_PLANS` (sidesteps, backward walks, starts and
+    stops travel as walks do not: a decoder can glide them)."""
+    count: Dict[Tuple[str, str], int] = {}
+    out = []
+    for index in range(800):
+        sample = zoo_sample(index)
+        key = (sample.kind, sample.species)
+        if (sample.kind not in MORE_KINDS or sample.species not in KIND_PLANS
+                or count.get(key, 0) >= KIND_PER_PLAN):
+            continue
+        count[key] = count.get(key, 0) + 1
+        out.append((f"zoo {sample.kind}", f"{sample.plan} ({sample.rest} rest)", sample.motion))
+    return sorted(out, key=lambda item: MORE_KINDS.index(item[0][4:]))
 
 
 def real_clips() -> List[Tuple[str, str, Motion]]:
@@ -256,7 +279,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     parser.add_argument("--plant", action="store_true",
                         help="plant the feet of every output (retarget_canonical's plant)")
-    parser.add_argument("--settle", choices=("off", "on", "both"), default="on",
+    parser.add_argument("--settle", choices=("off", "on", "both"), default="off",
                         help="hold the root still where the decoded body stands still "
                              "(retarget_canonical's settle); both: each checkpoint twice, "
                              "the second column named '+settle'")
@@ -266,7 +289,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               file=sys.stderr)
         return 2
     start = time.perf_counter()
-    clips = zoo_clips() + real_clips()
+    clips = zoo_clips() + zoo_kind_clips() + real_clips()
     pairs = retarget_pairs()
     summary: Dict[str, Dict[str, dict]] = {}
     retargets: Dict[str, Dict[str, dict]] = {}

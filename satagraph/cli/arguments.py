@@ -86,9 +86,11 @@ def add_plant_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def add_settle_argument(parser: argparse.ArgumentParser) -> None:
-    """``--settle/--no-settle``: hold the output's root still where its
-    body stands still (:func:`~satagraph.transforms.still_root.settle_root`)."""
-    parser.add_argument("--settle", action=argparse.BooleanOptionalAction, default=True,
+    """``--settle``: hold the output's root still where its body stands
+    still (:func:`~satagraph.transforms.still_root.settle_root`)."""
+    parser.add_argument("--settle", action="store_true",
                         help="hold the root still where the decoded body stands still (a "
-                        "foot on the ground, no limb moving): a decoder can drift a "
-                        "standing body away (--no-settle keeps its root path; default: on)")
+                        "foot on the ground, no limb moving): for clips in which the "
+                        "character stands, sits or lies, which a decoder can drift away; "
+                        "it also stops a sidestep whose decoded legs do not step "
+                        "(default: off)")

@@ -159,7 +159,7 @@ def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
                     rest: str = "auto", ground: bool = True, plant: bool = False,
-                    settle: bool = True) -> Motion:
+                    settle: bool = False) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -201,9 +201,10 @@ def retarget_motion(module, source: Motion, target: Motion,
         plant (bool): Hold the limb ends still through their stances
             (:func:`~satagraph.transforms.foot_plant.plant_feet`).
         settle (bool): Hold the root still where the decoded body stands
-            still (:func:`~satagraph.transforms.still_root.settle_root`;
-            ``experiments/PRETRAIN.md`` section 24); ``False`` keeps the
-            decoder's root path throughout.
+            still (:func:`~satagraph.transforms.still_root.settle_root`):
+            it stops a standing body that the decoder drives away, and
+            also a sidestep whose decoded legs do not step (off by default,
+            ``experiments/PRETRAIN.md`` section 24).
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
                                   rest, ground, plant, settle)
@@ -222,7 +223,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        semantic: Optional[Callable] = None, window: Optional[int] = None,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
                        rest: str = "auto", ground: bool = True,
-                       plant: bool = False, settle: bool = True) -> Tuple[Motion, Motion]:
+                       plant: bool = False, settle: bool = False) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -310,7 +311,7 @@ def turn_world(motion: Motion, turn: np.ndarray) -> Motion:
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
                        window: Optional[int] = None, overlap: Optional[int] = None,
                        rest: str = "auto", ground: bool = False,
-                       settle: bool = True) -> Motion:
+                       settle: bool = False) -> Motion:
     """Encode and decode a motion on its own skeleton (:obj:`rest`,
     :obj:`ground` and :obj:`settle`: see :func:`retarget_motion`; ground
     is off by default here: on its own skeleton the decoder's root height

@@ -154,6 +154,11 @@ def root_travel(canonical: Motion) -> float:
     return float(np.linalg.norm(np.diff(xz, axis=0), axis=-1).sum() / leg_length(canonical))
 
 
+#: Shortest source :func:`stride` (leg lengths) that a stride ratio is read
+#: against: a jump or a stand in place swings its limbs by noise alone.
+MIN_STRIDE = 0.05
+
+
 def stride(canonical: Motion, tracks: Optional[Dict[str, np.ndarray]] = None
            ) -> Optional[float]:
     """How far the limb ends swing fore and aft relative to the root, in
@@ -327,7 +332,8 @@ def retarget_quality(source: Motion, output: Motion,
         ``slide`` (:func:`foot_slide` of the output) and ``sideways``
         (degrees between the output's :func:`heading_gap` and the source's;
         ``None`` where either has none) and ``stride`` (the output's
-        :func:`stride` over the source's), and ``posture`` (:func:`posture`
+        :func:`stride` over the source's; ``None`` where the source swings
+        its limbs less than :data:`MIN_STRIDE`), and ``posture`` (:func:`posture`
         of the output against :obj:`target`, the target rig's own canonical
         clip; ``None`` without one).
     """
@@ -340,7 +346,8 @@ def retarget_quality(source: Motion, output: Motion,
         out["travel"] = root_travel(output) / max(root_travel(source), 1e-9)
     if "stride" in keys:
         a, b = stride(source, tracks[0]), stride(output, tracks[1])
-        out["stride"] = None if a is None or b is None else b / max(a, 1e-9)
+        out["stride"] = (None if a is None or b is None or a < MIN_STRIDE
+                         else b / a)
     if "ground" in keys:
         out["ground"] = ground_height(output)
     if "upright" in keys:

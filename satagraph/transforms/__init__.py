@@ -1,8 +1,8 @@
 """Motion-to-motion transforms: reading a rig (up axis, units),
 canonicalisation (+Y up, facing +Z, metres, one frame rate), skeleton
 augmentation (bone scaling, mirroring, restructuring), the rest pose a rig
-is shown to a model in, and planting a decoded motion's feet. Imported
-lazily: numpy only."""
+is shown to a model in, and planting a decoded motion's feet and settling
+its root where it stands still. Imported lazily: numpy only."""
 from satagraph._lazy import lazy_exports
 
 _CANONICAL = ("canonicalize", "decanonicalize", "detect_up_axis", "resample")
@@ -11,7 +11,8 @@ _EXPORTS = {**dict.fromkeys(_CANONICAL, "satagraph.transforms.canonical"),
             **dict.fromkeys(("SkeletonAugment", "mirror", "scale_bones"),
                             "satagraph.transforms.augment"),
             "plant_feet": "satagraph.transforms.foot_plant",
+            "settle_root": "satagraph.transforms.still_root",
             **dict.fromkeys(("shown_rest", "needs_rest"), "satagraph.transforms.rest")}
 __all__ = [*_CANONICAL, "read_rig", "with_rig", "SkeletonAugment", "mirror",
-           "scale_bones", "plant_feet", "shown_rest", "needs_rest"]
+           "scale_bones", "plant_feet", "settle_root", "shown_rest", "needs_rest"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -223,7 +223,7 @@ def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None
     """The dog's D1_003 (validation split) stands through its most active
     128 frames; the built-in model predicts its paws on the ground and
     barely moves them, yet drives its root at about two heights a second
-    (9 heights away over the clip). Settled (the default), the root is
+    (9 heights away over the clip). Settled (``settle=True``), the root is
     held wherever no decoded limb moves fast: it ends less than a third as
     far away (2.6 heights: the decoded paws still twitch), and the joint
     error falls as much (1.3 heights against 4.6)."""

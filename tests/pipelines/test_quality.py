@@ -186,6 +186,8 @@ def test_stride_reads_the_limb_swing_in_leg_lengths(species):
     assert stride(frozen) < 0.02 * swing
     assert retarget_quality(walk, walk, ("stride",)) == {"stride": pytest.approx(1.0)}
     assert retarget_quality(walk, frozen, ("stride",))["stride"] < 0.02
+    # a source that swings no stride (a stand, a jump in place) has no ratio
+    assert retarget_quality(frozen, walk, ("stride",)) == {"stride": None}
 
 
 @pytest.mark.parametrize("species", ["biped", "quadruped"])
