@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
@@ -122,19 +123,40 @@ def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
     return str(path)
 
 
+#: Longest provenance part (command, machine, note) that :func:`builtin_notice`
+#: shows whole; a longer command or machine is cut at its first clause, a
+#: longer note is pointed to.
+NOTICE_PART_CHARS = 120
+
+
+def _first_clause(text: str) -> str:
+    """:obj:`text` up to its first bracket, semicolon or comma, when it is
+    longer than :data:`NOTICE_PART_CHARS`."""
+    if len(text) <= NOTICE_PART_CHARS:
+        return text
+    return re.split(r" \(|;|,", text, maxsplit=1)[0][:NOTICE_PART_CHARS]
+
+
 def builtin_notice(kind: str = "autoencoder", name: str = BUILTIN) -> str:
-    """One line on a built-in model, from its own metadata: what made it
-    and its provenance note (what it can and cannot do yet); shown by the
-    commands that fall back on it."""
+    """One short line on a built-in model, from its own metadata: what made
+    it (the command and machine cut to their first clause) and its
+    provenance note when that is short (a long one is pointed to:
+    :func:`read_weights_metadata` and the README give it whole); shown by
+    the commands that fall back on it."""
     meta = read_weights_metadata(resolve_weights(name, kind))
     prov = meta.get("provenance") or {}
     minutes = prov.get("minutes")
-    parts = (prov.get("command"), minutes and f"{float(minutes):.0f} min", prov.get("machine"))
+    parts = (prov.get("command") and _first_clause(str(prov["command"])),
+             minutes and f"{float(minutes):.0f} min",
+             prov.get("machine") and _first_clause(str(prov["machine"])))
     made = ", ".join(str(part) for part in parts if part)
-    note = f": {prov['note']}" if prov.get("note") else ""
+    note = str(prov.get("note") or "")
+    if len(note) > NOTICE_PART_CHARS:
+        note = ("what it can and cannot do: the README, or "
+                "satagraph.io.weights.read_weights_metadata() of its file")
     what = "model" if kind == "autoencoder" else f"{kind} model"
     which = "" if name == BUILTIN else f" {name}"
-    return f"using the built-in {what}{which} ({made}){note}"
+    return f"using the built-in {what}{which} ({made})" + (f": {note}" if note else "")
 
 
 def is_weights_file(path: PathLike) -> bool:

@@ -212,3 +212,24 @@ def test_export_weights_command_and_init_from(config_overrides: List[str], zoo_c
             torch.testing.assert_close(state[key], value, rtol=0, atol=0, msg=key)
 
     assert main(["export-weights", str(tmp_path / "nothing"), str(tmp_path / "x.safetensors")]) == 2
+
+
+def test_builtin_notice_stays_one_short_line(build_tiny_module: Callable, tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """A built-in model whose provenance tells its whole history gets a
+    notice with the command's first clause and a pointer to the long note,
+    not the history (the shipped ones were 1,000-1,400 characters)."""
+    shipped = tmp_path / "builtin.safetensors"
+    history = "satagraph train pretrain_zoo (stage 1: " + "resumed with optim.lr=1e-4; " * 20 + ")"
+    save_weights(build_tiny_module(), shipped,
+                 provenance={"command": history, "minutes": 723.0,
+                             "machine": "a 2-core VM, one thread, beside other jobs",
+                             "note": "in step on zoo rigs; " * 30})
+    monkeypatch.setattr(weights, "builtin_path",
+                        lambda kind="autoencoder", name="builtin": shipped)
+    notice = weights.builtin_notice()
+    assert notice == ("using the built-in model (satagraph train pretrain_zoo, 723 min, "
+                      "a 2-core VM, one thread, beside other jobs): what it can and cannot "
+                      "do: the README, or satagraph.io.weights.read_weights_metadata() of "
+                      "its file")
+    assert "\n" not in notice and len(notice) < 300
