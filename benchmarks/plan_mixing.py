@@ -55,7 +55,7 @@ def steps_of(module, motions: Sequence[Motion]) -> List[float]:
     module.eval()
     out = []
     for motion in motions:
-        src, rec = retarget_canonical(module, motion, motion)
+        src, rec = retarget_canonical(module, motion, motion, still=False)
         steps = retarget_quality(src, rec, ("steps",))["steps"]
         out.append(float("nan") if steps is None else steps)
     module.train()

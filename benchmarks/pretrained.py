@@ -247,7 +247,8 @@ def retarget_row(module, source: Motion, target: Motion, rest: str = "auto") -> 
 
 def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
     """The joint errors, steps, stride and slide of one reconstruction."""
-    src, raw = retarget_canonical(module, clip, clip, module.embed, rest=rest, ground=False)
+    src, raw = retarget_canonical(module, clip, clip, module.embed, rest=rest, ground=False,
+                                  still=False)
     same_rig = retarget_quality(src, raw, ("steps", "stride"))
     grounded = ground_like(raw, src)
     return dict(jp=joint_error(src, raw), pose=joint_error(src, raw, relative=True),

@@ -56,11 +56,13 @@ from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
-from satagraph.pipelines.quality import retarget_quality  # noqa: E402
+from satagraph.pipelines.quality import leg_length, retarget_quality  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
-#: ``--settle`` -> the settings measured.
+#: Farthest a still source's root ends from its start, in leg lengths.
+STILL_SOURCE = 0.5
+#: ``--settle`` and ``--still`` -> the settings measured.
 SETTLE = {"off": (False,), "on": (True,), "both": (False, True)}
 #: Kinds of the zoo's other groups (one group each), per plan of these plans.
 MORE_KINDS = ("side", "back", "start", "stop", "jump", "idle")
@@ -157,27 +159,61 @@ def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
     return out
 
 
+def displacement(canonical: Motion) -> np.ndarray:
+    """Where the root ends, horizontally, from where it starts, in leg
+    lengths (a canonical motion)."""
+    root = canonical.translations[:, 0, [0, 2]]
+    return (root[-1] - root[0]) / leg_length(canonical)
+
+
+def still_pairs() -> List[Tuple[str, Motion, Motion]]:
+    """``(name, source, target)`` of validation retargets whose source
+    stands (its root ends under :data:`STILL_SOURCE` leg lengths from its
+    start, canonical): the dog's clips outside its test split (never
+    trained on, as in :func:`real_clips`) onto a Bandai validation walk's
+    rig, and every third Bandai validation clip onto the dog's first
+    validation clip's rig (each cut to its most active
+    :data:`RECON_FRAMES` frames at 30 fps)."""
+    dogs = sorted(manifest_paths("dog", lambda split: split != "test"))
+    bandai = manifest_paths("bandai", lambda split: split == "val")
+    human = real_file(next(p for p in bandai if "_walk_" in p))
+    dog = real_file(manifest_paths("dog", lambda split: split == "val")[0])
+    out = []
+    for name, paths, target in (("still source: dog -> bandai", dogs, human),
+                                ("still source: bandai -> dog", bandai[::3], dog)):
+        for rel in paths:
+            source = recon_window(real_file(rel))
+            if np.linalg.norm(displacement(canonicalize(source, fps=30.0))) < STILL_SOURCE:
+                out.append((name, source, target))
+    return out
+
+
 def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
-                    plant: bool = False, settle: bool = False) -> Dict[str, dict]:
+                    plant: bool = False, settle: bool = False,
+                    still: bool = True) -> Dict[str, dict]:
     """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
     :func:`~satagraph.pipelines.quality.heading_gap`), of the stride
     ratio (:func:`~satagraph.pipelines.quality.stride`) and the lowest
     posture (:func:`~satagraph.pipelines.quality.posture` against the
-    target's own clip) per pair name."""
+    target's own clip) and the median ``gap`` between the retarget's and
+    the source's :func:`displacement` (leg lengths) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
         src, out = retarget_canonical(module, source, target, module.embed, plant=plant,
-                                      settle=settle)
+                                      settle=settle, still=still)
         own = canonicalize(target, fps=float(module.fps))
-        got.setdefault(name, []).append(retarget_quality(
-            src, out, ("steps", "travel", "sideways", "stride", "posture"), target=own))
+        quality = retarget_quality(src, out, ("steps", "travel", "sideways", "stride",
+                                              "posture"), target=own)
+        quality["gap"] = float(np.linalg.norm(displacement(out) - displacement(src)))
+        got.setdefault(name, []).append(quality)
     return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
                        travel=float(np.median([q["travel"] for q in v])),
                        travel_ok=float(np.mean([0.8 <= q["travel"] <= 1.25 for q in v])),
                        sideways=_median([q["sideways"] for q in v]),
                        stride=_median([q["stride"] for q in v]),
-                       posture=_lowest([q["posture"] for q in v]))
+                       posture=_lowest([q["posture"] for q in v]),
+                       gap=float(np.median([q["gap"] for q in v])))
             for name, v in got.items()}
 
 
@@ -210,7 +246,7 @@ def measure(module, motion: Motion, plant: bool = False, settle: bool = False) -
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
     source)."""
     src, out = retarget_canonical(module, motion, motion, module.embed, ground=False,
-                                  plant=plant, settle=settle)
+                                  plant=plant, settle=settle, still=False)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
@@ -258,7 +294,8 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
     if retargets:
         lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25), "
                   "median degrees sideways of the source's heading, median stride ratio, "
-                  "lowest posture.", "",
+                  "lowest posture, median gap between the retarget's and the source's "
+                  "displacement (leg lengths).", "",
                   "| retarget | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
                   "|---|---:|" + "---:|" * len(names)]
         for pair in retargets[names[0]]:
@@ -266,6 +303,7 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
                      + ("" if r.get("sideways") is None else f", {r['sideways']:.0f} deg")
                      + ("" if r.get("stride") is None else f", stride {r['stride']:.2f}")
                      + ("" if r.get("posture") is None else f", posture {r['posture']:.2f}")
+                     + f", gap {r['gap']:.2f}"
                      for r in (retargets[k][pair] for k in names)]
             lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)
                          + " |")
@@ -283,6 +321,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="hold the root still where the decoded body stands still "
                              "(retarget_canonical's settle); both: each checkpoint twice, "
                              "the second column named '+settle'")
+    parser.add_argument("--still", choices=("off", "on", "both"), default="on",
+                        help="retargets: keep the root still where the source stands "
+                             "(retarget_canonical's still; reconstructions never); both: "
+                             "each checkpoint twice, the second column named '+still'")
     args = parser.parse_args(argv)
     if not (DATA / "manifest.tsv").is_file():
         print(f"pretrained_val.py: {DATA} not found: the real groups need ../shared/data",
@@ -290,7 +332,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 2
     start = time.perf_counter()
     clips = zoo_clips() + zoo_kind_clips() + real_clips()
-    pairs = retarget_pairs()
+    pairs = retarget_pairs() + still_pairs()
     summary: Dict[str, Dict[str, dict]] = {}
     retargets: Dict[str, Dict[str, dict]] = {}
     with warnings.catch_warnings():
@@ -298,13 +340,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         for ckpt in args.ckpt:
             module = load_module(ckpt).eval()
             for settle in SETTLE[args.settle]:
-                name = f"{ckpt} +settle" if settle and args.settle == "both" else ckpt
-                groups: Dict[str, List[dict]] = {}
-                for group, _, motion in clips:
-                    groups.setdefault(group, []).append(
-                        measure(module, motion, args.plant, settle))
-                summary[name] = {g: summarise(v) for g, v in groups.items()}
-                retargets[name] = retarget_scores(module, pairs, args.plant, settle)
+                for still in SETTLE[args.still]:
+                    name = ckpt + (" +settle" if settle and args.settle == "both" else "") \
+                        + (" +still" if still and args.still == "both" else "")
+                    groups: Dict[str, List[dict]] = {}
+                    for group, _, motion in clips:
+                        groups.setdefault(group, []).append(
+                            measure(module, motion, args.plant, settle))
+                    summary[name] = {g: summarise(v) for g, v in groups.items()}
+                    retargets[name] = retarget_scores(module, pairs, args.plant, settle, still)
     text = table(summary, time.perf_counter() - start, retargets)
     print(text)
     write_results(args.out, "Built-in model candidates on validation material "

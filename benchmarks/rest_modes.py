@@ -44,7 +44,8 @@ MODES = ("file", "first-frame", "auto")
 
 def pose_error(module, motion: Motion, rest: str) -> float:
     """Root-relative joint error of a reconstruction, in heights."""
-    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False, rest=rest)
+    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False, rest=rest,
+                                  still=False)
     a, b = src.global_positions(), out.global_positions()
     n = min(len(a), len(b))
     rel = (a[:n] - a[:n, :1]) - (b[:n] - b[:n, :1])

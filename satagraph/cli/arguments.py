@@ -94,3 +94,13 @@ def add_settle_argument(parser: argparse.ArgumentParser) -> None:
                         "character stands, sits or lies, which a decoder can drift away; "
                         "it also stops a sidestep whose decoded legs do not step "
                         "(default: off)")
+
+
+def add_still_argument(parser: argparse.ArgumentParser) -> None:
+    """``--still/--no-still``: keep a retarget's root still wherever its
+    source's root stands still
+    (:func:`~satagraph.transforms.still_root.hold_still_source`)."""
+    parser.add_argument("--still", action=argparse.BooleanOptionalAction, default=True,
+                        help="keep the output's root still wherever the source's root "
+                        "stands still (a decoder can glide a body whose source stands "
+                        "away; --no-still keeps the decoded path; default: on)")

@@ -12,7 +12,8 @@ from satagraph.cli.arguments import positive_float, positive_int
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
-    from satagraph.cli.arguments import add_plant_argument, add_settle_argument
+    from satagraph.cli.arguments import (add_plant_argument, add_settle_argument,
+                                         add_still_argument)
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config in experiments/ "
                        "(or a path), with dotted overrides, e.g. "
@@ -45,6 +46,7 @@ def add_train_parsers(sub) -> None:
     _ground(p, default=True)
     add_plant_argument(p)
     add_settle_argument(p)
+    add_still_argument(p)
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
@@ -285,7 +287,7 @@ def run_retarget(args) -> int:
     _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
-                         settle=args.settle)
+                         settle=args.settle, still=args.still)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")

@@ -15,7 +15,7 @@ from satagraph.transforms.rest import (POSED_REST_DEGREES, REST_MODES, is_line_r
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.foot_plant import plant_feet
-from satagraph.transforms.still_root import settle_root
+from satagraph.transforms.still_root import hold_still_source, settle_root
 from satagraph.transforms.ground import (STANDING_SHARE, ground_retarget, stands,  # noqa: F401
                                          standing_frame, standing_frames)
 from satagraph.data.clip import MotionClip
@@ -159,7 +159,7 @@ def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
                     rest: str = "auto", ground: bool = True, plant: bool = False,
-                    settle: bool = False) -> Motion:
+                    settle: bool = False, still: bool = True) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -205,9 +205,14 @@ def retarget_motion(module, source: Motion, target: Motion,
             it stops a standing body that the decoder drives away, and
             also a sidestep whose decoded legs do not step (off by default,
             ``experiments/PRETRAIN.md`` section 24).
+        still (bool): Keep the root still wherever the source's root
+            stands still
+            (:func:`~satagraph.transforms.still_root.hold_still_source`;
+            ``experiments/PRETRAIN.md`` section 26); ``False`` keeps the
+            decoder's root path there.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest, ground, plant, settle)
+                                  rest, ground, plant, settle, still)
     return from_canonical(canon, source)
 
 
@@ -223,7 +228,8 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        semantic: Optional[Callable] = None, window: Optional[int] = None,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
                        rest: str = "auto", ground: bool = True,
-                       plant: bool = False, settle: bool = False) -> Tuple[Motion, Motion]:
+                       plant: bool = False, settle: bool = False,
+                       still: bool = True) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -243,6 +249,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
                        tgt_canon.skeleton)
     out = settle_root(out, c) if settle else out
+    out = hold_still_source(out, src_canon) if still else out
     out = ground_retarget(out, src_canon, tgt_canon) if ground else out
     return src_canon, plant_feet(out) if plant else out
 
@@ -316,7 +323,9 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     :obj:`ground` and :obj:`settle`: see :func:`retarget_motion`; ground
     is off by default here: on its own skeleton the decoder's root height
     is closer than a shift that matches the lowest joints of two
-    different poses)."""
+    different poses). The root is never held where the input stands
+    still (``still`` of :func:`retarget_motion`): a reconstruction is
+    the model's alone."""
     return retarget_motion(module, motion, motion, semantic, window, overlap, rest=rest,
-                           ground=ground, settle=settle)
+                           ground=ground, settle=settle, still=False)
 

@@ -11,8 +11,10 @@ _EXPORTS = {**dict.fromkeys(_CANONICAL, "satagraph.transforms.canonical"),
             **dict.fromkeys(("SkeletonAugment", "mirror", "scale_bones"),
                             "satagraph.transforms.augment"),
             "plant_feet": "satagraph.transforms.foot_plant",
-            "settle_root": "satagraph.transforms.still_root",
+            **dict.fromkeys(("settle_root", "hold_still_source"),
+                            "satagraph.transforms.still_root"),
             **dict.fromkeys(("shown_rest", "needs_rest"), "satagraph.transforms.rest")}
 __all__ = [*_CANONICAL, "read_rig", "with_rig", "SkeletonAugment", "mirror",
-           "scale_bones", "plant_feet", "settle_root", "shown_rest", "needs_rest"]
+           "scale_bones", "plant_feet", "settle_root", "hold_still_source",
+           "shown_rest", "needs_rest"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

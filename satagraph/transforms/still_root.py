@@ -23,6 +23,11 @@ the root, rightly, moves looks the same as the standing dog, and is
 stopped too (the zoo's validation sidesteps: 5.3 -> 22.8 % of the height
 on average). The pipelines therefore apply it only on request
 (``settle=True``, ``--settle``).
+
+A retarget knows what a reconstruction cannot: its source, an input. Where
+the source's root stands still, :func:`hold_still_source` keeps the
+retarget's root still too (:func:`source_still_steps`), whatever the
+decoder made of it; a sidestep's source moves, so it is left alone.
 """
 from __future__ import annotations
 
@@ -39,6 +44,9 @@ STILL_SPEED = 0.5
 STILL_WINDOW = 0.3
 #: Contact probability above which a joint counts as on the ground.
 CONTACT_PROB = 0.5
+#: Fastest horizontal root speed of a source that stands still, in its
+#: character heights a second (averaged over :data:`STILL_WINDOW`).
+SOURCE_STILL_SPEED = 0.05
 
 
 def _window_max(x: np.ndarray, width: int) -> np.ndarray:
@@ -48,6 +56,15 @@ def _window_max(x: np.ndarray, width: int) -> np.ndarray:
         return x
     pad = width // 2
     return sliding_window_view(np.pad(x, (pad, width - 1 - pad), mode="edge"), width).max(-1)
+
+
+def _window_mean(x: np.ndarray, width: int) -> np.ndarray:
+    """The mean of :obj:`x` over a centred window of :obj:`width` samples
+    (edges repeated)."""
+    if width <= 1 or len(x) == 0:
+        return x
+    pad = width // 2
+    return sliding_window_view(np.pad(x, (pad, width - 1 - pad), mode="edge"), width).mean(-1)
 
 
 def still_frames(positions: np.ndarray, contacts: np.ndarray, ends, fps: float,
@@ -89,6 +106,21 @@ def contact_steps(positions: np.ndarray, contacts: np.ndarray) -> np.ndarray:
     return -step / np.maximum(weight.sum(axis=1), 1e-12)[:, None]
 
 
+def _with_steps(motion: Motion, where: np.ndarray, steps: np.ndarray) -> Motion:
+    r""":obj:`motion` whose root takes the horizontal :obj:`steps` on the
+    steps :obj:`where` marks and the decoded ones elsewhere, from its first
+    frame's position.
+
+    Shapes:
+        - **where**: :math:`(T - 1,)` bool, **steps**: :math:`(T - 1, 3)`
+    """
+    root = motion.translations[:, 0]
+    step = np.where(where[:, None], steps, np.diff(root, axis=0))
+    translations = motion.translations.copy()
+    translations[1:, 0, [0, 2]] = root[0, [0, 2]] + np.cumsum(step[:, [0, 2]], axis=0)
+    return motion.with_(translations=translations)
+
+
 def settle_root(motion: Motion, contacts: np.ndarray) -> Motion:
     r""":obj:`motion` with its root held where the body stands still (see
     the module's text): on :func:`still_frames`, the root's horizontal step
@@ -113,8 +145,40 @@ def settle_root(motion: Motion, contacts: np.ndarray) -> Motion:
                          character_height(motion.skeleton, pos))
     if not still.any():
         return motion
-    root = motion.translations[:, 0]
-    step = np.where(still[:, None], contact_steps(pos, contacts), np.diff(root, axis=0))
-    translations = motion.translations.copy()
-    translations[1:, 0, [0, 2]] = root[0, [0, 2]] + np.cumsum(step[:, [0, 2]], axis=0)
-    return motion.with_(translations=translations)
+    return _with_steps(motion, still, contact_steps(pos, contacts))
+
+
+def source_still_steps(source: Motion) -> np.ndarray:
+    r"""Steps (frame ``t`` to ``t + 1``) on which :obj:`source`'s root
+    stands still: its horizontal speed, averaged over :data:`STILL_WINDOW`
+    seconds, under :data:`SOURCE_STILL_SPEED` of its height a second (+Y
+    up, canonical).
+
+    Shapes:
+        - **output**: :math:`(T - 1,)` bool
+    """
+    if source.num_frames < 2:
+        return np.zeros(0, dtype=bool)
+    height = character_height(source.skeleton, source.global_positions())
+    root = source.translations[:, 0, [0, 2]]
+    speed = np.linalg.norm(np.diff(root, axis=0), axis=-1) * source.fps
+    width = int(round(STILL_WINDOW * source.fps)) | 1
+    return _window_mean(speed, width) < SOURCE_STILL_SPEED * height
+
+
+def hold_still_source(motion: Motion, source: Motion) -> Motion:
+    r""":obj:`motion` (a retarget of :obj:`source`, frame for frame) with no
+    horizontal root step wherever the source's root stands still
+    (:func:`source_still_steps`); its other steps, the root's height and
+    every rotation as decoded (+Y up, canonical).
+
+    Raises:
+        ValueError: The two have different numbers of frames.
+    """
+    if motion.num_frames != source.num_frames:
+        raise ValueError(f"hold_still_source: the retarget has {motion.num_frames} frames "
+                         f"and its source {source.num_frames}")
+    still = source_still_steps(source)
+    if not still.any():
+        return motion
+    return _with_steps(motion, still, np.zeros((len(still), 3)))

@@ -75,7 +75,7 @@ def test_builtin_reconstructs_a_real_rig_whose_root_offset_is_far_away(
     motion = read_bvh(shared_data / "bandai" / "dataset-1_walk_sad_001.bvh")
     clip = most_active(motion, 128)
     module = load_module("builtin").eval()
-    src, out = retarget_canonical(module, clip, clip, module.embed)
+    src, out = retarget_canonical(module, clip, clip, module.embed, still=False)
     frames = min(src.num_frames, out.num_frames)
     jp = np.linalg.norm(src.global_positions()[:frames] - out.global_positions()[:frames],
                         axis=-1).mean() / src.height()
@@ -167,7 +167,8 @@ def test_builtin_wide_reads_body_plans_the_default_cannot(no_network: None) -> N
         motion = zoo.sample(0, index, 64, "test").motion
         errors = []
         for module in (wide, default):
-            src, out = retarget_canonical(module, motion, motion, module.embed, ground=False)
+            src, out = retarget_canonical(module, motion, motion, module.embed, ground=False,
+                                              still=False)
             n = min(src.num_frames, out.num_frames)
             errors.append(np.linalg.norm(src.global_positions()[:n] - out.global_positions()[:n],
                                          axis=-1).mean() / src.height())
@@ -235,7 +236,7 @@ def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None
     clip = most_active(motion, int(128 * motion.fps / 30))  # 128 frames at 30 fps
     module = load_module("builtin").eval()
     outs = {settle: retarget_canonical(module, clip, clip, module.embed, ground=False,
-                                       settle=settle) for settle in (False, True)}
+                                       settle=settle, still=False) for settle in (False, True)}
     src = outs[True][0]
     height = src.height()
 
@@ -251,3 +252,28 @@ def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None
     assert travel(outs[False][1]) > 5.0
     assert travel(outs[True][1]) < 0.35 * travel(outs[False][1])
     assert joint_error(outs[True][1]) < 0.35 * joint_error(outs[False][1])
+
+
+def test_a_retarget_of_a_standing_dog_stands(shared_data: Path) -> None:
+    """The dog's D1_003 (validation split) stands; retargeted onto Bandai's
+    human by the built-in model, the human glides over 5 leg lengths away
+    with its legs barely swinging. By default the retarget's root is held
+    wherever the source's stands, so it ends within 0.1 leg lengths of
+    where the source's displacement puts it; with ``still=False`` it
+    glides as decoded."""
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import retarget_canonical
+    from satagraph.pipelines.quality import leg_length, most_active
+
+    motion = read_bvh(shared_data / "dog" / "D1_003_KAN01_001.bvh")
+    source = most_active(motion, int(128 * motion.fps / 30))
+    human = read_bvh(shared_data / "bandai" / "dataset-1_walk_happy_001.bvh")
+    module = load_module("builtin").eval()
+
+    def gap(still: bool) -> float:
+        src, out = retarget_canonical(module, source, human, module.embed, still=still)
+        ends = [m.translations[[0, -1], 0][:, [0, 2]] for m in (src, out)]
+        return float(np.linalg.norm((ends[1][1] - ends[1][0]) / leg_length(out)
+                                    - (ends[0][1] - ends[0][0]) / leg_length(src)))
+
+    assert gap(False) > 5.0 and gap(True) < 0.1

@@ -1,5 +1,6 @@
 """A decoded root held still where the decoded body stands still: still
-frames, contact steps, and walks, flights and wrong shapes left alone."""
+frames, contact steps, and walks, flights and wrong shapes left alone; a
+retarget's root held where its source stands."""
 from __future__ import annotations
 
 import numpy as np
@@ -8,7 +9,8 @@ import pytest
 from satagraph.motion import Motion
 from satagraph.ops.rotation_numpy import rotation_about_numpy
 from satagraph.skeleton import Skeleton
-from satagraph.transforms.still_root import contact_steps, settle_root, still_frames
+from satagraph.transforms.still_root import (contact_steps, hold_still_source, settle_root,
+                                             source_still_steps, still_frames)
 
 FPS = 30.0
 NAMES = ["Hips", "Spine", "Head", "LeftUpLeg", "LeftLeg", "LeftFoot", "RightUpLeg",
@@ -98,3 +100,32 @@ def test_contacts_of_the_wrong_shape_are_refused():
     motion = biped(10)
     with pytest.raises(ValueError, match=r"contacts must be \[10, 9\]"):
         settle_root(motion, np.zeros((10, 4)))
+
+
+def test_a_retarget_stands_where_its_source_stands_and_moves_where_it_moves():
+    """Source: one second standing, then one walking. The retarget glides
+    throughout; held, it takes no step while the source stands, then the
+    decoder's steps; its height and rotations stay as decoded."""
+    stand, walk = biped(30, speed=0.0), biped(60, speed=1.0, swing_degrees=30.0)
+    source = stand.with_(rotations=np.concatenate([stand.rotations, walk.rotations[30:]]),
+                         translations=np.concatenate([stand.translations,
+                                                      walk.translations[30:]]))
+    source.translations[30:, 0, 2] -= source.translations[30, 0, 2]  # walks off from 0
+    still = source_still_steps(source)
+    assert still[:25].all() and not still[35:].any()
+    glide = biped(60, speed=1.0)
+    held = hold_still_source(glide, source)
+    root, decoded = held.translations[:, 0], glide.translations[:, 0]
+    assert np.abs(root[:25, [0, 2]] - root[0, [0, 2]]).max() < 1e-12
+    np.testing.assert_allclose(np.diff(root[:, 2])[35:], np.diff(decoded[:, 2])[35:])
+    np.testing.assert_array_equal(root[:, 1], decoded[:, 1])
+    np.testing.assert_array_equal(held.rotations, glide.rotations)
+
+
+def test_a_moving_source_leaves_the_retarget_as_decoded_and_frames_must_match():
+    walk, glide = biped(40, speed=1.0, swing_degrees=30.0), biped(40, speed=0.7)
+    assert not source_still_steps(walk).any()
+    np.testing.assert_array_equal(hold_still_source(glide, walk).translations,
+                                  glide.translations)
+    with pytest.raises(ValueError, match="the retarget has 40 frames and its source 30"):
+        hold_still_source(glide, biped(30))
