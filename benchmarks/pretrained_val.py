@@ -303,7 +303,7 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
                      + ("" if r.get("sideways") is None else f", {r['sideways']:.0f} deg")
                      + ("" if r.get("stride") is None else f", stride {r['stride']:.2f}")
                      + ("" if r.get("posture") is None else f", posture {r['posture']:.2f}")
-                     + f", gap {r['gap']:.2f}"
+                     + ("" if r.get("gap") is None else f", gap {r['gap']:.2f}")
                      for r in (retargets[k][pair] for k in names)]
             lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)
                          + " |")
