@@ -49,22 +49,27 @@ CONTACT_PROB = 0.5
 SOURCE_STILL_SPEED = 0.05
 
 
+def _windows(x: np.ndarray, width: int) -> np.ndarray:
+    """Centred windows of :obj:`width` samples of :obj:`x`, one per sample
+    (edges repeated; :obj:`x` not empty).
+
+    Shapes:
+        - **x**: :math:`(T,)`, **output**: :math:`(T, W)`
+    """
+    width = max(width, 1)
+    pad = width // 2
+    return sliding_window_view(np.pad(x, (pad, width - 1 - pad), mode="edge"), width)
+
+
 def _window_max(x: np.ndarray, width: int) -> np.ndarray:
     """The largest value of :obj:`x` within a centred window of
-    :obj:`width` samples (edges repeated)."""
-    if width <= 1 or len(x) == 0:
-        return x
-    pad = width // 2
-    return sliding_window_view(np.pad(x, (pad, width - 1 - pad), mode="edge"), width).max(-1)
+    :obj:`width` samples."""
+    return _windows(x, width).max(-1) if len(x) else x
 
 
 def _window_mean(x: np.ndarray, width: int) -> np.ndarray:
-    """The mean of :obj:`x` over a centred window of :obj:`width` samples
-    (edges repeated)."""
-    if width <= 1 or len(x) == 0:
-        return x
-    pad = width // 2
-    return sliding_window_view(np.pad(x, (pad, width - 1 - pad), mode="edge"), width).mean(-1)
+    """The mean of :obj:`x` over a centred window of :obj:`width` samples."""
+    return _windows(x, width).mean(-1) if len(x) else x
 
 
 def still_frames(positions: np.ndarray, contacts: np.ndarray, ends, fps: float,
