@@ -31,7 +31,7 @@ from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.experiment.config import load_config
 from satagraph.experiment.train import module_class
 from satagraph.motion import Motion
-from satagraph.pipelines.inference import retarget_canonical
+from satagraph.pipelines.inference import reconstruct_canonical
 from satagraph.pipelines.quality import retarget_quality
 from satagraph.transforms import canonicalize
 
@@ -55,7 +55,7 @@ def steps_of(module, motions: Sequence[Motion]) -> List[float]:
     module.eval()
     out = []
     for motion in motions:
-        src, rec = retarget_canonical(module, motion, motion, still=False)
+        src, rec = reconstruct_canonical(module, motion)
         steps = retarget_quality(src, rec, ("steps",))["steps"]
         out.append(float("nan") if steps is None else steps)
     module.train()

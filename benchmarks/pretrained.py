@@ -76,7 +76,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from results_io import write_results  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
-from satagraph.pipelines.inference import REST_MODES, retarget_canonical  # noqa: E402
+from satagraph.pipelines.inference import (REST_MODES, reconstruct_canonical,  # noqa: E402
+                                           retarget_canonical)
 from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
@@ -247,8 +248,7 @@ def retarget_row(module, source: Motion, target: Motion, rest: str = "auto") -> 
 
 def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
     """The joint errors, steps, stride and slide of one reconstruction."""
-    src, raw = retarget_canonical(module, clip, clip, module.embed, rest=rest, ground=False,
-                                  still=False)
+    src, raw = reconstruct_canonical(module, clip, module.embed, rest=rest, ground=False)
     same_rig = retarget_quality(src, raw, ("steps", "stride"))
     grounded = ground_like(raw, src)
     return dict(jp=joint_error(src, raw), pose=joint_error(src, raw, relative=True),

@@ -55,7 +55,8 @@ from satagraph.datasets.sources import read_manifest  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
+from satagraph.pipelines.inference import (reconstruct_canonical,  # noqa: E402
+                                           retarget_canonical)
 from satagraph.pipelines.quality import leg_length, retarget_quality  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
@@ -63,7 +64,7 @@ OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: Farthest a still source's root ends from its start, in leg lengths.
 STILL_SOURCE = 0.5
 #: ``--settle`` and ``--still`` -> the settings measured.
-SETTLE = {"off": (False,), "on": (True,), "both": (False, True)}
+SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 #: Kinds of the zoo's other groups (one group each), per plan of these plans.
 MORE_KINDS = ("side", "back", "start", "stop", "jump", "idle")
 KIND_PLANS, KIND_PER_PLAN = ("biped", "quadruped", "bird", "fowl"), 2
@@ -245,8 +246,8 @@ def measure(module, motion: Motion, plant: bool = False, settle: bool = False) -
     """JP, root-relative JP (fractions of the height), facing drift and the
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
     source)."""
-    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False,
-                                  plant=plant, settle=settle, still=False)
+    src, out = reconstruct_canonical(module, motion, module.embed, ground=False, plant=plant,
+                                     settle=settle)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
@@ -339,14 +340,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.simplefilter("ignore")
         for ckpt in args.ckpt:
             module = load_module(ckpt).eval()
-            for settle in SETTLE[args.settle]:
-                for still in SETTLE[args.still]:
+            for settle in SETTINGS[args.settle]:
+                groups: Dict[str, List[dict]] = {}
+                for group, _, motion in clips:  # reconstructions: never ``still``
+                    groups.setdefault(group, []).append(
+                        measure(module, motion, args.plant, settle))
+                for still in SETTINGS[args.still]:
                     name = ckpt + (" +settle" if settle and args.settle == "both" else "") \
                         + (" +still" if still and args.still == "both" else "")
-                    groups: Dict[str, List[dict]] = {}
-                    for group, _, motion in clips:
-                        groups.setdefault(group, []).append(
-                            measure(module, motion, args.plant, settle))
                     summary[name] = {g: summarise(v) for g, v in groups.items()}
                     retargets[name] = retarget_scores(module, pairs, args.plant, settle, still)
     text = table(summary, time.perf_counter() - start, retargets)

@@ -33,7 +33,7 @@ from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import (is_line_rest, needs_rest,  # noqa: E402
-                                           retarget_canonical)
+                                           reconstruct_canonical)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: The body plans of the built-in model's training (stage 1).
@@ -44,8 +44,7 @@ MODES = ("file", "first-frame", "auto")
 
 def pose_error(module, motion: Motion, rest: str) -> float:
     """Root-relative joint error of a reconstruction, in heights."""
-    src, out = retarget_canonical(module, motion, motion, module.embed, ground=False, rest=rest,
-                                  still=False)
+    src, out = reconstruct_canonical(module, motion, module.embed, ground=False, rest=rest)
     a, b = src.global_positions(), out.global_positions()
     n = min(len(a), len(b))
     rel = (a[:n] - a[:n, :1]) - (b[:n] - b[:n, :1])

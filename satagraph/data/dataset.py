@@ -51,8 +51,7 @@ def shown_as(motion: Motion, config: Optional[Mapping[str, Any]] = None) -> Moti
     ``"file"`` (the default) as read; ``"auto"`` as inference shows a rig
     (a line or captured rest re-rested on its mean standing pose), so that a
     model trains on rigs as it will be shown them; ``"first-frame"``."""
-    rest = _rest_mode(config)
-    return motion if rest == "file" else shown_rest(motion, rest)[0]
+    return shown_rest(motion, _rest_mode(config))[0]
 
 
 def _rest_mode(config: Optional[Mapping[str, Any]]) -> str:
@@ -291,7 +290,7 @@ class WindowAugment:
                 pass  # asymmetric skeleton: left as it is
         augment = SkeletonAugment(**self.skeleton_augment,
                                   seed=int(rng.integers(2 ** 31)))
-        augmented = shown_as(augment(motion), {"rest": self.show_rest})
+        augmented = shown_rest(augment(motion), self.show_rest)[0]
         # a new rest pose turns the root's local frame: turn its facing axis too
         axis = augmented.rotations[0, 0].T @ motion.rotations[0, 0] @ axis
         out = motion_to_features(augmented, **self.options, facing_axis=axis)

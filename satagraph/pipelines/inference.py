@@ -254,6 +254,15 @@ def retarget_canonical(module, source: Motion, target: Motion,
     return src_canon, plant_feet(out) if plant else out
 
 
+def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] = None,
+                          **options) -> Tuple[Motion, Motion]:
+    r""":func:`retarget_canonical` of :obj:`motion` onto its own skeleton,
+    the model's alone: the root is never held where the input stands
+    (``still=False``: there the input is the answer). :obj:`options` are
+    :func:`retarget_canonical`'s (``ground`` still on unless turned off)."""
+    return retarget_canonical(module, motion, motion, semantic, still=False, **options)
+
+
 def facing_smooth_of(module) -> float:
     """The facing smoothing (seconds) of the features :obj:`module` was
     trained on (its config's ``data.preprocessing.facing_smooth``; 0 for a

@@ -39,7 +39,7 @@ from typing import Dict, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph.transforms.canonical import body_forward, canonicalize
-from satagraph.transforms.ground import ground_level, standing_frames
+from satagraph.transforms.ground import ground_level, stands
 from satagraph.data.features import motion_to_features
 from satagraph.pipelines.motion_descriptor import contact_quality
 from satagraph.semantics import LIMBS, describe_joints, limb_ends
@@ -301,8 +301,8 @@ def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     and real rigs); a retarget with one leg pointing up read 0.37."""
     if canonical.skeleton.names != reference.skeleton.names:
         return None
-    a, b = _carried(canonical.global_positions()), _carried(
-        reference.global_positions()[standing_frames(reference)])
+    ref = reference.global_positions()
+    a, b = _carried(canonical.global_positions()), _carried(ref[stands(ref)])
     if a.std() < 1e-9 or b.std() < 1e-9:
         return None
     return float(np.corrcoef(a, b)[0, 1])

@@ -108,7 +108,7 @@ def standing_frame(motion: Motion) -> int:
     stands: its root at least :data:`STANDING_SHARE` as high above its
     lowest joint as in any frame: the frame whose root orientation the
     rest of ``rest="auto"`` takes
-    (:func:`~satagraph.pipelines.inference.shown_rest`), so that a clip
+    (:func:`~satagraph.transforms.rest.shown_rest`), so that a clip
     that starts lying or sitting (many of the dog's) does not show the
     model a curled-up skeleton."""
     return int(np.argmax(stands(motion.global_positions())))

@@ -164,11 +164,10 @@ def source_still_steps(source: Motion) -> np.ndarray:
     """
     if source.num_frames < 2:
         return np.zeros(0, dtype=bool)
-    height = character_height(source.skeleton, source.global_positions())
     root = source.translations[:, 0, [0, 2]]
     speed = np.linalg.norm(np.diff(root, axis=0), axis=-1) * source.fps
     width = int(round(STILL_WINDOW * source.fps)) | 1
-    return _window_mean(speed, width) < SOURCE_STILL_SPEED * height
+    return _window_mean(speed, width) < SOURCE_STILL_SPEED * source.height()
 
 
 def hold_still_source(motion: Motion, source: Motion) -> Motion:

@@ -69,13 +69,13 @@ def test_builtin_reconstructs_a_real_rig_whose_root_offset_is_far_away(
     decoded a Bandai walk upside down (JP 62 % of the height, limbs out of
     step); without it the walk comes back in step and on the ground."""
     from satagraph.experiment.train import load_module
-    from satagraph.pipelines.inference import retarget_canonical
+    from satagraph.pipelines.inference import reconstruct_canonical
     from satagraph.pipelines.quality import most_active, retarget_quality
 
     motion = read_bvh(shared_data / "bandai" / "dataset-1_walk_sad_001.bvh")
     clip = most_active(motion, 128)
     module = load_module("builtin").eval()
-    src, out = retarget_canonical(module, clip, clip, module.embed, still=False)
+    src, out = reconstruct_canonical(module, clip, module.embed)
     frames = min(src.num_frames, out.num_frames)
     jp = np.linalg.norm(src.global_positions()[:frames] - out.global_positions()[:frames],
                         axis=-1).mean() / src.height()
@@ -153,7 +153,7 @@ def test_builtin_wide_reads_body_plans_the_default_cannot(no_network: None) -> N
     than their height), offline, from a file that describes itself."""
     from satagraph.datasets.zoo.endless import EndlessZoo
     from satagraph.experiment.train import load_module
-    from satagraph.pipelines.inference import retarget_canonical
+    from satagraph.pipelines.inference import reconstruct_canonical
 
     assert builtin_path(name="builtin-wide").stat().st_size <= MAX_WEIGHTS_BYTES
     meta = read_weights_metadata(builtin_path(name="builtin-wide"))
@@ -167,8 +167,7 @@ def test_builtin_wide_reads_body_plans_the_default_cannot(no_network: None) -> N
         motion = zoo.sample(0, index, 64, "test").motion
         errors = []
         for module in (wide, default):
-            src, out = retarget_canonical(module, motion, motion, module.embed, ground=False,
-                                              still=False)
+            src, out = reconstruct_canonical(module, motion, module.embed, ground=False)
             n = min(src.num_frames, out.num_frames)
             errors.append(np.linalg.norm(src.global_positions()[:n] - out.global_positions()[:n],
                                          axis=-1).mean() / src.height())
@@ -229,14 +228,14 @@ def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None
     far away (2.6 heights: the decoded paws still twitch), and the joint
     error falls as much (1.3 heights against 4.6)."""
     from satagraph.experiment.train import load_module
-    from satagraph.pipelines.inference import retarget_canonical
+    from satagraph.pipelines.inference import reconstruct_canonical
     from satagraph.pipelines.quality import most_active
 
     motion = read_bvh(shared_data / "dog" / "D1_003_KAN01_001.bvh")
     clip = most_active(motion, int(128 * motion.fps / 30))  # 128 frames at 30 fps
     module = load_module("builtin").eval()
-    outs = {settle: retarget_canonical(module, clip, clip, module.embed, ground=False,
-                                       settle=settle, still=False) for settle in (False, True)}
+    outs = {settle: reconstruct_canonical(module, clip, module.embed, ground=False,
+                                          settle=settle) for settle in (False, True)}
     src = outs[True][0]
     height = src.height()
 

@@ -12,7 +12,7 @@ from satagraph.data import motion_to_features
 from satagraph.transforms import canonicalize
 from satagraph.data.collate import collate_clips
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
-from satagraph.pipelines.inference import retarget_canonical
+from satagraph.pipelines.inference import reconstruct_canonical
 from satagraph.pipelines.quality import retarget_quality
 from satagraph.experiment.train import module_class
 
@@ -41,10 +41,10 @@ def test_pretrain_model_learns_one_walk_in_step() -> None:
     semantic = module.embed(feats.skeleton)
     batch = collate_clips([feats.to_clip(a, a + 32, semantic) for a in (0, 16, 32)])
 
-    src, before = retarget_canonical(module, motion, motion, still=False)
+    src, before = reconstruct_canonical(module, motion)
     assert retarget_quality(src, before, ("steps",))["steps"] < 0.5
     _fit(module, batch, 150)
-    src, after = retarget_canonical(module, motion, motion, still=False)
+    src, after = reconstruct_canonical(module, motion)
     quality = retarget_quality(src, after, ("steps", "travel"))
     error = np.linalg.norm(src.global_positions() - after.global_positions(), axis=-1)
     assert quality["steps"] > 0.9
