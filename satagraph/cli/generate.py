@@ -36,6 +36,10 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--text", required=True, help="the prompt, e.g. \"a person walks "
                    "forward and turns left\"; an empty text generates for the skeleton "
                    "alone (the model is trained with some text dropped)")
+    p.add_argument("--literal", action="store_true",
+                   help="give the model the prompt as written (default: a subject noun the "
+                   "model never saw in training, e.g. \"dog\", is read as its own subject of "
+                   "that body plan, \"four-legged animal\"; the words it never saw are named)")
     p.add_argument("--skeleton", required=True, nargs="+", metavar="TARGET.bvh",
                    help="BVH file(s) whose skeleton the motion is generated on")
     p.add_argument("--seconds", type=_seconds, default=None,
@@ -80,6 +84,22 @@ def _split_output(args) -> None:
         args.output = args.skeleton.pop()
 
 
+def _prompt(module, text: str, literal: bool):
+    """The prompt the model is given (``None``: unconditional), with a
+    note on stderr where it was read in the model's words or holds words
+    the model never saw."""
+    from satagraph.pipelines.prompt_reading import read_prompt, vocabulary_of
+    if not text:
+        return None
+    reading = read_prompt(text, vocabulary_of(module), subjects=not literal)
+    note = reading.note()
+    if note:
+        print(f"satagraph: the generator {note}" + ("" if literal or not reading.replaced else
+                                                   " (--literal keeps the prompt as written)"),
+              file=sys.stderr)
+    return reading.text
+
+
 def run_generate(args) -> int:
     from satagraph.pipelines.generate import (GenerationSettings, generate_on, load_generator,
                                     output_paths, write_all)
@@ -101,7 +121,7 @@ def run_generate(args) -> int:
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant)
     start = time.time()
-    text = args.text.strip() or None
+    text = _prompt(module, args.text.strip(), args.literal)
     motions = [generate_on(module, text, t, args.seconds, args.seed, settings)
                for t in targets]
     write_all(motions, paths)

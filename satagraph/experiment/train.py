@@ -192,14 +192,19 @@ def init_weights(module: L.LightningModule, ckpt: str) -> None:
     ``init_keeps`` prefixes name (a text-to-motion module's frozen
     autoencoder: the one its config gives, not the checkpoint's).
     :obj:`ckpt` is a checkpoint, a ``.safetensors`` weights file or
-    ``"builtin"``. A VAE's bottleneck starts an RVQ's (:func:`vae_to_rvq`).
+    ``"builtin"``. A VAE's bottleneck starts an RVQ's (:func:`vae_to_rvq`);
+    a module with ``init_meta`` is given the checkpoint's ``meta`` (a
+    text-to-motion module keeps the words its weights learnt).
     Warns about weights the checkpoint lacks, has in excess (e.g. another
     bottleneck) or has in another shape (e.g. another codebook size), which
     keep their initialisation."""
     frozen = getattr(module, "frozen_parts", lambda: [])()
     keep = ((() if frozen else ("normalizer.",)) + tuple(getattr(module, "init_keeps", ())))
     own = module.state_dict()
-    state = load_weights_or_checkpoint(ckpt)["state_dict"]
+    payload = load_weights_or_checkpoint(ckpt)
+    if hasattr(module, "init_meta"):
+        module.init_meta((payload.get("hyper_parameters") or {}).get("meta") or {})
+    state = payload["state_dict"]
     state = vae_to_rvq({k: v for k, v in state.items() if not k.startswith(keep)}, own)
     reshaped = [k for k, v in state.items() if k in own and own[k].shape != v.shape]
     state = {k: v for k, v in state.items() if k not in reshaped}

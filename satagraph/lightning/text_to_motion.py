@@ -42,7 +42,7 @@ from __future__ import annotations
 import copy
 import math
 import os
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import lightning as L
 import torch
@@ -55,6 +55,7 @@ from satagraph.data.captioned import batch_seconds, batch_texts
 from satagraph.data.code_bank import CodeBank, CodeBatch, autoencoder_fingerprint
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.pipelines.inference import default_windows, window_codes
+from satagraph.pipelines.prompt_reading import VOCABULARY_KEY, words_of
 from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTransformer,
                                      SkeletonEmbedding, merge_codes, parents_to_edge_index,
                                      skeleton_graph, split_codes)
@@ -159,6 +160,7 @@ class TextToMotionModule(L.LightningModule):
         # record of training, never overwritten by a later load
         self.meta.setdefault(TEXT_ENCODER_KEY, text_encoder_state(self.text_encoder))
         self.hparams["meta"] = self.meta
+        self._caption_words = set(self.meta.get(VOCABULARY_KEY) or ())
         self._check_semantic_encoder()
         self._check_facing()
         self.build(model)
@@ -300,6 +302,8 @@ class TextToMotionModule(L.LightningModule):
             codes, lengths = self.batch_codes(batch)
             texts, skel = batch_texts(batch), self.skeleton_embedding(batch)
             seconds = batch_seconds(batch)
+        if self.training:
+            self.note_words(texts)
         text = self.encode_text(texts)
         masked = self.masked.loss(codes, text, skel, lengths, generator)
         residual = self.residual.loss(codes, text, skel, lengths, generator)
@@ -309,6 +313,21 @@ class TextToMotionModule(L.LightningModule):
                "masked_acc": masked.accuracy, "residual_acc": residual.accuracy}
         out["loss"] = sum(self.loss_weights[k] * out[k] for k in DEFAULT_LOSS)
         return out
+
+    def note_words(self, texts: Sequence[str]) -> None:
+        """Add the words of training captions to the record of the words
+        the model knows (``meta["caption_words"]``, kept sorted in
+        checkpoints and weights files; :func:`~satagraph.pipelines.prompt_reading.read_prompt`
+        reads prompts in them)."""
+        new = words_of(texts) - self._caption_words
+        if new:
+            self._caption_words |= new
+            self.meta[VOCABULARY_KEY] = sorted(self._caption_words)
+
+    def init_meta(self, meta: Dict[str, Any]) -> None:
+        """``--init-from``: a fine-tune knows the words its weights learnt
+        as well as its own captions'."""
+        self.note_words(meta.get(VOCABULARY_KEY) or ())
 
     def _step(self, batch, stage: str, generator: Optional[torch.Generator] = None) -> Tensor:
         losses = self.compute_losses(batch, generator)
