@@ -104,3 +104,7 @@ def test_cli_render(tmp_path, capsys):
         assert gif.n_frames == 5
     assert sheet.stat().st_size > 0
     assert main(["render", str(bvh), str(tmp_path / "x.txt")]) == 2
+    # files after an option, as `render A.bvh --max-frames 3 B.bvh OUT.gif`
+    assert main(["render", str(bvh), "--max-frames", "3", str(bvh), str(out)]) == 0
+    with Image.open(out) as gif:
+        assert gif.n_frames == 3

@@ -390,12 +390,17 @@ def parse_args(parser: argparse.ArgumentParser,
                argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
     """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
     (also after an option such as ``--init-from CKPT``, where argparse alone
-    would reject them)."""
+    would reject them), and a command's ``files`` (``render``) also after
+    its options."""
     args, extra = parser.parse_known_args(argv)
     overrides = [a for a in extra if "=" in a and not a.startswith("-")]
     if hasattr(args, "overrides") and overrides:
         args.overrides = list(args.overrides or []) + overrides
         extra = [a for a in extra if a not in overrides]
+    if extra and isinstance(getattr(args, "files", None), list) and \
+            not any(a.startswith("-") for a in extra):
+        args.files += extra  # `render A.bvh --units cm B.bvh OUT.gif`: files after an option
+        extra = []
     if extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     return args
