@@ -76,7 +76,10 @@ def rigs(split: str) -> List[Tuple[str, str, Motion]]:
         return out
     files = read_manifest(MANIFEST)
     for dataset, plan in (("bandai", "biped"), ("dog", "quadruped")):
-        pick = next(f for f in files if f.dataset == dataset and f.split == split)
+        pick = next((f for f in files if f.dataset == dataset and f.split == split), None)
+        if pick is None:
+            print(f"# no {dataset} file in the {split} split: left out", file=sys.stderr)
+            continue
         motion = read_bvh(MANIFEST.parent / pick.path)
         if dataset == "dog":  # its files do not say their units
             motion = with_rig(motion, scale="cm")
