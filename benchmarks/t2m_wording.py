@@ -47,7 +47,7 @@ from satagraph.datasets.zoo_captions import ZOO_SUBJECTS  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import generate_on, load_generator  # noqa: E402
-from satagraph.pipelines.prompt_reading import read_prompt, vocabulary_of  # noqa: E402
+from satagraph.pipelines.prompt_reading import article, read_prompt, vocabulary_of  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 
@@ -89,7 +89,7 @@ def rigs(split: str) -> List[Tuple[str, str, Motion]]:
 
 def an(noun: str) -> str:
     """The noun with its indefinite article."""
-    return f"{'an' if noun[0] in 'aeiou' else 'a'} {noun}"
+    return f"{article(noun)} {noun}"
 
 
 def probe(module, target: Motion, subject: str, seeds: int) -> Dict[str, object]:

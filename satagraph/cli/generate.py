@@ -94,9 +94,8 @@ def _prompt(module, text: str, literal: bool):
     reading = read_prompt(text, vocabulary_of(module), subjects=not literal)
     note = reading.note()
     if note:
-        print(f"satagraph: the generator {note}" + ("" if literal or not reading.replaced else
-                                                   " (--literal keeps the prompt as written)"),
-              file=sys.stderr)
+        keep = " (--literal keeps the prompt as written)" if reading.replaced else ""
+        print(f"satagraph: the generator {note}{keep}", file=sys.stderr)
     return reading.text
 
 

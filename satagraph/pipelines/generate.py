@@ -119,8 +119,9 @@ def load_generator(ckpt: str = "builtin"):
 class RigInputs:
     """A skeleton as the model sees it: the canonical motion, the motion
     in the rest pose shown to the model (a line or captured rest re-rested on
-    its mean standing pose, :func:`~satagraph.transforms.rest.shown_rest`), its static features, semantic embedding, and the rest rotations
-    that undo the re-resting (``None``: none)."""
+    its mean standing pose, :func:`~satagraph.transforms.rest.shown_rest`),
+    its static features, semantic embedding, and the rest rotations that
+    undo the re-resting (``None``: none)."""
 
     canon: Motion
     shown: Motion

@@ -333,8 +333,9 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     is off by default here: on its own skeleton the decoder's root height
     is closer than a shift that matches the lowest joints of two
     different poses). The root is never held where the input stands
-    still (``still`` of :func:`retarget_motion`): a reconstruction is
-    the model's alone."""
-    return retarget_motion(module, motion, motion, semantic, window, overlap, rest=rest,
-                           ground=ground, settle=settle, still=False)
+    still (:func:`reconstruct_canonical`): a reconstruction is the
+    model's alone."""
+    _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
+                                     rest=rest, ground=ground, settle=settle)
+    return from_canonical(canon, motion)
 

@@ -97,6 +97,11 @@ def _subject(plan: str, vocabulary: FrozenSet[str]) -> Optional[str]:
     return phrase if words_of([phrase]) <= vocabulary else None
 
 
+def article(phrase: str) -> str:
+    """The indefinite article of :obj:`phrase` ("a" or "an")."""
+    return "an" if phrase[:1].lower() in tuple("aeiou") else "a"
+
+
 def _with_article(tokens: List[str], index: int, phrase: str) -> None:
     """Replace ``tokens[index]`` by :obj:`phrase`, the article just before
     it ("a" or "an") made to fit."""
@@ -104,8 +109,7 @@ def _with_article(tokens: List[str], index: int, phrase: str) -> None:
     before = [j for j in range(index) if _WORD.fullmatch(tokens[j])]
     if before and tokens[before[-1]].lower() in ("a", "an"):
         j = before[-1]
-        article = "an" if phrase[0] in "aeiou" else "a"
-        tokens[j] = article.capitalize() if tokens[j][0].isupper() else article
+        tokens[j] = article(phrase).capitalize() if tokens[j][0].isupper() else article(phrase)
 
 
 def read_prompt(text: str, vocabulary: Optional[FrozenSet[str]],
@@ -125,7 +129,7 @@ def read_prompt(text: str, vocabulary: Optional[FrozenSet[str]],
     """
     if not vocabulary:
         return PromptReading(text)
-    tokens = re.split(r"([A-Za-z0-9]+(?:-[A-Za-z0-9]+)*)", text)
+    tokens = re.split(f"({_WORD.pattern})", text)
     replaced = []
     for i, token in enumerate(tokens):
         word = token.lower()
@@ -142,4 +146,4 @@ def read_prompt(text: str, vocabulary: Optional[FrozenSet[str]],
 
 
 __all__ = ["VOCABULARY_KEY", "SUBJECT_NOUNS", "PromptReading", "words_of", "vocabulary_of",
-           "read_prompt"]
+           "article", "read_prompt"]
