@@ -29,9 +29,8 @@ from torch.utils.data import DataLoader, Dataset
 from satagraph.data.code_bank import CodeBank, concat_banks
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
-from satagraph.data.endless import MixedDataset, is_zoo_entry, zoo_entry
+from satagraph.data.endless import MixedDataset, endless_zoo, is_zoo_entry, zoo_entry
 from satagraph.datasets.sources import SPLITS, resolve_sources, select
-from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.data.captioned import FileCaptionWindows, ZooCaptionWindows
 from satagraph.utils.files import check_input_file
 
@@ -43,10 +42,8 @@ def zoo_caption_datasets(spec: Mapping[str, Any], split: str, window: int, min_f
     the training plans; validation and test clips of held-out seeds, of the
     training plans and of the held-out plans (``<name>-holdout``)."""
     spec = zoo_entry(spec)
-    options = {"rests": spec["rests"]} if spec.get("rests") else {}
     fps = float(kwargs.get("preprocessing", {}).get("fps", DEFAULT_PREPROCESSING["fps"]))
-    zoo = EndlessZoo(spec["species"], spec["holdout_species"], noise=spec["noise"], fps=fps,
-                     seed=seed if spec["seed"] is None else spec["seed"], **options)
+    zoo = endless_zoo(spec, fps, seed)
     name = spec["dataset"]
     if split == "train":
         return [ZooCaptionWindows(zoo, spec["windows_per_epoch"], window, min_frames,

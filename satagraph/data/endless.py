@@ -33,7 +33,17 @@ from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample
 ZOO_ENTRY_DEFAULTS: Dict[str, Any] = {
     "zoo": "endless", "dataset": "zoo-endless", "species": None,
     "holdout_species": [], "windows_per_epoch": 1024, "val_windows": 64,
-    "test_windows": 64, "fit_windows": 128, "rests": None, "noise": 0.3, "seed": None}
+    "test_windows": 64, "fit_windows": 128, "rests": None, "noise": 0.3, "seed": None,
+    "kinds": None}
+
+
+def endless_zoo(spec: Mapping[str, Any], fps: float, seed: int) -> EndlessZoo:
+    """The :class:`~satagraph.datasets.zoo.endless.EndlessZoo` of a zoo
+    entry (:func:`zoo_entry`; its ``seed`` when set, else :obj:`seed`)."""
+    options = {"rests": spec["rests"]} if spec.get("rests") else {}
+    return EndlessZoo(spec["species"], spec["holdout_species"], noise=spec["noise"], fps=fps,
+                      seed=seed if spec["seed"] is None else spec["seed"],
+                      kinds=spec["kinds"], **options)
 
 
 def is_zoo_entry(source: Any) -> bool:
@@ -197,10 +207,7 @@ def zoo_datasets(spec: Mapping[str, Any], split: str, window: int,
     held-out seeds, of the training plans and of the held-out plans
     (dataset ``<name>-holdout``)."""
     config = dict(DEFAULT_PREPROCESSING, **(preprocessing or {}))
-    kwargs = {"rests": spec["rests"]} if spec.get("rests") else {}
-    zoo = EndlessZoo(spec["species"], spec["holdout_species"], noise=spec["noise"],
-                     fps=config["fps"], seed=seed if spec["seed"] is None else spec["seed"],
-                     **kwargs)
+    zoo = endless_zoo(spec, config["fps"], seed)
     name = spec["dataset"]
     if split == "train":
         return [EndlessZooDataset(zoo, spec["windows_per_epoch"], window, semantic,
@@ -213,5 +220,5 @@ def zoo_datasets(spec: Mapping[str, Any], split: str, window: int,
     return out
 
 
-__all__ = ["ZOO_ENTRY_DEFAULTS", "is_zoo_entry", "zoo_entry", "EndlessZooDataset",
+__all__ = ["ZOO_ENTRY_DEFAULTS", "endless_zoo", "is_zoo_entry", "zoo_entry", "EndlessZooDataset",
            "MixedDataset", "zoo_datasets"]

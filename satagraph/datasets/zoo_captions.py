@@ -31,6 +31,11 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
   place) and lands (legged plans).
 * ``reach``: stands and raises one arm forward or overhead, holds it and
   lowers it again (bipeds).
+* ``bow`` (a gesture, drawn only when asked for): stands and bends forward
+  at the hips and along the spine, 30-70 degrees, holds and straightens up
+  (bipeds).
+* ``wave`` (a gesture): stands, raises one arm to the side with the forearm
+  up, swings the forearm from side to side and lowers the arm (bipeds).
 * ``back``: walks backward, facing forward (legged plans).
 * ``side``: walks facing forward while travelling 30-90 degrees to one side
   (the sign of ``travel``: positive left), told as diagonally forward
@@ -45,7 +50,7 @@ from dataclasses import dataclass
 from pathlib import PurePath
 from typing import Dict, List, Mapping, Optional, Tuple
 
-from satagraph.datasets.zoo import CLIP_KINDS, GAITS, SPECIES, ClipFacts
+from satagraph.datasets.zoo import ALL_KINDS, GAITS, SPECIES, ClipFacts
 
 #: Body plan -> subjects.
 ZOO_SUBJECTS: Dict[str, Tuple[str, ...]] = {
@@ -73,7 +78,7 @@ SIDESTEP = 60.0
 #: told as dashing, the others as running.
 DASH = 2.15
 _KIND_IN_NAME = re.compile(
-    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach|back|side|run)(?:_\d+)?$")
+    r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach|back|side|run|bow|wave)(?:_\d+)?$")
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
 
@@ -112,7 +117,7 @@ def zoo_clip_of_row(row: Mapping[str, str]) -> Optional[ZooClip]:
     species = row.get("species") or (in_name["species"] if in_name else "")
     match = _KIND_IN_NAME.search(stem)
     kind = row.get("kind") or (match["kind"] if match else "")
-    if species not in SPECIES or kind not in CLIP_KINDS[species]:
+    if species not in SPECIES or kind not in ALL_KINDS[species]:
         return None
     return ZooClip(species, kind, _number(row, "turn_deg"), _number(row, "speed_start"),
                    _number(row, "speed_end"), _number(row, "travel_deg"))
@@ -153,6 +158,10 @@ def _verbs(clip: ZooClip) -> List[str]:
         return ["crouches and jumps", "jumps up and lands"]
     if clip.kind == "reach":
         return ["stands and reaches out with one arm", "raises an arm and lowers it again"]
+    if clip.kind == "bow":
+        return ["bows", "bends forward in a bow"]
+    if clip.kind == "wave":
+        return ["waves goodbye with one hand", "raises a hand and waves"]
     if clip.kind in ("back", "side", "run"):
         return _travel_verbs(clip, drift)
     if clip.kind == "turn":

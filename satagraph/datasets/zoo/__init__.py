@@ -20,7 +20,8 @@ of reach. Clip kinds (:data:`CLIP_KINDS`): ``walk``, ``turn``, ``speed``
 (speed change), ``idle``, ``trot`` (quadrupeds), ``start`` and ``stop``
 (from and to a standstill), ``look`` (head, neck, tail and arms turning
 slowly), ``jump`` (crouch, flight, landing) and ``reach`` (bipeds: one arm
-raised and lowered). Snakes slither: every joint follows the path of the
+raised and lowered); gestures (:data:`GESTURE_KINDS`, drawn by the endless
+zoo only when asked for): ``bow`` and ``wave`` (bipeds). Snakes slither: every joint follows the path of the
 head.
 
 Exporter dialects (:mod:`satagraph.datasets.zoo.dialects`) re-express a clip
@@ -42,11 +43,12 @@ from satagraph.datasets.zoo.dialects import (NOISE_STYLES, REST_POSES, UNITS, UP
 from satagraph.datasets.zoo.motions import (GAITS, ClipFacts, generate_clip,
                                             generate_clip_with_facts)
 from satagraph.datasets.zoo.rigs import STYLES, Leg, Sway, ZooRig
-from satagraph.datasets.zoo.species import CLIP_KINDS, SPECIES, VARIANTS, zoo_rigs
+from satagraph.datasets.zoo.species import (ALL_KINDS, CLIP_KINDS, GESTURE_KINDS, SPECIES,
+                                            VARIANTS, zoo_rigs)
 from satagraph.datasets.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_COLUMNS,
                                            MOTION_COLUMNS, write_dialect_zoo, write_zoo)
 
-__all__ = ["CLIP_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS", "LICENCE",
+__all__ = ["ALL_KINDS", "CLIP_KINDS", "GESTURE_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS", "LICENCE",
            "MANIFEST_COLUMNS", "MOTION_COLUMNS", "generate_clip_with_facts",
            "NOISE_STYLES", "REST_POSES", "SPECIES", "STYLES", "UNITS", "UP_AXES",
            "VARIANTS", "Dialect", "DialectVariant", "Leg", "Sway", "ZooRig",

@@ -24,14 +24,14 @@ Example::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from satagraph.datasets.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
-from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, CLIP_KINDS,
-                                            SPECIES, VARIANTS)
+from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, ALL_KINDS,
+                                            CLIP_KINDS, SPECIES, VARIANTS)
 from satagraph.motion import Motion
 
 #: Seed streams: training samples, and the held-out seeds of validation
@@ -73,6 +73,24 @@ def _plans(species: Sequence[str]) -> List[Tuple[str, int]]:
     return [(s, v) for s in species for v in range(len(VARIANTS[s]))]
 
 
+def _kinds_of(species: Sequence[str], kinds: Optional[Sequence[str]]
+              ) -> Dict[str, Tuple[str, ...]]:
+    """Species -> the clip kinds drawn for it (see :class:`EndlessZoo`)."""
+    if kinds is None:
+        return {s: CLIP_KINDS[s] for s in species}
+    known = set().union(*ALL_KINDS.values())
+    unknown = [k for k in kinds if k not in known]
+    if unknown:
+        raise ValueError(f"endless zoo: unknown clip kinds {unknown}; choose from "
+                         f"{sorted(known)}")
+    out = {s: tuple(k for k in ALL_KINDS[s] if k in kinds) for s in species}
+    empty = [s for s, chosen in out.items() if not chosen]
+    if empty:
+        raise ValueError(f"endless zoo: {', '.join(empty)} can do none of the kinds "
+                         f"{list(kinds)}")
+    return out
+
+
 def _matches(plan: Tuple[str, int], holdout: Sequence[str]) -> bool:
     species, v = plan
     return any(h == species or h == f"{species}/{VARIANTS[species][v][0]}"
@@ -95,12 +113,18 @@ class EndlessZoo:
         noise (float): Probability of noisy joint names.
         fps (float): Frame rate of the clips.
         seed (int): Base seed.
+        kinds (list[str], optional): Clip kinds drawn, of those each species
+            can do (:data:`~satagraph.datasets.zoo.species.ALL_KINDS`, which
+            adds the gestures ``bow`` and ``wave`` of bipeds); default: each
+            species' :data:`~satagraph.datasets.zoo.CLIP_KINDS`. Every drawn
+            and held-out species must be able to do at least one of them.
     """
 
     def __init__(self, species: Optional[Sequence[str]] = None,
                  holdout: Optional[Sequence[str]] = None,
                  rests: Sequence[str] = REST_POSES, noise: float = 0.3,
-                 fps: float = 30.0, seed: int = 0) -> None:
+                 fps: float = 30.0, seed: int = 0,
+                 kinds: Optional[Sequence[str]] = None) -> None:
         self.species = list(DEFAULT_SPECIES if species is None else species)
         self.holdout = list(holdout or [])
         for name in self.species + [h.split("/")[0] for h in self.holdout]:
@@ -124,6 +148,7 @@ class EndlessZoo:
             raise ValueError("endless zoo: every body plan is held out")
         self.rests, self.noise = list(rests), float(noise)
         self.fps, self.seed = float(fps), int(seed)
+        self.kinds = _kinds_of(self.species + held_species, kinds)
 
     def plans(self, holdout: bool = False) -> List[str]:
         """``species/variant`` names drawn for training (or held out)."""
@@ -162,7 +187,7 @@ class EndlessZoo:
         build = _BUILDERS_BY_STYLE.get((species, style), _BUILDERS[species])
         name = f"endless-{species}-{style}-{epoch}-{index}"
         rig = build(style, np.random.default_rng(rng.integers(2 ** 63)), name, **options)
-        kinds = CLIP_KINDS[species]
+        kinds = self.kinds[species]
         kind = kinds[int(rng.integers(len(kinds)))]
         motion, facts = generate_clip_with_facts(rig, kind, frames=frames, fps=self.fps,
                                                  seed=int(rng.integers(2 ** 31)))

@@ -9,7 +9,7 @@ import numpy as np
 
 from satagraph.datasets.zoo.rigs import (Leg, Sway, ZooRig, _align, _euler,
                                          _is_below, _rot, _smoothstep, _unit)
-from satagraph.datasets.zoo.species import CLIP_KINDS
+from satagraph.datasets.zoo.species import ALL_KINDS
 from satagraph.motion import Motion
 from satagraph.ops.rotation_numpy import rotation_about_numpy
 from satagraph.skeleton import Skeleton
@@ -58,6 +58,17 @@ _JUMP_RISE, _JUMP_HOP, _JUMP_CROUCH, _GRAVITY = (0.15, 0.4), (0.0, 0.6), 0.12, 9
 #: reaches forward and down, 90 straight ahead, 150 overhead), how long it
 #: rises (s) and holds (s).
 _REACH_DEGREES, _REACH_RISE, _REACH_HOLD = (60.0, 150.0), (0.5, 0.9), (0.3, 1.0)
+#: ``bow`` clips: how far the upper body bends forward (degrees; the pelvis
+#: takes :data:`_BOW_PELVIS` of it, the spine the rest), how long it goes
+#: down (and comes up, s) and holds (s).
+_BOW_DEGREES, _BOW_DOWN, _BOW_HOLD, _BOW_PELVIS = (30.0, 70.0), (0.7, 1.2), (0.3, 1.0), 0.6
+#: ``wave`` clips: how far the upper arm rises from hanging (degrees, to the
+#: side), how far the forearm bends up from it, the forearm's side-to-side
+#: swing (degrees, Hz), how long the arm rises (s) and waves (s).
+_WAVE_RAISE, _WAVE_ELBOW, _WAVE_SWING, _WAVE_HZ = (100.0, 150.0), (30.0, 70.0), (20.0, 35.0), (1.5, 2.8)
+_WAVE_RISE, _WAVE_HOLD = (0.4, 0.7), (1.2, 2.2)
+#: Kinds whose body stands in place.
+_STILL_KINDS = ("idle", "look", "reach", "bow", "wave")
 #: Walks that do not go where the body faces: ``back`` at this share of the
 #: gait's speed, ``side`` at this share and this angle off the facing
 #: direction (degrees, to a random side: below 60 diagonally forward, above
@@ -98,7 +109,7 @@ def _profile(kind: str, frames: int, fps: float, speed: float,
     ramp = _smoothstep((t - mid + 0.75) / 1.5)
     v = speed * rng.uniform(0.85, 1.15) * np.ones_like(t)
     yaw = np.radians(rng.uniform(-4, 4)) * np.ones_like(t)
-    if kind in ("idle", "look", "reach"):
+    if kind in _STILL_KINDS:
         v[:], yaw[:] = 0.0, 0.0
     elif kind == "turn":
         rate = np.radians(rng.uniform(35, 70)) * rng.choice([-1.0, 1.0])
@@ -136,7 +147,7 @@ class ClipFacts:
 
     Attributes:
         species (str): Body plan.
-        kind (str): Clip kind (:data:`CLIP_KINDS`).
+        kind (str): Clip kind (:data:`ALL_KINDS`).
         duration (float): Seconds.
         speed_start (float): Forward speed at the first frame, in leg
             lengths per second (0 for idles).
@@ -320,18 +331,76 @@ def _look(rig: ZooRig, time: np.ndarray, rng: np.random.Generator) -> Dict[int, 
 
 
 def _reach(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
-           rng: np.random.Generator) -> Dict[int, np.ndarray]:
+           rng: np.random.Generator) -> None:
     """One arm (drawn) swings up from its hanging pose about the body's
-    left-right axis, holds and comes back down, centred in the clip: the
-    upper arm's new local rotation."""
+    left-right axis, holds and comes back down, centred in the clip:
+    updates the upper arm's local rotation in :obj:`local`."""
     arm = rig.arms[int(rng.integers(len(rig.arms)))]
-    frames = len(clip.time) - 2 * clip.pad
-    mid = 0.5 * frames / clip.fps
     rise, hold = rng.uniform(*_REACH_RISE), rng.uniform(*_REACH_HOLD)
+    angle = -np.radians(rng.uniform(*_REACH_DEGREES)) * _centred(clip, rise, hold)
+    local[arm] = _rot(0, angle) @ local[arm]
+
+
+def _centred(clip: _Clip, rise: float, hold: float) -> np.ndarray:
+    """A 0 -> 1 -> 0 envelope over the clip's extended grid: rising for
+    :obj:`rise` seconds, held for :obj:`hold`, falling for :obj:`rise`,
+    centred in the clip."""
+    mid = 0.5 * (len(clip.time) - 2 * clip.pad) / clip.fps
     up = _smoothstep((clip.time - (mid - hold / 2 - rise)) / rise)
     down = _smoothstep((clip.time - (mid + hold / 2)) / rise)
-    angle = -np.radians(rng.uniform(*_REACH_DEGREES)) * (up - down)
-    return {arm: _rot(0, angle) @ local[arm]}
+    return up - down
+
+
+def _bow(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
+         rng: np.random.Generator) -> np.ndarray:
+    """The upper body bends forward at the hips and along the spine, holds
+    and straightens, centred in the clip (the legs stay planted by IK, the
+    arms keep hanging):
+    updates the spine's local rotations in :obj:`local`; returns the
+    pelvis's extra rotation :math:`(T, 3, 3)`."""
+    angle = np.radians(rng.uniform(*_BOW_DEGREES)) * _centred(
+        clip, rng.uniform(*_BOW_DOWN), rng.uniform(*_BOW_HOLD))
+    spine = _spine(rig)
+    for j in spine:
+        local[j] = _rot(0, angle * (1.0 - _BOW_PELVIS) / len(spine)) @ local[j]
+    for arm in rig.arms:  # the arms keep hanging down
+        local[arm] = _rot(0, -angle) @ local[arm]
+    return _rot(0, angle * _BOW_PELVIS)
+
+
+def _spine(rig: ZooRig) -> list:
+    """The joints from the root's child to the joint the arms hang from."""
+    parents = rig.skeleton.parents
+    j, chain = int(parents[parents[rig.arms[0]]]), []
+    while j > 0:
+        chain.append(j)
+        j = int(parents[j])
+    return chain[::-1]
+
+
+def _wave(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
+          rng: np.random.Generator) -> None:
+    """One arm (drawn) rises to the side, its forearm bent up and swinging
+    from side to side, then comes down, centred in the clip: updates the
+    upper arm's and forearm's local rotations in :obj:`local`."""
+    arm = rig.arms[int(rng.integers(len(rig.arms)))]
+    forearm = int(np.flatnonzero(rig.skeleton.parents == arm)[0])
+    rest = rig.skeleton.offsets[forearm]
+    side = 1.0 if rest[0] >= 0 else -1.0  # the arm points to +X (left) or -X
+    rise, hold = rng.uniform(*_WAVE_RISE), rng.uniform(*_WAVE_HOLD)
+    up = _centred(clip, rise, hold)
+    on = _centred(clip, 0.5 * rise, hold + rise)  # the swing fades in and out
+    hz, start = rng.uniform(*_WAVE_HZ), rng.uniform(0, 2 * np.pi)
+    swing = np.radians(rng.uniform(*_WAVE_SWING)) * np.sin(2 * np.pi * hz * clip.time + start)
+    raise_ = np.radians(rng.uniform(*_WAVE_RAISE)) * up
+    elbow = np.radians(rng.uniform(*_WAVE_ELBOW)) * up + swing * on
+    local[arm] = _rot(2, side * raise_) @ local[arm]
+    local[forearm] = _rot(2, side * elbow) @ local[forearm]
+
+
+#: Kinds that move the body in place: kind -> a function updating the local
+#: rotations (and returning the pelvis's extra rotation, or ``None``).
+_GESTURES = {"reach": _reach, "bow": _bow, "wave": _wave}
 
 
 def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
@@ -402,7 +471,7 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     _, _, stride, speed, _ = gait
     length = rig.leg_length
     clip = _profile(kind, frames, fps, speed * length, rng, length)
-    idle = kind in ("idle", "look", "jump", "reach")
+    idle = kind in _STILL_KINDS + ("jump",)
     _trace(clip, rng.uniform(-np.pi, np.pi), idle, length, rng)
     if idle:
         freq = np.full_like(clip.speed, _IDLE_HZ)
@@ -423,8 +492,10 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase, scale)
     local = _local_rotations(rig, phase, scale,
                              _look(rig, clip.time, rng) if kind == "look" else None)
-    if kind == "reach":
-        local.update(_reach(rig, clip, local, rng))
+    if kind in _GESTURES:
+        pelvis = _GESTURES[kind](rig, clip, local, rng)
+        if pelvis is not None:
+            root_rot = root_rot @ pelvis
     height = _body_height(rig, clip, root_rot, local,
                           feet if clip.jump is None else _grounded(feet))
     root = clip.position * np.array([1.0, 0.0, 1.0])
@@ -568,7 +639,7 @@ def generate_clip(rig: ZooRig, kind: str = "walk", frames: int = 120,
 
     Args:
         rig (ZooRig): A skeleton from :func:`zoo_rigs`.
-        kind (str): One of ``CLIP_KINDS[rig.species]``.
+        kind (str): One of ``ALL_KINDS[rig.species]``.
         frames (int): Number of frames.
         fps (float): Frames per second.
         seed (int): Random seed (speed, turn rate, heading, phase).
@@ -588,7 +659,7 @@ def generate_clip_with_facts(rig: ZooRig, kind: str = "walk", frames: int = 120,
 
     Args:
         rig (ZooRig): A skeleton from :func:`zoo_rigs`.
-        kind (str): One of ``CLIP_KINDS[rig.species]``.
+        kind (str): One of ``ALL_KINDS[rig.species]``.
         frames (int): Number of frames.
         fps (float): Frames per second.
         seed (int): Random seed.
@@ -596,9 +667,9 @@ def generate_clip_with_facts(rig: ZooRig, kind: str = "walk", frames: int = 120,
     Returns:
         tuple: The motion (see :func:`generate_clip`) and its facts.
     """
-    if kind not in CLIP_KINDS[rig.species]:
+    if kind not in ALL_KINDS[rig.species]:
         raise ValueError(f"{rig.species} has no clip kind {kind!r}: choose "
-                         f"from {list(CLIP_KINDS[rig.species])}")
+                         f"from {list(ALL_KINDS[rig.species])}")
     rng = np.random.default_rng(seed)
     make = _slither if rig.species == "snake" else _legged
     rot, pos, pad, facts = make(rig, kind, frames, fps, rng)

@@ -35,6 +35,12 @@ CLIP_KINDS = {
     "spider": _LEGGED + _TRAVEL,
     "longtail": ("walk", "trot") + _LEGGED[1:] + _TRAVEL,
 }
+#: Gestures: kinds a species can do that the endless zoo draws only when a
+#: source asks for them (``kinds``), so that the draws of :data:`CLIP_KINDS`
+#: (and every model trained on them) stay as they were.
+GESTURE_KINDS: Dict[str, Tuple[str, ...]] = {"biped": ("bow", "wave")}
+#: Every kind a species can do: :data:`CLIP_KINDS`, then its gestures.
+ALL_KINDS = {s: kinds + GESTURE_KINDS.get(s, ()) for s, kinds in CLIP_KINDS.items()}
 
 VARIANTS: Dict[str, Tuple[Tuple[str, dict], ...]] = {
     "biped": (("mixamo", {}), ("blender", {}), ("smpl", {}), ("cmu", {})),
