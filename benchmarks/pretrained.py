@@ -82,7 +82,8 @@ from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E4
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.quality import foot_slide, most_active, retarget_quality  # noqa: E402
+from satagraph.pipelines.quality import (foot_slide, most_active, retarget_quality,  # noqa: E402
+                                         trunk_bend)
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.pipelines.builtin_choice import AUTO, choose_builtin  # noqa: E402
 
@@ -255,7 +256,8 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
                 local=joint_error(src, raw, heading=True),
                 grounded_jp=joint_error(src, grounded), height=src.height(),
                 steps=same_rig["steps"], stride=same_rig["stride"],
-                slide=foot_slide(grounded), source_slide=foot_slide(src))
+                slide=foot_slide(grounded), source_slide=foot_slide(src),
+                bend=trunk_bend(raw), source_bend=trunk_bend(src))
 
 
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
@@ -315,6 +317,14 @@ def _slide(row: dict) -> str:
     return f"{row['slide']:.2f} ({row['source_slide']:.2f})"
 
 
+def _bend(row: dict) -> str:
+    """A reconstruction's trunk bend beside its source's (rows written
+    before the column existed: blank)."""
+    if row.get("bend") is None:
+        return ""
+    return f"{row['bend']:.0f} ({row['source_bend']:.0f})"
+
+
 def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto") -> str:
     lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose; {seconds:.0f} s on "
              "this machine.", "",
@@ -333,15 +343,15 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
     lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met "
               "| JP, grounded (--ground) | root-relative JP | pose alone (also heading-free) "
               "| steps (same rig; diagnostic) | stride ratio (diagnostic) "
-              "| foot slide, H/s (source) |",
-              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|"]
+              "| foot slide, H/s (source) | trunk bend, deg (source; diagnostic) |",
+              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows["reconstruction"]:
         limit = TARGETS["jp_zoo" if r["group"].startswith("held") else "jp_real"]
         steps = "-" if r.get("steps") is None else f"{r['steps']:+.2f}"
         lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
                      f"| {'yes' if r['jp'] <= limit else 'no'} | {100 * r['grounded_jp']:.1f} "
                      f"| {100 * r['pose']:.1f} | {_local(r)} | {steps} "
-                     f"| {_ratio(r.get('stride'))} | {_slide(r)} |")
+                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_bend(r)} |")
     return "\n".join(lines) + "\n"
 
 

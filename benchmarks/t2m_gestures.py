@@ -8,11 +8,12 @@ does with measures that need no model:
 
 - **still**: share of motions whose root stays put (Froude speed below
   ``benchmarks/t2m.py``'s ``STILL_FROUDE``);
-- **bend**: the largest angle (degrees) by which the line from the root to
-  the first frame's highest joint (the head, on an upright body) leans away
-  from where it started: a bow bends it, a wave does not;
-- **raise**: the largest height any joint gains over its first frame, in
-  body heights: a raised hand gains half a height, a walk's feet a tenth;
+- **bend** (:func:`~satagraph.pipelines.quality.trunk_bend`): the largest
+  angle (degrees) by which the line from the root to the head leans away
+  from where it pointed at the first frame: a bow bends it, a wave does not;
+- **raise** (:func:`~satagraph.pipelines.quality.joint_raise`): the largest
+  height any joint gains over its first frame, in body heights: a raised
+  hand gains half a height, a walk's feet a tenth;
 
 and with ``benchmarks/t2m.py``'s action recogniser (trained on the same
 training items as there; it knows Bandai's ``bow``, ``bye``, ``byebye`` and
@@ -55,6 +56,7 @@ from satagraph.datasets.zoo.motions import generate_clip  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import generate_on, load_generator  # noqa: E402
+from satagraph.pipelines.quality import joint_raise, trunk_bend  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: Prompts and the action each asks for.
@@ -65,19 +67,6 @@ PROMPTS: Tuple[Tuple[str, str], ...] = (
 ACCEPTED = {"bow": ("bow",), "bye": ("bye", "byebye"), "walk": ("walk",)}
 #: Zoo rig seeds per split (those of ``t2m_wording.py``).
 ZOO_SEEDS = {"val": (911, 912), "test": (913, 914)}
-
-
-def gesture_measures(motion: Motion) -> Tuple[float, float]:
-    """``(bend, raise)`` of a canonical motion (metres, +Y up): see the
-    module's docstring."""
-    pos = np.asarray(motion.global_positions(), dtype=np.float64)
-    height = max(float(np.ptp(pos[0, :, 1])), 1e-6)
-    top = int(np.argmax(pos[0, :, 1]))
-    line = pos[:, top] - pos[:, 0]
-    line /= np.maximum(np.linalg.norm(line, axis=-1, keepdims=True), 1e-9)
-    bend = np.degrees(np.arccos(np.clip(line @ line[0], -1.0, 1.0))).max()
-    rise = (pos[:, :, 1] - pos[:1, :, 1]).max() / height
-    return float(bend), float(rise)
 
 
 def rigs(split: str) -> Tuple[List[Tuple[str, Motion]], List[Tuple[str, str, Motion]]]:
@@ -104,7 +93,7 @@ def reading(motion: Motion, action: str, recogniser) -> Dict[str, object]:
     """What one motion does: still, bend, raise, recognised as asked."""
     canonical = canonicalize(motion, fps=FPS)
     it = measure(motion_to_features(canonical), [], action, "", "")
-    bend, rise = gesture_measures(canonical)
+    bend, rise = trunk_bend(canonical), joint_raise(canonical)
     got = recogniser.predict([it.desc], [action])
     return {"still": bool(it.froude < STILL_FROUDE), "bend": bend, "raise": rise,
             "recognised": bool(got and got[0][1] in ACCEPTED[action]),

@@ -218,6 +218,27 @@ def upright_fraction(canonical: Motion) -> Optional[float]:
     return float((pos[:, head, 1] > pos[:, 0, 1]).mean())
 
 
+def trunk_bend(canonical: Motion) -> float:
+    """The largest angle (degrees) by which the line from the root to the
+    head (:func:`head_index`; the first frame's highest joint for a
+    skeleton without one) turns away from where it pointed at frame 0: a
+    bow's lean, a few degrees in a walk."""
+    pos = canonical.global_positions()
+    head = head_index(canonical)
+    top = int(np.argmax(pos[0, :, 1])) if head is None else head
+    line = pos[:, top] - pos[:, 0]
+    line = line / np.maximum(np.linalg.norm(line, axis=-1, keepdims=True), 1e-9)
+    return float(np.degrees(np.arccos(np.clip(line @ line[0], -1.0, 1.0))).max())
+
+
+def joint_raise(canonical: Motion) -> float:
+    """The largest height any joint gains over its height at frame 0, in
+    character heights: a hand raised to wave gains about half a height, a
+    walk's feet a tenth."""
+    y = canonical.global_positions()[:, :, 1]
+    return float((y - y[:1]).max() / max(canonical.height(), 1e-9))
+
+
 #: Travel (leg lengths) below which a motion has no direction to compare
 #: with its facing (:func:`heading_gap`).
 HEADING_TRAVEL = 0.5
@@ -363,6 +384,7 @@ def retarget_quality(source: Motion, output: Motion,
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
-           "ground_height", "foot_slide", "head_index", "upright_fraction", "most_active",
+           "ground_height", "foot_slide", "head_index", "upright_fraction", "trunk_bend",
+           "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
            "retarget_quality"]

@@ -10,6 +10,7 @@ from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, forward_tracks,
+                                         joint_raise, trunk_bend,
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, posture, retarget_quality, root_travel,
@@ -245,3 +246,32 @@ def test_turn_rate_reads_a_straight_walk_and_a_turned_one(species):
         expected = sign * 60.0 / ((walk.num_frames - 1) / walk.fps)
         assert turn_rate(turned) - base == pytest.approx(expected, abs=1e-6)
     assert turn_rate(walk.slice(0, 10)) is None  # shorter than both ends
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_trunk_bend_and_joint_raise_tell_a_bow_a_wave_and_a_walk(seed):
+    zoo = EndlessZoo(species=["biped"], kinds=["walk", "bow", "wave"], seed=seed)
+    read = {}
+    for i in range(12):
+        sample = zoo.sample(0, i, 120)
+        if sample.kind not in read:
+            motion = canonicalize(sample.motion, fps=30.0)
+            read[sample.kind] = (trunk_bend(motion), joint_raise(motion))
+    assert set(read) == {"walk", "bow", "wave"}
+    assert 25.0 < read["bow"][0] < 75.0 and read["wave"][0] < 12.0 and read["walk"][0] < 12.0
+    assert read["wave"][1] > 0.4 and read["walk"][1] < 0.2 and read["bow"][1] < 0.2
+
+
+def test_trunk_bend_is_the_lean_from_the_first_frame():
+    motion = canonicalize(EndlessZoo(species=["biped"], kinds=["walk"]).sample(0, 0, 60).motion,
+                          fps=30.0)
+    rotations = motion.rotations.copy()
+    tilt = np.radians(np.linspace(0.0, 40.0, motion.num_frames))
+    c, s = np.cos(tilt), np.sin(tilt)
+    pitch = np.zeros((len(tilt), 3, 3))
+    pitch[:, 0, 0], pitch[:, 1, 1], pitch[:, 1, 2] = 1.0, c, -s
+    pitch[:, 2, 1], pitch[:, 2, 2] = s, c
+    rotations[:, 0] = pitch @ rotations[:, 0]  # the whole body tips forward to 40 degrees
+    tipped = motion.with_(rotations=rotations)
+    assert trunk_bend(tipped) == pytest.approx(trunk_bend(motion) + 40.0, abs=8.0)
+    assert trunk_bend(tipped) > 35.0
