@@ -19,9 +19,9 @@ import time
 from typing import List
 
 from satagraph.cli.arguments import positive_int
-from satagraph.datasets.zoo import (CLIP_KINDS, NOISE_STYLES, REST_POSES, SPECIES, UNITS,
-                                    UP_AXES, Dialect, dialect_variants, unit_scale,
-                                    write_dialect_zoo, write_zoo)
+from satagraph.datasets.zoo import (CLIP_KINDS, GESTURE_KINDS, NOISE_STYLES, REST_POSES,
+                                    SPECIES, UNITS, UP_AXES, Dialect, dialect_variants,
+                                    unit_scale, write_dialect_zoo, write_zoo)
 
 
 def _axes(text: str) -> List[str]:
@@ -63,6 +63,7 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
         :func:`run_zoo`).
     """
     kinds = "; ".join(f"{s}: {', '.join(k)}" for s, k in CLIP_KINDS.items())
+    gestures = "; ".join(f"{s}: {', '.join(k)}" for s, k in GESTURE_KINDS.items())
     p = subparsers.add_parser(
         "zoo", help="write procedural skeletons and motions (BVH + manifest)",
         description="Generate skeletons of several body plans (bipeds, "
@@ -73,7 +74,8 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
         "turns, speed changes, idles, starts and stops, looking around, jumps, "
         "reaching), written as BVH files with a "
         "manifest.tsv. The same seed gives the same files. Clip kinds cycle "
-        f"per skeleton: {kinds}. Exporter dialects: every clip is written once "
+        f"per skeleton: {kinds}; --kinds chooses among them and the gestures "
+        f"({gestures}). Exporter dialects: every clip is written once "
         "per combination of --up-axes, --units, --rest-poses and --name-noise "
         "(default: once, +Y up in metres), each exactly the same motion; the "
         "manifest records up_axis, scale (metres per file unit), height_m, "
@@ -94,6 +96,10 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
                    help="frames per clip (default: 120)")
     p.add_argument("--fps", type=float, default=30.0,
                    help="frames per second (default: 30)")
+    p.add_argument("--kinds", nargs="+", default=None, metavar="KIND",
+                   help="clip kinds to cycle through, of those each species can do "
+                   "(default: every kind but the gestures; e.g. --species biped "
+                   "--kinds bow wave)")
     d = p.add_argument_group("exporter dialects")
     d.add_argument("--up-axes", nargs="+", type=_axes, default=[["+Y"]],
                    metavar="AXIS", help=f"up axes to write ({', '.join(UP_AXES)}; a "
@@ -130,7 +136,7 @@ def run_zoo(args: argparse.Namespace) -> int:
     else:
         rows = write_zoo(args.out_dir, species=args.species, clips=args.clips,
                          seed=args.seed, fps=args.fps, frames=frames,
-                         dialects=_dialects(args))
+                         dialects=_dialects(args), kinds=args.kinds)
     for name in dict.fromkeys(r["species"] for r in rows):
         mine = [r for r in rows if r["species"] == name]
         skeletons = dict.fromkeys(f"{r['skeleton']} ({r['joints']} joints)"

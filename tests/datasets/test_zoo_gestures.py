@@ -122,3 +122,27 @@ def test_a_source_entry_with_kinds_gives_gesture_windows() -> None:
     data = zoo_caption_datasets(spec, "train", window=40, min_frames=32, seed=0)[0]
     clip = data[(0, 0)]
     assert clip.meta["kind"] == "wave" and "waves" in clip.meta["text"]
+
+
+def test_write_zoo_writes_the_kinds_asked_for(tmp_path) -> None:
+    from satagraph.datasets.captions import captions_for
+    from satagraph.datasets.zoo import write_zoo
+
+    rows = write_zoo(tmp_path, species=["biped"], clips=2, frames=40, kinds=["wave", "bow"])
+    assert [r["kind"] for r in rows] == ["bow", "wave"] * 4  # ALL_KINDS' order
+    assert all((tmp_path / r["path"]).is_file() for r in rows)
+    assert "a person bows" in {c.text for c in captions_for(rows[0])}
+    with pytest.raises(ValueError, match="write_zoo: quadruped can do none"):
+        write_zoo(tmp_path / "none", species=["biped", "quadruped"], kinds=["bow"])
+    assert not (tmp_path / "none").exists()
+
+
+def test_the_zoo_cli_takes_kinds(tmp_path, capsys) -> None:
+    from satagraph.cli import main
+
+    assert main(["zoo", str(tmp_path / "z"), "--species", "biped", "--clips", "1",
+                 "--frames", "30", "--kinds", "wave"]) == 0
+    assert sorted(p.name for p in (tmp_path / "z" / "biped").iterdir())[0].endswith("_wave.bvh")
+    assert main(["zoo", str(tmp_path / "y"), "--kinds", "curtsy"]) == 2
+    assert "unknown clip kinds ['curtsy']" in capsys.readouterr().err
+    assert not (tmp_path / "y").exists()

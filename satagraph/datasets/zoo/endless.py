@@ -24,14 +24,14 @@ Example::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from satagraph.datasets.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
-from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, ALL_KINDS,
-                                            CLIP_KINDS, SPECIES, VARIANTS)
+from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, SPECIES,
+                                            VARIANTS, kinds_of)
 from satagraph.motion import Motion
 
 #: Seed streams: training samples, and the held-out seeds of validation
@@ -71,24 +71,6 @@ def _variant_names(species: str) -> List[str]:
 def _plans(species: Sequence[str]) -> List[Tuple[str, int]]:
     """``(species, variant index)`` of every variant of :obj:`species`."""
     return [(s, v) for s in species for v in range(len(VARIANTS[s]))]
-
-
-def _kinds_of(species: Sequence[str], kinds: Optional[Sequence[str]]
-              ) -> Dict[str, Tuple[str, ...]]:
-    """Species -> the clip kinds drawn for it (see :class:`EndlessZoo`)."""
-    if kinds is None:
-        return {s: CLIP_KINDS[s] for s in species}
-    known = set().union(*ALL_KINDS.values())
-    unknown = [k for k in kinds if k not in known]
-    if unknown:
-        raise ValueError(f"endless zoo: unknown clip kinds {unknown}; choose from "
-                         f"{sorted(known)}")
-    out = {s: tuple(k for k in ALL_KINDS[s] if k in kinds) for s in species}
-    empty = [s for s, chosen in out.items() if not chosen]
-    if empty:
-        raise ValueError(f"endless zoo: {', '.join(empty)} can do none of the kinds "
-                         f"{list(kinds)}")
-    return out
 
 
 def _matches(plan: Tuple[str, int], holdout: Sequence[str]) -> bool:
@@ -148,7 +130,7 @@ class EndlessZoo:
             raise ValueError("endless zoo: every body plan is held out")
         self.rests, self.noise = list(rests), float(noise)
         self.fps, self.seed = float(fps), int(seed)
-        self.kinds = _kinds_of(self.species + held_species, kinds)
+        self.kinds = kinds_of(self.species + held_species, kinds, "endless zoo")
 
     def plans(self, holdout: bool = False) -> List[str]:
         """``species/variant`` names drawn for training (or held out)."""

@@ -60,6 +60,29 @@ _BUILDERS = {"biped": _biped, "quadruped": _quadruped, "bird": _bird,
 _BUILDERS_BY_STYLE = {("fowl", "fingerwing"): _fingerwing}
 
 
+def kinds_of(species: Sequence[str], kinds: Optional[Sequence[str]] = None,
+             who: str = "zoo") -> Dict[str, Tuple[str, ...]]:
+    """Species -> the clip kinds to draw for it: of :obj:`kinds`, those the
+    species can do (:data:`ALL_KINDS`, in that order); each species'
+    :data:`CLIP_KINDS` when :obj:`kinds` is ``None``.
+
+    Raises:
+        ValueError: An unknown kind, or a species that can do none of
+            :obj:`kinds` (the message starts with :obj:`who`).
+    """
+    if kinds is None:
+        return {s: CLIP_KINDS[s] for s in species}
+    known = set().union(*ALL_KINDS.values())
+    unknown = [k for k in kinds if k not in known]
+    if unknown:
+        raise ValueError(f"{who}: unknown clip kinds {unknown}; choose from {sorted(known)}")
+    out = {s: tuple(k for k in ALL_KINDS[s] if k in kinds) for s in species}
+    empty = [s for s, chosen in out.items() if not chosen]
+    if empty:
+        raise ValueError(f"{who}: {', '.join(empty)} can do none of the kinds {list(kinds)}")
+    return out
+
+
 def zoo_rigs(species: Optional[Sequence[str]] = None, seed: int = 0) -> List[ZooRig]:
     r"""The zoo's skeletons: every variant of every requested species.
 

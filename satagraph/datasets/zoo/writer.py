@@ -13,7 +13,7 @@ import numpy as np
 from satagraph.datasets.zoo.dialects import Dialect, DialectVariant, apply_dialect
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
 from satagraph.datasets.zoo.rigs import ZooRig
-from satagraph.datasets.zoo.species import CLIP_KINDS, zoo_rigs
+from satagraph.datasets.zoo.species import kinds_of, zoo_rigs
 from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
 
@@ -46,14 +46,15 @@ def _split(rig_index: int, rig_count: int, clip: int, clips: int) -> str:
 
 def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
               clips: int = 4, seed: int = 0, fps: float = 30.0,
-              frames: int = 120, dialects: Optional[Sequence[Dialect]] = None
-              ) -> List[Dict[str, str]]:
+              frames: int = 120, dialects: Optional[Sequence[Dialect]] = None,
+              kinds: Optional[Sequence[str]] = None) -> List[Dict[str, str]]:
     r"""Write the zoo as BVH files under ``out_dir/<species>/`` and a
     ``manifest.tsv`` (columns :data:`MANIFEST_COLUMNS`, the layout of the
     shared data manifest plus the dialect truth :data:`DIALECT_COLUMNS`)
     in :obj:`out_dir`.
 
-    Clip kinds cycle through ``CLIP_KINDS[species]``; every file has its own
+    Clip kinds cycle through ``CLIP_KINDS[species]`` (or the species' kinds
+    among :obj:`kinds`); every file has its own
     seed derived from :obj:`seed`, so the zoo is deterministic. Each clip
     is written once per dialect, a non-canonical one under
     ``<species>/<dialect tag>/`` (e.g. ``crab/negZup-cm-apose/``).
@@ -67,6 +68,10 @@ def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
         frames (int): Frames per clip.
         dialects (list[Dialect], optional): Dialects every clip is written
             in (default: the zoo's own, +Y up in metres).
+        kinds (list[str], optional): Clip kinds to write, of those each
+            species can do (:data:`~satagraph.datasets.zoo.ALL_KINDS`: with
+            the bipeds' gestures ``bow`` and ``wave``); every species must
+            do one of them.
 
     Returns:
         list[dict]: The manifest rows.
@@ -76,6 +81,7 @@ def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
     dialects = list(dialects or [Dialect()])
     out = Path(out_dir)
     rigs = zoo_rigs(species, seed)
+    drawn = kinds_of(dict.fromkeys(r.species for r in rigs), kinds, "write_zoo")
     counts = {r.species: sum(q.species == r.species for q in rigs) for r in rigs}
     seen: Dict[str, int] = {}
     rows = []
@@ -84,15 +90,15 @@ def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
         seen[rig.species] += 1
         for c in range(clips):
             split = _split(index, counts[rig.species], c, clips)
-            rows += _write_clip(out, rig, c, seed, fps, frames, split, r, dialects)
+            rows += _write_clip(out, rig, drawn[rig.species], c, seed, fps, frames, split,
+                                r, dialects)
     _write_manifest(out / "manifest.tsv", rows)
     return rows
 
 
-def _write_clip(out: Path, rig: ZooRig, c: int, seed: int, fps: float,
-                frames: int, split: str, r: int,
+def _write_clip(out: Path, rig: ZooRig, kinds: Sequence[str], c: int, seed: int,
+                fps: float, frames: int, split: str, r: int,
                 dialects: Sequence[Dialect]) -> List[Dict[str, str]]:
-    kinds = CLIP_KINDS[rig.species]
     kind, repeat = kinds[c % len(kinds)], c // len(kinds)
     clip_seed = int(np.random.default_rng([seed, r, c]).integers(2 ** 31))
     motion, facts = generate_clip_with_facts(rig, kind, frames, fps, clip_seed)
