@@ -21,8 +21,8 @@ of reach. Clip kinds (:data:`CLIP_KINDS`): ``walk``, ``turn``, ``speed``
 (from and to a standstill), ``look`` (head, neck, tail and arms turning
 slowly), ``jump`` (crouch, flight, landing) and ``reach`` (bipeds: one arm
 raised and lowered); gestures (:data:`GESTURE_KINDS`, drawn by the endless
-zoo only when asked for): ``bow`` and ``wave`` (bipeds). Snakes slither: every joint follows the path of the
-head.
+zoo only when asked for): ``bow`` and ``wave`` (bipeds). Snakes slither:
+every joint follows the path of the head.
 
 Exporter dialects (:mod:`satagraph.datasets.zoo.dialects`) re-express a clip
 exactly with another up axis (:data:`UP_AXES`), unit, rest pose and noisy
@@ -48,7 +48,8 @@ from satagraph.datasets.zoo.species import (ALL_KINDS, CLIP_KINDS, GESTURE_KINDS
 from satagraph.datasets.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_COLUMNS,
                                            MOTION_COLUMNS, write_dialect_zoo, write_zoo)
 
-__all__ = ["ALL_KINDS", "CLIP_KINDS", "GESTURE_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS", "LICENCE",
+__all__ = ["ALL_KINDS", "CLIP_KINDS", "GESTURE_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS",
+           "LICENCE",
            "MANIFEST_COLUMNS", "MOTION_COLUMNS", "generate_clip_with_facts",
            "NOISE_STYLES", "REST_POSES", "SPECIES", "STYLES", "UNITS", "UP_AXES",
            "VARIANTS", "Dialect", "DialectVariant", "Leg", "Sway", "ZooRig",

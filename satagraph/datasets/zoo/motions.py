@@ -3,7 +3,7 @@ rigs, slithering for snakes, and :func:`generate_clip`."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -65,8 +65,8 @@ _BOW_DEGREES, _BOW_DOWN, _BOW_HOLD, _BOW_PELVIS = (30.0, 70.0), (0.7, 1.2), (0.3
 #: ``wave`` clips: how far the upper arm rises from hanging (degrees, to the
 #: side), how far the forearm bends up from it, the forearm's side-to-side
 #: swing (degrees, Hz), how long the arm rises (s) and waves (s).
-_WAVE_RAISE, _WAVE_ELBOW, _WAVE_SWING, _WAVE_HZ = (100.0, 150.0), (30.0, 70.0), (20.0, 35.0), (1.5, 2.8)
-_WAVE_RISE, _WAVE_HOLD = (0.4, 0.7), (1.2, 2.2)
+_WAVE_RAISE, _WAVE_ELBOW = (100.0, 150.0), (30.0, 70.0)
+_WAVE_SWING, _WAVE_HZ, _WAVE_RISE, _WAVE_HOLD = (20.0, 35.0), (1.5, 2.8), (0.4, 0.7), (1.2, 2.2)
 #: Kinds whose body stands in place.
 _STILL_KINDS = ("idle", "look", "reach", "bow", "wave")
 #: Walks that do not go where the body faces: ``back`` at this share of the
@@ -355,9 +355,8 @@ def _bow(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
          rng: np.random.Generator) -> np.ndarray:
     """The upper body bends forward at the hips and along the spine, holds
     and straightens, centred in the clip (the legs stay planted by IK, the
-    arms keep hanging):
-    updates the spine's local rotations in :obj:`local`; returns the
-    pelvis's extra rotation :math:`(T, 3, 3)`."""
+    arms keep hanging): updates the spine's and arms' local rotations in
+    :obj:`local`; returns the pelvis's extra rotation :math:`(T, 3, 3)`."""
     angle = np.radians(rng.uniform(*_BOW_DEGREES)) * _centred(
         clip, rng.uniform(*_BOW_DOWN), rng.uniform(*_BOW_HOLD))
     spine = _spine(rig)
@@ -368,7 +367,7 @@ def _bow(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
     return _rot(0, angle * _BOW_PELVIS)
 
 
-def _spine(rig: ZooRig) -> list:
+def _spine(rig: ZooRig) -> List[int]:
     """The joints from the root's child to the joint the arms hang from."""
     parents = rig.skeleton.parents
     j, chain = int(parents[parents[rig.arms[0]]]), []
