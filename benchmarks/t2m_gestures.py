@@ -80,8 +80,10 @@ def rigs(split: str) -> Tuple[List[Tuple[str, Motion]], List[Tuple[str, str, Mot
         return targets, []
     real = []
     for f in read_manifest(MANIFEST):
+        if f.dataset != "bandai" or f.split != split:
+            continue
         action = bandai_parts(f.path)[0]
-        if f.dataset == "bandai" and f.split == split and action in ACCEPTED:
+        if action in ACCEPTED:
             motion = read_bvh(MANIFEST.parent / f.path)
             real.append((Path(f.path).stem, action, motion))
             if action != "walk":  # one rig serves: the gestures' files are the targets
