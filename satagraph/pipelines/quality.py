@@ -235,8 +235,9 @@ def joint_raise(canonical: Motion) -> float:
     """The largest height any joint gains over its height at frame 0, in
     character heights: a hand raised to wave gains about half a height, a
     walk's feet a tenth."""
-    y = canonical.global_positions()[:, :, 1]
-    return float((y - y[:1]).max() / max(canonical.height(), 1e-9))
+    pos = canonical.global_positions()
+    height = character_height(canonical.skeleton, pos)  # Motion.height() without a second FK
+    return float((pos[..., 1] - pos[:1, :, 1]).max() / max(height, 1e-9))
 
 
 #: Travel (leg lengths) below which a motion has no direction to compare
