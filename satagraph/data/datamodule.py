@@ -15,7 +15,7 @@ from satagraph.data.dataset import (ON_ERROR, MotionDataset, WindowAugment, data
 from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_datasets,
                                     zoo_entry)
 from satagraph.data.sampler import ResumableSampler
-from satagraph.data.normalizer import FeatureNormalizer
+from satagraph.data.normalizer import ROOT_UNITS, FeatureNormalizer
 from satagraph.data.pairing import PartnerCollate
 from satagraph.datasets.sources import SPLITS, MotionFile, resolve_sources, select
 
@@ -134,6 +134,10 @@ class MotionDataModule(WindowDataModule):
             lists them in :attr:`skipped` and uses the others.
         body_relative (bool): Normalise lengths in character heights
             (default), see :class:`~satagraph.data.FeatureNormalizer`.
+        root_unit (str): The unit of the root's ground speed and height
+            when :obj:`body_relative`: ``"height"`` (default) or ``"leg"``
+            (leg lengths, the unit in which travel compares across body
+            plans), see :class:`~satagraph.data.FeatureNormalizer`.
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -143,11 +147,14 @@ class MotionDataModule(WindowDataModule):
                  cache_dir: Optional[str] = None, num_workers: int = 0,
                  max_files: Optional[int] = None, seed: int = 0,
                  augment: Union[None, bool, Mapping[str, Any]] = None,
-                 on_error: str = "raise", body_relative: bool = True) -> None:
+                 on_error: str = "raise", body_relative: bool = True,
+                 root_unit: str = "height") -> None:
         super().__init__()
         if on_error not in ON_ERROR:
             raise ValueError(f"data.on_error must be one of {ON_ERROR}, got {on_error!r}")
         self.on_error = on_error
+        if root_unit not in ROOT_UNITS:
+            raise ValueError(f"data.root_unit must be one of {ROOT_UNITS}, got {root_unit!r}")
         #: ``(split, error line)`` of every file left out (``on_error="skip"``).
         self.skipped: List[str] = []
         self.sources, self.window, self.stride = sources, window, stride
@@ -158,7 +165,7 @@ class MotionDataModule(WindowDataModule):
         self.max_files, self.seed = max_files, seed
         self.augment = WindowAugment.from_config(augment, seed, self.preprocessing)
         self.datasets: Dict[str, MotionDataset] = {}
-        self.normalizer = FeatureNormalizer(body_relative)
+        self.normalizer = FeatureNormalizer(body_relative, root_unit)
         #: Pair every training clip with a clip of another skeleton when
         #: collating (``batch.pairing``, see
         #: :class:`~satagraph.data.pairing.PartnerCollate`); a module with an

@@ -4,7 +4,10 @@ travel inside checkpoints).
 Lengths can be measured in character heights before the statistics are
 taken (:attr:`FeatureNormalizer.body_relative`): a 5 cm spider and a 3 m
 giraffe that walk alike then have alike features, and a latent decoded onto
-another body moves it in its own body lengths."""
+another body moves it in its own body lengths. The root's lengths (ground
+speed and height) can be measured in leg lengths instead
+(:attr:`FeatureNormalizer.root_unit`), the unit in which travel compares
+across body plans."""
 from __future__ import annotations
 
 from typing import Dict, Iterable, List, Optional, Sequence
@@ -28,6 +31,9 @@ LENGTH_CHANNELS: Dict[str, List[int]] = {
     "root": [1, 2, 3],
     "static": list(range(STATIC_CHANNELS)),
 }
+#: Units of the root's length channels: ``"height"`` (the character height,
+#: as every other length) or ``"leg"`` (:func:`satagraph.motion.leg_length`).
+ROOT_UNITS = ("height", "leg")
 #: Largest accepted mean or standard deviation of any feature channel
 #: (features are in metres, seconds and radians after canonicalisation).
 MAX_STAT = 1e5
@@ -52,9 +58,16 @@ class FeatureNormalizer(nn.Module):
             before normalising (and multiply after denormalising), so that
             models see every body in its own heights. Stored as a buffer:
             checkpoints written before it existed load as ``False``.
+        root_unit (str, optional): With :obj:`body_relative`, the unit of
+            the root's length channels (its ground speed and height): the
+            character height (``"height"``, default) or the leg length
+            (``"leg"``), so that a body decoded onto another travels as many
+            of its own leg lengths as the source did. Stored as the buffer
+            ``root_in_legs``: checkpoints written before it existed load as
+            ``"height"``.
     """
 
-    def __init__(self, body_relative: bool = True) -> None:
+    def __init__(self, body_relative: bool = True, root_unit: str = "height") -> None:
         super().__init__()
         for name, width in (("dynamic", DYNAMIC_CHANNELS), ("root", ROOT_CHANNELS),
                             ("static", STATIC_CHANNELS)):
@@ -62,6 +75,10 @@ class FeatureNormalizer(nn.Module):
             self.register_buffer(f"{name}_std", torch.ones(width))
         self.register_buffer("fitted", torch.zeros((), dtype=torch.bool))
         self.register_buffer("body_relative", torch.tensor(bool(body_relative)))
+        if root_unit not in ROOT_UNITS:
+            raise ValueError(f"FeatureNormalizer: root_unit must be one of {ROOT_UNITS}, "
+                             f"got {root_unit!r}")
+        self.register_buffer("root_in_legs", torch.tensor(root_unit == "leg"))
         for name, columns in LENGTH_CHANNELS.items():
             width = getattr(self, f"{name}_mean").numel()
             mask = torch.zeros(width, dtype=torch.bool)
@@ -72,6 +89,7 @@ class FeatureNormalizer(nn.Module):
         # statistics saved before body_relative existed are in metres
         if prefix + "fitted" in state_dict:
             state_dict.setdefault(prefix + "body_relative", torch.tensor(False))
+            state_dict.setdefault(prefix + "root_in_legs", torch.tensor(False))
         super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
     @torch.no_grad()
@@ -93,7 +111,8 @@ class FeatureNormalizer(nn.Module):
             raise ValueError("FeatureNormalizer.fit: no training features")
         parts = {"dynamic": [self._relative(f.dynamic.reshape(-1, DYNAMIC_CHANNELS),
                                             "dynamic", f.height) for f in feats],
-                 "root": [self._relative(f.r, "root", f.height) for f in feats],
+                 "root": [self._relative(f.r, "root", f.height, f.leg_length)
+                          for f in feats],
                  "static": [self._relative(f.static, "static", f.height)
                             for f in feats]}
         stats = {}
@@ -122,44 +141,66 @@ class FeatureNormalizer(nn.Module):
                        getattr(self, f"{name}_std").tolist())
                 for name in ("dynamic", "root", "static")}
 
-    def _relative(self, value: np.ndarray, name: str, height: float) -> np.ndarray:
-        """Length channels of numpy features in character heights."""
+    @property
+    def root_unit(self) -> str:
+        """The unit of the root's length channels (:data:`ROOT_UNITS`)."""
+        return "leg" if bool(self.root_in_legs) else "height"
+
+    def _unit(self, name: str, height, leg):
+        """The unit that group :obj:`name`'s lengths are measured in: the
+        leg length for the root when :attr:`root_unit` is ``"leg"``, else
+        the height."""
+        if name != "root" or not bool(self.root_in_legs):
+            return height
+        if leg is None and height is not None:
+            raise ValueError("FeatureNormalizer: root lengths are in leg lengths "
+                             "(root_unit='leg'); pass leg= with height=")
+        return leg
+
+    def _relative(self, value: np.ndarray, name: str, height: float,
+                  leg: Optional[float] = None) -> np.ndarray:
+        """Length channels of numpy features in character heights (the
+        root's in leg lengths when :attr:`root_unit` is ``"leg"``)."""
         if not bool(self.body_relative):
             return value
         out = np.array(value, dtype=np.float64, copy=True)
-        out[..., LENGTH_CHANNELS[name]] /= max(float(height), 1e-8)
+        out[..., LENGTH_CHANNELS[name]] /= max(float(self._unit(name, height, leg)), 1e-8)
         return out
 
-    def _scale(self, name: str, height: Optional[Tensor], columns: slice,
-               like: Tensor) -> Optional[Tensor]:
+    def _scale(self, name: str, height: Optional[Tensor], leg: Optional[Tensor],
+               columns: slice, like: Tensor) -> Optional[Tensor]:
         """Per-row divisor of the length channels, :math:`(R, C)`, or
         ``None`` when lengths stay as they are."""
-        if height is None or not bool(self.body_relative):
+        unit = self._unit(name, height, leg)
+        if unit is None or not bool(self.body_relative):
             return None
         mask = getattr(self, f"_{name}_lengths")[columns]
-        height = height.to(like).clamp(min=1e-8).unsqueeze(-1)
-        return torch.where(mask, height, torch.ones_like(height))
+        unit = unit.to(like).clamp(min=1e-8).unsqueeze(-1)
+        return torch.where(mask, unit, torch.ones_like(unit))
 
-    def normalize(self, value: Tensor, name: str,
-                  height: Optional[Tensor] = None) -> Tensor:
+    def normalize(self, value: Tensor, name: str, height: Optional[Tensor] = None,
+                  leg: Optional[Tensor] = None) -> Tensor:
         """``(value - mean) / std`` over the last dimension, lengths first
-        divided by :obj:`height` when :attr:`body_relative`.
+        divided by :obj:`height` when :attr:`body_relative` (the root's by
+        :obj:`leg` when :attr:`root_unit` is ``"leg"``).
 
         Shapes:
             - **value**: :math:`(R, C)`
             - **height**: :math:`(R,)` character height of each row, optional
+            - **leg**: :math:`(R,)` leg length of each row, optional
         """
-        scale = self._scale(name, height, slice(None), value)
+        scale = self._scale(name, height, leg, slice(None), value)
         if scale is not None:
             value = value / scale
         return (value - getattr(self, f"{name}_mean")) / getattr(self, f"{name}_std")
 
     def denormalize(self, value: Tensor, name: str, columns: slice = slice(None),
-                    height: Optional[Tensor] = None) -> Tensor:
+                    height: Optional[Tensor] = None,
+                    leg: Optional[Tensor] = None) -> Tensor:
         """Inverse of :meth:`normalize`, optionally for a column range."""
         mean = getattr(self, f"{name}_mean")[columns]
         out = value * getattr(self, f"{name}_std")[columns] + mean
-        scale = self._scale(name, height, columns, out)
+        scale = self._scale(name, height, leg, columns, out)
         return out if scale is None else out * scale
 
 

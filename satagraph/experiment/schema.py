@@ -59,6 +59,7 @@ class DataConfig:
     augment: Any = None
     on_error: str = "raise"
     body_relative: bool = True
+    root_unit: str = "height"
 
 
 @dataclass

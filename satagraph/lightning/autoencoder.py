@@ -159,7 +159,8 @@ class MotionAutoencoderModule(L.LightningModule):
         out = copy.copy(batch)
         norm = self.normalizer
         out.x = norm.normalize(batch.x, "dynamic", batch.heights("node"))
-        out.root = norm.normalize(batch.root, "root", batch.heights("frame"))
+        out.root = norm.normalize(batch.root, "root", batch.heights("frame"),
+                                  batch.legs("frame"))
         out.joint_static = norm.normalize(batch.joint_static, "static",
                                           batch.heights("stream"))
         return out
@@ -172,7 +173,8 @@ class MotionAutoencoderModule(L.LightningModule):
         out["q_norm"], out["r_norm"] = out["q"], out["r"]
         out["q"] = self.normalizer.denormalize(out["q"], "dynamic", DYNAMIC_LAYOUT["q"])
         out["r"] = self.normalizer.denormalize(out["r"], "root",
-                                               height=target.heights("frame"))
+                                               height=target.heights("frame"),
+                                               leg=target.legs("frame"))
         return out
 
     # ----------------------------------------------------------- steps

@@ -58,7 +58,7 @@ class MotionLoss(nn.Module):
     def _root(self, out: Dict[str, Tensor], batch, normalizer) -> Tensor:
         if normalizer is not None and "r_norm" in out:
             return F.mse_loss(out["r_norm"], normalizer.normalize(
-                batch.root, "root", batch.heights("frame")))
+                batch.root, "root", batch.heights("frame"), batch.legs("frame")))
         return F.mse_loss(out["r"], batch.root.to(out["r"].dtype))
 
     def _positions(self, q: Tensor, r: Tensor, batch, fps: Optional[float]):
