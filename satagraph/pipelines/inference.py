@@ -71,7 +71,8 @@ def window_codes(autoencoder, clips: Sequence[MotionClip]) -> List[torch.Tensor]
 
 def target_clip(feats: MotionFeatures, num_frames: int,
                 semantic: Optional[torch.Tensor]) -> MotionClip:
-    """A clip of the target skeleton with its static features and no motion."""
+    """A clip of the target skeleton with its static features and no motion
+    (its height and leg length are those of :obj:`feats`' frames)."""
     num = feats.skeleton.num_joints
     return MotionClip(dynamic=torch.zeros(num_frames, num, DYNAMIC_CHANNELS),
                       root=torch.zeros(num_frames, 4),
@@ -80,7 +81,8 @@ def target_clip(feats: MotionFeatures, num_frames: int,
                                 else torch.zeros(num, 0)),
                       parents=torch.from_numpy(feats.skeleton.parents),
                       edge_attr=torch.from_numpy(feats.edge_attr).float(),
-                      meta={"height": feats.height, "fps": feats.fps})
+                      meta={"height": feats.height, "leg": feats.leg_length,
+                            "fps": feats.fps})
 
 
 def static_features(motion: Motion) -> MotionFeatures:

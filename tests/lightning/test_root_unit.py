@@ -79,3 +79,20 @@ def test_a_latent_decoded_onto_longer_legs_travels_further(build_tiny_module, da
                 z, module.normalize_batch(target)), target)["r"][:, 1:3]
                 for target in (train_batch, longer)]
         torch.testing.assert_close(speeds[1], factor * speeds[0])
+
+
+def test_inference_targets_carry_their_leg_length():
+    """A decoding target built for inference (retarget, generate) carries
+    its character's leg length, which a leg-unit model scales its root by
+    (collation would otherwise assume half the height)."""
+    from satagraph.data import motion_to_features
+    from satagraph.data.collate import collate_clips
+    from satagraph.data.examples import example_motion
+    from satagraph.pipelines.inference import target_clip
+    from satagraph.transforms import canonicalize
+    import dataclasses
+    feats = motion_to_features(canonicalize(example_motion(), unit_scale=1.0))
+    feats = dataclasses.replace(feats, height=3.0 * feats.height)  # leg != half the height
+    batch = collate_clips([target_clip(feats, 5, None)])
+    assert feats.leg_length < 0.4 * feats.height
+    torch.testing.assert_close(batch.legs("frame"), torch.full((5,), feats.leg_length))
