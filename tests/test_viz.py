@@ -108,3 +108,29 @@ def test_cli_render(tmp_path, capsys):
     assert main(["render", str(bvh), "--max-frames", "3", str(bvh), str(out)]) == 0
     with Image.open(out) as gif:
         assert gif.n_frames == 3
+
+
+def test_cli_render_takes_units_per_file(tmp_path, capsys):
+    """``--units cm,m``: a rig in centimetres beside one in metres are both
+    drawn at their true size (one value for every file stays as before; a
+    list of another length is one error line)."""
+    from satagraph.cli import build_parser
+    from satagraph.cli.render import _load
+    walk = example_motion(num_frames=4)
+    cm = tmp_path / "cm.bvh"
+    write_bvh(walk.with_(translations=walk.translations * 100.0,
+                         skeleton=walk.skeleton.replace(offsets=walk.skeleton.offsets * 100.0)),
+              cm)
+    metres = tmp_path / "m.bvh"
+    write_bvh(walk, metres)
+    out = tmp_path / "out.gif"
+    argv = ["render", str(cm), str(metres), str(out), "--units", "cm,m"]
+    args = build_parser().parse_args(argv)
+    heights = [_load(str(path), args, i).height() for i, path in enumerate((cm, metres))]
+    assert heights[0] == pytest.approx(heights[1], rel=1e-6)
+    assert heights[1] == pytest.approx(walk.height(), rel=0.05)
+    assert main(argv + ["--max-frames", "2"]) == 0
+    one = build_parser().parse_args(["render", str(cm), str(cm), str(out), "--units", "cm"])
+    assert [_load(str(cm), one, i).height() for i in (0, 1)] == [heights[0]] * 2
+    assert main(["render", str(cm), str(metres), str(out), "--units", "cm,m,in"]) == 2
+    assert "--units has 3 values for 2 files" in capsys.readouterr().err

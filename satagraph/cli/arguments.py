@@ -38,28 +38,67 @@ def units(text: str):
         raise argparse.ArgumentTypeError(str(err)) from None
 
 
+def _each(parse):
+    """An argument type of comma-separated values, each read by
+    :obj:`parse` (``"cm,file"`` -> ``[0.01, "file"]``)."""
+    def read(text: str) -> list:
+        return [parse(part.strip()) for part in text.split(",")]
+    read.__name__ = parse.__name__
+    return read
+
+
 def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
-                      what: str = "the input") -> None:
+                      what: str = "the input", per_input: bool = False) -> None:
     """``--[PREFIX-]up-axis`` and ``--[PREFIX-]units`` (alias
     ``--[PREFIX-]scale``): how to read a rig where detection guesses
-    wrong. They are used as given, never re-guessed."""
+    wrong. They are used as given, never re-guessed. With
+    :obj:`per_input` (commands that read several files) each takes one
+    value for every file or a comma-separated value per file, in order
+    (``--units cm,cmu``: a dog in centimetres beside a CMU human)."""
     dash = f"--{prefix}-" if prefix else "--"
-    parser.add_argument(f"{dash}up-axis", type=up_axis, default=None,
+    wrap = _each if per_input else (lambda parse: parse)
+    each = ("; one for every file, or one per file in order, comma-separated "
+            "(cm,file)" if per_input else "")
+    parser.add_argument(f"{dash}up-axis", type=wrap(up_axis), default=None,
                         metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
-                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it")
-    parser.add_argument(f"{dash}units", f"{dash}scale", type=units, default=None,
+                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it"
+                        + each.replace("(cm,file)", "(+Z,y)"))
+    parser.add_argument(f"{dash}units", f"{dash}scale", type=wrap(units), default=None,
                         metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
                         "ft, cmu (CMU mocap units), file (keep the file's own) or "
-                        "a factor to metres, instead of guessing them")
+                        "a factor to metres, instead of guessing them" + each)
 
 
-def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "") -> Motion:
+def check_per_input(args: argparse.Namespace, count: int, prefix: str = "") -> None:
+    """Refuse ``--up-axis`` / ``--units`` lists of
+    :func:`add_rig_arguments` (``per_input``) whose length is neither one
+    nor :obj:`count`."""
+    key = f"{prefix}_" if prefix else ""
+    for flag in ("up_axis", "units"):
+        value = getattr(args, f"{key}{flag}", None)
+        if isinstance(value, list) and len(value) not in (1, count):
+            raise ValueError(f"--{flag.replace('_', '-')} has {len(value)} values for "
+                             f"{count} files: give one for every file or one per file")
+
+
+def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "",
+                  index: int = 0) -> Motion:
     """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
-    :func:`add_rig_arguments` (the file's own declaration otherwise)."""
+    :func:`add_rig_arguments` (the file's own declaration otherwise);
+    :obj:`index` is the file's place among the inputs where the options
+    give one value per file."""
     from satagraph.transforms.rig_reading import with_rig
     key = f"{prefix}_" if prefix else ""
-    return with_rig(read_bvh(path), getattr(args, f"{key}up_axis", None),
-                    getattr(args, f"{key}units", None))
+    up, scale = (_pick(getattr(args, f"{key}{flag}", None), index)
+                 for flag in ("up_axis", "units"))
+    return with_rig(read_bvh(path), up, scale)
+
+
+def _pick(value, index: int):
+    """The value of input :obj:`index` of a per-input option."""
+    if not isinstance(value, list):
+        return value
+    return value[0] if len(value) == 1 else value[index]
 
 
 def positive_int(text: str) -> int:
@@ -73,7 +112,7 @@ def positive_int(text: str) -> int:
 
 
 __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
-           "read_with_rig"]
+           "check_per_input", "read_with_rig"]
 
 
 def add_plant_argument(parser: argparse.ArgumentParser) -> None:

@@ -59,17 +59,18 @@ def add_generate_parser(sub) -> None:
                    "threads make a busy machine many times slower)")
     p.add_argument("output", metavar="OUT.bvh", nargs="?",
                    help="output file (may also come last after the --skeleton files)")
-    add_rig_arguments(p, "", "the skeleton files")
+    add_rig_arguments(p, "", "the skeleton files", per_input=True)
     p.set_defaults(func=run_generate)
 
 
 def _targets(args) -> list:
     """The skeleton files, read and checked (one line naming a bad file)."""
-    from satagraph.cli.arguments import read_with_rig
+    from satagraph.cli.arguments import check_per_input, read_with_rig
     from satagraph.data.validate import check_skeleton
+    check_per_input(args, len(args.skeleton))
     out = []
-    for path in args.skeleton:
-        motion = read_with_rig(path, args)
+    for i, path in enumerate(args.skeleton):
+        motion = read_with_rig(path, args, index=i)
         check_skeleton(motion, path)
         out.append(motion)
     return out

@@ -53,14 +53,14 @@ def add_render_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--raw", action="store_true",
                    help="draw the files as they are (must be +Y up)")
     from satagraph.cli.arguments import add_rig_arguments
-    add_rig_arguments(p, what="every input")
+    add_rig_arguments(p, what="the inputs", per_input=True)
     p.set_defaults(func=run_render)
     return p
 
 
-def _load(path: str, args: argparse.Namespace) -> Motion:
+def _load(path: str, args: argparse.Namespace, index: int) -> Motion:
     from satagraph.cli.arguments import read_with_rig
-    motion = read_with_rig(path, args)
+    motion = read_with_rig(path, args, index=index)
     if not args.raw:
         from satagraph.transforms.canonical import canonicalize
         motion = canonicalize(motion, fps=None)
@@ -87,7 +87,9 @@ def run_render(args: argparse.Namespace) -> int:
         raise ValueError(f"--fps must be positive, got {args.fps}")
     if args.max_frames is not None and args.max_frames < 1:
         raise ValueError(f"--max-frames must be at least 1, got {args.max_frames}")
-    motions = [_load(path, args) for path in inputs]
+    from satagraph.cli.arguments import check_per_input
+    check_per_input(args, len(inputs))
+    motions = [_load(path, args, i) for i, path in enumerate(inputs)]
     titles = [os.path.basename(path) for path in inputs]
     start = time.perf_counter()
     count = render(motions, output, titles=titles, fps=args.fps,

@@ -367,3 +367,21 @@ def test_generator_trains_on_codes_of_the_autoencoders_windows(t2m_ckpt):
     assert torch.equal(module.batch_codes(one)[0][0], module.autoencoder.codes(one))
     whole = module.autoencoder.codes(collate_clips(clips[:1]))
     assert not torch.equal(codes[0], whole)  # past frame 32 the windows differ
+
+
+def test_units_and_up_axes_per_skeleton(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
+    """``--units cm,m`` reads each skeleton file in its own units (the
+    reading each output ends with says so); a list of another length is
+    one error line before anything is written."""
+    skeletons = [zoo_skeletons[s] for s in ("biped", "quadruped")]
+    out = tmp_path / "walk.bvh"
+    assert _generate(t2m_ckpt, skeletons, out, "--seconds", "1", "--up-axis", "+Z",
+                     "--units", "cm,m") == 0
+    tails = [Path(p).read_text().rstrip().splitlines()[-1]
+             for p in output_paths(str(out), [str(s) for s in skeletons])]
+    assert "up_axis=+Z" in tails[0] and "scale=0.01" in tails[0]
+    assert "up_axis=+Z" in tails[1] and "scale=1" in tails[1]
+    bad = tmp_path / "bad.bvh"
+    assert _generate(t2m_ckpt, skeletons, bad, "--units", "cm,m,in") == 2
+    assert "--units has 3 values for 2 files" in capsys.readouterr().err
+    assert not list(tmp_path.glob("bad*"))
