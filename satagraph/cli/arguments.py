@@ -40,9 +40,11 @@ def units(text: str):
 
 def _each(parse):
     """An argument type of comma-separated values, each read by
-    :obj:`parse` (``"cm,file"`` -> ``[0.01, "file"]``)."""
-    def read(text: str) -> list:
-        return [parse(part.strip()) for part in text.split(",")]
+    :obj:`parse` (``"cm,file"`` -> ``[0.01, "file"]``; one value stays
+    itself: ``"cm"`` -> ``0.01``)."""
+    def read(text: str):
+        values = [parse(part.strip()) for part in text.split(",")]
+        return values[0] if len(values) == 1 else values
     read.__name__ = parse.__name__
     return read
 

@@ -111,7 +111,7 @@ class FeatureNormalizer(nn.Module):
             raise ValueError("FeatureNormalizer.fit: no training features")
         parts = {"dynamic": [self._relative(f.dynamic.reshape(-1, DYNAMIC_CHANNELS),
                                             "dynamic", f.height) for f in feats],
-                 "root": [self._relative(f.r, "root", f.height, f.leg_length)
+                 "root": [self._relative(f.r, "root", f.height, self._leg(f))
                           for f in feats],
                  "static": [self._relative(f.static, "static", f.height)
                             for f in feats]}
@@ -156,6 +156,11 @@ class FeatureNormalizer(nn.Module):
             raise ValueError("FeatureNormalizer: root lengths are in leg lengths "
                              "(root_unit='leg'); pass leg= with height=")
         return leg
+
+    def _leg(self, feats: MotionFeatures) -> Optional[float]:
+        """The leg length of :obj:`feats` where the root is measured in
+        it (``None`` otherwise: not computed)."""
+        return feats.leg_length if bool(self.root_in_legs) else None
 
     def _relative(self, value: np.ndarray, name: str, height: float,
                   leg: Optional[float] = None) -> np.ndarray:
