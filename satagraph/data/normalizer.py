@@ -10,7 +10,7 @@ speed and height) can be measured in leg lengths instead
 across body plans."""
 from __future__ import annotations
 
-from typing import Dict, Iterable, List, Optional, Sequence
+from typing import Dict, Iterable, List, Optional, Sequence, Union
 
 import numpy as np
 import torch
@@ -146,7 +146,8 @@ class FeatureNormalizer(nn.Module):
         """The unit of the root's length channels (:data:`ROOT_UNITS`)."""
         return "leg" if bool(self.root_in_legs) else "height"
 
-    def _unit(self, name: str, height, leg):
+    def _unit(self, name: str, height: Union[None, float, Tensor],
+              leg: Union[None, float, Tensor]) -> Union[None, float, Tensor]:
         """The unit that group :obj:`name`'s lengths are measured in: the
         leg length for the root when :attr:`root_unit` is ``"leg"``, else
         the height."""
