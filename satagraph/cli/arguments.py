@@ -59,16 +59,18 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
     (``--units cm,cmu``: a dog in centimetres beside a CMU human)."""
     dash = f"--{prefix}-" if prefix else "--"
     wrap = _each if per_input else (lambda parse: parse)
-    each = ("; one for every file, or one per file in order, comma-separated "
-            "(cm,file)" if per_input else "")
+
+    def each(example: str) -> str:
+        return (f"; one for every file, or one per file in order, comma-separated "
+                f"({example})" if per_input else "")
     parser.add_argument(f"{dash}up-axis", type=wrap(up_axis), default=None,
                         metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
                         "-Y, +Z, -Z; a bare letter means +) instead of detecting it"
-                        + each.replace("(cm,file)", "(+Z,y)"))
+                        + each("+Z,y"))
     parser.add_argument(f"{dash}units", f"{dash}scale", type=wrap(units), default=None,
                         metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
                         "ft, cmu (CMU mocap units), file (keep the file's own) or "
-                        "a factor to metres, instead of guessing them" + each)
+                        "a factor to metres, instead of guessing them" + each("cm,file"))
 
 
 def check_per_input(args: argparse.Namespace, count: int, prefix: str = "") -> None:

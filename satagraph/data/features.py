@@ -21,6 +21,7 @@ relative to the world origin, so integration restores the trajectory.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Dict, Optional
 
 import numpy as np
@@ -71,9 +72,10 @@ class MotionFeatures:
     def num_frames(self) -> int:
         return self.q.shape[0]
 
-    @property
+    @cached_property
     def leg_length(self) -> float:
-        """:func:`satagraph.motion.leg_length` over every frame."""
+        """:func:`satagraph.motion.leg_length` over every frame (computed
+        once: every window of a clip and every decoding target reads it)."""
         return leg_length(self.x, self.height)
 
     @property

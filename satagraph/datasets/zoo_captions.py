@@ -77,8 +77,8 @@ SIDESTEP = 60.0
 #: ``run`` clips at least this many times their gait's walking speed are
 #: told as dashing, the others as running.
 DASH = 2.15
-_KIND_IN_NAME = re.compile(r"_(?P<kind>walk|trot|turn|speed|idle|start|stop|look|jump|reach"
-                           r"|back|side|run|bow|wave)(?:_\d+)?$")
+_KIND_IN_NAME = re.compile(
+    r"_(?P<kind>%s)(?:_\d+)?$" % "|".join(sorted(set().union(*ALL_KINDS.values()))))
 _SPECIES_IN_NAME = re.compile(r"^zoo\d+-(?P<species>[a-z]+)-")
 
 

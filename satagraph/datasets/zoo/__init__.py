@@ -49,8 +49,7 @@ from satagraph.datasets.zoo.writer import (DIALECT_COLUMNS, LICENCE, MANIFEST_CO
                                            MOTION_COLUMNS, write_dialect_zoo, write_zoo)
 
 __all__ = ["ALL_KINDS", "CLIP_KINDS", "GESTURE_KINDS", "ClipFacts", "DIALECT_COLUMNS", "GAITS",
-           "LICENCE",
-           "MANIFEST_COLUMNS", "MOTION_COLUMNS", "generate_clip_with_facts",
+           "LICENCE", "MANIFEST_COLUMNS", "MOTION_COLUMNS", "generate_clip_with_facts",
            "NOISE_STYLES", "REST_POSES", "SPECIES", "STYLES", "UNITS", "UP_AXES",
            "VARIANTS", "Dialect", "DialectVariant", "Leg", "Sway", "ZooRig",
            "add_name_noise", "apply_dialect", "change_rest_pose", "dialect_variants",
