@@ -67,8 +67,24 @@ _BOW_DEGREES, _BOW_DOWN, _BOW_HOLD, _BOW_PELVIS = (30.0, 70.0), (0.7, 1.2), (0.3
 #: swing (degrees, Hz), how long the arm rises (s) and waves (s).
 _WAVE_RAISE, _WAVE_ELBOW = (100.0, 150.0), (30.0, 70.0)
 _WAVE_SWING, _WAVE_HZ, _WAVE_RISE, _WAVE_HOLD = (20.0, 35.0), (1.5, 2.8), (0.4, 0.7), (1.2, 2.2)
-#: Kinds whose body stands in place.
-_STILL_KINDS = ("idle", "look", "reach", "bow", "wave")
+#: ``sit`` and ``lie`` clips of quadrupeds: the body pitches nose up until
+#: its hips are :data:`_SIT_DROP` of their height lower (the shoulders
+#: stay up on straight fore legs) or goes down by :data:`_LIE_DROP` of its
+#: standing height; the feet of the folded legs turn flat on the ground. The body
+#: goes down in :data:`_LOWER_MOVE` seconds, stays down :data:`_LOWER_HOLD`
+#: and gets up again; where in that the clip starts is drawn, so a short
+#: clip can show the body going down, staying down or getting up.
+_SIT_DROP, _LIE_DROP, _LOWER_MOVE, _LOWER_HOLD = (0.4, 0.6), (0.55, 0.8), (0.6, 1.2), (1.0, 4.0)
+#: How far a lying quadruped's fore and hind feet move forward (leg
+#: lengths).
+_LIE_FORE, _LIE_HIND = (0.7, 0.95), (0.3, 0.6)
+#: Lowest a lowered body's joints above its feet come to the ground (leg
+#: lengths); how far a flat foot turns towards the ground (of the
+#: angle that lays it flat); how far up a folded leg's knee points
+#: (against the rest's pole, at 1).
+_CLEARANCE, _FLAT, _FOLD_POLE = 0.03, 0.9, 0.0
+#: Kinds whose body stays in place.
+_STILL_KINDS = ("idle", "look", "reach", "bow", "wave", "sit", "lie")
 #: Walks that do not go where the body faces: ``back`` at this share of the
 #: gait's speed, ``side`` at this share and this angle off the facing
 #: direction (degrees, to a random side: below 60 diagonally forward, above
@@ -187,6 +203,11 @@ class _Feet:
 
     targets: np.ndarray  # (legs, N, 3)
     yaw: np.ndarray  # (legs, N)
+    #: Pitch of each foot (radians, (legs, N); negative lays it forward
+    #: and flat), or ``None`` for feet kept as in the rest
+    pitch: Optional[np.ndarray] = None
+    #: How far each leg is folded under a lowered body, 0 to 1 (legs, N)
+    fold: Optional[np.ndarray] = None
 
 
 def _leg_geometry(rig: ZooRig, leg: Leg) -> Tuple[np.ndarray, float, float, float]:
@@ -341,11 +362,11 @@ def _reach(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
     local[arm] = _rot(0, angle) @ local[arm]
 
 
-def _centred(clip: _Clip, rise: float, hold: float) -> np.ndarray:
+def _centred(clip: _Clip, rise: float, hold: float, shift: float = 0.0) -> np.ndarray:
     """A 0 -> 1 -> 0 envelope over the clip's extended grid: rising for
     :obj:`rise` seconds, held for :obj:`hold`, falling for :obj:`rise`,
-    centred in the clip."""
-    mid = 0.5 * (len(clip.time) - 2 * clip.pad) / clip.fps
+    centred in the clip (or :obj:`shift` seconds after its middle)."""
+    mid = 0.5 * (len(clip.time) - 2 * clip.pad) / clip.fps + shift
     up = _smoothstep((clip.time - (mid - hold / 2 - rise)) / rise)
     down = _smoothstep((clip.time - (mid + hold / 2)) / rise)
     return up - down
@@ -402,19 +423,135 @@ def _wave(rig: ZooRig, clip: _Clip, local: Dict[int, np.ndarray],
 _GESTURES = {"reach": _reach, "bow": _bow, "wave": _wave}
 
 
+@dataclass
+class _Lowering:
+    """A ``sit`` or ``lie`` over the extended grid: the pelvis's extra
+    rotation :math:`(T, 3, 3)` (or ``None``), the share of its standing
+    height the root goes down by :math:`(T,)`, and how flat each leg's
+    foot lies, 0 standing to 1 flat :math:`(L, T)`."""
+
+    pelvis: Optional[np.ndarray]
+    drop: np.ndarray
+    flat: np.ndarray
+    #: How far each foot moves forward, in its leg's lengths :math:`(L, T)`
+    ahead: np.ndarray
+
+
+def _lower(rig: ZooRig, kind: str, clip: _Clip, local: Dict[int, np.ndarray],
+           rng: np.random.Generator) -> _Lowering:
+    """A quadruped sits (nose up, hind legs folded with their feet flat;
+    the tail's base turns back so that the tail keeps its carriage) or
+    lies down (every leg folded): updates the tail's local rotations in
+    :obj:`local`."""
+    move, hold = rng.uniform(*_LOWER_MOVE), rng.uniform(*_LOWER_HOLD)
+    down = _centred(clip, move, hold, rng.uniform(-1.0, 1.0) * (0.5 * hold + move))
+    hind = np.array([not leg.key.endswith("F") for leg in rig.legs], dtype=np.float64)
+    if kind == "lie":  # the fore legs stretch out in front, the hind feet come forward
+        fore = rng.uniform(*_LIE_FORE) * (1.0 - hind) + rng.uniform(*_LIE_HIND) * hind
+        return _Lowering(None, rng.uniform(*_LIE_DROP) * down,
+                         np.repeat(down[None], len(rig.legs), axis=0), fore[:, None] * down[None])
+    # the nose-up pitch that takes the hips :data:`_SIT_DROP` of their
+    # height down while the shoulders stay up
+    rest = rig.skeleton.rest_positions()
+    fore = [leg.upper for leg in rig.legs if leg.key.endswith("F")]
+    body = float(np.mean(rest[fore, 2]) - rest[0, 2])
+    hips = float(rest[0, 1] - rest[:, 1].min())
+    pitch = np.arcsin(min(rng.uniform(*_SIT_DROP) * hips / body, 0.8)) * down
+    for j in _tail_bases(rig):
+        local[j] = _rot(0, pitch) @ local.get(j, np.eye(3))
+    return _Lowering(_rot(0, -pitch), np.zeros_like(down), hind[:, None] * down[None],
+                     np.zeros((len(rig.legs), len(down))))
+
+
+def _tail_bases(rig: ZooRig) -> List[int]:
+    """The root's children that point backwards (a tail's first joint)."""
+    skel = rig.skeleton
+    return [j for j in range(1, skel.num_joints)
+            if skel.parents[j] == 0 and skel.offsets[j][2] < 0 and not skel.end_site[j]]
+
+
+def _flatten(rig: ZooRig, feet: _Feet, flat: np.ndarray, ahead: np.ndarray) -> _Feet:
+    """Feet that turn flat on the ground as :obj:`flat` goes to 1: each
+    pitches until its ankle-to-tip line lies :data:`_FLAT` of the way to
+    the ground, its lowest tip staying where it stood (in plan, moved
+    :obj:`ahead` leg lengths forward) and its lowest joint on the
+    ground."""
+    skel = rig.skeleton
+    rest = skel.rest_positions()
+    targets, pitch = feet.targets.copy(), np.zeros_like(flat)
+    for i, leg in enumerate(rig.legs):
+        below = [j for j in range(skel.num_joints) if _is_below(skel, j, leg.foot)]
+        w = rest[below] - rest[leg.foot]  # the foot's joints from its ankle
+        v = w[np.argmin(w[:, 1])]  # ankle -> lowest tip
+        pitch[i] = -_FLAT * np.arctan2(-v[1], v[2]) * flat[i]
+        turn, tilt = _rot(1, feet.yaw[i]), _rot(0, pitch[i])
+        yaw = feet.yaw[i]
+        reach = ahead[i] * sum(_leg_geometry(rig, leg)[2:])
+        targets[i] += turn @ v - turn @ tilt @ v + reach[:, None] * np.stack(
+            [np.sin(yaw), np.zeros_like(yaw), np.cos(yaw)], axis=-1)
+        targets[i, :, 1] += -(tilt @ w.T)[:, 1].min(axis=-1) + w[:, 1].min() - (
+            turn @ v - turn @ tilt @ v)[:, 1]
+    return _Feet(targets, feet.yaw, pitch, flat)
+
+
+def _lowered(rig: ZooRig, clip: _Clip, root_rot: np.ndarray, local: Dict[int, np.ndarray],
+             feet: _Feet, height: np.ndarray, drop: np.ndarray) -> np.ndarray:
+    """Root height per frame of a body :obj:`drop` of its standing
+    :obj:`height` down, kept so that no joint above the feet (knees
+    included) comes nearer the ground than :data:`_CLEARANCE` (nor the
+    root higher than :obj:`height`)."""
+    skel = rig.skeleton
+    root = clip.position * np.array([1.0, 0.0, 1.0])
+    root[:, 1] = height * (1.0 - drop)
+    _, pos = _pose(rig, root, root_rot, clip.heading, local, feet)
+    body = [j for j in range(skel.num_joints)
+            if not any(_is_below(skel, j, leg.foot) for leg in rig.legs)]
+    under = _CLEARANCE * rig.leg_length - pos[:, body, 1].min(axis=1)
+    return np.minimum(height, root[:, 1] + np.maximum(under, 0.0))
+
+
+def _fold_pole(hip: np.ndarray, target: np.ndarray, l1: float, l2: float,
+               pole: np.ndarray, fold: np.ndarray, clearance: float) -> np.ndarray:
+    """The pole of a leg folded under a lowered body (:obj:`fold`, 0 to
+    1): tipped up by :data:`_FOLD_POLE` times the fold, and further where
+    the knee would otherwise come nearer the ground than
+    :obj:`clearance` (a moving maximum and average over 9 frames).
+
+    Shapes:
+        - **hip**, **target**, **pole**: :math:`(T, 3)`
+        - **fold**: :math:`(T,)`
+        - **output**: :math:`(T, 3)`
+    """
+    up = np.array([0.0, 1.0, 0.0])
+    lift = _FOLD_POLE * fold
+    for extra in (1.0, 3.0, 9.0, 27.0):
+        knee, _, _ = _two_bone(hip, target, l1, l2, pole + np.outer(lift, up))
+        low = (knee[:, 1] < clearance) & (fold > 0)
+        if not low.any():
+            break
+        lift = np.where(low, lift + extra, lift)
+    return pole + np.outer(-_smooth_min(-lift, 4), up)
+
+
 def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
                feet: _Feet) -> Dict[int, np.ndarray]:
     """Global rotations of a leg's upper, lower and foot joints."""
     leg, off = rig.legs[i], rig.skeleton.offsets
     l1, l2 = np.linalg.norm(off[leg.lower]), np.linalg.norm(off[leg.foot])
     pole = _rot(1, heading) @ leg.pole
+    if feet.fold is not None:
+        pole = _fold_pole(hip, feet.targets[i], l1, l2, pole, feet.fold[i],
+                          _CLEARANCE * rig.leg_length)
     _, d1, d2 = _two_bone(hip, feet.targets[i], l1, l2, pole)
     hinge_w = _unit(np.cross(d1, pole))
     u, lo = off[leg.lower] / l1, off[leg.foot] / l2
     hinge = _unit(np.cross(_unit(u + lo), leg.pole))
+    foot = _rot(1, feet.yaw[i])
+    if feet.pitch is not None:
+        foot = foot @ _rot(0, feet.pitch[i])
     return {leg.upper: _align(u, hinge, d1, hinge_w),
             leg.lower: _align(lo, hinge, d2, hinge_w),
-            leg.foot: _rot(1, feet.yaw[i])}
+            leg.foot: foot}
 
 
 def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
@@ -491,12 +628,18 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     root_rot = _rot(1, clip.heading) @ _sway_rotation(rig.sway.get(0), phase, scale)
     local = _local_rotations(rig, phase, scale,
                              _look(rig, clip.time, rng) if kind == "look" else None)
+    pelvis, low = None, None
     if kind in _GESTURES:
         pelvis = _GESTURES[kind](rig, clip, local, rng)
-        if pelvis is not None:
-            root_rot = root_rot @ pelvis
+    elif kind in ("sit", "lie"):
+        low = _lower(rig, kind, clip, local, rng)
+        pelvis, feet = low.pelvis, _flatten(rig, feet, low.flat, low.ahead)
+    if pelvis is not None:
+        root_rot = root_rot @ pelvis
     height = _body_height(rig, clip, root_rot, local,
                           feet if clip.jump is None else _grounded(feet))
+    if low is not None:
+        height = _lowered(rig, clip, root_rot, local, feet, height, low.drop)
     root = clip.position * np.array([1.0, 0.0, 1.0])
     root[:, 1] = height
     if clip.jump is not None:

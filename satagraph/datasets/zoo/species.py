@@ -38,7 +38,8 @@ CLIP_KINDS = {
 #: Gestures: kinds a species can do that the endless zoo draws only when a
 #: source asks for them (``kinds``), so that the draws of :data:`CLIP_KINDS`
 #: (and every model trained on them) stay as they were.
-GESTURE_KINDS: Dict[str, Tuple[str, ...]] = {"biped": ("bow", "wave")}
+GESTURE_KINDS: Dict[str, Tuple[str, ...]] = {"biped": ("bow", "wave"),
+                                             "quadruped": ("sit", "lie")}
 #: Every kind a species can do: :data:`CLIP_KINDS`, then its gestures.
 ALL_KINDS = {s: kinds + GESTURE_KINDS.get(s, ()) for s, kinds in CLIP_KINDS.items()}
 
