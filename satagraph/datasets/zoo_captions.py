@@ -36,6 +36,11 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
   (bipeds).
 * ``wave`` (a gesture): stands, raises one arm to the side with the forearm
   up, swings the forearm from side to side and lowers the arm (bipeds).
+* ``sit`` (a gesture): stays in place, pitching nose up until the hips are
+  down on folded hind legs, stays seated and gets up (quadrupeds; a short
+  window may show only part of that).
+* ``lie`` (a gesture): stays in place, folding all four legs until the body
+  is down near the ground, stays and gets up (quadrupeds; as ``sit``).
 * ``back``: walks backward, facing forward (legged plans).
 * ``side``: walks facing forward while travelling 30-90 degrees to one side
   (the sign of ``travel``: positive left), told as diagonally forward
@@ -162,6 +167,10 @@ def _verbs(clip: ZooClip) -> List[str]:
         return ["bows", "bends forward in a bow"]
     if clip.kind == "wave":
         return ["waves goodbye with one hand", "raises a hand and waves"]
+    if clip.kind == "sit":
+        return ["sits down on its haunches in place", "lowers its hindquarters and sits"]
+    if clip.kind == "lie":
+        return ["lies down on the ground in place", "folds its legs and lies down"]
     if clip.kind in ("back", "side", "run"):
         return _travel_verbs(clip, drift)
     if clip.kind == "turn":

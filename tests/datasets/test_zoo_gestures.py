@@ -1,4 +1,5 @@
-"""The zoo's gestures (``bow``, ``wave``): what the motion does, how the
+"""The zoo's gestures (``bow``, ``wave`` of bipeds; ``sit``, ``lie`` of
+quadrupeds in `test_zoo_lowering.py`): what the motion does, how the
 endless zoo draws them only when asked, and their captions."""
 from __future__ import annotations
 
@@ -78,10 +79,12 @@ def _descends(rig, j: int, ancestor: int) -> bool:
     return False
 
 
-def test_gestures_are_kinds_of_bipeds_only() -> None:
-    assert GESTURE_KINDS == {"biped": ("bow", "wave")}
+def test_gestures_are_kinds_of_bipeds_and_quadrupeds_only() -> None:
+    assert GESTURE_KINDS == {"biped": ("bow", "wave"), "quadruped": ("sit", "lie")}
     assert ALL_KINDS["biped"] == CLIP_KINDS["biped"] + ("bow", "wave")
-    assert all(ALL_KINDS[s] == CLIP_KINDS[s] for s in CLIP_KINDS if s != "biped")
+    assert ALL_KINDS["quadruped"] == CLIP_KINDS["quadruped"] + ("sit", "lie")
+    assert all(ALL_KINDS[s] == CLIP_KINDS[s] for s in CLIP_KINDS
+               if s not in ("biped", "quadruped"))
     quadruped = zoo_rigs(["quadruped"], seed=0)[0]
     with pytest.raises(ValueError, match="quadruped has no clip kind 'bow'"):
         generate_clip(quadruped, "bow", 30)
