@@ -14,7 +14,9 @@ on the clip's own rig, root path integrated over the clip):
   and idles of its bipeds, quadrupeds, birds and fowl (two per plan);
 - **bandai**: a third of Bandai's validation split (never trained on);
 - **dog**: the dog clips outside its test split (never trained on: its
-  licence keeps it out of the shipped model's data).
+  licence keeps it out of the shipped model's data); and **dog lowered**:
+  those that sit or lie down for a tenth of their frames or more, cut
+  where they are down the most.
 
 and retargets between validation rigs (zoo biped, quadruped and bird of the
 validation seeds; a Bandai validation walk and the dog's validation clips),
@@ -59,6 +61,7 @@ from satagraph.pipelines.inference import (reconstruct_canonical,  # noqa: E402
                                            retarget_canonical)
 from satagraph.pipelines.quality import leg_length, retarget_quality  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "pretrained_val"
 #: Farthest a still source's root ends from its start, in leg lengths.
@@ -68,6 +71,9 @@ SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 #: Kinds of the zoo's other groups (one group each), per plan of these plans.
 MORE_KINDS = ("side", "back", "start", "stop", "jump", "idle")
 KIND_PLANS, KIND_PER_PLAN = ("biped", "quadruped", "bird", "fowl"), 2
+#: The dog's lowered frames: hips below this share of their standing
+#: height; clips with at least :data:`LOW_SHARE` of them form a group.
+LOW_HIPS, LOW_SHARE = 0.7, 0.1
 #: Zoo clips per body plan, and the kinds that travel.
 ZOO_PER_PLAN, ZOO_KINDS = 6, ("walk", "trot", "run", "turn", "speed")
 
@@ -131,6 +137,34 @@ def real_clips() -> List[Tuple[str, str, Motion]]:
     return [(group, rel, recon_window(real_file(rel)))
             for group, paths in (("bandai (val)", bandai), ("dog (not test)", dog))
             for rel in paths]
+
+
+def hips(motion: Motion) -> np.ndarray:
+    """The root's height above the lowest joint, per frame (file units)."""
+    pos = canonicalize(motion, fps=None).global_positions()
+    return pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
+
+
+def lowered_clips() -> List[Tuple[str, str, Motion]]:
+    """The dog's non-test clips that go down (hips below :data:`LOW_HIPS`
+    of their standing height, the 90th percentile, in at least
+    :data:`LOW_SHARE` of the frames), each cut to the
+    :data:`RECON_FRAMES` frames (at 30 fps) with the most such frames.
+    Read +Y up, as the dog's files are: a window in which the dog lies
+    throughout can be guessed on its side (a low-confidence guess that
+    `satagraph` warns about), and this group measures the model, not the
+    guess."""
+    out = []
+    for rel in sorted(manifest_paths("dog", lambda split: split != "test")):
+        motion = with_rig(real_file(rel), up_axis="+Y")
+        height = hips(motion)
+        low = (height < LOW_HIPS * np.percentile(height, 90)).astype(np.float64)
+        frames = int(RECON_FRAMES * motion.fps / 30.0)
+        if low.mean() < LOW_SHARE or motion.num_frames <= frames:
+            continue
+        start = int(np.argmax(np.convolve(low, np.ones(frames), mode="valid")))
+        out.append(("dog lowered (not test)", rel, motion.slice(start, start + frames)))
+    return out
 
 
 def retarget_pairs() -> List[Tuple[str, Motion, Motion]]:
@@ -254,7 +288,14 @@ def measure(module, motion: Motion, plant: bool = False, settle: bool = False) -
     drift = None if fa is None or fb is None else float(np.abs((fb - fa) - (fb - fa)[0]).mean())
     return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True),
                 local=joint_error(src, out, heading=True), drift=drift,
-                stride=retarget_quality(src, out, ("stride",))["stride"])
+                stride=retarget_quality(src, out, ("stride",))["stride"],
+                path=path_length(out) - path_length(src))
+
+
+def path_length(canonical: Motion) -> float:
+    """How far the root goes on the ground over the clip, in leg lengths."""
+    root = canonical.translations[:, 0, [0, 2]]
+    return float(np.linalg.norm(np.diff(root, axis=0), axis=-1).sum() / leg_length(canonical))
 
 
 def summarise(values: List[dict]) -> dict:
@@ -264,7 +305,8 @@ def summarise(values: List[dict]) -> dict:
                 pose=float(np.median([v["pose"] for v in values])),
                 local=float(np.median([v["local"] for v in values])),
                 drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None,
-                stride=_median([v.get("stride") for v in values]))
+                stride=_median([v.get("stride") for v in values]),
+                path=_median([v.get("path") for v in values]))
 
 
 def table(summary: Dict[str, Dict[str, dict]], seconds: float,
@@ -275,8 +317,9 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
              "JP, % of the height: median (mean) over a group's clips; real groups also give "
              "the median root-relative error (pose; in brackets with each frame turned about "
              "+Y onto the source's: the pose alone, without the decoded facing's drift) and the "
-             "mean facing drift (degrees); stride: the median stride ratio (limb ends' "
-             "fore-aft swing, output over source).", "",
+             "mean facing drift (degrees) and the median of how much farther the decoded root "
+             "goes on the ground than the source's (path, leg lengths); stride: the median "
+             "stride ratio (limb ends' fore-aft swing, output over source).", "",
              "| group | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
              "|---|---:|" + "---:|" * len(names)]
     for group in summary[names[0]]:
@@ -288,6 +331,8 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
                 cell += f", pose {100 * s['pose']:.1f} ({100 * s['local']:.1f})"
                 if s["drift"] is not None:
                     cell += f", drift {s['drift']:.0f}"
+                if s.get("path") is not None:
+                    cell += f", path {s['path']:+.2f}"
             if s.get("stride") is not None:
                 cell += f", stride {s['stride']:.2f}"
             cells.append(cell)
@@ -332,7 +377,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               file=sys.stderr)
         return 2
     start = time.perf_counter()
-    clips = zoo_clips() + zoo_kind_clips() + real_clips()
+    clips = zoo_clips() + zoo_kind_clips() + real_clips() + lowered_clips()
     pairs = retarget_pairs() + still_pairs()
     summary: Dict[str, Dict[str, dict]] = {}
     retargets: Dict[str, Dict[str, dict]] = {}
