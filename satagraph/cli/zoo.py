@@ -99,7 +99,7 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--kinds", nargs="+", default=None, metavar="KIND",
                    help="clip kinds to cycle through, of those each species can do "
                    "(default: every kind but the gestures; e.g. --species biped "
-                   "--kinds bow wave)")
+                   "--kinds bow wave, --species quadruped --kinds sit lie)")
     d = p.add_argument_group("exporter dialects")
     d.add_argument("--up-axes", nargs="+", type=_axes, default=[["+Y"]],
                    metavar="AXIS", help=f"up axes to write ({', '.join(UP_AXES)}; a "

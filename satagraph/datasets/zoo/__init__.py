@@ -21,7 +21,8 @@ of reach. Clip kinds (:data:`CLIP_KINDS`): ``walk``, ``turn``, ``speed``
 (from and to a standstill), ``look`` (head, neck, tail and arms turning
 slowly), ``jump`` (crouch, flight, landing) and ``reach`` (bipeds: one arm
 raised and lowered); gestures (:data:`GESTURE_KINDS`, drawn by the endless
-zoo only when asked for): ``bow`` and ``wave`` (bipeds). Snakes slither:
+zoo only when asked for): ``bow`` and ``wave`` (bipeds), ``sit`` and ``lie``
+(quadrupeds: down in place, then up again). Snakes slither:
 every joint follows the path of the head.
 
 Exporter dialects (:mod:`satagraph.datasets.zoo.dialects`) re-express a clip

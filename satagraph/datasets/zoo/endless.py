@@ -97,9 +97,10 @@ class EndlessZoo:
         seed (int): Base seed.
         kinds (list[str], optional): Clip kinds drawn, of those each species
             can do (:data:`~satagraph.datasets.zoo.species.ALL_KINDS`, which
-            adds the gestures ``bow`` and ``wave`` of bipeds); default: each
-            species' :data:`~satagraph.datasets.zoo.CLIP_KINDS`. Every drawn
-            and held-out species must be able to do at least one of them.
+            adds the gestures: ``bow`` and ``wave`` of bipeds, ``sit`` and
+            ``lie`` of quadrupeds); default: each species'
+            :data:`~satagraph.datasets.zoo.CLIP_KINDS`. Every drawn and
+            held-out species must be able to do at least one of them.
     """
 
     def __init__(self, species: Optional[Sequence[str]] = None,
