@@ -9,6 +9,7 @@ import pytest
 from satagraph.datasets.captions import captions_for
 from satagraph.datasets.zoo import CLIP_KINDS, generate_clip_with_facts, zoo_rigs
 from satagraph.datasets.zoo.endless import EndlessZoo
+from satagraph.datasets.zoo_captions import zoo_clip_of_row, zoo_phrasings
 
 FRAMES = 240  # 8 s: the body goes down and gets up inside the clip
 
@@ -78,3 +79,6 @@ def test_lowering_is_drawn_only_when_asked_and_captioned() -> None:
     assert any("sits" in t for t in texts) and any("lies down" in t for t in texts)
     with pytest.raises(ValueError, match="biped can do none of the kinds"):
         EndlessZoo(species=["biped", "quadruped"], kinds=["sit"])
+    written = zoo_clip_of_row({"path": "zoo/zoo0-quadruped-abbrev-notail_lie_2.bvh"})
+    assert written is not None and written.kind == "lie"
+    assert "a quadruped folds its legs and lies down" in zoo_phrasings(written)
