@@ -70,19 +70,19 @@ _WAVE_SWING, _WAVE_HZ, _WAVE_RISE, _WAVE_HOLD = (20.0, 35.0), (1.5, 2.8), (0.4, 
 #: ``sit`` and ``lie`` clips of quadrupeds: the body pitches nose up until
 #: its hips are :data:`_SIT_DROP` of their height lower (the shoulders
 #: stay up on straight fore legs) or goes down by :data:`_LIE_DROP` of its
-#: standing height; the feet of the folded legs turn flat on the ground. The body
-#: goes down in :data:`_LOWER_MOVE` seconds, stays down :data:`_LOWER_HOLD`
-#: and gets up again; where in that the clip starts is drawn, so a short
-#: clip can show the body going down, staying down or getting up.
+#: standing height; the feet of the folded legs turn flat on the ground.
+#: The body goes down in :data:`_LOWER_MOVE` seconds, stays down
+#: :data:`_LOWER_HOLD` and gets up again; where in that the clip starts is
+#: drawn, so a short clip can show the body going down, staying down or
+#: getting up.
 _SIT_DROP, _LIE_DROP, _LOWER_MOVE, _LOWER_HOLD = (0.4, 0.6), (0.55, 0.8), (0.6, 1.2), (1.0, 4.0)
 #: How far a lying quadruped's fore and hind feet move forward (leg
 #: lengths).
 _LIE_FORE, _LIE_HIND = (0.7, 0.95), (0.3, 0.6)
 #: Lowest a lowered body's joints above its feet come to the ground (leg
-#: lengths); how far a flat foot turns towards the ground (of the
-#: angle that lays it flat); how far up a folded leg's knee points
-#: (against the rest's pole, at 1).
-_CLEARANCE, _FLAT, _FOLD_POLE = 0.03, 0.9, 0.0
+#: lengths); how far a flat foot turns towards the ground (of the angle
+#: that lays it flat).
+_CLEARANCE, _FLAT = 0.03, 0.9
 #: Kinds whose body stays in place.
 _STILL_KINDS = ("idle", "look", "reach", "bow", "wave", "sit", "lie")
 #: Walks that do not go where the body faces: ``back`` at this share of the
@@ -453,8 +453,8 @@ def _lower(rig: ZooRig, kind: str, clip: _Clip, local: Dict[int, np.ndarray],
     # the nose-up pitch that takes the hips :data:`_SIT_DROP` of their
     # height down while the shoulders stay up
     rest = rig.skeleton.rest_positions()
-    fore = [leg.upper for leg in rig.legs if leg.key.endswith("F")]
-    body = float(np.mean(rest[fore, 2]) - rest[0, 2])
+    shoulders = [leg.upper for leg in rig.legs if leg.key.endswith("F")]
+    body = float(np.mean(rest[shoulders, 2]) - rest[0, 2])
     hips = float(rest[0, 1] - rest[:, 1].min())
     pitch = np.arcsin(min(rng.uniform(*_SIT_DROP) * hips / body, 0.8)) * down
     for j in _tail_bases(rig):
@@ -484,13 +484,13 @@ def _flatten(rig: ZooRig, feet: _Feet, flat: np.ndarray, ahead: np.ndarray) -> _
         w = rest[below] - rest[leg.foot]  # the foot's joints from its ankle
         v = w[np.argmin(w[:, 1])]  # ankle -> lowest tip
         pitch[i] = -_FLAT * np.arctan2(-v[1], v[2]) * flat[i]
-        turn, tilt = _rot(1, feet.yaw[i]), _rot(0, pitch[i])
         yaw = feet.yaw[i]
-        reach = ahead[i] * sum(_leg_geometry(rig, leg)[2:])
-        targets[i] += turn @ v - turn @ tilt @ v + reach[:, None] * np.stack(
-            [np.sin(yaw), np.zeros_like(yaw), np.cos(yaw)], axis=-1)
-        targets[i, :, 1] += -(tilt @ w.T)[:, 1].min(axis=-1) + w[:, 1].min() - (
-            turn @ v - turn @ tilt @ v)[:, 1]
+        turn, tilt = _rot(1, yaw), _rot(0, pitch[i])
+        step = turn @ v - turn @ tilt @ v  # the tip stays in plan
+        step[:, 1] = w[:, 1].min() - (tilt @ w.T)[:, 1].min(axis=-1)  # lowest joint down
+        forward = np.stack([np.sin(yaw), np.zeros_like(yaw), np.cos(yaw)], axis=-1)
+        length = sum(_leg_geometry(rig, leg)[2:])
+        targets[i] += step + (ahead[i] * length)[:, None] * forward
     return _Feet(targets, feet.yaw, pitch, flat)
 
 
@@ -513,9 +513,8 @@ def _lowered(rig: ZooRig, clip: _Clip, root_rot: np.ndarray, local: Dict[int, np
 def _fold_pole(hip: np.ndarray, target: np.ndarray, l1: float, l2: float,
                pole: np.ndarray, fold: np.ndarray, clearance: float) -> np.ndarray:
     """The pole of a leg folded under a lowered body (:obj:`fold`, 0 to
-    1): tipped up by :data:`_FOLD_POLE` times the fold, and further where
-    the knee would otherwise come nearer the ground than
-    :obj:`clearance` (a moving maximum and average over 9 frames).
+    1): tipped up where the knee would otherwise come nearer the ground
+    than :obj:`clearance` (a moving maximum and average over 9 frames).
 
     Shapes:
         - **hip**, **target**, **pole**: :math:`(T, 3)`
@@ -523,7 +522,7 @@ def _fold_pole(hip: np.ndarray, target: np.ndarray, l1: float, l2: float,
         - **output**: :math:`(T, 3)`
     """
     up = np.array([0.0, 1.0, 0.0])
-    lift = _FOLD_POLE * fold
+    lift = np.zeros_like(fold)
     for extra in (1.0, 3.0, 9.0, 27.0):
         knee, _, _ = _two_bone(hip, target, l1, l2, pole + np.outer(lift, up))
         low = (knee[:, 1] < clearance) & (fold > 0)
