@@ -59,7 +59,7 @@ from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import (reconstruct_canonical,  # noqa: E402
                                            retarget_canonical)
-from satagraph.pipelines.quality import leg_length, retarget_quality  # noqa: E402
+from satagraph.pipelines.quality import leg_length, retarget_quality, root_travel  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 
@@ -140,7 +140,7 @@ def real_clips() -> List[Tuple[str, str, Motion]]:
 
 
 def hips(motion: Motion) -> np.ndarray:
-    """The root's height above the lowest joint, per frame (file units)."""
+    """The root's height above the lowest joint, per frame (metres, canonical)."""
     pos = canonicalize(motion, fps=None).global_positions()
     return pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
 
@@ -289,13 +289,7 @@ def measure(module, motion: Motion, plant: bool = False, settle: bool = False) -
     return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True),
                 local=joint_error(src, out, heading=True), drift=drift,
                 stride=retarget_quality(src, out, ("stride",))["stride"],
-                path=path_length(out) - path_length(src))
-
-
-def path_length(canonical: Motion) -> float:
-    """How far the root goes on the ground over the clip, in leg lengths."""
-    root = canonical.translations[:, 0, [0, 2]]
-    return float(np.linalg.norm(np.diff(root, axis=0), axis=-1).sum() / leg_length(canonical))
+                path=root_travel(out) - root_travel(src))
 
 
 def summarise(values: List[dict]) -> dict:

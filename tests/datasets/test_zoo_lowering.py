@@ -9,6 +9,7 @@ import pytest
 from satagraph.datasets.captions import captions_for
 from satagraph.datasets.zoo import CLIP_KINDS, generate_clip_with_facts, zoo_rigs
 from satagraph.datasets.zoo.endless import EndlessZoo
+from satagraph.datasets.zoo.rigs import _is_below
 from satagraph.datasets.zoo_captions import zoo_clip_of_row, zoo_phrasings
 
 FRAMES = 240  # 8 s: the body goes down and gets up inside the clip
@@ -18,12 +19,6 @@ def _clip(kind: str, style: int, seed: int):
     rig = zoo_rigs(["quadruped"], seed=0)[style]
     motion, facts = generate_clip_with_facts(rig, kind, FRAMES, seed=seed)
     return rig, np.asarray(motion.global_positions()), facts
-
-
-def _below(skel, j: int, ancestor: int) -> bool:
-    while j >= 0 and j != ancestor:
-        j = int(skel.parents[j])
-    return j == ancestor
 
 
 def _hips(pos: np.ndarray) -> np.ndarray:
@@ -43,7 +38,7 @@ def test_the_body_goes_down_in_place_and_stays_above_the_ground(kind: str, style
     # the horizontal root moves by the idle's sway only: no travel
     assert np.ptp(pos[:, 0, [0, 2]], axis=0).max() < 0.05 * rig.leg_length
     for leg in rig.legs:  # every foot stays on the ground
-        foot = [j for j in range(skel.num_joints) if _below(skel, j, leg.foot)]
+        foot = [j for j in range(skel.num_joints) if _is_below(skel, j, leg.foot)]
         assert pos[:, foot, 1].min(axis=1).max() < 0.01 * rig.leg_length
     assert (facts.kind, facts.speed_start, facts.speed_end) == (kind, 0.0, 0.0)
 

@@ -83,8 +83,10 @@ _LIE_FORE, _LIE_HIND = (0.7, 0.95), (0.3, 0.6)
 #: lengths); how far a flat foot turns towards the ground (of the angle
 #: that lays it flat).
 _CLEARANCE, _FLAT = 0.03, 0.9
+#: Kinds that lower the body (:func:`_lower`).
+_LOWER_KINDS = ("sit", "lie")
 #: Kinds whose body stays in place.
-_STILL_KINDS = ("idle", "look", "reach", "bow", "wave", "sit", "lie")
+_STILL_KINDS = ("idle", "look", "reach", "bow", "wave") + _LOWER_KINDS
 #: Walks that do not go where the body faces: ``back`` at this share of the
 #: gait's speed, ``side`` at this share and this angle off the facing
 #: direction (degrees, to a random side: below 60 diagonally forward, above
@@ -630,7 +632,7 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     pelvis, low = None, None
     if kind in _GESTURES:
         pelvis = _GESTURES[kind](rig, clip, local, rng)
-    elif kind in ("sit", "lie"):
+    elif kind in _LOWER_KINDS:
         low = _lower(rig, kind, clip, local, rng)
         pelvis, feet = low.pelvis, _flatten(rig, feet, low.flat, low.ahead)
     if pelvis is not None:
