@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 import time
-from typing import List, Sequence
+from typing import List, Optional, Sequence
 
 from satagraph.cli.arguments import positive_float, positive_int
 
@@ -90,6 +90,13 @@ def add_train_parsers(sub) -> None:
                    help="(a text-to-motion model) decode with this SATA-RVQ's decoder: "
                    "one fine-tuned from the generator's autoencoder with its encoder and "
                    "codebooks frozen (optim.frozen); refused for any other")
+    p.add_argument("--blend", metavar="BASE",
+                   help="write (1 - ALPHA) * BASE + ALPHA * RUN_OR_CKPT instead (WiSE-FT): "
+                   "BASE is what the fine-tune started from (a checkpoint, a weights "
+                   "file, builtin or builtin-wide); keeps much of what the fine-tune "
+                   "learnt with less of its drift")
+    p.add_argument("--alpha", type=float, default=None,
+                   help="with --blend, the fine-tune's share in [0, 1]")
     p.set_defaults(func=run_export_weights)
 
     p = sub.add_parser("code-bank", help="code a text-to-motion config's training windows "
@@ -347,6 +354,25 @@ def _previous_provenance(source: str) -> dict:
     return {"previous": previous} if previous else {}
 
 
+def _blend(module, source: str, base: Optional[str], alpha: Optional[float]) -> dict:
+    """``export-weights --blend BASE --alpha A``: loads the blend of
+    :obj:`base` and :obj:`source` into :obj:`module` and returns its
+    provenance (``{}`` without ``--blend``)."""
+    if (base is None) != (alpha is None):
+        raise ValueError("--blend BASE and --alpha A go together")
+    if base is None:
+        return {}
+    from satagraph.experiment.blend import blend_state, check_blend_meta
+    from satagraph.experiment.train import load_module
+    from satagraph.io.weights import module_hyper_parameters
+    start = load_module(base)  # as a module: older files gain the buffers they lack
+    check_blend_meta(module_hyper_parameters(start), module_hyper_parameters(module), base,
+                     source)
+    module.load_state_dict(blend_state(start.state_dict(), module.state_dict(), alpha,
+                                       base, source))
+    return {"blend": {"base": base, "alpha": float(alpha)}}
+
+
 def run_export_weights(args) -> int:
     from satagraph import __version__
     from satagraph.utils.files import check_output_path
@@ -359,12 +385,13 @@ def run_export_weights(args) -> int:
         if not hasattr(module, "swap_decoder"):
             raise ValueError(f"--decoder: {source} is not a text-to-motion model")
         module.swap_decoder(args.decoder)
+    blend = _blend(module, source, args.blend, args.alpha)
     provenance = {k: v for k, v in (("command", args.command), ("minutes", args.minutes),
                                     ("machine", args.machine), ("note", args.note))
                   if v is not None}
     provenance.update(source=source, satagraph_version=__version__,
                       **({"decoder": args.decoder} if args.decoder else {}),
-                      **_previous_provenance(source))
+                      **blend, **_previous_provenance(source))
     size = save_weights(module, args.output, half=args.half,
                         training_data=args.training_data, provenance=provenance,
                         force=args.force)
