@@ -326,3 +326,22 @@ def test_t2m_gait_reads_a_real_walk_as_a_straight_gait():
     assert text.splitlines()[0].endswith("heading gap, deg |")
     assert text.splitlines()[-1] == (f"| real | {froude:.2f} | {swing:.2f} | {cadence:.2f} "
                                      f"| {gap:+.1f} |")
+
+
+def test_pretrained_rule_gives_section_31s_verdict_from_its_stored_table():
+    """The rule computed from the stored JSON of PRETRAIN.md section 31
+    fails both candidates on the parts that section reports, and a
+    candidate equal to the base fails part 1 only."""
+    import json
+    import pretrained_rule
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "pretrained_val_sitlie.json").read_text())
+    fails, chosen = pretrained_rule.verdict(results)
+    assert chosen is None
+    lie = next(c for c in fails if "s43_lie" in c)
+    starts = ("part 2: zoo biped JP 3.32 against 3.15", "part 2: zoo bird JP 3.41",
+              "part 3: bandai -> dog travel in band 75% against 100%")
+    assert len(fails[lie]) == 3 and all(map(str.startswith, fails[lie], starts))
+    for part in ("reconstruction", "retarget"):
+        results[part]["same"] = results[part]["builtin"]
+    assert [f[:7] for f in pretrained_rule.failures(results, "same")] == ["part 1:"]

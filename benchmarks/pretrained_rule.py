@@ -1,0 +1,91 @@
+"""The rule that lets a candidate replace the built-in model (issue 16).
+
+`experiments/PRETRAIN.md` sections 31-32 register it before a candidate is
+measured; this applies it to the JSON that `benchmarks/pretrained_val.py`
+writes (validation material only), so that the verdict is computed, not
+read off a table by eye. Against the base column (`builtin`) of the same
+run, a candidate passes if:
+
+1. the dog (outside its test split): its median JP is at least 5 % below
+   the base's, and its pose error is below the base's;
+2. no other group's median JP (zoo biped, quadruped, bird, fowl, Bandai)
+   rises more than 5 % above the base's;
+3. the retargets: no row's mean steps fall by more than 0.03, no row
+   loses travel share in band, and no row's lowest posture falls below 0.9.
+
+Of those that pass, the one with the lowest dog median is chosen.
+
+    .venv/bin/python benchmarks/pretrained_rule.py benchmarks/results/pretrained_val.json
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Dict, List, Optional, Tuple
+
+#: The group the candidates are trained to improve (part 1).
+AIM = "dog (not test)"
+#: The groups no candidate may lose on (part 2).
+KEPT = ("zoo biped", "zoo quadruped", "zoo bird", "zoo fowl", "bandai (val)")
+#: Part 1's least gain, part 2's largest loss (shares of the base's median).
+GAIN, LOSS = 0.05, 0.05
+#: Part 3: largest fall in mean steps, lowest posture.
+STEPS_DROP, POSTURE = 0.03, 0.9
+
+
+def failures(results: Dict, candidate: str, base: str = "builtin") -> List[str]:
+    """The parts of the rule :obj:`candidate` breaks, one line each
+    (empty: it passes)."""
+    rec, bas = results["reconstruction"][candidate], results["reconstruction"][base]
+    out = []
+    if not (rec[AIM]["median"] <= (1 - GAIN) * bas[AIM]["median"]
+            and rec[AIM]["pose"] < bas[AIM]["pose"]):
+        out.append(f"part 1: {AIM} JP {100 * rec[AIM]['median']:.1f}, pose "
+                   f"{100 * rec[AIM]['pose']:.1f} against {100 * bas[AIM]['median']:.1f}, "
+                   f"{100 * bas[AIM]['pose']:.1f}")
+    for group in KEPT:
+        ratio = rec[group]["median"] / bas[group]["median"]
+        if ratio > 1 + LOSS:
+            out.append(f"part 2: {group} JP {100 * rec[group]['median']:.2f} against "
+                       f"{100 * bas[group]['median']:.2f} ({ratio - 1:+.1%})")
+    for row, got in results["retarget"][candidate].items():
+        was = results["retarget"][base][row]
+        if got["steps"] < was["steps"] - STEPS_DROP:
+            out.append(f"part 3: {row} steps {got['steps']:+.2f} against {was['steps']:+.2f}")
+        if got["travel_ok"] < was["travel_ok"] - 1e-9:
+            out.append(f"part 3: {row} travel in band {got['travel_ok']:.0%} against "
+                       f"{was['travel_ok']:.0%}")
+        if got["posture"] < POSTURE:
+            out.append(f"part 3: {row} lowest posture {got['posture']:.2f}")
+    return out
+
+
+def verdict(results: Dict, base: str = "builtin") -> Tuple[Dict[str, List[str]], Optional[str]]:
+    """Every candidate's failures and the chosen one (``None``: the base stays)."""
+    fails = {c: failures(results, c, base) for c in results["reconstruction"] if c != base}
+    passing = [c for c, f in fails.items() if not f]
+    chosen = min(passing, key=lambda c: results["reconstruction"][c][AIM]["median"],
+                 default=None)
+    return fails, chosen
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("results", type=Path, help="pretrained_val.py's JSON")
+    parser.add_argument("--base", default="builtin", help="the column to beat")
+    args = parser.parse_args(argv)
+    results = json.loads(args.results.read_text())
+    fails, chosen = verdict(results, args.base)
+    for candidate, lines in fails.items():
+        dog = 100 * results["reconstruction"][candidate][AIM]["median"]
+        print(f"{candidate}: {'passes' if not lines else 'fails'} ({AIM} {dog:.1f})")
+        for line in lines:
+            print(f"    {line}")
+    print(f"chosen: {chosen}" if chosen else f"chosen: none ({args.base} stays)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
