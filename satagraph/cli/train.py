@@ -370,7 +370,9 @@ def _blend(module, source: str, base: Optional[str], alpha: Optional[float]) -> 
                      source)
     module.load_state_dict(blend_state(start.state_dict(), module.state_dict(), alpha,
                                        base, source))
-    return {"blend": {"base": base, "alpha": float(alpha)}}
+    from satagraph.io.weights import resolve_weights
+    return {"blend": {"base": base, "alpha": float(alpha),
+                      **_previous_provenance(resolve_weights(base))}}
 
 
 def run_export_weights(args) -> int:

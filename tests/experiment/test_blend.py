@@ -14,7 +14,8 @@ from satagraph.cli import main
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
 from satagraph.experiment.blend import blend_state
 from satagraph.experiment.train import load_module
-from satagraph.io.weights import load_weights, save_weights
+from satagraph.io.weights import (load_weights, read_weights_metadata, resolve_weights,
+                                   save_weights)
 from satagraph.pipelines.inference import reconstruct_motion
 
 
@@ -85,8 +86,10 @@ def test_export_weights_blend_writes_the_blend(base: Dict[str, Tensor], tuned_fi
         if value.is_floating_point():
             torch.testing.assert_close(value, 0.75 * base[key] + 0.25 * tuned[key],
                                        rtol=0, atol=1e-6)
-    assert written["weights_metadata"]["provenance"]["blend"] == {"base": "builtin",
-                                                                  "alpha": 0.25}
+    blend = written["weights_metadata"]["provenance"]["blend"]
+    assert (blend["base"], blend["alpha"]) == ("builtin", 0.25)
+    # how builtin was made stays with it
+    assert blend["previous"] == read_weights_metadata(resolve_weights("builtin"))["provenance"]
     # alpha 0 is builtin itself: the same reconstruction of a zoo clip
     zero = tmp_path / "zero.safetensors"
     assert main(["export-weights", str(tuned_file), str(zero), "--blend", "builtin",
