@@ -364,13 +364,12 @@ def _blend(module, source: str, base: Optional[str], alpha: Optional[float]) -> 
         return {}
     from satagraph.experiment.blend import blend_state, check_blend_meta
     from satagraph.experiment.train import load_module
-    from satagraph.io.weights import module_hyper_parameters
+    from satagraph.io.weights import module_hyper_parameters, resolve_weights
     start = load_module(base)  # as a module: older files gain the buffers they lack
     check_blend_meta(module_hyper_parameters(start), module_hyper_parameters(module), base,
                      source)
     module.load_state_dict(blend_state(start.state_dict(), module.state_dict(), alpha,
                                        base, source))
-    from satagraph.io.weights import resolve_weights
     return {"blend": {"base": base, "alpha": float(alpha),
                       **_previous_provenance(resolve_weights(base))}}
 
