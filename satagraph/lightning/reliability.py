@@ -31,6 +31,7 @@ import lightning as L
 import numpy as np
 import torch
 from lightning.fabric.plugins.io.torch_io import TorchCheckpointIO
+from lightning.pytorch.callbacks import Checkpoint
 
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from satagraph.utils.files import keep_copy
@@ -158,10 +159,16 @@ def set_rng_states(states: Dict[str, Any]) -> None:
 
 
 # ------------------------------------------------------------ checkpoints
-class ResumeCheckpoint(L.Callback):
+class ResumeCheckpoint(Checkpoint):
     r"""Write ``<dirpath>/last.ckpt`` every :obj:`every_n_steps` training
     steps and/or :obj:`every_minutes` minutes, and at every epoch end,
     keeping the one it replaces as ``last.prev.ckpt``.
+
+    It is a :class:`~lightning.pytorch.callbacks.Checkpoint`, so Lightning
+    runs it with the other checkpoint callbacks, after everything else, in
+    the order given: placed after a best-checkpoint callback, the epoch-end
+    ``last.ckpt`` holds that epoch's best (a run resumed from it compares
+    the next epochs with it, and deletes it when beaten).
 
     Its state in the checkpoint holds every random state (restored at the
     first training batch after a resume) and the position of the run

@@ -150,6 +150,20 @@ def test_resume_falls_back_from_a_truncated_last_checkpoint(
         resume_checkpoint(folder)
 
 
+def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]) -> None:
+    """``last.ckpt`` is written after the best checkpoint at an epoch's
+    end: resumed from it, a run compares later epochs with that epoch's and
+    leaves no best checkpoint behind that it no longer tracks."""
+    train(tiny_config, max_epochs=1)
+    folder = Path(tiny_config["output_dir"]) / "checkpoints"
+    (best,) = folder.glob("epoch=*.ckpt")
+    callbacks = load_checkpoint(folder / LAST)["callbacks"]
+    state = next(v for k, v in callbacks.items() if k.startswith("ModelCheckpoint"))
+    assert Path(state["best_model_path"]) == best
+    train(tiny_config, resume=True, max_epochs=3)
+    assert len(list(folder.glob("epoch=*.ckpt"))) == 1
+
+
 def test_a_live_run_holds_its_output_dir(tmp_path: Path) -> None:
     with run_lock(tmp_path):
         with pytest.raises(RunLockedError, match=f"pid {os.getpid()}"):
