@@ -25,6 +25,11 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--init-from", metavar="CKPT",
                    help="start from another run's weights (fine-tuning): a checkpoint, "
                    "a .safetensors weights file, builtin or builtin-wide")
+    p.add_argument("--init-normalizer", choices=("data", "checkpoint"), default="data",
+                   help="with --init-from, the feature normaliser: refitted on this "
+                   "config's data (default) or the checkpoint's own, so that its weights "
+                   "see the features as they were trained to (needed to --blend the "
+                   "fine-tune back with the checkpoint)")
     _data_rig(p)
     p.set_defaults(func=run_train)
 
@@ -174,11 +179,14 @@ def run_train(args) -> int:
     from satagraph.experiment.config import load_config
     from satagraph.lightning.reliability import RunLockedError, TrainingStopped
     from satagraph.experiment.train import last_checkpoint, train
+    if args.init_normalizer != "data" and not args.init_from:
+        raise ValueError("--init-normalizer goes with --init-from CKPT")
     cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
     start = time.time()
     try:
         module, dm, trainer, run_dir = train(cfg, resume=args.resume,
-                                             init_from=args.init_from)
+                                             init_from=args.init_from,
+                                             init_normalizer=args.init_normalizer)
     except (TrainingStopped, RunLockedError) as err:
         print(f"satagraph: error: {err}", file=sys.stderr)
         return 1

@@ -8,8 +8,10 @@ Wortsman et al., 2022),
     \theta_\alpha = (1 - \alpha)\, \theta_{\text{base}} + \alpha\, \theta_{\text{tuned}},
 
 keeps much of the new skill with less of the drift, without training. Both
-ends must be the same network: one was started from the other
-(``--init-from``), so they share every key and shape.
+ends must be the same network reading the same features: one was started
+from the other with its normaliser kept (``--init-from CKPT
+--init-normalizer checkpoint``), so they share every key, shape and
+normaliser statistic.
 
 ``satagraph export-weights CKPT OUT.safetensors --blend builtin --alpha 0.5``
 writes such a blend.
@@ -18,9 +20,14 @@ from __future__ import annotations
 
 from typing import Any, Dict, Mapping
 
+import torch
 from torch import Tensor
 
 from satagraph.data.dataset import data_facing_smooth
+
+
+#: Prefix of the feature normaliser's tensors, which must be equal in a blend.
+NORMALIZER = "normalizer."
 
 
 def blend_state(base: Mapping[str, Tensor], tuned: Mapping[str, Tensor], alpha: float,
@@ -28,11 +35,15 @@ def blend_state(base: Mapping[str, Tensor], tuned: Mapping[str, Tensor], alpha: 
     r"""The state dict :math:`(1 - \alpha)\,` :obj:`base` :math:`+ \alpha\,`
     :obj:`tuned`.
 
-    Every floating-point tensor is interpolated, the normaliser's statistics
-    included (a fine-tune refits them on its own data, so each end of the
-    blend reads the data as it was trained to). Other tensors (flags such
-    as ``normalizer.fitted``, the root's unit) must be equal: they say what
-    the features mean, which a blend cannot average.
+    Every floating-point weight is interpolated. The normaliser (its
+    statistics and flags) and every other tensor that is not a float must
+    be equal in both: they say what the features mean, and a network can be
+    far more sensitive to them than to its weights (`builtin` reads zoo
+    bipeds at 3.1 % of their height with its own normaliser and at 16.9 %
+    with one refitted on a fine-tune's data; blending the statistics too
+    gave 6-10 % at every share in between, ``experiments/PRETRAIN.md``
+    section 32). A fine-tune meant to be blended keeps its starting
+    point's normaliser (``--init-normalizer checkpoint``).
 
     Args:
         base (Mapping[str, Tensor]): The starting point's state dict.
@@ -99,11 +110,13 @@ def _check_same_network(base: Mapping[str, Tensor], tuned: Mapping[str, Tensor],
 def _mix(a: Tensor, b: Tensor, alpha: float, key: str, base_name: str,
          tuned_name: str) -> Tensor:
     """One tensor of the blend."""
-    if b.is_floating_point():
+    if b.is_floating_point() and not key.startswith(NORMALIZER):
         return ((1.0 - alpha) * a.float() + alpha * b.float()).to(b.dtype)
-    if not bool((a.to(b.dtype) == b).all()):
+    if not torch.allclose(a.to(b.dtype), b, rtol=1e-5, atol=1e-7):
+        hint = (": fine-tune with --init-normalizer checkpoint to blend"
+                if key.startswith(NORMALIZER) else "")
         raise ValueError(f"cannot blend {tuned_name} with {base_name}: {key!r} differs "
-                         "and is not a weight (the two read their features otherwise)")
+                         f"and is not a weight (the two read their features otherwise{hint})")
     return b.clone()
 
 

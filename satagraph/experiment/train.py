@@ -184,11 +184,22 @@ def vae_to_rvq(state: Dict[str, Tensor], own: Dict[str, Tensor]) -> Dict[str, Te
     return out
 
 
-def init_weights(module: L.LightningModule, ckpt: str) -> None:
+#: Where a fine-tune's normaliser comes from (``--init-normalizer``): fitted
+#: on the new data, or the checkpoint's own.
+INIT_NORMALIZERS = ("data", "checkpoint")
+
+
+def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data") -> None:
     """Load another run's weights into :obj:`module` for fine-tuning; the
     module keeps its own normaliser (the new data's), unless parts of it
     are frozen (``optim.frozen``: a frozen encoder reads the data as the
-    checkpoint's normaliser did, so that one loads), and whatever its
+    checkpoint's normaliser did, so that one loads; so does
+    :obj:`normalizer` ``"checkpoint"``: the weights see the features scaled
+    as they were trained on, where a refitted normaliser shifts them, and a
+    network can be sensitive to that: `builtin` reads zoo bipeds at 3.1 %
+    of their height with its own normaliser and at 16.9 % with one refitted
+    on ``pretrain_zoo_lie``'s data, ``experiments/PRETRAIN.md`` section 32),
+    and whatever its
     ``init_keeps`` prefixes name (a text-to-motion module's frozen
     autoencoder: the one its config gives, not the checkpoint's).
     :obj:`ckpt` is a checkpoint, a ``.safetensors`` weights file or
@@ -199,7 +210,11 @@ def init_weights(module: L.LightningModule, ckpt: str) -> None:
     bottleneck) or has in another shape (e.g. another codebook size), which
     keep their initialisation."""
     frozen = getattr(module, "frozen_parts", lambda: [])()
-    keep = ((() if frozen else ("normalizer.",)) + tuple(getattr(module, "init_keeps", ())))
+    if normalizer not in INIT_NORMALIZERS:
+        raise ValueError(f"--init-normalizer must be one of {INIT_NORMALIZERS}, got "
+                         f"{normalizer!r}")
+    refit = not frozen and normalizer == "data"
+    keep = (("normalizer.",) if refit else ()) + tuple(getattr(module, "init_keeps", ()))
     own = module.state_dict()
     payload = load_weights_or_checkpoint(ckpt)
     if hasattr(module, "init_meta"):
@@ -244,14 +259,17 @@ def check_init_features(payload: Dict[str, Any], cfg: Dict[str, Any], name: str)
 
 
 def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = None,
-          **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
+          init_normalizer: str = "data", **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
     r"""Train a model from a config dict (see ``experiments/``).
 
     Args:
         cfg (dict): The config (plain containers).
         resume (bool): Continue from ``<run>/checkpoints/last.ckpt``.
         init_from (str, optional): Start from another run's weights (fine-
-            tuning on a new dataset); the normaliser of the new data is used.
+            tuning on a new dataset); the normaliser of the new data is used
+            unless :obj:`init_normalizer` is ``"checkpoint"`` (see
+            :func:`init_weights`).
+        init_normalizer (str): ``"data"`` (default) or ``"checkpoint"``.
 
     Returns:
         The trained module, the data module, the trainer and the run folder.
@@ -276,7 +294,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         _record_skipped(dm, run_dir)
         module = build_module(cfg, dm)
         if init_from:
-            init_weights(module, init_from)
+            init_weights(module, init_from, init_normalizer)
         trainer = build_trainer(cfg, run_dir, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
         # set up (its datasets hold the semantic embedder, a closure); each worker

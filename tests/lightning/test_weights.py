@@ -233,3 +233,30 @@ def test_builtin_notice_stays_one_short_line(build_tiny_module: Callable, tmp_pa
                       "do: the README, or satagraph.io.weights.read_weights_metadata() of "
                       "its file")
     assert "\n" not in notice and len(notice) < 300
+
+
+def test_init_normalizer_keeps_the_checkpoints_or_refits(config_overrides: List[str],
+                                                         tmp_path: Path,
+                                                         capsys: pytest.CaptureFixture) -> None:
+    """``--init-normalizer checkpoint`` starts from the checkpoint's feature
+    statistics (here made unlike the data's), the default refits them on
+    the config's data; without ``--init-from`` the flag is refused."""
+    run = tmp_path / "run"
+    assert main(_train_args(config_overrides, run)) == 0
+    module = load_module(str(run / "checkpoints" / "last.ckpt"))
+    fitted = {k: v.clone() for k, v in module.state_dict().items() if k.startswith("normalizer.")}
+    with torch.no_grad():
+        module.normalizer.static_std.mul_(2.0)
+        module.normalizer.root_mean.add_(0.5)
+    odd = tmp_path / "odd.safetensors"
+    weights.save_weights(module, odd)
+    for choice, want in (("checkpoint", load_weights(odd)["state_dict"]), ("data", fitted)):
+        tuned = tmp_path / choice
+        assert main(_train_args(config_overrides, tuned, "optim.lr=0.0", "--init-from",
+                                str(odd), "--init-normalizer", choice)) == 0
+        state = torch.load(tuned / "checkpoints" / "last.ckpt", weights_only=True)["state_dict"]
+        for key in ("normalizer.static_std", "normalizer.root_mean"):
+            torch.testing.assert_close(state[key], want[key], msg=f"{choice} {key}")
+    assert main(_train_args(config_overrides, tmp_path / "x", "--init-normalizer",
+                            "checkpoint")[1:]) == 2  # without --traceback
+    assert "--init-normalizer goes with --init-from CKPT" in capsys.readouterr().err
