@@ -190,17 +190,17 @@ INIT_NORMALIZERS = ("data", "checkpoint")
 
 
 def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data") -> None:
-    """Load another run's weights into :obj:`module` for fine-tuning; the
-    module keeps its own normaliser (the new data's), unless parts of it
-    are frozen (``optim.frozen``: a frozen encoder reads the data as the
-    checkpoint's normaliser did, so that one loads; so does
-    :obj:`normalizer` ``"checkpoint"``: the weights see the features scaled
-    as they were trained on, where a refitted normaliser shifts them, and a
-    network can be sensitive to that: `builtin` reads zoo bipeds at 3.1 %
-    of their height with its own normaliser and at 16.9 % with one refitted
-    on ``pretrain_zoo_lie``'s data, ``experiments/PRETRAIN.md`` section 32),
-    and whatever its
-    ``init_keeps`` prefixes name (a text-to-motion module's frozen
+    """Load another run's weights into :obj:`module` for fine-tuning.
+
+    The module keeps its own normaliser (fitted on the new data) when
+    :obj:`normalizer` is ``"data"``; the checkpoint's loads when it is
+    ``"checkpoint"`` or when parts of the module are frozen
+    (``optim.frozen``: a frozen encoder reads the data as the checkpoint's
+    normaliser did). A network can be very sensitive to a refit: `builtin`
+    reads zoo bipeds at 3.1 % of their height with its own normaliser and
+    at 16.9 % with one refitted on ``pretrain_zoo_lie``'s data
+    (``experiments/PRETRAIN.md`` section 32). The module also keeps what
+    its ``init_keeps`` prefixes name (a text-to-motion module's frozen
     autoencoder: the one its config gives, not the checkpoint's).
     :obj:`ckpt` is a checkpoint, a ``.safetensors`` weights file or
     ``"builtin"``. A VAE's bottleneck starts an RVQ's (:func:`vae_to_rvq`);
@@ -259,7 +259,8 @@ def check_init_features(payload: Dict[str, Any], cfg: Dict[str, Any], name: str)
 
 
 def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = None,
-          init_normalizer: str = "data", **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
+          init_normalizer: str = "data",
+          **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
     r"""Train a model from a config dict (see ``experiments/``).
 
     Args:
