@@ -98,8 +98,9 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--blend", metavar="BASE",
                    help="write (1 - ALPHA) * BASE + ALPHA * RUN_OR_CKPT instead (WiSE-FT): "
                    "BASE is what the fine-tune started from (a checkpoint, a weights "
-                   "file, builtin or builtin-wide); keeps much of what the fine-tune "
-                   "learnt with less of its drift")
+                   "file, builtin or builtin-wide) and whose normaliser it kept "
+                   "(train --init-normalizer checkpoint); keeps much of what the "
+                   "fine-tune learnt with less of its drift")
     p.add_argument("--alpha", type=float, default=None,
                    help="with --blend, the fine-tune's share in [0, 1]")
     p.set_defaults(func=run_export_weights)
