@@ -367,8 +367,6 @@ def _blend(module, source: str, base: Optional[str], alpha: Optional[float]) -> 
     """``export-weights --blend BASE --alpha A``: loads the blend of
     :obj:`base` and :obj:`source` into :obj:`module` and returns its
     provenance (``{}`` without ``--blend``)."""
-    if (base is None) != (alpha is None):
-        raise ValueError("--blend BASE and --alpha A go together")
     if base is None:
         return {}
     from satagraph.experiment.blend import blend_state, check_blend_meta
@@ -388,6 +386,8 @@ def run_export_weights(args) -> int:
     from satagraph.utils.files import check_output_path
     from satagraph.io.weights import save_weights
     from satagraph.experiment.train import load_module
+    if (args.blend is None) != (args.alpha is None):  # before any file is read
+        raise ValueError("--blend BASE and --alpha A go together")
     check_output_path(args.output)
     source = _export_source(args.source)
     module = load_module(source)
