@@ -24,10 +24,7 @@ import torch
 from torch import Tensor
 
 from satagraph.data.dataset import data_facing_smooth
-
-
-#: Prefix of the feature normaliser's tensors, which must be equal in a blend.
-NORMALIZER = "normalizer."
+from satagraph.io.weights import NORMALIZER_PREFIX
 
 
 def blend_state(base: Mapping[str, Tensor], tuned: Mapping[str, Tensor], alpha: float,
@@ -110,11 +107,11 @@ def _check_same_network(base: Mapping[str, Tensor], tuned: Mapping[str, Tensor],
 def _mix(a: Tensor, b: Tensor, alpha: float, key: str, base_name: str,
          tuned_name: str) -> Tensor:
     """One tensor of the blend."""
-    if b.is_floating_point() and not key.startswith(NORMALIZER):
+    if b.is_floating_point() and not key.startswith(NORMALIZER_PREFIX):
         return ((1.0 - alpha) * a.float() + alpha * b.float()).to(b.dtype)
     if not torch.allclose(a.to(b.dtype), b, rtol=1e-5, atol=1e-7):
         hint = (": fine-tune with --init-normalizer checkpoint to blend"
-                if key.startswith(NORMALIZER) else "")
+                if key.startswith(NORMALIZER_PREFIX) else "")
         raise ValueError(f"cannot blend {tuned_name} with {base_name}: {key!r} differs "
                          f"and is not a weight (the two read their features otherwise{hint})")
     return b.clone()

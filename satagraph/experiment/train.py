@@ -22,7 +22,7 @@ from satagraph.experiment.schema import (LoggerConfig, TrainerExtras, check_keys
 from satagraph.data.datamodule import MotionDataModule
 from satagraph.data.dataset import DEFAULT_PREPROCESSING
 from satagraph.io.checkpoint import CheckpointError, check_finite_weights
-from satagraph.io.weights import load_weights_or_checkpoint
+from satagraph.io.weights import NORMALIZER_PREFIX, load_weights_or_checkpoint
 from satagraph.utils.files import atomic_write_text, sweep_stale_temps
 from satagraph.lightning.reliability import (LossLog, NonFiniteGuard, ResumeCheckpoint,
                                              SafeCheckpointIO, resume_checkpoint,
@@ -214,7 +214,7 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
         raise ValueError(f"--init-normalizer must be one of {INIT_NORMALIZERS}, got "
                          f"{normalizer!r}")
     refit = not frozen and normalizer == "data"
-    keep = (("normalizer.",) if refit else ()) + tuple(getattr(module, "init_keeps", ()))
+    keep = ((NORMALIZER_PREFIX,) if refit else ()) + tuple(getattr(module, "init_keeps", ()))
     own = module.state_dict()
     payload = load_weights_or_checkpoint(ckpt)
     if hasattr(module, "init_meta"):

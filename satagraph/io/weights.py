@@ -32,6 +32,10 @@ from satagraph.utils.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
+#: Prefix of the feature normaliser's tensors in a model's state dict: what
+#: the features mean, kept in float32 by ``half``, refitted or kept by a
+#: fine-tune, never blended.
+NORMALIZER_PREFIX = "normalizer."
 #: ``format`` of a satagraph weights file's metadata.
 FORMAT = "satagraph.weights"
 #: Version of the metadata layout.
@@ -221,7 +225,7 @@ def weights_payload(module: torch.nn.Module, half: bool = False,
     tensors = {}
     for key, value in module.state_dict().items():
         value = value.detach().to("cpu")
-        if value.is_floating_point() and not key.startswith("normalizer."):
+        if value.is_floating_point() and not key.startswith(NORMALIZER_PREFIX):
             value = value.to(dtype)
         tensors[key] = value.contiguous().clone()
     metadata = {"format": FORMAT, "format_version": FORMAT_VERSION,
