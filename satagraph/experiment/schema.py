@@ -76,10 +76,13 @@ class LoggerConfig:
 class CheckpointConfig:
     r"""``checkpoint``: ``last.ckpt`` every :obj:`every_n_steps` steps
     and/or :obj:`every_minutes` minutes of training (and every epoch end);
-    ``null`` turns one off."""
+    ``null`` turns one off. :obj:`keep_every_epoch` keeps a checkpoint of
+    every epoch's end (``epoch=E-step=S.ckpt``) instead of only the best
+    one, so that a run can be chosen from by a benchmark afterwards."""
 
     every_n_steps: Optional[int] = 500
     every_minutes: Optional[float] = 10.0
+    keep_every_epoch: bool = False
 
 
 @dataclass

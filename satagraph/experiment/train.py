@@ -105,7 +105,8 @@ def trainer_keys() -> set:
 def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Trainer:
     """The trainer of a config: ``last.ckpt`` by :class:`ResumeCheckpoint`
     (``checkpoint.every_n_steps`` / ``every_minutes``, and every epoch end),
-    the best ``val_loss`` by :class:`ModelCheckpoint`, non-finite losses and
+    the best ``val_loss`` by :class:`ModelCheckpoint` (every epoch's with
+    ``checkpoint.keep_every_epoch``), non-finite losses and
     gradients handled by :class:`NonFiniteGuard` (``nonfinite``: ``stop`` or
     ``skip``), checkpoints written atomically and loaded safely
     (:class:`SafeCheckpointIO`); ``loss_log: true`` appends every step's
@@ -120,8 +121,9 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     folder = run_dir / "checkpoints"
     spec = cfg["checkpoint"]
     resume = ResumeCheckpoint(str(folder), spec["every_n_steps"], spec["every_minutes"])
-    best = ModelCheckpoint(dirpath=str(folder), save_last=False,
-                           monitor=opts.pop("monitor"), mode="min")
+    best = ModelCheckpoint(dirpath=str(folder), save_last=False, mode="min",
+                           monitor=opts.pop("monitor"),
+                           save_top_k=-1 if spec["keep_every_epoch"] else 1)
     guard = NonFiniteGuard(cfg["nonfinite"], str(resume.last_path))
     # the average is updated before any checkpoint of the same step is written
     callbacks = [weight_average(cfg["optim"]["ema"])] if cfg["optim"]["ema"] else []

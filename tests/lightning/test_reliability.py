@@ -164,6 +164,21 @@ def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]
     assert len(list(folder.glob("epoch=*.ckpt"))) == 1
 
 
+def test_keep_every_epoch_keeps_one_checkpoint_per_epoch(tiny_config: Dict[str, Any]) -> None:
+    """``checkpoint.keep_every_epoch`` keeps each epoch's end, across a
+    resume, each holding the weights of its own step."""
+    tiny_config["checkpoint"]["keep_every_epoch"] = True
+    train(tiny_config, max_epochs=2)
+    train(tiny_config, resume=True, max_epochs=3)
+    folder = Path(tiny_config["output_dir"]) / "checkpoints"
+    kept = sorted(folder.glob("epoch=*.ckpt"))
+    assert [p.name.split("-")[0] for p in kept] == ["epoch=0", "epoch=1", "epoch=2"]
+    steps = [load_checkpoint(p)["global_step"] for p in kept]
+    assert steps[0] < steps[1] < steps[2] == load_checkpoint(folder / LAST)["global_step"]
+    first, last = (load_checkpoint(p)["state_dict"] for p in (kept[0], kept[2]))
+    assert any(not torch.equal(first[k], last[k]) for k in first)
+
+
 def test_a_live_run_holds_its_output_dir(tmp_path: Path) -> None:
     with run_lock(tmp_path):
         with pytest.raises(RunLockedError, match=f"pid {os.getpid()}"):
