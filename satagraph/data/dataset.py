@@ -367,12 +367,7 @@ class MotionDataset(Dataset):
                  evidence: Optional[JointEvidence] = None) -> Optional[torch.Tensor]:
         """The semantic embedding of a skeleton, computed once per skeleton
         and evidence."""
-        if self.semantic_fn is None:
-            return None
-        return _per_skeleton(
-            self._semantic, feats.skeleton,
-            lambda skeleton: call_semantic(self.semantic_fn, skeleton, evidence).float(),
-            evidence)
+        return _semantic_once(self._semantic, self.semantic_fn, feats.skeleton, evidence)
 
     def limb_ends(self, feats: MotionFeatures,
                   evidence: Optional[JointEvidence] = None) -> Tuple[int, ...]:
@@ -420,6 +415,18 @@ def _per_skeleton(cache: Dict[Tuple, Any], skeleton: Skeleton,
             del cache[next(iter(cache))]
         cache[key] = compute(skeleton)
     return cache[key]
+
+
+def _semantic_once(cache: Dict[Tuple, Any], semantic_fn: Optional[Callable],
+                   skeleton: Skeleton, evidence: Optional[JointEvidence]
+                   ) -> Optional[torch.Tensor]:
+    """The float semantic embedding of :obj:`skeleton` by :obj:`semantic_fn`
+    (``None`` without one), once per skeleton and evidence in :obj:`cache`."""
+    if semantic_fn is None:
+        return None
+    return _per_skeleton(
+        cache, skeleton,
+        lambda skel: call_semantic(semantic_fn, skel, evidence).float(), evidence)
 
 
 def _skeleton_key(skeleton: Skeleton) -> Tuple:

@@ -20,11 +20,10 @@ from torch.utils.data import Dataset
 
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
-from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton, shown_as,
-                                    feature_options)
+from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowKey, _per_skeleton,
+                                    _semantic_once, shown_as, feature_options)
 from satagraph.data.features import MotionFeatures, motion_to_features
-from satagraph.semantics.evidence import (JointEvidence, call_semantic,
-                                          evidence_from_features)
+from satagraph.semantics.evidence import evidence_from_features
 from satagraph.semantics.limbs import limb_end_index
 from satagraph.data.validate import check_features
 from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample
@@ -130,15 +129,6 @@ class EndlessZooDataset(Dataset):
         normaliser)."""
         return [self.features(0, i)[0] for i in range(min(count, max(self.windows, 1)))]
 
-    def _semantic_of(self, feats: MotionFeatures,
-                     evidence: JointEvidence) -> Optional[torch.Tensor]:
-        if self.semantic_fn is None:
-            return None
-        return _per_skeleton(
-            self._semantic, feats.skeleton,
-            lambda skeleton: call_semantic(self.semantic_fn, skeleton, evidence).float(),
-            evidence)
-
     def __getitem__(self, key: WindowKey) -> MotionClip:
         epoch, idx = key if isinstance(key, tuple) else (0, key)
         feats, sample = self.features(int(epoch), int(idx))
@@ -150,7 +140,8 @@ class EndlessZooDataset(Dataset):
                         f"{sample.kind}>",
                 "dataset": self.dataset, "skeleton": sample.plan,
                 "species": sample.species, "limb_ends": limbs}
-        return feats.to_clip(1, None, self._semantic_of(feats, evidence), meta)
+        semantic = _semantic_once(self._semantic, self.semantic_fn, feats.skeleton, evidence)
+        return feats.to_clip(1, None, semantic, meta)
 
 
 class MixedDataset(Dataset):
