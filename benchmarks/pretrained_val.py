@@ -97,13 +97,15 @@ def manifest_paths(dataset: str, keep: Callable[[str], bool]) -> List[str]:
             if keep(f.split)]
 
 
-def zoo_clips() -> List[Tuple[str, str, Motion]]:
-    """``(group, name, motion)`` of validation-seed zoo clips."""
+def zoo_clips(per_plan: int = ZOO_PER_PLAN) -> List[Tuple[str, str, Motion]]:
+    """``(group, name, motion)`` of validation-seed zoo clips, :obj:`per_plan`
+    of each body plan (the first of the stream, so a larger count keeps
+    the smaller one's clips)."""
     count: Dict[str, int] = {}
     out = []
-    for index in range(600):
+    for index in range(100 * per_plan):
         sample = zoo_sample(index)
-        if sample.kind not in ZOO_KINDS or count.get(sample.species, 0) >= ZOO_PER_PLAN:
+        if sample.kind not in ZOO_KINDS or count.get(sample.species, 0) >= per_plan:
             continue
         count[sample.species] = count.get(sample.species, 0) + 1
         out.append((f"zoo {sample.species}", f"{sample.plan} {sample.kind} ({sample.rest} rest)",
@@ -296,6 +298,7 @@ def summarise(values: List[dict]) -> dict:
     jp = np.array([v["jp"] for v in values])
     drift = [v["drift"] for v in values if v["drift"] is not None]
     return dict(n=len(values), median=float(np.median(jp)), mean=float(jp.mean()),
+                jp=jp.tolist(),
                 pose=float(np.median([v["pose"] for v in values])),
                 local=float(np.median([v["local"] for v in values])),
                 drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None,
@@ -355,6 +358,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--ckpt", nargs="+", default=["builtin"],
                         help="checkpoints, .safetensors weights files or builtin")
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
+    parser.add_argument("--zoo-per-plan", type=int, default=ZOO_PER_PLAN, metavar="N",
+                        help="zoo clips per body plan (the first N of the validation "
+                             "stream; more: less noisy medians, slower)")
     parser.add_argument("--plant", action="store_true",
                         help="plant the feet of every output (retarget_canonical's plant)")
     parser.add_argument("--settle", choices=("off", "on", "both"), default="off",
@@ -371,7 +377,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               file=sys.stderr)
         return 2
     start = time.perf_counter()
-    clips = zoo_clips() + zoo_kind_clips() + real_clips() + lowered_clips()
+    if args.zoo_per_plan < 1:
+        parser.error(f"--zoo-per-plan must be at least 1, got {args.zoo_per_plan}")
+    clips = zoo_clips(args.zoo_per_plan) + zoo_kind_clips() + real_clips() + lowered_clips()
     pairs = retarget_pairs() + still_pairs()
     summary: Dict[str, Dict[str, dict]] = {}
     retargets: Dict[str, Dict[str, dict]] = {}
@@ -393,7 +401,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     print(text)
     write_results(args.out, "Built-in model candidates on validation material "
                   "(benchmarks/pretrained_val.py)", text,
-                  {"reconstruction": summary, "retarget": retargets})
+                  {"reconstruction": summary, "retarget": retargets,
+                   "zoo_per_plan": args.zoo_per_plan})
     return 0
 
 

@@ -297,6 +297,7 @@ def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
              dict(jp=0.2, pose=0.06, local=0.03, drift=20.0)]
     s = pretrained_val.summarise(clips)
     assert s["median"] == pytest.approx(0.2) and s["mean"] == pytest.approx(0.2)
+    assert s["jp"] == pytest.approx([0.1, 0.3, 0.2])  # per clip, in clip order
     assert s["pose"] == pytest.approx(0.06) and s["drift"] == pytest.approx(15.0)
     assert pretrained_val.summarise(clips[1:2] + clips[:1])["drift"] is None
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s, "dog (not test)": s}}, 1.0)
@@ -345,3 +346,33 @@ def test_pretrained_rule_gives_section_31s_verdict_from_its_stored_table():
     for part in ("reconstruction", "retarget"):
         results[part]["same"] = results[part]["builtin"]
     assert [f[:7] for f in pretrained_rule.failures(results, "same")] == ["part 1:"]
+
+
+def test_pretrained_rule_paired_compares_each_clip_with_itself():
+    """``--paired``: a candidate 10 % worse on every clip fails part 2 even
+    where the group's median does not move (the clips trade places), one
+    worse on a single clip of five passes, and results without per-clip
+    values are refused by name."""
+    import json
+    import pretrained_rule
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "pretrained_val_sitlie.json").read_text())
+    for part in ("reconstruction", "retarget"):
+        results[part]["same"] = json.loads(json.dumps(results[part]["builtin"]))
+    base, same = results["reconstruction"]["builtin"], results["reconstruction"]["same"]
+    for group in pretrained_rule.KEPT:
+        base[group]["jp"] = [0.02, 0.03, 0.04, 0.05, 0.06]
+        same[group]["jp"] = [0.05, 0.033, 0.044, 0.055, 0.066]  # 10 % worse, the first 2.5x
+        same[group]["median"] = base[group]["median"]  # unpaired medians equal
+    part2 = [f for f in pretrained_rule.failures(results, "same", paired=True)
+             if f.startswith("part 2")]
+    assert len(part2) == len(pretrained_rule.KEPT)
+    assert part2[0] == "part 2: zoo biped paired JP ratio +10.0% over 5 clips"
+    assert not [f for f in pretrained_rule.failures(results, "same") if f.startswith("part 2")]
+    for group in pretrained_rule.KEPT:
+        same[group]["jp"] = [0.03, 0.03, 0.04, 0.05, 0.06]
+    assert not [f for f in pretrained_rule.failures(results, "same", paired=True)
+                if f.startswith("part 2")]
+    del base["zoo biped"]["jp"]
+    with pytest.raises(ValueError, match="lack per-clip JP"):
+        pretrained_rule.failures(results, "same", paired=True)
