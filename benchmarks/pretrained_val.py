@@ -110,6 +110,8 @@ def zoo_clips(per_plan: int = ZOO_PER_PLAN) -> List[Tuple[str, str, Motion]]:
         count[sample.species] = count.get(sample.species, 0) + 1
         out.append((f"zoo {sample.species}", f"{sample.plan} {sample.kind} ({sample.rest} rest)",
                     sample.motion))
+        if all(count.get(species, 0) >= per_plan for species in TRAIN_SPECIES):
+            break
     return out
 
 
