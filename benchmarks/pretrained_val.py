@@ -300,7 +300,7 @@ def summarise(values: List[dict]) -> dict:
     jp = np.array([v["jp"] for v in values])
     drift = [v["drift"] for v in values if v["drift"] is not None]
     return dict(n=len(values), median=float(np.median(jp)), mean=float(jp.mean()),
-                jp=jp.tolist(),
+                jp_clips=jp.tolist(), pose_clips=[v["pose"] for v in values],
                 pose=float(np.median([v["pose"] for v in values])),
                 local=float(np.median([v["local"] for v in values])),
                 drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None,

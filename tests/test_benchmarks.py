@@ -297,7 +297,8 @@ def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
              dict(jp=0.2, pose=0.06, local=0.03, drift=20.0)]
     s = pretrained_val.summarise(clips)
     assert s["median"] == pytest.approx(0.2) and s["mean"] == pytest.approx(0.2)
-    assert s["jp"] == pytest.approx([0.1, 0.3, 0.2])  # per clip, in clip order
+    assert s["jp_clips"] == pytest.approx([0.1, 0.3, 0.2])  # per clip, in clip order
+    assert s["pose_clips"] == pytest.approx([0.05, 0.07, 0.06])
     assert s["pose"] == pytest.approx(0.06) and s["drift"] == pytest.approx(15.0)
     assert pretrained_val.summarise(clips[1:2] + clips[:1])["drift"] is None
     text = pretrained_val.table({"a.ckpt": {"zoo biped": s, "dog (not test)": s}}, 1.0)
@@ -350,29 +351,38 @@ def test_pretrained_rule_gives_section_31s_verdict_from_its_stored_table():
 
 def test_pretrained_rule_paired_compares_each_clip_with_itself():
     """``--paired``: a candidate 10 % worse on every clip fails part 2 even
-    where the group's median does not move (the clips trade places), one
-    worse on a single clip of five passes, and results without per-clip
-    values are refused by name."""
+    where the group's median does not move, one worse on a single clip of
+    five passes; part 1 asks the dog's pose 5 % better clip by clip; the
+    choice among passing candidates is by that ratio; results without
+    per-clip values are refused by name."""
     import json
     import pretrained_rule
     root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
     results = json.loads((root / "pretrained_val_sitlie.json").read_text())
-    for part in ("reconstruction", "retarget"):
-        results[part]["same"] = json.loads(json.dumps(results[part]["builtin"]))
-    base, same = results["reconstruction"]["builtin"], results["reconstruction"]["same"]
+    for part in ("reconstruction", "retarget"):  # builtin and two copies of it
+        results[part] = {name: json.loads(json.dumps(results[part]["builtin"]))
+                         for name in ("builtin", "same", "other")}
+    rec = results["reconstruction"]
+    base, same = rec["builtin"], rec["same"]
     for group in pretrained_rule.KEPT:
-        base[group]["jp"] = [0.02, 0.03, 0.04, 0.05, 0.06]
-        same[group]["jp"] = [0.05, 0.033, 0.044, 0.055, 0.066]  # 10 % worse, the first 2.5x
+        base[group]["jp_clips"] = [0.02, 0.03, 0.04, 0.05, 0.06]
+        same[group]["jp_clips"] = [0.05, 0.033, 0.044, 0.055, 0.066]  # 10 % worse, the first 2.5x
         same[group]["median"] = base[group]["median"]  # unpaired medians equal
-    part2 = [f for f in pretrained_rule.failures(results, "same", paired=True)
-             if f.startswith("part 2")]
+    base[pretrained_rule.AIM]["pose_clips"] = [0.2, 0.2, 0.2]
+    same[pretrained_rule.AIM]["pose_clips"] = [0.1, 0.2, 0.2]  # one clip better: ratio 1
+    fails = pretrained_rule.failures(results, "same", paired=True)
+    assert fails[0] == "part 1: dog (not test) paired pose ratio +0.0% over 3 clips"
+    part2 = [f for f in fails if f.startswith("part 2")]
     assert len(part2) == len(pretrained_rule.KEPT)
     assert part2[0] == "part 2: zoo biped paired JP ratio +10.0% over 5 clips"
     assert not [f for f in pretrained_rule.failures(results, "same") if f.startswith("part 2")]
     for group in pretrained_rule.KEPT:
-        same[group]["jp"] = [0.03, 0.03, 0.04, 0.05, 0.06]
-    assert not [f for f in pretrained_rule.failures(results, "same", paired=True)
-                if f.startswith("part 2")]
-    del base["zoo biped"]["jp"]
-    with pytest.raises(ValueError, match="lack per-clip JP"):
+        same[group]["jp_clips"] = [0.03, 0.03, 0.04, 0.05, 0.06]
+        rec["other"][group]["jp_clips"] = same[group]["jp_clips"]
+    same[pretrained_rule.AIM]["pose_clips"] = [0.1, 0.18, 0.19]
+    rec["other"][pretrained_rule.AIM]["pose_clips"] = [0.3, 0.15, 0.15]
+    assert pretrained_rule.failures(results, "same", paired=True) == []
+    assert pretrained_rule.verdict(results, paired=True) == ({"same": [], "other": []}, "other")
+    del base["zoo biped"]["jp_clips"]
+    with pytest.raises(ValueError, match="lack per-clip jp_clips"):
         pretrained_rule.failures(results, "same", paired=True)
