@@ -386,3 +386,19 @@ def test_pretrained_rule_paired_compares_each_clip_with_itself():
     del base["zoo biped"]["jp_clips"]
     with pytest.raises(ValueError, match="lack per-clip jp_clips"):
         pretrained_rule.failures(results, "same", paired=True)
+
+
+def test_pretrained_rule_gives_section_35s_verdicts_from_its_stored_table():
+    """Section 35's six epochs all fail the paired rule as registered; with
+    the still-source rows' steps left out (the amendment that section
+    states), epoch 20 alone passes and is chosen."""
+    import json
+    import pretrained_rule
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "pretrained_val_s35.json").read_text())
+    fails, chosen = pretrained_rule.verdict(results, paired=True)
+    assert chosen is None and len(fails) == 6
+    epoch20 = next(c for c in fails if "epoch_20" in c)
+    assert fails[epoch20] == ["part 3: still source: dog -> bandai steps +0.02 against +0.06"]
+    fails, chosen = pretrained_rule.verdict(results, paired=True, still_steps=False)
+    assert chosen == epoch20 and [c for c, f in fails.items() if not f] == [epoch20]
