@@ -222,11 +222,12 @@ def test_choose_builtin_reads_the_plan_from_the_joints() -> None:
 def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None:
     """The dog's D1_003 (validation split) stands through its most active
     128 frames; the built-in model predicts its paws on the ground and
-    barely moves them, yet drives its root at about two heights a second
-    (9 heights away over the clip). Settled (``settle=True``), the root is
-    held wherever no decoded limb moves fast: it ends less than a third as
-    far away (2.6 heights: the decoded paws still twitch), and the joint
-    error falls as much (1.3 heights against 4.6)."""
+    barely moves them, yet drives its root about a height away over the
+    clip (0.96 heights; the weights shipped before 28 Nov drove it 9).
+    Settled (``settle=True``), the root is held wherever no decoded limb
+    moves fast: it ends less than half as far away (0.39 heights: the
+    decoded paws still twitch), and the joint error halves (0.24 heights
+    against 0.50)."""
     from satagraph.experiment.train import load_module
     from satagraph.pipelines.inference import reconstruct_canonical
     from satagraph.pipelines.quality import most_active
@@ -248,15 +249,16 @@ def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None
                                     axis=-1).mean() / height)
 
     assert travel(src) < 0.1
-    assert travel(outs[False][1]) > 5.0
-    assert travel(outs[True][1]) < 0.35 * travel(outs[False][1])
-    assert joint_error(outs[True][1]) < 0.35 * joint_error(outs[False][1])
+    assert travel(outs[False][1]) > 0.5
+    assert travel(outs[True][1]) < 0.5 * travel(outs[False][1])
+    assert joint_error(outs[True][1]) < 0.6 * joint_error(outs[False][1])
 
 
 def test_a_retarget_of_a_standing_dog_stands(shared_data: Path) -> None:
     """The dog's D1_003 (validation split) stands; retargeted onto Bandai's
-    human by the built-in model, the human glides over 5 leg lengths away
-    with its legs barely swinging. By default the retarget's root is held
+    human by the built-in model, the human glides 2.2 leg lengths away
+    with its legs barely swinging (over 5 with the weights shipped before
+    28 Nov). By default the retarget's root is held
     wherever the source's stands, so it ends within 0.1 leg lengths of
     where the source's displacement puts it; with ``still=False`` it
     glides as decoded."""
@@ -275,4 +277,4 @@ def test_a_retarget_of_a_standing_dog_stands(shared_data: Path) -> None:
         return float(np.linalg.norm((ends[1][1] - ends[1][0]) / leg_length(out)
                                     - (ends[0][1] - ends[0][0]) / leg_length(src)))
 
-    assert gap(False) > 5.0 and gap(True) < 0.1
+    assert gap(False) > 1.0 and gap(True) < 0.1
