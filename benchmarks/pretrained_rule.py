@@ -51,7 +51,8 @@ KEPT = ("zoo biped", "zoo quadruped", "zoo bird", "zoo fowl", "bandai (val)")
 GAIN, LOSS = 0.05, 0.05
 #: Part 3: largest fall in mean steps, lowest posture.
 STEPS_DROP, POSTURE = 0.03, 0.9
-#: How ``pretrained_val.py`` names the retarget rows whose source stands still.
+#: How the retarget rows whose source stands still are named (``pretrained_val.py``
+#: names them with it).
 STILL = "still source:"
 
 
@@ -90,19 +91,18 @@ def failures(results: Dict, candidate: str, base: str = "builtin",
     for group in KEPT:
         if paired:
             ratio = paired_ratio(rec[group], bas[group])
-            if ratio > 1 + LOSS:
-                out.append(f"part 2: {group} paired JP ratio {ratio - 1:+.1%} over "
-                           f"{len(rec[group]['jp_clips'])} clips")
-            continue
-        ratio = rec[group]["median"] / bas[group]["median"]
+            line = (f"part 2: {group} paired JP ratio {ratio - 1:+.1%} over "
+                    f"{len(rec[group]['jp_clips'])} clips")
+        else:
+            ratio = rec[group]["median"] / bas[group]["median"]
+            line = (f"part 2: {group} JP {100 * rec[group]['median']:.2f} against "
+                    f"{100 * bas[group]['median']:.2f} ({ratio - 1:+.1%})")
         if ratio > 1 + LOSS:
-            out.append(f"part 2: {group} JP {100 * rec[group]['median']:.2f} against "
-                       f"{100 * bas[group]['median']:.2f} ({ratio - 1:+.1%})")
+            out.append(line)
     for row, got in results["retarget"][candidate].items():
         was = results["retarget"][base][row]
-        if still_steps is False and row.startswith(STILL):
-            pass  # a source that stands has no steps to keep
-        elif got["steps"] < was["steps"] - STEPS_DROP:
+        has_steps = still_steps or not row.startswith(STILL)  # a standing source has none
+        if has_steps and got["steps"] < was["steps"] - STEPS_DROP:
             out.append(f"part 3: {row} steps {got['steps']:+.2f} against {was['steps']:+.2f}")
         if got["travel_ok"] < was["travel_ok"] - 1e-9:
             out.append(f"part 3: {row} travel in band {got['travel_ok']:.0%} against "

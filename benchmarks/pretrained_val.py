@@ -52,6 +52,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from pretrained import (DATA, HOLDOUT, TRAIN_SPECIES, RECON_FRAMES, joint_error,  # noqa: E402
                         real_clip, recon_window)
+from pretrained_rule import STILL  # noqa: E402
 from results_io import write_results  # noqa: E402
 from satagraph.datasets.sources import read_manifest  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample  # noqa: E402
@@ -218,8 +219,8 @@ def still_pairs() -> List[Tuple[str, Motion, Motion]]:
     human = real_file(next(p for p in bandai if "_walk_" in p))
     dog = real_file(manifest_paths("dog", lambda split: split == "val")[0])
     out = []
-    for name, paths, target in (("still source: dog -> bandai", dogs, human),
-                                ("still source: bandai -> dog", bandai[::3], dog)):
+    for name, paths, target in ((f"{STILL} dog -> bandai", dogs, human),
+                                (f"{STILL} bandai -> dog", bandai[::3], dog)):
         for rel in paths:
             source = recon_window(real_file(rel))
             if np.linalg.norm(displacement(canonicalize(source, fps=30.0))) < STILL_SOURCE:
