@@ -36,6 +36,7 @@ clip (degrees, mean absolute; for groups whose heads lead the body).
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import sys
 import time
@@ -230,7 +231,7 @@ def still_pairs() -> List[Tuple[str, Motion, Motion]]:
 
 def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
                     plant: bool = False, settle: bool = False,
-                    still: bool = True) -> Dict[str, dict]:
+                    still: bool = True, mirror: bool = False) -> Dict[str, dict]:
     """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
     :func:`~satagraph.pipelines.quality.heading_gap`), of the stride
@@ -241,7 +242,7 @@ def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
         src, out = retarget_canonical(module, source, target, module.embed, plant=plant,
-                                      settle=settle, still=still)
+                                      settle=settle, still=still, mirror=mirror)
         own = canonicalize(target, fps=float(module.fps))
         quality = retarget_quality(src, out, ("steps", "travel", "sideways", "stride",
                                               "posture"), target=own)
@@ -281,12 +282,13 @@ def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]
     return np.degrees(np.unwrap(np.arctan2(d[:, 0], d[:, 2])))
 
 
-def measure(module, motion: Motion, plant: bool = False, settle: bool = False) -> dict:
+def measure(module, motion: Motion, plant: bool = False, settle: bool = False,
+            mirror: bool = False) -> dict:
     """JP, root-relative JP (fractions of the height), facing drift and the
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
     source)."""
     src, out = reconstruct_canonical(module, motion, module.embed, ground=False, plant=plant,
-                                     settle=settle)
+                                     settle=settle, mirror=mirror)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
@@ -374,6 +376,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="retargets: keep the root still where the source stands "
                              "(retarget_canonical's still; reconstructions never); both: "
                              "each checkpoint twice, the second column named '+still'")
+    parser.add_argument("--mirror", choices=("off", "on", "both"), default="off",
+                        help="average each decoding with its mirror image's "
+                             "(retarget_canonical's mirror); both: each checkpoint twice, "
+                             "the second column named '+mirror'")
     args = parser.parse_args(argv)
     if not (DATA / "manifest.tsv").is_file():
         print(f"pretrained_val.py: {DATA} not found: the real groups need ../shared/data",
@@ -390,16 +396,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.simplefilter("ignore")
         for ckpt in args.ckpt:
             module = load_module(ckpt).eval()
-            for settle in SETTINGS[args.settle]:
+            for settle, mirror in itertools.product(SETTINGS[args.settle],
+                                                    SETTINGS[args.mirror]):
                 groups: Dict[str, List[dict]] = {}
                 for group, _, motion in clips:  # reconstructions: never ``still``
                     groups.setdefault(group, []).append(
-                        measure(module, motion, args.plant, settle))
+                        measure(module, motion, args.plant, settle, mirror))
                 for still in SETTINGS[args.still]:
                     name = ckpt + (" +settle" if settle and args.settle == "both" else "") \
+                        + (" +mirror" if mirror and args.mirror == "both" else "") \
                         + (" +still" if still and args.still == "both" else "")
                     summary[name] = {g: summarise(v) for g, v in groups.items()}
-                    retargets[name] = retarget_scores(module, pairs, args.plant, settle, still)
+                    retargets[name] = retarget_scores(module, pairs, args.plant, settle, still,
+                                                      mirror)
     text = table(summary, time.perf_counter() - start, retargets)
     print(text)
     write_results(args.out, "Built-in model candidates on validation material "

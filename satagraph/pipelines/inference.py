@@ -9,12 +9,13 @@ import numpy as np
 import torch
 
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
-from satagraph.transforms.augment import root_tilted
+from satagraph.transforms.augment import mirror_pairs, root_tilted
 from satagraph.transforms.rest import (POSED_REST_DEGREES, REST_MODES, is_line_rest,  # noqa: F401
                                       needs_rest, rest_asymmetry, restore_rest, shown_rest)
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.foot_plant import plant_feet
+from satagraph.transforms.mirror_average import average_readings, mirror_back, mirror_canonical
 from satagraph.transforms.still_root import hold_still_source, settle_root
 from satagraph.transforms.ground import (STANDING_SHARE, ground_retarget, stands,  # noqa: F401
                                          standing_frame, standing_frames)
@@ -231,29 +232,71 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
                        rest: str = "auto", ground: bool = True,
                        plant: bool = False, settle: bool = False,
-                       still: bool = True) -> Tuple[Motion, Motion]:
+                       still: bool = True, mirror: bool = False) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
     :func:`~satagraph.transforms.canonical.decanonicalize` undoes), the
     source turned about +Y where :func:`source_features` turns it. What
-    :mod:`satagraph.quality` measures."""
+    :mod:`satagraph.quality` measures. With :obj:`mirror`, the decoding
+    is averaged with that of both rigs' mirror images
+    (:func:`mirrored_reading`)."""
     if rest not in REST_MODES:
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
-    src_canon, src = source_features(canonicalize(source, fps=fps), rest,
-                                     facing_smooth_of(module))
-    tgt_canon = canonicalize(target, fps=fps)
-    tgt_rest, undo = shown_rest(tgt_canon, rest)
-    tgt = static_features(tgt_rest)
-    q, r, c = transfer(module, src, tgt, semantic, window, overlap)
-    out_feats = replace(tgt, q=q, r=r, fps=fps, transform=tgt_canon.transform)
-    out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False), undo,
-                       tgt_canon.skeleton)
+    source, target = canonicalize(source, fps=fps), canonicalize(target, fps=fps)
+    reading = Reader(module, semantic, window, overlap, fps, rest)
+    src_canon, out, c = reading(source, target)
+    if mirror:
+        out, c = mirrored_reading(reading, source, target, src_canon, out, c)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
-    out = ground_retarget(out, src_canon, tgt_canon) if ground else out
+    out = ground_retarget(out, src_canon, target) if ground else out
     return src_canon, plant_feet(out) if plant else out
+
+
+class Reader:
+    """One reading of a canonical source onto a canonical target by
+    :obj:`module` (:func:`retarget_canonical`'s settings): called with
+    ``(source, target)``, it returns the source as shown to the model
+    (:func:`source_features`), the decoded motion on the target's rig
+    (its rest restored) and the decoder's contact probabilities
+    :math:`(T, J_t)`."""
+
+    def __init__(self, module, semantic: Optional[Callable], window: Optional[int],
+                 overlap: Optional[int], fps: float, rest: str) -> None:
+        self.module, self.semantic, self.fps, self.rest = module, semantic, fps, rest
+        self.window, self.overlap = window, overlap
+
+    def __call__(self, source: Motion, target: Motion) -> Tuple[Motion, Motion, np.ndarray]:
+        src_canon, src = source_features(source, self.rest, facing_smooth_of(self.module))
+        tgt_rest, undo = shown_rest(target, self.rest)
+        tgt = static_features(tgt_rest)
+        q, r, c = transfer(self.module, src, tgt, self.semantic, self.window, self.overlap)
+        out_feats = replace(tgt, q=q, r=r, fps=self.fps, transform=target.transform)
+        out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False),
+                           undo, target.skeleton)
+        return src_canon, out, c
+
+
+def mirrored_reading(reading: Reader, source: Motion, target: Motion,
+                     src_canon: Motion, out: Motion, contacts: np.ndarray
+                     ) -> Tuple[Motion, np.ndarray]:
+    r"""The mean of a reading (:obj:`out`, :obj:`contacts`, from
+    :obj:`src_canon`) and the reading of both canonical rigs' mirror
+    images (:mod:`~satagraph.transforms.mirror_average`), or the reading
+    as it is where either rig has no mirror image.
+
+    Shapes:
+        - **contacts**: :math:`(T, J_t)`
+    """
+    twin_source, twin_target = mirror_canonical(source), mirror_canonical(target)
+    if twin_source is None or twin_target is None:
+        return out, contacts
+    twin_src, twin_out, twin_c = reading(twin_source, twin_target)
+    back = mirror_back(twin_out, twin_src, src_canon)
+    pair = mirror_pairs(target.skeleton)
+    return average_readings(out, back), 0.5 * (contacts + twin_c[:, pair])
 
 
 def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] = None,

@@ -220,12 +220,15 @@ def _heading(rotation: np.ndarray) -> np.ndarray:
 def mirror_pairs(skeleton: Skeleton) -> np.ndarray:
     r"""Index of each joint's mirror counterpart (itself for joints without
     a side or whose counterpart is missing), by
-    :func:`satagraph.sides.side_pairs`.
+    :func:`~satagraph.transforms.canonical.lateral_pairs` (the names'
+    sides, exporter tags such as ``__x7Q`` dropped).
 
     Shapes:
         - **output**: :math:`(J,)`
     """
-    left, right = side_pairs(skeleton.names)
+    from satagraph.transforms.canonical import lateral_pairs
+
+    left, right = lateral_pairs(skeleton.names)
     out = np.arange(skeleton.num_joints)
     out[left], out[right] = right, left
     return out
