@@ -1,0 +1,125 @@
+"""Reconstruction with and without the mirror image's reading, on validation
+clips that `benchmarks/pretrained_val.py` does not read
+(`experiments/PRETRAIN.md` section 37b).
+
+`pretrained_val.py` reads each zoo plan's first six validation clips and
+every third of Bandai's validation files; this reads each plan's clips 7
+to 18 of the same stream and Bandai's other validation files, each
+reconstructed by every checkpoint as one reading and averaged with its
+mirror image's (`retarget_canonical(..., mirror=True)`). Per group: the
+median JP (% of the height) of each setting and the paired ratio, the
+median over the clips of the averaged reading's JP over the single one's.
+Prints the table and the verdict of section 37b's rule.
+
+    .venv/bin/python benchmarks/mirror_val.py [--ckpt builtin builtin-wide] [--out P]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import pretrained_val as val  # noqa: E402
+from results_io import write_results  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
+
+OUT = val.ROOT / "benchmarks" / "results" / "mirror_val"
+#: Zoo clips per plan that ``pretrained_val.py`` reads, and how far this reads.
+SEEN, LAST = val.ZOO_PER_PLAN, 18
+#: Section 37b's groups per model: (groups, largest paired ratio, largest mean or None).
+RULE = {"builtin": (("zoo biped", "zoo quadruped", "zoo bird", "zoo fowl", "bandai (val)"),
+                    1.02, 0.95),
+        "builtin-wide": (("zoo hexapod", "zoo crab", "zoo spider"), 1.02, None)}
+
+
+def fresh_clips() -> List[Tuple[str, str, Motion]]:
+    """``(group, name, motion)``: each plan's validation clips after the
+    first :data:`SEEN` up to :data:`LAST`, and Bandai's validation files
+    outside every third (each cut as ``pretrained_val.py`` cuts them)."""
+    count: Dict[str, int] = {}
+    zoo = []
+    for clip in val.zoo_clips(LAST):  # each plan's clips in stream order
+        count[clip[0]] = count.get(clip[0], 0) + 1
+        if count[clip[0]] > SEEN:
+            zoo.append(clip)
+    bandai = val.manifest_paths("bandai", lambda split: split == "val")
+    rest = [rel for i, rel in enumerate(bandai) if i % 3]
+    return zoo + [("bandai (val)", rel, val.recon_window(val.real_file(rel))) for rel in rest]
+
+
+def paired(single: Sequence[float], averaged: Sequence[float]) -> float:
+    """Median over clips of the averaged reading's error over the single one's."""
+    return float(np.median(np.asarray(averaged) / np.asarray(single)))
+
+
+def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool, List[str]]:
+    """Section 37b's rule on ``results[ckpt][group] = {"single", "mirror"}``
+    (per-clip JPs); returns whether it passes and why not."""
+    failures = []
+    for ckpt, (groups, largest, mean_cap) in RULE.items():
+        ratios = {g: paired(results[ckpt][g]["single"], results[ckpt][g]["mirror"])
+                  for g in groups}
+        failures += [f"{ckpt} {g}: {r:.3f} > {largest}" for g, r in ratios.items()
+                     if r > largest]
+        if mean_cap is not None and np.mean(list(ratios.values())) > mean_cap:
+            failures.append(f"{ckpt} mean {np.mean(list(ratios.values())):.3f} > {mean_cap}")
+    return not failures, failures
+
+
+def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float) -> str:
+    lines = [f"Validation clips `pretrained_val.py` does not read; {seconds:.0f} s. JP, % of "
+             "the height, median over the group's clips: one reading, averaged with the "
+             "mirror image's, and the paired ratio (median of averaged over single).", "",
+             "| group | n | " + " | ".join(f"`{k}`: one, mirror, paired" for k in results) + " |",
+             "|---|---:|" + "---|" * len(results)]
+    first = next(iter(results.values()))
+    for group in first:
+        cells = [f"{100 * np.median(r[group]['single']):.1f}, "
+                 f"{100 * np.median(r[group]['mirror']):.1f}, "
+                 f"{paired(r[group]['single'], r[group]['mirror']):.3f}"
+                 for r in results.values()]
+        lines.append(f"| {group} | {len(first[group]['single'])} | " + " | ".join(cells) + " |")
+    if set(RULE) <= set(results):
+        ok, failures = verdict(results)
+        lines += ["", "Section 37b's rule: " + ("passes" if ok else "fails: " + "; ".join(failures))]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--ckpt", nargs="+", default=list(RULE),
+                        help="checkpoints, .safetensors weights files or built-in names")
+    parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
+    args = parser.parse_args(argv)
+    if not (val.DATA / "manifest.tsv").is_file():
+        print(f"mirror_val.py: {val.DATA} not found: Bandai's clips need ../shared/data",
+              file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    clips = fresh_clips()
+    results: Dict[str, Dict[str, Dict[str, List[float]]]] = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for ckpt in args.ckpt:
+            module = load_module(ckpt).eval()
+            groups = results.setdefault(ckpt, {})
+            for group, _, motion in clips:
+                cell = groups.setdefault(group, {"single": [], "mirror": []})
+                for key, mirror in (("single", False), ("mirror", True)):
+                    cell[key].append(val.measure(module, motion, mirror=mirror)["jp"])
+    text = table(results, time.perf_counter() - start)
+    print(text)
+    write_results(args.out, "Reconstruction with the mirror image's reading, on fresh "
+                  "validation clips (benchmarks/mirror_val.py)", text, results)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
