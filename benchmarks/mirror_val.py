@@ -1,17 +1,19 @@
 """Reconstruction with and without the mirror image's reading, on validation
 clips that `benchmarks/pretrained_val.py` does not read
-(`experiments/PRETRAIN.md` section 37b).
+(`experiments/PRETRAIN.md` sections 37b-37c).
 
 `pretrained_val.py` reads each zoo plan's first six validation clips and
 every third of Bandai's validation files; this reads each plan's clips 7
-to 18 of the same stream and Bandai's other validation files, each
-reconstructed by every checkpoint as one reading and averaged with its
-mirror image's (`retarget_canonical(..., mirror=True)`). Per group: the
-median JP (% of the height) of each setting and the paired ratio, the
-median over the clips of the averaged reading's JP over the single one's.
-Prints the table and the verdict of section 37b's rule.
+to 18 of the same stream (`--zoo-clips`: another range) and Bandai's other
+validation files (`--no-bandai`: none), each reconstructed by every
+checkpoint as one reading and averaged with its mirror image's
+(`retarget_canonical(..., mirror=True)`); a built-in model reads the
+groups its part of the rule names. Per group: the median JP (% of the
+height) of each setting and the paired ratio, the median over the clips
+of the averaged reading's JP over the single one's. Prints the table and
+the verdict of the rule on the groups measured.
 
-    .venv/bin/python benchmarks/mirror_val.py [--ckpt builtin builtin-wide] [--out P]
+    .venv/bin/python benchmarks/mirror_val.py [--ckpt builtin builtin-wide] [--zoo-clips 7 18] [--out P]
 """
 from __future__ import annotations
 
@@ -31,26 +33,28 @@ from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 
 OUT = val.ROOT / "benchmarks" / "results" / "mirror_val"
-#: Zoo clips per plan that ``pretrained_val.py`` reads, and how far this reads.
-SEEN, LAST = val.ZOO_PER_PLAN, 18
+#: The zoo clips of each plan read by default (1-based, inclusive): those
+#: after the ones ``pretrained_val.py`` reads.
+ZOO_CLIPS = (val.ZOO_PER_PLAN + 1, 18)
 #: Section 37b's groups per model: (groups, largest paired ratio, largest mean or None).
 RULE = {"builtin": (("zoo biped", "zoo quadruped", "zoo bird", "zoo fowl", "bandai (val)"),
                     1.02, 0.95),
         "builtin-wide": (("zoo hexapod", "zoo crab", "zoo spider"), 1.02, None)}
 
 
-def fresh_clips() -> List[Tuple[str, str, Motion]]:
-    """``(group, name, motion)``: each plan's validation clips after the
-    first :data:`SEEN` up to :data:`LAST`, and Bandai's validation files
-    outside every third (each cut as ``pretrained_val.py`` cuts them)."""
+def fresh_clips(first: int, last: int, bandai: bool = True) -> List[Tuple[str, str, Motion]]:
+    """``(group, name, motion)``: each plan's validation clips :obj:`first`
+    to :obj:`last` (1-based, in stream order) and, with :obj:`bandai`,
+    Bandai's validation files outside every third (each cut as
+    ``pretrained_val.py`` cuts them)."""
     count: Dict[str, int] = {}
     zoo = []
-    for clip in val.zoo_clips(LAST):  # each plan's clips in stream order
+    for clip in val.zoo_clips(last):
         count[clip[0]] = count.get(clip[0], 0) + 1
-        if count[clip[0]] > SEEN:
+        if count[clip[0]] >= first:
             zoo.append(clip)
-    bandai = val.manifest_paths("bandai", lambda split: split == "val")
-    rest = [rel for i, rel in enumerate(bandai) if i % 3]
+    files = val.manifest_paths("bandai", lambda split: split == "val") if bandai else []
+    rest = [rel for i, rel in enumerate(files) if i % 3]
     return zoo + [("bandai (val)", rel, val.recon_window(val.real_file(rel))) for rel in rest]
 
 
@@ -65,7 +69,7 @@ def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool
     failures = []
     for ckpt, (groups, largest, mean_cap) in RULE.items():
         ratios = {g: paired(results[ckpt][g]["single"], results[ckpt][g]["mirror"])
-                  for g in groups}
+                  for g in groups if g in results[ckpt]}
         failures += [f"{ckpt} {g}: {r:.3f} > {largest}" for g, r in ratios.items()
                      if r > largest]
         if mean_cap is not None and np.mean(list(ratios.values())) > mean_cap:
@@ -75,20 +79,22 @@ def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool
 
 def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float) -> str:
     lines = [f"Validation clips `pretrained_val.py` does not read; {seconds:.0f} s. JP, % of "
-             "the height, median over the group's clips: one reading, averaged with the "
+             "the height, median over the group's clips (n): one reading, averaged with the "
              "mirror image's, and the paired ratio (median of averaged over single).", "",
-             "| group | n | " + " | ".join(f"`{k}`: one, mirror, paired" for k in results) + " |",
-             "|---|---:|" + "---|" * len(results)]
-    first = next(iter(results.values()))
-    for group in first:
-        cells = [f"{100 * np.median(r[group]['single']):.1f}, "
-                 f"{100 * np.median(r[group]['mirror']):.1f}, "
-                 f"{paired(r[group]['single'], r[group]['mirror']):.3f}"
+             "| group | " + " | ".join(f"`{k}`: n, one, mirror, paired" for k in results) + " |",
+             "|---|" + "---|" * len(results)]
+    groups = list(dict.fromkeys(g for r in results.values() for g in r))
+    for group in groups:
+        cells = [("" if group not in r else
+                  f"{len(r[group]['single'])}, {100 * np.median(r[group]['single']):.1f}, "
+                  f"{100 * np.median(r[group]['mirror']):.1f}, "
+                  f"{paired(r[group]['single'], r[group]['mirror']):.3f}")
                  for r in results.values()]
-        lines.append(f"| {group} | {len(first[group]['single'])} | " + " | ".join(cells) + " |")
+        lines.append(f"| {group} | " + " | ".join(cells) + " |")
     if set(RULE) <= set(results):
         ok, failures = verdict(results)
-        lines += ["", "Section 37b's rule: " + ("passes" if ok else "fails: " + "; ".join(failures))]
+        lines += ["", "The rule (PRETRAIN.md 37b) on these groups: "
+                  + ("passes" if ok else "fails: " + "; ".join(failures))]
     return "\n".join(lines) + "\n"
 
 
@@ -96,14 +102,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--ckpt", nargs="+", default=list(RULE),
                         help="checkpoints, .safetensors weights files or built-in names")
+    parser.add_argument("--zoo-clips", type=int, nargs=2, default=ZOO_CLIPS,
+                        metavar=("FIRST", "LAST"),
+                        help="each plan's validation clips FIRST to LAST (1-based; default "
+                             f"{ZOO_CLIPS[0]} {ZOO_CLIPS[1]})")
+    parser.add_argument("--bandai", action=argparse.BooleanOptionalAction, default=True,
+                        help="Bandai's validation files outside every third (default: on)")
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     args = parser.parse_args(argv)
+    if not 1 <= args.zoo_clips[0] <= args.zoo_clips[1]:
+        parser.error(f"--zoo-clips: need 1 <= FIRST <= LAST, got {args.zoo_clips}")
     if not (val.DATA / "manifest.tsv").is_file():
         print(f"mirror_val.py: {val.DATA} not found: Bandai's clips need ../shared/data",
               file=sys.stderr)
         return 2
     start = time.perf_counter()
-    clips = fresh_clips()
+    clips = fresh_clips(*args.zoo_clips, bandai=args.bandai)
     results: Dict[str, Dict[str, Dict[str, List[float]]]] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -111,6 +125,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             module = load_module(ckpt).eval()
             groups = results.setdefault(ckpt, {})
             for group, _, motion in clips:
+                if ckpt in RULE and group not in RULE[ckpt][0]:
+                    continue
                 cell = groups.setdefault(group, {"single": [], "mirror": []})
                 for key, mirror in (("single", False), ("mirror", True)):
                     cell[key].append(val.measure(module, motion, mirror=mirror)["jp"])

@@ -402,3 +402,21 @@ def test_pretrained_rule_gives_section_35s_verdicts_from_its_stored_table():
     assert fails[epoch20] == ["part 3: still source: dog -> bandai steps +0.02 against +0.06"]
     fails, chosen = pretrained_rule.verdict(results, paired=True, still_steps=False)
     assert chosen == epoch20 and [c for c, f in fails.items() if not f] == [epoch20]
+
+
+def test_mirror_val_gives_section_37bs_verdict_from_its_stored_table():
+    """Section 37b's stored figures fail on builtin-wide's spider alone; a
+    group the run did not measure (Bandai with --no-bandai) is not judged,
+    and builtin's mean counts the groups measured."""
+    import json
+    import mirror_val
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "mirror_val_37b.json").read_text())
+    ok, failures = mirror_val.verdict(results)
+    assert not ok and len(failures) == 1 and failures[0].startswith("builtin-wide zoo spider: 1.117")
+    results["builtin-wide"]["zoo spider"]["mirror"] = results["builtin-wide"]["zoo spider"]["single"]
+    del results["builtin"]["bandai (val)"]
+    assert mirror_val.verdict(results) == (True, [])
+    results["builtin"]["zoo bird"]["mirror"] = [2 * v for v in results["builtin"]["zoo bird"]["single"]]
+    ok, failures = mirror_val.verdict(results)
+    assert failures == ["builtin zoo bird: 2.000 > 1.02", "builtin mean 1.167 > 0.95"]

@@ -139,6 +139,16 @@ def add_settle_argument(parser: argparse.ArgumentParser) -> None:
                         "(default: off)")
 
 
+def add_mirror_argument(parser: argparse.ArgumentParser, default: bool) -> None:
+    """``--mirror/--no-mirror``: average the decoding with that of the
+    input's mirror image (:mod:`~satagraph.transforms.mirror_average`)."""
+    parser.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=default,
+                        help="also decode the left-right mirror image of the input(s) and "
+                        "average the two readings (twice the model's time; a rig without "
+                        "left/right joint names is read once; default: "
+                        f"{'on' if default else 'off'})")
+
+
 def add_still_argument(parser: argparse.ArgumentParser) -> None:
     """``--still/--no-still``: keep a retarget's root still wherever its
     source's root stands still

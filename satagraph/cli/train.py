@@ -12,8 +12,8 @@ from satagraph.cli.arguments import positive_float, positive_int
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
-    from satagraph.cli.arguments import (add_plant_argument, add_settle_argument,
-                                         add_still_argument)
+    from satagraph.cli.arguments import (add_mirror_argument, add_plant_argument,
+                                         add_settle_argument, add_still_argument)
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config in experiments/ "
                        "(or a path), with dotted overrides, e.g. "
@@ -38,6 +38,7 @@ def add_train_parsers(sub) -> None:
     _common(p)
     _ground(p, default=False)
     add_settle_argument(p)
+    add_mirror_argument(p, default=False)
     p.add_argument("input", metavar="IN.bvh")
     p.add_argument("output", metavar="OUT.bvh")
     _rig(p)
@@ -52,6 +53,7 @@ def add_train_parsers(sub) -> None:
     add_plant_argument(p)
     add_settle_argument(p)
     add_still_argument(p)
+    add_mirror_argument(p, default=False)
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
@@ -286,7 +288,7 @@ def run_reconstruct(args) -> int:
     module, embed = _load(args, [motion], [args.input])
     _check(motion, args.input, module.fps)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
-                             args.ground, args.settle)
+                             args.ground, args.settle, args.mirror)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
     return 0
@@ -303,7 +305,7 @@ def run_retarget(args) -> int:
     _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
-                         settle=args.settle, still=args.still)
+                         settle=args.settle, still=args.still, mirror=args.mirror)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")

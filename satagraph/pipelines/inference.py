@@ -162,7 +162,7 @@ def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
                     rest: str = "auto", ground: bool = True, plant: bool = False,
-                    settle: bool = False, still: bool = True) -> Motion:
+                    settle: bool = False, still: bool = True, mirror: bool = False) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -213,9 +213,12 @@ def retarget_motion(module, source: Motion, target: Motion,
             (:func:`~satagraph.transforms.still_root.hold_still_source`;
             ``experiments/PRETRAIN.md`` section 26); ``False`` keeps the
             decoder's root path there.
+        mirror (bool): Also decode both rigs' left-right mirror images and
+            average the two readings (:func:`mirrored_reading`; twice the
+            model's time). A rig without left/right joint pairs is read once.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest, ground, plant, settle, still)
+                                  rest, ground, plant, settle, still, mirror)
     return from_canonical(canon, source)
 
 
@@ -372,15 +375,15 @@ def turn_world(motion: Motion, turn: np.ndarray) -> Motion:
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
                        window: Optional[int] = None, overlap: Optional[int] = None,
                        rest: str = "auto", ground: bool = False,
-                       settle: bool = False) -> Motion:
+                       settle: bool = False, mirror: bool = False) -> Motion:
     """Encode and decode a motion on its own skeleton (:obj:`rest`,
-    :obj:`ground` and :obj:`settle`: see :func:`retarget_motion`; ground
+    :obj:`ground`, :obj:`settle` and :obj:`mirror`: see :func:`retarget_motion`; ground
     is off by default here: on its own skeleton the decoder's root height
     is closer than a shift that matches the lowest joints of two
     different poses). The root is never held where the input stands
     still (:func:`reconstruct_canonical`): a reconstruction is the
     model's alone."""
     _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
-                                     rest=rest, ground=ground, settle=settle)
+                                     rest=rest, ground=ground, settle=settle, mirror=mirror)
     return from_canonical(canon, motion)
 

@@ -14,7 +14,7 @@ import numpy as np
 from satagraph.motion import Motion
 from satagraph.ops.fk import forward_kinematics_numpy
 from satagraph.ops.rotation_numpy import mean_rotation_numpy, yaw_matrix_numpy, yaw_of
-from satagraph.sides import side_pairs, swap_side  # noqa: F401 (re-exported)
+from satagraph.sides import side_of, side_pairs, swap_side  # noqa: F401 (re-exported)
 from satagraph.skeleton import Skeleton
 
 
@@ -234,6 +234,13 @@ def mirror_pairs(skeleton: Skeleton) -> np.ndarray:
     return out
 
 
+def _sided(name: str) -> bool:
+    """Whether a joint name carries a side (exporter tags dropped)."""
+    from satagraph.semantics.lexicon import drop_noise_tokens
+
+    return side_of(drop_noise_tokens(name)) is not None
+
+
 def mirror(motion: Motion, axis: int = 0) -> Motion:
     r"""Mirror a motion across the plane normal to :obj:`axis` (0: the
     character's left-right axis X of a canonical motion), swapping left and
@@ -246,11 +253,21 @@ def mirror(motion: Motion, axis: int = 0) -> Motion:
     Args:
         motion (Motion): The motion.
         axis (int): Axis reflected (0, 1 or 2).
+
+    Raises:
+        ValueError: A joint named for one side has no counterpart on the
+            other (legs numbered across the body, ``Leg_L_01`` ... ``Leg_R_08``:
+            its mirror image would carry left-named legs on its right), or
+            the two sides' hierarchies differ.
     """
     reflect = np.eye(3)
     reflect[axis, axis] = -1.0
     skel = motion.skeleton
     pair = mirror_pairs(skel)
+    lone = [name for j, name in enumerate(skel.names) if pair[j] == j and _sided(name)]
+    if lone:
+        raise ValueError(f"mirror: {len(lone)} joints named for one side have no "
+                         f"counterpart on the other (first: {lone[0]!r})")
     parents = pair[np.maximum(skel.parents[pair], 0)]
     parents[0] = -1
     if not np.array_equal(parents, skel.parents):
