@@ -523,12 +523,14 @@ def reconstructed_items(module, items: Sequence[Item],
 def autoencoded_items(autoencoder, items: Sequence[Item]) -> List[Item]:
     """Every test item encoded and decoded on its own rig by a plain
     autoencoder (``--reference``: the ceiling an RVQ started from it could
-    reach), put on the floor as the other rows."""
+    reach), put on the floor as the other rows; one reading, as the RVQ's
+    own row decodes its codes once (no mirror image)."""
     from satagraph.pipelines.inference import reconstruct_motion
     out = []
     for it in items:
         with torch.no_grad():
-            motion = reconstruct_motion(autoencoder, it.motion, autoencoder.embed, ground=True)
+            motion = reconstruct_motion(autoencoder, it.motion, autoencoder.embed, ground=True,
+                                        mirror=False)
         feats = motion_to_features(canonicalize(motion, fps=FPS))
         out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
     return out

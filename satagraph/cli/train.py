@@ -38,7 +38,7 @@ def add_train_parsers(sub) -> None:
     _common(p)
     _ground(p, default=False)
     add_settle_argument(p)
-    add_mirror_argument(p, default=False)
+    add_mirror_argument(p, default=True)
     p.add_argument("input", metavar="IN.bvh")
     p.add_argument("output", metavar="OUT.bvh")
     _rig(p)
