@@ -250,11 +250,12 @@ def test_builtin_holds_a_standing_dog_where_it_stands(shared_data: Path) -> None
     """The dog's D1_003 (validation split) stands through its most active
     128 frames; the built-in model predicts its paws on the ground and
     barely moves them, yet drives its root about a height away over the
-    clip (0.96 heights; the weights shipped before 28 Nov drove it 9).
+    clip (0.90 heights averaged with the mirror image's reading, the
+    default; 0.96 read once; the weights shipped before 28 Nov drove it 9).
     Settled (``settle=True``), the root is held wherever no decoded limb
-    moves fast: it ends less than half as far away (0.39 heights: the
-    decoded paws still twitch), and the joint error halves (0.24 heights
-    against 0.50)."""
+    moves fast: it ends less than half as far away (0.02 heights; 0.39
+    read once, where the decoded paws still twitch), and the joint error
+    halves (0.12 heights against 0.48; read once 0.24 against 0.50)."""
     from satagraph.experiment.train import load_module
     from satagraph.pipelines.inference import reconstruct_canonical
     from satagraph.pipelines.quality import most_active
