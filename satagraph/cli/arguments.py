@@ -144,8 +144,8 @@ def add_mirror_argument(parser: argparse.ArgumentParser, default: bool) -> None:
     input's mirror image (:mod:`~satagraph.transforms.mirror_average`)."""
     parser.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=default,
                         help="also decode the left-right mirror image of the input(s) and "
-                        "average the two readings (twice the model's time; a rig without "
-                        "left/right joint names is read once; default: "
+                        "average the two readings (twice the model's time; a rig whose sides "
+                        "do not pair by joint name is read once; default: "
                         f"{'on' if default else 'off'})")
 
 
