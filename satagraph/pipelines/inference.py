@@ -215,7 +215,9 @@ def retarget_motion(module, source: Motion, target: Motion,
             decoder's root path there.
         mirror (bool): Also decode both rigs' left-right mirror images and
             average the two readings (:func:`mirrored_reading`; twice the
-            model's time). A rig without left/right joint pairs is read once.
+            model's time). A rig whose sides do not pair by joint name
+            (:func:`~satagraph.transforms.mirror_average.mirror_canonical`) is
+            read once.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
                                   rest, ground, plant, settle, still, mirror)

@@ -34,8 +34,10 @@ LATERAL_AXIS = 0
 def mirror_canonical(motion: Motion) -> Optional[Motion]:
     """The mirror image of a canonical motion across its side-to-side axis,
     or ``None`` where it has none to speak of: no left/right joint pairs
-    (:func:`~satagraph.transforms.augment.mirror_pairs`) or a hierarchy
-    whose sides are not each other's image."""
+    (:func:`~satagraph.transforms.augment.mirror_pairs`), a joint named for
+    one side without a counterpart, or a hierarchy whose sides are not
+    each other's image (what :func:`~satagraph.transforms.augment.mirror`
+    refuses)."""
     pair = mirror_pairs(motion.skeleton)
     if np.array_equal(pair, np.arange(motion.num_joints)):
         return None
