@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import partial
 from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -250,7 +251,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
     source, target = canonicalize(source, fps=fps), canonicalize(target, fps=fps)
-    reading = Reader(module, semantic, window, overlap, fps, rest)
+    reading = partial(read_once, module, semantic, window, overlap, fps, rest)
     src_canon, out, c = reading(source, target)
     if mirror:
         out, c = mirrored_reading(reading, source, target, src_canon, out, c)
@@ -260,37 +261,31 @@ def retarget_canonical(module, source: Motion, target: Motion,
     return src_canon, plant_feet(out) if plant else out
 
 
-class Reader:
+def read_once(module, semantic: Optional[Callable], window: Optional[int],
+              overlap: Optional[int], fps: float, rest: str, source: Motion,
+              target: Motion) -> Tuple[Motion, Motion, np.ndarray]:
     """One reading of a canonical source onto a canonical target by
-    :obj:`module` (:func:`retarget_canonical`'s settings): called with
-    ``(source, target)``, it returns the source as shown to the model
-    (:func:`source_features`), the decoded motion on the target's rig
-    (its rest restored) and the decoder's contact probabilities
-    :math:`(T, J_t)`."""
-
-    def __init__(self, module, semantic: Optional[Callable], window: Optional[int],
-                 overlap: Optional[int], fps: float, rest: str) -> None:
-        self.module, self.semantic, self.fps, self.rest = module, semantic, fps, rest
-        self.window, self.overlap = window, overlap
-
-    def __call__(self, source: Motion, target: Motion) -> Tuple[Motion, Motion, np.ndarray]:
-        src_canon, src = source_features(source, self.rest, facing_smooth_of(self.module))
-        tgt_rest, undo = shown_rest(target, self.rest)
-        tgt = static_features(tgt_rest)
-        q, r, c = transfer(self.module, src, tgt, self.semantic, self.window, self.overlap)
-        out_feats = replace(tgt, q=q, r=r, fps=self.fps, transform=target.transform)
-        out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False),
-                           undo, target.skeleton)
-        return src_canon, out, c
+    :obj:`module` (:func:`retarget_canonical`'s settings): the source as
+    shown to the model (:func:`source_features`), the decoded motion on
+    the target's rig (its rest restored) and the decoder's contact
+    probabilities :math:`(T, J_t)`."""
+    src_canon, src = source_features(source, rest, facing_smooth_of(module))
+    tgt_rest, undo = shown_rest(target, rest)
+    tgt = static_features(tgt_rest)
+    q, r, c = transfer(module, src, tgt, semantic, window, overlap)
+    out_feats = replace(tgt, q=q, r=r, fps=fps, transform=target.transform)
+    out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False),
+                       undo, target.skeleton)
+    return src_canon, out, c
 
 
-def mirrored_reading(reading: Reader, source: Motion, target: Motion,
-                     src_canon: Motion, out: Motion, contacts: np.ndarray
-                     ) -> Tuple[Motion, np.ndarray]:
+def mirrored_reading(reading: Callable, source: Motion, target: Motion, src_canon: Motion,
+                     out: Motion, contacts: np.ndarray) -> Tuple[Motion, np.ndarray]:
     r"""The mean of a reading (:obj:`out`, :obj:`contacts`, from
-    :obj:`src_canon`) and the reading of both canonical rigs' mirror
-    images (:mod:`~satagraph.transforms.mirror_average`), or the reading
-    as it is where either rig has no mirror image.
+    :obj:`src_canon`) and :obj:`reading` (:func:`read_once` with its
+    settings bound) of both canonical rigs' mirror images
+    (:mod:`~satagraph.transforms.mirror_average`), or the reading as it is
+    where either rig has no mirror image.
 
     Shapes:
         - **contacts**: :math:`(T, J_t)`

@@ -234,11 +234,14 @@ def mirror_pairs(skeleton: Skeleton) -> np.ndarray:
     return out
 
 
-def _sided(name: str) -> bool:
-    """Whether a joint name carries a side (exporter tags dropped)."""
+def _lone_sides(names: List[str], pair: np.ndarray) -> List[str]:
+    """The names among :obj:`names` that carry a side (exporter tags
+    dropped, as :func:`mirror_pairs` reads them) but have no counterpart
+    in :obj:`pair`."""
     from satagraph.semantics.lexicon import drop_noise_tokens
 
-    return side_of(drop_noise_tokens(name)) is not None
+    return [name for j, name in enumerate(names)
+            if pair[j] == j and side_of(drop_noise_tokens(name)) is not None]
 
 
 def mirror(motion: Motion, axis: int = 0) -> Motion:
@@ -264,7 +267,7 @@ def mirror(motion: Motion, axis: int = 0) -> Motion:
     reflect[axis, axis] = -1.0
     skel = motion.skeleton
     pair = mirror_pairs(skel)
-    lone = [name for j, name in enumerate(skel.names) if pair[j] == j and _sided(name)]
+    lone = _lone_sides(skel.names, pair)
     if lone:
         raise ValueError(f"mirror: {len(lone)} joints named for one side have no "
                          f"counterpart on the other (first: {lone[0]!r})")
