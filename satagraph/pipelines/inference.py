@@ -250,7 +250,9 @@ def retarget_canonical(module, source: Motion, target: Motion,
     if rest not in REST_MODES:
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
-    source, target = canonicalize(source, fps=fps), canonicalize(target, fps=fps)
+    same = target is source  # a reconstruction: canonicalized and mirrored once
+    source = canonicalize(source, fps=fps)
+    target = source if same else canonicalize(target, fps=fps)
     reading = partial(read_once, module, semantic, window, overlap, fps, rest)
     src_canon, out, c = reading(source, target)
     if mirror:
@@ -290,7 +292,8 @@ def mirrored_reading(reading: Callable, source: Motion, target: Motion, src_cano
     Shapes:
         - **contacts**: :math:`(T, J_t)`
     """
-    twin_source, twin_target = mirror_canonical(source), mirror_canonical(target)
+    twin_source = mirror_canonical(source)
+    twin_target = twin_source if target is source else mirror_canonical(target)
     if twin_source is None or twin_target is None:
         return out, contacts
     twin_src, twin_out, twin_c = reading(twin_source, twin_target)
