@@ -115,8 +115,66 @@ def positive_int(text: str) -> int:
     return value
 
 
+class ListThenFolder(argparse.Action):
+    """A list option (``nargs="+"``) that hands a trailing value it cannot
+    read to the command's positional :obj:`folder`, where that is not
+    given yet: ``zoo --species hexapod DIR`` reads as ``zoo DIR --species
+    hexapod`` (argparse alone reads ``DIR`` as a species). Each value goes
+    through :obj:`read`, which returns it converted or raises
+    :class:`argparse.ArgumentTypeError`; a value it refuses anywhere else
+    is refused. The positional is a :class:`Folder` (``nargs="?"``), and
+    the command refuses a run without it.
+
+    Args:
+        read: Converts and checks one value.
+        folder: ``dest`` of the positional a trailing value may fill.
+    """
+
+    def __init__(self, option_strings, dest, read=str, folder: str = "out_dir", **kwargs):
+        super().__init__(option_strings, dest, **kwargs)
+        self.read, self.folder = read, folder
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        values = list(values)
+        if len(values) > 1 and getattr(namespace, self.folder, None) is None \
+                and not self._readable(values[-1]):
+            setattr(namespace, self.folder, values.pop())
+        try:
+            setattr(namespace, self.dest, [self.read(v) for v in values])
+        except argparse.ArgumentTypeError as err:
+            parser.error(f"argument {option_string}: {err}")
+
+    def _readable(self, value: str) -> bool:
+        try:
+            self.read(value)
+        except argparse.ArgumentTypeError:
+            return False
+        return True
+
+
+class Folder(argparse.Action):
+    """An optional positional (``nargs="?"``) that :class:`ListThenFolder`
+    may have filled: argparse's empty match at the end of the line keeps
+    it."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values is not None or getattr(namespace, self.dest, None) is None:
+            setattr(namespace, self.dest, values)
+
+
+def one_of(choices, what: str = "value"):
+    """An argument reader that accepts only :obj:`choices`."""
+    def read(text: str) -> str:
+        if text not in choices:
+            raise argparse.ArgumentTypeError(
+                f"invalid {what}: {text!r} (choose from {', '.join(choices)})")
+        return text
+    return read
+
+
 __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
-           "check_per_input", "read_with_rig"]
+           "check_per_input", "read_with_rig", "ListThenFolder", "Folder",
+           "one_of"]
 
 
 def add_plant_argument(parser: argparse.ArgumentParser) -> None:

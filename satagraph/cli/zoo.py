@@ -18,7 +18,7 @@ import itertools
 import time
 from typing import List
 
-from satagraph.cli.arguments import positive_int
+from satagraph.cli.arguments import Folder, ListThenFolder, one_of, positive_int
 from satagraph.datasets.zoo import (CLIP_KINDS, GESTURE_KINDS, NOISE_STYLES, REST_POSES,
                                     SPECIES, UNITS, UP_AXES, Dialect, dialect_variants,
                                     unit_scale, write_dialect_zoo, write_zoo)
@@ -85,8 +85,10 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
         epilog="examples: satagraph zoo zoo/ --species quadruped bird --clips 5; "
         "satagraph zoo zoo/ --species spider --up-axes=+Z,-Y --units cm in 28 "
         "--rest-poses native crouched --name-noise none tag")
-    p.add_argument("out_dir", help="output folder (created)")
-    p.add_argument("--species", nargs="+", choices=SPECIES, default=None,
+    p.add_argument("out_dir", nargs="?", action=Folder, help="output folder (created; also after a list "
+                   "option: --species hexapod DIR)")
+    p.add_argument("--species", nargs="+", action=ListThenFolder,
+                   read=one_of(SPECIES, "species"), default=None,
                    metavar="NAME", help=f"species to write (default: all of "
                    f"{', '.join(SPECIES)})")
     p.add_argument("--clips", type=positive_int, default=4,
@@ -96,7 +98,8 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
                    help="frames per clip (default: 120)")
     p.add_argument("--fps", type=float, default=30.0,
                    help="frames per second (default: 30)")
-    p.add_argument("--kinds", nargs="+", default=None, metavar="KIND",
+    p.add_argument("--kinds", nargs="+", action=ListThenFolder, default=None,
+                   read=one_of(_all_kinds(), "clip kind"), metavar="KIND",
                    help="clip kinds to cycle through, of those each species can do "
                    "(default: every kind but the gestures; e.g. --species biped "
                    "--kinds bow wave, --species quadruped --kinds sit lie)")
@@ -108,10 +111,12 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
     d.add_argument("--units", nargs="+", type=_unit, default=["m"], metavar="UNIT",
                    help=f"units to write: {', '.join(UNITS)}, or a number N for an "
                    "arbitrary unit in which the character is N units tall (default: m)")
-    d.add_argument("--rest-poses", nargs="+", choices=REST_POSES, default=["native"],
+    d.add_argument("--rest-poses", nargs="+", action=ListThenFolder,
+                   read=one_of(REST_POSES, "rest pose"), default=["native"],
                    metavar="POSE", help=f"rest poses ({', '.join(REST_POSES)}; the "
                    "motion keeps its global positions; default: native)")
-    d.add_argument("--name-noise", nargs="+", choices=("none",) + NOISE_STYLES,
+    d.add_argument("--name-noise", nargs="+", action=ListThenFolder,
+                   read=one_of(("none",) + NOISE_STYLES, "name noise"),
                    default=["none"], metavar="STYLE",
                    help="exporter suffixes on joint names: none, tag (Tail_01__x7Q), "
                    "version (Tail_01_v2), hash (Tail_01_a1b2c3) (default: none)")
@@ -125,6 +130,8 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
 
 def run_zoo(args: argparse.Namespace) -> int:
     """Write the zoo and print a one-line summary per species."""
+    if args.out_dir is None:
+        raise ValueError("zoo: no output folder: satagraph zoo OUT_DIR [--species ...]")
     start = time.perf_counter()
     frames = max(args.frames, 2)
     if args.dialect_variants:
@@ -154,6 +161,12 @@ def _dialects(args: argparse.Namespace) -> List[Dialect]:
     combos = itertools.product(dict.fromkeys(_flat(args.up_axes)), dict.fromkeys(args.units),
                                dict.fromkeys(args.rest_poses), dict.fromkeys(noises))
     return [Dialect(*combo) for combo in combos]
+
+
+def _all_kinds() -> List[str]:
+    """Every clip kind some species can do, gestures included."""
+    kinds = [k for table in (CLIP_KINDS, GESTURE_KINDS) for ks in table.values() for k in ks]
+    return list(dict.fromkeys(kinds))
 
 
 def _flat(axes: List[List[str]]) -> List[str]:

@@ -142,6 +142,23 @@ def test_cli_writes_files_and_manifest(tmp_path, capsys):
     assert kinds == set(CLIP_KINDS["bird"][:3])
 
 
+def test_cli_folder_after_a_list_option_is_the_folder(tmp_path, capsys):
+    first, after = tmp_path / "first", tmp_path / "after"
+    assert main(["zoo", str(first), "--species", "hexapod", "--kinds", "walk",
+                 "--clips", "1", "--frames", "8"]) == 0
+    assert main(["zoo", "--clips", "1", "--frames", "8", "--species", "hexapod",
+                 "--kinds", "walk", str(after)]) == 0
+    assert (after / "manifest.tsv").read_text() == (first / "manifest.tsv").read_text()
+    capsys.readouterr()
+    assert main(["zoo", "--species", "hexapod"]) == 2
+    assert "no output folder" in capsys.readouterr().err
+    for argv in (["zoo", str(first), "--species", "hexapod", "ant"],
+                 ["zoo", "--species", str(after)]):
+        with pytest.raises(SystemExit):
+            main(argv)
+        assert "invalid species" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("species", ["biped", "quadruped", "hexapod"])
 def test_start_and_stop_stand_with_planted_feet(species):
     """``start`` stands then walks, ``stop`` walks then stands, and whoever
