@@ -12,11 +12,13 @@ import torch
 from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
 from satagraph.transforms.augment import mirror_pairs, root_tilted
 from satagraph.transforms.rest import (POSED_REST_DEGREES, REST_MODES, is_line_rest,  # noqa: F401
-                                      needs_rest, rest_asymmetry, restore_rest, shown_rest)
+                                      needs_rest, rest_asymmetry, restore_rest, second_rest,
+                                      shown_rest)
 from satagraph.transforms.canonical import (body_forward, canonicalize, decanonicalize,
                                            resample_frames)
 from satagraph.transforms.foot_plant import plant_feet
-from satagraph.transforms.mirror_average import average_readings, mirror_back, mirror_canonical
+from satagraph.transforms.mirror_average import (average_readings, mirror_back, mirror_canonical,
+                                                 place_reading)
 from satagraph.transforms.still_root import hold_still_source, settle_root
 from satagraph.transforms.ground import (STANDING_SHARE, ground_retarget, stands,  # noqa: F401
                                          standing_frame, standing_frames)
@@ -163,7 +165,8 @@ def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
                     rest: str = "auto", ground: bool = True, plant: bool = False,
-                    settle: bool = False, still: bool = True, mirror: bool = False) -> Motion:
+                    settle: bool = False, still: bool = True, mirror: bool = False,
+                    two_rests: bool = False) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -215,13 +218,18 @@ def retarget_motion(module, source: Motion, target: Motion,
             ``experiments/PRETRAIN.md`` section 26); ``False`` keeps the
             decoder's root path there.
         mirror (bool): Also decode both rigs' left-right mirror images and
-            average the two readings (:func:`mirrored_reading`; twice the
+            average the readings (:func:`averaged_reading`; twice the
             model's time). A rig whose sides do not pair by joint name
             (:func:`~satagraph.transforms.mirror_average.mirror_canonical`) is
             read once.
+        two_rests (bool): Also decode both rigs shown in a second rest pose
+            (:func:`~satagraph.transforms.rest.second_rest` of :obj:`rest`:
+            for ``"auto"``, the pose it does not choose) and average the
+            readings (:func:`averaged_reading`; twice the model's time, four
+            times with :obj:`mirror`).
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest, ground, plant, settle, still, mirror)
+                                  rest, ground, plant, settle, still, mirror, two_rests)
     return from_canonical(canon, source)
 
 
@@ -238,25 +246,26 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        overlap: Optional[int] = None, fps: Optional[float] = None,
                        rest: str = "auto", ground: bool = True,
                        plant: bool = False, settle: bool = False,
-                       still: bool = True, mirror: bool = False) -> Tuple[Motion, Motion]:
+                       still: bool = True, mirror: bool = False,
+                       two_rests: bool = False) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
     :func:`~satagraph.transforms.canonical.decanonicalize` undoes), the
     source turned about +Y where :func:`source_features` turns it. What
-    :mod:`satagraph.quality` measures. With :obj:`mirror`, the decoding
-    is averaged with that of both rigs' mirror images
-    (:func:`mirrored_reading`)."""
+    :mod:`satagraph.quality` measures. With :obj:`mirror` and
+    :obj:`two_rests`, the decoding is averaged with that of both rigs'
+    mirror images and of both rigs in a second rest pose
+    (:func:`averaged_reading`)."""
     if rest not in REST_MODES:
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     fps = fps or float(getattr(module, "fps", 30.0))
     same = target is source  # a reconstruction: canonicalized and mirrored once
     source = canonicalize(source, fps=fps)
     target = source if same else canonicalize(target, fps=fps)
-    reading = partial(read_once, module, semantic, window, overlap, fps, rest)
-    src_canon, out, c = reading(source, target)
-    if mirror:
-        out, c = mirrored_reading(reading, source, target, src_canon, out, c)
+    reading = partial(read_once, module, semantic, window, overlap, fps)
+    rests = (rest, second_rest(rest)) if two_rests else (rest,)
+    src_canon, out, c = averaged_reading(reading, source, target, rests, mirror)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
     out = ground_retarget(out, src_canon, target) if ground else out
@@ -281,39 +290,51 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     return src_canon, out, c
 
 
-def mirrored_reading(reading: Callable, source: Motion, target: Motion, src_canon: Motion,
-                     out: Motion, contacts: np.ndarray) -> Tuple[Motion, np.ndarray]:
-    r"""The mean of a reading (:obj:`out`, :obj:`contacts`, from
-    :obj:`src_canon`) and :obj:`reading` (:func:`read_once` with its
-    settings bound) of both canonical rigs' mirror images
-    (:mod:`~satagraph.transforms.mirror_average`), or the reading as it is
-    where either rig has no mirror image.
+def averaged_reading(reading: Callable, source: Motion, target: Motion,
+                     rests: Sequence[str], mirror: bool
+                     ) -> Tuple[Motion, Motion, np.ndarray]:
+    r"""The mean of :obj:`reading`\ s (:func:`read_once` with the module
+    and its settings bound) of a canonical source onto a canonical target
+    in each rest pose of :obj:`rests` and, with :obj:`mirror`, of both
+    rigs' mirror images too (:mod:`~satagraph.transforms.mirror_average`;
+    rigs without a mirror image are read as they are): the first reading's
+    source, the averaged motion placed on it and the mean contact
+    probabilities.
 
     Shapes:
         - **contacts**: :math:`(T, J_t)`
     """
-    twin_source = mirror_canonical(source)
-    twin_target = twin_source if target is source else mirror_canonical(target)
-    if twin_source is None or twin_target is None:
-        return out, contacts
-    twin_src, twin_out, twin_c = reading(twin_source, twin_target)
-    back = mirror_back(twin_out, twin_src, src_canon)
-    pair = mirror_pairs(target.skeleton)
-    return average_readings(out, back), 0.5 * (contacts + twin_c[:, pair])
+    twin_source = mirror_canonical(source) if mirror else None
+    twin_target = twin_source if target is source else (
+        mirror_canonical(target) if twin_source is not None else None)
+    pair = mirror_pairs(target.skeleton) if twin_target is not None else None
+    src_canon, outs, contacts = None, [], []
+    for rest in rests:
+        shown, out, c = reading(rest, source, target)
+        src_canon = shown if src_canon is None else src_canon
+        outs.append(out if shown is src_canon else place_reading(out, shown, src_canon))
+        contacts.append(c)
+        if pair is not None:
+            twin_src, twin_out, twin_c = reading(rest, twin_source, twin_target)
+            outs.append(mirror_back(twin_out, twin_src, src_canon))
+            contacts.append(twin_c[:, pair])
+    return src_canon, average_readings(*outs), np.mean(contacts, axis=0)
 
 
 def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] = None,
-                          mirror: bool = True, **options) -> Tuple[Motion, Motion]:
+                          mirror: bool = True, two_rests: bool = False,
+                          **options) -> Tuple[Motion, Motion]:
     r""":func:`retarget_canonical` of :obj:`motion` onto its own skeleton,
     the model's alone: the root is never held where the input stands
     (``still=False``: there the input is the answer). Unlike a retarget it
     averages the model's reading with that of the mirror image by default
     (:obj:`mirror`; ``experiments/PRETRAIN.md`` sections 37-37c: on
     validation clips the error falls to 0.83-0.91 of one reading's in the
-    median). :obj:`options` are :func:`retarget_canonical`'s (``ground``
-    still on unless turned off)."""
+    median). :obj:`two_rests` also reads it in a second rest pose.
+    :obj:`options` are :func:`retarget_canonical`'s (``ground`` still on
+    unless turned off)."""
     return retarget_canonical(module, motion, motion, semantic, still=False, mirror=mirror,
-                              **options)
+                              two_rests=two_rests, **options)
 
 
 def facing_smooth_of(module) -> float:
@@ -380,9 +401,11 @@ def turn_world(motion: Motion, turn: np.ndarray) -> Motion:
 def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = None,
                        window: Optional[int] = None, overlap: Optional[int] = None,
                        rest: str = "auto", ground: bool = False,
-                       settle: bool = False, mirror: bool = True) -> Motion:
+                       settle: bool = False, mirror: bool = True,
+                       two_rests: bool = False) -> Motion:
     """Encode and decode a motion on its own skeleton (:obj:`rest`,
-    :obj:`ground`, :obj:`settle` and :obj:`mirror`: see :func:`retarget_motion`; ground
+    :obj:`ground`, :obj:`settle`, :obj:`mirror` and :obj:`two_rests`: see
+    :func:`retarget_motion`; ground
     is off by default here: on its own skeleton the decoder's root height
     is closer than a shift that matches the lowest joints of two
     different poses, and mirror on: see :func:`reconstruct_canonical`).
@@ -390,6 +413,7 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     (:func:`reconstruct_canonical`): a reconstruction is the model's
     alone."""
     _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
-                                     rest=rest, ground=ground, settle=settle, mirror=mirror)
+                                     rest=rest, ground=ground, settle=settle, mirror=mirror,
+                                     two_rests=two_rests)
     return from_canonical(canon, motion)
 

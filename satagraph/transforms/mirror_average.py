@@ -1,14 +1,16 @@
-"""Averaging a model's reading of a motion with its reading of the mirror
-image (test-time mirroring; ``experiments/PRETRAIN.md`` section 37).
+"""Averaging a model's readings of one motion: of the motion and its
+mirror image (test-time mirroring; ``experiments/PRETRAIN.md`` section
+37), of the rigs shown in two rest poses (section 39).
 
-A model trained with mirroring as an augmentation reads a motion and its
-left-right mirror image as the same motion; each reading carries its own
-error, and part of it cancels in their mean. :func:`mirror_canonical`
-mirrors a canonical motion across its side-to-side axis (X),
-:func:`mirror_back` brings the output of the mirror image back onto the
-first reading's rig and frame, and :func:`average_readings` takes the
-mean of the two: each joint's rotation by its chordal mean, the root's
-position by its mean.
+A model trained with mirroring and re-rested rigs as augmentations reads
+a motion, its left-right mirror image and the motion on a re-rested rig
+as the same motion; each reading carries its own error, and part of it
+cancels in their mean. :func:`mirror_canonical` mirrors a canonical
+motion across its side-to-side axis (X), :func:`mirror_back` brings the
+output of the mirror image back onto the first reading's rig and frame,
+:func:`place_reading` does so for a reading whose source was turned
+otherwise, and :func:`average_readings` takes their mean: each joint's
+rotation by its chordal mean, the root's position by its mean.
 
 Example::
 
@@ -53,34 +55,47 @@ def mirror_back(output: Motion, mirrored_source: Motion, source: Motion) -> Moti
     it), mirrored back and moved rigidly (a turn about +Y and a ground
     shift) so that the mirrored-back source's root lies on :obj:`source`'s
     at frame 0."""
-    back, src_back = mirror(output, LATERAL_AXIS), mirror(mirrored_source, LATERAL_AXIS)
+    return place_reading(mirror(output, LATERAL_AXIS), mirror(mirrored_source, LATERAL_AXIS),
+                         source)
+
+
+def place_reading(output: Motion, shown_source: Motion, source: Motion) -> Motion:
+    r""":obj:`output`, decoded from :obj:`shown_source` (:obj:`source`
+    turned about +Y and moved otherwise, as a second reading's pipeline
+    placed it), moved rigidly (a turn about +Y and a ground shift) so that
+    :obj:`shown_source`'s root lies on :obj:`source`'s at frame 0."""
     forward = np.array([0.0, 0.0, 1.0])
     turn = yaw_matrix_numpy(yaw_of(source.rotations[0, 0] @ forward)
-                            - yaw_of(src_back.rotations[0, 0] @ forward))
-    root = source.translations[0, 0] - turn @ src_back.translations[0, 0]
+                            - yaw_of(shown_source.rotations[0, 0] @ forward))
+    root = source.translations[0, 0] - turn @ shown_source.translations[0, 0]
     root[1] = 0.0
-    rotations, translations = back.rotations.copy(), back.translations.copy()
+    rotations, translations = output.rotations.copy(), output.translations.copy()
     rotations[:, 0] = turn @ rotations[:, 0]
     translations[:, 0] = translations[:, 0] @ turn.T + root
-    return back.with_(rotations=rotations, translations=translations)
+    return output.with_(rotations=rotations, translations=translations)
 
 
-def average_readings(first: Motion, second: Motion) -> Motion:
-    r"""The mean of two readings of one motion on one rig: each joint's
+def average_readings(first: Motion, *others: Motion) -> Motion:
+    r"""The mean of readings of one motion on one rig: each joint's
     rotation their chordal mean
     (:func:`~satagraph.ops.rotation_numpy.mean_rotation_numpy`), the
     root's position their mean, everything else :obj:`first`'s.
 
     Shapes:
-        - both motions: :math:`T` frames of the same :math:`J` joints
+        - every motion: :math:`T` frames of the same :math:`J` joints
     """
-    if first.rotations.shape != second.rotations.shape:
-        raise ValueError(f"average_readings: {first.rotations.shape[:2]} and "
-                         f"{second.rotations.shape[:2]} (frames, joints) differ")
-    rotations = mean_rotation_numpy(np.stack([first.rotations, second.rotations]))
+    for other in others:
+        if first.rotations.shape != other.rotations.shape:
+            raise ValueError(f"average_readings: {first.rotations.shape[:2]} and "
+                             f"{other.rotations.shape[:2]} (frames, joints) differ")
+    if not others:
+        return first
+    readings = (first,) + others
+    rotations = mean_rotation_numpy(np.stack([m.rotations for m in readings]))
     translations = first.translations.copy()
-    translations[:, 0] = 0.5 * (first.translations[:, 0] + second.translations[:, 0])
+    translations[:, 0] = np.mean([m.translations[:, 0] for m in readings], axis=0)
     return first.with_(rotations=rotations, translations=translations)
 
 
-__all__ = ["LATERAL_AXIS", "mirror_canonical", "mirror_back", "average_readings"]
+__all__ = ["LATERAL_AXIS", "mirror_canonical", "mirror_back", "place_reading",
+           "average_readings"]

@@ -21,10 +21,14 @@ from satagraph.transforms.ground import standing_frames
 #: How a rig is shown to a model
 #: (:func:`~satagraph.pipelines.inference.retarget_canonical`'s ``rest``,
 #: ``data.preprocessing.rest``): in the rest pose of its file, re-rested on
-#: its first frame's pose, or re-rested on its mean standing pose
+#: its first frame's pose, re-rested on its mean standing pose
 #: (:func:`~satagraph.transforms.ground.standing_frames`) only where the
-#: file's rest is a line or a captured pose (:func:`needs_rest`).
-REST_MODES = ("auto", "file", "first-frame")
+#: file's rest is a line or a captured pose (:func:`needs_rest`:
+#: ``"auto"``) or always (``"standing"``), or in the pose ``"auto"`` does
+#: not choose (``"alternate"``: the mean standing pose where ``"auto"``
+#: keeps the file's, the first frame's where it re-rests), a second
+#: reading's (:func:`second_rest`).
+REST_MODES = ("auto", "file", "first-frame", "standing", "alternate")
 
 
 def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]:
@@ -32,8 +36,11 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
     names, and the rest rotations that undo it (``None``: unchanged; a
     skeleton without frames keeps its file's rest); :func:`restore_rest`
     undoes it."""
-    if rest == "file" or not motion.num_frames or (
-            rest == "auto" and not needs_rest(motion.skeleton)):
+    if rest in ("auto", "alternate"):
+        needs = needs_rest(motion.skeleton)
+        rest = (("standing" if needs else "file") if rest == "auto"
+                else ("first-frame" if needs else "standing"))
+    if rest == "file" or not motion.num_frames:
         return motion, None
     if rest == "first-frame":
         new = rebase_rotations(motion, 0)
@@ -41,6 +48,15 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
         frames = standing_frames(motion)  # the first is the standing frame
         new = mean_pose_rotations(motion, frames, int(frames[0]))
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
+
+
+def second_rest(rest: str) -> str:
+    """The rest pose of a second reading of a rig shown in :obj:`rest`
+    (:data:`REST_MODES`): ``"alternate"`` for ``"auto"`` (and the
+    reverse), ``"first-frame"`` for ``"standing"``, ``"standing"`` for
+    the others."""
+    return {"auto": "alternate", "alternate": "auto",
+            "standing": "first-frame"}.get(rest, "standing")
 
 
 def restore_rest(motion: Motion, undo: Optional[np.ndarray], skeleton) -> Motion:
@@ -135,5 +151,5 @@ def needs_rest(skeleton) -> bool:
     return asym is not None and asym > POSED_REST_DEGREES
 
 
-__all__ = ["REST_MODES", "shown_rest", "restore_rest", "is_line_rest", "rest_asymmetry",
+__all__ = ["REST_MODES", "shown_rest", "second_rest", "restore_rest", "is_line_rest", "rest_asymmetry",
            "POSED_REST_DEGREES", "needs_rest"]

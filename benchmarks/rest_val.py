@@ -1,0 +1,129 @@
+"""Reconstruction read in one rest pose and in two, on validation clips no
+rule has read (`experiments/PRETRAIN.md` section 39).
+
+Each clip is reconstructed as `reconstruct` does by default (its reading
+averaged with its mirror image's) and, besides, with `two_rests=True`
+(also read with both rigs in the rest pose `auto` does not choose, the
+four readings averaged). The zoo's clips are each plan's validation clips
+45 to 56 (`--zoo-clips`); the real ones are Bandai's validation files
+outside every third and the dog's non-test files (each cut as
+`pretrained_val.py` cuts them). A built-in model reads the groups `auto`
+gives it. Per group: the median JP (% of the height) of each setting and
+the paired ratio (median over clips of two rests' JP over one's). Prints
+the table and the verdict of section 39's rule.
+
+    .venv/bin/python benchmarks/rest_val.py [--ckpt builtin builtin-wide] [--zoo-clips 45 56] [--out P]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import mirror_val  # noqa: E402
+import pretrained_val as val  # noqa: E402
+from pretrained import joint_error  # noqa: E402
+from results_io import write_results  # noqa: E402
+from satagraph.experiment.train import load_module  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
+from satagraph.pipelines.inference import reconstruct_canonical  # noqa: E402
+
+OUT = val.ROOT / "benchmarks" / "results" / "rest_val"
+#: Each plan's validation clips read by default (1-based, inclusive): after
+#: those sections 37c (19-30), 38 (31-36) and 39's exploration (37-44) read.
+ZOO_CLIPS = (45, 56)
+#: The groups each built-in model reads (what ``auto`` gives it).
+GROUPS = {"builtin": ("zoo biped", "zoo quadruped", "zoo bird", "zoo fowl", "bandai (val)",
+                      "dog (not test)"),
+          "builtin-wide": ("zoo hexapod", "zoo crab", "zoo spider")}
+#: Section 39's rule: no group's paired ratio above the first, their mean
+#: at most the second.
+LARGEST, MEAN_CAP = 1.02, 0.97
+
+
+def fresh_clips(first: int, last: int) -> List[Tuple[str, str, Motion]]:
+    """``(group, name, motion)``: the zoo's and Bandai's clips of
+    :func:`mirror_val.fresh_clips` and the dog's non-test clips."""
+    dog = sorted(val.manifest_paths("dog", lambda split: split != "test"))
+    return mirror_val.fresh_clips(first, last) + [
+        ("dog (not test)", rel, val.recon_window(val.real_file(rel))) for rel in dog]
+
+
+def jp(module, motion: Motion, two_rests: bool) -> float:
+    """JP (fraction of the height) of the default reconstruction, read in
+    one rest pose or two."""
+    src, out = reconstruct_canonical(module, motion, module.embed, ground=False,
+                                     two_rests=two_rests)
+    return joint_error(src, out)
+
+
+def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool, List[str]]:
+    """Section 39's rule on ``results[ckpt][group] = {"one", "two"}`` (per-clip JPs)."""
+    ratios = {f"{ckpt} {g}": mirror_val.paired(cell["one"], cell["two"])
+              for ckpt, groups in results.items() for g, cell in groups.items()}
+    failures = [f"{g}: {r:.3f} > {LARGEST}" for g, r in ratios.items() if r > LARGEST]
+    mean = float(np.mean(list(ratios.values())))
+    if mean > MEAN_CAP:
+        failures.append(f"mean {mean:.3f} > {MEAN_CAP}")
+    return not failures, failures
+
+
+def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float) -> str:
+    lines = [f"Validation clips no rule has read; {seconds:.0f} s. JP, % of the height, median "
+             "over the group's clips: one rest (today's default: with the mirror image's "
+             "reading), two rests, and the paired ratio (median of two over one).", "",
+             "| model | group | n | one rest | two rests | paired |", "|---|---|---:|---:|---:|---:|"]
+    for ckpt, groups in results.items():
+        for group, cell in groups.items():
+            lines.append(f"| `{ckpt}` | {group} | {len(cell['one'])} | "
+                         f"{100 * np.median(cell['one']):.1f} | "
+                         f"{100 * np.median(cell['two']):.1f} | "
+                         f"{mirror_val.paired(cell['one'], cell['two']):.3f} |")
+    ok, failures = verdict(results)
+    return "\n".join(lines + ["", "The rule (PRETRAIN.md 39): " + (
+        "passes" if ok else "fails: " + "; ".join(failures))]) + "\n"
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--ckpt", nargs="+", default=list(GROUPS),
+                        help="built-in names (each reads its groups) or checkpoints (every group)")
+    parser.add_argument("--zoo-clips", type=int, nargs=2, default=ZOO_CLIPS,
+                        metavar=("FIRST", "LAST"), help="each plan's validation clips FIRST to "
+                        f"LAST (1-based; default {ZOO_CLIPS[0]} {ZOO_CLIPS[1]})")
+    parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
+    args = parser.parse_args(argv)
+    if not 1 <= args.zoo_clips[0] <= args.zoo_clips[1]:
+        parser.error(f"--zoo-clips: need 1 <= FIRST <= LAST, got {args.zoo_clips}")
+    if not (val.DATA / "manifest.tsv").is_file():
+        print(f"rest_val.py: {val.DATA} not found: the real clips need ../shared/data",
+              file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    clips = fresh_clips(*args.zoo_clips)
+    results: Dict[str, Dict[str, Dict[str, List[float]]]] = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for ckpt in args.ckpt:
+            module = load_module(ckpt).eval()
+            for group, _, motion in clips:
+                if ckpt in GROUPS and group not in GROUPS[ckpt]:
+                    continue
+                cell = results.setdefault(ckpt, {}).setdefault(group, {"one": [], "two": []})
+                cell["one"].append(jp(module, motion, False))
+                cell["two"].append(jp(module, motion, True))
+    text = table(results, time.perf_counter() - start)
+    print(text)
+    write_results(args.out, "Reconstruction read in one rest pose and in two, on fresh "
+                  "validation clips (benchmarks/rest_val.py)", text, results)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
