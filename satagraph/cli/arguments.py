@@ -207,6 +207,17 @@ def add_mirror_argument(parser: argparse.ArgumentParser, default: bool) -> None:
                         f"{'on' if default else 'off'})")
 
 
+def add_two_rests_argument(parser: argparse.ArgumentParser, default: bool) -> None:
+    """``--two-rests/--no-two-rests``: average the decoding with that of
+    the rigs shown in a second rest pose
+    (:func:`~satagraph.transforms.rest.second_rest`)."""
+    parser.add_argument("--two-rests", action=argparse.BooleanOptionalAction, default=default,
+                        help="also decode the input(s) with each rig shown in a second rest "
+                        "pose (for --rest auto, the pose auto does not choose) and average "
+                        "the readings (twice the model's time, four times with --mirror; "
+                        f"default: {'on' if default else 'off'})")
+
+
 def add_still_argument(parser: argparse.ArgumentParser) -> None:
     """``--still/--no-still``: keep a retarget's root still wherever its
     source's root stands still

@@ -8,12 +8,14 @@ import time
 from typing import List, Optional, Sequence
 
 from satagraph.cli.arguments import positive_float, positive_int
+from satagraph.transforms.rest import REST_MODES
 
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
     from satagraph.cli.arguments import (add_mirror_argument, add_plant_argument,
-                                         add_settle_argument, add_still_argument)
+                                         add_settle_argument, add_still_argument,
+                                         add_two_rests_argument)
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config in experiments/ "
                        "(or a path), with dotted overrides, e.g. "
@@ -39,6 +41,7 @@ def add_train_parsers(sub) -> None:
     _ground(p, default=False)
     add_settle_argument(p)
     add_mirror_argument(p, default=True)
+    add_two_rests_argument(p, default=False)
     p.add_argument("input", metavar="IN.bvh")
     p.add_argument("output", metavar="OUT.bvh")
     _rig(p)
@@ -54,6 +57,7 @@ def add_train_parsers(sub) -> None:
     add_settle_argument(p)
     add_still_argument(p)
     add_mirror_argument(p, default=False)
+    add_two_rests_argument(p, default=False)
     p.add_argument("source", metavar="SOURCE.bvh")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     p.add_argument("output", metavar="OUT.bvh")
@@ -138,13 +142,14 @@ def _common(p) -> None:
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
                    help="frames shared by consecutive windows (default: window / 4)")
-    p.add_argument("--rest", choices=("auto", "file", "first-frame"), default="auto",
+    p.add_argument("--rest", choices=REST_MODES, default="auto",
                    help="the rest pose the model sees each skeleton in: the file's, its "
-                   "first frame's pose, or auto (default): its mean pose over the frames "
-                   "in which the body stands, for rigs whose rest pose is a line (every "
-                   "bone along its joint's X as Bandai's, or all up as Reallusion's) or a "
-                   "captured pose, else the "
-                   "file's; the output keeps the target file's rest pose either way")
+                   "first frame's pose, its mean pose over the frames in which the body "
+                   "stands (standing), or auto (default): standing for rigs whose rest pose "
+                   "is a line (every bone along its joint's X as Bandai's, or all up as "
+                   "Reallusion's) or a captured pose, else the file's; alternate: the pose "
+                   "auto does not choose. The output keeps the target file's rest pose "
+                   "either way")
 
 
 def _ground(p, default: bool) -> None:
@@ -288,7 +293,7 @@ def run_reconstruct(args) -> int:
     module, embed = _load(args, [motion], [args.input])
     _check(motion, args.input, module.fps)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
-                             args.ground, args.settle, args.mirror)
+                             args.ground, args.settle, args.mirror, args.two_rests)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
     return 0
@@ -305,7 +310,8 @@ def run_retarget(args) -> int:
     _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
-                         settle=args.settle, still=args.still, mirror=args.mirror)
+                         settle=args.settle, still=args.still, mirror=args.mirror,
+                         two_rests=args.two_rests)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
           f"{out.num_joints}-joint skeleton of {args.target}")
