@@ -165,6 +165,32 @@ def test_mirror_reading_treats_left_and_right_alike(no_network: None) -> None:
     assert gaps[True] < 1e-6 < 1e-3 < gaps[False], gaps
 
 
+def test_two_rests_read_in_either_order_agree(no_network: None) -> None:
+    """``two_rests=True`` averages the readings in ``rest`` and in
+    ``second_rest(rest)``: started from ``"auto"`` or from
+    ``"alternate"`` it reads the same two rests, so the two outputs agree
+    once placed on one source (to float error), and differ from one
+    rest's reading."""
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import reconstruct_canonical
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.transforms.mirror_average import place_reading
+
+    module = load_module("builtin").eval()
+    motion = canonicalize(EndlessZoo(species=["quadruped"]).sample(0, 2, 40, "test").motion,
+                          fps=module.fps)
+    read = {rest: reconstruct_canonical(module, motion, module.embed, ground=False,
+                                        mirror=False, two_rests=True, rest=rest)
+            for rest in ("auto", "alternate")}
+    (src_a, out_a), (src_b, out_b) = read["auto"], read["alternate"]
+    gap = np.abs(place_reading(out_a, src_a, src_b).global_positions()
+                 - out_b.global_positions()).max() / motion.height()
+    _, one = reconstruct_canonical(module, motion, module.embed, ground=False, mirror=False)
+    change = np.abs(one.global_positions() - out_a.global_positions()).max() / motion.height()
+    assert gap < 1e-6 < 1e-3 < change, (gap, change)
+
+
 def _ancestors(parents, joint: int):
     while joint >= 0:
         yield joint

@@ -224,6 +224,33 @@ def test_auto_rest_re_rests_on_the_mean_standing_pose(
     np.testing.assert_allclose(first.rotations[0, 1:], eye, atol=1e-9)
 
 
+def test_the_second_rest_is_the_pose_auto_does_not_choose(
+        read_real: Callable[[str], Motion]) -> None:
+    """``"alternate"`` shows a line rest (Bandai) on its first frame and a
+    designed rest (a zoo biped's T pose) on its mean standing pose, where
+    ``"auto"`` does the reverse; every rest keeps the global positions,
+    and :func:`second_rest` pairs the modes."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.pipelines.inference import shown_rest
+    from satagraph.transforms.rest import REST_MODES, second_rest
+    line = canonicalize(read_real(BANDAI).slice(0, 20), fps=30)
+    rig = next(r for r in zoo_rigs(seed=0) if r.species == "biped")
+    designed = canonicalize(generate_clip(rig, "walk", frames=20, seed=0))
+    for motion, alternate, auto in ((line, "first-frame", "standing"),
+                                    (designed, "standing", "file")):
+        for mode, same in (("alternate", alternate), ("auto", auto)):
+            shown, undo = shown_rest(motion, mode)
+            expect, _ = shown_rest(motion, same)
+            np.testing.assert_allclose(shown.rotations, expect.rotations, atol=1e-12)
+            assert (undo is None) == (same == "file")
+            np.testing.assert_allclose(shown.global_positions(), motion.global_positions(),
+                                       atol=1e-6)
+    assert shown_rest(designed, "standing")[1] is not None
+    assert {m: second_rest(m) for m in REST_MODES} == {
+        "auto": "alternate", "alternate": "auto", "file": "standing",
+        "first-frame": "standing", "standing": "first-frame"}
+
+
 def test_auto_rest_of_a_dog_that_starts_on_its_side_faces_forward(
         read_real: Callable[[str], Motion]) -> None:
     """This dog lies on its side for 8 s (its root tilted 99 degrees from

@@ -11,7 +11,7 @@ from satagraph.skeleton import Skeleton
 from satagraph.transforms.augment import mirror, mirror_pairs
 from satagraph.transforms.canonical import canonicalize
 from satagraph.transforms.mirror_average import (average_readings, mirror_back,
-                                                 mirror_canonical)
+                                                 mirror_canonical, place_reading)
 
 RIGS = {r.species: r for r in zoo_rigs(seed=0)}
 
@@ -75,6 +75,31 @@ def test_the_average_of_two_opposite_errors_is_the_truth(canon) -> None:
     assert np.allclose(mean.translations[:, 1:], plus.translations[:, 1:])  # offsets: the first's
     same = average_readings(canon, canon)
     assert np.allclose(same.global_positions(), canon.global_positions(), atol=1e-12)
+
+
+def test_three_readings_average_to_their_common_truth(canon) -> None:
+    """Rotations off by 0 and +-0.3 rad about one axis, roots off by 0 and
+    +-d: the mean of the three is the motion; one reading is itself."""
+    axis, shift = np.array([0.2, 1.0, -0.4]), np.array([0.1, 0.0, -0.05])
+    off = []
+    for angle, k in ((0.3, 1), (0.0, 0), (-0.3, -1)):
+        translations = canon.translations.copy()
+        translations[:, 0] += k * shift
+        off.append(canon.with_(rotations=canon.rotations @ rotation_about_numpy(axis, angle),
+                               translations=translations))
+    mean = average_readings(*off)
+    assert np.allclose(mean.global_positions(), canon.global_positions(), atol=1e-12)
+    assert average_readings(off[0]) is off[0]
+
+
+def test_place_reading_undoes_the_turn_a_second_reading_was_given(canon) -> None:
+    """A second reading's pipeline may turn its source about +Y and place
+    it elsewhere; its output, placed by the source it was given, lands on
+    the first reading's (global positions exact)."""
+    moved = _moved(canon, -1.1, np.array([0.4, 0.0, 0.9]))
+    assert not np.allclose(moved.global_positions(), canon.global_positions())
+    placed = place_reading(moved, moved, canon)
+    assert np.allclose(placed.global_positions(), canon.global_positions(), atol=1e-9)
 
 
 def test_readings_of_different_clips_do_not_average(canon) -> None:
