@@ -22,7 +22,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -56,6 +56,47 @@ def fresh_clips(first: int, last: int, bandai: bool = True) -> List[Tuple[str, s
     files = val.manifest_paths("bandai", lambda split: split == "val") if bandai else []
     rest = [rel for i, rel in enumerate(files) if i % 3]
     return zoo + [("bandai (val)", rel, val.recon_window(val.real_file(rel))) for rel in rest]
+
+
+def add_zoo_clips_argument(parser: argparse.ArgumentParser, default: Tuple[int, int]) -> None:
+    """``--zoo-clips FIRST LAST``: which of each plan's validation clips to read."""
+    parser.add_argument("--zoo-clips", type=int, nargs=2, default=default,
+                        metavar=("FIRST", "LAST"),
+                        help="each plan's validation clips FIRST to LAST (1-based; default "
+                             f"{default[0]} {default[1]})")
+
+
+def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                    script: str) -> bool:
+    """Refuse a bad ``--zoo-clips``; ``False`` (with a line on stderr)
+    where ``../shared/data`` is missing."""
+    if not 1 <= args.zoo_clips[0] <= args.zoo_clips[1]:
+        parser.error(f"--zoo-clips: need 1 <= FIRST <= LAST, got {args.zoo_clips}")
+    if not (val.DATA / "manifest.tsv").is_file():
+        print(f"{script}: {val.DATA} not found: the real clips need ../shared/data",
+              file=sys.stderr)
+        return False
+    return True
+
+
+def read_clips(ckpts: Sequence[str], clips: List[Tuple[str, str, Motion]],
+               groups: Dict[str, Sequence[str]], readers: Dict[str, Callable[[object, Motion], float]]
+               ) -> Dict[str, Dict[str, Dict[str, List[float]]]]:
+    """``results[ckpt][group][setting]``: each reader's JP of every clip
+    of a group the checkpoint reads (a built-in name in :obj:`groups`
+    reads its own groups; any other checkpoint every group)."""
+    results: Dict[str, Dict[str, Dict[str, List[float]]]] = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for ckpt in ckpts:
+            module = load_module(ckpt).eval()
+            for group, _, motion in clips:
+                if ckpt in groups and group not in groups[ckpt]:
+                    continue
+                cell = results.setdefault(ckpt, {}).setdefault(group, {k: [] for k in readers})
+                for key, reader in readers.items():
+                    cell[key].append(reader(module, motion))
+    return results
 
 
 def paired(single: Sequence[float], averaged: Sequence[float]) -> float:
@@ -102,34 +143,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--ckpt", nargs="+", default=list(RULE),
                         help="checkpoints, .safetensors weights files or built-in names")
-    parser.add_argument("--zoo-clips", type=int, nargs=2, default=ZOO_CLIPS,
-                        metavar=("FIRST", "LAST"),
-                        help="each plan's validation clips FIRST to LAST (1-based; default "
-                             f"{ZOO_CLIPS[0]} {ZOO_CLIPS[1]})")
+    add_zoo_clips_argument(parser, ZOO_CLIPS)
     parser.add_argument("--bandai", action=argparse.BooleanOptionalAction, default=True,
                         help="Bandai's validation files outside every third (default: on)")
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     args = parser.parse_args(argv)
-    if not 1 <= args.zoo_clips[0] <= args.zoo_clips[1]:
-        parser.error(f"--zoo-clips: need 1 <= FIRST <= LAST, got {args.zoo_clips}")
-    if not (val.DATA / "manifest.tsv").is_file():
-        print(f"mirror_val.py: {val.DATA} not found: Bandai's clips need ../shared/data",
-              file=sys.stderr)
+    if not check_arguments(parser, args, "mirror_val.py"):
         return 2
     start = time.perf_counter()
     clips = fresh_clips(*args.zoo_clips, bandai=args.bandai)
-    results: Dict[str, Dict[str, Dict[str, List[float]]]] = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for ckpt in args.ckpt:
-            module = load_module(ckpt).eval()
-            groups = results.setdefault(ckpt, {})
-            for group, _, motion in clips:
-                if ckpt in RULE and group not in RULE[ckpt][0]:
-                    continue
-                cell = groups.setdefault(group, {"single": [], "mirror": []})
-                for key, mirror in (("single", False), ("mirror", True)):
-                    cell[key].append(val.measure(module, motion, mirror=mirror)["jp"])
+    results = read_clips(args.ckpt, clips, {k: v[0] for k, v in RULE.items()},
+                         {"single": lambda m, x: val.measure(m, x, mirror=False)["jp"],
+                          "mirror": lambda m, x: val.measure(m, x, mirror=True)["jp"]})
     text = table(results, time.perf_counter() - start)
     print(text)
     write_results(args.out, "Reconstruction with the mirror image's reading, on fresh "

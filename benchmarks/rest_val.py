@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-import warnings
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -30,7 +29,6 @@ import mirror_val  # noqa: E402
 import pretrained_val as val  # noqa: E402
 from pretrained import joint_error  # noqa: E402
 from results_io import write_results  # noqa: E402
-from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import reconstruct_canonical  # noqa: E402
 
@@ -94,30 +92,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--ckpt", nargs="+", default=list(GROUPS),
                         help="built-in names (each reads its groups) or checkpoints (every group)")
-    parser.add_argument("--zoo-clips", type=int, nargs=2, default=ZOO_CLIPS,
-                        metavar=("FIRST", "LAST"), help="each plan's validation clips FIRST to "
-                        f"LAST (1-based; default {ZOO_CLIPS[0]} {ZOO_CLIPS[1]})")
+    mirror_val.add_zoo_clips_argument(parser, ZOO_CLIPS)
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     args = parser.parse_args(argv)
-    if not 1 <= args.zoo_clips[0] <= args.zoo_clips[1]:
-        parser.error(f"--zoo-clips: need 1 <= FIRST <= LAST, got {args.zoo_clips}")
-    if not (val.DATA / "manifest.tsv").is_file():
-        print(f"rest_val.py: {val.DATA} not found: the real clips need ../shared/data",
-              file=sys.stderr)
+    if not mirror_val.check_arguments(parser, args, "rest_val.py"):
         return 2
     start = time.perf_counter()
-    clips = fresh_clips(*args.zoo_clips)
-    results: Dict[str, Dict[str, Dict[str, List[float]]]] = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for ckpt in args.ckpt:
-            module = load_module(ckpt).eval()
-            for group, _, motion in clips:
-                if ckpt in GROUPS and group not in GROUPS[ckpt]:
-                    continue
-                cell = results.setdefault(ckpt, {}).setdefault(group, {"one": [], "two": []})
-                cell["one"].append(jp(module, motion, False))
-                cell["two"].append(jp(module, motion, True))
+    results = mirror_val.read_clips(args.ckpt, fresh_clips(*args.zoo_clips), GROUPS,
+                                    {"one": lambda m, x: jp(m, x, False),
+                                     "two": lambda m, x: jp(m, x, True)})
     text = table(results, time.perf_counter() - start)
     print(text)
     write_results(args.out, "Reconstruction read in one rest pose and in two, on fresh "
