@@ -12,6 +12,7 @@ from satagraph.ops.smoothing import gaussian_smooth
 from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
+from satagraph.lightning.per_dataset import dataset_of, log_per_dataset
 from satagraph.ops.motion_batch import batch_global_motion
 
 DEFAULT_OPTIM: Dict[str, Any] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
@@ -256,6 +257,7 @@ class MotionAutoencoderModule(L.LightningModule):
             metrics = self.metrics(out, batch)
             self.log_dict({f"{stage}/{k}": v.mean() for k, v in metrics.items()},
                           batch_size=size, on_epoch=True, sync_dist=True)
+            log_per_dataset(self, stage, metrics, dataset_of(batch.meta))
         return losses["loss"]
 
     def training_step(self, batch, batch_idx: int) -> Tensor:

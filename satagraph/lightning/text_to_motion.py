@@ -53,12 +53,13 @@ from satagraph.semantics import build_text_encoder
 from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
 from satagraph.data.captioned import batch_seconds, batch_texts
 from satagraph.data.code_bank import CodeBank, CodeBatch, autoencoder_fingerprint
+from satagraph.lightning.per_dataset import dataset_of, log_per_dataset
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.pipelines.inference import default_windows, window_codes
 from satagraph.pipelines.prompt_reading import VOCABULARY_KEY, words_of
-from satagraph.nn.generators import (LengthModel, MaskedTransformer, ResidualTransformer,
-                                     SkeletonEmbedding, merge_codes, parents_to_edge_index,
-                                     skeleton_graph, split_codes)
+from satagraph.nn.generators import (LengthModel, MaskedLoss, MaskedTransformer,
+                                     ResidualTransformer, SkeletonEmbedding, merge_codes,
+                                     parents_to_edge_index, skeleton_graph, split_codes)
 
 #: Loss weights of the three models.
 DEFAULT_LOSS: Dict[str, float] = {"masked": 1.0, "residual": 1.0, "length": 0.1}
@@ -290,9 +291,11 @@ class TextToMotionModule(L.LightningModule):
         return self.text_encoder.encode(list(texts)).float().to(self.device)
 
     # ------------------------------------------------------------ steps
-    def compute_losses(self, batch, generator: Optional[torch.Generator] = None
-                       ) -> Dict[str, Tensor]:
-        """The three losses, their weighted sum (``loss``) and accuracies."""
+    def compute_losses(self, batch, generator: Optional[torch.Generator] = None,
+                       per_dataset: Optional[str] = None) -> Dict[str, Tensor]:
+        """The three losses, their weighted sum (``loss``) and accuracies;
+        with :obj:`per_dataset` (a stage name), also logs the masked loss
+        and accuracy per dataset (:mod:`~satagraph.lightning.per_dataset`)."""
         if isinstance(batch, CodeBatch):
             lengths, texts, seconds = batch.num_frames, batch.texts, batch.seconds
             codes = split_codes(batch.codes, lengths)
@@ -312,7 +315,28 @@ class TextToMotionModule(L.LightningModule):
         out = {"masked": masked.loss, "residual": residual.loss, "length": length,
                "masked_acc": masked.accuracy, "residual_acc": residual.accuracy}
         out["loss"] = sum(self.loss_weights[k] * out[k] for k in DEFAULT_LOSS)
+        if per_dataset and not isinstance(batch, CodeBatch):
+            log_per_dataset(self, per_dataset, self.masked_per_clip(masked),
+                            dataset_of(batch.meta), masked.corruption.mask.sum(-1))
         return out
+
+    @torch.no_grad()
+    def masked_per_clip(self, masked: MaskedLoss) -> Dict[str, Tensor]:
+        r"""The masked loss and accuracy of every clip, over its masked
+        tokens (their token-weighted mean is the batch's).
+
+        Shapes:
+            - every value: :math:`(B,)`
+        """
+        mask = masked.corruption.mask
+        targets = masked.targets.masked_fill(~mask, 0)
+        token = torch.nn.functional.cross_entropy(
+            masked.logits.transpose(1, 2), targets, reduction="none",
+            label_smoothing=self.masked.label_smoothing)
+        hit = (masked.logits.argmax(-1) == targets).float()
+        count = mask.sum(-1).clamp(min=1)
+        return {name: (value * mask).sum(-1) / count
+                for name, value in (("masked", token), ("masked_acc", hit))}
 
     def note_words(self, texts: Sequence[str]) -> None:
         """Add the words of training captions to the record of the words
@@ -330,7 +354,7 @@ class TextToMotionModule(L.LightningModule):
         self.note_words(meta.get(VOCABULARY_KEY) or ())
 
     def _step(self, batch, stage: str, generator: Optional[torch.Generator] = None) -> Tensor:
-        losses = self.compute_losses(batch, generator)
+        losses = self.compute_losses(batch, generator, None if stage == "train" else stage)
         size = len(batch) if isinstance(batch, CodeBatch) else len(batch.meta)
         self.log_dict({f"{stage}/{k}": v.detach() for k, v in losses.items()},
                       batch_size=size, on_epoch=True, on_step=stage == "train",

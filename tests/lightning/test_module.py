@@ -241,7 +241,30 @@ def test_every_term_logged_with_number_of_clips(build_tiny_module: Callable,
         assert [b for _, b in logged] == [3, 1], name
         mean = sum(v * b for v, b in logged) / 4
         assert float(trainer.callback_metrics[name]) == pytest.approx(mean, rel=1e-5), name
-    assert {n for n, _, _ in calls} == names
+    # (and again per dataset: test_metrics_are_logged_per_dataset_too)
+    assert {n for n, _, _ in calls if n.count("/") < 2} == names
+
+
+def test_metrics_are_logged_per_dataset_too(build_tiny_module: Callable, datamodule) -> None:
+    """A batch of Bandai and dog clips logs each metric per dataset as
+    ``val/<dataset>/<metric>``, each over its own clips; their clip-weighted
+    mean is the overall figure."""
+    module = build_tiny_module("vae")
+    calls = _spy_logs(module)
+    ds = datamodule.datasets["val"]
+    clips = [ds[i] for i in range(len(ds))]
+    picked = [c for d in ("bandai", "dog") for c in [c for c in clips
+                                                      if c.meta["dataset"] == d][:2]]
+    loader = DataLoader([picked], batch_size=1, collate_fn=lambda g: collate_clips(g[0]))
+    trainer = _quiet_trainer()
+    trainer.validate(module, dataloaders=loader, verbose=False)
+    for metric in METRICS:
+        sizes = {d: [b for n, _, b in calls if n == f"val/{d}/{metric}"] for d in ("bandai", "dog")}
+        assert sizes == {"bandai": [2], "dog": [2]}, metric
+        values = [float(trainer.callback_metrics[f"val/{d}/{metric}"]) for d in ("bandai", "dog")]
+        assert float(trainer.callback_metrics[f"val/{metric}"]) == pytest.approx(
+            sum(values) / 2, rel=1e-5), metric
+    assert values[0] != pytest.approx(values[1])  # each dataset its own clips
 
 
 # ------------------------------------------------------------------ embed

@@ -106,13 +106,17 @@ def test_semantic_encoder_must_be_the_autoencoders(autoencoder_ckpt):
         build_module(cfg)
 
 
-def test_satagraph_train_t2m_selects_on_validation(autoencoder_ckpt, tmp_path):
-    """`satagraph train t2m_tiny` (module: t2m) end to end for a few steps."""
+@pytest.mark.parametrize("monitor", ["val_loss", "val/zoo-endless/masked"])
+def test_satagraph_train_t2m_selects_on_validation(autoencoder_ckpt, tmp_path, monitor):
+    """`satagraph train t2m_tiny` (module: t2m) end to end for a few steps,
+    keeping the best checkpoint by the overall loss or one dataset's."""
     overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "run")
-    cfg = load_config("t2m_tiny", overrides)
+    cfg = load_config("t2m_tiny", overrides + [f"trainer.monitor={monitor}"])
     module, data, trainer, run_dir = train(cfg)
     best = trainer.checkpoint_callback
-    assert best.monitor == "val_loss" and best.best_model_path
+    assert best.monitor == monitor and best.best_model_path
+    assert float(best.best_model_score) == pytest.approx(float(min(
+        trainer.callback_metrics[monitor], best.best_model_score)))
     assert "val_loss" in trainer.callback_metrics
     loaded = load_module(best.best_model_path)
     assert type(loaded).__name__ == "TextToMotionModule"
@@ -200,3 +204,39 @@ def test_facing_frame_must_be_the_autoencoders(autoencoder_ckpt, tmp_path):
     with pytest.raises(ValueError, match=r"facing_smooth=0 is not the autoencoder's \(0.25\)"):
         build(0.0)
     assert build(0.25).meta["data"]["preprocessing"]["facing_smooth"] == 0.25
+
+
+def test_validation_logs_the_masked_loss_per_dataset(autoencoder_ckpt):
+    """Validation logs the masked loss and accuracy of each dataset's
+    clips (``val/<dataset>/masked``) over its masked tokens: their
+    token-weighted mean is the overall figure; training logs none."""
+    import lightning as L
+    from torch.utils.data import DataLoader
+
+    module = build_t2m(autoencoder_ckpt)
+    batch = zoo_batch(6)
+    for i, meta in enumerate(batch.meta):
+        meta["dataset"] = "zoo" if i < 4 else "zoo-gestures"
+    calls = []
+    original = module.log
+
+    def log(name, value, *args, **kwargs):
+        calls.append((name, float(value), kwargs.get("batch_size")))
+        original(name, value, *args, **kwargs)
+
+    module.log = log
+    trainer = L.Trainer(accelerator="cpu", devices=1, logger=False, enable_checkpointing=False,
+                        enable_progress_bar=False, enable_model_summary=False)
+    trainer.validate(module, DataLoader([batch], batch_size=None), verbose=False)
+    for name in ("masked_acc", "masked"):
+        logged = {d: [(v, b) for n, v, b in calls if n == f"val/{d}/{name}"]
+                  for d in ("zoo", "zoo-gestures")}
+        assert all(len(v) == 1 and v[0][1] > 0 for v in logged.values()), logged
+        tokens = sum(v[0][1] for v in logged.values())
+        mean = sum(v[0][0] * v[0][1] for v in logged.values()) / tokens
+        assert float(trainer.callback_metrics[f"val/{name}"]) == pytest.approx(mean, rel=1e-4)
+    assert logged["zoo"][0][0] != pytest.approx(logged["zoo-gestures"][0][0])  # the loss
+    calls.clear()
+    module.train()
+    module.compute_losses(batch, torch.Generator().manual_seed(0))
+    assert not calls
