@@ -1,19 +1,18 @@
 """The SATA decoder: per-frame latents broadcast onto a target skeleton."""
 from __future__ import annotations
 
-from typing import Dict, Optional
+from typing import Any, Dict
 
 from torch import Tensor, nn
 
-from satagraph.typing import ROOT_CHANNELS, STATIC_CHANNELS
-from satagraph.nn.layers.modulation import build_input_layer
-from satagraph.nn.layers.spatio_temporal import make_blocks
+from satagraph.typing import ROOT_CHANNELS
+from satagraph.nn.autoencoders.stack import SATAStack
 
 #: Output widths: 6D rotation per node, root features per frame, contact logit.
 Q_CHANNELS, C_CHANNELS = 6, 1
 
 
-class SATADecoder(nn.Module):
+class SATADecoder(SATAStack):
     r"""Decodes one latent per frame onto the nodes of a target batch.
 
     Every frame's latent is broadcast to all nodes of the target frame graph
@@ -25,10 +24,8 @@ class SATADecoder(nn.Module):
 
     Args:
         latent_channels (int, optional): Latent width.
-        hidden_channels, heads, ff_channels, num_blocks, dropout,
-        static_channels, semantic_channels, edge_channels, local_conv,
-        spatial_attention, temporal, fusion, use_text, num_frequencies, act:
-            As in :class:`~satagraph.nn.SATAEncoder`.
+        **kwargs: The :class:`~satagraph.nn.autoencoders.stack.SATAStack`
+            arguments, as in :class:`~satagraph.nn.SATAEncoder`.
 
     Shapes:
         - **z**: :math:`(G, C_{lat})`, frames in the order of the target's
@@ -39,32 +36,14 @@ class SATADecoder(nn.Module):
           logits)
     """
 
-    def __init__(self, latent_channels: int = 128, hidden_channels: int = 256,
-                 heads: int = 4, ff_channels: int = 512, num_blocks: int = 3,
-                 dropout: float = 0.1, static_channels: int = STATIC_CHANNELS,
-                 semantic_channels: int = 0, edge_channels: int = 2,
-                 local_conv: Optional[str] = "gine", spatial_attention: bool = True,
-                 temporal: bool = True, fusion: bool = True, use_text: bool = True,
-                 num_frequencies: int = 8, act: str = "relu") -> None:
-        super().__init__()
-        self.input = build_input_layer(
-            latent_channels, hidden_channels, fusion, static_channels=static_channels,
-            semantic_channels=semantic_channels, num_frequencies=num_frequencies,
-            use_text=use_text, act=act)
-        self.blocks = make_blocks(
-            num_blocks, hidden_channels, heads=heads, ff_channels=ff_channels,
-            dropout=dropout, local_conv=local_conv, spatial_attention=spatial_attention,
-            temporal=temporal, edge_channels=edge_channels, act=act)
-        self.head = nn.Linear(hidden_channels, Q_CHANNELS + ROOT_CHANNELS + C_CHANNELS)
+    def __init__(self, latent_channels: int = 128, **kwargs: Any) -> None:
+        super().__init__(latent_channels, **kwargs)
+        self.head = nn.Linear(self.hidden_channels, Q_CHANNELS + ROOT_CHANNELS + C_CHANNELS)
 
     def forward(self, z: Tensor, frames) -> Dict[str, Tensor]:
         if z.shape[0] != frames.root.shape[0]:
             raise ValueError(f"SATADecoder: {z.shape[0]} latents for "
                              f"{frames.root.shape[0]} target frames")
-        h = self.input(z[frames.batch], frames.joint_static, frames.joint_semantic,
-                       frames.node_stream)
-        for block in self.blocks:
-            h = block(h, frames)
-        out = self.head(h)
+        out = self.head(self.stack(z[frames.batch], frames))
         q, r, c = out.split([Q_CHANNELS, ROOT_CHANNELS, C_CHANNELS], dim=-1)
         return {"q": q, "r": r[frames.root_node], "c": c}
