@@ -5,9 +5,11 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 from typing import List, Optional, Sequence
 
 from satagraph.cli.arguments import positive_float, positive_int
+from satagraph.cli.folders import run_over_folder
 from satagraph.transforms.rest import REST_MODES
 
 
@@ -36,21 +38,28 @@ def add_train_parsers(sub) -> None:
     p.set_defaults(func=run_train)
 
     p = sub.add_parser("reconstruct", help="encode and decode a BVH on its own skeleton",
-                       description="Sliding-window reconstruction of IN.bvh into OUT.bvh.")
+                       description="Sliding-window reconstruction of IN.bvh into OUT.bvh, or of "
+                       "every .bvh below a folder IN into the same paths below a folder OUT "
+                       "(the model loaded once; a file that fails is said in one line and "
+                       "the others go on; exit code 2 if any failed).")
     _common(p)
     _ground(p, default=False)
     add_settle_argument(p)
     add_mirror_argument(p, default=True)
     add_two_rests_argument(p, default=False)
-    p.add_argument("input", metavar="IN.bvh")
-    p.add_argument("output", metavar="OUT.bvh")
+    p.add_argument("input", metavar="IN", help="a .bvh file, or a folder of them")
+    p.add_argument("output", metavar="OUT", help="the .bvh file to write, or the folder "
+                   "(created) for an input folder")
     _rig(p)
     p.set_defaults(func=run_reconstruct)
 
     p = sub.add_parser("retarget", help="transfer a motion onto another skeleton",
                        description="Retarget SOURCE.bvh onto TARGET.bvh's skeleton (any "
                        "species); OUT.bvh is in the target's axes, units and channel layout "
-                       "at the source's frame rate.")
+                       "at the source's frame rate. A folder SOURCE retargets every .bvh below "
+                       "it into the same paths below a folder OUT (the model loaded once; a "
+                       "file that fails is said in one line and the others go on; exit code 2 "
+                       "if any failed).")
     _common(p)
     _ground(p, default=True)
     add_plant_argument(p)
@@ -58,9 +67,10 @@ def add_train_parsers(sub) -> None:
     add_still_argument(p)
     add_mirror_argument(p, default=False)
     add_two_rests_argument(p, default=False)
-    p.add_argument("source", metavar="SOURCE.bvh")
+    p.add_argument("source", metavar="SOURCE", help="a .bvh file, or a folder of them")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
-    p.add_argument("output", metavar="OUT.bvh")
+    p.add_argument("output", metavar="OUT", help="the .bvh file to write, or the folder "
+                   "(created) for a source folder")
     _rig(p, what="SOURCE.bvh")
     _rig(p, "target", "TARGET.bvh")
     p.set_defaults(func=run_retarget)
@@ -249,10 +259,11 @@ def run_code_bank(args) -> int:
     return 0
 
 
-def _load(args, motions: Sequence, paths: Sequence[str]):
+def _load(args, motions: Sequence, paths: Sequence[str], cache: Optional[dict] = None):
     """The model of ``--ckpt`` (``auto``: the built-in one for the rigs of
     :obj:`motions`, :mod:`~satagraph.pipelines.builtin_choice`), saying on
-    stderr which built-in model is used and why."""
+    stderr which built-in model is used and why; with :obj:`cache` (a dict
+    kept across the files of a folder), each model is loaded and named once."""
     from satagraph.experiment.train import load_module
     from satagraph.io.weights import builtin_notice, is_builtin
     from satagraph.pipelines.builtin_choice import AUTO, choose_builtin
@@ -260,9 +271,13 @@ def _load(args, motions: Sequence, paths: Sequence[str]):
     if name == AUTO:
         name, reason = choose_builtin([m.skeleton for m in motions], paths)
         why = f"--ckpt auto ({reason}): "
+    if cache is not None and name in cache:
+        return cache[name], cache[name].embed
     module = load_module(name)
     if is_builtin(name):
         print(f"satagraph: {why}{builtin_notice(name=name)}", file=sys.stderr)
+    if cache is not None:
+        cache[name] = module
     return module, module.embed
 
 
@@ -285,37 +300,61 @@ def _check(motion, path: str, fps: float, frames: bool = True) -> None:
 
 
 def run_reconstruct(args) -> int:
-    from satagraph.pipelines.inference import reconstruct_motion
-    from satagraph.io import write_bvh
-    from satagraph.utils.files import check_output_path
-    check_output_path(args.output)
-    motion = _read(args, "input")
-    module, embed = _load(args, [motion], [args.input])
-    _check(motion, args.input, module.fps)
-    out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
-                             args.ground, args.settle, args.mirror, args.two_rests)
-    write_bvh(out, args.output)
-    print(f"wrote {args.output}: {out.num_frames} frames, {out.num_joints} joints")
+    """Reconstruct a file, or every BVH file of a folder (:mod:`satagraph.cli.folders`)."""
+    models: dict = {}
+    if Path(args.input).is_dir():
+        return run_over_folder(args.input, args.output,
+                               lambda src, out: _reconstruct_file(args, src, out, models),
+                               "reconstructed", args.traceback)
+    print(_reconstruct_file(args, args.input, args.output, models))
     return 0
 
 
+def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
+    from satagraph.cli.arguments import read_with_rig
+    from satagraph.pipelines.inference import reconstruct_motion
+    from satagraph.io import write_bvh
+    from satagraph.utils.files import check_output_path
+    check_output_path(output)
+    motion = read_with_rig(source, args)
+    module, embed = _load(args, [motion], [source], models)
+    _check(motion, source, module.fps)
+    out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
+                             args.ground, args.settle, args.mirror, args.two_rests)
+    write_bvh(out, output)
+    return f"wrote {output}: {out.num_frames} frames, {out.num_joints} joints"
+
+
 def run_retarget(args) -> int:
+    """Retarget a file, or every BVH file of a folder (:mod:`satagraph.cli.folders`),
+    onto ``--target``."""
+    models: dict = {}
+    target = _read(args, "target")
+    if Path(args.source).is_dir():
+        return run_over_folder(args.source, args.output,
+                               lambda src, out: _retarget_file(args, src, target, out, models),
+                               "retargeted", args.traceback)
+    print(_retarget_file(args, args.source, target, args.output, models))
+    return 0
+
+
+def _retarget_file(args, source_path: str, target, output: str, models: dict) -> str:
+    from satagraph.cli.arguments import read_with_rig
     from satagraph.pipelines.inference import retarget_motion
     from satagraph.io import write_bvh
     from satagraph.utils.files import check_output_path
-    check_output_path(args.output)
-    source, target = _read(args, "source"), _read(args, "target")
-    module, embed = _load(args, [source, target], [args.source, args.target])
-    _check(source, args.source, module.fps)
+    check_output_path(output)
+    source = read_with_rig(source_path, args)
+    module, embed = _load(args, [source, target], [source_path, args.target], models)
+    _check(source, source_path, module.fps)
     _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
                          settle=args.settle, still=args.still, mirror=args.mirror,
                          two_rests=args.two_rests)
-    write_bvh(out, args.output)
-    print(f"wrote {args.output}: {out.num_frames} frames of {args.source} on the "
-          f"{out.num_joints}-joint skeleton of {args.target}")
-    return 0
+    write_bvh(out, output)
+    return (f"wrote {output}: {out.num_frames} frames of {source_path} on the "
+            f"{out.num_joints}-joint skeleton of {args.target}")
 
 
 def run_eval(args) -> int:

@@ -1,0 +1,93 @@
+"""`satagraph retarget` and `reconstruct` over a folder of BVH files: the
+model loaded once, outputs at the same relative paths, a bad file said in
+one line while the others go on, and no output for it."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from satagraph.cli import main
+from satagraph.cli.folders import bvh_files, failure_line
+from satagraph.datasets.zoo import write_zoo
+from satagraph.io import read_bvh
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two zoo walks (one in a subfolder), a broken file, a text file."""
+    zoo = tmp_path_factory.mktemp("zoo")
+    write_zoo(zoo, species=["biped", "quadruped"], clips=1, frames=40, seed=2)
+    src = tmp_path_factory.mktemp("src")
+    (src / "deep").mkdir()
+    biped = sorted((zoo / "biped").glob("*.bvh"))[0]
+    quad = sorted((zoo / "quadruped").glob("*.bvh"))
+    (src / "walk.bvh").write_bytes(biped.read_bytes())
+    (src / "deep" / "Trot.BVH").write_bytes(quad[0].read_bytes())
+    (src / "deep" / "broken.bvh").write_text("HIERARCHY\nROOT Hips\n{\n")
+    (src / "notes.txt").write_text("not motion")
+    (src / "target.bvh").write_bytes(quad[-1].read_bytes())
+    return src
+
+
+def test_bvh_files_are_found_below_the_folder_in_any_case(folder: Path) -> None:
+    names = [p.relative_to(folder).as_posix() for p in bvh_files(folder)]
+    assert names == ["deep/Trot.BVH", "deep/broken.bvh", "target.bvh", "walk.bvh"]
+
+
+def test_retarget_a_folder_goes_on_past_a_bad_file(folder: Path, tmp_path: Path,
+                                                   capsys) -> None:
+    out = tmp_path / "out"
+    target = folder / "target.bvh"
+    code = main(["retarget", str(folder), "--target", str(target), str(out)])
+    printed = capsys.readouterr()
+    assert code == 2
+    written = sorted(p.relative_to(out).as_posix() for p in bvh_files(out))
+    assert written == ["deep/Trot.BVH", "target.bvh", "walk.bvh"]
+    errors = [line for line in printed.err.splitlines() if "error" in line]
+    assert len(errors) == 1 and "deep/broken.bvh:3:" in errors[0]
+    assert "retargeted 3 of 4 files" in printed.out and "1 failed" in printed.out
+    assert printed.err.count("using the built-in model") == 1  # loaded once
+    names = read_bvh(target).skeleton.names
+    for path in bvh_files(out):
+        motion = read_bvh(path)
+        assert motion.skeleton.names == names and motion.num_frames == 40
+
+
+def test_reconstruct_a_folder_keeps_each_rig(folder: Path, tmp_path: Path, capsys) -> None:
+    good = tmp_path / "good"
+    (good / "deep").mkdir(parents=True)
+    for rel in ("walk.bvh", "deep/Trot.BVH"):
+        (good / rel).write_bytes((folder / rel).read_bytes())
+    out = good / "out"  # inside the input folder: never read as an input
+    assert main(["reconstruct", str(good), str(out), "--no-mirror"]) == 0
+    assert main(["reconstruct", str(good), str(out), "--no-mirror"]) == 0
+    assert "reconstructed 2 of 2 files" in capsys.readouterr().out
+    for rel in ("walk.bvh", "deep/Trot.BVH"):
+        source, result = read_bvh(good / rel), read_bvh(out / rel)
+        assert result.skeleton.names == source.skeleton.names
+        assert result.num_frames == source.num_frames
+
+
+@pytest.mark.parametrize("case", ["file", "bvh-name", "empty"])
+def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: Path,
+                                                        capsys, case: str) -> None:
+    source, out = folder, tmp_path / "results"
+    if case == "file":
+        out.write_text("x")
+    elif case == "bvh-name":
+        out = tmp_path / "results.bvh"
+    else:
+        source = tmp_path / "empty"
+        source.mkdir()
+    assert main(["reconstruct", str(source), str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert ("no .bvh files" if case == "empty" else "not a folder") in err
+
+
+def test_failure_line_names_the_file_once() -> None:
+    assert failure_line("a.bvh", ValueError("a.bvh:3: bad")) == "a.bvh:3: bad"
+    assert failure_line("a.bvh", RuntimeError("shape\nmismatch")) == "a.bvh: shape mismatch"
+    assert failure_line("a.bvh", FileNotFoundError(2, "No such file", "a.bvh")) == \
+        "a.bvh: No such file"
