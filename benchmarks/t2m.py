@@ -775,11 +775,14 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
 def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     """The generator's sampling settings of the command line (``None``:
     all defaults)."""
-    given = {k: getattr(args, k) for k in ("guidance", "residual_guidance", "temperature",
+    given = {k: getattr(args, k) for k in ("decoding_steps", "guidance", "residual_guidance",
+                                           "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
                                            "smooth", "plant", "choice_temperature",
                                            "spread")
              if getattr(args, k, None) is not None}
+    if "decoding_steps" in given:
+        given["steps"] = given.pop("decoding_steps")
     return replace(GenerationSettings(), **given) if given else None
 
 
@@ -797,6 +800,8 @@ def main(argv=None) -> int:
                              "there, report test)")
     parser.add_argument("--guidance", type=float, default=None,
                         help="masked transformer guidance (default: generate's)")
+    parser.add_argument("--decoding-steps", type=int, default=None,
+                        help="iterative decoding steps (default: generate's, 10)")
     parser.add_argument("--residual-guidance", type=float, default=None)
     parser.add_argument("--temperature", type=float, default=None)
     parser.add_argument("--topk-ratio", type=float, default=None)

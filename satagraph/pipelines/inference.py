@@ -330,7 +330,8 @@ def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] =
     averages the model's reading with that of the mirror image by default
     (:obj:`mirror`; ``experiments/PRETRAIN.md`` sections 37-37c: on
     validation clips the error falls to 0.83-0.91 of one reading's in the
-    median). :obj:`two_rests` also reads it in a second rest pose.
+    median). :obj:`two_rests` also reads it in a second rest pose (off:
+    on fresh validation clips it helped the spider alone, section 39).
     :obj:`options` are :func:`retarget_canonical`'s (``ground`` still on
     unless turned off)."""
     return retarget_canonical(module, motion, motion, semantic, still=False, mirror=mirror,
