@@ -319,11 +319,7 @@ def _no_output(tmp: Path) -> bool:
 
 
 def _reads_back(tmp: Path) -> bool:
-    sys.path.insert(0, str(REPO))
-    from satagraph.io import read_bvh
-    import numpy as np
-    motion = read_bvh(tmp / "o.bvh")
-    return bool(np.isfinite(motion.raw_channels).all())
+    return _reads_back_path(tmp / "o.bvh")
 
 
 # ------------------------------------------------------------ training cases
@@ -684,6 +680,47 @@ def model_cases(root: Path) -> List[Case]:
     return cases
 
 
+def _bad_folder(root: Path, tmp: Path, command: str) -> List[str]:
+    """``retarget`` / ``reconstruct`` over a folder of every hostile BVH
+    file, a FIFO, a dangling link and two good files (one in a subfolder)."""
+    src = tmp / "in"
+    for i, data in enumerate(BVH_ERRORS.values()):
+        _write(src / f"bad{i:03d}.bvh", data)
+    _fifo(src / "fifo.bvh")
+    (src / "dangling.bvh").symlink_to(tmp / "nowhere.bvh")
+    _good(src, "good1.bvh")
+    _good(src / "deep", "good2.bvh")
+    target = ["--target", str(_good(tmp, "t.bvh"))] if command == "retarget" else []
+    return [command, "--ckpt", str(_model(root)), *target, str(src), str(tmp / "out")]
+
+
+def _folder_done(tmp: Path) -> bool:
+    """The two good files written and readable, nothing else written, one
+    error line per bad file."""
+    out = tmp / "out"
+    written = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    errors = [x for x in (tmp / "stderr").read_text().splitlines()
+              if x.startswith("satagraph: error: ")]
+    return (written == ["deep/good2.bvh", "good1.bvh"]
+            and all(_reads_back_path(out / w) for w in written)
+            and len(errors) == len(BVH_ERRORS) + 2)
+
+
+def _reads_back_path(path: Path) -> bool:
+    sys.path.insert(0, str(REPO))
+    from satagraph.io import read_bvh
+    import numpy as np
+    return bool(np.isfinite(read_bvh(path).raw_channels).all())
+
+
+def folder_cases(root: Path) -> List[Case]:
+    """A folder of bad files among good ones: every bad file said, every
+    good one written, the run never stopped halfway."""
+    return [Case(f"{command}: a folder of {len(BVH_ERRORS) + 2} bad files and 2 good",
+                 "folder", lambda t, c=command: _bad_folder(root, t, c), check=_folder_done,
+                 slow=True, timeout=240.0) for command in ("reconstruct", "retarget")]
+
+
 def _nan_ckpt(root: Path, tmp: Path) -> str:
     import torch
     data = torch.load(_model(root), weights_only=True)
@@ -716,7 +753,7 @@ def all_cases(root: Path, quick: bool = False) -> List[Case]:
     """Every case; :obj:`quick` leaves out those that train or need a model."""
     cases = bvh_cases() + convert_cases() + checkpoint_cases() + tags_cases()
     if not quick:
-        cases += training_cases(root) + model_cases(root)
+        cases += training_cases(root) + model_cases(root) + folder_cases(root)
     names = [c.name for c in cases]
     assert len(names) == len(set(names)), "case names must be distinct"
     return cases

@@ -14,9 +14,11 @@ PathLike = Union[str, Path]
 
 
 def bvh_files(folder: PathLike) -> List[Path]:
-    """Every ``.bvh`` file (any case) below :obj:`folder`, sorted."""
+    """Every ``.bvh`` entry (any case) below :obj:`folder` but folders,
+    sorted: special files and broken links too, which the reader refuses
+    in one line rather than the listing leaving them out unsaid."""
     return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() == ".bvh"
-                  and p.is_file())
+                  and not p.is_dir())
 
 
 def failure_line(path: PathLike, err: BaseException) -> str:
@@ -64,9 +66,18 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
             print(f"satagraph: error: {failure_line(path, err)}", file=sys.stderr)
     done = len(files) - len(failed)
     print(f"{verb} {done} of {len(files)} files into {output} in "
-          f"{time.perf_counter() - start:.1f} s"
-          + (f"; {len(failed)} failed: {', '.join(str(p) for p in failed)}" if failed else ""))
+          f"{time.perf_counter() - start:.1f} s" + _failed(failed))
     return 2 if failed else 0
+
+
+def _failed(failed: List[Path], shown: int = 10) -> str:
+    """The end of the summary line: the files that failed, the first
+    :obj:`shown` named."""
+    if not failed:
+        return ""
+    names = ", ".join(str(p) for p in failed[:shown])
+    more = f" and {len(failed) - shown} more (each said above)" if len(failed) > shown else ""
+    return f"; {len(failed)} failed: {names}{more}"
 
 
 __all__ = ["bvh_files", "failure_line", "run_over_folder"]

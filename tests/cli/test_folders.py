@@ -15,7 +15,8 @@ from satagraph.io import read_bvh
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Two zoo walks (one in a subfolder), a broken file, a text file."""
+    """Two zoo walks (one in a subfolder), a broken file, a dangling link,
+    a text file."""
     zoo = tmp_path_factory.mktemp("zoo")
     write_zoo(zoo, species=["biped", "quadruped"], clips=1, frames=40, seed=2)
     src = tmp_path_factory.mktemp("src")
@@ -26,13 +27,15 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     (src / "deep" / "Trot.BVH").write_bytes(quad[0].read_bytes())
     (src / "deep" / "broken.bvh").write_text("HIERARCHY\nROOT Hips\n{\n")
     (src / "notes.txt").write_text("not motion")
+    (src / "deep" / "gone.bvh").symlink_to(src / "nowhere.bvh")
     (src / "target.bvh").write_bytes(quad[-1].read_bytes())
     return src
 
 
 def test_bvh_files_are_found_below_the_folder_in_any_case(folder: Path) -> None:
     names = [p.relative_to(folder).as_posix() for p in bvh_files(folder)]
-    assert names == ["deep/Trot.BVH", "deep/broken.bvh", "target.bvh", "walk.bvh"]
+    assert names == ["deep/Trot.BVH", "deep/broken.bvh", "deep/gone.bvh", "target.bvh",
+                     "walk.bvh"]  # a broken link too: the reader says what it is
 
 
 def test_retarget_a_folder_goes_on_past_a_bad_file(folder: Path, tmp_path: Path,
@@ -45,8 +48,9 @@ def test_retarget_a_folder_goes_on_past_a_bad_file(folder: Path, tmp_path: Path,
     written = sorted(p.relative_to(out).as_posix() for p in bvh_files(out))
     assert written == ["deep/Trot.BVH", "target.bvh", "walk.bvh"]
     errors = [line for line in printed.err.splitlines() if "error" in line]
-    assert len(errors) == 1 and "deep/broken.bvh:3:" in errors[0]
-    assert "retargeted 3 of 4 files" in printed.out and "1 failed" in printed.out
+    assert len(errors) == 2 and "deep/broken.bvh:3:" in errors[0]
+    assert "deep/gone.bvh" in errors[1] and "No such file" in errors[1]
+    assert "retargeted 3 of 5 files" in printed.out and "2 failed" in printed.out
     assert printed.err.count("using the built-in model") == 1  # loaded once
     names = read_bvh(target).skeleton.names
     for path in bvh_files(out):
@@ -84,6 +88,23 @@ def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: 
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert ("no .bvh files" if case == "empty" else "not a folder") in err
+
+
+def test_the_summary_names_ten_failures_at_most(tmp_path: Path, capsys) -> None:
+    from satagraph.cli.folders import run_over_folder
+
+    for i in range(12):
+        (tmp_path / "in" / f"{i:02d}.bvh").parent.mkdir(exist_ok=True)
+        (tmp_path / "in" / f"{i:02d}.bvh").write_text("x")
+
+    def refuse(source: str, output: str) -> str:
+        raise ValueError(f"{source}:1: bad")
+
+    assert run_over_folder(tmp_path / "in", tmp_path / "out", refuse, "read") == 2
+    printed = capsys.readouterr()
+    assert printed.err.count("satagraph: error: ") == 12
+    assert "0 of 12 files" in printed.out and "09.bvh and 2 more (each said above)" in printed.out
+    assert "10.bvh" not in printed.out and not list((tmp_path / "out").rglob("*.bvh"))
 
 
 def test_failure_line_names_the_file_once() -> None:
