@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
+from pathlib import Path
 from typing import List
 
 
@@ -29,13 +31,19 @@ def add_generate_parser(sub) -> None:
         "OUT.bvh is on the target's own rig: its axes, units, rest pose and channel "
         "layout. With several --skeleton files, one file per skeleton: "
         "OUT_<skeleton>.bvh beside OUT.bvh (or <skeleton>.bvh inside OUT when it is a "
-        "folder). The same seed gives the same motion. Works offline.")
+        "folder). The same seed gives the same motion. Works offline. --prompts FILE "
+        "generates one motion per line of FILE into the folder OUT, prompt i with seed "
+        "SEED + i, and lists them in OUT/prompts.tsv.")
     p.add_argument("--ckpt", default="builtin",
                    help="a text-to-motion checkpoint or weights file, or builtin (the "
                    "default: the small model shipped in the package)")
-    p.add_argument("--text", required=True, help="the prompt, e.g. \"a person walks "
-                   "forward and turns left\"; an empty text generates for the skeleton "
-                   "alone (the model is trained with some text dropped)")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--text", help="the prompt, e.g. \"a person walks "
+                      "forward and turns left\"; an empty text generates for the skeleton "
+                      "alone (the model is trained with some text dropped)")
+    what.add_argument("--prompts", metavar="FILE", help="a text file of prompts, one per "
+                      "line (blank lines and lines starting with # are skipped); OUT is then "
+                      "a folder")
     p.add_argument("--literal", action="store_true",
                    help="give the model the prompt as written (default: a subject noun the "
                    "model never saw in training, e.g. \"dog\", is read as its own subject of "
@@ -85,6 +93,14 @@ def _split_output(args) -> None:
         args.output = args.skeleton.pop()
 
 
+def _prompt_folder(output: str) -> None:
+    """Refuse an output of ``--prompts`` that is a file or named as one."""
+    folder = Path(output)
+    if folder.suffix.lower() == ".bvh" or (folder.exists() and not folder.is_dir()):
+        raise ValueError(f"{output}: not a folder: with --prompts, OUT is the folder the "
+                         "motions go to")
+
+
 def _prompt(module, text: str, literal: bool):
     """The prompt the model is given (``None``: unconditional), with a
     note on stderr where it was read in the model's words or holds words
@@ -100,6 +116,33 @@ def _prompt(module, text: str, literal: bool):
     return reading.text
 
 
+def read_prompts(path: str) -> List[str]:
+    """The prompts of a ``--prompts`` file: one per line, blank lines and
+    ``#`` comments skipped.
+
+    Raises:
+        ValueError: An unreadable file, not UTF-8, or one without prompts
+            (one line naming it).
+    """
+    from satagraph.utils.files import check_input_file
+    check_input_file(path, "prompts file")
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start})") from None
+    prompts = [line.strip() for line in lines]
+    prompts = [p for p in prompts if p and not p.startswith("#")]
+    if not prompts:
+        raise ValueError(f"{path}: no prompts (one per line; # starts a comment)")
+    return prompts
+
+
+def prompt_stem(index: int, text: str) -> str:
+    """A file stem for prompt :obj:`index`: ``007_a-person-walks-forward``."""
+    slug = "-".join(re.findall(r"[a-z0-9]+", text.lower()))[:40].strip("-")
+    return f"{index:03d}_{slug or 'prompt'}"
+
+
 def run_generate(args) -> int:
     from satagraph.pipelines.generate import (GenerationSettings, generate_on, load_generator,
                                     output_paths, write_all)
@@ -107,11 +150,14 @@ def run_generate(args) -> int:
     from satagraph.io.weights import BUILTIN, builtin_notice
     import torch
     _split_output(args)
+    prompts = read_prompts(args.prompts) if args.prompts is not None else None
+    if prompts is not None:
+        _prompt_folder(args.output)
     if args.steps < 1 or args.threads < 1:
         raise ValueError(f"--steps and --threads must be at least 1, got {args.steps} "
                          f"and {args.threads}")
     torch.set_num_threads(args.threads)
-    paths = output_paths(args.output, args.skeleton)
+    paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths:
         check_output_path(path)
     targets = _targets(args)
@@ -120,6 +166,8 @@ def run_generate(args) -> int:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant)
+    if args.prompts is not None:
+        return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()
     text = _prompt(module, args.text.strip(), args.literal)
     motions = [generate_on(module, text, t, args.seconds, args.seed, settings)
@@ -133,4 +181,36 @@ def run_generate(args) -> int:
     return 0
 
 
-__all__: List[str] = ["add_generate_parser"]
+def _generate_prompts(args, module, targets, prompts: List[str], settings) -> int:
+    """``--prompts``: every prompt on every skeleton into the folder
+    ``args.output``, prompt i with seed ``args.seed + i``; a prompt that
+    fails is said in one line and the others go on (exit code 2)."""
+    from satagraph.pipelines.generate import generate_on, output_paths, write_all
+    from satagraph.utils.files import atomic_write_text
+    start, rows, failed = time.time(), ["path\tprompt\tskeleton\tseconds\tseed"], 0
+    Path(args.output).mkdir(parents=True, exist_ok=True)
+    for i, prompt in enumerate(prompts):
+        stem = Path(args.output) / f"{prompt_stem(i, prompt)}.bvh"
+        paths = output_paths(str(stem), args.skeleton)
+        try:
+            text = _prompt(module, prompt, args.literal)
+            motions = [generate_on(module, text, t, args.seconds, args.seed + i, settings)
+                       for t in targets]
+            write_all(motions, paths)
+        except Exception as err:  # one prompt never stops the list
+            if args.traceback:
+                raise
+            failed += 1
+            print(f"satagraph: error: {args.prompts}: prompt {i + 1} ({prompt!r}): {err}",
+                  file=sys.stderr)
+            continue
+        for motion, path, source in zip(motions, paths, args.skeleton):
+            rows.append(f"{Path(path).name}\t{prompt}\t{source}\t{motion.duration:.2f}\t"
+                        f"{args.seed + i}")
+    atomic_write_text(Path(args.output) / "prompts.tsv", "\n".join(rows) + "\n")
+    print(f"generated {len(rows) - 1} motions of {len(prompts) - failed} of {len(prompts)} "
+          f"prompts into {args.output} in {time.time() - start:.1f} s (listed in prompts.tsv)")
+    return 2 if failed else 0
+
+
+__all__: List[str] = ["add_generate_parser", "read_prompts", "prompt_stem"]
