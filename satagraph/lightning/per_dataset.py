@@ -9,6 +9,10 @@ module logs its per-clip figures again per ``meta["dataset"]`` as
 ``{stage}/{dataset}/{name}`` (epoch means, weighted as the overall
 figure is), which a run can watch or keep its checkpoints by
 (``trainer.monitor=val/zoo-gestures/masked``).
+
+In a distributed run they are each process's own, not synced: a dataset
+may be in one process's batches and not another's, and a sync over keys
+that differ from process to process would pair the wrong values or hang.
 """
 from __future__ import annotations
 
@@ -53,7 +57,7 @@ def log_per_dataset(module, stage: str, values: Dict[str, Tensor], datasets: Seq
         module.log_dict({f"{stage}/{name}/{key}": (value[keep].float() * weights[keep]).sum()
                          / total for key, value in values.items()},
                         batch_size=int(round(float(total))), on_step=False, on_epoch=True,
-                        sync_dist=True, add_dataloader_idx=False)
+                        sync_dist=False, add_dataloader_idx=False)
 
 
 __all__ = ["dataset_of", "log_per_dataset"]
