@@ -13,6 +13,19 @@ from satagraph.cli.folders import run_over_folder
 from satagraph.transforms.rest import REST_MODES
 
 
+#: What the model commands do with a folder (their ``--help``).
+FOLDER_NOTE = ("A folder {what} reads every .bvh below it and writes each result to the same "
+               "path below a folder OUT (the model loaded once; a file that fails is said in "
+               "one line and the others go on; exit code 2 if any failed).")
+
+
+def _in_out(p: argparse.ArgumentParser, dest: str, metavar: str) -> None:
+    """The input (a file or a folder) and output positionals of a model command."""
+    p.add_argument(dest, metavar=metavar, help="a .bvh file, or a folder of them")
+    p.add_argument("output", metavar="OUT", help="the .bvh file to write, or the folder "
+                   f"(created) for a folder {metavar}")
+
+
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
     from satagraph.cli.arguments import (add_mirror_argument, add_plant_argument,
@@ -38,28 +51,21 @@ def add_train_parsers(sub) -> None:
     p.set_defaults(func=run_train)
 
     p = sub.add_parser("reconstruct", help="encode and decode a BVH on its own skeleton",
-                       description="Sliding-window reconstruction of IN.bvh into OUT.bvh, or of "
-                       "every .bvh below a folder IN into the same paths below a folder OUT "
-                       "(the model loaded once; a file that fails is said in one line and "
-                       "the others go on; exit code 2 if any failed).")
+                       description="Sliding-window reconstruction of IN.bvh into OUT.bvh. "
+                       + FOLDER_NOTE.format(what="IN"))
     _common(p)
     _ground(p, default=False)
     add_settle_argument(p)
     add_mirror_argument(p, default=True)
     add_two_rests_argument(p, default=False)
-    p.add_argument("input", metavar="IN", help="a .bvh file, or a folder of them")
-    p.add_argument("output", metavar="OUT", help="the .bvh file to write, or the folder "
-                   "(created) for an input folder")
+    _in_out(p, "input", "IN")
     _rig(p)
     p.set_defaults(func=run_reconstruct)
 
     p = sub.add_parser("retarget", help="transfer a motion onto another skeleton",
                        description="Retarget SOURCE.bvh onto TARGET.bvh's skeleton (any "
                        "species); OUT.bvh is in the target's axes, units and channel layout "
-                       "at the source's frame rate. A folder SOURCE retargets every .bvh below "
-                       "it into the same paths below a folder OUT (the model loaded once; a "
-                       "file that fails is said in one line and the others go on; exit code 2 "
-                       "if any failed).")
+                       "at the source's frame rate. " + FOLDER_NOTE.format(what="SOURCE"))
     _common(p)
     _ground(p, default=True)
     add_plant_argument(p)
@@ -67,10 +73,8 @@ def add_train_parsers(sub) -> None:
     add_still_argument(p)
     add_mirror_argument(p, default=False)
     add_two_rests_argument(p, default=False)
-    p.add_argument("source", metavar="SOURCE", help="a .bvh file, or a folder of them")
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
-    p.add_argument("output", metavar="OUT", help="the .bvh file to write, or the folder "
-                   "(created) for a source folder")
+    _in_out(p, "source", "SOURCE")
     _rig(p, what="SOURCE.bvh")
     _rig(p, "target", "TARGET.bvh")
     p.set_defaults(func=run_retarget)
