@@ -134,3 +134,11 @@ def test_cli_render_takes_units_per_file(tmp_path, capsys):
     assert [_load(str(cm), one, i).height() for i in (0, 1)] == [heights[0]] * 2
     assert main(["render", str(cm), str(metres), str(out), "--units", "cm,m,in"]) == 2
     assert "--units has 3 values for 2 files" in capsys.readouterr().err
+    # auto: that file's units guessed, as without the option
+    plain = build_parser().parse_args(["render", str(cm), str(metres), str(out)])
+    mixed = build_parser().parse_args(["render", str(cm), str(metres), str(out),
+                                       "--units", "cm,auto", "--up-axis", "auto,y"])
+    assert mixed.units == [0.01, None] and mixed.up_axis == [None, "+Y"]
+    assert _load(str(metres), mixed, 1).height() == pytest.approx(
+        _load(str(metres), plain, 1).height(), rel=1e-9)
+    assert _load(str(cm), mixed, 0).height() == pytest.approx(heights[0], rel=1e-6)

@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import argparse
+from typing import Optional
 
 import numpy as np
 
 from satagraph.io import read_bvh
 from satagraph.motion import Motion
+
+
+#: The value of ``--up-axis`` / ``--units`` that keeps detection for a file.
+AUTO = "auto"
 
 
 def positive_float(text: str) -> float:
@@ -20,9 +25,12 @@ def positive_float(text: str) -> float:
     return value
 
 
-def up_axis(text: str) -> str:
-    """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``."""
+def up_axis(text: str) -> Optional[str]:
+    """``"z"`` -> ``"+Z"``, ``"-y"`` -> ``"-Y"``; ``"auto"`` -> ``None``
+    (detected, as without the option: ``--up-axis auto,z`` for two files)."""
     from satagraph.transforms.rig_reading import normalize_up_axis
+    if text.strip().lower() == AUTO:
+        return None
     try:
         return normalize_up_axis(text)
     except ValueError as err:
@@ -30,8 +38,11 @@ def up_axis(text: str) -> str:
 
 
 def units(text: str):
-    """A unit name (``cm``, ``in``, ...) or a factor to metres."""
+    """A unit name (``cm``, ``in``, ...) or a factor to metres; ``"auto"``
+    -> ``None`` (guessed, as without the option: ``--units auto,cm``)."""
     from satagraph.transforms.rig_reading import parse_units
+    if text.strip().lower() == AUTO:
+        return None
     try:
         return parse_units(text)
     except ValueError as err:
@@ -65,12 +76,13 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
                 f"({example})" if per_input else "")
     parser.add_argument(f"{dash}up-axis", type=wrap(up_axis), default=None,
                         metavar="AXIS", help=f"up axis of {what} (+X, -X, +Y, "
-                        "-Y, +Z, -Z; a bare letter means +) instead of detecting it"
-                        + each("+Z,y"))
+                        "-Y, +Z, -Z; a bare letter means +; auto: detected) instead of "
+                        "detecting it" + each("+Z,auto"))
     parser.add_argument(f"{dash}units", f"{dash}scale", type=wrap(units), default=None,
                         metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
-                        "ft, cmu (CMU mocap units), file (keep the file's own) or "
-                        "a factor to metres, instead of guessing them" + each("cm,file"))
+                        "ft, cmu (CMU mocap units), file (keep the file's own), a "
+                        "factor to metres or auto (guessed), instead of guessing them"
+                        + each("auto,cm"))
 
 
 def check_per_input(args: argparse.Namespace, count: int, prefix: str = "") -> None:
