@@ -453,18 +453,28 @@ def _forward_median(labels: Sequence[str], values: Optional[Sequence[float]]
     return (float(np.median(ahead)), len(ahead)) if ahead else None
 
 
+def _left_share(labels: Sequence[str], turns: Sequence[float]) -> float:
+    """Share of the forward actions' turns that go left: about half for a
+    mirror-symmetric generator (``experiments/T2M.md`` section 31)."""
+    ahead = [v for l, v in zip(labels, turns) if l in FORWARD and np.isfinite(v)]
+    return float(np.mean([v > 0 for v in ahead]))
+
+
 def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
            froudes: Sequence[float], gaps: Optional[Sequence[float]] = None,
            turns: Optional[Sequence[float]] = None) -> Dict[str, object]:
     """Direction accuracy, walk < run < dash ordering of mean Froude speed,
     share of still bow / bye motions and, with :obj:`gaps` (:func:`sideways`
     per motion) and :obj:`turns` (:func:`turning`), their median magnitude
-    over the forward actions (:data:`FORWARD`), over labelled motions."""
+    over the forward actions (:data:`FORWARD`) and the share of those turns
+    that go left, over labelled motions."""
     out: Dict[str, object] = {}
     for key, values in (("sideways", gaps), ("turn", turns)):
         found = _forward_median(labels, values)
         if found is not None:
             out[key] = found
+    if "turn" in out:
+        out["turn_left"] = _left_share(labels, turns)
     dirs = [direction_ok(l, t) for l, t in zip(labels, travels) if l in DIRECTIONS]
     if dirs:
         out["direction"] = (float(np.mean(dirs)), len(dirs))
@@ -665,7 +675,8 @@ def probe_cell(p: Dict[str, object]) -> str:
     if "sideways" in p:
         parts.append(f"sideways {p['sideways'][0]:.0f} deg (n={p['sideways'][1]})")
     if "turn" in p:
-        parts.append(f"turn {p['turn'][0]:.1f} deg/s (n={p['turn'][1]})")
+        left = f", {p['turn_left']:.0%} left" if "turn_left" in p else ""
+        parts.append(f"turn {p['turn'][0]:.1f} deg/s (n={p['turn'][1]}{left})")
     return "; ".join(parts)
 
 

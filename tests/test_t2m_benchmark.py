@@ -66,7 +66,9 @@ def test_turn_reads_how_fast_the_facing_turns():
     out = t2m.probes(["walk", "bow", "run"], [walk.travel] * 3, [0.3, 0.0, 0.6],
                      turns=[walk.turn, turned.turn, -turned.turn])
     assert out["turn"] == (np.median([abs(walk.turn), abs(turned.turn)]), 2)
-    assert t2m.probe_cell(out).endswith(f"; turn {out['turn'][0]:.1f} deg/s (n=2)")
+    assert out["turn_left"] == np.mean([walk.turn > 0, -turned.turn > 0])
+    assert t2m.probe_cell(out).endswith(
+        f"; turn {out['turn'][0]:.1f} deg/s (n=2, {out['turn_left']:.0%} left)")
 
 
 @pytest.mark.slow
