@@ -99,6 +99,20 @@ def read_clips(ckpts: Sequence[str], clips: List[Tuple[str, str, Motion]],
     return results
 
 
+def measure_and_write(args: argparse.Namespace, clips: List[Tuple[str, str, Motion]],
+                      groups: Dict[str, Sequence[str]],
+                      readers: Dict[str, Callable[[object, Motion], float]],
+                      table_of: Callable, title: str) -> int:
+    """:func:`read_clips`, then the table printed and written with its
+    figures to ``args.out``."""
+    start = time.perf_counter()
+    results = read_clips(args.ckpt, clips, groups, readers)
+    text = table_of(results, time.perf_counter() - start)
+    print(text)
+    write_results(args.out, title, text, results)
+    return 0
+
+
 def paired(single: Sequence[float], averaged: Sequence[float]) -> float:
     """Median over clips of the averaged reading's error over the single one's."""
     return float(np.median(np.asarray(averaged) / np.asarray(single)))
@@ -109,13 +123,21 @@ def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool
     (per-clip JPs); returns whether it passes and why not."""
     failures = []
     for ckpt, (groups, largest, mean_cap) in RULE.items():
-        ratios = {g: paired(results[ckpt][g]["single"], results[ckpt][g]["mirror"])
+        ratios = {f"{ckpt} {g}": paired(results[ckpt][g]["single"], results[ckpt][g]["mirror"])
                   for g in groups if g in results[ckpt]}
-        failures += [f"{ckpt} {g}: {r:.3f} > {largest}" for g, r in ratios.items()
-                     if r > largest]
-        if mean_cap is not None and np.mean(list(ratios.values())) > mean_cap:
-            failures.append(f"{ckpt} mean {np.mean(list(ratios.values())):.3f} > {mean_cap}")
+        failures += rule_failures(ratios, largest, mean_cap, f"{ckpt} mean")
     return not failures, failures
+
+
+def rule_failures(ratios: Dict[str, float], largest: float, mean_cap: Optional[float],
+                  mean_name: str = "mean") -> List[str]:
+    """What a paired-ratio rule finds: each group above :obj:`largest`, and
+    the groups' mean above :obj:`mean_cap` (``None``: no cap)."""
+    failures = [f"{g}: {r:.3f} > {largest}" for g, r in ratios.items() if r > largest]
+    mean = float(np.mean(list(ratios.values()))) if ratios else float("nan")
+    if mean_cap is not None and mean > mean_cap:
+        failures.append(f"{mean_name} {mean:.3f} > {mean_cap}")
+    return failures
 
 
 def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float) -> str:
@@ -150,16 +172,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(argv)
     if not check_arguments(parser, args, "mirror_val.py"):
         return 2
-    start = time.perf_counter()
-    clips = fresh_clips(*args.zoo_clips, bandai=args.bandai)
-    results = read_clips(args.ckpt, clips, {k: v[0] for k, v in RULE.items()},
-                         {"single": lambda m, x: val.measure(m, x, mirror=False)["jp"],
-                          "mirror": lambda m, x: val.measure(m, x, mirror=True)["jp"]})
-    text = table(results, time.perf_counter() - start)
-    print(text)
-    write_results(args.out, "Reconstruction with the mirror image's reading, on fresh "
-                  "validation clips (benchmarks/mirror_val.py)", text, results)
-    return 0
+    return measure_and_write(
+        args, fresh_clips(*args.zoo_clips, bandai=args.bandai),
+        {k: v[0] for k, v in RULE.items()},
+        {"single": lambda m, x: val.measure(m, x, mirror=False)["jp"],
+         "mirror": lambda m, x: val.measure(m, x, mirror=True)["jp"]}, table,
+        "Reconstruction with the mirror image's reading, on fresh validation clips "
+        "(benchmarks/mirror_val.py)")
 
 
 if __name__ == "__main__":

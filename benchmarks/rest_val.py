@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -28,7 +27,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import mirror_val  # noqa: E402
 import pretrained_val as val  # noqa: E402
 from pretrained import joint_error  # noqa: E402
-from results_io import write_results  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import reconstruct_canonical  # noqa: E402
 
@@ -65,10 +63,7 @@ def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool
     """Section 39's rule on ``results[ckpt][group] = {"one", "two"}`` (per-clip JPs)."""
     ratios = {f"{ckpt} {g}": mirror_val.paired(cell["one"], cell["two"])
               for ckpt, groups in results.items() for g, cell in groups.items()}
-    failures = [f"{g}: {r:.3f} > {LARGEST}" for g, r in ratios.items() if r > LARGEST]
-    mean = float(np.mean(list(ratios.values())))
-    if mean > MEAN_CAP:
-        failures.append(f"mean {mean:.3f} > {MEAN_CAP}")
+    failures = mirror_val.rule_failures(ratios, LARGEST, MEAN_CAP)
     return not failures, failures
 
 
@@ -97,15 +92,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(argv)
     if not mirror_val.check_arguments(parser, args, "rest_val.py"):
         return 2
-    start = time.perf_counter()
-    results = mirror_val.read_clips(args.ckpt, fresh_clips(*args.zoo_clips), GROUPS,
-                                    {"one": lambda m, x: jp(m, x, False),
-                                     "two": lambda m, x: jp(m, x, True)})
-    text = table(results, time.perf_counter() - start)
-    print(text)
-    write_results(args.out, "Reconstruction read in one rest pose and in two, on fresh "
-                  "validation clips (benchmarks/rest_val.py)", text, results)
-    return 0
+    return mirror_val.measure_and_write(
+        args, fresh_clips(*args.zoo_clips), GROUPS,
+        {"one": lambda m, x: jp(m, x, False), "two": lambda m, x: jp(m, x, True)}, table,
+        "Reconstruction read in one rest pose and in two, on fresh validation clips "
+        "(benchmarks/rest_val.py)")
 
 
 if __name__ == "__main__":

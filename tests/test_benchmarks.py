@@ -420,3 +420,19 @@ def test_mirror_val_gives_section_37bs_verdict_from_its_stored_table():
     results["builtin"]["zoo bird"]["mirror"] = [2 * v for v in results["builtin"]["zoo bird"]["single"]]
     ok, failures = mirror_val.verdict(results)
     assert failures == ["builtin zoo bird: 2.000 > 1.02", "builtin mean 1.167 > 0.95"]
+
+
+def test_rest_val_gives_section_39s_verdict_from_its_stored_table():
+    """Section 39's stored figures fail on the quadruped, Bandai and the
+    mean; a candidate equal to the baseline passes with a mean of 1."""
+    import json
+    import rest_val
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "rest_val.json").read_text())
+    ok, failures = rest_val.verdict(results)
+    assert not ok and failures == ["builtin zoo quadruped: 1.022 > 1.02",
+                                   "builtin bandai (val): 1.053 > 1.02", "mean 0.987 > 0.97"]
+    for groups in results.values():
+        for cell in groups.values():
+            cell["two"] = [0.9 * v for v in cell["one"]]
+    assert rest_val.verdict(results) == (True, [])
