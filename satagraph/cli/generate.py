@@ -89,7 +89,8 @@ def _split_output(args) -> None:
     no other positional argument gave one."""
     if args.output is None:
         if len(args.skeleton) < 2:
-            raise ValueError("generate: OUT.bvh is missing (the file to write)")
+            raise ValueError("generate: OUT.bvh is missing (the file to write; with "
+                             "--prompts, the folder)")
         args.output = args.skeleton.pop()
 
 
