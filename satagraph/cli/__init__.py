@@ -144,7 +144,11 @@ def format_table(info: Dict[str, Any]) -> str:
 
 # ------------------------------------------------------------------ inspect
 def run_inspect(args: argparse.Namespace) -> int:
-    """Print the summary of a BVH file."""
+    """Print the summary of a BVH file, or a line per file of a folder
+    (:mod:`satagraph.cli.inspect_folder`)."""
+    if Path(args.file).is_dir():
+        from satagraph.cli.inspect_folder import run_inspect_folder
+        return run_inspect_folder(args, lambda path: describe(read_with_rig(path, args), path))
     info = describe(read_with_rig(args.file, args), str(args.file))
     print(json.dumps(info, indent=2) if args.json else format_table(info))
     return 0
@@ -153,13 +157,16 @@ def run_inspect(args: argparse.Namespace) -> int:
 def add_inspect_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     """Register ``satagraph inspect FILE [--json]``."""
     parser = subparsers.add_parser(
-        "inspect", help="summarise a BVH file",
+        "inspect", help="summarise a BVH file, or every one of a folder",
         description="Summarise a BVH file: joints and end sites, frames, "
         "frame rate, duration, the up axis (with the confidence and evidence "
         "of its detection), the units and height, Euler rotation orders and "
-        "channel layout. Doubtful readings are flagged WARNING.",
-        epilog="example: satagraph inspect walk.bvh --json")
-    parser.add_argument("file", help="the .bvh file")
+        "channel layout. Doubtful readings are flagged WARNING. Given a folder: "
+        "one line per .bvh below it and a summary of their up axes, units and "
+        "warnings (a dataset checked before training; a file that does not read "
+        "is one error line, exit code 2).",
+        epilog="examples: satagraph inspect walk.bvh --json; satagraph inspect mocap/")
+    parser.add_argument("file", help="the .bvh file, or a folder of them")
     parser.add_argument("--json", action="store_true",
                         help="print a JSON object instead of a table")
     add_rig_arguments(parser)

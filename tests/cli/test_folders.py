@@ -3,6 +3,7 @@ model loaded once, outputs at the same relative paths, a bad file said in
 one line while the others go on, and no output for it."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -112,3 +113,20 @@ def test_failure_line_names_the_file_once() -> None:
     assert failure_line("a.bvh", RuntimeError("shape\nmismatch")) == "a.bvh: shape mismatch"
     assert failure_line("a.bvh", FileNotFoundError(2, "No such file", "a.bvh")) == \
         "a.bvh: No such file"
+
+
+def test_inspect_a_folder_tabulates_every_file_and_sums_up(folder: Path, capsys) -> None:
+    assert main(["inspect", str(folder)]) == 2
+    printed = capsys.readouterr()
+    lines = printed.out.splitlines()
+    assert lines[0].split()[:3] == ["file", "joints", "frames"]
+    rows = {line.split()[0]: line.split() for line in lines[1:-1]}
+    assert set(rows) == {"deep/Trot.BVH", "target.bvh", "walk.bvh"}
+    assert rows["walk.bvh"][1] == str(read_bvh(folder / "walk.bvh").num_joints)
+    assert rows["walk.bvh"][2] == "40" and rows["walk.bvh"][5] == "+Y"
+    assert lines[-1] == ("5 files: up axis +Y 3; units m 3; 0 with warnings; 2 unreadable")
+    errors = printed.err.splitlines()
+    assert len(errors) == 2 and "broken.bvh:3:" in errors[0] and "gone.bvh" in errors[1]
+    assert main(["inspect", str(folder), "--json"]) == 2
+    infos = json.loads(capsys.readouterr().out)
+    assert sorted(Path(i["file"]).name for i in infos) == ["Trot.BVH", "target.bvh", "walk.bvh"]
