@@ -206,8 +206,8 @@ def _generate_prompts(args, module, targets, prompts: List[str], settings) -> in
                   file=sys.stderr)
             continue
         for motion, path, source in zip(motions, paths, args.skeleton):
-            rows.append(f"{Path(path).name}\t{prompt}\t{source}\t{motion.duration:.2f}\t"
-                        f"{args.seed + i}")
+            rows.append("\t".join([Path(path).name, " ".join(prompt.split()), source,
+                                    f"{motion.duration:.2f}", str(args.seed + i)]))
     atomic_write_text(Path(args.output) / "prompts.tsv", "\n".join(rows) + "\n")
     print(f"generated {len(rows) - 1} motions of {len(prompts) - failed} of {len(prompts)} "
           f"prompts into {args.output} in {time.time() - start:.1f} s (listed in prompts.tsv)")
