@@ -142,3 +142,38 @@ def test_cli_render_takes_units_per_file(tmp_path, capsys):
     assert _load(str(metres), mixed, 1).height() == pytest.approx(
         _load(str(metres), plain, 1).height(), rel=1e-9)
     assert _load(str(cm), mixed, 0).height() == pytest.approx(heights[0], rel=1e-6)
+
+
+def _outside(motion, zoom=None) -> int:
+    """How many joint positions of the first frame project outside their
+    panel (``zoom``: force the box zoom, as before :func:`panel_zoom`)."""
+    import importlib
+    from mpl_toolkits.mplot3d import proj3d
+    module = importlib.import_module("satagraph.viz.render")
+    scene = module._Scene(module._tracks([motion], None), 1, 320, 15.0, -60.0)
+    ax = scene.artists[0][0]
+    if zoom is not None:
+        low, high = module._limits(scene.tracks, 1)
+        ax.set_box_aspect((1, 1, (high[1] - low[1]) / (high[0] - low[0])), zoom=zoom)
+        scene.canvas.draw()
+    box = ax.get_window_extent()
+    pos = scene.tracks[0].positions[0]
+    x, y, _ = proj3d.proj_transform(pos[:, 0], pos[:, 2], pos[:, 1], ax.get_proj())
+    px = ax.transData.transform(np.stack([x, y], axis=1))
+    inside = ((px[:, 0] >= box.x0) & (px[:, 0] <= box.x1)
+              & (px[:, 1] >= box.y0) & (px[:, 1] <= box.y1))
+    return int((~inside).sum())
+
+
+def test_a_figure_standing_still_keeps_its_head_and_feet_in_the_panel():
+    """A standing figure's box is tall (height over ground width about 2):
+    at the old fixed zoom (1.4) its head and feet projected outside the
+    panel; :func:`panel_zoom` keeps every joint inside, and a scene wider
+    than tall keeps 1.4."""
+    from satagraph.viz.render import panel_zoom
+    rig = [r for r in zoo_rigs(seed=0) if r.species == "biped"][0]
+    still = generate_clip(rig, "idle", frames=4, seed=0)
+    assert _outside(still, zoom=1.4) > 0
+    assert _outside(still) == 0
+    assert panel_zoom(0.2) == 1.4 and panel_zoom(0.35) == 1.4
+    assert 1.4 > panel_zoom(0.8) > panel_zoom(1.8) > panel_zoom(3.0) >= 0.75

@@ -84,6 +84,19 @@ def _limits(tracks: Sequence[_Track], frames: int) -> Tuple[np.ndarray, np.ndarr
             np.array([centre[0] + half, top, centre[2] + half]))
 
 
+#: Box height over ground width (:func:`panel_zoom`'s knots) and the zoom
+#: at which each fits its panel, measured on renders: a walk across the
+#: floor (0.35), a short walk (0.55), a figure standing still (1.8).
+ZOOM_KNOTS = ((0.35, 0.55, 1.8, 4.0), (1.4, 1.05, 0.9, 0.75))
+
+
+def panel_zoom(tall: float) -> float:
+    """How far a panel's 3D box is magnified: 1.4 for a scene wider than
+    tall, less as it grows taller, so that a figure standing still keeps
+    its head and feet inside the panel (at 1.4 both were cut off)."""
+    return float(np.interp(tall, *ZOOM_KNOTS))
+
+
 class _Scene:
     """A figure with one 3D panel per track and persistent artists."""
 
@@ -117,8 +130,8 @@ class _Scene:
         ax.set_xlim(low[0], high[0])
         ax.set_ylim(low[2], high[2])
         ax.set_zlim(low[1], high[1])
-        ax.set_box_aspect((1, 1, (high[1] - low[1]) / (high[0] - low[0])),
-                          zoom=1.4)
+        tall = (high[1] - low[1]) / (high[0] - low[0])
+        ax.set_box_aspect((1, 1, tall), zoom=panel_zoom(tall))
         ax.view_init(elev=elev, azim=azim)
         ax.set_axis_off()
         _ground(ax, low, high)
