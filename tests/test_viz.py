@@ -177,3 +177,28 @@ def test_a_figure_standing_still_keeps_its_head_and_feet_in_the_panel():
     assert _outside(still) == 0
     assert panel_zoom(0.2) == 1.4 and panel_zoom(0.35) == 1.4
     assert 1.4 > panel_zoom(0.8) > panel_zoom(1.8) > panel_zoom(3.0) >= 0.75
+
+
+def test_fit_scales_each_panel_to_its_own_figure():
+    """A figure beside its copy at a tenth of the size: one shared scale
+    draws the copy ten times smaller; ``fit`` draws both alike."""
+    import importlib
+    module = importlib.import_module("satagraph.viz.render")
+    walk = example_motion(num_frames=4)
+    small = walk.with_(translations=walk.translations * 0.1,
+                       skeleton=walk.skeleton.replace(offsets=walk.skeleton.offsets * 0.1))
+
+    def heights(fit: bool):
+        scene = module._Scene(module._tracks([walk, small], None), 1, 200, 15.0, -60.0, fit)
+        out = []
+        for (ax, *_), track in zip(scene.artists, scene.tracks):
+            from mpl_toolkits.mplot3d import proj3d
+            pos = track.positions[0]
+            x, y, _ = proj3d.proj_transform(pos[:, 0], pos[:, 2], pos[:, 1], ax.get_proj())
+            px = ax.transData.transform(np.stack([x, y], axis=1))
+            out.append(np.ptp(px[:, 1]))
+        return out
+
+    shared, fitted = heights(False), heights(True)
+    assert shared[1] == pytest.approx(0.1 * shared[0], rel=0.05)
+    assert fitted[1] == pytest.approx(fitted[0], rel=0.02)

@@ -52,6 +52,9 @@ def add_render_parser(subparsers: "argparse._SubParsersAction"
                    help="render at most N frames (the clip is cut)")
     p.add_argument("--raw", action="store_true",
                    help="draw the files as they are (must be +Y up)")
+    p.add_argument("--fit", action="store_true",
+                   help="scale each panel to its own figure (default: one scale for all, "
+                   "so that sizes compare: a crab beside a human is then a dot)")
     from satagraph.cli.arguments import add_rig_arguments
     add_rig_arguments(p, what="the inputs", per_input=True)
     p.set_defaults(func=run_render)
@@ -93,7 +96,7 @@ def run_render(args: argparse.Namespace) -> int:
     titles = [os.path.basename(path) for path in inputs]
     start = time.perf_counter()
     count = render(motions, output, titles=titles, fps=args.fps,
-                   max_frames=args.max_frames, sheet=args.png)
+                   max_frames=args.max_frames, sheet=args.png, fit=args.fit)
     extra = f" and {args.png}" if args.png else ""
     print(f"wrote {output}{extra}: {len(motions)} panel(s), {count} frames "
           f"in {time.perf_counter() - start:.1f} s")

@@ -101,7 +101,7 @@ class _Scene:
     """A figure with one 3D panel per track and persistent artists."""
 
     def __init__(self, tracks: Sequence[_Track], frames: int, panel_px: int,
-                 elev: float, azim: float) -> None:
+                 elev: float, azim: float, fit: bool = False) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
@@ -111,9 +111,10 @@ class _Scene:
         height = 16 * round(panel_px / 16)
         self.figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
         self.canvas = FigureCanvasAgg(self.figure)
-        low, high = _limits(tracks, frames)
+        limits = ([_limits([t], frames) for t in tracks] if fit
+                  else [_limits(tracks, frames)] * len(tracks))
         self.artists = [self._panel(i, t, low, high, elev, azim)
-                        for i, t in enumerate(tracks)]
+                        for i, (t, (low, high)) in enumerate(zip(tracks, limits))]
         self.label = self.figure.text(0.01, 0.01, "", fontsize=8,
                                       color="#555555", animated=True)
         self.figure.subplots_adjust(left=0, right=1, bottom=0, top=0.94, wspace=0)
@@ -187,7 +188,8 @@ def _segments(pos: np.ndarray, parents: np.ndarray) -> np.ndarray:
 def render_frames(motions: Sequence[Motion], titles: Optional[Sequence[str]] = None,
                   max_frames: Optional[int] = None, panel_px: int = 320,
                   elev: float = 15.0, azim: float = -60.0,
-                  frames: Optional[Sequence[int]] = None) -> Iterator[np.ndarray]:
+                  frames: Optional[Sequence[int]] = None,
+                  fit: bool = False) -> Iterator[np.ndarray]:
     r"""Rendered frames, one RGB image per time step.
 
     Args:
@@ -199,13 +201,16 @@ def render_frames(motions: Sequence[Motion], titles: Optional[Sequence[str]] = N
         elev (float): Camera elevation (degrees), the same for every panel.
         azim (float): Camera azimuth (degrees).
         frames (list[int], optional): Render only these frame indices.
+        fit (bool): Scale each panel to its own motion (default: one scale
+            for all, so that sizes compare; a crab beside a human is then a
+            dot).
 
     Shapes:
         - **output**: :math:`(H, W, 3)` uint8 per frame
     """
     tracks = _tracks(motions, titles)
     count = frame_count(motions, max_frames)
-    scene = _Scene(tracks, count, panel_px, elev, azim)
+    scene = _Scene(tracks, count, panel_px, elev, azim, fit)
     for t in (range(count) if frames is None else frames):
         yield scene.draw(int(t))
 
@@ -277,7 +282,8 @@ def sheet_frames(count: int, samples: int = 6) -> List[int]:
 def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = None,
            titles: Optional[Sequence[str]] = None, fps: Optional[float] = None,
            max_frames: Optional[int] = None, sheet: Optional[PathLike] = None,
-           panel_px: int = 320, elev: float = 15.0, azim: float = -60.0) -> int:
+           panel_px: int = 320, elev: float = 15.0, azim: float = -60.0,
+           fit: bool = False) -> int:
     r"""Render motions side by side to a GIF or MP4 and/or a PNG sheet.
 
     Args:
@@ -291,6 +297,8 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
         panel_px (int): Panel size in pixels.
         elev (float): Camera elevation (degrees).
         azim (float): Camera azimuth (degrees).
+        fit (bool): Scale each panel to its own motion (see
+            :func:`render_frames`).
 
     Returns:
         int: The number of animation frames.
@@ -304,7 +312,7 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
     fps = float(fps or motions[0].fps)
     count = frame_count(motions, max_frames)
     kwargs = dict(titles=titles, max_frames=max_frames, panel_px=panel_px,
-                  elev=elev, azim=azim)
+                  elev=elev, azim=azim, fit=fit)
     if path is not None:
         frames = list(render_frames(motions, **kwargs))
         (save_gif if ext == ".gif" else save_mp4)(frames, path, fps)
