@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from functools import partial
-from typing import Callable, List, Optional, Sequence, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import torch
@@ -264,8 +264,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     source = canonicalize(source, fps=fps)
     target = source if same else canonicalize(target, fps=fps)
     reading = partial(read_once, module, semantic, window, overlap, fps)
-    rests = (rest, second_rest(rest)) if two_rests else (rest,)
-    src_canon, out, c = averaged_reading(reading, source, target, rests, mirror)
+    src_canon, out, c = averaged_reading(reading, source, target, rest, mirror, two_rests)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
     out = ground_retarget(out, src_canon, target) if ground else out
@@ -290,24 +289,35 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     return src_canon, out, c
 
 
-def averaged_reading(reading: Callable, source: Motion, target: Motion,
-                     rests: Sequence[str], mirror: bool
+#: ``two_rests`` value: a second rest only where the rigs have no mirror
+#: image to read (``experiments/PRETRAIN.md`` section 40).
+UNMIRRORED = "unmirrored"
+
+
+def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: str,
+                     mirror: bool, two_rests: Union[bool, str] = False
                      ) -> Tuple[Motion, Motion, np.ndarray]:
     r"""The mean of :obj:`reading`\ s (:func:`read_once` with the module
     and its settings bound) of a canonical source onto a canonical target
-    in each rest pose of :obj:`rests` and, with :obj:`mirror`, of both
-    rigs' mirror images too (:mod:`~satagraph.transforms.mirror_average`;
-    rigs without a mirror image are read as they are): the first reading's
-    source, the averaged motion placed on it and the mean contact
-    probabilities.
+    in the rest pose :obj:`rest` and, with :obj:`two_rests`, in
+    :func:`~satagraph.transforms.rest.second_rest` too (``True``: always;
+    :data:`UNMIRRORED`: only where the rigs have no mirror image), and,
+    with :obj:`mirror`, of both rigs' mirror images too
+    (:mod:`~satagraph.transforms.mirror_average`; rigs without a mirror
+    image are read as they are): the first reading's source, the averaged
+    motion placed on it and the mean contact probabilities.
 
     Shapes:
         - **contacts**: :math:`(T, J_t)`
     """
+    if two_rests not in (False, True, UNMIRRORED):
+        raise ValueError(f"two_rests must be True, False or {UNMIRRORED!r}, got {two_rests!r}")
     twin_source = mirror_canonical(source) if mirror else None
     twin_target = twin_source if target is source else (
         mirror_canonical(target) if twin_source is not None else None)
     pair = mirror_pairs(target.skeleton) if twin_target is not None else None
+    second = two_rests is True or (two_rests == UNMIRRORED and pair is None)
+    rests = (rest, second_rest(rest)) if second else (rest,)
     src_canon, outs, contacts = None, [], []
     for rest in rests:
         shown, out, c = reading(rest, source, target)
