@@ -436,3 +436,20 @@ def test_rest_val_gives_section_39s_verdict_from_its_stored_table():
         for cell in groups.values():
             cell["two"] = [0.9 * v for v in cell["one"]]
     assert rest_val.verdict(results) == (True, [])
+
+
+def test_unmirrored_val_gives_section_40s_verdict_from_its_stored_table():
+    """Section 40's stored figures pass; a hexapod reading that moved at
+    all, or a spider gaining less than 5 %, would fail it."""
+    import json
+    import unmirrored_val
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "unmirrored_val.json").read_text())
+    assert unmirrored_val.verdict(results) == (True, [])
+    cells = results["builtin-wide"]
+    cells["zoo hexapod"]["two"] = [v * 1.001 for v in cells["zoo hexapod"]["one"]]
+    cells["zoo spider"]["two"] = [v * 0.97 for v in cells["zoo spider"]["one"]]
+    ok, failures = unmirrored_val.verdict(results)
+    assert not ok and sorted(failures) == ["zoo hexapod: 1.001 > 1.0",
+                                           "zoo hexapod: a mirrored reading changed",
+                                           "zoo spider: 0.970 > 0.95"]

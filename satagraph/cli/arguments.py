@@ -219,15 +219,18 @@ def add_mirror_argument(parser: argparse.ArgumentParser, default: bool) -> None:
                         f"{'on' if default else 'off'})")
 
 
-def add_two_rests_argument(parser: argparse.ArgumentParser, default: bool) -> None:
+def add_two_rests_argument(parser: argparse.ArgumentParser, default) -> None:
     """``--two-rests/--no-two-rests``: average the decoding with that of
     the rigs shown in a second rest pose
-    (:func:`~satagraph.transforms.rest.second_rest`)."""
+    (:func:`~satagraph.transforms.rest.second_rest`); :obj:`default`
+    ``True``, ``False`` or ``"unmirrored"`` (where no mirror image is read)."""
+    said = {True: "on", False: "off"}.get(default, "only where no mirror image is read, "
+                                          "as for a rig whose sides do not pair")
     parser.add_argument("--two-rests", action=argparse.BooleanOptionalAction, default=default,
                         help="also decode the input(s) with each rig shown in a second rest "
                         "pose (for --rest auto, the pose auto does not choose) and average "
                         "the readings (twice the model's time, four times with --mirror; "
-                        f"default: {'on' if default else 'off'})")
+                        f"default: {said})")
 
 
 def add_still_argument(parser: argparse.ArgumentParser) -> None:

@@ -57,7 +57,7 @@ def add_train_parsers(sub) -> None:
     _ground(p, default=False)
     add_settle_argument(p)
     add_mirror_argument(p, default=True)
-    add_two_rests_argument(p, default=False)
+    add_two_rests_argument(p, default="unmirrored")
     _in_out(p, "input", "IN")
     _rig(p)
     p.set_defaults(func=run_reconstruct)

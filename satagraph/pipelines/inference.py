@@ -161,6 +161,11 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
     return call_semantic(semantic, feats.skeleton, evidence_from_features(feats))
 
 
+#: ``two_rests`` value: a second rest only where the rigs have no mirror
+#: image to read (``experiments/PRETRAIN.md`` section 40).
+UNMIRRORED = "unmirrored"
+
+
 def retarget_motion(module, source: Motion, target: Motion,
                     semantic: Optional[Callable] = None, window: Optional[int] = None,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
@@ -289,11 +294,6 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     return src_canon, out, c
 
 
-#: ``two_rests`` value: a second rest only where the rigs have no mirror
-#: image to read (``experiments/PRETRAIN.md`` section 40).
-UNMIRRORED = "unmirrored"
-
-
 def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: str,
                      mirror: bool, two_rests: Union[bool, str] = False
                      ) -> Tuple[Motion, Motion, np.ndarray]:
@@ -332,7 +332,7 @@ def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: st
 
 
 def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] = None,
-                          mirror: bool = True, two_rests: bool = False,
+                          mirror: bool = True, two_rests: Union[bool, str] = UNMIRRORED,
                           **options) -> Tuple[Motion, Motion]:
     r""":func:`retarget_canonical` of :obj:`motion` onto its own skeleton,
     the model's alone: the root is never held where the input stands
@@ -340,8 +340,11 @@ def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] =
     averages the model's reading with that of the mirror image by default
     (:obj:`mirror`; ``experiments/PRETRAIN.md`` sections 37-37c: on
     validation clips the error falls to 0.83-0.91 of one reading's in the
-    median). :obj:`two_rests` also reads it in a second rest pose (off:
-    on fresh validation clips it helped the spider alone, section 39).
+    median). Where no mirror image is read (a rig whose sides do not
+    pair, ``mirror=False``) it reads the rig in a second rest pose instead
+    (:obj:`two_rests` :data:`UNMIRRORED`, the default: section 40, the
+    spider's error 0.83 of one reading's; ``True``: both, always, which
+    helped no other plan in section 39; ``False``: one rest).
     :obj:`options` are :func:`retarget_canonical`'s (``ground`` still on
     unless turned off)."""
     return retarget_canonical(module, motion, motion, semantic, still=False, mirror=mirror,
@@ -413,7 +416,7 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
                        window: Optional[int] = None, overlap: Optional[int] = None,
                        rest: str = "auto", ground: bool = False,
                        settle: bool = False, mirror: bool = True,
-                       two_rests: bool = False) -> Motion:
+                       two_rests: Union[bool, str] = UNMIRRORED) -> Motion:
     """Encode and decode a motion on its own skeleton (:obj:`rest`,
     :obj:`ground`, :obj:`settle`, :obj:`mirror` and :obj:`two_rests`: see
     :func:`retarget_motion`; ground

@@ -186,9 +186,35 @@ def test_two_rests_read_in_either_order_agree(no_network: None) -> None:
     (src_a, out_a), (src_b, out_b) = read["auto"], read["alternate"]
     gap = np.abs(place_reading(out_a, src_a, src_b).global_positions()
                  - out_b.global_positions()).max() / motion.height()
-    _, one = reconstruct_canonical(module, motion, module.embed, ground=False, mirror=False)
+    _, one = reconstruct_canonical(module, motion, module.embed, ground=False, mirror=False,
+                                   two_rests=False)
     change = np.abs(one.global_positions() - out_a.global_positions()).max() / motion.height()
     assert gap < 1e-6 < 1e-3 < change, (gap, change)
+
+
+def test_reconstruction_reads_a_second_rest_where_no_mirror_image_is_read(
+        no_network: None) -> None:
+    """By default (``two_rests="unmirrored"``, PRETRAIN.md 40) a spider,
+    whose legs are numbered across the body and so has no mirror image, is
+    read in two rests; a biped, read with its mirror image, in one."""
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import reconstruct_canonical
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.transforms.mirror_average import mirror_canonical
+
+    for name, species, changed in (("builtin-wide", "spider", True), ("builtin", "biped", False)):
+        module = load_module(name).eval()
+        motion = canonicalize(EndlessZoo(species=[species]).sample(0, 1, 40, "test").motion,
+                              fps=module.fps)
+        assert (mirror_canonical(motion) is None) == changed
+        read = {k: reconstruct_canonical(module, motion, module.embed, ground=False,
+                                         **({} if k == "default" else {"two_rests": k}))[1]
+                for k in ("default", False, True)}
+        gap = {k: np.abs(read["default"].global_positions()
+                         - read[k].global_positions()).max() / motion.height()
+               for k in (False, True)}
+        assert (gap[False] > 1e-3) == changed and (gap[True] < 1e-9) == changed, (name, gap)
 
 
 def _ancestors(parents, joint: int):
