@@ -286,9 +286,10 @@ def measure(module, motion: Motion, plant: bool = False, settle: bool = False,
             mirror: bool = False) -> dict:
     """JP, root-relative JP (fractions of the height), facing drift and the
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
-    source)."""
+    source); read in one rest pose (``two_rests=False``), as every rule
+    that used it was measured."""
     src, out = reconstruct_canonical(module, motion, module.embed, ground=False, plant=plant,
-                                     settle=settle, mirror=mirror)
+                                     settle=settle, mirror=mirror, two_rests=False)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)

@@ -161,8 +161,8 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
     return call_semantic(semantic, feats.skeleton, evidence_from_features(feats))
 
 
-#: ``two_rests`` value: a second rest only where the rigs have no mirror
-#: image to read (``experiments/PRETRAIN.md`` section 40).
+#: ``two_rests`` value: a second rest only for rigs without a mirror image
+#: (``experiments/PRETRAIN.md`` section 40).
 UNMIRRORED = "unmirrored"
 
 
@@ -301,7 +301,8 @@ def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: st
     and its settings bound) of a canonical source onto a canonical target
     in the rest pose :obj:`rest` and, with :obj:`two_rests`, in
     :func:`~satagraph.transforms.rest.second_rest` too (``True``: always;
-    :data:`UNMIRRORED`: only where the rigs have no mirror image), and,
+    :data:`UNMIRRORED`: only where a rig has no mirror image, whether or
+    not :obj:`mirror` reads it), and,
     with :obj:`mirror`, of both rigs' mirror images too
     (:mod:`~satagraph.transforms.mirror_average`; rigs without a mirror
     image are read as they are): the first reading's source, the averaged
@@ -312,11 +313,11 @@ def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: st
     """
     if two_rests not in (False, True, UNMIRRORED):
         raise ValueError(f"two_rests must be True, False or {UNMIRRORED!r}, got {two_rests!r}")
-    twin_source = mirror_canonical(source) if mirror else None
+    twin_source = mirror_canonical(source) if mirror or two_rests == UNMIRRORED else None
     twin_target = twin_source if target is source else (
         mirror_canonical(target) if twin_source is not None else None)
-    pair = mirror_pairs(target.skeleton) if twin_target is not None else None
-    second = two_rests is True or (two_rests == UNMIRRORED and pair is None)
+    second = two_rests is True or (two_rests == UNMIRRORED and twin_target is None)
+    pair = mirror_pairs(target.skeleton) if mirror and twin_target is not None else None
     rests = (rest, second_rest(rest)) if second else (rest,)
     src_canon, outs, contacts = None, [], []
     for rest in rests:
@@ -340,8 +341,8 @@ def reconstruct_canonical(module, motion: Motion, semantic: Optional[Callable] =
     averages the model's reading with that of the mirror image by default
     (:obj:`mirror`; ``experiments/PRETRAIN.md`` sections 37-37c: on
     validation clips the error falls to 0.83-0.91 of one reading's in the
-    median). Where no mirror image is read (a rig whose sides do not
-    pair, ``mirror=False``) it reads the rig in a second rest pose instead
+    median). A rig without a mirror image (its sides do not pair) it reads
+    in a second rest pose instead
     (:obj:`two_rests` :data:`UNMIRRORED`, the default: section 40, the
     spider's error 0.83 of one reading's; ``True``: both, always, which
     helped no other plan in section 39; ``False``: one rest).
