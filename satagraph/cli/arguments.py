@@ -223,9 +223,9 @@ def add_two_rests_argument(parser: argparse.ArgumentParser, default) -> None:
     """``--two-rests/--no-two-rests``: average the decoding with that of
     the rigs shown in a second rest pose
     (:func:`~satagraph.transforms.rest.second_rest`); :obj:`default`
-    ``True``, ``False`` or ``"unmirrored"`` (where no mirror image is read)."""
-    said = {True: "on", False: "off"}.get(default, "only where no mirror image is read, "
-                                          "as for a rig whose sides do not pair")
+    ``True``, ``False`` or ``"unmirrored"`` (only rigs without a mirror image)."""
+    said = {True: "on", False: "off"}.get(default, "only for a rig without a mirror "
+                                          "image, whose sides do not pair")
     parser.add_argument("--two-rests", action=argparse.BooleanOptionalAction, default=default,
                         help="also decode the input(s) with each rig shown in a second rest "
                         "pose (for --rest auto, the pose auto does not choose) and average "
