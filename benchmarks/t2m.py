@@ -540,7 +540,7 @@ def autoencoded_items(autoencoder, items: Sequence[Item]) -> List[Item]:
     for it in items:
         with torch.no_grad():
             motion = reconstruct_motion(autoencoder, it.motion, autoencoder.embed, ground=True,
-                                        mirror=False)
+                                        mirror=False, two_rests=False)
         feats = motion_to_features(canonicalize(motion, fps=FPS))
         out.append(measure(feats, it.captions, it.label, it.group, it.skeleton))
     return out
