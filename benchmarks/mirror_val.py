@@ -113,6 +113,26 @@ def measure_and_write(args: argparse.Namespace, clips: List[Tuple[str, str, Moti
     return 0
 
 
+def table_head(seconds: float, settings: str, columns: Sequence[str]) -> List[str]:
+    """The first lines of a rule's table on fresh validation clips."""
+    return [f"Validation clips no rule has read; {seconds:.0f} s. JP, % of the height, median "
+            f"over the group's clips: {settings}.", "", "| " + " | ".join(columns) + " |",
+            "|" + "|".join("---" if c in ("model", "group") else "---:" for c in columns) + "|"]
+
+
+def pair_cells(cell: Dict[str, List[float]], first: str = "one", second: str = "two") -> str:
+    """``n | median first | median second | paired`` of a group's cell (% of the height)."""
+    return (f"{len(cell[first])} | {100 * np.median(cell[first]):.1f} | "
+            f"{100 * np.median(cell[second]):.1f} | {paired(cell[first], cell[second]):.3f}")
+
+
+def verdict_line(section: str, found: Tuple[bool, List[str]]) -> str:
+    """The last line of a rule's table: ``The rule (PRETRAIN.md N): ...``."""
+    ok, failures = found
+    return f"The rule (PRETRAIN.md {section}): " + (
+        "passes" if ok else "fails: " + "; ".join(failures))
+
+
 def paired(single: Sequence[float], averaged: Sequence[float]) -> float:
     """Median over clips of the averaged reading's error over the single one's."""
     return float(np.median(np.asarray(averaged) / np.asarray(single)))

@@ -21,7 +21,6 @@ import sys
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import mirror_val  # noqa: E402
@@ -68,19 +67,14 @@ def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool
 
 
 def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float) -> str:
-    lines = [f"Validation clips no rule has read; {seconds:.0f} s. JP, % of the height, median "
-             "over the group's clips: one rest (today's default: with the mirror image's "
-             "reading), two rests, and the paired ratio (median of two over one).", "",
-             "| model | group | n | one rest | two rests | paired |", "|---|---|---:|---:|---:|---:|"]
+    lines = mirror_val.table_head(
+        seconds, "one rest (today's default: with the mirror image's reading), two rests, "
+        "and the paired ratio (median of two over one)",
+        ("model", "group", "n", "one rest", "two rests", "paired"))
     for ckpt, groups in results.items():
         for group, cell in groups.items():
-            lines.append(f"| `{ckpt}` | {group} | {len(cell['one'])} | "
-                         f"{100 * np.median(cell['one']):.1f} | "
-                         f"{100 * np.median(cell['two']):.1f} | "
-                         f"{mirror_val.paired(cell['one'], cell['two']):.3f} |")
-    ok, failures = verdict(results)
-    return "\n".join(lines + ["", "The rule (PRETRAIN.md 39): " + (
-        "passes" if ok else "fails: " + "; ".join(failures))]) + "\n"
+            lines.append(f"| `{ckpt}` | {group} | {mirror_val.pair_cells(cell)} |")
+    return "\n".join(lines + ["", mirror_val.verdict_line("39", verdict(results))]) + "\n"
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -18,7 +18,6 @@ import sys
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import mirror_val  # noqa: E402
@@ -55,17 +54,12 @@ def verdict(results: Dict[str, Dict[str, Dict[str, List[float]]]]) -> Tuple[bool
 
 
 def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float) -> str:
-    lines = [f"Validation clips no rule has read; {seconds:.0f} s. JP, % of the height, median "
-             "over the group's clips: today's reading, with a second rest where no mirror "
-             "image is read, and the paired ratio.", "",
-             "| group | n | today | unmirrored second rest | paired |", "|---|---:|---:|---:|---:|"]
+    lines = mirror_val.table_head(
+        seconds, "today's reading, with a second rest where no mirror image is read, and "
+        "the paired ratio", ("group", "n", "today", "unmirrored second rest", "paired"))
     for group, cell in results["builtin-wide"].items():
-        lines.append(f"| {group} | {len(cell['one'])} | {100 * np.median(cell['one']):.1f} | "
-                     f"{100 * np.median(cell['two']):.1f} | "
-                     f"{mirror_val.paired(cell['one'], cell['two']):.3f} |")
-    ok, failures = verdict(results)
-    return "\n".join(lines + ["", "The rule (PRETRAIN.md 40): " + (
-        "passes" if ok else "fails: " + "; ".join(failures))]) + "\n"
+        lines.append(f"| {group} | {mirror_val.pair_cells(cell)} |")
+    return "\n".join(lines + ["", mirror_val.verdict_line("40", verdict(results))]) + "\n"
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
