@@ -215,8 +215,8 @@ def add_mirror_argument(parser: argparse.ArgumentParser, default: bool) -> None:
     parser.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=default,
                         help="also decode the left-right mirror image of the input(s) and "
                         "average the two readings (twice the model's time; a rig whose sides "
-                        "do not pair by joint name is read once; default: "
-                        f"{'on' if default else 'off'})")
+                        "do not pair by joint name has no mirror image: see --two-rests; "
+                        f"default: {'on' if default else 'off'})")
 
 
 def add_two_rests_argument(parser: argparse.ArgumentParser, default) -> None:
