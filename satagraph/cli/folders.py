@@ -8,9 +8,10 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import Callable, List, Union
+from typing import Callable, List, Optional, Sequence, Tuple, TypeVar, Union
 
 PathLike = Union[str, Path]
+Item, Result = TypeVar("Item"), TypeVar("Result")
 
 
 def bvh_files(folder: PathLike) -> List[Path]:
@@ -21,14 +22,44 @@ def bvh_files(folder: PathLike) -> List[Path]:
                   and not p.is_dir())
 
 
+def input_files(source: PathLike, output: Optional[PathLike] = None) -> List[Path]:
+    """:func:`bvh_files` below :obj:`source`, but those below
+    :obj:`output` (results are never read as inputs).
+
+    Raises:
+        ValueError: None is left.
+    """
+    inside = None if output is None else Path(output).resolve()
+    files = [p for p in bvh_files(source) if inside is None or inside not in p.resolve().parents]
+    if not files:
+        raise ValueError(f"{source}: no .bvh files in this folder or below it")
+    return files
+
+
 def failure_line(path: PathLike, err: BaseException) -> str:
     """One line for a file that failed, naming it (once)."""
-    if isinstance(err, OSError) and err.filename is not None:
-        text = f"{err.filename}: {err.strerror or err}"
-    else:
-        text = str(err) or type(err).__name__
-    text = " ".join(text.split())
+    from satagraph.cli import _message
+    text = " ".join((_message(err) or type(err).__name__).split())
     return text if str(path) in text else f"{path}: {text}"
+
+
+def each_kept(items: Sequence[Item], work: Callable[[Item], Result],
+              failure: Callable[[Item, BaseException], str], traceback: bool = False
+              ) -> Tuple[List[Result], List[Item]]:
+    """:obj:`work` on every item, one that fails said in one line on
+    stderr (``satagraph: error:`` and :obj:`failure`'s text) while the
+    others go on (:obj:`traceback`: raise instead): the results, and the
+    items that failed."""
+    results, failed = [], []
+    for item in items:
+        try:
+            results.append(work(item))
+        except Exception as err:  # one bad item never stops the rest
+            if traceback:
+                raise
+            failed.append(item)
+            print(f"satagraph: error: {failure(item, err)}", file=sys.stderr)
+    return results, failed
 
 
 def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str], str],
@@ -49,21 +80,15 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
     if (output.exists() and not output.is_dir()) or output.suffix.lower() == ".bvh":
         raise ValueError(f"{output}: not a folder: with an input folder, OUT is the folder "
                          "the results go to")
-    inside = output.resolve()
-    files = [p for p in bvh_files(source) if inside not in p.resolve().parents]
-    if not files:
-        raise ValueError(f"{source}: no .bvh files in this folder or below it")
-    start, failed = time.perf_counter(), []
-    for path in files:
+    files = input_files(source, output)
+    start = time.perf_counter()
+
+    def write(path: Path) -> None:
         out = output / path.relative_to(source)
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            print(one(str(path), str(out)))
-        except Exception as err:  # one bad file never stops the folder
-            if traceback:
-                raise
-            failed.append(path)
-            print(f"satagraph: error: {failure_line(path, err)}", file=sys.stderr)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        print(one(str(path), str(out)))
+
+    _, failed = each_kept(files, write, failure_line, traceback)
     done = len(files) - len(failed)
     print(f"{verb} {done} of {len(files)} files into {output} in "
           f"{time.perf_counter() - start:.1f} s" + _failed(failed))
@@ -80,4 +105,4 @@ def _failed(failed: List[Path], shown: int = 10) -> str:
     return f"; {len(failed)} failed: {names}{more}"
 
 
-__all__ = ["bvh_files", "failure_line", "run_over_folder"]
+__all__ = ["bvh_files", "input_files", "failure_line", "each_kept", "run_over_folder"]

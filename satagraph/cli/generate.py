@@ -188,28 +188,27 @@ def _generate_prompts(args, module, targets, prompts: List[str], settings) -> in
     fails is said in one line and the others go on (exit code 2)."""
     from satagraph.pipelines.generate import generate_on, output_paths, write_all
     from satagraph.utils.files import atomic_write_text
-    start, rows, failed = time.time(), ["path\tprompt\tskeleton\tseconds\tseed"], 0
+    from satagraph.cli.folders import each_kept
+    start = time.time()
     Path(args.output).mkdir(parents=True, exist_ok=True)
-    for i, prompt in enumerate(prompts):
-        stem = Path(args.output) / f"{prompt_stem(i, prompt)}.bvh"
-        paths = output_paths(str(stem), args.skeleton)
-        try:
-            text = _prompt(module, prompt, args.literal)
-            motions = [generate_on(module, text, t, args.seconds, args.seed + i, settings)
-                       for t in targets]
-            write_all(motions, paths)
-        except Exception as err:  # one prompt never stops the list
-            if args.traceback:
-                raise
-            failed += 1
-            print(f"satagraph: error: {args.prompts}: prompt {i + 1} ({prompt!r}): {err}",
-                  file=sys.stderr)
-            continue
-        for motion, path, source in zip(motions, paths, args.skeleton):
-            rows.append("\t".join([Path(path).name, " ".join(prompt.split()), source,
-                                    f"{motion.duration:.2f}", str(args.seed + i)]))
+
+    def one(item) -> List[str]:
+        i, prompt = item
+        paths = output_paths(str(Path(args.output) / f"{prompt_stem(i, prompt)}.bvh"),
+                             args.skeleton)
+        text = _prompt(module, prompt, args.literal)
+        motions = [generate_on(module, text, t, args.seconds, args.seed + i, settings)
+                   for t in targets]
+        write_all(motions, paths)
+        return ["\t".join([Path(path).name, " ".join(prompt.split()), source,
+                           f"{motion.duration:.2f}", str(args.seed + i)])
+                for motion, path, source in zip(motions, paths, args.skeleton)]
+
+    done, failed = each_kept(list(enumerate(prompts)), one, lambda item, err: (
+        f"{args.prompts}: prompt {item[0] + 1} ({item[1]!r}): {err}"), args.traceback)
+    rows = ["path\tprompt\tskeleton\tseconds\tseed"] + [row for rows in done for row in rows]
     atomic_write_text(Path(args.output) / "prompts.tsv", "\n".join(rows) + "\n")
-    print(f"generated {len(rows) - 1} motions of {len(prompts) - failed} of {len(prompts)} "
+    print(f"generated {len(rows) - 1} motions of {len(done)} of {len(prompts)} "
           f"prompts into {args.output} in {time.time() - start:.1f} s (listed in prompts.tsv)")
     return 2 if failed else 0
 

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections import Counter
+from pathlib import Path
 from typing import Any, Callable, Dict, List
 
-from satagraph.cli.folders import bvh_files, failure_line
+from satagraph.cli.folders import each_kept, failure_line, input_files
 
 #: The columns of a folder's table.
 COLUMNS = ("file", "joints", "frames", "fps", "seconds", "up axis", "units", "height, m",
@@ -44,21 +44,11 @@ def run_inspect_folder(args: argparse.Namespace, describe_file: Callable[[str], 
     a path to :func:`~satagraph.cli.describe`'s summary) as a table or, with
     ``--json``, a list; a file that does not read is said in one line and
     the others go on (exit code 2 if any failed)."""
-    files = bvh_files(args.file)
-    if not files:
-        raise ValueError(f"{args.file}: no .bvh files in this folder or below it")
-    infos, rows, failed = [], [], 0
-    for path in files:
-        try:
-            info = describe_file(str(path))
-        except Exception as err:  # one bad file never stops the folder
-            if args.traceback:
-                raise
-            failed += 1
-            print(f"satagraph: error: {failure_line(path, err)}", file=sys.stderr)
-            continue
-        infos.append(info)
-        rows.append(folder_row(info, path.relative_to(args.file).as_posix()))
+    infos, bad = each_kept(input_files(args.file), lambda path: describe_file(str(path)),
+                           failure_line, args.traceback)
+    failed = len(bad)
+    rows = [folder_row(info, Path(info["file"]).relative_to(args.file).as_posix())
+            for info in infos]
     if args.json:
         print(json.dumps(infos, indent=2))
     else:

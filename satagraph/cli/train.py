@@ -292,15 +292,12 @@ def _read(args, key: str):
     return read_with_rig(getattr(args, key), args, "target" if key == "target" else "")
 
 
-def _check(motion, path: str, fps: float, frames: bool = True) -> None:
-    """:obj:`motion` checked for inference (:mod:`satagraph.data.validate`);
-    :obj:`frames`: also its timing and values (a target needs only its
-    skeleton)."""
-    from satagraph.data.validate import check_motion, check_skeleton
-    if frames:
-        check_motion(motion, path, fps=fps)
-    else:
-        check_skeleton(motion, path)
+def _check(motion, path: str, fps: float) -> None:
+    """:obj:`motion` checked for inference, its timing and values too
+    (:mod:`satagraph.data.validate`; a target needs only its skeleton:
+    ``check_skeleton``)."""
+    from satagraph.data.validate import check_motion
+    check_motion(motion, path, fps=fps)
 
 
 def run_reconstruct(args) -> int:
@@ -332,8 +329,10 @@ def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
 def run_retarget(args) -> int:
     """Retarget a file, or every BVH file of a folder (:mod:`satagraph.cli.folders`),
     onto ``--target``."""
+    from satagraph.data.validate import check_skeleton
     models: dict = {}
     target = _read(args, "target")
+    check_skeleton(target, args.target)  # once, also for a folder of sources
     if Path(args.source).is_dir():
         return run_over_folder(args.source, args.output,
                                lambda src, out: _retarget_file(args, src, target, out, models),
@@ -351,7 +350,6 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict) ->
     source = read_with_rig(source_path, args)
     module, embed = _load(args, [source, target], [source_path, args.target], models)
     _check(source, source_path, module.fps)
-    _check(target, args.target, module.fps, frames=False)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
                          settle=args.settle, still=args.still, mirror=args.mirror,

@@ -19,9 +19,12 @@ import time
 from typing import List
 
 from satagraph.cli.arguments import Folder, ListThenFolder, one_of, positive_int
-from satagraph.datasets.zoo import (CLIP_KINDS, GESTURE_KINDS, NOISE_STYLES, REST_POSES,
-                                    SPECIES, UNITS, UP_AXES, Dialect, dialect_variants,
-                                    unit_scale, write_dialect_zoo, write_zoo)
+from satagraph.datasets.zoo import (ALL_KINDS, CLIP_KINDS, GESTURE_KINDS, NOISE_STYLES,
+                                    REST_POSES, SPECIES, UNITS, UP_AXES, Dialect,
+                                    dialect_variants, unit_scale, write_dialect_zoo, write_zoo)
+
+#: Every clip kind some species can do (:data:`ALL_KINDS`), in order.
+_ALL_KIND_NAMES = tuple(dict.fromkeys(k for kinds in ALL_KINDS.values() for k in kinds))
 
 
 def _axes(text: str) -> List[str]:
@@ -85,8 +88,8 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
         epilog="examples: satagraph zoo zoo/ --species quadruped bird --clips 5; "
         "satagraph zoo zoo/ --species spider --up-axes=+Z,-Y --units cm in 28 "
         "--rest-poses native crouched --name-noise none tag")
-    p.add_argument("out_dir", nargs="?", action=Folder, help="output folder (created; also after a list "
-                   "option: --species hexapod DIR)")
+    p.add_argument("out_dir", nargs="?", action=Folder,
+                   help="output folder (created; also after a list option: --species hexapod DIR)")
     p.add_argument("--species", nargs="+", action=ListThenFolder,
                    read=one_of(SPECIES, "species"), default=None,
                    metavar="NAME", help=f"species to write (default: all of "
@@ -99,7 +102,7 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--fps", type=float, default=30.0,
                    help="frames per second (default: 30)")
     p.add_argument("--kinds", nargs="+", action=ListThenFolder, default=None,
-                   read=one_of(_all_kinds(), "clip kind"), metavar="KIND",
+                   read=one_of(_ALL_KIND_NAMES, "clip kind"), metavar="KIND",
                    help="clip kinds to cycle through, of those each species can do "
                    "(default: every kind but the gestures; e.g. --species biped "
                    "--kinds bow wave, --species quadruped --kinds sit lie)")
@@ -161,12 +164,6 @@ def _dialects(args: argparse.Namespace) -> List[Dialect]:
     combos = itertools.product(dict.fromkeys(_flat(args.up_axes)), dict.fromkeys(args.units),
                                dict.fromkeys(args.rest_poses), dict.fromkeys(noises))
     return [Dialect(*combo) for combo in combos]
-
-
-def _all_kinds() -> List[str]:
-    """Every clip kind some species can do, gestures included."""
-    kinds = [k for table in (CLIP_KINDS, GESTURE_KINDS) for ks in table.values() for k in ks]
-    return list(dict.fromkeys(kinds))
 
 
 def _flat(axes: List[List[str]]) -> List[str]:

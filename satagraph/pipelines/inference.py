@@ -171,7 +171,7 @@ def retarget_motion(module, source: Motion, target: Motion,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
                     rest: str = "auto", ground: bool = True, plant: bool = False,
                     settle: bool = False, still: bool = True, mirror: bool = False,
-                    two_rests: bool = False) -> Motion:
+                    two_rests: Union[bool, str] = False) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
     The result is in the target's own axes, units, rest pose, joint order and
@@ -227,11 +227,12 @@ def retarget_motion(module, source: Motion, target: Motion,
             model's time). A rig whose sides do not pair by joint name
             (:func:`~satagraph.transforms.mirror_average.mirror_canonical`) is
             read once.
-        two_rests (bool): Also decode both rigs shown in a second rest pose
-            (:func:`~satagraph.transforms.rest.second_rest` of :obj:`rest`:
-            for ``"auto"``, the pose it does not choose) and average the
-            readings (:func:`averaged_reading`; twice the model's time, four
-            times with :obj:`mirror`).
+        two_rests (bool or str): Also decode both rigs shown in a second
+            rest pose (:func:`~satagraph.transforms.rest.second_rest` of
+            :obj:`rest`: for ``"auto"``, the pose it does not choose) and
+            average the readings (:func:`averaged_reading`; twice the
+            model's time, four times with :obj:`mirror`); :data:`UNMIRRORED`:
+            only for a rig without a mirror image.
     """
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
                                   rest, ground, plant, settle, still, mirror, two_rests)
@@ -252,7 +253,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        rest: str = "auto", ground: bool = True,
                        plant: bool = False, settle: bool = False,
                        still: bool = True, mirror: bool = False,
-                       two_rests: bool = False) -> Tuple[Motion, Motion]:
+                       two_rests: Union[bool, str] = False) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -318,15 +319,14 @@ def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: st
         mirror_canonical(target) if twin_source is not None else None)
     second = two_rests is True or (two_rests == UNMIRRORED and twin_target is None)
     pair = mirror_pairs(target.skeleton) if mirror and twin_target is not None else None
-    rests = (rest, second_rest(rest)) if second else (rest,)
     src_canon, outs, contacts = None, [], []
-    for rest in rests:
-        shown, out, c = reading(rest, source, target)
+    for shown_in in (rest, second_rest(rest)) if second else (rest,):
+        shown, out, c = reading(shown_in, source, target)
         src_canon = shown if src_canon is None else src_canon
         outs.append(out if shown is src_canon else place_reading(out, shown, src_canon))
         contacts.append(c)
         if pair is not None:
-            twin_src, twin_out, twin_c = reading(rest, twin_source, twin_target)
+            twin_src, twin_out, twin_c = reading(shown_in, twin_source, twin_target)
             outs.append(mirror_back(twin_out, twin_src, src_canon))
             contacts.append(twin_c[:, pair])
     return src_canon, average_readings(*outs), np.mean(contacts, axis=0)

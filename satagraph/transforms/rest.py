@@ -151,5 +151,5 @@ def needs_rest(skeleton) -> bool:
     return asym is not None and asym > POSED_REST_DEGREES
 
 
-__all__ = ["REST_MODES", "shown_rest", "second_rest", "restore_rest", "is_line_rest", "rest_asymmetry",
-           "POSED_REST_DEGREES", "needs_rest"]
+__all__ = ["REST_MODES", "shown_rest", "second_rest", "restore_rest", "is_line_rest",
+           "rest_asymmetry", "POSED_REST_DEGREES", "needs_rest"]
