@@ -6,8 +6,12 @@ the caption it is trained with:
 - ``meta["text"]``: one caption of the window (a seeded choice per
   ``(epoch, index)`` in training, the first one in evaluation);
 - ``meta["captions"]``: every caption of the window;
-- ``meta["seconds"]``: the window's duration (what the length model
-  learns);
+- ``meta["seconds"]``: the duration of the motion the caption describes
+  (what the length model learns): its clip's or time range's, which may
+  be longer than the window cut from it;
+- ``meta["censored"]``: whether that duration is only a lower bound (an
+  endless-zoo clip, whose length was drawn while its motion could have
+  gone on; see :class:`~satagraph.nn.generators.LengthModel`);
 - ``meta["mirrored"]``: whether the window was mirrored left/right, in
   which case the motion (:func:`~satagraph.transforms.augment.mirror`) and every
   caption (:func:`~satagraph.datasets.mirror.mirror_text`) were mirrored
@@ -75,11 +79,17 @@ def mirror_features(feats: MotionFeatures, start: int, stop: int,
     return motion_to_features(mirrored, **options, facing_axis=axis), lead
 
 
-def pick_caption(captions: Sequence[Caption], rng: Optional[np.random.Generator]) -> str:
-    """One caption's text: a draw of :obj:`rng`, or the first without one."""
+def choose_caption(captions: Sequence[Caption], rng: Optional[np.random.Generator]
+                   ) -> Caption:
+    """One caption: a draw of :obj:`rng`, or the first without one."""
     if rng is None or len(captions) == 1:
-        return captions[0].text
-    return captions[int(rng.integers(len(captions)))].text
+        return captions[0]
+    return captions[int(rng.integers(len(captions)))]
+
+
+def pick_caption(captions: Sequence[Caption], rng: Optional[np.random.Generator]) -> str:
+    """One caption's text (:func:`choose_caption`)."""
+    return choose_caption(captions, rng).text
 
 
 def overlapping(captions: Sequence[Caption], fps: float, num_frames: int, start: int,
@@ -145,11 +155,13 @@ class CaptionWindows(Dataset):
 
     def make_clip(self, feats: MotionFeatures, start: int, stop: int,
                   captions: Sequence[Caption], rng: Optional[np.random.Generator],
-                  meta: Dict) -> MotionClip:
+                  meta: Dict, censored: bool = False) -> MotionClip:
         """The item of frames ``start:stop``: mirrored with its captions at
         probability :attr:`p_mirror` and bone-scaled at :attr:`p_scale`
-        (training only), with a caption drawn."""
-        mirrored = None
+        (training only), with a caption drawn; its duration is the drawn
+        caption's time range in :obj:`feats`, or the item's own where it is
+        only a lower bound (:obj:`censored`)."""
+        total, mirrored = feats.num_frames, None
         if rng is not None and rng.random() < self.p_mirror:
             mirrored = mirror_features(feats, start, stop, self.options)
         if mirrored is not None:
@@ -161,8 +173,11 @@ class CaptionWindows(Dataset):
             feats, start = self.scaler(feats, start, stop, int(rng.integers(2 ** 31)))
             stop = None
         clip = feats.to_clip(start, stop, self.semantic(feats), meta)
-        seconds = clip.num_frames / float(self.config["fps"])
-        clip.meta.update(text=pick_caption(captions, rng), seconds=seconds,
+        fps = float(self.config["fps"])
+        caption = choose_caption(captions, rng)
+        span = caption.frames(fps, total)
+        frames = clip.num_frames if censored else span.stop - span.start
+        clip.meta.update(text=caption.text, seconds=frames / fps, censored=bool(censored),
                          captions=[c.text for c in captions], mirrored=mirrored is not None,
                          scaled=scaled)
         return clip
@@ -238,7 +253,9 @@ class ZooCaptionWindows(CaptionWindows):
     Clip :obj:`index` of an epoch is a new rig and clip
     (:meth:`~satagraph.datasets.zoo.endless.EndlessZoo.sample`) of a length drawn
     uniformly in ``[min_frames, window]`` (evaluation streams: fixed per
-    index, seeds training never draws).
+    index, seeds training never draws). The same caption fits a clip of any
+    length, so a clip's duration is only a lower bound of its motion's
+    (``meta["censored"]``).
 
     Args:
         zoo (EndlessZoo): The zoo.
@@ -285,7 +302,7 @@ class ZooCaptionWindows(CaptionWindows):
                 "dataset": self.dataset, "skeleton": sample.plan,
                 "species": sample.species, "kind": sample.kind}
         return self.make_clip(feats, 1, None, captions_for(sample), self.rng(epoch, idx),
-                              meta)
+                              meta, censored=True)
 
 
 def batch_texts(batch) -> List[str]:
@@ -294,7 +311,8 @@ def batch_texts(batch) -> List[str]:
 
 
 def batch_seconds(batch) -> torch.Tensor:
-    r"""Duration of every clip of a collated batch.
+    r"""Duration of the captioned motion of every clip of a collated batch
+    (``meta["seconds"]``).
 
     Shapes:
         - **output**: :math:`(B,)` seconds
@@ -302,5 +320,16 @@ def batch_seconds(batch) -> torch.Tensor:
     return torch.tensor([float(m["seconds"]) for m in batch.meta])
 
 
+def batch_censored(batch) -> torch.Tensor:
+    r"""Whether each clip's duration is only a lower bound
+    (``meta["censored"]``; ``False`` where a clip does not say).
+
+    Shapes:
+        - **output**: :math:`(B,)` bool
+    """
+    return torch.tensor([bool(m.get("censored", False)) for m in batch.meta])
+
+
 __all__ = ["CaptionWindows", "FileCaptionWindows", "ZooCaptionWindows", "mirror_features",
-           "overlapping", "pick_caption", "batch_texts", "batch_seconds"]
+           "overlapping", "choose_caption", "pick_caption", "batch_texts", "batch_seconds",
+           "batch_censored"]

@@ -5,8 +5,9 @@ CPU cores, encoding a batch of 16 windows of 120 frames takes 1.9 s of a
 2.4 s step, the two transformers 0.15 s (``experiments/T2M.md`` section 20).
 A :class:`CodeBank` stores what a step reads of a captioned window once:
 its per-frame code stacks, its skeleton graph (static and semantic joint
-features normalised as the autoencoder's, parents), its caption and its
-duration. Training on a bank (``data.code_bank``) skips the autoencoder and
+features normalised as the autoencoder's, parents), its caption and the
+duration of its captioned motion (and whether that is only a lower bound,
+see :class:`~satagraph.nn.generators.LengthModel`). Training on a bank (``data.code_bank``) skips the autoencoder and
 the data pipeline; each window's augmentation (mirroring, bone scaling,
 caption phrasing) is the one drawn when the bank was made.
 
@@ -43,7 +44,8 @@ class CodeBatch(NamedTuple):
         - **x**: :math:`(S, F)` skeleton node features, **parent**:
           :math:`(S,)` parent node (``-1``: a root), **node_clip**:
           :math:`(S,)` window of every node
-        - **seconds**: :math:`(B,)` durations
+        - **seconds**: :math:`(B,)` durations of the captioned motions,
+          **censored**: :math:`(B,)` bool, which are only lower bounds
     """
     codes: Tensor
     num_frames: Tensor
@@ -52,6 +54,7 @@ class CodeBatch(NamedTuple):
     node_clip: Tensor
     texts: List[str]
     seconds: Tensor
+    censored: Optional[Tensor] = None
 
     def __len__(self) -> int:
         return len(self.texts)
@@ -84,30 +87,37 @@ class CodeBank(Dataset):
         parent (Tensor): Parent of every node within its window (``-1``:
             root).
         num_nodes (Tensor): Nodes per window.
-        seconds (Tensor): Duration of every window.
+        seconds (Tensor): Duration of every window's captioned motion
+            (``meta["seconds"]`` of :mod:`~satagraph.data.captioned`).
         texts (list of str): Caption of every window.
         fingerprint (str): :func:`autoencoder_fingerprint` of the
             autoencoder that made the codes.
+        censored (Tensor, optional): Which durations are only lower bounds
+            (default: none; banks made before 29 Nov record none).
 
     Shapes:
         - **codes**: :math:`(G, Q)`, **num_frames**: :math:`(N,)`
         - **x**: :math:`(S, F)`, **parent**: :math:`(S,)`,
-          **num_nodes**: :math:`(N,)`, **seconds**: :math:`(N,)`
+          **num_nodes**: :math:`(N,)`, **seconds**, **censored**: :math:`(N,)`
     """
 
     def __init__(self, codes: Tensor, num_frames: Tensor, x: Tensor, parent: Tensor,
                  num_nodes: Tensor, seconds: Tensor, texts: Sequence[str],
-                 fingerprint: str) -> None:
+                 fingerprint: str, censored: Optional[Tensor] = None) -> None:
         count = len(texts)
-        if not (num_frames.numel() == num_nodes.numel() == seconds.numel() == count):
+        censored = torch.zeros(count, dtype=torch.bool) if censored is None else censored
+        if not (num_frames.numel() == num_nodes.numel() == seconds.numel() == count
+                == censored.numel()):
             raise ValueError(f"a bank of {count} captions has {num_frames.numel()} frame "
-                             f"counts, {num_nodes.numel()} node counts and "
-                             f"{seconds.numel()} durations")
+                             f"counts, {num_nodes.numel()} node counts, "
+                             f"{seconds.numel()} durations and {censored.numel()} "
+                             "censoring flags")
         if int(num_frames.sum()) != codes.size(0) or int(num_nodes.sum()) != x.size(0):
             raise ValueError("the bank's counts do not add up to its codes or nodes")
         self.codes, self.num_frames = codes, num_frames.long()
         self.x, self.parent, self.num_nodes = x, parent.long(), num_nodes.long()
         self.seconds, self.texts, self.fingerprint = seconds.float(), list(texts), fingerprint
+        self.censored = censored.bool()
         self._frame_start = _offsets(self.num_frames)
         self._node_start = _offsets(self.num_nodes)
 
@@ -122,14 +132,15 @@ class CodeBank(Dataset):
     @classmethod
     def of_batch(cls, codes: Tensor, num_frames: Tensor, x: Tensor, parent: Tensor,
                  node_clip: Tensor, seconds: Tensor, texts: Sequence[str],
-                 fingerprint: str) -> "CodeBank":
+                 fingerprint: str, censored: Optional[Tensor] = None) -> "CodeBank":
         """A bank of one batch's windows, given as a :class:`CodeBatch`
         holds them (parents indexing the batch's nodes)."""
         nodes = torch.bincount(node_clip, minlength=num_frames.numel())
         start = _offsets(nodes)[:-1][node_clip]
         local = torch.where(parent < 0, -1, parent - start)
         return cls(codes.cpu(), num_frames.cpu(), x.detach().cpu(), local.cpu(), nodes.cpu(),
-                   seconds.cpu(), texts, fingerprint)
+                   seconds.cpu(), texts, fingerprint,
+                   None if censored is None else censored.cpu())
 
     def collate(self, indices: Sequence[int]) -> CodeBatch:
         """The :class:`CodeBatch` of windows :obj:`indices` (a loader's
@@ -145,7 +156,8 @@ class CodeBank(Dataset):
         clip = torch.arange(len(index)).repeat_interleave(nodes)
         parent = torch.where(local < 0, -1, local + _offsets(nodes)[:-1][clip])
         return CodeBatch(codes, self.num_frames[index], x, parent, clip,
-                         [self.texts[i] for i in index], self.seconds[index])
+                         [self.texts[i] for i in index], self.seconds[index],
+                         self.censored[index])
 
     # ------------------------------------------------------------ files
     def save(self, path: PathLike) -> None:
@@ -156,7 +168,7 @@ class CodeBank(Dataset):
         tensors = {"codes": self.codes.to(torch.int16).contiguous(),
                    "num_frames": self.num_frames, "x": self.x.half().contiguous(),
                    "parent": self.parent.to(torch.int32), "num_nodes": self.num_nodes,
-                   "seconds": self.seconds}
+                   "seconds": self.seconds, "censored": self.censored.to(torch.uint8)}
         meta = {"format": FORMAT, "fingerprint": self.fingerprint,
                 "texts": json.dumps(self.texts)}
         with atomic_path(path, create_parent=True) as tmp:
@@ -182,7 +194,7 @@ class CodeBank(Dataset):
         try:
             return cls(tensors["codes"], tensors["num_frames"], tensors["x"], tensors["parent"],
                        tensors["num_nodes"], tensors["seconds"], json.loads(meta["texts"]),
-                       meta["fingerprint"])
+                       meta["fingerprint"], tensors.get("censored"))
         except (KeyError, ValueError) as err:
             raise ValueError(f"{path}: a damaged code bank ({err})") from None
 
@@ -203,7 +215,8 @@ def concat_banks(banks: Iterable[CodeBank]) -> CodeBank:
         raise ValueError("banks of different autoencoders cannot be joined")
     cat = lambda name: torch.cat([getattr(b, name) for b in banks])  # noqa: E731
     return CodeBank(cat("codes"), cat("num_frames"), cat("x"), cat("parent"), cat("num_nodes"),
-                    cat("seconds"), [t for b in banks for t in b.texts], banks[0].fingerprint)
+                    cat("seconds"), [t for b in banks for t in b.texts], banks[0].fingerprint,
+                    cat("censored"))
 
 
 def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,

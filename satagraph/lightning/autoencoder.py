@@ -13,6 +13,7 @@ from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
 from satagraph.lightning.per_dataset import dataset_of, log_per_dataset
+from satagraph.lightning.frozen import freeze, keep_frozen, named_parts
 from satagraph.ops.motion_batch import batch_global_motion
 
 DEFAULT_OPTIM: Dict[str, Any] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
@@ -77,8 +78,7 @@ class MotionAutoencoderModule(L.LightningModule):
         self.normalizer = FeatureNormalizer()
         self.model = self.build_model(**model)
         self.criterion = self.build_loss(**(loss or {}))
-        for part in self.frozen_parts():
-            part.requires_grad_(False).eval()
+        freeze(self.frozen_parts())
         rate = int(getattr(self.model, "latent_rate", 1))
         if self._retarget_weight() > 0 and rate != 1:
             raise ValueError(f"loss.retarget needs one latent per frame (decoded onto "
@@ -279,29 +279,22 @@ class MotionAutoencoderModule(L.LightningModule):
 
     def frozen_parts(self) -> List[nn.Module]:
         r"""The parts ``optim.frozen`` names (paths below the module, e.g.
-        ``model.encoder``, ``model.bottleneck``): left out of the optimiser
-        and kept in evaluation mode while training, so that a frozen
-        quantiser's codebooks do not move either. Fine-tuning a decoder
-        under frozen encoder and codebooks keeps a code sequence's meaning,
-        so a generator trained over those codes stays valid.
+        ``model.encoder``, ``model.bottleneck``;
+        :func:`~satagraph.lightning.frozen.named_parts`): left out of the
+        optimiser and kept in evaluation mode while training, so that a
+        frozen quantiser's codebooks do not move either. Fine-tuning a
+        decoder under frozen encoder and codebooks keeps a code sequence's
+        meaning, so a generator trained over those codes stays valid.
 
         Raises:
             ValueError: A name that is not a part of the module.
         """
-        parts = []
-        for name in self.optim["frozen"] or ():
-            try:
-                parts.append(self.get_submodule(str(name)))
-            except AttributeError:
-                known = ", ".join(f"model.{n}" for n, _ in self.model.named_children())
-                raise ValueError(f"optim.frozen: {name!r} is not a part of "
-                                 f"{type(self).__name__}; its parts: {known}") from None
-        return parts
+        known = [f"model.{n}" for n, _ in self.model.named_children()]
+        return named_parts(self, self.optim["frozen"], known)
 
     def train(self, mode: bool = True) -> "MotionAutoencoderModule":
         super().train(mode)
-        for part in self.frozen_parts():
-            part.eval()
+        keep_frozen(self.frozen_parts())
         return self
 
     def configure_optimizers(self):

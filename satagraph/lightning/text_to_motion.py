@@ -51,9 +51,10 @@ from torch import Tensor, nn
 from satagraph.data.datamodule import semantic_embedder
 from satagraph.semantics import build_text_encoder
 from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
-from satagraph.data.captioned import batch_seconds, batch_texts
+from satagraph.data.captioned import batch_censored, batch_seconds, batch_texts
 from satagraph.data.code_bank import CodeBank, CodeBatch, autoencoder_fingerprint
 from satagraph.lightning.per_dataset import dataset_of, log_per_dataset
+from satagraph.lightning.frozen import freeze, keep_frozen, named_parts
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.pipelines.inference import default_windows, window_codes
 from satagraph.pipelines.prompt_reading import VOCABULARY_KEY, words_of
@@ -66,9 +67,12 @@ DEFAULT_LOSS: Dict[str, float] = {"masked": 1.0, "residual": 1.0, "length": 0.1}
 #: AdamW with a linear warm-up over ``warmup_steps``, then constant, or,
 #: with ``decay_steps`` > 0, a cosine from ``lr`` down to ``floor * lr``
 #: over that many steps after the warm-up (gradient clipping:
-#: ``optim.grad_clip`` of the config schema).
-DEFAULT_OPTIM: Dict[str, float] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200,
-                                   "decay_steps": 0, "floor": 0.1}
+#: ``optim.grad_clip`` of the config schema); ``frozen``: the parts not
+#: trained (:meth:`TextToMotionModule.frozen_parts`).
+DEFAULT_OPTIM: Dict[str, Any] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps": 200,
+                                 "decay_steps": 0, "floor": 0.1, "frozen": ()}
+#: The parts of a generator ``optim.frozen`` may name.
+GENERATOR_PARTS = ("skeleton", "masked", "residual", "length")
 #: Checkpoint key of the text encoder's id and width.
 TEXT_ENCODER_KEY = "text_encoder"
 
@@ -165,6 +169,7 @@ class TextToMotionModule(L.LightningModule):
         self._check_semantic_encoder()
         self._check_facing()
         self.build(model)
+        freeze(self.frozen_parts())
 
     # ------------------------------------------------------------ build
     def _check_semantic_encoder(self) -> None:
@@ -204,10 +209,19 @@ class TextToMotionModule(L.LightningModule):
                                             **(model.get("residual") or {}))
         self.length = LengthModel(text, width, **(model.get("length") or {}))
 
+    def frozen_parts(self) -> List[nn.Module]:
+        """The parts ``optim.frozen`` names (:data:`GENERATOR_PARTS`;
+        :func:`~satagraph.lightning.frozen.named_parts`), e.g. all but
+        ``length`` to teach the length model alone; a part is frozen with
+        its loss still computed unless its weight is 0 (``loss``)."""
+        return named_parts(self, self.optim["frozen"], GENERATOR_PARTS)
+
     def train(self, mode: bool = True) -> "TextToMotionModule":
-        """Train mode for the generators; the autoencoder stays in eval."""
+        """Train mode for the generators; the autoencoder and the frozen
+        parts stay in eval."""
         super().train(mode)
         self.autoencoder.eval()
+        keep_frozen(self.frozen_parts())
         return self
 
     @torch.no_grad()
@@ -268,7 +282,7 @@ class TextToMotionModule(L.LightningModule):
         fingerprint = fingerprint or autoencoder_fingerprint(self.autoencoder)
         return CodeBank.of_batch(merge_codes(codes, lengths), lengths, graph.x,
                                  batch.stream_parent, graph.batch, batch_seconds(batch),
-                                 batch_texts(batch), fingerprint)
+                                 batch_texts(batch), fingerprint, batch_censored(batch))
 
     def skeleton_embedding(self, batch) -> Tensor:
         r""":math:`f_{skel}` of every clip's skeleton (static features
@@ -295,27 +309,35 @@ class TextToMotionModule(L.LightningModule):
                        per_dataset: Optional[str] = None) -> Dict[str, Tensor]:
         """The three losses, their weighted sum (``loss``) and accuracies;
         with :obj:`per_dataset` (a stage name), also logs the masked loss
-        and accuracy per dataset (:mod:`~satagraph.lightning.per_dataset`)."""
+        and accuracy per dataset (:mod:`~satagraph.lightning.per_dataset`).
+        A transformer whose loss weight is 0 is not run, and where neither
+        runs the windows are not coded (training the length model alone
+        costs no autoencoder pass)."""
+        run = {k: self.loss_weights[k] > 0 for k in ("masked", "residual")}
         if isinstance(batch, CodeBatch):
             lengths, texts, seconds = batch.num_frames, batch.texts, batch.seconds
+            censored = batch.censored
             codes = split_codes(batch.codes, lengths)
             edge_index, root = parents_to_edge_index(batch.parent)
             skel = self.skeleton(batch.x, edge_index, batch.node_clip, root)
         else:
-            codes, lengths = self.batch_codes(batch)
+            codes, lengths = self.batch_codes(batch) if any(run.values()) else (None, None)
             texts, skel = batch_texts(batch), self.skeleton_embedding(batch)
-            seconds = batch_seconds(batch)
+            seconds, censored = batch_seconds(batch), batch_censored(batch)
         if self.training:
             self.note_words(texts)
         text = self.encode_text(texts)
-        masked = self.masked.loss(codes, text, skel, lengths, generator)
-        residual = self.residual.loss(codes, text, skel, lengths, generator)
-        seconds = seconds.to(skel.device)
-        length = self.length.loss(seconds, text, skel, generator)
-        out = {"masked": masked.loss, "residual": residual.loss, "length": length,
-               "masked_acc": masked.accuracy, "residual_acc": residual.accuracy}
-        out["loss"] = sum(self.loss_weights[k] * out[k] for k in DEFAULT_LOSS)
-        if per_dataset and not isinstance(batch, CodeBatch):
+        out = {"length": self.length.loss(seconds.to(skel.device), text, skel, generator,
+                                          None if censored is None else censored.to(skel.device))}
+        masked = None
+        if run["masked"]:
+            masked = self.masked.loss(codes, text, skel, lengths, generator)
+            out.update(masked=masked.loss, masked_acc=masked.accuracy)
+        if run["residual"]:
+            residual = self.residual.loss(codes, text, skel, lengths, generator)
+            out.update(residual=residual.loss, residual_acc=residual.accuracy)
+        out["loss"] = sum(self.loss_weights[k] * out[k] for k in DEFAULT_LOSS if k in out)
+        if per_dataset and masked is not None and not isinstance(batch, CodeBatch):
             log_per_dataset(self, per_dataset, self.masked_per_clip(masked),
                             dataset_of(batch.meta), masked.corruption.mask.sum(-1))
         return out

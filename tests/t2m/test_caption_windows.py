@@ -13,7 +13,8 @@ from satagraph.data.features import motion_to_features
 from satagraph.datasets.sources import MotionFile
 from satagraph.datasets import Caption, captions_for, mirror_text
 from satagraph.data.caption_datamodule import CaptionDataModule
-from satagraph.data.captioned import FileCaptionWindows, batch_seconds, batch_texts
+from satagraph.data.captioned import (FileCaptionWindows, batch_censored, batch_seconds,
+                                      batch_texts)
 from tests.conftest import data_dir
 from tests.t2m.conftest import zoo_batch, zoo_windows
 
@@ -25,6 +26,7 @@ def test_zoo_windows_carry_their_captions_and_lengths():
         assert 16 <= clip.num_frames <= 40
         assert clip.meta["text"] in clip.meta["captions"]
         assert clip.meta["seconds"] == pytest.approx(clip.num_frames / 30.0)
+        assert clip.meta["censored"]  # a drawn length: the motion could go on
         assert clip.semantic.shape == (clip.num_joints, 256)
 
 
@@ -79,6 +81,26 @@ def test_file_windows_keep_the_captions_overlapping_them():
     texts = [ds[i].meta["captions"] for i in range(len(ds))]
     assert texts == [[captions[0].text], [captions[1].text]]  # 1 s - 2 s: no caption
     assert all(ds[i].num_frames == 30 for i in range(len(ds)))
+    # each window's duration is its caption's time range: 0-1 s, then 2 s to the end
+    assert [ds[i].meta["seconds"] for i in range(len(ds))] == pytest.approx([1.0, 1.0])
+    assert not any(ds[i].meta["censored"] for i in range(len(ds)))
+
+
+def test_file_windows_learn_their_whole_clips_duration():
+    """A window cut from a longer captioned clip carries the clip's duration
+    (the caption describes all of it), mirrored or not."""
+    motion = canonicalize(example_motion(150, fps=30.0), fps=30.0)
+    feats = motion_to_features(motion)
+    f = MotionFile("clip.bvh", "user", "example", "train")
+    caption = [Caption("a person walks forward and turns left", 0.0, None)]
+    for mirror in (0.0, 1.0):
+        ds = FileCaptionWindows([f], [feats], window=60, stride=60, captions=[caption],
+                                mirror=mirror)
+        for key in ((0, 0), 1, (3, 2)):
+            clip = ds[key]
+            assert clip.num_frames == 60
+            assert clip.meta["seconds"] == pytest.approx(feats.num_frames / 30.0)
+            assert not clip.meta["censored"]
 
 
 def test_file_windows_mirror_their_captions():
@@ -97,6 +119,7 @@ def test_batch_helpers():
     assert len(batch_texts(batch)) == 3
     assert batch_seconds(batch).tolist() == pytest.approx(
         (batch.clip_num_frames.float() / 30.0).tolist())
+    assert batch_censored(batch).tolist() == [True] * 3
 
 
 @pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: the real "

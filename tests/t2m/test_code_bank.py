@@ -45,7 +45,8 @@ def test_a_bank_round_trips_through_its_file_and_gathers_any_order(banked, tmp_p
     assert torch.equal(back.codes.long(), bank.codes.long())
     torch.testing.assert_close(back.x.float(), bank.x.half().float())
     one, other = bank.collate([3, 0]), back.collate([3, 0])
-    for key in ("codes", "num_frames", "parent", "node_clip", "texts", "seconds"):
+    assert bank.censored.all()  # zoo clips: their durations are lower bounds
+    for key in ("codes", "num_frames", "parent", "node_clip", "texts", "seconds", "censored"):
         assert getattr(one, key) == getattr(other, key) if key == "texts" else \
             torch.equal(getattr(one, key), getattr(other, key)), key
     torch.testing.assert_close(one.x.half().float(), other.x)
@@ -60,6 +61,21 @@ def test_a_bank_round_trips_through_its_file_and_gathers_any_order(banked, tmp_p
     joined = concat_banks([bank, back])
     assert len(joined) == 2 * len(bank) and joined.collate([len(bank) + 1]).texts == \
         [bank.texts[1]]
+
+
+def test_a_bank_made_before_censoring_reads_every_duration_as_known(banked, tmp_path):
+    from safetensors.torch import load_file, save_file
+    from safetensors import safe_open
+    _, _, bank = banked
+    bank.save(tmp_path / "new.safetensors")
+    tensors = load_file(str(tmp_path / "new.safetensors"))
+    with safe_open(str(tmp_path / "new.safetensors"), framework="pt") as f:
+        meta = f.metadata()
+    del tensors["censored"]
+    save_file(tensors, str(tmp_path / "old.safetensors"), metadata=meta)
+    old = CodeBank.load(tmp_path / "old.safetensors")
+    assert not old.censored.any() and old.collate([0, 1]).censored.tolist() == [False] * 2
+    assert torch.equal(old.seconds, bank.seconds)
 
 
 def test_a_bank_belongs_to_its_autoencoder_decoder_aside(banked):

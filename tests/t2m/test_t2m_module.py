@@ -50,6 +50,48 @@ def test_training_steps_lower_the_loss_and_reach_every_generator(autoencoder_ckp
     assert all(torch.equal(ae_before[k], after[k]) for k in ae_before)
 
 
+def test_the_length_model_trains_alone_without_coding_the_windows(autoencoder_ckpt,
+                                                                  monkeypatch):
+    """optim.frozen keeps every other part as it was; zero-weighted
+    transformers are not run, so no window is coded."""
+    torch.manual_seed(0)
+    from tests.t2m.conftest import T2M_MODEL
+    from satagraph.lightning.text_to_motion import TextToMotionModule
+    module = TextToMotionModule(model=dict(T2M_MODEL, autoencoder=str(autoencoder_ckpt)),
+                                loss={"masked": 0.0, "residual": 0.0, "length": 1.0},
+                                optim={"frozen": ["skeleton", "masked", "residual"]},
+                                meta={"module": "t2m", "semantic_encoder": "offline"}).train()
+    assert not module.masked.training and module.length.training
+    monkeypatch.setattr(module, "batch_codes", lambda batch: pytest.fail("coded"))
+    before = copy.deepcopy(module.state_dict())
+    batch = zoo_batch(6)
+    trained = module.configure_optimizers()["optimizer"].param_groups[0]["params"]
+    assert {id(p) for p in trained} == {id(p) for p in module.length.parameters()}
+    opt = torch.optim.AdamW(trained, 3e-3)
+    losses = []
+    for _ in range(30):
+        out = module.compute_losses(batch, torch.Generator().manual_seed(0))
+        assert set(out) == {"length", "loss"}
+        opt.zero_grad()
+        out["loss"].backward()
+        opt.step()
+        losses.append(out["loss"].item())
+    assert losses[-1] < 0.5 * losses[0]
+    after = module.state_dict()
+    changed = {k.split(".")[0] for k in before if not torch.equal(before[k], after[k])}
+    assert changed == {"length"}
+
+
+def test_an_unknown_frozen_part_is_named(autoencoder_ckpt):
+    from tests.t2m.conftest import T2M_MODEL
+    from satagraph.lightning.text_to_motion import TextToMotionModule
+    with pytest.raises(ValueError, match="'lenght' is not a part of TextToMotionModule; its "
+                       "parts: skeleton, masked, residual, length"):
+        TextToMotionModule(model=dict(T2M_MODEL, autoencoder=str(autoencoder_ckpt)),
+                           optim={"frozen": ["lenght"]},
+                           meta={"module": "t2m", "semantic_encoder": "offline"})
+
+
 def test_guidance_drops_the_text_but_never_the_skeleton(autoencoder_ckpt):
     module = build_t2m(autoencoder_ckpt).eval()
     batch = zoo_batch(2)

@@ -1,7 +1,16 @@
 r"""A categorical distribution over motion durations from the text and the
 skeleton, for generation when the user gives no length (MoMask's
 ``LengthEstimator`` takes the text only; a skeleton changes how long an
-action takes)."""
+action takes).
+
+A training duration is either known (a captioned clip or segment, whose
+caption describes all of it) or only a lower bound (*censored*: a clip
+whose length was drawn while its motion could have gone on, as the
+endless zoo's, :class:`~satagraph.data.captioned.ZooCaptionWindows`). A
+known duration is scored by the cross-entropy of its bin; a lower bound by
+the probability of its bin or any longer one, as survival analysis scores
+censored observations, so that drawn lengths teach the model "at least
+this long" rather than a uniform spread of durations."""
 from __future__ import annotations
 
 from typing import Optional
@@ -80,15 +89,29 @@ class LengthModel(nn.Module):
         return self.mlp(text + skel)
 
     def loss(self, seconds: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
-             generator: Optional[torch.Generator] = None) -> Tensor:
-        """Cross-entropy of the duration bins (text dropped with probability
-        :obj:`cond_drop` in training)."""
+             generator: Optional[torch.Generator] = None,
+             censored: Optional[Tensor] = None) -> Tensor:
+        """Mean negative log-likelihood of the durations (text dropped with
+        probability :obj:`cond_drop` in training): the cross-entropy of a
+        known duration's bin, :math:`-\\log P(\\text{bin} \\ge b)` of a
+        lower bound's (:obj:`censored`, default: none).
+
+        Shapes:
+            - **seconds**, **censored**: :math:`(B,)`
+        """
         drop = None
         if self.training and self.cond_drop > 0:
             drop = uniform((skel_emb.size(0),), generator, skel_emb.device) < self.cond_drop
         logits = self(text_emb, skel_emb, drop)
-        return F.cross_entropy(logits, self.seconds_to_bins(seconds),
-                               label_smoothing=self.label_smoothing)
+        bins = self.seconds_to_bins(seconds)
+        known = F.cross_entropy(logits, bins, label_smoothing=self.label_smoothing,
+                                reduction="none")
+        if censored is None or not bool(censored.any()):
+            return known.mean()
+        later = torch.arange(self.num_bins, device=logits.device) >= bins.unsqueeze(-1)
+        bound = (logits.logsumexp(-1)
+                 - logits.masked_fill(~later, float("-inf")).logsumexp(-1))
+        return torch.where(censored.to(logits.device).bool(), bound, known).mean()
 
     @torch.no_grad()
     def sample(self, text_emb: Optional[Tensor], skel_emb: Tensor, temperature: float = 1.0,

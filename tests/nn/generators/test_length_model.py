@@ -64,3 +64,45 @@ def test_gradients_reach_both_conditions():
     skel = torch.randn(2, SKEL, requires_grad=True)
     model.eval().loss(torch.tensor([1.0, 3.0]), text, skel).backward()
     assert text.grad.abs().sum() > 0 and skel.grad.abs().sum() > 0
+
+
+def test_a_lower_bound_scores_every_longer_bin():
+    model = tiny_length(bin_seconds=0.5, max_seconds=4.0, cond_drop=0.0).eval()
+    text, skel = torch.randn(3, TEXT), torch.randn(3, SKEL)
+    seconds = torch.tensor([0.5, 2.0, 4.0])
+    logp = model(text, skel).log_softmax(-1)
+    censored = torch.ones(3, dtype=torch.bool)
+    want = -torch.stack([logp[0].exp().sum().log(),  # at least the first bin: certain
+                         logp[1, 3:].logsumexp(-1), logp[2, 7]]).mean()
+    torch.testing.assert_close(model.loss(seconds, text, skel, censored=censored), want)
+    mixed = torch.tensor([False, True, False])
+    want = -torch.stack([logp[0, 0], logp[1, 3:].logsumexp(-1), logp[2, 7]]).mean()
+    torch.testing.assert_close(model.loss(seconds, text, skel, censored=mixed), want)
+    torch.testing.assert_close(model.loss(seconds, text, skel, censored=~censored),
+                               model.loss(seconds, text, skel))
+
+
+def test_drawn_lengths_teach_at_least_not_a_spread():
+    """Clips of lengths drawn uniformly for one caption: read as known
+    durations they teach a spread over the range, read as lower bounds the
+    longest bin."""
+    gen = torch.Generator().manual_seed(0)
+    text, skel = torch.randn(1, TEXT, generator=gen), torch.randn(1, SKEL, generator=gen)
+    seconds = torch.rand(64, generator=gen) * 3.0 + 1.0  # 1-4 s
+    modes = {}
+    for censored in (False, True):
+        model = tiny_length(bin_seconds=0.5, max_seconds=4.0, cond_drop=0.0)
+        opt = torch.optim.Adam(model.parameters(), lr=1e-2)
+        flag = torch.full((64,), censored)
+        for _ in range(150):
+            loss = model.loss(seconds, text.expand(64, -1), skel.expand(64, -1),
+                              censored=flag)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        p = model.eval()(text, skel).softmax(-1)[0]
+        modes[censored] = (float(p[-1]), float(p[:-1].max()))
+    top, rest = modes[True]
+    assert top > 0.9 > rest
+    top, rest = modes[False]
+    assert top < 0.3 and rest < 0.3
