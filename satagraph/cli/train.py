@@ -115,6 +115,10 @@ def add_train_parsers(sub) -> None:
                    help="(a text-to-motion model) decode with this SATA-RVQ's decoder: "
                    "one fine-tuned from the generator's autoencoder with its encoder and "
                    "codebooks frozen (optim.frozen); refused for any other")
+    p.add_argument("--length", metavar="T2M.ckpt",
+                   help="(a text-to-motion model) draw durations with this generator's "
+                   "length model: one trained from RUN_OR_CKPT with every other part "
+                   "frozen (optim.frozen=[skeleton,masked,residual]); refused for any other")
     p.add_argument("--blend", metavar="BASE",
                    help="write (1 - ALPHA) * BASE + ALPHA * RUN_OR_CKPT instead (WiSE-FT): "
                    "BASE is what the fine-tune started from (a checkpoint, a weights "
@@ -440,16 +444,17 @@ def run_export_weights(args) -> int:
     check_output_path(args.output)
     source = _export_source(args.source)
     module = load_module(source)
-    if args.decoder:
-        if not hasattr(module, "swap_decoder"):
-            raise ValueError(f"--decoder: {source} is not a text-to-motion model")
-        module.swap_decoder(args.decoder)
+    for flag, part in (("decoder", "swap_decoder"), ("length", "swap_length")):
+        if getattr(args, flag):
+            if not hasattr(module, part):
+                raise ValueError(f"--{flag}: {source} is not a text-to-motion model")
+            getattr(module, part)(getattr(args, flag))
     blend = _blend(module, source, args.blend, args.alpha)
     provenance = {k: v for k, v in (("command", args.command), ("minutes", args.minutes),
                                     ("machine", args.machine), ("note", args.note))
                   if v is not None}
     provenance.update(source=source, satagraph_version=__version__,
-                      **({"decoder": args.decoder} if args.decoder else {}),
+                      **{k: getattr(args, k) for k in ("decoder", "length") if getattr(args, k)},
                       **blend, **_previous_provenance(source))
     size = save_weights(module, args.output, half=args.half,
                         training_data=args.training_data, provenance=provenance,

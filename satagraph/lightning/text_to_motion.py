@@ -118,6 +118,24 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     return module.eval(), stored
 
 
+def check_shared(own: nn.Module, theirs: Dict[str, Tensor], prefix: str, ckpt: str,
+                 why: str) -> None:
+    """Refuse to swap the part of :obj:`own` below :obj:`prefix` for that of
+    :obj:`theirs` (a state dict) unless every other weight is the same (in
+    half precision or not): only a part fine-tuned with the rest frozen
+    fits the rest.
+
+    Raises:
+        CheckpointError: Another weight differs (one line naming
+            :obj:`ckpt`, the first such weight and :obj:`why`).
+    """
+    differ = [k for k, v in own.state_dict().items()
+              if not k.startswith(prefix) and not _same_weights(theirs.get(k), v)]
+    if differ:
+        raise CheckpointError(f"{ckpt}: {differ[0]} (and {len(differ) - 1} more) differ "
+                              f"from this model's: {why}")
+
+
 def _same_weights(other: Optional[Tensor], own: Tensor) -> bool:
     """Whether :obj:`other` is :obj:`own`, or rounds to it in half precision
     (a generator loaded from a ``--half`` weights file)."""
@@ -237,15 +255,30 @@ class TextToMotionModule(L.LightningModule):
         """
         from satagraph.experiment.train import load_module
         theirs = load_module(ckpt).state_dict()
-        differ = [k for k, v in self.autoencoder.state_dict().items()
-                  if not k.startswith("model.decoder.") and not _same_weights(theirs.get(k), v)]
-        if differ:
-            raise CheckpointError(f"{ckpt}: {differ[0]} (and {len(differ) - 1} more) differ "
-                                  "from the generator's autoencoder: only a decoder fine-tuned "
-                                  "under its frozen encoder and codebooks (optim.frozen) keeps "
-                                  "the codes' meaning")
+        check_shared(self.autoencoder, theirs, "model.decoder.", ckpt,
+                     "only a decoder fine-tuned under its frozen encoder and codebooks "
+                     "(optim.frozen) keeps the codes' meaning")
         self.autoencoder.load_state_dict(theirs)
         self.hparams["model"]["autoencoder"]["decoder"] = ckpt
+
+    @torch.no_grad()
+    def swap_length(self, ckpt: str) -> None:
+        """Draw durations with the length model of :obj:`ckpt`, a generator
+        fine-tuned from this one with every other part frozen
+        (``optim.frozen=[skeleton,masked,residual]``, its autoencoder this
+        one's); the length model's shape may differ (other bins).
+
+        Raises:
+            CheckpointError: Any other weight of :obj:`ckpt` is not this
+                generator's (stored in half precision or not).
+        """
+        from satagraph.experiment.train import load_module
+        theirs = load_module(ckpt)
+        check_shared(self, theirs.state_dict(), "length.", ckpt,
+                     "only a length model trained with every other part frozen "
+                     "(optim.frozen) fits the rest")
+        self.length = theirs.length.to(self.device)
+        self.hparams["model"]["length"] = copy.deepcopy(theirs.hparams["model"].get("length"))
 
     # ------------------------------------------------------------ inputs
     @property

@@ -66,3 +66,25 @@ def test_generate_without_ckpt_on_three_species_offline(
     first = (out / dog.name).read_bytes()
     assert main(args) == 0
     assert (out / dog.name).read_bytes() == first
+
+
+def test_shipped_length_model_draws_full_motions_on_unseen_rigs() -> None:
+    """Its captions describe motions at least 4 s long (zoo clips of drawn
+    lengths are lower bounds), so without --seconds it draws 4 s on rigs
+    it never saw, for any prompt, not a random 1-4 s."""
+    import torch
+    from satagraph.data.collate import collate_clips
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    from satagraph.pipelines.generate import load_generator, rig_inputs
+    from satagraph.pipelines.inference import target_clip
+    module = load_generator("builtin").eval()
+    zoo = EndlessZoo(["biped", "quadruped", "bird"], fps=30.0, seed=0)
+    for i, subject in enumerate(("a person", "a quadruped", "a bird")):
+        rig = rig_inputs(module, zoo.sample(0, i, 40, "test").motion)
+        skel = module.skeleton_embedding(collate_clips([target_clip(rig.feats, 1,
+                                                                    rig.semantic)]))
+        for text in (f"{subject} walks forward", f"{subject} jumps", None):
+            emb = None if text is None else module.encode_text([text])
+            with torch.no_grad():
+                p = module.length(emb, skel).softmax(-1)[0]
+            assert float(p[-1]) > 0.9, (subject, text, p)

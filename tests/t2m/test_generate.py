@@ -385,3 +385,45 @@ def test_units_and_up_axes_per_skeleton(t2m_ckpt, zoo_skeletons, tmp_path, capsy
     assert _generate(t2m_ckpt, skeletons, bad, "--units", "cm,m,in") == 2
     assert "--units has 3 values for 2 files" in capsys.readouterr().err
     assert not list(tmp_path.glob("bad*"))
+
+
+def test_export_swaps_in_a_length_model_trained_alone(t2m_ckpt, autoencoder_ckpt, tmp_path,
+                                                      capsys):
+    """`export-weights --length`: the generator draws durations with a length
+    model trained with every other part frozen (other bins allowed); one whose
+    transformer moved is refused in one line, and nothing is written."""
+    from satagraph.experiment.train import load_module
+    from satagraph.io.weights import read_weights_metadata
+    from satagraph.nn.generators import LengthModel
+    from tests.t2m.conftest import save_checkpoint
+    tuned = load_module(str(t2m_ckpt))
+    lm = tuned.length
+    tuned.length = LengthModel(lm.text_proj.in_features, lm.skel_proj.in_features,
+                               hidden_channels=16, bin_seconds=0.5, max_seconds=6.0)
+    tuned.hparams["model"]["length"] = {"hidden_channels": 16, "bin_seconds": 0.5,
+                                        "max_seconds": 6.0}
+    tuned_ckpt = save_checkpoint(tuned, tmp_path / "length.ckpt")
+    half = tmp_path / "half.safetensors"
+    assert main(["export-weights", str(t2m_ckpt), str(half), "--half"]) == 0
+    swapped = tmp_path / "swapped.safetensors"
+    assert main(["export-weights", str(half), str(swapped), "--length", str(tuned_ckpt)]) == 0
+    provenance = read_weights_metadata(swapped)["provenance"]
+    assert provenance["length"] == str(tuned_ckpt) and "previous" in provenance
+    module, original = load_module(str(swapped)), load_module(str(half))
+    assert module.length.num_bins == 12
+    for name, value in module.length.state_dict().items():
+        torch.testing.assert_close(value, tuned.length.state_dict()[name], rtol=0, atol=0,
+                                   msg=name)
+    own = {k: v for k, v in module.state_dict().items() if not k.startswith("length.")}
+    assert own.keys() == {k for k in original.state_dict() if not k.startswith("length.")}
+    assert all(torch.equal(v, original.state_dict()[k]) for k, v in own.items())
+
+    with torch.no_grad():
+        next(tuned.masked.parameters()).add_(0.1)
+    moved = save_checkpoint(tuned, tmp_path / "moved.ckpt")
+    capsys.readouterr()
+    bad = tmp_path / "bad.safetensors"
+    assert main(["export-weights", str(half), str(bad), "--length", str(moved)]) == 2
+    line = _error(capsys)
+    assert "moved.ckpt" in line and "masked." in line and "optim.frozen" in line
+    assert not bad.exists()
