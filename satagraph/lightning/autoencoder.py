@@ -12,7 +12,7 @@ from satagraph.ops.smoothing import gaussian_smooth
 from satagraph.typing import DYNAMIC_LAYOUT
 from satagraph.data.normalizer import FeatureNormalizer
 from satagraph.metrics import motion_metrics
-from satagraph.lightning.per_dataset import dataset_of, log_per_dataset
+from satagraph.lightning.per_dataset import PerDatasetFigures, dataset_of, log_per_dataset
 from satagraph.lightning.frozen import freeze, keep_frozen, named_parts
 from satagraph.ops.motion_batch import batch_global_motion
 
@@ -28,7 +28,7 @@ def lr_factor(epoch: int, warmup_epochs: int, decay: float, floor: float) -> flo
     return max(floor, decay ** (epoch - warmup_epochs))
 
 
-class MotionAutoencoderModule(L.LightningModule):
+class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
     r"""Base LightningModule for topology-agnostic motion autoencoders.
 
     Subclasses choose the network in :meth:`build_model` and may override

@@ -53,7 +53,7 @@ from satagraph.semantics import build_text_encoder
 from satagraph.semantics.factory import check_text_encoder_state, text_encoder_state
 from satagraph.data.captioned import batch_censored, batch_seconds, batch_texts
 from satagraph.data.code_bank import CodeBank, CodeBatch, autoencoder_fingerprint
-from satagraph.lightning.per_dataset import dataset_of, log_per_dataset
+from satagraph.lightning.per_dataset import PerDatasetFigures, dataset_of, log_per_dataset
 from satagraph.lightning.frozen import freeze, keep_frozen, named_parts
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.pipelines.inference import default_windows, window_codes
@@ -146,7 +146,7 @@ def _same_weights(other: Optional[Tensor], own: Tensor) -> bool:
         other.is_floating_point() and torch.equal(other.half().to(own.dtype), own))
 
 
-class TextToMotionModule(L.LightningModule):
+class TextToMotionModule(PerDatasetFigures, L.LightningModule):
     r"""Masked + residual transformers, skeleton embedding and length model
     over a frozen SATA-RVQ's codes (see the module docstring).
 

@@ -65,3 +65,16 @@ def test_spawned_workers_get_a_picklable_datamodule(tiny_config: Dict[str, Any],
     # Forked workers share memory: the set-up data module is kept.
     train(cfg, **_ddp_overrides("ddp_fork"))
     assert not seen["spawns"] and seen["datamodule"].datasets
+
+
+def test_ddp_validation_logs_per_dataset_figures_of_both_processes(
+        tiny_config: Dict[str, Any]) -> None:
+    """Each process validates its own share of the batches; the per-dataset
+    figures are summed over both before they are logged, and every process
+    logs the same keys (no hang where one saw a dataset the other did not)."""
+    cfg = dict(tiny_config, logger={"name": "none"})
+    cfg["data"] = dict(cfg["data"], batch_size=2)
+    overrides = dict(_ddp_overrides("ddp_fork"), limit_val_batches=2)
+    _, _, trainer, _ = train(cfg, **overrides)
+    per_dataset = [k for k in trainer.callback_metrics if k.startswith("val/") and k.count("/") == 2]
+    assert per_dataset and all(torch.isfinite(trainer.callback_metrics[k]) for k in per_dataset)

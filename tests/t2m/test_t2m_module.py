@@ -247,13 +247,23 @@ def test_facing_frame_must_be_the_autoencoders(autoencoder_ckpt, tmp_path):
     assert build(0.25).meta["data"]["preprocessing"]["facing_smooth"] == 0.25
 
 
-def test_validation_logs_the_masked_loss_per_dataset(autoencoder_ckpt):
+def test_validation_logs_the_masked_loss_per_dataset(autoencoder_ckpt, monkeypatch):
     """Validation logs the masked loss and accuracy of each dataset's
     clips (``val/<dataset>/masked``) over its masked tokens: their
     token-weighted mean is the overall figure; training logs none."""
     import lightning as L
     from torch.utils.data import DataLoader
+    import satagraph.lightning.text_to_motion as t2m_module
+    from satagraph.lightning.per_dataset import log_per_dataset
 
+    tokens_of = {}
+
+    def spy(module, stage, values, datasets, weights=None):
+        for d in set(datasets):
+            tokens_of[d] = sum(int(w) for w, e in zip(weights, datasets) if e == d)
+        log_per_dataset(module, stage, values, datasets, weights)
+
+    monkeypatch.setattr(t2m_module, "log_per_dataset", spy)
     module = build_t2m(autoencoder_ckpt)
     batch = zoo_batch(6)
     for i, meta in enumerate(batch.meta):
@@ -270,7 +280,7 @@ def test_validation_logs_the_masked_loss_per_dataset(autoencoder_ckpt):
                         enable_progress_bar=False, enable_model_summary=False)
     trainer.validate(module, DataLoader([batch], batch_size=None), verbose=False)
     for name in ("masked_acc", "masked"):
-        logged = {d: [(v, b) for n, v, b in calls if n == f"val/{d}/{name}"]
+        logged = {d: [(v, tokens_of[d]) for n, v, _ in calls if n == f"val/{d}/{name}"]
                   for d in ("zoo", "zoo-gestures")}
         assert all(len(v) == 1 and v[0][1] > 0 for v in logged.values()), logged
         tokens = sum(v[0][1] for v in logged.values())
