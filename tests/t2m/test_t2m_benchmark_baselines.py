@@ -49,3 +49,22 @@ def test_reference_autoencoder_row_reconstructs_each_test_clip() -> None:
     own = np.array([[np.linalg.norm(a.desc - b.desc) for b in test] for a in out])
     others = np.where(np.eye(len(test), dtype=bool), np.inf, own)
     assert (own.diagonal() < others.min(axis=1)).mean() >= 0.75  # nearest to its own
+
+
+def test_length_benchmark_reads_the_length_models_distribution(t2m_ckpt: Path) -> None:
+    """benchmarks/t2m_length.py: the mean drawn duration per rig is the
+    distribution's mean over the probe prompts, within the model's bins."""
+    import torch
+    import t2m_length
+    from satagraph.datasets.zoo.endless import EndlessZoo
+    module = load_generator(str(t2m_ckpt)).eval()
+    motion = EndlessZoo(["biped"], fps=30.0, seed=0).sample(0, 0, 40, "val").motion
+    row = t2m_length.rig_row(module, "a person", motion)
+    seconds = module.length.bins_to_seconds(torch.arange(module.length.num_bins)).numpy()
+    assert seconds[0] <= row["mean"] <= seconds[-1]
+    assert 0.0 <= row["short"] <= 1.0 and row["spread"] >= 0.0
+    p = t2m_length.distribution(module, "a person walks forward", motion)
+    assert p.shape == seconds.shape and abs(p.sum() - 1.0) < 1e-6
+    text = t2m_length.table({"tiny": {"rigs": {"zoo biped": row}, "bandai": None,
+                                      "longest": float(seconds[-1])}}, 1.0)
+    assert "| tiny | zoo biped |" in text
