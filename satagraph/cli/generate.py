@@ -65,6 +65,10 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "
                    "threads make a busy machine many times slower)")
+    p.add_argument("--render", metavar="OUT.gif", default=None,
+                   help="also render the generated motions side by side, one titled panel "
+                   "per skeleton, to a GIF or an MP4 (as `satagraph render` draws them; "
+                   "with --text)")
     p.add_argument("output", metavar="OUT.bvh", nargs="?",
                    help="output file (may also come last after the --skeleton files)")
     add_rig_arguments(p, "", "the skeleton files", per_input=True)
@@ -159,8 +163,9 @@ def run_generate(args) -> int:
                          f"and {args.threads}")
     torch.set_num_threads(args.threads)
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
-    for path in paths:
+    for path in paths + ([args.render] if args.render else []):
         check_output_path(path)
+    _check_render(args)
     targets = _targets(args)
     module = load_generator(args.ckpt)
     if args.ckpt == BUILTIN:
@@ -179,7 +184,31 @@ def run_generate(args) -> int:
         print(f"wrote {path}: {motion.num_frames} frames ({motion.duration:.2f} s) on the "
               f"{motion.num_joints}-joint skeleton of {source}")
     print(f"generated in {took:.2f} s")
+    if args.render:
+        _render(motions, args)
     return 0
+
+
+def _check_render(args) -> None:
+    """``--render`` names a GIF or an MP4, and goes with ``--text``."""
+    if args.render is None:
+        return
+    from satagraph.cli.render import OUTPUTS
+    if args.prompts is not None:
+        raise ValueError("--render goes with --text (render a --prompts folder with "
+                         "`satagraph render`)")
+    if Path(args.render).suffix.lower() not in OUTPUTS:
+        raise ValueError(f"--render: {args.render} is not a .gif or .mp4 file")
+
+
+def _render(motions, args) -> None:
+    """``--render``: the generated motions side by side, canonicalised as
+    their skeleton files were read, one panel per skeleton."""
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.viz import render
+    shown = [canonicalize(m, fps=None) for m in motions]
+    count = render(shown, args.render, titles=[Path(s).name for s in args.skeleton])
+    print(f"wrote {args.render}: {len(shown)} panel(s), {count} frames")
 
 
 def _generate_prompts(args, module, targets, prompts: List[str], settings) -> int:

@@ -427,3 +427,28 @@ def test_export_swaps_in_a_length_model_trained_alone(t2m_ckpt, autoencoder_ckpt
     line = _error(capsys)
     assert "moved.ckpt" in line and "masked." in line and "optim.frozen" in line
     assert not bad.exists()
+
+
+def test_render_draws_every_skeletons_motion_side_by_side(t2m_ckpt, zoo_skeletons, tmp_path,
+                                                          capsys):
+    """`generate --render OUT.gif`: the motions written, rendered one panel
+    per skeleton; a --render that is no GIF or MP4 is refused before
+    anything is generated."""
+    from PIL import Image
+    skeletons = [zoo_skeletons["biped"], zoo_skeletons["quadruped"]]
+    out, gif = tmp_path / "out.bvh", tmp_path / "both.gif"
+    assert _generate(t2m_ckpt, skeletons, out, "--seconds", "1", "--render", str(gif)) == 0
+    written = sorted(tmp_path.glob("out_*.bvh"))
+    assert len(written) == 2
+    with Image.open(gif) as image:
+        assert image.n_frames == read_bvh(str(written[0])).num_frames
+        width = image.size[0]
+    single = tmp_path / "one.gif"
+    assert _generate(t2m_ckpt, skeletons[:1], tmp_path / "one.bvh", "--seconds", "1",
+                     "--render", str(single)) == 0
+    with Image.open(single) as image:
+        assert width > 1.5 * image.size[0]  # two panels side by side
+    capsys.readouterr()
+    bad = tmp_path / "bad.bvh"
+    assert _generate(t2m_ckpt, skeletons, bad, "--render", str(tmp_path / "x.png")) == 2
+    assert "x.png" in _error(capsys) and not list(tmp_path.glob("bad*.bvh"))
