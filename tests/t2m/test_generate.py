@@ -286,15 +286,8 @@ def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
     assert _generate(swapped, [zoo_skeletons["biped"]], b, "--seconds", "1") == 0
     assert np.abs(read_bvh(str(a)).rotations - read_bvh(str(b)).rotations).max() > 1e-3
 
-    with torch.no_grad():
-        next(tuned.model.encoder.parameters()).add_(0.1)
-    moved = save_checkpoint(tuned, tmp_path / "moved.ckpt")
-    capsys.readouterr()
-    bad = tmp_path / "bad.safetensors"
-    assert main(["export-weights", str(half), str(bad), "--decoder", str(moved)]) == 2
-    line = _error(capsys)
-    assert "moved.ckpt" in line and "model.encoder." in line and "optim.frozen" in line
-    assert not bad.exists()
+    _refuses_a_moved_part(tuned, tuned.model.encoder, "--decoder", "model.encoder.", half,
+                          tmp_path, capsys)
 
 
 def test_codes_go_through_the_autoencoder_in_its_training_windows(t2m_ckpt, monkeypatch):
@@ -418,14 +411,21 @@ def test_export_swaps_in_a_length_model_trained_alone(t2m_ckpt, autoencoder_ckpt
     assert own.keys() == {k for k in original.state_dict() if not k.startswith("length.")}
     assert all(torch.equal(v, original.state_dict()[k]) for k, v in own.items())
 
+    _refuses_a_moved_part(tuned, tuned.masked, "--length", "masked.", half, tmp_path, capsys)
+
+
+def _refuses_a_moved_part(tuned, part, flag: str, name: str, half, tmp_path, capsys) -> None:
+    """``export-weights HALF OUT FLAG CKPT`` with :obj:`part` of CKPT moved
+    is refused in one line naming CKPT and the part, and writes nothing."""
+    from tests.t2m.conftest import save_checkpoint
     with torch.no_grad():
-        next(tuned.masked.parameters()).add_(0.1)
+        next(part.parameters()).add_(0.1)
     moved = save_checkpoint(tuned, tmp_path / "moved.ckpt")
     capsys.readouterr()
     bad = tmp_path / "bad.safetensors"
-    assert main(["export-weights", str(half), str(bad), "--length", str(moved)]) == 2
+    assert main(["export-weights", str(half), str(bad), flag, str(moved)]) == 2
     line = _error(capsys)
-    assert "moved.ckpt" in line and "masked." in line and "optim.frozen" in line
+    assert "moved.ckpt" in line and name in line and "optim.frozen" in line
     assert not bad.exists()
 
 
