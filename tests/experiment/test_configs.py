@@ -13,7 +13,8 @@ from satagraph.experiment.config import load_config
 
 EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
 #: Configs whose module needs a trained autoencoder: built in tests/t2m.
-NEEDS_CHECKPOINT = ("t2m", "t2m_tiny", "t2m_cpu", "t2m_builtin", "t2m_gestures")
+NEEDS_CHECKPOINT = ("t2m", "t2m_tiny", "t2m_cpu", "t2m_builtin", "t2m_gestures",
+                    "t2m_length_bandai")
 CONFIGS = sorted(p.stem for p in EXPERIMENTS.glob("*.yaml") if p.stem not in NEEDS_CHECKPOINT)
 WANDB_SWEEP = EXPERIMENTS / "sweeps" / "wandb_sweep.yaml"
 #: Widths and depths small enough to build every config in a fraction of a

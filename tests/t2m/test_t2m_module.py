@@ -173,6 +173,23 @@ def test_t2m_configs_build_on_an_autoencoder(name, autoencoder_ckpt):
     assert module.masked.pool == 2 and module.residual.pool == 2
 
 
+def test_the_length_only_config_trains_the_length_model_alone(autoencoder_ckpt):
+    """experiments/t2m_length_bandai.yaml: every part but the length model
+    frozen, the transformers not run, Bandai's long takes in 0.5 s bins."""
+    from satagraph.experiment.train import module_class
+    cfg = load_config("t2m_length_bandai", [f"model.autoencoder={autoencoder_ckpt}"])
+    assert [s["dataset"] for s in cfg["data"]["sources"]] == ["bandai"]
+    cfg["meta"] = {"module": "t2m", "semantic_encoder": "offline"}
+    module = module_class("t2m")(model=cfg["model"], loss=cfg["loss"],
+                                 optim={k: v for k, v in cfg["optim"].items()
+                                        if k not in ("grad_clip", "ema")},
+                                 meta=cfg["meta"])
+    trained = {n.split(".")[0] for n, p in module.named_parameters() if p.requires_grad}
+    assert trained == {"length"}
+    assert module.loss_weights["masked"] == module.loss_weights["residual"] == 0.0
+    assert module.length.num_bins == 32 and module.length.bin_seconds == 0.5
+
+
 def test_a_missing_autoencoder_is_named(tmp_path):
     cfg = load_config("t2m_tiny", [f"model.autoencoder={tmp_path / 'none.ckpt'}"])
     with pytest.raises(CheckpointError, match="none.ckpt: no such autoencoder"):
