@@ -86,6 +86,7 @@ from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E40
 from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.semantics.limbs import limb_end_index  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.transforms.rest import REST_MODES  # noqa: E402
 
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
@@ -790,7 +791,7 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
                                            "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
                                            "smooth", "plant", "choice_temperature",
-                                           "spread")
+                                           "spread", "rest")
              if getattr(args, k, None) is not None}
     if "decoding_steps" in given:
         given["steps"] = given.pop("decoding_steps")
@@ -823,6 +824,9 @@ def main(argv=None) -> int:
     parser.add_argument("--spread", type=float, default=None,
                         help="keep each decoding step's tokens this share of their mean "
                         "gap apart (default 0: by confidence alone)")
+    parser.add_argument("--rest", choices=REST_MODES, default=None,
+                        help="the rest pose a rig is shown to the generator in (default: "
+                        "generate's, auto)")
     parser.add_argument("--layers", type=int, default=None,
                         help="RVQ layers to decode (default: all)")
     parser.add_argument("--smooth", type=float, default=None,

@@ -70,7 +70,11 @@ class GenerationSettings:
     and how far apart it keeps them (``spread``, a share of their mean gap,
     :func:`~satagraph.nn.generators.sampling.spread_choice`; 0: by
     confidence alone, runs of one code grow, ``experiments/T2M.md`` sections
-    20-21)."""
+    20-21); the rest pose a rig is shown in (``rest``,
+    :data:`~satagraph.transforms.rest.REST_MODES`: ``"auto"``, as
+    ``retarget`` shows it, re-rests a line or captured rest on its mean
+    standing pose; ``"file"``, as the generator's data showed it,
+    ``experiments/T2M.md`` section 34)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -84,6 +88,7 @@ class GenerationSettings:
     plant: bool = False
     choice_temperature: float = 0.0
     spread: float = 0.0
+    rest: str = "auto"
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -130,10 +135,11 @@ class RigInputs:
     undo: Optional[np.ndarray]
 
 
-def rig_inputs(module, target: Motion) -> RigInputs:
-    """The :class:`RigInputs` of a target for :obj:`module`."""
+def rig_inputs(module, target: Motion, rest: str = "auto") -> RigInputs:
+    """The :class:`RigInputs` of a target for :obj:`module`, shown in the
+    rest pose :obj:`rest` names (:data:`~satagraph.transforms.rest.REST_MODES`)."""
     canon = canonicalize(target, fps=module.fps)
-    shown, undo = shown_rest(canon, "auto")
+    shown, undo = shown_rest(canon, rest)
     feats = static_features(shown)
     semantic = module.semantic_fn()
     sem = None if semantic is None else call_semantic(
@@ -177,7 +183,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     """
     module.eval()
     gen = torch.Generator().manual_seed(int(seed))
-    rig = rig_inputs(module, target)
+    rig = rig_inputs(module, target, settings.rest)
     device = module.device
     skel_batch = collate_clips([target_clip(rig.feats, 1, rig.semantic)]).to(device)
     skel_emb = module.skeleton_embedding(skel_batch)
