@@ -452,3 +452,27 @@ def test_render_draws_every_skeletons_motion_side_by_side(t2m_ckpt, zoo_skeleton
     bad = tmp_path / "bad.bvh"
     assert _generate(t2m_ckpt, skeletons, bad, "--render", str(tmp_path / "x.png")) == 2
     assert "x.png" in _error(capsys) and not list(tmp_path.glob("bad*.bvh"))
+
+
+def test_the_rest_a_rig_is_shown_in_matters_only_where_auto_re_rests(t2m_ckpt, zoo_skeletons):
+    """GenerationSettings.rest: a designed rest reads the same shown as in
+    its file or re-rested (auto keeps it); a line rest is re-rested by auto
+    only, and the output keeps the file's rest either way."""
+    from satagraph.pipelines.generate import GenerationSettings, generate_on, load_generator
+    from satagraph.transforms.rest import needs_rest
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.datasets.zoo.dialects import Dialect, apply_dialect
+    module = load_generator(str(t2m_ckpt))
+    designed = read_bvh(str(zoo_skeletons["quadruped"]))
+    line, _ = apply_dialect(canonicalize(designed), Dialect(rest="axis"))  # the same motion
+    assert not needs_rest(canonicalize(designed).skeleton)
+    assert needs_rest(canonicalize(line).skeleton)
+    outs = {}
+    for name, rig in (("designed", designed), ("line", line)):
+        for rest in ("auto", "file"):
+            outs[name, rest] = generate_on(module, "a quadruped walks", rig, 1.0, 0,
+                                           GenerationSettings(rest=rest))
+            np.testing.assert_allclose(outs[name, rest].skeleton.offsets,
+                                       rig.skeleton.offsets, atol=1e-6)
+    assert np.array_equal(outs["designed", "auto"].rotations, outs["designed", "file"].rotations)
+    assert not np.allclose(outs["line", "auto"].rotations, outs["line", "file"].rotations)
