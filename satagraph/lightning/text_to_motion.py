@@ -338,6 +338,26 @@ class TextToMotionModule(PerDatasetFigures, L.LightningModule):
         return self.text_encoder.encode(list(texts)).float().to(self.device)
 
     # ------------------------------------------------------------ steps
+    def batch_inputs(self, batch, coded: bool = True) -> Tuple:
+        r"""What the losses read of a :class:`~satagraph.data.FrameBatch` or
+        a banked :class:`~satagraph.data.code_bank.CodeBatch`: per-window
+        codes and frames (``None`` for a frame batch when not
+        :obj:`coded`), captions, skeleton embeddings, durations and their
+        censoring flags.
+
+        Shapes:
+            - **codes**: :math:`(B, T_{max}, Q)`, **frames**, **seconds**,
+              **censored**: :math:`(B,)`, **skel**: :math:`(B, D_s)`
+        """
+        if isinstance(batch, CodeBatch):
+            edge_index, root = parents_to_edge_index(batch.parent)
+            skel = self.skeleton(batch.x, edge_index, batch.node_clip, root)
+            return (split_codes(batch.codes, batch.num_frames), batch.num_frames, batch.texts,
+                    skel, batch.seconds, batch.censored)
+        codes, lengths = self.batch_codes(batch) if coded else (None, None)
+        return (codes, lengths, batch_texts(batch), self.skeleton_embedding(batch),
+                batch_seconds(batch), batch_censored(batch))
+
     def compute_losses(self, batch, generator: Optional[torch.Generator] = None,
                        per_dataset: Optional[str] = None) -> Dict[str, Tensor]:
         """The three losses, their weighted sum (``loss``) and accuracies;
@@ -347,28 +367,21 @@ class TextToMotionModule(PerDatasetFigures, L.LightningModule):
         runs the windows are not coded (training the length model alone
         costs no autoencoder pass)."""
         run = {k: self.loss_weights[k] > 0 for k in ("masked", "residual")}
-        if isinstance(batch, CodeBatch):
-            lengths, texts, seconds = batch.num_frames, batch.texts, batch.seconds
-            censored = batch.censored
-            codes = split_codes(batch.codes, lengths)
-            edge_index, root = parents_to_edge_index(batch.parent)
-            skel = self.skeleton(batch.x, edge_index, batch.node_clip, root)
-        else:
-            codes, lengths = self.batch_codes(batch) if any(run.values()) else (None, None)
-            texts, skel = batch_texts(batch), self.skeleton_embedding(batch)
-            seconds, censored = batch_seconds(batch), batch_censored(batch)
+        codes, lengths, texts, skel, seconds, censored = self.batch_inputs(
+            batch, any(run.values()))
         if self.training:
             self.note_words(texts)
         text = self.encode_text(texts)
-        out = {"length": self.length.loss(seconds.to(skel.device), text, skel, generator,
-                                          None if censored is None else censored.to(skel.device))}
-        masked = None
+        out, masked = {}, None
         if run["masked"]:
             masked = self.masked.loss(codes, text, skel, lengths, generator)
             out.update(masked=masked.loss, masked_acc=masked.accuracy)
         if run["residual"]:
             residual = self.residual.loss(codes, text, skel, lengths, generator)
             out.update(residual=residual.loss, residual_acc=residual.accuracy)
+        device = skel.device
+        out["length"] = self.length.loss(seconds.to(device), text, skel, generator,
+                                         None if censored is None else censored.to(device))
         out["loss"] = sum(self.loss_weights[k] * out[k] for k in DEFAULT_LOSS if k in out)
         if per_dataset and masked is not None and not isinstance(batch, CodeBatch):
             log_per_dataset(self, per_dataset, self.masked_per_clip(masked),
