@@ -141,17 +141,28 @@ def _first_clause(text: str) -> str:
     return re.split(r" \(|;|,", text, maxsplit=1)[0][:NOTICE_PART_CHARS]
 
 
+def provenance_chain(provenance: dict) -> List[dict]:
+    """A weights file's provenance, then that of each file it was re-exported
+    from (``previous``: a part swapped in, ``export-weights --decoder`` or
+    ``--length``), the first training last."""
+    chain = [provenance]
+    while isinstance(chain[-1].get("previous"), dict) and chain[-1]["previous"]:
+        chain.append(chain[-1]["previous"])
+    return chain
+
+
 def builtin_notice(kind: str = "autoencoder", name: str = BUILTIN) -> str:
     """One short line on a built-in model, from its own metadata: what made
-    it (the command and machine cut to their first clause) and its
-    provenance note when that is short (a long one is pointed to:
+    it (the first training's command and machine, cut to their first
+    clause, and the minutes of every step of :func:`provenance_chain`) and
+    its provenance note when that is short (a long one is pointed to:
     :func:`read_weights_metadata` and the README give it whole); shown by
     the commands that fall back on it."""
     meta = read_weights_metadata(resolve_weights(name, kind))
-    prov = meta.get("provenance") or {}
-    minutes = prov.get("minutes")
+    chain = provenance_chain(meta.get("provenance") or {})
+    prov, minutes = chain[-1], sum(float(p.get("minutes") or 0.0) for p in chain)
     parts = (prov.get("command") and _first_clause(str(prov["command"])),
-             minutes and f"{float(minutes):.0f} min",
+             minutes and f"{minutes:.0f} min",
              prov.get("machine") and _first_clause(str(prov["machine"])))
     made = ", ".join(str(part) for part in parts if part)
     note = str(prov.get("note") or "")

@@ -260,3 +260,21 @@ def test_init_normalizer_keeps_the_checkpoints_or_refits(config_overrides: List[
     assert main(_train_args(config_overrides, tmp_path / "x", "--init-normalizer",
                             "checkpoint")[1:]) == 2  # without --traceback
     assert "--init-normalizer goes with --init-from CKPT" in capsys.readouterr().err
+
+
+def test_builtin_notice_tells_the_first_training_of_a_re_exported_file(
+        build_tiny_module: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A file re-exported with a part swapped in (its first training kept
+    as ``previous``) is announced by its first training's command and
+    machine and the minutes of both steps, not by the swap's."""
+    shipped = tmp_path / "builtin.safetensors"
+    first = {"command": "satagraph train pretrain_zoo", "minutes": 400.0,
+             "machine": "a 2-core VM", "note": "short"}
+    save_weights(build_tiny_module(), shipped,
+                 provenance={"command": "satagraph train t2m_builtin --init-from it",
+                             "minutes": 12.0, "machine": "the same VM", "note": "short",
+                             "previous": first})
+    monkeypatch.setattr(weights, "builtin_path",
+                        lambda kind="autoencoder", name="builtin": shipped)
+    assert weights.builtin_notice() == ("using the built-in model (satagraph train "
+                                        "pretrain_zoo, 412 min, a 2-core VM): short")
