@@ -584,13 +584,23 @@ def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, 
     files = read_manifest(MANIFEST)
     for name, subject, dataset in (("cmu 01_01", "a person", "cmu"), ("dog", SUBJECTS["dog"],
                                                                         "dog")):
-        picks = [f for f in files if f.dataset == dataset and f.split == "test"][:1]
-        if dataset == "dog":  # its files do not say their units: cm
-            picks = [replace(f, scale=0.01) for f in picks]
-        kept, feats, _ = try_load_features(picks, {"fps": FPS})
-        if feats:
-            out[name] = (subject, features_to_motion(feats[0]))
+        motion = manifest_motion(files, dataset, "test")
+        if motion is not None:
+            out[name] = (subject, motion)
     return out
+
+
+def manifest_motion(files, dataset: str, split: str, path_part: str = "") -> Optional[Motion]:
+    """The canonical motion (at :data:`FPS`) of the first manifest file of a
+    dataset's split whose path contains :obj:`path_part` (the dog's files,
+    which do not say their units, read in centimetres); ``None`` if none
+    loads."""
+    picks = [f for f in files if f.dataset == dataset and f.split == split
+             and path_part in f.path][:1]
+    if dataset == "dog":
+        picks = [replace(f, scale=0.01) for f in picks]
+    _, feats, _ = try_load_features(picks, {"fps": FPS})
+    return features_to_motion(feats[0]) if feats else None
 
 
 def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,

@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -27,10 +26,8 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from results_io import write_results  # noqa: E402
-from t2m import MANIFEST, PROBE_PROMPTS, SUBJECTS  # noqa: E402
+from t2m import MANIFEST, PROBE_PROMPTS, SUBJECTS, manifest_motion  # noqa: E402
 from satagraph.data.collate import collate_clips  # noqa: E402
-from satagraph.data.dataset import try_load_features  # noqa: E402
-from satagraph.data.features import features_to_motion  # noqa: E402
 from satagraph.datasets import captions_for  # noqa: E402
 from satagraph.datasets.sources import read_manifest, select  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
@@ -56,21 +53,23 @@ def rigs() -> Dict[str, Tuple[str, Motion]]:
         return out
     files = read_manifest(MANIFEST)
     for name, dataset, split, subject in REAL_RIGS:
-        picks = [f for f in select(files, split) if f.dataset == dataset]
-        picks = picks[:1] if name != "cmu 01_01" else [f for f in picks if "01_01" in f.path]
-        if dataset == "dog":  # its files do not say their units: cm
-            picks = [replace(f, scale=0.01) for f in picks]
-        _, feats, _ = try_load_features(picks, {"fps": 30.0})
-        if feats:
-            out[name] = (SUBJECTS[subject], features_to_motion(feats[0]))
+        motion = manifest_motion(files, dataset, split, "01_01" if name == "cmu 01_01" else "")
+        if motion is not None:
+            out[name] = (SUBJECTS[subject], motion)
     return out
 
 
 @torch.no_grad()
-def distribution(module, text: Optional[str], motion: Motion) -> np.ndarray:
-    """The length model's probabilities over its bins for a prompt on a rig."""
+def skeleton_token(module, motion: Motion) -> torch.Tensor:
+    """The skeleton embedding of a rig as ``generate`` shows it."""
     rig = rig_inputs(module, motion)
-    skel = module.skeleton_embedding(collate_clips([target_clip(rig.feats, 1, rig.semantic)]))
+    return module.skeleton_embedding(collate_clips([target_clip(rig.feats, 1, rig.semantic)]))
+
+
+@torch.no_grad()
+def distribution(module, text: Optional[str], skel: torch.Tensor) -> np.ndarray:
+    """The length model's probabilities over its bins for a prompt on a rig
+    (its :func:`skeleton_token`)."""
     emb = None if text is None else module.encode_text([text])
     module.length.eval()
     return module.length(emb, skel).softmax(-1)[0].double().numpy()
@@ -79,9 +78,10 @@ def distribution(module, text: Optional[str], motion: Motion) -> np.ndarray:
 def rig_row(module, subject: str, motion: Motion) -> Dict[str, float]:
     """Mean duration, share under 2 s and spread over the probe prompts."""
     seconds = module.length.bins_to_seconds(torch.arange(module.length.num_bins)).numpy()
+    skel = skeleton_token(module, motion)
     means, short = [], []
     for prompt, _ in PROBE_PROMPTS:
-        p = distribution(module, prompt.format(subject), motion)
+        p = distribution(module, prompt.format(subject), skel)
         means.append(float(p @ seconds))
         short.append(float(p[seconds < 2.0].sum()))
     return {"mean": float(np.mean(means)), "short": float(np.mean(short)),
@@ -98,22 +98,22 @@ def bandai_seconds(split: str) -> List[Tuple[str, float]]:
     return out
 
 
-def known_durations(module, motion: Motion) -> Optional[Dict[str, float]]:
+def known_durations(module, motion: Motion, train: Sequence[float],
+                    test: Sequence[Tuple[str, float]]) -> Dict[str, float]:
     """On Bandai's test clips (their file's duration is their caption's):
     the median absolute error of the model's median and the NLL, and the
-    error of one constant, the median of Bandai's training clips."""
-    if not MANIFEST.is_file():
-        return None
+    error of one constant, the median of Bandai's training clips' durations
+    :obj:`train`."""
     lm = module.length
     seconds = lm.bins_to_seconds(torch.arange(lm.num_bins)).numpy()
     longest = float(seconds[-1])
-    constant = min(float(np.median([d for _, d in bandai_seconds("train")])), longest)
+    constant = min(float(np.median(train)), longest)
+    skel = skeleton_token(module, motion)
     errors, nll, flat = [], [], []
-    for path, duration in bandai_seconds("test"):
+    for path, duration in test:
         truth = min(duration, longest)
         flat.append(abs(constant - truth))
-        text = captions_for(path, "bandai")[0].text
-        p = distribution(module, text, motion)
+        p = distribution(module, captions_for(path, "bandai")[0].text, skel)
         median = float(seconds[np.searchsorted(np.cumsum(p), 0.5)])
         errors.append(abs(median - truth))
         nll.append(-np.log(p[int(lm.seconds_to_bins(torch.tensor(truth)))] + 1e-12))
@@ -123,14 +123,18 @@ def known_durations(module, motion: Motion) -> Optional[Dict[str, float]]:
 
 def measure(ckpts: Sequence[str]) -> Dict[str, Dict[str, object]]:
     targets = rigs()
+    bandai = targets.get("bandai")
+    if bandai is not None:  # read once for every checkpoint
+        train = [d for _, d in bandai_seconds("train")]
+        test = bandai_seconds("test")
     results = {}
     for ckpt in ckpts:
         module = load_generator(ckpt).eval()
         rows = {name: rig_row(module, subject, motion)
                 for name, (subject, motion) in targets.items()}
-        bandai = targets.get("bandai")
         results[ckpt] = {"rigs": rows,
-                         "bandai": known_durations(module, bandai[1]) if bandai else None,
+                         "bandai": (known_durations(module, bandai[1], train, test)
+                                    if bandai is not None else None),
                          "longest": float(module.length.bins_to_seconds(
                              torch.tensor(module.length.num_bins - 1)))}
     return results

@@ -87,11 +87,6 @@ def choose_caption(captions: Sequence[Caption], rng: Optional[np.random.Generato
     return captions[int(rng.integers(len(captions)))]
 
 
-def pick_caption(captions: Sequence[Caption], rng: Optional[np.random.Generator]) -> str:
-    """One caption's text (:func:`choose_caption`)."""
-    return choose_caption(captions, rng).text
-
-
 def overlapping(captions: Sequence[Caption], fps: float, num_frames: int, start: int,
                 stop: int) -> List[Caption]:
     """The captions whose frames overlap ``start:stop`` (a clip's whole
@@ -331,5 +326,5 @@ def batch_censored(batch) -> torch.Tensor:
 
 
 __all__ = ["CaptionWindows", "FileCaptionWindows", "ZooCaptionWindows", "mirror_features",
-           "overlapping", "choose_caption", "pick_caption", "batch_texts", "batch_seconds",
+           "overlapping", "choose_caption", "batch_texts", "batch_seconds",
            "batch_censored"]

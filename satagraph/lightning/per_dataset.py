@@ -61,11 +61,13 @@ def log_per_dataset(module, stage: str, values: Dict[str, Tensor], datasets: Seq
     weights = weights.detach().double()
     for name in dict.fromkeys(datasets):
         keep = torch.tensor([d == name for d in datasets], device=device)
-        total = float(weights[keep].sum())
+        w = weights[keep]
+        # one transfer to the host per dataset: its weight, then each value's sum
+        total, *added = torch.stack([w.sum()] + [(v.detach()[keep].double() * w).sum()
+                                                 for v in values.values()]).tolist()
         if total <= 0:
             continue
-        for key, value in values.items():
-            add = float((value.detach()[keep].double() * weights[keep]).sum())
+        for key, add in zip(values, added):
             old = sums.get(f"{stage}/{name}/{key}", (0.0, 0.0))
             sums[f"{stage}/{name}/{key}"] = (old[0] + add, old[1] + total)
 

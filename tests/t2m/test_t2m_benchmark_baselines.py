@@ -63,7 +63,8 @@ def test_length_benchmark_reads_the_length_models_distribution(t2m_ckpt: Path) -
     seconds = module.length.bins_to_seconds(torch.arange(module.length.num_bins)).numpy()
     assert seconds[0] <= row["mean"] <= seconds[-1]
     assert 0.0 <= row["short"] <= 1.0 and row["spread"] >= 0.0
-    p = t2m_length.distribution(module, "a person walks forward", motion)
+    p = t2m_length.distribution(module, "a person walks forward",
+                                t2m_length.skeleton_token(module, motion))
     assert p.shape == seconds.shape and abs(p.sum() - 1.0) < 1e-6
     text = t2m_length.table({"tiny": {"rigs": {"zoo biped": row}, "bandai": None,
                                       "longest": float(seconds[-1])}}, 1.0)
