@@ -141,13 +141,25 @@ def _first_clause(text: str) -> str:
     return re.split(r" \(|;|,", text, maxsplit=1)[0][:NOTICE_PART_CHARS]
 
 
+def _earlier(provenance: dict) -> Optional[dict]:
+    """The provenance one step back: of the file re-exported (``previous``)
+    or, for a blend, of its base (``blend.previous``)."""
+    blend = provenance.get("blend")
+    for earlier in (provenance.get("previous"),
+                    blend.get("previous") if isinstance(blend, dict) else None):
+        if isinstance(earlier, dict) and earlier:
+            return earlier
+    return None
+
+
 def provenance_chain(provenance: dict) -> List[dict]:
     """A weights file's provenance, then that of each file it was re-exported
     from (``previous``: a part swapped in, ``export-weights --decoder`` or
-    ``--length``), the first training last."""
+    ``--length``) or blended back into (``blend.previous``: the base of
+    ``export-weights --blend``), the first training last."""
     chain = [provenance]
-    while isinstance(chain[-1].get("previous"), dict) and chain[-1]["previous"]:
-        chain.append(chain[-1]["previous"])
+    while (earlier := _earlier(chain[-1])) is not None:
+        chain.append(earlier)
     return chain
 
 

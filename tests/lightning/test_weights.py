@@ -278,3 +278,27 @@ def test_builtin_notice_tells_the_first_training_of_a_re_exported_file(
                         lambda kind="autoencoder", name="builtin": shipped)
     assert weights.builtin_notice() == ("using the built-in model (satagraph train "
                                         "pretrain_zoo, 412 min, a 2-core VM): short")
+
+
+def test_builtin_notice_tells_the_first_training_of_a_blend(
+        build_tiny_module: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A blend (``export-weights --blend``: its base's provenance under
+    ``blend.previous``) is announced by the base's first training and the
+    minutes of every step: the fine-tune's, the base's and the base's own
+    earlier file's."""
+    shipped = tmp_path / "builtin.safetensors"
+    first = {"command": "satagraph train pretrain_zoo", "minutes": 400.0,
+             "machine": "a 2-core VM", "note": "short"}
+    base = {"command": "satagraph train t2m_builtin --init-from it", "minutes": 12.0,
+            "previous": first}
+    save_weights(build_tiny_module(), shipped,
+                 provenance={"command": "satagraph code-bank ...; satagraph train ...",
+                             "minutes": 39.0, "machine": "the same VM", "note": "a blend",
+                             "blend": {"base": "old.safetensors", "alpha": 0.5,
+                                       "previous": base}})
+    monkeypatch.setattr(weights, "builtin_path",
+                        lambda kind="autoencoder", name="builtin": shipped)
+    assert [p.get("minutes") for p in weights.provenance_chain(
+        weights.read_weights_metadata(shipped)["provenance"])] == [39.0, 12.0, 400.0]
+    assert weights.builtin_notice() == ("using the built-in model (satagraph train "
+                                        "pretrain_zoo, 451 min, a 2-core VM): short")
