@@ -15,13 +15,19 @@ $(STAMP): setup.cfg pyproject.toml
 
 venv: $(STAMP)
 
+# pytest keeps the test modules it rewrote for assert messages (and Python its
+# bytecode) only where bytecode may be written: a shell that sets
+# PYTHONDONTWRITEBYTECODE would compile every module again in each worker and run
+# (4 s of a 2-core run), so the tests allow it.
+TEST_ENV := PYTHONDONTWRITEBYTECODE=
+
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 tests
+	$(TEST_ENV) $(PY) -m pytest -q -n 2 tests
 
 # Only the tests marked slow (every real file, real training runs, kill -9
 # and resume, ddp_spawn, the sweep end to end); CI runs it after `make test`.
 test-slow: $(STAMP)
-	$(PY) -m pytest -q -n 2 -m slow tests
+	$(TEST_ENV) $(PY) -m pytest -q -n 2 -m slow tests
 
 # The whole pipeline on the procedural zoo in under 10 minutes on a CPU (zoo,
 # training, retargeting, rendering into demo_output/), e.g.

@@ -1,20 +1,21 @@
 """Shared fixtures: the real BVH data folder, its manifest, cached reads and
-small hand-built skeletons and motions."""
+small hand-built skeletons and motions.
+
+torch and satagraph are imported where they are used: under ``-n 2`` the
+controlling process loads this file too, and runs no test (2 s saved)."""
 from __future__ import annotations
 
 import csv
 import os
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional
 
 import numpy as np
 import pytest
-import torch
 
-from satagraph.io import read_bvh
-from satagraph.motion import Motion
-from satagraph.ops.rotation import euler_to_matrix
-from satagraph.skeleton import Skeleton
+if TYPE_CHECKING:
+    from satagraph.motion import Motion
+    from satagraph.skeleton import Skeleton
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DATA_ENV = "SATAGRAPH_DATA"
@@ -116,6 +117,7 @@ def manifest(shared_data: Path) -> List[Dict[str, str]]:
 def read_real(shared_data: Path) -> Callable[[str], Motion]:
     """Read a file of the shared data folder by its manifest path, once per
     session. Callers must not modify the returned motion."""
+    from satagraph.io import read_bvh
     cache: Dict[str, Motion] = {}
 
     def read(rel_path: str) -> Motion:
@@ -135,6 +137,7 @@ def _tiny_skeleton() -> Skeleton:
         +-- 4 LeftLeg -- 5 LeftFoot -- 6 LeftFoot_end*
         +-- 7 RightLeg -- 8 RightFoot -- 9 RightFoot_end*
     """
+    from satagraph.skeleton import Skeleton
     names = ["Hips", "Spine", "Head", "Head_end", "LeftLeg", "LeftFoot",
              "LeftFoot_end", "RightLeg", "RightFoot", "RightFoot_end"]
     parents = np.array([-1, 0, 1, 2, 0, 4, 5, 0, 7, 8])
@@ -161,6 +164,10 @@ def _random_motion(skeleton: Skeleton, num_frames: int = 8, fps: float = 30.0,
                    seed: int = 0) -> Motion:
     """A motion with random rotations (Euler angles away from gimbal lock)
     and random values on every position channel; no raw channels."""
+    import torch
+
+    from satagraph.motion import Motion
+    from satagraph.ops.rotation import euler_to_matrix
     gen = np.random.default_rng(seed)
     num = skeleton.num_joints
     angles = gen.uniform(-np.pi, np.pi, size=(num_frames, num, 3))
@@ -224,6 +231,10 @@ def assert_grounded_pair() -> Callable[[Path, Path], None]:
 
 @pytest.fixture(autouse=True)
 def _seed() -> None:
-    """Every test starts from the same random state."""
+    """Every test starts from the same random state. The tests run on the
+    CPU, so its generator is the one seeded: ``torch.manual_seed`` also queues
+    a seed for each accelerator, formatting a stack trace each time (2 ms a
+    test, 4 s a suite)."""
+    import torch
     np.random.seed(0)
-    torch.manual_seed(0)
+    torch.default_generator.manual_seed(0)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ast
 from collections import defaultdict
+from functools import lru_cache
 from pathlib import Path
 from typing import Dict, Iterator, List, Set, Tuple
 
@@ -21,12 +22,16 @@ LOWER = ("data", "datasets", "transforms", "semantics", "pipelines")
 MODEL = ("satagraph.nn", "satagraph.losses", "satagraph.metrics")
 
 
-def _modules() -> Iterator[Tuple[str, ast.Module]]:
+@lru_cache(maxsize=None)
+def _modules() -> Tuple[Tuple[str, ast.Module], ...]:
+    """Every module of the package, parsed once (the tests only read the trees)."""
+    out = []
     for path in sorted(PACKAGE.rglob("*.py")):
         parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
         if parts[-1] == "__init__":
             parts = parts[:-1]
-        yield ".".join(parts), ast.parse(path.read_text(encoding="utf-8"))
+        out.append((".".join(parts), ast.parse(path.read_text(encoding="utf-8"))))
+    return tuple(out)
 
 
 def _imported(node: ast.AST, module: str) -> List[str]:

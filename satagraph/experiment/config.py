@@ -4,10 +4,11 @@
 before they reach the modules."""
 from __future__ import annotations
 
+import copy
 import os
 import sys
 from pathlib import Path
-from typing import Any, Dict, Mapping, Sequence
+from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
 from omegaconf import OmegaConf
 
@@ -41,14 +42,45 @@ def config_path(name: str) -> Path:
     raise FileNotFoundError(f"config {name!r} not found (a path, or one of: {known})")
 
 
-def _load(path: Path):
+def _load(path: Path, files: List[Path]):
+    """The config of :obj:`path` merged onto its ``defaults``; every file
+    read is appended to :obj:`files`."""
+    files.append(path)
     try:
         cfg = OmegaConf.load(path)
     except Exception as err:  # yaml or omegaconf errors: one line naming the file
         detail = " ".join(str(err).split())[:200]
         raise ValueError(f"{path}: not a valid YAML config ({detail})") from None
     bases = cfg.pop("defaults", []) or []
-    return OmegaConf.merge(*[_load(path.parent / f"{b}.yaml") for b in bases], cfg)
+    return OmegaConf.merge(*[_load(path.parent / f"{b}.yaml", files) for b in bases], cfg)
+
+
+def _stamp(path: Path) -> Tuple[str, int, int]:
+    stat = path.stat()
+    return str(path.resolve()), stat.st_mtime_ns, stat.st_size
+
+
+#: Configs read so far: path -> (stamps of every file read, plain container).
+_LOADED: Dict[str, Tuple[Tuple, Dict[str, Any]]] = {}
+
+
+def _read(path: Path) -> Dict[str, Any]:
+    """The config of :obj:`path` with its ``defaults`` merged in, as plain
+    containers; read again only when one of its files changed (merging
+    costs tens of milliseconds, and a test suite or sweep loads the same
+    configs hundreds of times)."""
+    key = str(path.resolve())
+    hit = _LOADED.get(key)
+    if hit is not None:
+        try:
+            if tuple(_stamp(Path(f[0])) for f in hit[0]) == hit[0]:
+                return copy.deepcopy(hit[1])
+        except OSError:
+            pass
+    files: List[Path] = []
+    cfg = OmegaConf.to_container(_load(path, files))
+    _LOADED[key] = (tuple(_stamp(f) for f in files), cfg)
+    return copy.deepcopy(cfg)
 
 
 def merge_overrides(cfg: Mapping[str, Any], overrides: Sequence[str] = (),
@@ -82,7 +114,7 @@ def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
     filled (:func:`~satagraph.experiment.schema.resolve_config`); ``name``
     defaults to the file's stem."""
     path = config_path(name)
-    cfg = merge_overrides(OmegaConf.to_container(_load(path)), overrides, str(path))
+    cfg = merge_overrides(_read(path), overrides, str(path))
     if not cfg.get("name"):
         cfg["name"] = path.stem
     return resolve_config(cfg)

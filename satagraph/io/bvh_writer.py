@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import os
-from typing import List, Union
+from typing import Dict, List, Union
 
 import numpy as np
 import torch
@@ -68,6 +68,25 @@ def _check_finite(motion: Motion, values: np.ndarray, path: str) -> None:
                          "is broken (a diverged model?)")
 
 
+def euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
+    r"""Each rotating joint's Euler angles in degrees, in its own rotation
+    order and unwrapped over time; the joints of one order are converted
+    together.
+
+    Shapes:
+        - **output**: joint index -> :math:`(T, 3)`
+    """
+    orders = motion.skeleton.rotation_orders
+    out: Dict[int, np.ndarray] = {}
+    for order in sorted({o for o in orders if o}):
+        joints = [j for j, o in enumerate(orders) if o == order]
+        rot = np.ascontiguousarray(motion.rotations[:, joints])  # writable copy for torch
+        rad = matrix_to_euler(torch.from_numpy(rot), order)
+        deg = np.degrees(np.unwrap(rad.numpy(), axis=0))
+        out.update({j: deg[:, k] for k, j in enumerate(joints)})
+    return out
+
+
 def channel_values(motion: Motion) -> np.ndarray:
     r"""The motion as BVH channel values (Euler angles in degrees, unwrapped
     over time, and positions), in the skeleton's channel layout.
@@ -79,19 +98,14 @@ def channel_values(motion: Motion) -> np.ndarray:
     if motion.raw_channels is not None and motion.raw_channels.shape == (
             motion.num_frames, skel.num_channels):
         return motion.raw_channels
-    columns = []
+    euler, columns = euler_degrees(motion), []
     for j, chans in enumerate(skel.channels):
         order = skel.rotation_orders[j]
-        euler = None
-        if order:
-            rot = np.array(motion.rotations[:, j])  # writable copy for torch
-            rad = matrix_to_euler(torch.from_numpy(rot), order)
-            euler = np.degrees(np.unwrap(rad.numpy(), axis=0))
         for c in chans:
             if c.endswith("position"):
                 columns.append(motion.translations[:, j, "XYZ".index(c[0])])
             else:
-                columns.append(euler[:, order.index(c[0])])
+                columns.append(euler[j][:, order.index(c[0])])
     if not columns:
         return np.zeros((motion.num_frames, 0))
     return np.stack(columns, axis=1)

@@ -127,3 +127,21 @@ def test_every_package_has_an_init():
                if d.is_dir() and d.name != "__pycache__" and any(d.glob("*.py"))
                and not (d / "__init__.py").is_file()]
     assert not missing
+
+
+def test_a_config_is_read_again_when_one_of_its_files_changes(tmp_path):
+    """Configs are kept once read, as copies: a caller's edit never reaches
+    the next load, and an edited file (the config or a default it inherits)
+    is read again."""
+    base = tmp_path / "base.yaml"
+    base.write_text((EXPERIMENTS / "sata_vae.yaml").read_text())
+    top = tmp_path / "top.yaml"
+    top.write_text("defaults: [base]\ndata: {window: 24}\n")
+    first = load_config(str(top))
+    assert first["data"]["window"] == 24 and first["name"] == "top"
+    first["data"]["window"] = 1
+    assert load_config(str(top))["data"]["window"] == 24
+    top.write_text("defaults: [base]\ndata: {window: 40}\nseed: 7\n")
+    assert load_config(str(top))["data"]["window"] == 40
+    base.write_text(base.read_text() + "\nthreads: 3\n")
+    assert load_config(str(top))["threads"] == 3

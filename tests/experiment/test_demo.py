@@ -40,11 +40,18 @@ def demo(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def demo_builtin(demo, tmp_path_factory):
-    """The demo with a built-in model (the tiny one above, exported as a
-    weights file): retarget and render with it, then fine-tune it."""
+def demo_weights(demo, tmp_path_factory):
+    """The demo's tiny model exported as a weights file."""
     weights = tmp_path_factory.mktemp("weights") / "builtin.safetensors"
     assert main(["export-weights", str(demo[0] / "run"), str(weights)]) == 0
+    return weights
+
+
+@pytest.fixture(scope="module")
+def demo_builtin(demo_weights, tmp_path_factory):
+    """The demo with a built-in model (the tiny one above, exported as a
+    weights file): retarget and render with it, then fine-tune it."""
+    weights = demo_weights
     out = tmp_path_factory.mktemp("demo_builtin")
     tiny = [o for o in TINY if not o.startswith("model.")]
     return out, _run_demo(out, tiny, builtin=weights), weights
@@ -74,12 +81,12 @@ def test_builtin_model_retargets_first_then_fine_tunes(demo_builtin, capsys):
     assert "3 steps" in summary["steps"][3]["note"]
 
 
-def test_builtin_fine_tune_refuses_a_new_architecture(demo_builtin, tmp_path):
+def test_builtin_fine_tune_refuses_a_new_architecture(demo_weights, tmp_path):
     """model.* overrides would not fit the built-in weights: one clear error."""
     from satagraph.experiment.demo import DemoOptions, demo_config
     from satagraph.io.weights import load_weights
 
-    base = load_weights(demo_builtin[2])["hyper_parameters"]
+    base = load_weights(demo_weights)["hyper_parameters"]
     with pytest.raises(ValueError, match="--from-scratch"):
         demo_config(DemoOptions(overrides=["model.hidden_channels=8"]), [], tmp_path, base)
 
