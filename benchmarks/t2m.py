@@ -194,6 +194,35 @@ def file_items(files, group: Callable[[object], str], window: int = 96, stride: 
     return out
 
 
+def file_splits(files) -> Dict[str, List[object]]:
+    """The captioned manifest files by role: ``fit``, what the evaluator
+    learns from (every Bandai training take but one in five, CMU and
+    CC_Base); ``seen``, the Bandai training takes held out of it (seen-style
+    test prompts); ``test``, Bandai's test takes (unseen styles); ``val``,
+    Bandai's validation takes (``--bandai-val``)."""
+    train = sorted(select(files, "train"), key=lambda f: f.path)
+    seen = {f.path for f in [f for f in train if f.dataset == "bandai"][::5]}
+    return {"fit": [f for f in train if f.path not in seen],
+            "seen": [f for f in train if f.path in seen],
+            "test": [f for f in select(files, "test") if f.dataset == "bandai"],
+            "val": [f for f in select(files, "val") if f.dataset == "bandai"]}
+
+
+def captioned_files():
+    """The manifest's files with captions of their own."""
+    return [f for f in read_manifest(MANIFEST) if f.dataset in ("bandai", "cmu", "ccbase")]
+
+
+def bandai_val_items(zoo_train: List[Item]) -> Tuple[List[Item], List[Item]]:
+    """For ``--prompts val --bandai-val``: the items of the test table's
+    evaluator (:obj:`zoo_train` and the ``fit`` files of :func:`file_splits`)
+    and Bandai's validation takes (never trained on and never a test
+    prompt), for a rule to see a real human rig."""
+    split = file_splits(captioned_files())
+    return (zoo_train + file_items(split["fit"], lambda f: f.dataset, keep=True),
+            file_items(split["val"], lambda f: "bandai (val)", keep=True))
+
+
 def real_items(quick: bool, seed: int, prompts: str = "test") -> Tuple[List[Item], List[Item]]:
     """Training items (evaluator, retrieval) and test items (:obj:`prompts`
     ``"val"``: the zoo's validation seeds instead, and no file groups, for
@@ -202,16 +231,10 @@ def real_items(quick: bool, seed: int, prompts: str = "test") -> Tuple[List[Item
     zoo_test = zoo_items(prompts, 64 if quick else 256, seed, keep=True)
     if quick or prompts != "test" or not MANIFEST.is_file():
         return zoo_train, zoo_test
-    files = [f for f in read_manifest(MANIFEST) if f.dataset in ("bandai", "cmu", "ccbase")]
-    train = sorted(select(files, "train"), key=lambda f: f.path)
-    bandai = [f for f in train if f.dataset == "bandai"]
-    seen = {f.path for f in bandai[::5]}  # one take in five: seen-style test prompts
-    fit = [f for f in train if f.path not in seen]
-    held = [f for f in train if f.path in seen]
-    test = [f for f in select(files, "test") if f.dataset == "bandai"]
-    train_items = zoo_train + file_items(fit, lambda f: f.dataset, keep=True)
-    test_items = (zoo_test + file_items(held, lambda f: "bandai seen-style", keep=True)
-                  + file_items(test, lambda f: "bandai unseen-style", keep=True))
+    split = file_splits(captioned_files())
+    train_items = zoo_train + file_items(split["fit"], lambda f: f.dataset, keep=True)
+    test_items = (zoo_test + file_items(split["seen"], lambda f: "bandai seen-style", keep=True)
+                  + file_items(split["test"], lambda f: "bandai unseen-style", keep=True))
     return train_items, test_items
 
 
@@ -736,14 +759,17 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
              reps: Optional[int] = None, gen_seeds: int = 2,
              reference: Optional[str] = None, prompts: str = "test",
              settings: Optional[GenerationSettings] = None,
-             probe_seeds: Optional[int] = None) -> Tuple[List[Dict], Dict]:
+             probe_seeds: Optional[int] = None,
+             bandai_val: bool = False) -> Tuple[List[Dict], Dict]:
     """Train the evaluator and score every group; rows and run facts
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
     file, whose reconstruction is one more row per group; :obj:`prompts`:
     see :func:`real_items`; :obj:`settings`: the generator's sampling, whose
     latent smoothing and planting the reconstruction and retrieval rows share;
     :obj:`probe_seeds`: seeds of every per-skeleton probe prompt, by
-    default :data:`PROBE_SEEDS`, 2 when :obj:`quick`)."""
+    default :data:`PROBE_SEEDS`, 2 when :obj:`quick`; :obj:`bandai_val`: with
+    validation prompts, Bandai's validation takes too, scored by an evaluator
+    trained as the test table's, see :func:`bandai_val_items`)."""
     settings = settings or GenerationSettings()
     probe_seeds = probe_seeds or (2 if quick else PROBE_SEEDS)
     start = time.perf_counter()
@@ -768,17 +794,26 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     if reference:
         from satagraph.experiment.train import load_module
         autoencoder = load_module(reference).eval()
+    scoring = [(test, train, model, recogniser)]
+    if bandai_val and prompts == "val" and MANIFEST.is_file():
+        file_train, val = bandai_val_items(train)
+        scoring.append((val, file_train, train_evaluator(file_train, encode, steps, seed),
+                        train_recogniser(file_train, steps, seed)))
+        test = test + val
     rows = []
-    for name in dict.fromkeys(it.group for it in test):
-        items = [it for it in test if it.group == name]
-        extra = {}
-        if autoencoder is not None:
-            extra[f"reconstruction ({reference})"] = [autoencoded_items(autoencoder, items)]
-        if module is not None:
-            extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items, settings)]
-            extra["generator (GT length)"] = generated_items(module, items, gen_seeds, settings)
-        rows += group_rows(name, items, train, model, recogniser, encode,
-                           reps or (3 if quick else 20), extra, seed, module, settings)
+    for items_of, train_of, model_of, recogniser_of in scoring:
+        for name in dict.fromkeys(it.group for it in items_of):
+            items = [it for it in items_of if it.group == name]
+            extra = {}
+            if autoencoder is not None:
+                extra[f"reconstruction ({reference})"] = [autoencoded_items(autoencoder, items)]
+            if module is not None:
+                extra["reconstruction (SATA-RVQ)"] = [reconstructed_items(module, items,
+                                                                          settings)]
+                extra["generator (GT length)"] = generated_items(module, items, gen_seeds,
+                                                                 settings)
+            rows += group_rows(name, items, train_of, model_of, recogniser_of, encode,
+                               reps or (3 if quick else 20), extra, seed, module, settings)
     if module is not None:
         run_extra = skeleton_probes(module, skeleton_targets(test, quick or prompts != "test"),
                                     probe_seeds, settings=settings)
@@ -786,7 +821,8 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
         run_extra = []
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
              "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "reference": reference,
-             "quick": quick, "prompts": prompts, "probe_seeds": probe_seeds,
+             "quick": quick, "prompts": prompts, "bandai_val": bandai_val,
+             "probe_seeds": probe_seeds,
              "settings": vars(settings),
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
@@ -820,6 +856,10 @@ def main(argv=None) -> int:
     parser.add_argument("--prompts", choices=("test", "val"), default="test",
                         help="val: the zoo's validation seeds only (choose sampling settings "
                              "there, report test)")
+    parser.add_argument("--bandai-val", action="store_true",
+                        help="with --prompts val: Bandai's validation takes too (a real "
+                             "human rig, never trained on), scored by an evaluator trained "
+                             "as the test table's; the zoo rows are unchanged")
     parser.add_argument("--guidance", type=float, default=None,
                         help="masked transformer guidance (default: generate's)")
     parser.add_argument("--decoding-steps", type=int, default=None,
@@ -851,11 +891,14 @@ def main(argv=None) -> int:
                              "rig (builtin, a checkpoint or weights file): the ceiling of "
                              "an RVQ started from it")
     args = parser.parse_args(argv)
+    if args.bandai_val and args.prompts != "val":
+        parser.error("--bandai-val goes with --prompts val")
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
                          reference=args.reference, prompts=args.prompts,
-                         settings=sampling(args), probe_seeds=args.probe_seeds)
+                         settings=sampling(args), probe_seeds=args.probe_seeds,
+                         bandai_val=args.bandai_val)
     name = ("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)

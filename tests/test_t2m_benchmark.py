@@ -121,3 +121,18 @@ def test_validation_prompts_and_sampling_settings():
     settings = t2m.sampling(argparse.Namespace(**dict(unset, guidance=2.5, temperature=0.7)))
     assert (settings.guidance, settings.temperature, settings.steps) == (2.5, 0.7, 10)
     assert t2m.sampling(argparse.Namespace(**unset)) is None
+
+
+def test_bandai_validation_takes_are_neither_learnt_nor_test_prompts(shared_data):
+    """``--bandai-val`` scores Bandai's validation takes: none is among the
+    files the evaluator learns from or the test prompts, and the evaluator
+    learns from the same files as the test table's."""
+    split = t2m.file_splits(t2m.captioned_files())
+    paths = {role: {f.path for f in files} for role, files in split.items()}
+    assert paths["val"] and all("bandai/" in p for p in paths["val"])
+    for role in ("fit", "seen", "test"):
+        assert not paths["val"] & paths[role], role
+    assert not paths["fit"] & paths["seen"] and not paths["test"] & paths["fit"]
+    assert {f.dataset for f in split["fit"]} == {"bandai", "cmu", "ccbase"}
+    with pytest.raises(SystemExit):
+        t2m.main(["--bandai-val"])  # with the test prompts: refused before any work
