@@ -40,6 +40,13 @@ def _run(tree: Path) -> Tuple[float, float, str]:
     return wall, float(inner.group(1)) if inner else float("nan"), summary
 
 
+def _label(tree: Path) -> str:
+    """The tree and its commit (``+`` where its files differ from it)."""
+    rev = subprocess.run(["git", "describe", "--always", "--dirty=+"], cwd=tree,
+                         capture_output=True, text=True).stdout.strip()
+    return f"{tree} ({rev})" if rev else str(tree)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=2)
@@ -55,7 +62,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     for tree, got in zip(trees, runs):
         walls = ", ".join(f"{w:.1f}" for w, _, _ in got)
         summary = got[-1][2].split(" in ")[0]
-        rows.append(f"| {tree} | {min(w for w, _, _ in got):.1f} | "
+        rows.append(f"| {_label(tree)} | {min(w for w, _, _ in got):.1f} | "
                     f"{min(p for _, p, _ in got):.1f} | {walls} | {summary} |")
     text = (f"`make test`, {args.repeat} runs a tree, the trees alternating, "
             f"{os.cpu_count()} CPUs.\n\n" + "\n".join(rows) + "\n")
