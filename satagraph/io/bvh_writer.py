@@ -68,7 +68,7 @@ def _check_finite(motion: Motion, values: np.ndarray, path: str) -> None:
                          "is broken (a diverged model?)")
 
 
-def euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
+def _euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
     r"""Each rotating joint's Euler angles in degrees, in its own rotation
     order and unwrapped over time; the joints of one order are converted
     together.
@@ -98,7 +98,7 @@ def channel_values(motion: Motion) -> np.ndarray:
     if motion.raw_channels is not None and motion.raw_channels.shape == (
             motion.num_frames, skel.num_channels):
         return motion.raw_channels
-    euler, columns = euler_degrees(motion), []
+    euler, columns = _euler_degrees(motion), []
     for j, chans in enumerate(skel.channels):
         order = skel.rotation_orders[j]
         for c in chans:
