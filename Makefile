@@ -20,16 +20,14 @@ venv: $(STAMP)
 # PYTHONDONTWRITEBYTECODE would compile every module again in each worker and run
 # (4 s of a 2-core run), so the tests allow it.
 TEST_ENV := PYTHONDONTWRITEBYTECODE=
-# --dist worksteal: a worker that runs out of tests takes some of the other's, instead
-# of idling while the other finishes its share (58-60 s against 65.5 s on 2 cores).
 
 test: $(STAMP)
-	$(TEST_ENV) $(PY) -m pytest -q -n 2 --dist worksteal tests
+	$(TEST_ENV) $(PY) -m pytest -q -n 2 tests
 
 # Only the tests marked slow (every real file, real training runs, kill -9
 # and resume, ddp_spawn, the sweep end to end); CI runs it after `make test`.
 test-slow: $(STAMP)
-	$(TEST_ENV) $(PY) -m pytest -q -n 2 --dist worksteal -m slow tests
+	$(TEST_ENV) $(PY) -m pytest -q -n 2 -m slow tests
 
 # The whole pipeline on the procedural zoo in under 10 minutes on a CPU (zoo,
 # training, retargeting, rendering into demo_output/), e.g.
