@@ -80,8 +80,7 @@ def _euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
     out: Dict[int, np.ndarray] = {}
     for order in sorted({o for o in orders if o}):
         joints = [j for j, o in enumerate(orders) if o == order]
-        rot = np.ascontiguousarray(motion.rotations[:, joints])  # writable copy for torch
-        rad = matrix_to_euler(torch.from_numpy(rot), order)
+        rad = matrix_to_euler(torch.from_numpy(motion.rotations[:, joints]), order)  # a copy
         deg = np.degrees(np.unwrap(rad.numpy(), axis=0))
         out.update({j: deg[:, k] for k, j in enumerate(joints)})
     return out

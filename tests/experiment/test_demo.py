@@ -51,10 +51,9 @@ def demo_weights(demo, tmp_path_factory):
 def demo_builtin(demo_weights, tmp_path_factory):
     """The demo with a built-in model (the tiny one above, exported as a
     weights file): retarget and render with it, then fine-tune it."""
-    weights = demo_weights
     out = tmp_path_factory.mktemp("demo_builtin")
     tiny = [o for o in TINY if not o.startswith("model.")]
-    return out, _run_demo(out, tiny, builtin=weights), weights
+    return out, _run_demo(out, tiny, builtin=demo_weights), demo_weights
 
 
 @pytest.mark.slow
