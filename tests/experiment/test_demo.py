@@ -146,7 +146,7 @@ def test_quick_demo_still_available(capsys, tmp_path):
     assert read_bvh(tmp_path / "example_walk.bvh").num_frames == 60
 
 
-def test_builtin_fine_tune_keeps_the_builtin_facing_features(demo_builtin, tmp_path):
+def test_builtin_fine_tune_keeps_the_builtin_facing_features(demo_weights, tmp_path):
     """The fine-tune featurises the zoo as the built-in weights were
     trained (``data.preprocessing.facing_smooth``), so ``--init-from``
     accepts them whatever that value is."""
@@ -156,7 +156,7 @@ def test_builtin_fine_tune_keeps_the_builtin_facing_features(demo_builtin, tmp_p
     from satagraph.experiment.train import check_init_features
     from satagraph.io.weights import load_weights
 
-    payload = load_weights(demo_builtin[2])
+    payload = load_weights(demo_weights)
     for smooth in (0.0, 0.25):
         base = copy.deepcopy(payload["hyper_parameters"])
         base["meta"].setdefault("data", {})["preprocessing"] = {"facing_smooth": smooth}
