@@ -105,7 +105,7 @@ class Item:
     seconds: float
     froude: float
     travel: np.ndarray  # final ground displacement in the start facing frame, leg lengths
-    contact: Tuple[float, float]  # foot sliding (heights/s), penetration (heights)
+    contact: Tuple[float, float]  # foot sliding (heights/s), hovering (heights)
     sideways: float = float("nan")  # degrees between travel and facing (see sideways)
     turn: float = float("nan")  # signed degrees a second the facing turns (see turning)
     motion: Optional[Motion] = field(default=None, repr=False)
@@ -675,7 +675,7 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
         row = score(model, encode, caps, [it.desc for it in items],
                     None if same else reference, reps, groups)
         row.update(slide=float(np.mean([it.contact[0] for it in items])),
-                   penetration=float(np.mean([it.contact[1] for it in items])))
+                   hover=float(np.mean([it.contact[1] for it in items])))
         descs, labels = [it.desc for it in items], [it.label for it in test]
         row.update(group=name, row=kind, action=recogniser.accuracy_interval(descs, labels),
                    action_by_label=recogniser.by_label(descs, labels),
@@ -717,7 +717,7 @@ def probe_cell(p: Dict[str, object]) -> str:
 def table(rows: Sequence[Dict[str, object]]) -> str:
     """The markdown table."""
     head = ("| group | row | n | R@1 | R@2 | R@3 | matching | FID | KID | diversity | "
-            "multimodality | action acc | foot slide (H/s) | penetration (H) | probes |\n|"
+            "multimodality | action acc | foot slide (H/s) | hover (H) | probes |\n|"
             + "---|" * 15)
     lines = [head]
     for r in rows:
@@ -727,7 +727,7 @@ def table(rows: Sequence[Dict[str, object]]) -> str:
             f"{fmt(r.get('R@2'))} | {fmt(r.get('R@3'))} | {fmt(r['matching'])} | "
             f"{fmt(r['fid'])} | {fmt(kid, 4)} | {fmt(r['diversity'])} | "
             f"{fmt(r.get('multimodality'))} | {fmt(r['action'], 2)} | "
-            f"{fmt(r['slide'])} | {fmt(r['penetration'], 4)} | "
+            f"{fmt(r['slide'])} | {fmt(r['hover'], 3)} | "
             f"{probe_cell(r['probes'])} |")
     return "\n".join(lines)
 

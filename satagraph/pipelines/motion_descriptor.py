@@ -31,7 +31,7 @@ from satagraph.data.features import MotionFeatures, motion_to_features
 from satagraph.motion import Motion
 from satagraph.semantics.limbs import LIMBS, limb_end_index
 from satagraph.skeleton import Skeleton
-from satagraph.transforms.canonical import canonicalize
+from satagraph.transforms.canonical import FLOOR_PERCENTILE, canonicalize
 
 #: Per-frame root channels.
 ROOT_CHANNELS: List[str] = ["forward", "lateral", "yaw_rate", "root_height"]
@@ -189,11 +189,18 @@ def froude_speed(feats: MotionFeatures, ends: Optional[Sequence[int]] = None) ->
 
 
 def contact_quality(feats: MotionFeatures) -> Tuple[float, float]:
-    r"""Foot sliding and ground penetration of a canonical motion, in
-    heights: the horizontal speed (per second) of every joint near the
-    ground, averaged with SAME's weights
-    :math:`\mathrm{clamp}(2 - 2^{h / H_0}, 0, 1)` (:data:`SLIDE_HEIGHT`),
-    and the mean of :math:`\min(y, 0)` of the lowest joint per frame."""
+    r"""Foot sliding and hovering of a motion, in character heights.
+
+    Foot sliding is the horizontal speed (per second) of every joint near
+    the ground, averaged with SAME's weights
+    :math:`\mathrm{clamp}(2 - 2^{h / H_0}, 0, 1)` (:data:`SLIDE_HEIGHT`).
+    Hovering is the median over frames of the lowest joint's height above
+    the motion's floor (its :data:`~satagraph.transforms.canonical.FLOOR_PERCENTILE`
+    of the per-frame lowest joint, as :func:`canonicalize` puts it): about
+    0.01 for a real walk, whose feet keep to the floor, more for a body
+    that bobs off it. It does not depend on where the floor was put; a
+    depth below that floor would (it is zero by construction on a
+    canonical motion), so none is given."""
     height = max(float(feats.height), 1e-6)
     slide = 0.0
     if feats.num_frames > 1:
@@ -201,8 +208,10 @@ def contact_quality(feats: MotionFeatures) -> Tuple[float, float]:
         weight = np.clip(2.0 - 2.0 ** (y / (SLIDE_HEIGHT * height)), 0.0, 1.0)
         speed = np.linalg.norm(feats.v_x[1:][..., [0, 2]], axis=-1)
         slide = float((weight * speed).sum() / max(weight.sum(), 1e-6) / height)
+    if feats.num_frames == 0:
+        return slide, 0.0
     lowest = feats.x[:, :, 1].min(axis=1)
-    return slide, float(np.minimum(lowest, 0.0).mean() / height)
+    return slide, float(np.median(lowest) - np.percentile(lowest, FLOOR_PERCENTILE)) / height
 
 
 def channel_index(channel: str, pool: str = "mean") -> int:

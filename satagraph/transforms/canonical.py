@@ -56,6 +56,10 @@ def _across_forward(positions: np.ndarray, left: List[int], right: List[int],
 #: joints stand at least this share of the pose's extent apart: CMU's
 #: ``LHipJoint`` sits on the hips.
 FACING_PAIR_GAP = 0.02
+#: The floor of a canonical motion: this percentile of its per-frame lowest
+#: joint's height (a low one, so that a few frames of noise or a foot
+#: pushed through the floor do not lift the body).
+FLOOR_PERCENTILE = 2.0
 
 
 def facing_pairs(skeleton: Skeleton, pose: np.ndarray) -> Tuple[List[int], List[int]]:
@@ -209,8 +213,8 @@ def canonicalize(
     r"""Bring a motion into the canonical frame used by the features.
 
     +Y up, the character facing +Z and its root at x = z = 0 at frame 0,
-    the floor (a low percentile of the per-frame lowest joint) at y = 0,
-    metres, :obj:`fps` frames per second (``None`` keeps the source rate).
+    the floor (:data:`FLOOR_PERCENTILE` of the per-frame lowest joint) at
+    y = 0, metres, :obj:`fps` frames per second (``None`` keeps the source rate).
     Up axis and units are :obj:`up_axis` / :obj:`unit_scale` when given,
     else the motion's :attr:`~Motion.rig` settings (a file's declaration, or
     overrides from a manifest or the command line), else guessed by
@@ -241,7 +245,7 @@ def canonicalize(
         shift[[0, 2]] = -out.translations[0, 0, [0, 2]]
         if floor:
             lowest = out.global_positions()[:, :, 1].min(axis=1)
-            shift[1] = -float(np.percentile(lowest, 2))
+            shift[1] = -float(np.percentile(lowest, FLOOR_PERCENTILE))
     transform.translation = shift
     out = out.with_(translations=_shift_root(out.translations, shift),
                     rig=CANONICAL_RIG)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from satagraph.data.features import motion_to_features
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.motion import Motion
 from satagraph.pipelines.motion_descriptor import (DESCRIPTOR_DIM, canonical_features,
@@ -72,10 +73,28 @@ def test_leg_length_falls_back_to_height(walk):
 
 def test_contact_quality_sees_sliding_feet(walk):
     feats = canonical_features(walk, up_axis="+Y", unit_scale=1.0)
-    slide, pen = contact_quality(feats)
-    assert slide >= 0.0 and pen <= 0.0
+    slide, hover = contact_quality(feats)
+    assert slide >= 0.0 and 0.0 <= hover < 0.02  # a walk keeps its feet on the floor
     skate = walk.with_(translations=walk.translations + np.arange(walk.num_frames)[:, None,
                                                                                      None]
                        * np.array([0.0, 0.0, 0.05]))
     faster, _ = contact_quality(canonical_features(skate, up_axis="+Y", unit_scale=1.0))
     assert faster > slide + 0.1
+
+
+def test_contact_quality_sees_a_body_bob_off_the_floor_wherever_the_floor_is(walk):
+    """Hovering: the median lowest joint above the floor, in heights; it
+    reads a body lifted in most frames, and not a whole clip moved."""
+    feats = canonical_features(walk, up_axis="+Y", unit_scale=1.0)
+    _, hover = contact_quality(feats)
+    height = walk.height()
+    bob = walk.translations.copy()
+    bob[np.arange(walk.num_frames) % 3 > 0, 0, 1] += 0.1 * height  # 2 frames in 3 lifted
+    _, bobbing = contact_quality(canonical_features(walk.with_(translations=bob),
+                                                    up_axis="+Y", unit_scale=1.0))
+    assert 0.08 < bobbing - hover < 0.12  # the lift, in heights
+    up = walk.translations.copy()
+    up[:, 0, 1] += 0.3 * height  # the whole clip a third of the height up
+    lifted = motion_to_features(walk.with_(translations=up))
+    np.testing.assert_allclose(contact_quality(lifted)[1],
+                               contact_quality(motion_to_features(walk))[1], atol=1e-6)
