@@ -196,11 +196,11 @@ def contact_quality(feats: MotionFeatures) -> Tuple[float, float]:
     :math:`\mathrm{clamp}(2 - 2^{h / H_0}, 0, 1)` (:data:`SLIDE_HEIGHT`).
     Hovering is the median over frames of the lowest joint's height above
     the motion's floor (its :data:`~satagraph.transforms.canonical.FLOOR_PERCENTILE`
-    of the per-frame lowest joint, as :func:`canonicalize` puts it): about
-    0.01 for a real walk, whose feet keep to the floor, more for a body
-    that bobs off it. It does not depend on where the floor was put; a
-    depth below that floor would (it is zero by construction on a
-    canonical motion), so none is given."""
+    of the per-frame lowest joint, as :func:`canonicalize` puts it): below
+    0.01 for captured walks, whose feet keep to the floor, more for a body
+    that bobs off it. It does not depend on where the floor was put, as a
+    depth below the floor would (zero by construction once
+    :func:`canonicalize` has put the floor there)."""
     height = max(float(feats.height), 1e-6)
     slide = 0.0
     if feats.num_frames > 1:
