@@ -60,9 +60,10 @@ def build(generator: str, autoencoder: str, folder: Path) -> TextToMotionModule:
                               meta={"module": "t2m", "semantic_encoder": "offline"}).eval()
 
 
-def time_generation(module, target, threads: int, reps: int) -> List[float]:
+def time_generation(module, target, threads: int, reps: int,
+                    plant: bool = False) -> List[float]:
     torch.set_num_threads(threads)
-    settings = GenerationSettings(steps=10)
+    settings = GenerationSettings(steps=10, plant=plant)
     generate_on(module, "a person walks forward", target, 4.0, 0, settings)  # warm-up
     out = []
     for seed in range(reps):
@@ -76,6 +77,8 @@ def time_generation(module, target, threads: int, reps: int) -> List[float]:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--reps", type=int, default=5)
+    parser.add_argument("--plant", action="store_true",
+                        help="plant the feet of each generated motion (generate --plant)")
     args = parser.parse_args(argv)
     zoo = EndlessZoo(species=["biped", "quadruped"])
     targets = {"zoo biped": zoo.sample(0, 0, 40, "test").motion,
@@ -89,7 +92,7 @@ def main(argv=None) -> int:
             ae_params = sum(p.numel() for p in module.autoencoder.parameters())
             for target_name, target in targets.items():
                 for threads in (1, 2):
-                    times = time_generation(module, target, threads, args.reps)
+                    times = time_generation(module, target, threads, args.reps, args.plant)
                     rows.append(dict(size=name, params=params, ae_params=ae_params,
                                      target=target_name, threads=threads,
                                      median=statistics.median(times), worst=max(times)))
