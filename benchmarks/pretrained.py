@@ -33,6 +33,14 @@ canonical frame at 30 fps), scored without a ground truth by
   second (:func:`~satagraph.quality.foot_slide`), next to the source's. No
   target in the issue; reported because a retarget that steps in time can
   still skate.
+- **hover**: how high the body keeps off its own floor, the median lowest
+  joint above that floor (its 2nd percentile), % of the height
+  (:func:`~satagraph.quality.hover`), next to the source's. No target; the
+  ground column is met by one vertical shift, and this one shows what
+  that shift cannot: a body that bobs off the floor between its lowest
+  frames, or sinks through it in some (the human retarget of the dog's
+  D1_008, which sits down: its legs pass below the floor while it sits,
+  and it stands 35 % of its height above that level).
 
 Reconstruction: JP, the mean global joint position error of a clip decoded
 onto its own skeleton, as % of the character's height, over each clip's
@@ -82,8 +90,8 @@ from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E4
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.quality import (foot_slide, most_active, retarget_quality,  # noqa: E402
-                                         trunk_bend)
+from satagraph.pipelines.quality import (foot_slide, hover, most_active,  # noqa: E402
+                                         retarget_quality, trunk_bend)
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.pipelines.builtin_choice import AUTO, choose_builtin  # noqa: E402
 
@@ -96,7 +104,8 @@ ZOO_FRAMES, REAL_SECONDS, RECON_FRAMES = 120, 10.0, 128
 TRAIN_SPECIES = ["biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab", "spider"]
 HOLDOUT = ["longtail", "spider/palps"]
 #: What each retarget row measures (foot sliding reported, no target).
-QUALITY = ("steps", "travel", "stride", "ground", "upright", "slide", "sideways", "posture")
+QUALITY = ("steps", "travel", "stride", "ground", "upright", "slide", "hover", "sideways",
+           "posture")
 TARGETS = {"steps_zoo": 0.8, "steps_real": 0.7, "travel": (0.8, 1.25), "ground": 0.03,
            "upright": 0.95, "jp_zoo": 0.05, "jp_real": 0.08}
 
@@ -241,8 +250,9 @@ def retarget_row(module, source: Motion, target: Motion, rest: str = "auto") -> 
     src, raw = retarget_canonical(module, source, target, module.embed, rest=rest, ground=False)
     tgt = canonicalize(target, fps=float(module.fps))
     quality = retarget_quality(src, ground_retarget(raw, src, tgt), QUALITY, target=tgt)
-    own = retarget_quality(src, src, ("upright", "slide"))
-    quality.update(source_upright=own["upright"], source_slide=own["slide"])
+    own = retarget_quality(src, src, ("upright", "slide", "hover"))
+    quality.update(source_upright=own["upright"], source_slide=own["slide"],
+                   source_hover=own["hover"])
     quality["decoder_ground"] = retarget_quality(src, raw, ("ground",))["ground"]
     return quality
 
@@ -257,7 +267,7 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
                 grounded_jp=joint_error(src, grounded), height=src.height(),
                 steps=same_rig["steps"], stride=same_rig["stride"],
                 slide=foot_slide(grounded), source_slide=foot_slide(src),
-                bend=trunk_bend(raw), source_bend=trunk_bend(src))
+                hover=hover(grounded), source_hover=hover(src), bend=trunk_bend(raw), source_bend=trunk_bend(src))
 
 
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
@@ -317,6 +327,13 @@ def _slide(row: dict) -> str:
     return f"{row['slide']:.2f} ({row['source_slide']:.2f})"
 
 
+def _hover(row: dict) -> str:
+    """The hover cell beside the source's ("-" in results measured before it)."""
+    if row.get("hover") is None:
+        return "-"
+    return f"{100 * row['hover']:.1f} ({100 * row['source_hover']:.1f})"
+
+
 def _bend(row: dict) -> str:
     """A reconstruction's trunk bend beside its source's (rows written
     before the column existed: blank)."""
@@ -332,26 +349,28 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
              "| travel ratio (0.8-1.25) | stride ratio (diagnostic) "
              "| posture (diagnostic) | ground, % height (<= 3) "
              "| decoder's ground (--no-ground) | upright (>= 95%) "
-             "| source upright | foot slide, H/s (source) | sideways, deg | all targets met |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+             "| source upright | foot slide, H/s (source) | hover, % height (source) "
+             "| sideways, deg | all targets met |",
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows["retarget"]:
         lines.append(f"| {r['group']} | {r['case']} | {r['source']} | {r['target']} "
                      f"| {r['steps']:+.2f} | {r['travel']:.2f} | {_ratio(r.get('stride'))} "
                      f"| {_ratio(r.get('posture'))} | {100 * r['ground']:+.1f} "
                      f"| {100 * r['decoder_ground']:+.1f} | {_pct(r['upright'])} | {_pct(r['source_upright'])} "
-                     f"| {_slide(r)} | {_degrees(r.get('sideways'))} | {_ok(r)} |")
+                     f"| {_slide(r)} | {_hover(r)} | {_degrees(r.get('sideways'))} | {_ok(r)} |")
     lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met "
               "| JP, grounded (--ground) | root-relative JP | pose alone (also heading-free) "
               "| steps (same rig; diagnostic) | stride ratio (diagnostic) "
-              "| foot slide, H/s (source) | trunk bend, deg (source; diagnostic) |",
-              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
+              "| foot slide, H/s (source) | hover, % height (source) "
+              "| trunk bend, deg (source; diagnostic) |",
+              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows["reconstruction"]:
         limit = TARGETS["jp_zoo" if r["group"].startswith("held") else "jp_real"]
         steps = "-" if r.get("steps") is None else f"{r['steps']:+.2f}"
         lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
                      f"| {'yes' if r['jp'] <= limit else 'no'} | {100 * r['grounded_jp']:.1f} "
                      f"| {100 * r['pose']:.1f} | {_local(r)} | {steps} "
-                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_bend(r)} |")
+                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_hover(r)} | {_bend(r)} |")
     return "\n".join(lines) + "\n"
 
 

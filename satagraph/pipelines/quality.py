@@ -311,6 +311,15 @@ def foot_slide(canonical: Motion) -> float:
     return contact_quality(motion_to_features(canonical))[0]
 
 
+def hover(canonical: Motion) -> float:
+    """How high the body keeps off its floor: the median over frames of the
+    lowest joint's height above the motion's floor, in heights
+    (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): at
+    most 0.01 for captured walks; a decoded body that bobs reads more,
+    wherever the motion was grounded."""
+    return contact_quality(motion_to_features(canonical))[1]
+
+
 def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     """How the joints of a motion are carried against how the same rig
     carries them where it stands in :obj:`reference` (its own clip,
@@ -351,7 +360,8 @@ def retarget_quality(source: Motion, output: Motion,
         :func:`root_travel` over the source's), ``ground``
         (:func:`ground_height` of the output), ``upright``
         (:func:`upright_fraction` of the output) and, when asked for,
-        ``slide`` (:func:`foot_slide` of the output) and ``sideways``
+        ``slide`` (:func:`foot_slide` of the output), ``hover``
+        (:func:`hover` of the output) and ``sideways``
         (degrees between the output's :func:`heading_gap` and the source's;
         ``None`` where either has none) and ``stride`` (the output's
         :func:`stride` over the source's; ``None`` where the source swings
@@ -376,6 +386,8 @@ def retarget_quality(source: Motion, output: Motion,
         out["upright"] = upright_fraction(output)
     if "slide" in keys:
         out["slide"] = foot_slide(output)
+    if "hover" in keys:
+        out["hover"] = hover(output)
     if "sideways" in keys:
         out["sideways"] = _sideways(source, output)
     if "posture" in keys:
@@ -385,7 +397,7 @@ def retarget_quality(source: Motion, output: Motion,
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
-           "ground_height", "foot_slide", "head_index", "upright_fraction", "trunk_bend",
+           "ground_height", "foot_slide", "hover", "head_index", "upright_fraction", "trunk_bend",
            "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
            "retarget_quality"]
