@@ -208,8 +208,9 @@ def retarget_motion(module, source: Motion, target: Motion,
             it stands as the target character does in :obj:`target`'s
             frames (its median lowest joint, in its heights), as the source
             does for a target without frames
-            (:func:`~satagraph.transforms.ground.ground_retarget`); ``False``
-            keeps the decoder's root height.
+            (:func:`~satagraph.transforms.ground.ground_retarget`: then each
+            frame that would sink below the floor is raised onto it);
+            ``False`` keeps the decoder's root height.
         plant (bool): Hold the limb ends still through their stances
             (:func:`~satagraph.transforms.foot_plant.plant_feet`).
         settle (bool): Hold the root still where the decoded body stands

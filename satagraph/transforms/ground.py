@@ -8,7 +8,9 @@ constant, so its vertical dynamics (bobbing, jumps) stay the decoder's and
 only the offset is set: the median height of its lowest joint, in its own
 character heights, becomes that of a reference (:func:`ground_like`): for a
 retarget, the target character's own clip (:func:`ground_retarget`), or the
-floor (:func:`ground_at`, for generated motion, which has no source).
+floor (:func:`ground_at`, for generated motion, which has no source). A
+retarget is then raised, frame by frame, where it would sink below the
+floor (:func:`lift_above_floor`).
 """
 from __future__ import annotations
 
@@ -84,10 +86,13 @@ def ground_like(motion: Motion, reference: Motion) -> Motion:
 def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     r"""A retarget stood on the floor as the target character stands in its
     own clip: :func:`ground_like` :obj:`target` where it has frames, else
-    :obj:`source`. How high a rig's lowest joint sits above the floor is the
-    rig's own (the dog's paw end sites stay 3-6 cm, 6-11 % of its height,
-    above the floor its tail touches): copied from the source, a dog's
-    offset left a human retarget hovering 9 % of its height up.
+    :obj:`source`, then :func:`lift_above_floor`. How high a rig's lowest
+    joint sits above the floor is the rig's own (the dog's paw end sites
+    stay 3-6 cm, 6-11 % of its height, above the floor its tail touches):
+    copied from the source, a dog's offset left a human retarget hovering
+    9 % of its height up. The lift keeps a body that sits or crouches lower
+    than the target clip stands from passing through the floor there
+    (``experiments/PRETRAIN.md`` section 42).
 
     Args:
         motion (Motion): The decoded retarget (canonical).
@@ -95,7 +100,29 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
         target (Motion): The canonical target clip (its skeleton and, where
             it has frames, how it stands).
     """
-    return ground_like(motion, target if target.num_frames else source)
+    return lift_above_floor(ground_like(motion, target if target.num_frames else source))
+
+
+def lift_above_floor(motion: Motion) -> Motion:
+    r""":obj:`motion` with its root raised, in each frame whose lowest joint
+    is below the floor (y = 0, +Y up), by that depth: no frame sinks, and
+    the frames above the floor, the horizontal path and every rotation
+    stay as they are. The last step of :func:`ground_retarget`: after one
+    shift that stands a retarget as its target stands, a body that sits or
+    crouches lower (a human retargeted from a sitting dog) would otherwise
+    pass through the floor there.
+
+    Args:
+        motion (Motion): A canonical motion.
+    """
+    if motion.num_frames == 0:
+        return motion
+    depth = np.maximum(-lowest_heights(motion), 0.0)
+    if not depth.any():
+        return motion
+    translations = motion.translations.copy()
+    translations[:, 0, 1] += depth
+    return motion.with_(translations=translations)
 
 
 #: Share of its greatest stance height at which a body counts as standing
@@ -136,4 +163,4 @@ def stands(positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "STANDING_SHARE", "standing_frame", "standing_frames", "stands"]
+           "lift_above_floor", "STANDING_SHARE", "standing_frame", "standing_frames", "stands"]

@@ -5,7 +5,8 @@ import numpy as np
 
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
 from satagraph.transforms.canonical import canonicalize
-from satagraph.transforms.ground import ground_like, ground_retarget, lowest_heights
+from satagraph.transforms.ground import (ground_like, ground_retarget, lift_above_floor,
+                                         lowest_heights)
 
 
 def _clip(species: str, kind: str = "walk", seed: int = 0):
@@ -62,3 +63,20 @@ def test_a_retarget_stands_as_its_target_stands_not_as_its_source():
     assert abs(np.median(lowest_heights(out))) < 0.03 * out.height()
     out = ground_retarget(floating, offset, target.slice(0, 0))
     np.testing.assert_allclose(np.median(lowest_heights(out)) / out.height(), 0.09, atol=1e-9)
+
+
+def test_a_sinking_frame_is_raised_to_the_floor_and_no_other_moves():
+    """Frames whose lowest joint is below the floor come up by exactly that
+    depth; frames above it, the horizontal path and the rotations stay."""
+    walk = _clip("biped")
+    dip = np.where(np.arange(60) < 15, -0.2 * walk.height(), 0.0)  # the first quarter sinks
+    sunk = _lifted(walk, dip + 0.01)
+    out = lift_above_floor(sunk)
+    low = lowest_heights(out)
+    assert low.min() >= -1e-9
+    np.testing.assert_allclose(low[:15], 0.0, atol=1e-9)
+    np.testing.assert_array_equal(out.translations[15:], sunk.translations[15:])
+    np.testing.assert_array_equal(out.translations[:, 0, [0, 2]], sunk.translations[:, 0, [0, 2]])
+    np.testing.assert_array_equal(out.rotations, sunk.rotations)
+    above = _lifted(walk, 0.05)
+    assert lift_above_floor(above) is above
