@@ -36,7 +36,7 @@ import torch
 
 from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.transforms.foot_plant import plant_feet
-from satagraph.transforms.ground import ground_at
+from satagraph.transforms.ground import ground_at, lift_above_floor
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
@@ -63,7 +63,9 @@ class GenerationSettings:
     foot sliding 0.99 against 1.32 heights a second; 0: none); whether the
     motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
-    median lowest joint at 0) or keeps the decoder's root height; whether
+    median lowest joint at 0, then each frame that would sink raised onto
+    the floor, :func:`~satagraph.transforms.ground.lift_above_floor`) or
+    keeps the decoder's root height; whether
     the limb ends are held still through their stances
     (:func:`~satagraph.transforms.foot_plant.plant_feet`); MaskGIT's Gumbel
     noise on which tokens each decoding step keeps (``choice_temperature``)
@@ -221,7 +223,8 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
 def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
               smooth: float = 0.0, plant: bool = False) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
-    its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`;
+    its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`
+    and :func:`~satagraph.transforms.ground.lift_above_floor`;
     the latents smoothed over :obj:`smooth` frames first, see
     :meth:`~satagraph.lightning.SATARVQModule.decode_codes`; the feet held
     through their stances with :obj:`plant`:
@@ -239,7 +242,7 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
     motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
                           rig.undo, rig.canon.skeleton)
     if ground:
-        motion = ground_at(motion)
+        motion = lift_above_floor(ground_at(motion))
     if plant:
         motion = plant_feet(motion)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)
