@@ -33,14 +33,14 @@ canonical frame at 30 fps), scored without a ground truth by
   second (:func:`~satagraph.quality.foot_slide`), next to the source's. No
   target in the issue; reported because a retarget that steps in time can
   still skate.
-- **hover**: how high the body keeps off its own floor, the median lowest
+- **hover**: how high the body keeps off its own floor, the mean lowest
   joint above that floor (its 2nd percentile), % of the height
   (:func:`~satagraph.quality.hover`), next to the source's. No target; the
-  ground column is met by one vertical shift, and this one shows what
-  that shift cannot: a body that bobs off the floor between its lowest
-  frames, or sinks through it in some (the human retarget of the dog's
-  D1_008, which sits down: its legs pass below the floor while it sits,
-  and it stands 35 % of its height above that level).
+  ground column is met by grounding, and this one shows what grounding
+  cannot: a body that bobs off the floor between its lowest frames, or
+  that sank through it in some (before retargets were lifted where they
+  sink, the human retarget of the dog's D1_008, which sits down, passed
+  below the floor while it sat and stood far above that level after).
 
 Reconstruction: JP, the mean global joint position error of a clip decoded
 onto its own skeleton, as % of the character's height, over each clip's

@@ -194,13 +194,16 @@ def contact_quality(feats: MotionFeatures) -> Tuple[float, float]:
     Foot sliding is the horizontal speed (per second) of every joint near
     the ground, averaged with SAME's weights
     :math:`\mathrm{clamp}(2 - 2^{h / H_0}, 0, 1)` (:data:`SLIDE_HEIGHT`).
-    Hovering is the median over frames of the lowest joint's height above
+    Hovering is the mean over frames of the lowest joint's height above
     the motion's floor (its :data:`~satagraph.transforms.canonical.FLOOR_PERCENTILE`
     of the per-frame lowest joint, as :func:`canonicalize` puts it): below
     0.01 for captured walks, whose feet keep to the floor, more for a body
     that bobs off it. It does not depend on where the floor was put, as a
     depth below the floor would (zero by construction once
-    :func:`canonicalize` has put the floor there)."""
+    :func:`canonicalize` has put the floor there); a mean, not a median,
+    so that a body standing on the floor in half its frames and off it in
+    the rest (what :func:`~satagraph.transforms.ground.lift_above_floor`
+    leaves of a bobbing one) still reads its hovering half."""
     height = max(float(feats.height), 1e-6)
     slide = 0.0
     if feats.num_frames > 1:
@@ -211,7 +214,7 @@ def contact_quality(feats: MotionFeatures) -> Tuple[float, float]:
     if feats.num_frames == 0:
         return slide, 0.0
     lowest = feats.x[:, :, 1].min(axis=1)
-    return slide, float(np.median(lowest) - np.percentile(lowest, FLOOR_PERCENTILE)) / height
+    return slide, float(np.mean(lowest) - np.percentile(lowest, FLOOR_PERCENTILE)) / height
 
 
 def channel_index(channel: str, pool: str = "mean") -> int:

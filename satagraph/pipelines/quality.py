@@ -312,7 +312,7 @@ def foot_slide(canonical: Motion) -> float:
 
 
 def hover(canonical: Motion) -> float:
-    """How high the body keeps off its floor: the median over frames of the
+    """How high the body keeps off its floor: the mean over frames of the
     lowest joint's height above the motion's floor, in heights
     (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): at
     most 0.01 for captured walks; a decoded body that bobs reads more,
