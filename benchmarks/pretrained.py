@@ -267,7 +267,8 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
                 grounded_jp=joint_error(src, grounded), height=src.height(),
                 steps=same_rig["steps"], stride=same_rig["stride"],
                 slide=foot_slide(grounded), source_slide=foot_slide(src),
-                hover=hover(grounded), source_hover=hover(src), bend=trunk_bend(raw), source_bend=trunk_bend(src))
+                hover=hover(grounded), source_hover=hover(src),
+                bend=trunk_bend(raw), source_bend=trunk_bend(src))
 
 
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",

@@ -8,9 +8,10 @@ constant, so its vertical dynamics (bobbing, jumps) stay the decoder's and
 only the offset is set: the median height of its lowest joint, in its own
 character heights, becomes that of a reference (:func:`ground_like`): for a
 retarget, the target character's own clip (:func:`ground_retarget`), or the
-floor (:func:`ground_at`, for generated motion, which has no source). A
-retarget is then raised, frame by frame, where it would sink below the
-floor (:func:`lift_above_floor`).
+floor (:func:`ground_at`, for generated motion, which has no source).
+Either is then raised, frame by frame, where it would sink below the
+floor (:func:`lift_above_floor`: :func:`ground_retarget` ends with it, and
+generation applies it after :func:`ground_at`).
 """
 from __future__ import annotations
 
