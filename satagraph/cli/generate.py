@@ -59,8 +59,8 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
     p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=True,
                    help="put the motion on the floor: one vertical shift, its median lowest "
-                   "joint at the floor (--no-ground keeps the decoder's root height; "
-                   "default: on)")
+                   "joint at the floor, then each frame that would sink raised onto it "
+                   "(--no-ground keeps the decoder's root height; default: on)")
     add_plant_argument(p)
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "

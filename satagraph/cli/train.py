@@ -174,8 +174,9 @@ def _ground(p, default: bool) -> None:
     import argparse
     p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=default,
                    help="move the output up or down by one constant so that its feet "
-                   "stand where the input's do, in character heights (--no-ground keeps "
-                   "the decoder's root height; default: "
+                   "stand where the input's do, in character heights, then raise each "
+                   "frame that would sink onto the floor (--no-ground keeps the "
+                   "decoder's root height; default: "
                    f"{'on' if default else 'off'})")
 
 
