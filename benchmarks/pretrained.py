@@ -90,8 +90,8 @@ from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E4
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.quality import (foot_slide, hover, most_active,  # noqa: E402
-                                         retarget_quality, trunk_bend)
+from satagraph.pipelines.quality import (contact, most_active, retarget_quality,  # noqa: E402
+                                         trunk_bend)
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.pipelines.builtin_choice import AUTO, choose_builtin  # noqa: E402
 
@@ -262,12 +262,13 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
     src, raw = reconstruct_canonical(module, clip, module.embed, rest=rest, ground=False)
     same_rig = retarget_quality(src, raw, ("steps", "stride"))
     grounded = ground_like(raw, src)
+    (slide, hovering), (source_slide, source_hover) = contact(grounded), contact(src)
     return dict(jp=joint_error(src, raw), pose=joint_error(src, raw, relative=True),
                 local=joint_error(src, raw, heading=True),
                 grounded_jp=joint_error(src, grounded), height=src.height(),
                 steps=same_rig["steps"], stride=same_rig["stride"],
-                slide=foot_slide(grounded), source_slide=foot_slide(src),
-                hover=hover(grounded), source_hover=hover(src),
+                slide=slide, source_slide=source_slide, hover=hovering,
+                source_hover=source_hover,
                 bend=trunk_bend(raw), source_bend=trunk_bend(src))
 
 

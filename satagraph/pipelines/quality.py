@@ -304,20 +304,25 @@ def most_active(motion: Motion, frames: int) -> Motion:
     return motion.slice(start, start + frames)
 
 
+def contact(canonical: Motion) -> Tuple[float, float]:
+    """:func:`foot_slide` and :func:`hover` of a canonical motion from one
+    feature pass (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`)."""
+    return contact_quality(motion_to_features(canonical))
+
+
 def foot_slide(canonical: Motion) -> float:
     """How fast the joints near the ground slide, in heights per second
-    (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): 0.02-0.12
-    for the zoo's and Bandai's walks and runs, whose planted feet stay."""
-    return contact_quality(motion_to_features(canonical))[0]
+    (:func:`contact`): 0.02-0.12 for the zoo's and Bandai's walks and runs,
+    whose planted feet stay."""
+    return contact(canonical)[0]
 
 
 def hover(canonical: Motion) -> float:
     """How high the body keeps off its floor: the mean over frames of the
     lowest joint's height above the motion's floor, in heights
-    (:func:`~satagraph.pipelines.motion_descriptor.contact_quality`): at
-    most 0.01 for captured walks; a decoded body that bobs reads more,
-    wherever the motion was grounded."""
-    return contact_quality(motion_to_features(canonical))[1]
+    (:func:`contact`): at most 0.01 for captured walks; a decoded body that
+    bobs reads more, wherever the motion was grounded."""
+    return contact(canonical)[1]
 
 
 def posture(canonical: Motion, reference: Motion) -> Optional[float]:
@@ -384,10 +389,9 @@ def retarget_quality(source: Motion, output: Motion,
         out["ground"] = ground_height(output)
     if "upright" in keys:
         out["upright"] = upright_fraction(output)
-    if "slide" in keys:
-        out["slide"] = foot_slide(output)
-    if "hover" in keys:
-        out["hover"] = hover(output)
+    if "slide" in keys or "hover" in keys:
+        slide, hovering = contact(output)
+        out.update({k: v for k, v in (("slide", slide), ("hover", hovering)) if k in keys})
     if "sideways" in keys:
         out["sideways"] = _sideways(source, output)
     if "posture" in keys:
@@ -397,7 +401,7 @@ def retarget_quality(source: Motion, output: Motion,
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
-           "ground_height", "foot_slide", "hover", "head_index", "upright_fraction", "trunk_bend",
+           "ground_height", "contact", "foot_slide", "hover", "head_index", "upright_fraction", "trunk_bend",
            "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
            "retarget_quality"]
