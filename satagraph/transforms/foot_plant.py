@@ -8,10 +8,16 @@ skeleton, :func:`plant_feet` finds the frames where each limb end
 (:func:`~satagraph.semantics.limb_ends`) stands: the lowest joint below
 it near the floor, the end slow next to the body (:func:`stance_frames`).
 It holds the end at one floor position through each
-such stance (fading in and out over :data:`BLEND_FRAMES`), and bends the
+such stance (fading in and out over :data:`BLEND_FRAMES`), on the floor
+(the lowest joint of its subtree at the floor's height), and bends the
 limb's single-child chain above it to reach there (FABRIK,
-:func:`reach`). The root, the limbs in the air and every other joint are
-left as decoded; the limb's end keeps its pose relative to its parent.
+:func:`reach`). Before that the root is lowered, frame by frame, onto the
+lowest of its standing limbs (:func:`stance_drop`): a decoded body bobs
+above its feet (``experiments/T2M.md`` section 47), and a leg that has
+to reach a floor below its foot's decoded height can only stretch. The
+horizontal root path, the limbs in the air and every other joint's
+rotation are left as decoded; the limb's end keeps its pose relative to
+its parent; no frame ends below the floor.
 """
 from __future__ import annotations
 
@@ -22,7 +28,7 @@ import numpy as np
 from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion
 from satagraph.ops.rotation_numpy import rotation_between_numpy
 from satagraph.semantics.limbs import limb_ends
-from satagraph.transforms.ground import levels
+from satagraph.transforms.ground import levels, lowest_heights
 
 #: Most bones above a limb end that :func:`plant_feet` bends.
 MAX_CHAIN_BONES = 3
@@ -34,8 +40,13 @@ MIN_STANCE = 3
 HEIGHT_FACTOR = 2.0
 #: ... and slower than :data:`~satagraph.motion.CONTACT_SPEED` plus this
 #: fraction of the root's horizontal speed (a gliding stance foot moves
-#: with a fraction of the body's speed, a swinging one faster than it).
-ROOT_SPEED_FACTOR = 0.5
+#: with a fraction of the body's speed, a swinging one faster than it: a
+#: decoded quadruped's stance feet glide at 0.35-0.6 of it,
+#: ``experiments/T2M.md`` section 47).
+ROOT_SPEED_FACTOR = 0.8
+#: Frames over which :func:`stance_drop` is averaged (no jolt where the
+#: lowest standing limb changes).
+DROP_FRAMES = 5
 
 
 def limb_chain(parents: Sequence[int], end: int, max_bones: int = MAX_CHAIN_BONES) -> List[int]:
@@ -97,14 +108,16 @@ def _drop_short(mask: np.ndarray, shortest: int) -> np.ndarray:
     return out
 
 
-def planted_track(track: np.ndarray, stance: np.ndarray, blend: int = BLEND_FRAMES
-                  ) -> np.ndarray:
+def planted_track(track: np.ndarray, stance: np.ndarray, blend: int = BLEND_FRAMES,
+                  drop: Optional[np.ndarray] = None) -> np.ndarray:
     r"""Where the limb end should be: through each stance, its mean
-    horizontal position over the stance (the height as decoded), faded in
-    over :obj:`blend` frames before and out after it.
+    horizontal position over the stance, the height as decoded less
+    :obj:`drop` (per frame: how far its lowest joint is above the floor;
+    ``None``: as decoded), faded in over :obj:`blend` frames before and
+    out after it.
 
     Shapes:
-        - **track**: :math:`(T, 3)`, **stance**: :math:`(T,)`
+        - **track**: :math:`(T, 3)`, **stance**, **drop**: :math:`(T,)`
         - **output**: :math:`(T, 3)`
     """
     frames = np.arange(len(track))
@@ -116,9 +129,28 @@ def planted_track(track: np.ndarray, stance: np.ndarray, blend: int = BLEND_FRAM
         take = w > weight
         weight[take] = w[take]
         lock[np.ix_(take, [0, 2])] = track[start:stop][:, [0, 2]].mean(axis=0)
-    out = track.copy()
-    out[:, [0, 2]] += weight[:, None] * (lock[:, [0, 2]] - track[:, [0, 2]])
-    return out
+        if drop is not None:
+            lock[take, 1] = track[take, 1] - drop[take]
+    return track + weight[:, None] * (lock - track)
+
+
+def stance_drop(gaps: np.ndarray, frames: int = DROP_FRAMES) -> np.ndarray:
+    r"""How far to lower the root in each frame: :obj:`gaps` (the height
+    above the floor of the lowest standing limb, NaN where no limb
+    stands), carried across the frames between stances by linear
+    interpolation (held before the first and after the last), then
+    averaged over :obj:`frames` frames. Zero where nothing ever stands.
+
+    Shapes:
+        - **gaps**, **output**: :math:`(T,)`
+    """
+    have = np.isfinite(gaps)
+    if not have.any():
+        return np.zeros(len(gaps))
+    t = np.arange(len(gaps))
+    drop = np.interp(t, t[have], gaps[have])
+    pad = np.pad(drop, (frames // 2, frames - 1 - frames // 2), mode="edge")
+    return np.convolve(pad, np.ones(frames) / frames, mode="valid")
 
 
 def reach(chain: np.ndarray, target: np.ndarray, iterations: int = 10) -> np.ndarray:
@@ -165,10 +197,12 @@ def _bend(motion: Motion, chain: List[int], goal: np.ndarray, frames: np.ndarray
 
 
 def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
-    r""":obj:`motion` with each limb end held still on the floor through
-    its stances (see the module's text; +Y up, the floor at the median
-    height of the lowest joint, as :func:`~satagraph.transforms.ground.ground_at`
-    sets it).
+    r""":obj:`motion` with its root lowered onto its standing limbs and each
+    limb end held still on the floor through its stances (see the module's
+    text; +Y up, the floor at the median height of the lowest joint, as
+    :func:`~satagraph.transforms.ground.ground_at` sets it); last, each
+    frame whose lowest joint is then below the floor is raised onto it. A
+    motion in which no limb stands is returned as it is.
 
     Args:
         motion (Motion): A decoded motion, canonical.
@@ -179,25 +213,37 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
         return motion
     if ends is None:
         ends = list(limb_ends(motion.skeleton).values())
+    skeleton = motion.skeleton
     pos = motion.global_positions()
-    floor, height = levels(motion.skeleton, pos)
+    floor, height = levels(skeleton, pos)
+    lowest = {end: pos[:, subtree(skeleton.children, end), 1].min(axis=1) for end in ends}
+    stances = {end: stance_frames(pos[:, end], lowest[end], pos[:, 0], motion.fps, height, floor)
+               for end in ends}
+    if not any(stance.any() for stance in stances.values()):
+        return motion
+    gaps = np.full(motion.num_frames, np.inf)
     for end in ends:
-        chain = limb_chain(motion.skeleton.parents, end)
+        gaps[stances[end]] = np.minimum(gaps[stances[end]], lowest[end][stances[end]] - floor)
+    motion = _raise_root(motion, -stance_drop(np.where(np.isfinite(gaps), gaps, np.nan)))
+    pos = motion.global_positions()
+    for end in ends:
+        chain = limb_chain(skeleton.parents, end)
         if len(chain) < 3:  # one bone cannot bend
             continue
         track = pos[:, end]
-        lowest = pos[:, subtree(motion.skeleton.children, end), 1].min(axis=1)
-        stance = stance_frames(track, lowest, pos[:, 0], motion.fps, height, floor)
-        target = planted_track(track, stance)
+        above = pos[:, subtree(skeleton.children, end), 1].min(axis=1) - floor
+        target = planted_track(track, stances[end], drop=above)
         frames = np.flatnonzero(np.linalg.norm(target - track, axis=-1) > 1e-9)
         if not len(frames):
             continue
         goal = reach(pos[:, chain], target)
         motion = _bend(motion, chain, goal, frames)
         pos = motion.global_positions()
-    return motion
+    return _raise_root(motion, np.maximum(floor - lowest_heights(motion), 0.0))
 
 
-__all__ = ["BLEND_FRAMES", "MAX_CHAIN_BONES", "MIN_STANCE", "limb_chain", "plant_feet",
-           "planted_track", "reach", "stance_frames",
-           "subtree"]
+def _raise_root(motion: Motion, rise: np.ndarray) -> Motion:
+    """:obj:`motion` with its root raised by :obj:`rise` :math:`(T,)` (+Y)."""
+    translations = motion.translations.copy()
+    translations[:, 0, 1] += rise
+    return motion.with_(translations=translations)

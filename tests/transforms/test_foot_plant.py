@@ -1,5 +1,5 @@
-"""Feet held through their stances: chains, stances, locks, FABRIK, and a
-gliding leg planted."""
+"""Feet held on the floor through their stances: chains, stances, locks,
+the root lowered onto them, FABRIK, and a gliding leg planted."""
 from __future__ import annotations
 
 import numpy as np
@@ -8,7 +8,7 @@ from satagraph.motion import Motion
 from satagraph.ops.rotation_numpy import rotation_about_numpy
 from satagraph.skeleton import Skeleton
 from satagraph.transforms.foot_plant import (BLEND_FRAMES, limb_chain, plant_feet, planted_track,
-                                             reach, stance_frames)
+                                             reach, stance_drop, stance_frames)
 
 FPS = 30.0
 # root (hips), spine, hip, knee, foot, toe: the hip's parent branches
@@ -17,10 +17,12 @@ OFFSETS = np.array([[0, 0, 0], [0, 0.6, 0], [0.1, 0, 0], [0, -0.45, 0], [0, -0.4
                     [0, -0.03, 0.1]], dtype=float)
 
 
-def gliding_leg(frames: int = 20, root_speed: float = 0.6, back_speed: float = 0.3) -> Motion:
+def gliding_leg(frames: int = 20, root_speed: float = 0.6, back_speed: float = 0.3,
+                bob: float = 0.0) -> Motion:
     """The root travels +Z at :obj:`root_speed` while the straight leg swings
     back at only :obj:`back_speed` (its foot glides forward at the
-    difference, close to the floor)."""
+    difference, close to the floor); the root is :obj:`bob` higher in the
+    middle five frames."""
     skeleton = Skeleton(names=["Hips", "Spine", "LeftUpLeg", "LeftLeg", "LeftFoot",
                                "LeftToe"], parents=PARENTS, offsets=OFFSETS)
     t = (np.arange(frames) - (frames - 1) / 2) / FPS
@@ -29,6 +31,7 @@ def gliding_leg(frames: int = 20, root_speed: float = 0.6, back_speed: float = 0
     translations = np.broadcast_to(OFFSETS, (frames, 6, 3)).copy()
     translations[:, 0] = np.stack([np.zeros(frames), np.full(frames, 0.95),
                                    root_speed * (t - t[0])], -1)
+    translations[frames // 2 - 2:frames // 2 + 3, 0, 1] += bob
     return Motion(skeleton, rotations, translations, fps=FPS)
 
 
@@ -98,8 +101,12 @@ def test_a_gliding_foot_is_held_and_the_rest_kept():
     middle = slice(BLEND_FRAMES, -BLEND_FRAMES)
     assert np.ptp(after[middle, 4, 2]) < 0.02 * glide  # held
     np.testing.assert_allclose(after[:, 4, 0], 0.1, atol=1e-9)  # in its plane
-    np.testing.assert_allclose(after[:, :2], before[:, :2])  # root, spine
-    np.testing.assert_allclose(planted.translations, motion.translations)
+    # the root's path and the spine kept, but for the root lowered onto the foot
+    np.testing.assert_allclose(planted.translations[:, 0, [0, 2]], motion.translations[:, 0, [0, 2]])
+    np.testing.assert_allclose(planted.translations[:, 1:], motion.translations[:, 1:])
+    np.testing.assert_allclose(after[:, 1] - after[:, 0], before[:, 1] - before[:, 0], atol=1e-12)
+    floor = np.median(before[..., 1].min(axis=1))
+    assert (after[..., 1].min(axis=1) > floor - 1e-9).all()  # nothing below the floor
     # the leg bends, its bones do not stretch
     for a, b in ((2, 3), (3, 4), (4, 5)):
         np.testing.assert_allclose(np.linalg.norm(after[:, b] - after[:, a], axis=-1),
@@ -109,8 +116,34 @@ def test_a_gliding_foot_is_held_and_the_rest_kept():
 
 
 def test_a_standing_foot_and_a_swinging_limb_stay_as_they_are():
-    fast = gliding_leg(root_speed=3.0, back_speed=0.3)  # the foot moves faster than a stance
-    np.testing.assert_allclose(plant_feet(fast, ends=[4]).rotations, fast.rotations)
+    fast = gliding_leg(root_speed=3.0, back_speed=-0.3)  # the foot swings faster than the body
+    planted = plant_feet(fast, ends=[4])
+    np.testing.assert_allclose(planted.rotations, fast.rotations)
+    np.testing.assert_allclose(planted.translations, fast.translations)
     still = gliding_leg(root_speed=0.0, back_speed=0.0)
     np.testing.assert_allclose(plant_feet(still, ends=[4]).global_positions(),
                                still.global_positions(), atol=1e-9)
+
+
+def test_a_body_bobbing_above_its_standing_foot_is_lowered_onto_it():
+    bobbing = gliding_leg(root_speed=0.0, back_speed=0.0, bob=0.04)
+    before = bobbing.global_positions()[..., 1].min(axis=1)
+    planted = plant_feet(bobbing, ends=[4])
+    after = planted.global_positions()[..., 1].min(axis=1)
+    floor = np.median(before)
+    assert (before - floor).max() > 0.039
+    assert (after - floor).mean() < 0.25 * (before - floor).mean()
+    assert (after > floor - 1e-9).all()
+    np.testing.assert_allclose(planted.translations[:, 0, [0, 2]], bobbing.translations[:, 0, [0, 2]])
+
+
+def test_stance_drop_carries_between_stances_and_is_zero_without_any():
+    gaps = np.full(12, np.nan)
+    gaps[[2, 9]] = [0.1, 0.4]
+    drop = stance_drop(gaps, frames=1)
+    np.testing.assert_allclose(drop[:3], 0.1)
+    np.testing.assert_allclose(drop[9:], 0.4)
+    np.testing.assert_allclose(drop[2:10], np.linspace(0.1, 0.4, 8))
+    np.testing.assert_allclose(stance_drop(np.full(5, np.nan)), 0.0)
+    smoothed = stance_drop(np.r_[np.zeros(6), np.ones(6)], frames=5)
+    assert smoothed.shape == (12,) and 0 < smoothed[5] < 1 and smoothed[0] == 0 and smoothed[-1] == 1
