@@ -189,13 +189,16 @@ __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_argume
            "one_of"]
 
 
-def add_plant_argument(parser: argparse.ArgumentParser) -> None:
-    """``--plant``: hold the output's limb ends still through their stances
-    (:func:`~satagraph.transforms.foot_plant.plant_feet`)."""
-    parser.add_argument("--plant", action="store_true",
-                        help="hold each foot still on the floor while it stands, bending the "
-                        "leg to reach it (a decoded stride is often short and its feet "
-                        "glide; default: off)")
+def add_plant_argument(parser: argparse.ArgumentParser, default: bool = False) -> None:
+    """``--plant`` / ``--no-plant``: lower the body onto its standing feet
+    and hold each foot still on the floor while it stands
+    (:func:`~satagraph.transforms.foot_plant.plant_feet`), on by
+    :obj:`default` or off."""
+    parser.add_argument("--plant", action=argparse.BooleanOptionalAction, default=default,
+                        help="lower the body onto its standing feet and hold each foot still "
+                        "on the floor while it stands, bending the leg to reach it (a decoded "
+                        "stride is often short and its feet glide; default: "
+                        f"{'on' if default else 'off'})")
 
 
 def add_settle_argument(parser: argparse.ArgumentParser) -> None:

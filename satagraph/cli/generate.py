@@ -61,7 +61,7 @@ def add_generate_parser(sub) -> None:
                    help="put the motion on the floor: one vertical shift, its median lowest "
                    "joint at the floor, then each frame that would sink raised onto it "
                    "(--no-ground keeps the decoder's root height; default: on)")
-    add_plant_argument(p)
+    add_plant_argument(p, default=True)
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "
                    "threads make a busy machine many times slower)")

@@ -65,9 +65,12 @@ class GenerationSettings:
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0, then each frame that would sink raised onto
     the floor, :func:`~satagraph.transforms.ground.lift_above_floor`) or
-    keeps the decoder's root height; whether
-    the limb ends are held still through their stances
-    (:func:`~satagraph.transforms.foot_plant.plant_feet`); MaskGIT's Gumbel
+    keeps the decoder's root height; whether the body is lowered onto its
+    standing feet and they are held still on the floor through their stances
+    (:func:`~satagraph.transforms.foot_plant.plant_feet`; on by default:
+    ``experiments/T2M.md`` section 47, on validation prompts R@3 0.799
+    against 0.781, action 0.59 against 0.54, hover and foot sliding lower);
+    MaskGIT's Gumbel
     noise on which tokens each decoding step keeps (``choice_temperature``)
     and how far apart it keeps them (``spread``, a share of their mean gap,
     :func:`~satagraph.nn.generators.sampling.spread_choice`; 0: by
@@ -87,7 +90,7 @@ class GenerationSettings:
     layers: Optional[int] = None
     smooth: float = 1.5
     ground: bool = True
-    plant: bool = False
+    plant: bool = True
     choice_temperature: float = 0.0
     spread: float = 0.0
     rest: str = "auto"
