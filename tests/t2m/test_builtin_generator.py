@@ -88,3 +88,31 @@ def test_shipped_length_model_draws_full_motions_on_unseen_rigs() -> None:
             with torch.no_grad():
                 p = module.length(emb, skel).softmax(-1)[0]
             assert float(p[-1]) > 0.9, (subject, text, p)
+
+
+def test_generate_plants_the_feet_by_default(tmp_path: Path) -> None:
+    """The built-in generator on a zoo quadruped of a test seed: by default
+    the body is lowered onto its standing feet (it hovers less above its
+    floor than with ``--no-plant``), with the same horizontal root path
+    (``experiments/T2M.md`` section 47)."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io import write_bvh
+    from satagraph.transforms.canonical import FLOOR_PERCENTILE, canonicalize
+    from satagraph.transforms.ground import lowest_heights
+    rig = tmp_path / "quadruped.bvh"
+    write_bvh(generate_clip(zoo_rigs(["quadruped"], seed=911)[0], frames=4), rig)
+    motions = {}
+    for flags in ((), ("--no-plant",)):
+        out = tmp_path / f"out{len(flags)}.bvh"
+        assert main(["generate", "--text", "a quadruped walks forward", "--seconds", "3",
+                     "--skeleton", str(rig), *flags, str(out)]) == 0
+        motions[flags] = canonicalize(read_bvh(out), fps=30.0, floor=False)
+
+    def hover(motion) -> float:
+        low = lowest_heights(motion)
+        return float(np.mean(low) - np.percentile(low, FLOOR_PERCENTILE)) / motion.height()
+
+    planted, decoded = motions[()], motions[("--no-plant",)]
+    np.testing.assert_allclose(planted.translations[:, 0, [0, 2]],
+                               decoded.translations[:, 0, [0, 2]], atol=1e-6 * decoded.height())
+    assert hover(planted) < 0.5 * hover(decoded)
