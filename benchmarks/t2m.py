@@ -542,7 +542,8 @@ def transfer(module, source: Motion, target: Motion,
         feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
         codes = encode_windows(module.autoencoder, feats, rig.semantic)
         motion = decode_on(module, codes, rig_inputs(module, target), ground=True,
-                           smooth=settings.smooth, plant=settings.plant)
+                           smooth=settings.smooth, plant=settings.plant,
+                           output_smooth=settings.output_smooth)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 
@@ -836,7 +837,8 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     given = {k: getattr(args, k) for k in ("decoding_steps", "guidance", "residual_guidance",
                                            "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
-                                           "smooth", "plant", "choice_temperature",
+                                           "smooth", "output_smooth", "plant",
+                                           "choice_temperature",
                                            "spread", "rest")
              if getattr(args, k, None) is not None}
     if "decoding_steps" in given:
@@ -881,6 +883,9 @@ def main(argv=None) -> int:
                         help="RVQ layers to decode (default: all)")
     parser.add_argument("--smooth", type=float, default=None,
                         help="latent smoothing in frames (default: generate's)")
+    parser.add_argument("--output-smooth", type=float, default=None,
+                        help="smoothing of the decoded rotations and root in frames "
+                             "(default: generate's)")
     parser.add_argument("--plant", action=argparse.BooleanOptionalAction, default=None,
                         help="plant the feet of decoded motion (default: generate's)")
     parser.add_argument("--probe-seeds", type=int, default=None,

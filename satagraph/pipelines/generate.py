@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from satagraph.transforms.canonical import canonicalize, decanonicalize
+from satagraph.ops.smoothing import gaussian_smooth
 from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.ground import ground_at, lift_above_floor
 from satagraph.data.collate import collate_clips
@@ -60,7 +61,10 @@ class GenerationSettings:
     quantiser dropout trained it for); a Gaussian smoothing of the decoded
     latents over ``smooth`` frames (1.5 by default: on the zoo's validation
     prompts R@3 0.547 against 0.533 unsmoothed, FID 0.456 against 0.527,
-    foot sliding 0.99 against 1.32 heights a second; 0: none); whether the
+    foot sliding 0.99 against 1.32 heights a second; 0: none); a Gaussian
+    smoothing of the decoded rotations and root features over
+    ``output_smooth`` frames instead (:func:`smooth_decoded`; 0: none, the
+    default); whether the
     motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0, then each frame that would sink raised onto
@@ -91,6 +95,7 @@ class GenerationSettings:
     smooth: float = 1.5
     ground: bool = True
     plant: bool = True
+    output_smooth: float = 0.0
     choice_temperature: float = 0.0
     spread: float = 0.0
     rest: str = "auto"
@@ -207,7 +212,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
-                     settings.ground, settings.smooth, settings.plant)
+                     settings.ground, settings.smooth, settings.plant, settings.output_smooth)
 
 
 def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
@@ -224,12 +229,14 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
 
 
 def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
-              smooth: float = 0.0, plant: bool = False) -> Motion:
+              smooth: float = 0.0, plant: bool = False, output_smooth: float = 0.0) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
     its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`
     and :func:`~satagraph.transforms.ground.lift_above_floor`;
     the latents smoothed over :obj:`smooth` frames first, see
-    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`; the feet held
+    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`, and the
+    decoded rotations and root features over :obj:`output_smooth` frames
+    (:func:`smooth_decoded`); the feet held
     through their stances with :obj:`plant`:
     :func:`~satagraph.transforms.foot_plant.plant_feet`). Decoded window
     by window (:func:`decode_windows`).
@@ -238,7 +245,7 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
         - **codes**: :math:`(T, Q)`
     """
     frames, num = codes.size(0), rig.feats.skeleton.num_joints
-    q, r = decode_windows(module.autoencoder, codes, rig, smooth)
+    q, r = smooth_decoded(*decode_windows(module.autoencoder, codes, rig, smooth), output_smooth)
     q = q.view(frames, num, 6).cpu().double().numpy()
     r = r.cpu().double().numpy()
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
@@ -286,6 +293,26 @@ def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,
         qs.append(out["q"].view(stop - start, num, 6)[keep - start:].reshape(-1, 6))
         rs.append(out["r"][keep - start:])
     return torch.cat(qs), torch.cat(rs)
+
+
+def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float
+                   ) -> Tuple[torch.Tensor, torch.Tensor]:
+    r"""Decoded rotations (6D) and root features of one motion smoothed
+    along time by a Gaussian of :obj:`sigma` frames
+    (:func:`~satagraph.ops.smoothing.gaussian_smooth`; 0: as is). Where
+    smoothing the latents averages codes that the decoder reads as
+    different poses, and so shortens every swing, this smooths what was
+    decoded (``experiments/T2M.md`` section 49).
+
+    Shapes:
+        - **q**: :math:`(T \cdot J, 6)`, **r**: :math:`(T, 4)`
+        - **output**: the same
+    """
+    if sigma <= 0:
+        return q, r
+    frames = torch.tensor([r.size(0)])
+    q = gaussian_smooth(q.reshape(r.size(0), -1), frames, sigma).reshape(-1, 6)
+    return q, gaussian_smooth(r, frames, sigma)
 
 
 def output_paths(output: str, skeletons: Sequence[str]) -> List[str]:
