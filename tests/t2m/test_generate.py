@@ -477,3 +477,26 @@ def test_the_rest_a_rig_is_shown_in_matters_only_where_auto_re_rests(t2m_ckpt, z
                                        rig.skeleton.offsets, atol=1e-6)
     assert np.array_equal(outs["designed", "auto"].rotations, outs["designed", "file"].rotations)
     assert not np.allclose(outs["line", "auto"].rotations, outs["line", "file"].rotations)
+
+
+def test_smooth_decoded_smooths_each_joint_along_time_only():
+    """``output_smooth``: each joint's 6D rotation and the root features are
+    smoothed along the frames; joints never mix, a constant stays, 0 is a
+    no-op."""
+    from satagraph.pipelines.generate import smooth_decoded
+    frames, joints = 40, 3
+    q = torch.zeros(frames, joints, 6)
+    q[:, 0] = torch.tensor([1.0, 0, 0, 0, 1.0, 0])  # constant
+    q[:, 1, 0] = torch.tensor([(-1.0) ** t for t in range(frames)])  # shakes every frame
+    q[:, 2, 3] = torch.linspace(0, 1, frames)  # a ramp
+    r = torch.stack([torch.arange(frames, dtype=torch.float32) % 2] * 4, dim=-1)
+    same_q, same_r = smooth_decoded(q.reshape(-1, 6), r, 0.0)
+    assert torch.equal(same_q, q.reshape(-1, 6)) and torch.equal(same_r, r)
+    sq, sr = smooth_decoded(q.reshape(-1, 6), r, 2.0)
+    sq = sq.view(frames, joints, 6)
+    assert sq.shape == q.shape and sr.shape == r.shape
+    torch.testing.assert_close(sq[:, 0], q[:, 0])
+    assert sq[5:-5, 1, 0].abs().max() < 0.05  # the shake is gone
+    torch.testing.assert_close(sq[7:-7, 2, 3], q[7:-7, 2, 3], atol=1e-5, rtol=0)  # a ramp stays
+    assert (sq[:, 1, 1:] == 0).all() and (sq[:, 2, :3] == 0).all()  # nothing leaks across
+    assert sr[5:-5].sub(0.5).abs().max() < 0.05
