@@ -34,8 +34,8 @@ from typing import List, Optional, Sequence, Tuple
 import numpy as np
 import torch
 
-from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.ops.smoothing import gaussian_smooth
+from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.ground import ground_at, lift_above_floor
 from satagraph.data.collate import collate_clips

@@ -21,7 +21,7 @@ its parent; no frame ends below the floor.
 """
 from __future__ import annotations
 
-from typing import List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -221,25 +221,31 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
                for end in ends}
     if not any(stance.any() for stance in stances.values()):
         return motion
-    gaps = np.full(motion.num_frames, np.inf)
-    for end in ends:
-        gaps[stances[end]] = np.minimum(gaps[stances[end]], lowest[end][stances[end]] - floor)
-    motion = _raise_root(motion, -stance_drop(np.where(np.isfinite(gaps), gaps, np.nan)))
+    gaps = np.full(motion.num_frames, np.nan)
+    for end, stance in stances.items():  # the lowest standing limb's height above the floor
+        gaps[stance] = np.fmin(gaps[stance], lowest[end][stance] - floor)
+    motion = _hold_stances(_raise_root(motion, -stance_drop(gaps)), stances, floor)
+    return _raise_root(motion, np.maximum(floor - lowest_heights(motion), 0.0))
+
+
+def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray], floor: float) -> Motion:
+    """Each limb end of :obj:`stances` (end -> :math:`(T,)` bool) held on
+    the floor through its stances, the chain above it bent to reach there."""
+    skeleton = motion.skeleton
     pos = motion.global_positions()
-    for end in ends:
+    for end, stance in stances.items():
         chain = limb_chain(skeleton.parents, end)
         if len(chain) < 3:  # one bone cannot bend
             continue
         track = pos[:, end]
         above = pos[:, subtree(skeleton.children, end), 1].min(axis=1) - floor
-        target = planted_track(track, stances[end], drop=above)
+        target = planted_track(track, stance, drop=above)
         frames = np.flatnonzero(np.linalg.norm(target - track, axis=-1) > 1e-9)
         if not len(frames):
             continue
-        goal = reach(pos[:, chain], target)
-        motion = _bend(motion, chain, goal, frames)
+        motion = _bend(motion, chain, reach(pos[:, chain], target), frames)
         pos = motion.global_positions()
-    return _raise_root(motion, np.maximum(floor - lowest_heights(motion), 0.0))
+    return motion
 
 
 def _raise_root(motion: Motion, rise: np.ndarray) -> Motion:
