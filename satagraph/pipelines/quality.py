@@ -401,7 +401,7 @@ def retarget_quality(source: Motion, output: Motion,
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
-           "ground_height", "contact", "foot_slide", "hover", "head_index", "upright_fraction", "trunk_bend",
-           "joint_raise", "most_active",
+           "ground_height", "contact", "foot_slide", "hover", "head_index", "upright_fraction",
+           "trunk_bend", "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
            "retarget_quality"]

@@ -28,7 +28,7 @@ import numpy as np
 from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion
 from satagraph.ops.rotation_numpy import rotation_between_numpy
 from satagraph.semantics.limbs import limb_ends
-from satagraph.transforms.ground import levels, lowest_heights
+from satagraph.transforms.ground import levels, lift_above_floor, raise_root
 
 #: Most bones above a limb end that :func:`plant_feet` bends.
 MAX_CHAIN_BONES = 3
@@ -224,8 +224,8 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     gaps = np.full(motion.num_frames, np.nan)
     for end, stance in stances.items():  # the lowest standing limb's height above the floor
         gaps[stance] = np.fmin(gaps[stance], lowest[end][stance] - floor)
-    motion = _hold_stances(_raise_root(motion, -stance_drop(gaps)), stances, floor)
-    return _raise_root(motion, np.maximum(floor - lowest_heights(motion), 0.0))
+    motion = _hold_stances(raise_root(motion, -stance_drop(gaps)), stances, floor)
+    return lift_above_floor(motion, floor)
 
 
 def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray], floor: float) -> Motion:
@@ -246,10 +246,3 @@ def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray], floor: float) 
         motion = _bend(motion, chain, reach(pos[:, chain], target), frames)
         pos = motion.global_positions()
     return motion
-
-
-def _raise_root(motion: Motion, rise: np.ndarray) -> Motion:
-    """:obj:`motion` with its root raised by :obj:`rise` :math:`(T,)` (+Y)."""
-    translations = motion.translations.copy()
-    translations[:, 0, 1] += rise
-    return motion.with_(translations=translations)

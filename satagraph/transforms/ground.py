@@ -65,9 +65,14 @@ def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
     if motion.num_frames == 0:
         return motion
     lowest, height = _levels(motion)
-    shift = lift * height - lowest
+    return raise_root(motion, lift * height - lowest)
+
+
+def raise_root(motion: Motion, rise) -> Motion:
+    r""":obj:`motion` with its root raised along +Y by :obj:`rise` (one
+    value, or one per frame :math:`(T,)`; negative lowers it)."""
     translations = motion.translations.copy()
-    translations[:, 0, 1] += shift
+    translations[:, 0, 1] += rise
     return motion.with_(translations=translations)
 
 
@@ -104,26 +109,24 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     return lift_above_floor(ground_like(motion, target if target.num_frames else source))
 
 
-def lift_above_floor(motion: Motion) -> Motion:
+def lift_above_floor(motion: Motion, floor: float = 0.0) -> Motion:
     r""":obj:`motion` with its root raised, in each frame whose lowest joint
-    is below the floor (y = 0, +Y up), by that depth: no frame sinks, and
-    the frames above the floor, the horizontal path and every rotation
-    stay as they are. The last step of :func:`ground_retarget`: after one
+    is below the floor (y = :obj:`floor`, +Y up), by that depth: no frame
+    sinks, and the frames above the floor, the horizontal path and every
+    rotation stay as they are. The last step of :func:`ground_retarget`: after one
     shift that stands a retarget as its target stands, a body that sits or
     crouches lower (a human retargeted from a sitting dog) would otherwise
     pass through the floor there.
 
     Args:
         motion (Motion): A canonical motion.
+        floor (float): The floor's height (0: where :func:`ground_at` puts
+            it).
     """
     if motion.num_frames == 0:
         return motion
-    depth = np.maximum(-lowest_heights(motion), 0.0)
-    if not depth.any():
-        return motion
-    translations = motion.translations.copy()
-    translations[:, 0, 1] += depth
-    return motion.with_(translations=translations)
+    depth = np.maximum(floor - lowest_heights(motion), 0.0)
+    return raise_root(motion, depth) if depth.any() else motion
 
 
 #: Share of its greatest stance height at which a body counts as standing
@@ -164,4 +167,4 @@ def stands(positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "lift_above_floor", "STANDING_SHARE", "standing_frame", "standing_frames", "stands"]
+           "lift_above_floor", "raise_root", "STANDING_SHARE", "standing_frame", "standing_frames", "stands"]

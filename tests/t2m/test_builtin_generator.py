@@ -97,8 +97,8 @@ def test_generate_plants_the_feet_by_default(tmp_path: Path) -> None:
     (``experiments/T2M.md`` section 47)."""
     from satagraph.datasets.zoo import generate_clip, zoo_rigs
     from satagraph.io import write_bvh
-    from satagraph.transforms.canonical import FLOOR_PERCENTILE, canonicalize
-    from satagraph.transforms.ground import lowest_heights
+    from satagraph.pipelines.quality import hover
+    from satagraph.transforms.canonical import canonicalize
     rig = tmp_path / "quadruped.bvh"
     write_bvh(generate_clip(zoo_rigs(["quadruped"], seed=911)[0], frames=4), rig)
     motions = {}
@@ -107,11 +107,6 @@ def test_generate_plants_the_feet_by_default(tmp_path: Path) -> None:
         assert main(["generate", "--text", "a quadruped walks forward", "--seconds", "3",
                      "--skeleton", str(rig), *flags, str(out)]) == 0
         motions[flags] = canonicalize(read_bvh(out), fps=30.0, floor=False)
-
-    def hover(motion) -> float:
-        low = lowest_heights(motion)
-        return float(np.mean(low) - np.percentile(low, FLOOR_PERCENTILE)) / motion.height()
-
     planted, decoded = motions[()], motions[("--no-plant",)]
     np.testing.assert_allclose(planted.translations[:, 0, [0, 2]],
                                decoded.translations[:, 0, [0, 2]], atol=1e-6 * decoded.height())
