@@ -336,14 +336,19 @@ class SATARVQModule(MotionAutoencoderModule):
         per-frame codes decoded onto the frame graphs of :obj:`target` (a
         physical :class:`~satagraph.data.FrameBatch` whose frames match the
         codes'), the dequantised latents first smoothed along each clip's
-        frames by a Gaussian of :obj:`smooth` frames
-        (:func:`~satagraph.ops.smoothing.gaussian_smooth`; 0: none).
+        frames by a Gaussian of :obj:`smooth` frames in all
+        (:func:`~satagraph.ops.smoothing.gaussian_smooth`; 0: none). A
+        network that smooths its latents itself (SATA's ``latent_smooth``)
+        gets only the remainder (Gaussian widths add in squares), never
+        less than its own.
 
         Shapes:
             - **codes**: :math:`(G, Q)`
         """
+        own = float(getattr(self.model, "latent_smooth", 0.0))
+        rest = max(smooth ** 2 - own ** 2, 0.0) ** 0.5
         z = gaussian_smooth(self.model.bottleneck.decode_codes(codes), target.clip_num_frames,
-                            smooth)
+                            rest)
         return self.denormalize_output(self.decode(z, self.normalize_batch(target)), target)
 
 

@@ -247,19 +247,26 @@ class TextToMotionModule(PerDatasetFigures, L.LightningModule):
         """Decode with the decoder of :obj:`ckpt`, a SATA-RVQ fine-tuned from
         this generator's autoencoder with its encoder and codebooks frozen
         (``optim.frozen``): the codes keep their meaning, so the generator
-        needs no retraining.
+        needs no retraining. The decoder comes with the latent smoothing it
+        was trained under (SATA's ``latent_smooth``).
 
         Raises:
             CheckpointError: :obj:`ckpt`'s normaliser, encoder or codebooks
                 are not the generator's (stored in half precision or not).
         """
         from satagraph.experiment.train import load_module
-        theirs = load_module(ckpt).state_dict()
+        module = load_module(ckpt)
+        theirs = module.state_dict()
         check_shared(self.autoencoder, theirs, "model.decoder.", ckpt,
                      "only a decoder fine-tuned under its frozen encoder and codebooks "
                      "(optim.frozen) keeps the codes' meaning")
         self.autoencoder.load_state_dict(theirs)
-        self.hparams["model"]["autoencoder"]["decoder"] = ckpt
+        stored = self.hparams["model"]["autoencoder"]
+        stored["decoder"] = ckpt
+        smooth = float(getattr(module.model, "latent_smooth", 0.0))
+        if smooth or "latent_smooth" in stored["hparams"]["model"]:
+            self.autoencoder.model.latent_smooth = smooth
+            stored["hparams"]["model"]["latent_smooth"] = smooth
 
     @torch.no_grad()
     def swap_length(self, ckpt: str) -> None:

@@ -307,3 +307,32 @@ def test_rvq_module_codes_round_trip(build_tiny_module: Callable, train_batch) -
     decoded = module.decode_codes(codes, train_batch)
     torch.testing.assert_close(decoded["q"], direct["q"], atol=1e-5, rtol=1e-5)
     torch.testing.assert_close(decoded["r"], direct["r"], atol=1e-5, rtol=1e-5)
+
+
+def test_latent_smooth_is_applied_once(build_tiny_module: Callable, train_batch) -> None:
+    """A network that smooths its latents (``latent_smooth``) decodes like
+    the same weights without it fed smoothed latents; decode_codes adds
+    only the remainder of the asked width (widths add in squares)."""
+    from satagraph.ops.smoothing import gaussian_smooth
+    plain = build_tiny_module("rvq").eval()
+    codes = plain.codes(train_batch)  # first: k-means initialises the codebooks
+    smooth = build_tiny_module("rvq", latent_smooth=1.5).eval()
+    smooth.load_state_dict(plain.state_dict())
+    frames = train_batch.clip_num_frames
+    once = smooth.decode_codes(codes, train_batch, smooth=1.5)
+    torch.testing.assert_close(once["q"], plain.decode_codes(codes, train_batch, 1.5)["q"])
+    torch.testing.assert_close(smooth.decode_codes(codes, train_batch, smooth=0.0)["q"],
+                               once["q"])  # never less than its own
+    with torch.no_grad():
+        z = plain.encode(plain.normalize_batch(train_batch))["z"]
+        target = plain.normalize_batch(train_batch)
+        wider = gaussian_smooth(gaussian_smooth(z, frames, 2.0), frames, 1.5)  # 2.5 in all
+        expect = plain.denormalize_output(plain.decode(wider, target), train_batch)["q"]
+    twice = smooth.decode_codes(codes, train_batch, smooth=2.5)["q"]
+    torch.testing.assert_close(twice, expect, atol=1e-5, rtol=1e-5)
+    assert not torch.allclose(once["q"], twice, atol=1e-3)
+    with torch.no_grad():
+        direct = smooth(train_batch)["q"]
+        fed = plain.denormalize_output(plain.decode(gaussian_smooth(z, frames, 1.5), target),
+                                       train_batch)["q"]
+    torch.testing.assert_close(direct, fed, atol=1e-5, rtol=1e-5)

@@ -257,11 +257,13 @@ def test_generate_on_infills_around_kept_tokens(t2m_ckpt, zoo_skeletons, monkeyp
 def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
         t2m_ckpt, autoencoder_ckpt, zoo_skeletons, tmp_path, capsys):
     """`export-weights --decoder`: the generator keeps its codes and decodes
-    with the new decoder (also from a half-precision file); a checkpoint
-    whose encoder moved is refused in one line, and nothing is written."""
+    with the new decoder (also from a half-precision file), under the latent
+    smoothing it was trained with; a checkpoint whose encoder moved is
+    refused in one line, and nothing is written."""
     from satagraph.experiment.train import load_module
     from tests.t2m.conftest import save_checkpoint
     tuned = load_module(str(autoencoder_ckpt))
+    tuned.hparams["model"]["latent_smooth"] = tuned.model.latent_smooth = 1.5
     with torch.no_grad():
         for param in tuned.model.decoder.parameters():
             param.add_(0.05 * torch.randn(param.shape, generator=torch.Generator().manual_seed(1)))
@@ -277,6 +279,8 @@ def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
     assert provenance["previous"] == read_weights_metadata(half)["provenance"]
     assert provenance["previous"]["source"] == str(t2m_ckpt)
     module, original = load_module(str(swapped)), load_module(str(half))
+    assert (module.autoencoder.model.latent_smooth, original.autoencoder.model.latent_smooth) \
+        == (1.5, 0.0)
     for name, value in module.autoencoder.state_dict().items():  # the tuned RVQ's ...
         torch.testing.assert_close(value, tuned.state_dict()[name], rtol=0, atol=0, msg=name)
         if not name.startswith("model.decoder."):  # ... whose other parts were the generator's

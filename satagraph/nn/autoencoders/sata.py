@@ -10,6 +10,7 @@ from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.nn.bottlenecks.vae import VAEBottleneck
 from satagraph.nn.autoencoders.decoder import SATADecoder
 from satagraph.nn.autoencoders.encoder import SATAEncoder
+from satagraph.ops.smoothing import gaussian_smooth
 
 #: Default latent width per bottleneck (paper section 4.1).
 DEFAULT_LATENT = {"vae": 128, "rvq": 256}
@@ -44,6 +45,12 @@ class SATA(MotionAutoencoder):
         codebook_decay, kmeans_init, threshold_ema_dead_code: RVQ options
             (see :class:`~satagraph.nn.RVQBottleneck`).
         act (str, optional): Activation.
+        latent_smooth (float, optional): Standard deviation in frames of a
+            Gaussian smoothing of the latents along each clip before the
+            decoder (:func:`~satagraph.ops.smoothing.gaussian_smooth`; 0:
+            none). Generation decodes code sequences with smoothed latents;
+            a decoder trained with the same smoothing reads them as the
+            motion they were encoded from instead of as a damped copy.
 
     Shapes:
         - **batch**, **target_batch**: :class:`~satagraph.data.FrameBatch`
@@ -64,8 +71,10 @@ class SATA(MotionAutoencoder):
                  num_quantizers: int = 6, codebook_size: int = 1024,
                  commitment_weight: float = 1.0, quantize_dropout: float = 0.2,
                  codebook_decay: float = 0.99, kmeans_init: bool = True,
-                 threshold_ema_dead_code: float = 1.0, act: str = "relu") -> None:
+                 threshold_ema_dead_code: float = 1.0, act: str = "relu",
+                 latent_smooth: float = 0.0) -> None:
         super().__init__()
+        self.latent_smooth = float(latent_smooth)
         if bottleneck not in DEFAULT_LATENT:
             raise ValueError(f"unknown bottleneck {bottleneck!r}: use 'vae' or 'rvq'")
         self.bottleneck_type = bottleneck
@@ -90,5 +99,7 @@ class SATA(MotionAutoencoder):
         return self.bottleneck(self.encoder(batch))._asdict()
 
     def decode(self, z: Tensor, target_batch) -> Dict[str, Tensor]:
-        """``q``, ``r``, ``c`` (logits) on the target frame graphs."""
+        """``q``, ``r``, ``c`` (logits) on the target frame graphs, from the
+        latents smoothed over :attr:`latent_smooth` frames."""
+        z = gaussian_smooth(z, target_batch.clip_num_frames, self.latent_smooth)
         return self.decoder(z, target_batch)
