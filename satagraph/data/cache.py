@@ -20,7 +20,8 @@ from satagraph.utils.files import atomic_write
 #: Bump when the feature definition changes: old cache entries are ignored.
 #: 2: files are checked (satagraph.data.validate) before they are cached.
 #: 4: the canonical facing is read from the left/right pairs nearest the root.
-FEATURE_VERSION = 4
+#: 5: a leading bind-pose frame is given frame 1's pose (transforms.bind_frame).
+FEATURE_VERSION = 5
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
            "r", "c", "facing_axis")

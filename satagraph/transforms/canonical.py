@@ -209,6 +209,7 @@ def canonicalize(
     unit_scale: Optional[float] = None,
     floor: bool = True,
     remove_root: bool = True,
+    replace_bind: bool = True,
 ) -> Motion:
     r"""Bring a motion into the canonical frame used by the features.
 
@@ -223,9 +224,15 @@ def canonicalize(
     The returned motion's :attr:`~Motion.transform` records what was done;
     :func:`decanonicalize` undoes it. The result declares itself canonical
     (:attr:`~Motion.rig`), so it is never re-guessed, also once written.
+    A leading bind-pose frame (:mod:`~satagraph.transforms.bind_frame`:
+    CMU's and CC_Base's exporters write one) is first given frame 1's pose
+    unless :obj:`replace_bind` is ``False``.
     """
+    from satagraph.transforms.bind_frame import replace_bind_frame
     from satagraph.transforms.rig_reading import read_rig, warn_reading
 
+    if replace_bind:
+        motion = replace_bind_frame(motion)
     motion, removed = (remove_static_root(motion) if remove_root
                        else (motion, None))
     reading = read_rig(motion, up_axis, unit_scale)
