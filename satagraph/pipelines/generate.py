@@ -61,7 +61,9 @@ class GenerationSettings:
     quantiser dropout trained it for); a Gaussian smoothing of the decoded
     latents over ``smooth`` frames (1.5 by default: on the zoo's validation
     prompts R@3 0.547 against 0.533 unsmoothed, FID 0.456 against 0.527,
-    foot sliding 0.99 against 1.32 heights a second; 0: none); a Gaussian
+    foot sliding 0.99 against 1.32 heights a second; 0: none; a decoder
+    trained under its own ``latent_smooth`` smooths at least that much,
+    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`); a Gaussian
     smoothing of the decoded rotations and root features over
     ``output_smooth`` frames instead (:func:`smooth_decoded`; 0: none, the
     default); whether the
