@@ -86,3 +86,18 @@ def test_real_exports_with_and_without_one(read_real) -> None:
     for path in ("ccbase/006_01.bvh", "cmu/angry_13_000.bvh", "bandai/dataset-1_walk_normal_002.bvh",
                  "dog/D1_001_KAN01_001.bvh"):
         assert not has_bind_frame(read_real(path)), path
+
+
+def test_every_zoo_body_plan() -> None:
+    """A zoo walk of every body plan is no bind frame; given its rest pose
+    as frame 0 where frame 1 stands (CMU's case: no teleport), it is one,
+    arthropods and their fast legs included."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    for rig in zoo_rigs(seed=0):
+        clip = generate_clip(rig, "walk", frames=30, seed=1)
+        rotations, translations = clip.rotations.copy(), clip.translations.copy()
+        rotations[0] = np.eye(3)
+        translations[0] = clip.skeleton.offsets
+        translations[0, 0] = clip.translations[1, 0]
+        bound = clip.with_(rotations=rotations, translations=translations)
+        assert not has_bind_frame(clip) and has_bind_frame(bound), rig.species
