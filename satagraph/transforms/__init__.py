@@ -1,8 +1,9 @@
 """Motion-to-motion transforms: reading a rig (up axis, units),
 canonicalisation (+Y up, facing +Z, metres, one frame rate), skeleton
 augmentation (bone scaling, mirroring, restructuring), the rest pose a rig
-is shown to a model in, a leading bind-pose frame, and planting a decoded motion's feet and settling
-its root where it stands still. Imported lazily: numpy only."""
+is shown to a model in, a leading bind-pose frame, and planting a decoded
+motion's feet and settling its root where it stands still. Imported lazily:
+numpy only."""
 from satagraph._lazy import lazy_exports
 
 _CANONICAL = ("canonicalize", "decanonicalize", "detect_up_axis", "resample")
