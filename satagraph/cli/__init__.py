@@ -67,8 +67,12 @@ def describe(motion: Motion, path: str) -> Dict[str, Any]:
     ``rig`` is how the rig is read (:func:`~satagraph.transforms.rig_reading.read_rig`:
     up axis and units, each given, declared or guessed, with the confidence
     and the evidence); ``height`` is the character height in file units
-    along that up axis and ``height_m`` in metres.
+    along that up axis and ``height_m`` in metres; ``bind_frame`` whether
+    frame 0 is the rig's bind pose rather than motion
+    (:func:`~satagraph.transforms.bind_frame.has_bind_frame`: it is read as
+    frame 1's pose).
     """
+    from satagraph.transforms.bind_frame import has_bind_frame
     from satagraph.transforms.rig_reading import read_rig
     skel = motion.skeleton
     reading = read_rig(motion)
@@ -92,6 +96,7 @@ def describe(motion: Motion, path: str) -> Dict[str, Any]:
         "channel_layout": {str(k): layout[k] for k in sorted(layout)},
         "position_channel_joints": int(skel.has_position_channels.sum()),
         "channels_per_frame": skel.num_channels,
+        "bind_frame": has_bind_frame(motion),
     }
 
 
@@ -137,6 +142,8 @@ def format_table(info: Dict[str, Any]) -> str:
         ("rotation orders", orders or "none"),
         ("channels", f"{info['channels_per_frame']} per frame: {channels}"),
         ("position channels", f"on {info['position_channel_joints']} joint(s)"),
+        ("frame 0", "the rig's bind pose, not motion: read as frame 1's pose"
+         if info["bind_frame"] else "motion"),
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
@@ -161,7 +168,8 @@ def add_inspect_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         description="Summarise a BVH file: joints and end sites, frames, "
         "frame rate, duration, the up axis (with the confidence and evidence "
         "of its detection), the units and height, Euler rotation orders and "
-        "channel layout. Doubtful readings are flagged WARNING. Given a folder: "
+        "channel layout, and whether frame 0 is the rig's bind pose rather than "
+        "motion. Doubtful readings are flagged WARNING. Given a folder: "
         "one line per .bvh below it and a summary of their up axes, units and "
         "warnings (a dataset checked before training; a file that does not read "
         "is one error line, exit code 2).",

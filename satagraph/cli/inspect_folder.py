@@ -35,8 +35,10 @@ def folder_summary(infos: List[Dict[str, Any]], failed: int) -> str:
     units = counts("undecided" if i["rig"]["units_how"] == "kept" else i["rig"]["units"]
                    for i in infos)
     warned = sum(bool(i["rig"]["warnings"]) for i in infos)
+    bound = sum(bool(i.get("bind_frame")) for i in infos)
     return (f"{len(infos) + failed} files: up axis {ups or '-'}; units {units or '-'}; "
-            f"{warned} with warnings; {failed} unreadable")
+            f"{warned} with warnings; {bound} with a bind pose as frame 0; "
+            f"{failed} unreadable")
 
 
 def run_inspect_folder(args: argparse.Namespace, describe_file: Callable[[str], Dict]) -> int:

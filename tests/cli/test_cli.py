@@ -62,6 +62,10 @@ def test_inspect_table_real_file(capsys, shared_data, manifest):
     assert rows["root"] == "joint_Root"
     assert rows["height"].endswith(" m") and "file units, 1." in rows["height"]  # cm
     assert rows["units"].startswith("cm (human, confidence 0.90")
+    assert rows["frame 0"] == "motion"
+    code, out, _ = run(capsys, "inspect", str(shared_data / "ccbase" / "007_05.bvh"))
+    rows = dict(re.split(r"\s{2,}", line, maxsplit=1) for line in out.strip().splitlines())
+    assert rows["frame 0"] == "the rig's bind pose, not motion: read as frame 1's pose"
 
 
 def test_inspect_json_real_file(capsys, shared_data, manifest):
@@ -80,6 +84,7 @@ def test_inspect_json_real_file(capsys, shared_data, manifest):
             assert info["up_axis"] == "+Y"  # frame 0 of all of these stands on Y
             assert info["height"] > 0
             assert sum(info["channel_layout"].values()) == info["joints"]
+            assert info["bind_frame"] == (row["path"] == "cmu/01_01.bvh")  # CMU's T first
 
 
 def test_inspect_json_synthetic(capsys, tiny_file):
@@ -101,7 +106,7 @@ def test_inspect_json_synthetic(capsys, tiny_file):
         "rotation_orders": {"XYZ": 1, "XZY": 1, "YXZ": 1, "YZX": 1, "ZXY": 2,
                             "ZYX": 1},
         "channel_layout": {"0": 3, "3": 5, "6": 2},
-        "position_channel_joints": 2, "channels_per_frame": 27,
+        "position_channel_joints": 2, "channels_per_frame": 27, "bind_frame": False,
     }
 
 

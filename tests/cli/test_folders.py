@@ -124,7 +124,8 @@ def test_inspect_a_folder_tabulates_every_file_and_sums_up(folder: Path, capsys)
     assert set(rows) == {"deep/Trot.BVH", "target.bvh", "walk.bvh"}
     assert rows["walk.bvh"][1] == str(read_bvh(folder / "walk.bvh").num_joints)
     assert rows["walk.bvh"][2] == "40" and rows["walk.bvh"][5] == "+Y"
-    assert lines[-1] == ("5 files: up axis +Y 3; units m 3; 0 with warnings; 2 unreadable")
+    assert lines[-1] == ("5 files: up axis +Y 3; units m 3; 0 with warnings; "
+                         "0 with a bind pose as frame 0; 2 unreadable")
     errors = printed.err.splitlines()
     assert len(errors) == 2 and "broken.bvh:3:" in errors[0] and "gone.bvh" in errors[1]
     assert main(["inspect", str(folder), "--json"]) == 2
