@@ -25,6 +25,8 @@ its length and frame times.
 """
 from __future__ import annotations
 
+from typing import Tuple
+
 import numpy as np
 
 from satagraph.motion import Motion
@@ -39,10 +41,13 @@ BIND_MIN_SHIFT = 0.2
 BIND_MIN_FRAMES = 8
 
 
-def frame_changes(motion: Motion) -> tuple:
+def frame_changes(motion: Motion) -> Tuple[np.ndarray, np.ndarray]:
     r"""Per pair of consecutive frames, the mean over joints of the angle
     each local rotation turns (radians) and the shift of the joints'
     centroid (the motion's units).
+
+    Args:
+        motion (Motion): A motion of at least two frames.
 
     Shapes:
         - **output**: two arrays :math:`(T - 1,)`
