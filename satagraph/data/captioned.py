@@ -291,7 +291,8 @@ class ZooCaptionWindows(CaptionWindows):
         frames = self.num_frames(draw, idx)
         sample = self.zoo.sample(draw, idx, frames + 1, self.stream, self.holdout)
         motion = canonicalize(sample.motion, fps=self.config["fps"], up_axis="+Y",
-                              unit_scale=1.0, floor=self.config["floor"])
+                              unit_scale=1.0, floor=self.config["floor"],
+                              replace_bind=False)  # procedural: no bind frame
         feats = motion_to_features(shown_as(motion, self.config), **self.options)
         meta = {"path": f"<zoo {self.stream} {draw} {idx}: {sample.plan} {sample.kind}>",
                 "dataset": self.dataset, "skeleton": sample.plan,

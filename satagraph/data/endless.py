@@ -119,7 +119,8 @@ class EndlessZooDataset(Dataset):
         """
         sample = self.zoo.sample(epoch, index, self.window + 1, self.stream, self.holdout)
         motion = canonicalize(sample.motion, fps=self.config["fps"], up_axis="+Y",
-                              unit_scale=1.0, floor=self.config["floor"])
+                              unit_scale=1.0, floor=self.config["floor"],
+                              replace_bind=False)  # procedural: no bind frame
         feats = motion_to_features(shown_as(motion, self.config), **feature_options(self.config))
         check_features(feats, f"<endless zoo {self.stream} {epoch} {index}>")
         return feats, sample

@@ -264,9 +264,7 @@ class TextToMotionModule(PerDatasetFigures, L.LightningModule):
         stored = self.hparams["model"]["autoencoder"]
         stored["decoder"] = ckpt
         smooth = float(getattr(module.model, "latent_smooth", 0.0))
-        if smooth or "latent_smooth" in stored["hparams"]["model"]:
-            self.autoencoder.model.latent_smooth = smooth
-            stored["hparams"]["model"]["latent_smooth"] = smooth
+        self.autoencoder.model.latent_smooth = stored["hparams"]["model"]["latent_smooth"] = smooth
 
     @torch.no_grad()
     def swap_length(self, ckpt: str) -> None:

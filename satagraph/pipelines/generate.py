@@ -310,8 +310,6 @@ def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float
         - **q**: :math:`(T \cdot J, 6)`, **r**: :math:`(T, 4)`
         - **output**: the same
     """
-    if sigma <= 0:
-        return q, r
     frames = torch.tensor([r.size(0)])
     q = gaussian_smooth(q.reshape(r.size(0), -1), frames, sigma).reshape(-1, 6)
     return q, gaussian_smooth(r, frames, sigma)

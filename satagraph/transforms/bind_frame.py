@@ -25,11 +25,11 @@ its length and frame times.
 """
 from __future__ import annotations
 
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 
-from satagraph.motion import Motion
+from satagraph.motion import Motion, character_height
 
 #: How many times the largest later change frame 0's change must be.
 BIND_RATIO = 2.0
@@ -41,21 +41,25 @@ BIND_MIN_SHIFT = 0.2
 BIND_MIN_FRAMES = 8
 
 
-def frame_changes(motion: Motion) -> Tuple[np.ndarray, np.ndarray]:
+def frame_changes(motion: Motion, positions: Optional[np.ndarray] = None
+                  ) -> Tuple[np.ndarray, np.ndarray]:
     r"""Per pair of consecutive frames, the mean over joints of the angle
     each local rotation turns (radians) and the shift of the joints'
     centroid (the motion's units).
 
     Args:
         motion (Motion): A motion of at least two frames.
+        positions (np.ndarray, optional): Its global joint positions
+            :math:`(T, J, 3)`, where the caller has them.
 
     Shapes:
         - **output**: two arrays :math:`(T - 1,)`
     """
-    rot = motion.rotations
-    rel = np.einsum("tjki,tjkl->tjil", rot[:-1], rot[1:])
-    cos = np.clip((np.trace(rel, axis1=2, axis2=3) - 1.0) / 2.0, -1.0, 1.0)
-    centroid = motion.global_positions().mean(axis=1)
+    rot = motion.rotations  # trace(A^T B) is the elementwise sum of A * B
+    cos = np.clip(((rot[:-1] * rot[1:]).sum(axis=(2, 3)) - 1.0) / 2.0, -1.0, 1.0)
+    if positions is None:
+        positions = motion.global_positions()
+    centroid = positions.mean(axis=1)
     return np.arccos(cos).mean(axis=1), np.linalg.norm(np.diff(centroid, axis=0), axis=1)
 
 
@@ -64,8 +68,9 @@ def has_bind_frame(motion: Motion) -> bool:
     module's rule); clips under :data:`BIND_MIN_FRAMES` frames never are."""
     if motion.num_frames < BIND_MIN_FRAMES:
         return False
-    angle, shift = frame_changes(motion)
-    size = max(motion.height(), 1e-9)
+    positions = motion.global_positions()
+    angle, shift = frame_changes(motion, positions)
+    size = max(character_height(motion.skeleton, positions), 1e-9)
     turned = angle[0] >= BIND_MIN_ANGLE and angle[0] >= BIND_RATIO * angle[1:].max()
     moved = shift[0] >= BIND_MIN_SHIFT * size and shift[0] >= BIND_RATIO * shift[1:].max()
     return bool(turned or moved)

@@ -216,7 +216,8 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     skeleton = motion.skeleton
     pos = motion.global_positions()
     floor, height = levels(skeleton, pos)
-    lowest = {end: pos[:, subtree(skeleton.children, end), 1].min(axis=1) for end in ends}
+    members = {end: subtree(skeleton.children, end) for end in ends}
+    lowest = {end: pos[:, members[end], 1].min(axis=1) for end in ends}
     stances = {end: stance_frames(pos[:, end], lowest[end], pos[:, 0], motion.fps, height, floor)
                for end in ends}
     if not any(stance.any() for stance in stances.values()):
@@ -224,13 +225,15 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     gaps = np.full(motion.num_frames, np.nan)
     for end, stance in stances.items():  # the lowest standing limb's height above the floor
         gaps[stance] = np.fmin(gaps[stance], lowest[end][stance] - floor)
-    motion = _hold_stances(raise_root(motion, -stance_drop(gaps)), stances, floor)
+    motion = _hold_stances(raise_root(motion, -stance_drop(gaps)), stances, members, floor)
     return lift_above_floor(motion, floor)
 
 
-def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray], floor: float) -> Motion:
+def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray],
+                  members: Dict[int, List[int]], floor: float) -> Motion:
     """Each limb end of :obj:`stances` (end -> :math:`(T,)` bool) held on
-    the floor through its stances, the chain above it bent to reach there."""
+    the floor through its stances (its subtree :obj:`members` at the floor),
+    the chain above it bent to reach there."""
     skeleton = motion.skeleton
     pos = motion.global_positions()
     for end, stance in stances.items():
@@ -238,7 +241,7 @@ def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray], floor: float) 
         if len(chain) < 3:  # one bone cannot bend
             continue
         track = pos[:, end]
-        above = pos[:, subtree(skeleton.children, end), 1].min(axis=1) - floor
+        above = pos[:, members[end], 1].min(axis=1) - floor
         target = planted_track(track, stance, drop=above)
         frames = np.flatnonzero(np.linalg.norm(target - track, axis=-1) > 1e-9)
         if not len(frames):
@@ -246,3 +249,8 @@ def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray], floor: float) 
         motion = _bend(motion, chain, reach(pos[:, chain], target), frames)
         pos = motion.global_positions()
     return motion
+
+
+__all__ = ["BLEND_FRAMES", "DROP_FRAMES", "MAX_CHAIN_BONES", "MIN_STANCE", "ROOT_SPEED_FACTOR",
+           "limb_chain", "plant_feet", "planted_track", "reach", "stance_drop", "stance_frames",
+           "subtree"]

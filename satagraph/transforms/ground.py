@@ -15,6 +15,8 @@ generation applies it after :func:`ground_at`).
 """
 from __future__ import annotations
 
+from typing import Union
+
 import numpy as np
 
 from satagraph.motion import Motion, character_height
@@ -68,7 +70,7 @@ def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
     return raise_root(motion, lift * height - lowest)
 
 
-def raise_root(motion: Motion, rise) -> Motion:
+def raise_root(motion: Motion, rise: Union[float, np.ndarray]) -> Motion:
     r""":obj:`motion` with its root raised along +Y by :obj:`rise` (one
     value, or one per frame :math:`(T,)`; negative lowers it)."""
     translations = motion.translations.copy()
@@ -167,4 +169,5 @@ def stands(positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "lift_above_floor", "raise_root", "STANDING_SHARE", "standing_frame", "standing_frames", "stands"]
+           "lift_above_floor", "raise_root", "STANDING_SHARE", "standing_frame",
+           "standing_frames", "stands"]
