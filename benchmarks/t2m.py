@@ -79,7 +79,7 @@ from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa
                                           encode_windows, generate_on, load_generator,
                                           rig_inputs)
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
-from satagraph.pipelines.quality import heading_gap, turn_rate  # noqa: E402
+from satagraph.pipelines.quality import heading_gap, pace_drift, turn_rate  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
                                                    describe_features, froude_speed,
                                                    leg_length)
@@ -108,6 +108,7 @@ class Item:
     contact: Tuple[float, float]  # foot sliding (heights/s), hovering (heights)
     sideways: float = float("nan")  # degrees between travel and facing (see sideways)
     turn: float = float("nan")  # signed degrees a second the facing turns (see turning)
+    drift: float = float("nan")  # the root's pace, last third over first, minus 1 (see drifting)
     motion: Optional[Motion] = field(default=None, repr=False)
 
 
@@ -122,7 +123,7 @@ def measure(feats: MotionFeatures, captions: List[str], label: str, group: str,
     return Item(describe_features(feats, ends), captions, label, group, skeleton,
                 feats.num_frames / feats.fps, froude_speed(feats, ends), travel,
                 contact_quality(feats), sideways(motion), turning(motion),
-                motion if keep else None)
+                drifting(motion), motion if keep else None)
 
 
 def _or_nan(value: Optional[float]) -> float:
@@ -140,6 +141,13 @@ def turning(motion: Motion) -> float:
     """:func:`~satagraph.pipelines.quality.turn_rate` of a canonical motion
     (signed degrees a second, positive to the left); NaN where it has none."""
     return _or_nan(turn_rate(motion))
+
+
+def drifting(motion: Motion) -> float:
+    """:func:`~satagraph.pipelines.quality.pace_drift` of a canonical motion
+    (how much faster it moves over its last third than its first); NaN
+    where it has none."""
+    return _or_nan(pace_drift(motion))
 
 
 def zoo_items(stream: str, count: int, seed: int = 0, keep: bool = False) -> List[Item]:
@@ -467,13 +475,15 @@ def direction_ok(label: str, travel: np.ndarray) -> bool:
 FORWARD = ("walk", "run", "dash")
 
 
-def _forward_median(labels: Sequence[str], values: Optional[Sequence[float]]
-                    ) -> Optional[Tuple[float, int]]:
-    """Median and count of the finite magnitudes of :obj:`values` over the
-    forward actions (:data:`FORWARD`); ``None`` where there are none."""
+def _forward_median(labels: Sequence[str], values: Optional[Sequence[float]],
+                    signed: bool = False) -> Optional[Tuple[float, int]]:
+    """Median and count of the finite magnitudes of :obj:`values` (the
+    values themselves with :obj:`signed`) over the forward actions
+    (:data:`FORWARD`); ``None`` where there are none."""
     if values is None:
         return None
-    ahead = [abs(v) for l, v in zip(labels, values) if l in FORWARD and np.isfinite(v)]
+    ahead = [v if signed else abs(v) for l, v in zip(labels, values)
+             if l in FORWARD and np.isfinite(v)]
     return (float(np.median(ahead)), len(ahead)) if ahead else None
 
 
@@ -486,12 +496,14 @@ def _left_share(labels: Sequence[str], turns: Sequence[float]) -> float:
 
 def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
            froudes: Sequence[float], gaps: Optional[Sequence[float]] = None,
-           turns: Optional[Sequence[float]] = None) -> Dict[str, object]:
+           turns: Optional[Sequence[float]] = None,
+           drifts: Optional[Sequence[float]] = None) -> Dict[str, object]:
     """Direction accuracy, walk < run < dash ordering of mean Froude speed,
     share of still bow / bye motions and, with :obj:`gaps` (:func:`sideways`
     per motion) and :obj:`turns` (:func:`turning`), their median magnitude
     over the forward actions (:data:`FORWARD`) and the share of those turns
-    that go left, over labelled motions."""
+    that go left, and with :obj:`drifts` (:func:`drifting`) their median
+    signed pace drift, over labelled motions."""
     out: Dict[str, object] = {}
     for key, values in (("sideways", gaps), ("turn", turns)):
         found = _forward_median(labels, values)
@@ -499,6 +511,9 @@ def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
             out[key] = found
     if "turn" in out:
         out["turn_left"] = _left_share(labels, turns)
+    drift = _forward_median(labels, drifts, signed=True)
+    if drift is not None:
+        out["drift"] = drift
     dirs = [direction_ok(l, t) for l, t in zip(labels, travels) if l in DIRECTIONS]
     if dirs:
         out["direction"] = (float(np.mean(dirs)), len(dirs))
@@ -635,7 +650,7 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
     settings = settings or GenerationSettings()
     rows = []
     for name, (subject, target) in targets.items():
-        labels, travels, froudes, gaps, turns = [], [], [], [], []
+        labels, travels, froudes, gaps, turns, drifts = [], [], [], [], [], []
         for prompt, label in PROBE_PROMPTS:
             for seed in range(seeds):
                 motion = generate_on(module, prompt.format(subject), target, seconds, seed,
@@ -643,9 +658,9 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
                 it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
                              name, name)
                 labels.append(label), travels.append(it.travel), froudes.append(it.froude)
-                gaps.append(it.sideways), turns.append(it.turn)
+                gaps.append(it.sideways), turns.append(it.turn), drifts.append(it.drift)
         rows.append({"skeleton": name, "subject": subject,
-                     "probes": probes(labels, travels, froudes, gaps, turns)})
+                     "probes": probes(labels, travels, froudes, gaps, turns, drifts)})
     return rows
 
 
@@ -682,7 +697,7 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                    action_by_label=recogniser.by_label(descs, labels),
                    probes=probes([it.label for it in test], [it.travel for it in items],
                                  [it.froude for it in items], [it.sideways for it in items],
-                                 [it.turn for it in items]))
+                                 [it.turn for it in items], [it.drift for it in items]))
         rows.append(row)
     return rows
 
@@ -712,6 +727,8 @@ def probe_cell(p: Dict[str, object]) -> str:
     if "turn" in p:
         left = f", {p['turn_left']:.0%} left" if "turn_left" in p else ""
         parts.append(f"turn {p['turn'][0]:.1f} deg/s (n={p['turn'][1]}{left})")
+    if "drift" in p:
+        parts.append(f"pace drift {p['drift'][0]:+.0%} (n={p['drift'][1]})")
     return "; ".join(parts)
 
 

@@ -71,6 +71,29 @@ def test_turn_reads_how_fast_the_facing_turns():
         f"; turn {out['turn'][0]:.1f} deg/s (n=2, {out['turn_left']:.0%} left)")
 
 
+
+def test_pace_drift_reads_a_walk_that_speeds_up():
+    """A zoo walk keeps its pace; the same root features whose speed ramps
+    from 0.7 to 1.3 times along the clip read about +0.5 (the last third's
+    mean over the first's); the forward actions' signed median goes in the
+    probes and in the probe cell."""
+    from dataclasses import replace
+    from satagraph.data.features import motion_to_features
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.transforms.canonical import canonicalize
+    rig = [r for r in zoo_rigs(seed=1) if r.species == "quadruped"][0]
+    feats = motion_to_features(canonicalize(generate_clip(rig, "walk", frames=90, seed=0),
+                                            fps=30.0))
+    walk = t2m.measure(feats, [], "walk", "zoo", "quadruped")
+    r = feats.r.copy()
+    r[:, 1:3] *= np.linspace(0.7, 1.3, len(r))[:, None]  # horizontal root velocity
+    faster = t2m.measure(replace(feats, r=r), [], "walk", "zoo", "quadruped")
+    assert abs(walk.drift) < 0.1 and faster.drift - walk.drift == pytest.approx(0.5, abs=0.08)
+    out = t2m.probes(["walk", "bow", "run"], [walk.travel] * 3, [0.3, 0.0, 0.6],
+                     drifts=[walk.drift, -0.9, faster.drift])
+    assert out["drift"] == (np.median([walk.drift, faster.drift]), 2)
+    assert t2m.probe_cell(out).endswith(f"pace drift {out['drift'][0]:+.0%} (n=2)")
+
 @pytest.mark.slow
 def test_quick_table_has_rows_and_real_beats_shuffled(tmp_path):
     torch.set_num_threads(1)

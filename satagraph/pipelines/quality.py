@@ -27,6 +27,9 @@ computed the same way on the source and on the output:
   the target character's own clip (the correlation over joints).
 * :func:`turn_rate`: how fast the body's facing turns over the clip, in
   degrees per second (2-3 for the zoo's forward walks and runs).
+* :func:`pace_drift`: how much faster the root moves over the clip's last
+  third than over its first (0 for a steady walk; a generator whose walks
+  speed up reads above 0).
 
 All of them take canonical motions (:func:`~satagraph.transforms.canonical.canonicalize`:
 +Y up, metres, floor at 0); :func:`retarget_quality` compares a source with
@@ -282,6 +285,30 @@ def turn_rate(canonical: Motion) -> Optional[float]:
     seconds = (canonical.num_frames - edge) / canonical.fps
     return float(np.degrees(yaw[-edge:].mean() - yaw[:edge].mean()) / seconds)
 
+
+#: Seconds below which a clip has no pace drift to read (:func:`pace_drift`):
+#: each third should hold about a stride.
+DRIFT_SECONDS = 1.5
+#: Leg lengths the root must cover in a clip's first third for
+#: :func:`pace_drift` to read it (a standing body has no pace).
+DRIFT_TRAVEL = 0.25
+
+
+def pace_drift(canonical: Motion) -> Optional[float]:
+    r"""How much faster the root moves horizontally over the clip's last
+    third than over its first, as a share of the first (``0.2``: a fifth
+    faster at the end; 0 for a steady walk, below 0 for one that slows).
+    ``None`` for a clip under :data:`DRIFT_SECONDS` or one whose root
+    travels under :data:`DRIFT_TRAVEL` leg lengths in its first third."""
+    if canonical.num_frames < DRIFT_SECONDS * canonical.fps:
+        return None
+    pos = canonical.global_positions()
+    step = np.linalg.norm(np.diff(pos[:, 0, [0, 2]], axis=0), axis=-1)
+    third = len(step) // 3
+    first, last = step[:third].sum(), step[-third:].sum()
+    if first < DRIFT_TRAVEL * leg_length(canonical, pos):
+        return None
+    return float(last / first - 1.0)
 
 def _sideways(source: Motion, output: Motion) -> Optional[float]:
     """Degrees between the output's :func:`heading_gap` and the source's."""

@@ -13,7 +13,8 @@ from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, for
                                          hover, joint_raise, trunk_bend,
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
-                                         most_active, posture, retarget_quality, root_travel,
+                                         most_active, pace_drift, posture, retarget_quality,
+                                         root_travel,
                                          step_correlation, stride, turn_rate, upright_fraction,
                                          cadence)
 
@@ -290,3 +291,28 @@ def test_trunk_bend_is_the_lean_from_the_first_frame():
     tipped = motion.with_(rotations=rotations)
     assert trunk_bend(tipped) == pytest.approx(trunk_bend(motion) + 40.0, abs=8.0)
     assert trunk_bend(tipped) > 35.0
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped"])
+def test_pace_drift_reads_a_steady_walk_and_one_that_speeds_up(species):
+    """A zoo walk holds its pace (drift under 0.1); its root re-timed so
+    that its speed ramps from 0.7 to 1.3 times along the clip reads the
+    ramp's thirds (1.2 / 0.8 - 1 = +0.5), the reverse ramp -1/3; a short
+    clip and a clip standing still have no pace to read."""
+    walk = _walk(species, frames=120)
+    assert abs(pace_drift(walk)) < 0.1
+    frames = walk.num_frames
+    t = np.linspace(0.0, 1.0, frames - 1)
+    for speed, expected in ((0.7 + 0.6 * t, 0.5), (1.3 - 0.6 * t, -1.0 / 3.0)):
+        warp = np.concatenate([[0.0], np.cumsum(speed)])
+        warp *= (frames - 1) / warp[-1]  # frame index each new frame reads, same span
+        translations = walk.translations.copy()
+        for axis in (0, 2):
+            translations[:, 0, axis] = np.interp(warp, np.arange(frames),
+                                                 walk.translations[:, 0, axis])
+        drift = pace_drift(walk.with_(translations=translations))
+        assert drift == pytest.approx(expected, abs=0.08)
+    assert pace_drift(walk.slice(0, 30)) is None  # one second
+    still = walk.translations.copy()
+    still[:, 0, [0, 2]] = still[:1, 0, [0, 2]]
+    assert pace_drift(walk.with_(translations=still)) is None
