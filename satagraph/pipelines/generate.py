@@ -85,7 +85,10 @@ class GenerationSettings:
     :data:`~satagraph.transforms.rest.REST_MODES`: ``"auto"``, as
     ``retarget`` shows it, re-rests a line or captured rest on its mean
     standing pose; ``"file"``, as the generator's data showed it,
-    ``experiments/T2M.md`` section 34)."""
+    ``experiments/T2M.md`` section 34); and the seconds of the windows the
+    residual layers are filled in (``residual_window``, 0: the whole clip at
+    once, the default; guided over a whole clip of three seconds or more,
+    walks speed up along it, ``experiments/T2M.md`` section 57)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -101,6 +104,12 @@ class GenerationSettings:
     choice_temperature: float = 0.0
     spread: float = 0.0
     rest: str = "auto"
+    residual_window: float = 0.0
+
+    def residual_frames(self, fps: float) -> Optional[int]:
+        """:attr:`residual_window` in frames at :obj:`fps` (``None``: whole
+        clips)."""
+        return int(round(self.residual_window * fps)) if self.residual_window > 0 else None
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -212,7 +221,8 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                    else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, temperature,
-                                     settings.topk_ratio, gen, settings.layers)
+                                     settings.topk_ratio, gen, settings.layers,
+                                     settings.residual_frames(module.fps))
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
                      settings.ground, settings.smooth, settings.plant, settings.output_smooth)
 

@@ -12,7 +12,7 @@ left to measurements of code run lengths (:func:`code_run_lengths`).
 """
 from __future__ import annotations
 
-from typing import Optional, Tuple
+from typing import List, Optional, Tuple
 
 import torch
 from torch import Tensor
@@ -157,3 +157,30 @@ def code_run_lengths(codes: Tensor, lengths: Tensor) -> Tensor:
         _, counts = torch.unique_consecutive(row[:length], return_counts=True)
         runs.append(counts)
     return torch.cat(runs) if runs else codes.new_zeros(0)
+
+
+def window_spans(length: int, window: int, align: int = 1) -> List[Tuple[int, int, int, int]]:
+    r"""Overlapping windows over a sequence of :obj:`length` frames, each
+    frame taken from the window whose centre is nearest: ``(start, stop,
+    keep_from, keep_to)``, windows of :obj:`window` frames every half window
+    (the last one ending at the sequence's end), every start and kept
+    boundary a multiple of :obj:`align` (the frames of a token). Each window
+    but the first and last keeps about its central half; a sequence no
+    longer than a window is one span.
+
+    Example:
+        >>> window_spans(120, 60, 2)
+        [(0, 60, 0, 46), (30, 90, 46, 76), (60, 120, 76, 120)]
+    """
+    if window < 2 * align:
+        raise ValueError(f"a window of {window} frames is under two tokens of {align}")
+    if length <= window:
+        return [(0, length, 0, length)]
+    hop = max(align, window // 2 // align * align)
+    last = (length - window) // align * align
+    starts = list(range(0, last, hop)) + [last]
+    stops = [s + window for s in starts[:-1]] + [length]
+    centres = [(a + b) / 2 for a, b in zip(starts, stops)]
+    cuts = [int((c + d) / 2 / align + 0.5) * align for c, d in zip(centres, centres[1:])]
+    bounds = [0] + cuts + [length]
+    return [(a, b, k, m) for a, b, k, m in zip(starts, stops, bounds, bounds[1:])]

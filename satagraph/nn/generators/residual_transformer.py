@@ -7,7 +7,8 @@ from typing import NamedTuple, Optional, Tuple
 import torch
 from torch import Tensor, nn
 
-from satagraph.nn.generators.codes import check_codes, length_mask, pool_codes, unpool_codes
+from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes,
+                                           unpool_codes, window_spans)
 from satagraph.nn.generators.sampling import guided, residual_layer_schedule, sample_logits
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
@@ -186,7 +187,7 @@ class ResidualTransformer(nn.Module):
                  lengths: Tensor, guidance: float = 5.0, temperature: float = 1.0,
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None,
-                 num_quantizers: Optional[int] = None) -> Tensor:
+                 num_quantizers: Optional[int] = None, window: Optional[int] = None) -> Tensor:
         r"""Fills layers :math:`1..Q-1` one after the other given layer-0
         codes, with classifier-free guidance (MoMask: 5).
 
@@ -202,11 +203,36 @@ class ResidualTransformer(nn.Module):
             topk_ratio (float, optional): Share of codes kept by top-k.
             generator (torch.Generator, optional): Source of randomness.
             num_quantizers (int, optional): Layers to fill (default all).
+            window (int, optional): Fill a sequence longer than this many
+                frames in overlapping windows of it, each frame from the
+                window centred nearest (:func:`~satagraph.nn.generators.codes.window_spans`;
+                default: whole sequences). Guided over a whole sequence of
+                three seconds or more, the shipped generator's walks speed
+                up along it (``experiments/T2M.md`` section 57).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T, Q)`, :attr:`pad_id` after
             each sequence's length.
         """
+        args = (guidance, temperature, topk_ratio, generator, num_quantizers)
+        if window is None or int(lengths.max()) <= window:
+            return self._fill(base_codes, text_emb, skel_emb, lengths, *args)
+        depth = num_quantizers or self.num_quantizers
+        out = base_codes.new_full((base_codes.size(0), int(lengths.max()), depth), self.pad_id)
+        for b, length in enumerate(lengths.tolist()):
+            text = None if text_emb is None else text_emb[b:b + 1]
+            for start, stop, keep, end in window_spans(int(length), window, self.pool):
+                part = self._fill(base_codes[b:b + 1, start:stop], text, skel_emb[b:b + 1],
+                                  lengths.new_tensor([stop - start]), *args)
+                out[b, keep:end] = part[0, keep - start:end - start]
+        return out
+
+    @torch.no_grad()
+    def _fill(self, base_codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+              lengths: Tensor, guidance: float, temperature: float,
+              topk_ratio: Optional[float], generator: Optional[torch.Generator],
+              num_quantizers: Optional[int]) -> Tensor:
+        """:meth:`generate` over whole sequences."""
         depth = num_quantizers or self.num_quantizers
         with evaluating(self):
             base, tok_lengths = pool_codes(base_codes, lengths, self.pool, self.pool_reduce,

@@ -6,6 +6,7 @@ import torch
 
 from satagraph.nn.generators import (code_run_lengths, merge_codes, pool_codes, split_codes,
                                      token_lengths, unpool_codes)
+from satagraph.nn.generators.codes import window_spans
 
 
 def test_split_and_merge_round_trip():
@@ -65,3 +66,37 @@ def test_unknown_reduction_is_refused():
 def test_run_lengths():
     codes = torch.tensor([[1, 1, 2, 2, 2, 1, 7], [3, 3, 3, 0, 0, 0, 0]])
     assert code_run_lengths(codes, torch.tensor([6, 3])).tolist() == [2, 3, 1, 3]
+
+
+@pytest.mark.parametrize("length,window,align", [(120, 60, 2), (121, 60, 2), (200, 60, 2),
+                                                 (95, 60, 2), (61, 60, 1), (60, 60, 2),
+                                                 (7, 60, 2), (250, 64, 4)])
+def test_window_spans_take_every_frame_once_from_the_nearest_window(length, window, align):
+    """Kept ranges tile the sequence in order; each lies inside its window,
+    starts and cuts sit on token boundaries, and no frame is kept from a
+    window whose centre is farther than the next window's (by more than a
+    token)."""
+    spans = window_spans(length, window, align)
+    keeps = [(k, m) for _, _, k, m in spans]
+    assert keeps[0][0] == 0 and keeps[-1][1] == length
+    assert all(a[1] == b[0] and a[0] < a[1] for a, b in zip(keeps, keeps[1:]))
+    for i, (start, stop, keep, end) in enumerate(spans):
+        assert 0 <= start <= keep < end <= stop <= length and start % align == 0
+        assert stop - start <= max(window, length) and (stop - start <= window + align or
+                                                       len(spans) == 1)
+        assert keep % align == 0 or keep == 0
+        centre = (start + stop) / 2
+        for j, (s2, e2, _, _) in enumerate(spans):
+            other = (s2 + e2) / 2
+            for frame in (keep, end - 1):
+                if j != i and s2 <= frame < e2:
+                    assert abs(frame - centre) <= abs(frame - other) + align
+    if length <= window:
+        assert spans == [(0, length, 0, length)]
+    else:
+        assert len(spans) >= 2 and spans[-1][1] == length
+
+
+def test_window_spans_refuse_a_window_under_two_tokens():
+    with pytest.raises(ValueError, match="under two tokens"):
+        window_spans(100, 3, 2)

@@ -154,3 +154,32 @@ def test_gradients_reach_the_skeleton_embedding():
     out.loss.backward()
     for name, param in net.named_parameters():
         assert param.grad is not None and param.grad.abs().sum() > 0, name
+
+
+def test_generate_in_windows_takes_each_span_from_its_windows_own_fill(conditions):
+    """With a window, each sequence's kept span of every window holds the
+    codes a whole-sequence fill of that window alone gives (argmax, so
+    exactly); sequences no longer than the window are filled whole, the
+    padding stays, and a window as long as the batch changes nothing."""
+    from satagraph.nn.generators.codes import window_spans
+    text, skel, _ = conditions
+    model = tiny_residual(Q, pool=2).eval()
+    lengths = torch.tensor([30, 12, 21])
+    base = random_stack(lengths)[..., 0].repeat_interleave(2, 1)[:, :30]
+    fill = dict(guidance=3.0, temperature=0.0)
+    out = model.generate(base, text, skel, lengths, window=12, **fill)
+    assert out.shape == (3, 30, Q)
+    assert torch.equal(out[1, :12], model.generate(base[1:2, :12], text[1:2], skel[1:2],
+                                                   torch.tensor([12]), **fill)[0])
+    for b in (0, 2):
+        n = int(lengths[b])
+        assert len(window_spans(n, 12, 2)) >= 2
+        for start, stop, keep, end in window_spans(n, 12, 2):
+            alone = model.generate(base[b:b + 1, start:stop], text[b:b + 1], skel[b:b + 1],
+                                   torch.tensor([stop - start]), **fill)[0]
+            assert torch.equal(out[b, keep:end], alone[keep - start:end - start])
+    real = torch.arange(30) < lengths.unsqueeze(-1)
+    assert out[~real].eq(model.pad_id).all() and torch.equal(out[..., 0][real], base[real])
+    assert torch.equal(model.generate(base, text, skel, lengths, window=30, **fill),
+                       model.generate(base, text, skel, lengths, **fill))
+    assert not torch.equal(out, model.generate(base, text, skel, lengths, **fill))
