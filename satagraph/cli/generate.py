@@ -20,6 +20,18 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _window(text: str) -> float:
+    """``--residual-window``: 0 (whole clips) or at least half a second."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if value != 0.0 and not 0.5 <= value <= 60.0:
+        raise argparse.ArgumentTypeError(f"0 (whole clips) or between 0.5 and 60 seconds: "
+                                         f"{text!r}")
+    return value
+
+
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
     from satagraph.cli.arguments import add_plant_argument, add_rig_arguments
@@ -57,6 +69,12 @@ def add_generate_parser(sub) -> None:
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
+    p.add_argument("--residual-window", type=_window, default=0.0, metavar="SECONDS",
+                   help="fill the residual code layers in overlapping windows of this many "
+                   "seconds (default 0: the whole clip at once). The built-in generator's "
+                   "walks of three seconds or more speed up along the clip (10-30 %%); 2 "
+                   "holds their pace, at some cost to how closely the motion matches the "
+                   "text on the benchmark (experiments/T2M.md sections 57-58)")
     p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=True,
                    help="put the motion on the floor: one vertical shift, its median lowest "
                    "joint at the floor, then each frame that would sink raised onto it "
@@ -171,7 +189,8 @@ def run_generate(args) -> int:
     if args.ckpt == BUILTIN:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
-                                  ground=args.ground, plant=args.plant)
+                                  ground=args.ground, plant=args.plant,
+                                  residual_window=args.residual_window)
     if args.prompts is not None:
         return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()
