@@ -10,11 +10,16 @@ from pathlib import Path
 from typing import List
 
 
-def _seconds(text: str) -> float:
+def _number(text: str) -> float:
+    """A command-line number, or argparse's one-line error."""
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def _seconds(text: str) -> float:
+    value = _number(text)
     if not 0.1 <= value <= 60.0:
         raise argparse.ArgumentTypeError(f"must be between 0.1 and 60 seconds: {text!r}")
     return value
@@ -22,10 +27,7 @@ def _seconds(text: str) -> float:
 
 def _window(text: str) -> float:
     """``--residual-window``: 0 (whole clips) or at least half a second."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    value = _number(text)
     if value != 0.0 and not 0.5 <= value <= 60.0:
         raise argparse.ArgumentTypeError(f"0 (whole clips) or between 0.5 and 60 seconds: "
                                          f"{text!r}")
