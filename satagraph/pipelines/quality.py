@@ -310,6 +310,7 @@ def pace_drift(canonical: Motion) -> Optional[float]:
         return None
     return float(last / first - 1.0)
 
+
 def _sideways(source: Motion, output: Motion) -> Optional[float]:
     """Degrees between the output's :func:`heading_gap` and the source's."""
     a, b = heading_gap(source), heading_gap(output)
