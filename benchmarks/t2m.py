@@ -27,8 +27,10 @@ diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinemati
 on every group's motions: direction of travel (walk / back / left / right),
 Froude speed ordering walk < run < dash, stillness of bow and bye, how far
 forward motions travel off the body's facing (``sideways``, median degrees:
-a crabwise walk) and how fast their facing turns (``turn``, median degrees
-a second: real forward walks and runs turn 2-3); and the same probes per
+a crabwise walk), how fast their facing turns (``turn``, median degrees
+a second: real forward walks and runs turn 2-3) and how much faster they
+move over their last third than their first (``pace drift``, the signed
+median: real clips 0-8 %); and the same probes per
 skeleton (one rig a body plan, real rigs too), every probe prompt with
 ``--probe-seeds`` seeds (6: 24 walking generations a skeleton).
 
