@@ -78,6 +78,8 @@ class MaskedTransformer(nn.Module):
         mask_prob (float, optional): Share of the other masked tokens given
             [MASK].
         label_smoothing (float, optional): Cross-entropy label smoothing.
+        position_jitter (int, optional): Training-time start positions
+            (:class:`~satagraph.nn.generators.token_transformer.TokenTransformer`).
 
     Shapes:
         - **tokens**: :math:`(B, T)` (token rate), **text_emb**:
@@ -92,7 +94,7 @@ class MaskedTransformer(nn.Module):
                  cond_drop: float = 0.1, positions: str = "sine",
                  max_length: Optional[int] = None, pool: int = 1, pool_reduce: str = "mode",
                  mask_floor: float = 0.0, random_prob: float = 0.1, mask_prob: float = 0.88,
-                 label_smoothing: float = 0.0) -> None:
+                 label_smoothing: float = 0.0, position_jitter: int = 0) -> None:
         super().__init__()
         if not 0.0 <= mask_floor < 1.0:
             raise ValueError(f"mask_floor must be in [0, 1), got {mask_floor}")
@@ -104,7 +106,7 @@ class MaskedTransformer(nn.Module):
         self.backbone = TokenTransformer(hidden_channels, heads, num_layers,
                                          ff_channels or 4 * hidden_channels, dropout,
                                          text_channels, skel_channels, cond_drop, positions,
-                                         max_length)
+                                         max_length, position_jitter)
         self.head = nn.Linear(hidden_channels, num_codes)
         init_token_model(self)
 

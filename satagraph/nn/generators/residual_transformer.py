@@ -68,6 +68,8 @@ class ResidualTransformer(nn.Module):
         pool (int, optional): Frames per token.
         pool_reduce (str, optional): ``"mode"`` or ``"first"``.
         label_smoothing (float, optional): Cross-entropy label smoothing.
+        position_jitter (int, optional): Training-time start positions
+            (:class:`~satagraph.nn.generators.token_transformer.TokenTransformer`).
 
     Shapes:
         - **codes**: :math:`(B, T, Q)` (token rate in :meth:`forward`),
@@ -82,7 +84,7 @@ class ResidualTransformer(nn.Module):
                  cond_drop: float = 0.2, code_channels: Optional[int] = None,
                  share_weights: bool = True, positions: str = "sine",
                  max_length: Optional[int] = None, pool: int = 1, pool_reduce: str = "mode",
-                 label_smoothing: float = 0.0) -> None:
+                 label_smoothing: float = 0.0, position_jitter: int = 0) -> None:
         super().__init__()
         if num_quantizers < 2:
             raise ValueError("a residual transformer needs at least 2 quantizers")
@@ -99,7 +101,7 @@ class ResidualTransformer(nn.Module):
         self.backbone = TokenTransformer(hidden_channels, heads, num_layers,
                                          ff_channels or 4 * hidden_channels, dropout,
                                          text_channels, skel_channels, cond_drop, positions,
-                                         max_length)
+                                         max_length, position_jitter)
         self.out_proj = nn.Linear(hidden_channels, code_channels)
         init_token_model(self)
 

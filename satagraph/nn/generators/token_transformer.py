@@ -66,6 +66,12 @@ class TokenTransformer(nn.Module):
             :obj:`max_length` tokens).
         max_length (int, optional): Longest token sequence (learned
             positions).
+        position_jitter (int, optional): In training, each sequence's first
+            token sits at a position drawn from ``0..position_jitter``
+            instead of 0, so that no motion is tied to the first positions
+            (``experiments/T2M.md`` section 59: the shipped generator's
+            residual layers write slow motion there); 0, the default, as
+            every model before it. Inference always starts at 0.
 
     Shapes:
         - **h**: :math:`(B, T, C)` token embeddings, **valid**: :math:`(B, T)`,
@@ -75,13 +81,15 @@ class TokenTransformer(nn.Module):
 
     def __init__(self, hidden_channels: int, heads: int, num_layers: int, ff_channels: int,
                  dropout: float, text_channels: int, skel_channels: int, cond_drop: float,
-                 positions: str = "sine", max_length: Optional[int] = None) -> None:
+                 positions: str = "sine", max_length: Optional[int] = None,
+                 position_jitter: int = 0) -> None:
         super().__init__()
         if positions not in POSITIONS:
             raise ValueError(f"unknown positions {positions!r}: use one of {POSITIONS}")
         if positions == "learned" and not max_length:
             raise ValueError("learned positions need max_length")
         self.cond_drop, self.hidden_channels = cond_drop, hidden_channels
+        self.position_jitter = int(position_jitter)
         self.condition = ConditionTokens(text_channels, skel_channels, hidden_channels)
         self.pos = nn.Embedding(max_length, hidden_channels) if positions == "learned" else None
         layer = nn.TransformerEncoderLayer(hidden_channels, heads, ff_channels, dropout,
@@ -98,6 +106,17 @@ class TokenTransformer(nn.Module):
             raise ValueError(f"{length} tokens exceed max_length {self.pos.num_embeddings}")
         return self.pos.weight[:length]
 
+    def token_positions(self, h: Tensor) -> Tensor:
+        r"""The position embeddings of :obj:`h`'s tokens: :math:`(T, C)`
+        from 0, or in training with :attr:`position_jitter` :math:`(B, T, C)`
+        from a start drawn per sequence."""
+        length = h.size(1)
+        if not self.training or self.position_jitter <= 0:
+            return self.positions(length, h.device, h.dtype)
+        table = self.positions(length + self.position_jitter, h.device, h.dtype)
+        start = torch.randint(self.position_jitter + 1, (h.size(0), 1), device=h.device)
+        return table[start + torch.arange(length, device=h.device)]
+
     def draw_text_drop(self, size: int, generator: Optional[torch.Generator] = None,
                        device=None) -> Tensor:
         """Which samples lose their text (training only; :math:`(B,)` bool)."""
@@ -110,7 +129,7 @@ class TokenTransformer(nn.Module):
         cond = self.condition(text_emb, skel_emb, drop_text)
         if extra is not None:
             cond = torch.cat([cond, extra], dim=1)
-        h = h + self.positions(h.size(1), h.device, h.dtype)
+        h = h + self.token_positions(h)
         keep = F.pad(valid, (cond.size(1), 0), value=True)
         out = self.encoder(torch.cat([cond, h], dim=1), src_key_padding_mask=~keep)
         return out[:, cond.size(1):]

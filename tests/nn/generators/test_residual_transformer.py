@@ -183,3 +183,30 @@ def test_generate_in_windows_takes_each_span_from_its_windows_own_fill(condition
     assert torch.equal(model.generate(base, text, skel, lengths, window=30, **fill),
                        model.generate(base, text, skel, lengths, **fill))
     assert not torch.equal(out, model.generate(base, text, skel, lengths, **fill))
+
+
+def test_position_jitter_starts_each_training_sequence_at_a_drawn_position(conditions):
+    """In training, each sequence's tokens read the sinusoids from a start
+    drawn in ``0..position_jitter`` (the same draw again gives the same
+    positions); in eval mode, and with no jitter, they start at 0."""
+    from satagraph.nn.layers.spatio_temporal import sinusoidal_positions
+    model = tiny_residual(Q, position_jitter=7)
+    backbone = model.backbone
+    h = torch.zeros(3, 10, backbone.hidden_channels)
+    table = sinusoidal_positions(17, backbone.hidden_channels)
+    torch.manual_seed(4)
+    drawn = backbone.token_positions(h)
+    torch.manual_seed(4)
+    start = torch.randint(8, (3, 1))
+    assert drawn.shape == (3, 10, backbone.hidden_channels)
+    for b in range(3):
+        assert torch.equal(drawn[b], table[int(start[b]):int(start[b]) + 10])
+    starts = set()
+    for seed in range(20):
+        torch.manual_seed(seed)
+        positions = backbone.token_positions(h)
+        starts |= {int(torch.cdist(positions[b, :1], table).argmin()) for b in range(3)}
+    assert starts == set(range(8))
+    model.eval()
+    assert torch.equal(backbone.token_positions(h), table[:10])
+    assert torch.equal(tiny_residual(Q).train().backbone.token_positions(h), table[:10])
