@@ -88,6 +88,8 @@ class TokenTransformer(nn.Module):
             raise ValueError(f"unknown positions {positions!r}: use one of {POSITIONS}")
         if positions == "learned" and not max_length:
             raise ValueError("learned positions need max_length")
+        if position_jitter < 0:
+            raise ValueError(f"position_jitter must be >= 0, got {position_jitter}")
         self.cond_drop, self.hidden_channels = cond_drop, hidden_channels
         self.position_jitter = int(position_jitter)
         self.condition = ConditionTokens(text_channels, skel_channels, hidden_channels)

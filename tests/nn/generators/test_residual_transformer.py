@@ -210,3 +210,5 @@ def test_position_jitter_starts_each_training_sequence_at_a_drawn_position(condi
     model.eval()
     assert torch.equal(backbone.token_positions(h), table[:10])
     assert torch.equal(tiny_residual(Q).train().backbone.token_positions(h), table[:10])
+    with pytest.raises(ValueError, match="position_jitter"):
+        tiny_residual(Q, position_jitter=-1)
