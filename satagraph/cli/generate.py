@@ -74,7 +74,8 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--residual-window", type=_window, default=0.0, metavar="SECONDS",
                    help="fill the residual code layers in overlapping windows of this many "
                    "seconds (default 0: the whole clip at once). The built-in generator's "
-                   "walks of three seconds or more speed up along the clip (10-30 %%); 2 "
+                   "walks of three seconds or more speed up along the clip (7-31 %% over four "
+                   "seconds on the benchmark's probe rigs); 2 "
                    "holds their pace, at some cost to how closely the motion matches the "
                    "text on the benchmark (experiments/T2M.md sections 57-58)")
     p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=True,

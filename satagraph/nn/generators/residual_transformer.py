@@ -229,12 +229,11 @@ class ResidualTransformer(nn.Module):
                 out[b, keep:end] = part[0, keep - start:end - start]
         return out
 
-    @torch.no_grad()
     def _fill(self, base_codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
               lengths: Tensor, guidance: float, temperature: float,
               topk_ratio: Optional[float], generator: Optional[torch.Generator],
               num_quantizers: Optional[int]) -> Tensor:
-        """:meth:`generate` over whole sequences."""
+        """:meth:`generate` over whole sequences (under its ``no_grad``)."""
         depth = num_quantizers or self.num_quantizers
         with evaluating(self):
             base, tok_lengths = pool_codes(base_codes, lengths, self.pool, self.pool_reduce,
