@@ -26,7 +26,8 @@ def _seconds(text: str) -> float:
 
 
 def _window(text: str) -> float:
-    """``--residual-window``: 0 (whole clips) or at least half a second."""
+    """``--window`` and ``--residual-window``: 0 (whole clips) or at least
+    half a second."""
     value = _number(text)
     if value != 0.0 and not 0.5 <= value <= 60.0:
         raise argparse.ArgumentTypeError(f"0 (whole clips) or between 0.5 and 60 seconds: "
@@ -65,12 +66,19 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--skeleton", required=True, nargs="+", metavar="TARGET.bvh",
                    help="BVH file(s) whose skeleton the motion is generated on")
     p.add_argument("--seconds", type=_seconds, default=None,
-                   help="duration (default: drawn from the model's length model)")
+                   help="duration (default: drawn from the model's length model; longer than "
+                   "the model's training window, generated in windows, see --window)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--guidance", type=float, default=4.0,
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
+    p.add_argument("--window", type=_window, default=None, metavar="SECONDS",
+                   help="generate a clip longer than this many seconds window after window, "
+                   "each continuing the half window before it (default: the length the "
+                   "model was trained on, 4 s for the built-in one; 0: the whole clip at "
+                   "once, which past that length slows to a shuffle: a 12-s walk at a fifth "
+                   "to a third of a 4-s one's speed, experiments/T2M.md section 61)")
     p.add_argument("--residual-window", type=_window, default=0.0, metavar="SECONDS",
                    help="fill the residual code layers in overlapping windows of this many "
                    "seconds (default 0: the whole clip at once). The built-in generator's "
@@ -193,7 +201,7 @@ def run_generate(args) -> int:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant,
-                                  residual_window=args.residual_window)
+                                  residual_window=args.residual_window, window=args.window)
     if args.prompts is not None:
         return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()

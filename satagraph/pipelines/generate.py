@@ -88,7 +88,15 @@ class GenerationSettings:
     ``experiments/T2M.md`` section 34); and the seconds of the windows the
     residual layers are filled in (``residual_window``, 0: the whole clip at
     once, the default; guided over a whole clip of three seconds or more,
-    walks speed up along it, ``experiments/T2M.md`` section 57)."""
+    walks speed up along it, ``experiments/T2M.md`` section 57); and the
+    seconds of the windows a longer clip is generated in (``window``:
+    ``None``, the default, the window the generator was trained on, so
+    that a clip longer than it is generated window after window, each
+    continuing the half window before it, its residual layers filled in
+    windows of that length too unless ``residual_window`` is set; 0: the
+    whole clip at once, which past the trained length reads positions the
+    transformers never learnt and slows to a shuffle, ``experiments/T2M.md``
+    section 61)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -105,11 +113,23 @@ class GenerationSettings:
     spread: float = 0.0
     rest: str = "auto"
     residual_window: float = 0.0
+    window: Optional[float] = None
 
-    def residual_frames(self, fps: float) -> Optional[int]:
-        """:attr:`residual_window` in frames at :obj:`fps` (``None``: whole
-        clips)."""
-        return int(round(self.residual_window * fps)) if self.residual_window > 0 else None
+    def window_frames(self, module) -> Optional[int]:
+        """:attr:`window` in frames of :obj:`module` (``None``: whole clips;
+        by default the window it was trained on, ``meta["window"]``, where
+        recorded)."""
+        if self.window is None:
+            trained = (getattr(module, "meta", None) or {}).get("window")
+            return int(trained) if trained else None
+        return int(round(self.window * module.fps)) if self.window > 0 else None
+
+    def residual_frames(self, module) -> Optional[int]:
+        """:attr:`residual_window` in frames of :obj:`module`, else
+        :meth:`window_frames` (``None``: whole clips)."""
+        if self.residual_window > 0:
+            return int(round(self.residual_window * module.fps))
+        return self.window_frames(module)
 
 
 def load_generator(ckpt: str = "builtin"):
@@ -216,13 +236,13 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                   settings.topk_ratio, gen,
                                   known=known, keep=keep,
                                   choice_temperature=settings.choice_temperature,
-                                  spread=settings.spread)
+                                  spread=settings.spread, window=settings.window_frames(module))
     temperature = (settings.temperature if settings.residual_temperature is None
                    else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers,
-                                     settings.residual_frames(module.fps))
+                                     settings.residual_frames(module))
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
                      settings.ground, settings.smooth, settings.plant, settings.output_smooth)
 

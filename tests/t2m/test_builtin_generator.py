@@ -140,3 +140,30 @@ def test_residual_window_holds_the_pace_of_a_four_second_walk(tmp_path):
     with pytest.raises(SystemExit):
         main(["generate", "--text", "a walk", "--skeleton", str(rig), "--residual-window",
               "0.2", str(tmp_path / "x.bvh")])
+
+
+def test_a_clip_longer_than_the_trained_window_keeps_the_pace_of_one_within_it(tmp_path):
+    """The built-in generator learnt 4-s windows (``meta["window"]``). A 12-s
+    walk generated whole (``--window 0``) reads positions it never learnt
+    and shuffles at under half a 4-s walk's pace (0.17 of it with seed 0);
+    by default it is generated in 4-s windows, each continuing the one
+    before, and keeps at least 0.7 of that pace (0.88). A clip within the
+    window is the same file either way."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io import write_bvh
+    from satagraph.pipelines.quality import root_travel
+    from satagraph.transforms.canonical import canonicalize
+    rig = tmp_path / "biped.bvh"
+    write_bvh(generate_clip(zoo_rigs(["biped"], seed=7)[0], frames=4), rig)
+
+    def pace(seconds: str, *flags: str) -> float:
+        out = tmp_path / f"walk_{seconds}_{len(flags)}.bvh"
+        assert main(["generate", "--text", "a person walks forward", "--seconds", seconds,
+                     "--seed", "0", "--skeleton", str(rig), *flags, str(out)]) == 0
+        return root_travel(canonicalize(read_bvh(out), fps=30.0)) / float(seconds)
+
+    four = pace("4")
+    assert pace("4", "--window", "0") == four
+    assert (tmp_path / "walk_4_0.bvh").read_bytes() == (tmp_path / "walk_4_2.bvh").read_bytes()
+    windowed, whole = pace("12") / four, pace("12", "--window", "0") / four
+    assert windowed >= 0.7 and whole < 0.5, (windowed, whole)

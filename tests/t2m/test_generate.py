@@ -11,7 +11,7 @@ import torch
 import pytest
 
 from satagraph.cli import main
-from satagraph.pipelines.generate import output_paths
+from satagraph.pipelines.generate import GenerationSettings, output_paths
 from satagraph.io import read_bvh
 from tests.conftest import data_dir
 
@@ -504,3 +504,19 @@ def test_smooth_decoded_smooths_each_joint_along_time_only():
     torch.testing.assert_close(sq[7:-7, 2, 3], q[7:-7, 2, 3], atol=1e-5, rtol=0)  # a ramp stays
     assert (sq[:, 1, 1:] == 0).all() and (sq[:, 2, :3] == 0).all()  # nothing leaks across
     assert sr[5:-5].sub(0.5).abs().max() < 0.05
+
+
+def test_settings_generate_in_the_window_the_model_was_trained_on_unless_told():
+    """``window=None`` reads the generator's training window
+    (``meta["window"]``, none where it is not recorded), 0 means whole
+    clips, seconds are frames at the model's rate; the residual layers take
+    their own window where one is set, else the same."""
+    from types import SimpleNamespace
+    module = SimpleNamespace(fps=30.0, meta={"window": 120})
+    assert GenerationSettings().window_frames(module) == 120
+    assert GenerationSettings().residual_frames(module) == 120
+    assert GenerationSettings(window=0.0).window_frames(module) is None
+    assert GenerationSettings(window=0.0).residual_frames(module) is None
+    assert GenerationSettings(window=2.5).window_frames(module) == 75
+    assert GenerationSettings(residual_window=2.0).residual_frames(module) == 60
+    assert GenerationSettings().window_frames(SimpleNamespace(fps=30.0, meta={})) is None

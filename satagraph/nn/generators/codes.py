@@ -184,3 +184,29 @@ def window_spans(length: int, window: int, align: int = 1) -> List[Tuple[int, in
     cuts = [int((c + d) / 2 / align + 0.5) * align for c, d in zip(centres, centres[1:])]
     bounds = [0] + cuts + [length]
     return [(a, b, k, m) for a, b, k, m in zip(starts, stops, bounds, bounds[1:])]
+
+
+def continuation_spans(length: int, window: int) -> List[Tuple[int, int, int]]:
+    r"""Windows of :obj:`window` tokens that generate a sequence of
+    :obj:`length` tokens one after the other: ``(start, stop, context)``,
+    the first at 0, each later one starting half a window before the end of
+    the one before it (the last one ending at the sequence's end), its first
+    :obj:`context` tokens (those already generated) kept as given. A
+    sequence no longer than a window is one span.
+
+    Example:
+        >>> continuation_spans(150, 60)
+        [(0, 60, 0), (30, 90, 30), (60, 120, 30), (90, 150, 30)]
+        >>> continuation_spans(75, 60)
+        [(0, 60, 0), (15, 75, 45)]
+    """
+    if window < 2:
+        raise ValueError(f"a window of {window} tokens is under two tokens")
+    if length <= window:
+        return [(0, length, 0)]
+    spans = [(0, window, 0)]
+    while spans[-1][1] < length:
+        end = spans[-1][1]
+        start = min(end - window // 2, length - window)
+        spans.append((start, start + window, end - start))
+    return spans

@@ -8,8 +8,8 @@ from typing import NamedTuple, Optional, Tuple
 import torch
 from torch import Tensor, nn
 
-from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes, token_lengths,
-                                           unpool_codes)
+from satagraph.nn.generators.codes import (check_codes, continuation_spans, length_mask,
+                                           pool_codes, token_lengths, unpool_codes)
 from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided,
                                               lowest_ranked, mask_ratio, random_mask,
                                               ranking_scores, sample_logits, spread_choice,
@@ -194,7 +194,8 @@ class MaskedTransformer(nn.Module):
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None,
                  known: Optional[Tensor] = None, keep: Optional[Tensor] = None,
-                 choice_temperature: float = 0.0, spread: float = 0.0) -> Tensor:
+                 choice_temperature: float = 0.0, spread: float = 0.0,
+                 window: Optional[int] = None) -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
         as [MASK] (but the :obj:`keep` positions of :obj:`known`, which stay
         as given: infilling); at step :math:`i` of :obj:`steps` (:math:`n`) the
@@ -227,11 +228,19 @@ class MaskedTransformer(nn.Module):
                 over time, :obj:`spread` of the mean gap apart where the
                 ranking allows (0: by rank alone, see
                 :func:`~satagraph.nn.generators.sampling.spread_choice`).
+            window (int, optional): Generate a sequence longer than this many
+                frames window after window
+                (:func:`~satagraph.nn.generators.codes.continuation_spans`),
+                each window infilling after the tokens of the window before
+                that it overlaps, so that a transformer trained on windows of
+                this length reads no position it never learnt (default: whole
+                sequences at once).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
             after each sequence's length.
         """
+        args = (steps, guidance, temperature, topk_ratio, generator, choice_temperature, spread)
         with evaluating(self):
             tok_lengths = token_lengths(lengths, self.pool)
             valid = length_mask(tok_lengths, int(tok_lengths.max()))
@@ -239,20 +248,45 @@ class MaskedTransformer(nn.Module):
             keep = torch.zeros_like(valid) if keep is None else keep[:, :valid.size(1)] & valid
             if known is not None:
                 ids = torch.where(keep, known[:, :valid.size(1)], ids)
-            ids = ids.masked_fill(~valid, self.pad_id)
-            fixed = ~valid | keep
-            scores = torch.zeros(valid.shape, device=valid.device).masked_fill(fixed, float("inf"))
-            free = (~fixed).sum(-1)
-            for step in range(steps):
-                ratio = self.mask_floor + (1 - self.mask_floor) * math.cos(
-                    math.pi / 2 * step / max(steps - 1, 1))
-                count = torch.round(ratio * free).clamp(min=1).long()
-                remask = self._remask(scores, fixed, valid, count, spread)
-                ids = ids.masked_fill(remask, self.mask_id)
-                logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
-                pred = sample_logits(logits, temperature, topk_ratio, generator)
-                ids = torch.where(remask, pred, ids)
-                conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
-                conf = ranking_scores(conf, choice_temperature, (step + 1) / steps, generator)
-                scores = conf.masked_fill(~remask, 1e5).masked_fill(fixed, float("inf"))
+            span = None if window is None else window // self.pool
+            if span is None or valid.size(1) <= span:
+                return self.to_frames(self._decode(ids, keep, text_emb, skel_emb, tok_lengths,
+                                                   *args), lengths)
+            for b, length in enumerate(tok_lengths.tolist()):
+                text = None if text_emb is None else text_emb[b:b + 1]
+                for start, stop, context in continuation_spans(length, span):
+                    held = keep[b:b + 1, start:stop].clone()
+                    held[:, :context] = True
+                    ids[b, start:stop] = self._decode(ids[b:b + 1, start:stop], held, text,
+                                                      skel_emb[b:b + 1],
+                                                      tok_lengths.new_tensor([stop - start]),
+                                                      *args)[0]
             return self.to_frames(ids, lengths)
+
+    def _decode(self, ids: Tensor, keep: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+                tok_lengths: Tensor, steps: int, guidance: float, temperature: float,
+                topk_ratio: Optional[float], generator: Optional[torch.Generator],
+                choice_temperature: float, spread: float) -> Tensor:
+        """:meth:`generate`'s iterative decoding of whole token sequences
+        (:obj:`ids` hold the kept tokens where :obj:`keep` is set); tokens,
+        :attr:`pad_id` after each length."""
+        valid = length_mask(tok_lengths, ids.size(1))
+        keep = keep & valid
+        ids = torch.where(keep, ids, torch.full_like(ids, self.mask_id))
+        ids = ids.masked_fill(~valid, self.pad_id)
+        fixed = ~valid | keep
+        scores = torch.zeros(valid.shape, device=valid.device).masked_fill(fixed, float("inf"))
+        free = (~fixed).sum(-1)
+        for step in range(steps):
+            ratio = self.mask_floor + (1 - self.mask_floor) * math.cos(
+                math.pi / 2 * step / max(steps - 1, 1))
+            count = torch.round(ratio * free).clamp(min=1).long()
+            remask = self._remask(scores, fixed, valid, count, spread)
+            ids = ids.masked_fill(remask, self.mask_id)
+            logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
+            pred = sample_logits(logits, temperature, topk_ratio, generator)
+            ids = torch.where(remask, pred, ids)
+            conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
+            conf = ranking_scores(conf, choice_temperature, (step + 1) / steps, generator)
+            scores = conf.masked_fill(~remask, 1e5).masked_fill(fixed, float("inf"))
+        return ids

@@ -6,7 +6,7 @@ import torch
 
 from satagraph.nn.generators import (code_run_lengths, merge_codes, pool_codes, split_codes,
                                      token_lengths, unpool_codes)
-from satagraph.nn.generators.codes import window_spans
+from satagraph.nn.generators.codes import continuation_spans, window_spans
 
 
 def test_split_and_merge_round_trip():
@@ -99,3 +99,25 @@ def test_window_spans_take_every_frame_once_from_the_nearest_window(length, wind
 def test_window_spans_refuse_a_window_under_two_tokens():
     with pytest.raises(ValueError, match="under two tokens"):
         window_spans(100, 3, 2)
+
+
+@pytest.mark.parametrize("length,window", [(150, 60), (75, 60), (61, 60), (60, 60), (7, 60),
+                                           (181, 60), (9, 3), (200, 17)])
+def test_continuation_spans_cover_the_sequence_each_window_after_the_one_before(length, window):
+    """The first window starts at 0 and the last ends at the sequence's end;
+    every window is a whole window long (but a sequence no longer than one),
+    starts before the one before it ends (by at least half a window), keeps
+    exactly the tokens already generated and generates at least one."""
+    spans = continuation_spans(length, window)
+    assert spans[0][0] == 0 and spans[0][2] == 0 and spans[-1][1] == length
+    if length <= window:
+        assert spans == [(0, length, 0)]
+        return
+    assert all(stop - start == window for start, stop, _ in spans)
+    for (_, end, _), (start, stop, context) in zip(spans, spans[1:]):
+        assert context == end - start >= window // 2 and stop > end
+
+
+def test_continuation_spans_refuse_a_window_under_two_tokens():
+    with pytest.raises(ValueError, match="under two tokens"):
+        continuation_spans(100, 1)

@@ -219,3 +219,41 @@ def test_incomplete_code_stacks_are_refused(conditions):
     codes[0, 2] = 0
     codes[1, 8:] = -1  # padding may hold anything
     model.loss(codes, text, skel, lengths)
+
+
+def test_generate_in_windows_continues_each_window_from_the_one_before(conditions):
+    """With a window, a longer sequence is generated window after window:
+    the first window is what a sequence of that length alone gives, each
+    later window is the infilling of its own length after the tokens of the
+    window before that it overlaps (greedy, so exactly), a kept token stays
+    in every window, sequences no longer than the window are generated whole
+    (the same draws as without a window) and the padding stays."""
+    from satagraph.nn.generators.codes import continuation_spans
+    text, skel, _ = conditions
+    model = tiny_masked(pool=2).eval()
+    lengths = torch.tensor([30, 12, 21])
+    greedy = dict(steps=3, guidance=2.0, temperature=0.0)
+    known = torch.zeros(3, 15, dtype=torch.long)
+    keep = torch.zeros(3, 15, dtype=torch.bool)
+    known[0, 11], keep[0, 11] = 5, True
+    out = model.generate(text, skel, lengths, window=12, known=known, keep=keep, **greedy)
+    assert out.shape == (3, 30) and out[0, 22] == 5
+    tokens = out[:, ::2]
+    for b in (0, 2):
+        spans = continuation_spans(int(lengths[b] + 1) // 2, 6)
+        assert len(spans) >= 3
+        for start, stop, context in spans:
+            held = keep[b:b + 1, start:stop].clone()
+            held[:, :context] = True
+            alone = model.generate(text[b:b + 1], skel[b:b + 1],
+                                   torch.tensor([min(2 * stop, int(lengths[b])) - 2 * start]),
+                                   known=tokens[b:b + 1, start:stop], keep=held, **greedy)
+            assert torch.equal(alone[0, ::2], tokens[b, start:stop])
+    short = model.generate(text[1:2], skel[1:2], lengths[1:2], **greedy)
+    assert torch.equal(out[1, :12], short[0])
+    assert out[1, 12:].eq(model.pad_id).all() and out[2, 21:].eq(model.pad_id).all()
+    assert not torch.equal(out, model.generate(text, skel, lengths, known=known, keep=keep,
+                                               **greedy))
+    seeded = lambda window: model.generate(text, skel, lengths, window=window,
+                                           generator=torch.Generator().manual_seed(3))
+    assert torch.equal(seeded(30), seeded(None))
