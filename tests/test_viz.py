@@ -115,7 +115,11 @@ def test_cli_render_takes_units_per_file(tmp_path, capsys):
     drawn at their true size (one value for every file stays as before; a
     list of another length is one error line)."""
     from satagraph.cli import build_parser
-    from satagraph.cli.render import _load
+    from satagraph.cli.arguments import read_with_rig
+    from satagraph.cli.render import _shown
+
+    def _load(path, args, index):
+        return _shown(read_with_rig(path, args, index=index), False)
     walk = example_motion(num_frames=4)
     cm = tmp_path / "cm.bvh"
     write_bvh(walk.with_(translations=walk.translations * 100.0,
@@ -202,3 +206,24 @@ def test_fit_scales_each_panel_to_its_own_figure():
     shared, fitted = heights(False), heights(True)
     assert shared[1] == pytest.approx(0.1 * shared[0], rel=0.05)
     assert fitted[1] == pytest.approx(fitted[0], rel=0.02)
+
+
+def test_panels_of_unknown_units_are_each_scaled_to_their_own_figure(shared_data, tmp_path,
+                                                                     capsys, monkeypatch):
+    """The dog's files are in centimetres that no reading can tell (read as
+    metres it is 50 m tall): beside a human it would dwarf him to a dot, so
+    each panel is scaled to its own figure and one line names the file whose
+    ``--units`` to give; with them, or with one panel, one scale for all."""
+    import satagraph.viz
+    dog = shared_data / "dog" / "D1_013_KAN01_001.bvh"
+    human = shared_data / "bandai" / "dataset-1_walk_normal_001.bvh"
+    seen = []
+    monkeypatch.setattr(satagraph.viz, "render",
+                        lambda motions, *a, fit=False, **k: seen.append(fit) or 1)
+    out = str(tmp_path / "out.gif")
+    assert main(["render", str(dog), str(human), out]) == 0
+    assert "units unknown for D1_013_KAN01_001.bvh (pass --units)" in capsys.readouterr().err
+    assert main(["render", str(dog), str(human), out, "--units", "cm"]) == 0
+    assert main(["render", str(dog), out]) == 0
+    assert "units unknown" not in capsys.readouterr().err
+    assert seen == [True, False, False]

@@ -6,6 +6,7 @@ import argparse
 import re
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import List
 
@@ -235,11 +236,18 @@ def _check_render(args) -> None:
 
 def _render(motions, args) -> None:
     """``--render``: the generated motions side by side, canonicalised as
-    their skeleton files were read, one panel per skeleton."""
+    their skeleton files were read, one panel per skeleton (each to its own
+    scale where the units of one are unknown, :func:`~satagraph.cli.render.own_scales`)."""
+    from satagraph.cli.render import own_scales
     from satagraph.transforms.canonical import canonicalize
+    from satagraph.transforms.rig_reading import RigReadingWarning
     from satagraph.viz import render
-    shown = [canonicalize(m, fps=None) for m in motions]
-    count = render(shown, args.render, titles=[Path(s).name for s in args.skeleton])
+    titles = [Path(s).name for s in args.skeleton]
+    fit = own_scales(motions, titles, False)
+    with warnings.catch_warnings():  # said when the skeleton files were read
+        warnings.simplefilter("ignore", RigReadingWarning)
+        shown = [canonicalize(m, fps=None) for m in motions]
+    count = render(shown, args.render, titles=titles, fit=fit)
     print(f"wrote {args.render}: {len(shown)} panel(s), {count} frames")
 
 

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
-from typing import List
+from typing import List, Sequence
 
 from satagraph.io import read_bvh
 from satagraph.motion import Motion
@@ -61,13 +62,26 @@ def add_render_parser(subparsers: "argparse._SubParsersAction"
     return p
 
 
-def _load(path: str, args: argparse.Namespace, index: int) -> Motion:
-    from satagraph.cli.arguments import read_with_rig
-    motion = read_with_rig(path, args, index=index)
-    if not args.raw:
-        from satagraph.transforms.canonical import canonicalize
-        motion = canonicalize(motion, fps=None)
-    return motion
+def own_scales(motions: Sequence[Motion], names: Sequence[str], fit: bool) -> bool:
+    """Whether each panel is scaled to its own figure: when asked
+    (``--fit``), or when several panels share a scale and the units of one
+    are unknown (a dog in centimetres read as metres would dwarf a human
+    beside it to a dot); one line names the files whose ``--units`` to give."""
+    if fit or len(motions) < 2:
+        return fit
+    from satagraph.transforms.rig_reading import read_rig
+    unknown = [name for motion, name in zip(motions, names) if read_rig(motion).units.kept]
+    if unknown:
+        print(f"satagraph: units unknown for {', '.join(unknown)} (pass --units): each panel "
+              f"is scaled to its own figure", file=sys.stderr)
+    return bool(unknown)
+
+
+def _shown(motion: Motion, raw: bool) -> Motion:
+    if raw:
+        return motion
+    from satagraph.transforms.canonical import canonicalize
+    return canonicalize(motion, fps=None)
 
 
 def _split_files(files: List[str]) -> tuple:
@@ -92,11 +106,14 @@ def run_render(args: argparse.Namespace) -> int:
         raise ValueError(f"--max-frames must be at least 1, got {args.max_frames}")
     from satagraph.cli.arguments import check_per_input
     check_per_input(args, len(inputs))
-    motions = [_load(path, args, i) for i, path in enumerate(inputs)]
+    from satagraph.cli.arguments import read_with_rig
+    read = [read_with_rig(path, args, index=i) for i, path in enumerate(inputs)]
     titles = [os.path.basename(path) for path in inputs]
+    fit = args.fit if args.raw else own_scales(read, titles, args.fit)
+    motions = [_shown(motion, args.raw) for motion in read]
     start = time.perf_counter()
     count = render(motions, output, titles=titles, fps=args.fps,
-                   max_frames=args.max_frames, sheet=args.png, fit=args.fit)
+                   max_frames=args.max_frames, sheet=args.png, fit=fit)
     extra = f" and {args.png}" if args.png else ""
     print(f"wrote {output}{extra}: {len(motions)} panel(s), {count} frames "
           f"in {time.perf_counter() - start:.1f} s")
