@@ -28,6 +28,7 @@ import argparse
 import json
 import sys
 import time
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Dict, List, Sequence
@@ -44,6 +45,7 @@ from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # noqa: E402
                                           load_generator)
 from satagraph.semantics import build_text_encoder  # noqa: E402
+from satagraph.transforms.rig_reading import RigReadingWarning  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: Prompts whose motion is the same all along (a long clip should be more of it).
@@ -165,6 +167,7 @@ def main(argv=None) -> int:
     p.add_argument("--quick", action="store_true")
     p.add_argument("--out", default=None, help="results stem (default t2m_long[_quick])")
     args = p.parse_args(argv)
+    warnings.filterwarnings("ignore", category=RigReadingWarning)  # zoo rigs: metres, +Y
     torch.manual_seed(0)
     result = evaluate(args)
     stem = args.out or ("t2m_long_quick" if args.quick else "t2m_long")

@@ -79,9 +79,9 @@ def add_generate_parser(sub) -> None:
                    "each continuing the half window before it (default: the length the "
                    "model was trained on, 4 s for the built-in one; 0: the whole clip at "
                    "once, which past that length reads positions the model never learnt: "
-                   "on validation prompts the last stretch of a 12-s clip then moves at 0.65 "
-                   "of the pace asked and matches its text with R@3 0.54 against 0.71 in "
-                   "windows, experiments/T2M.md section 61)")
+                   "on the benchmark's test prompts the last stretch of a 12-s clip then "
+                   "moves at 0.68 of the pace asked and matches its text with R@3 0.67 "
+                   "against 0.74 in windows, benchmarks/results/t2m_long.md)")
     p.add_argument("--residual-window", type=_window, default=0.0, metavar="SECONDS",
                    help="fill the residual code layers in overlapping windows of this many "
                    "seconds (default 0: the whole clip at once). The built-in generator's "
