@@ -74,6 +74,11 @@ def add_generate_parser(sub) -> None:
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
+    p.add_argument("--guide", default="logits", metavar="{logits,candidates}",
+                   help="how guidance enters each draw: logits (MoMask's: codes drawn from "
+                   "the guided logits) or candidates (the guided logits choose the most "
+                   "likely tenth of the codes and the text-conditioned logits draw among "
+                   "them; experiments/T2M.md section 63)")
     p.add_argument("--window", type=_window, default=None, metavar="SECONDS",
                    help="generate a clip longer than this many seconds window after window, "
                    "each continuing the half window before it (default: the length the "
@@ -193,6 +198,8 @@ def run_generate(args) -> int:
     if args.steps < 1 or args.threads < 1:
         raise ValueError(f"--steps and --threads must be at least 1, got {args.steps} "
                          f"and {args.threads}")
+    from satagraph.nn.generators.sampling import check_guide
+    check_guide(args.guide)
     torch.set_num_threads(args.threads)
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths + ([args.render] if args.render else []):
@@ -204,7 +211,8 @@ def run_generate(args) -> int:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant,
-                                  residual_window=args.residual_window, window=args.window)
+                                  residual_window=args.residual_window, window=args.window,
+                                  guide=args.guide)
     if args.prompts is not None:
         return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()

@@ -96,7 +96,12 @@ class GenerationSettings:
     windows of that length too unless ``residual_window`` is set; 0: the
     whole clip at once, which past the trained length reads positions the
     transformers never learnt and slows to a shuffle, ``experiments/T2M.md``
-    section 61)."""
+    section 61); and how guidance enters each draw of both transformers
+    (``guide``, :data:`~satagraph.nn.generators.sampling.GUIDES`:
+    ``"logits"``, MoMask's, codes drawn from the guided logits;
+    ``"candidates"``, the guided logits choose the top-k codes and the
+    conditional logits draw among them, :func:`~satagraph.nn.generators.sampling.guided_candidates`,
+    ``experiments/T2M.md`` section 63)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -114,6 +119,7 @@ class GenerationSettings:
     rest: str = "auto"
     residual_window: float = 0.0
     window: Optional[float] = None
+    guide: str = "logits"
 
     def window_frames(self, module) -> Optional[int]:
         """:attr:`window` in frames of :obj:`module` (``None``: whole clips;
@@ -236,13 +242,14 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                   settings.topk_ratio, gen,
                                   known=known, keep=keep,
                                   choice_temperature=settings.choice_temperature,
-                                  spread=settings.spread, window=settings.window_frames(module))
+                                  spread=settings.spread, window=settings.window_frames(module),
+                                  guide=settings.guide)
     temperature = (settings.temperature if settings.residual_temperature is None
                    else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers,
-                                     settings.residual_frames(module))
+                                     settings.residual_frames(module), settings.guide)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
                      settings.ground, settings.smooth, settings.plant, settings.output_smooth)
 

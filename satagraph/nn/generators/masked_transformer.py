@@ -10,10 +10,10 @@ from torch import Tensor, nn
 
 from satagraph.nn.generators.codes import (check_codes, continuation_spans, length_mask,
                                            pool_codes, token_lengths, unpool_codes)
-from satagraph.nn.generators.sampling import (Corruption, corrupt_tokens, guided,
-                                              lowest_ranked, mask_ratio, random_mask,
-                                              ranking_scores, sample_logits, spread_choice,
-                                              uniform)
+from satagraph.nn.generators.sampling import (Corruption, check_guide, corrupt_tokens, guided,
+                                              guided_candidates, lowest_ranked, mask_ratio,
+                                              random_mask, ranking_scores, sample_logits,
+                                              spread_choice, top_k_filter, uniform)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
                                                        masked_cross_entropy)
@@ -144,11 +144,27 @@ class MaskedTransformer(nn.Module):
         logits; :math:`s = 1`: the conditional ones (one pass each)."""
         if text_emb is None or guidance == 1.0:
             return self(tokens, text_emb, skel_emb, lengths)
+        return guided(*self._with_and_without_text(tokens, text_emb, skel_emb, lengths),
+                      guidance)
+
+    def candidate_logits(self, tokens: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+                         lengths: Tensor, guidance: float,
+                         topk_ratio: Optional[float]) -> Tensor:
+        """The conditional logits over the guided logits' top-k codes
+        (:func:`~satagraph.nn.generators.sampling.guided_candidates`)."""
+        if text_emb is None or guidance == 1.0:
+            return top_k_filter(self(tokens, text_emb, skel_emb, lengths), topk_ratio)
+        return guided_candidates(*self._with_and_without_text(tokens, text_emb, skel_emb,
+                                                              lengths), guidance, topk_ratio)
+
+    def _with_and_without_text(self, tokens: Tensor, text_emb: Tensor, skel_emb: Tensor,
+                               lengths: Tensor) -> Tuple[Tensor, Tensor]:
+        """Conditional and text-dropped logits, in one batch."""
         size = tokens.size(0)
         drop = torch.arange(2 * size, device=tokens.device) >= size
         both = self(tokens.repeat(2, 1), text_emb.repeat(2, 1), skel_emb.repeat(2, 1),
                     lengths.repeat(2), drop_text=drop)
-        return guided(both[:size], both[size:], guidance)
+        return both[:size], both[size:]
 
     # ------------------------------------------------------------ training
     def corrupt(self, tokens: Tensor, lengths: Tensor,
@@ -195,7 +211,7 @@ class MaskedTransformer(nn.Module):
                  generator: Optional[torch.Generator] = None,
                  known: Optional[Tensor] = None, keep: Optional[Tensor] = None,
                  choice_temperature: float = 0.0, spread: float = 0.0,
-                 window: Optional[int] = None) -> Tensor:
+                 window: Optional[int] = None, guide: str = "logits") -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
         as [MASK] (but the :obj:`keep` positions of :obj:`known`, which stay
         as given: infilling); at step :math:`i` of :obj:`steps` (:math:`n`) the
@@ -235,12 +251,17 @@ class MaskedTransformer(nn.Module):
                 that it overlaps, so that a transformer trained on windows of
                 this length reads no position it never learnt (default: whole
                 sequences at once).
+            guide (str, optional): ``"logits"`` (MoMask: draw from the guided
+                logits) or ``"candidates"`` (draw from the conditional logits
+                among the guided logits' top k,
+                :func:`~satagraph.nn.generators.sampling.guided_candidates`).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
             after each sequence's length.
         """
-        args = (steps, guidance, temperature, topk_ratio, generator, choice_temperature, spread)
+        args = (steps, guidance, temperature, topk_ratio, generator, choice_temperature, spread,
+                check_guide(guide))
         with evaluating(self):
             tok_lengths = token_lengths(lengths, self.pool)
             valid = length_mask(tok_lengths, int(tok_lengths.max()))
@@ -266,7 +287,7 @@ class MaskedTransformer(nn.Module):
     def _decode(self, ids: Tensor, keep: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
                 tok_lengths: Tensor, steps: int, guidance: float, temperature: float,
                 topk_ratio: Optional[float], generator: Optional[torch.Generator],
-                choice_temperature: float, spread: float) -> Tensor:
+                choice_temperature: float, spread: float, guide: str) -> Tensor:
         """:meth:`generate`'s iterative decoding of whole token sequences
         (:obj:`ids` hold the kept tokens where :obj:`keep` is set); tokens,
         :attr:`pad_id` after each length."""
@@ -283,8 +304,13 @@ class MaskedTransformer(nn.Module):
             count = torch.round(ratio * free).clamp(min=1).long()
             remask = self._remask(scores, fixed, valid, count, spread)
             ids = ids.masked_fill(remask, self.mask_id)
-            logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
-            pred = sample_logits(logits, temperature, topk_ratio, generator)
+            if guide == "candidates":
+                logits = self.candidate_logits(ids, text_emb, skel_emb, tok_lengths, guidance,
+                                               topk_ratio)
+                pred = sample_logits(logits, temperature, None, generator)
+            else:
+                logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
+                pred = sample_logits(logits, temperature, topk_ratio, generator)
             ids = torch.where(remask, pred, ids)
             conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
             conf = ranking_scores(conf, choice_temperature, (step + 1) / steps, generator)

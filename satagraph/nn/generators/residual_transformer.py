@@ -9,7 +9,9 @@ from torch import Tensor, nn
 
 from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes,
                                            unpool_codes, window_spans)
-from satagraph.nn.generators.sampling import guided, residual_layer_schedule, sample_logits
+from satagraph.nn.generators.sampling import (check_guide, guided, guided_candidates,
+                                              residual_layer_schedule, sample_logits,
+                                              top_k_filter)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
                                                        masked_cross_entropy)
@@ -156,11 +158,27 @@ class ResidualTransformer(nn.Module):
         """Classifier-free guided logits; ``uncond`` drops the text only."""
         if text_emb is None or guidance == 1.0:
             return self(codes, layer, text_emb, skel_emb, lengths)
+        return guided(*self._with_and_without_text(codes, layer, text_emb, skel_emb, lengths),
+                      guidance)
+
+    def candidate_logits(self, codes: Tensor, layer: Tensor, text_emb: Optional[Tensor],
+                         skel_emb: Tensor, lengths: Tensor, guidance: float,
+                         topk_ratio: Optional[float]) -> Tensor:
+        """The conditional logits over the guided logits' top-k codes
+        (:func:`~satagraph.nn.generators.sampling.guided_candidates`)."""
+        if text_emb is None or guidance == 1.0:
+            return top_k_filter(self(codes, layer, text_emb, skel_emb, lengths), topk_ratio)
+        return guided_candidates(*self._with_and_without_text(codes, layer, text_emb, skel_emb,
+                                                              lengths), guidance, topk_ratio)
+
+    def _with_and_without_text(self, codes: Tensor, layer: Tensor, text_emb: Tensor,
+                               skel_emb: Tensor, lengths: Tensor) -> Tuple[Tensor, Tensor]:
+        """Conditional and text-dropped logits, in one batch."""
         size = codes.size(0)
         drop = torch.arange(2 * size, device=codes.device) >= size
         both = self(codes.repeat(2, 1, 1), layer.repeat(2), text_emb.repeat(2, 1),
                     skel_emb.repeat(2, 1), lengths.repeat(2), drop_text=drop)
-        return guided(both[:size], both[size:], guidance)
+        return both[:size], both[size:]
 
     # ------------------------------------------------------------ training
     def loss(self, codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
@@ -189,7 +207,8 @@ class ResidualTransformer(nn.Module):
                  lengths: Tensor, guidance: float = 5.0, temperature: float = 1.0,
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None,
-                 num_quantizers: Optional[int] = None, window: Optional[int] = None) -> Tensor:
+                 num_quantizers: Optional[int] = None, window: Optional[int] = None,
+                 guide: str = "logits") -> Tensor:
         r"""Fills layers :math:`1..Q-1` one after the other given layer-0
         codes, with classifier-free guidance (MoMask: 5).
 
@@ -211,12 +230,16 @@ class ResidualTransformer(nn.Module):
                 default: whole sequences). Guided over a whole sequence of
                 three seconds or more, the shipped generator's walks speed
                 up along it (``experiments/T2M.md`` section 57).
+            guide (str, optional): ``"logits"`` (MoMask: draw from the guided
+                logits) or ``"candidates"`` (draw from the conditional logits
+                among the guided logits' top k,
+                :func:`~satagraph.nn.generators.sampling.guided_candidates`).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T, Q)`, :attr:`pad_id` after
             each sequence's length.
         """
-        args = (guidance, temperature, topk_ratio, generator, num_quantizers)
+        args = (guidance, temperature, topk_ratio, generator, num_quantizers, check_guide(guide))
         if window is None or int(lengths.max()) <= window:
             return self._fill(base_codes, text_emb, skel_emb, lengths, *args)
         depth = num_quantizers or self.num_quantizers
@@ -232,7 +255,7 @@ class ResidualTransformer(nn.Module):
     def _fill(self, base_codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
               lengths: Tensor, guidance: float, temperature: float,
               topk_ratio: Optional[float], generator: Optional[torch.Generator],
-              num_quantizers: Optional[int]) -> Tensor:
+              num_quantizers: Optional[int], guide: str) -> Tensor:
         """:meth:`generate` over whole sequences (under its ``no_grad``)."""
         depth = num_quantizers or self.num_quantizers
         with evaluating(self):
@@ -243,8 +266,13 @@ class ResidualTransformer(nn.Module):
             codes[..., 0] = base
             for q in range(1, depth):
                 layer = torch.full((base.size(0),), q, dtype=torch.long, device=base.device)
-                logits = self.guided_logits(codes, layer, text_emb, skel_emb, tok_lengths,
-                                            guidance)
-                pred = sample_logits(logits, temperature, topk_ratio, generator)
+                if guide == "candidates":
+                    logits = self.candidate_logits(codes, layer, text_emb, skel_emb, tok_lengths,
+                                                   guidance, topk_ratio)
+                    pred = sample_logits(logits, temperature, None, generator)
+                else:
+                    logits = self.guided_logits(codes, layer, text_emb, skel_emb, tok_lengths,
+                                                guidance)
+                    pred = sample_logits(logits, temperature, topk_ratio, generator)
                 codes[..., q] = pred.masked_fill(~valid, self.pad_id)
             return unpool_codes(codes, lengths, self.pool, self.pad_id)

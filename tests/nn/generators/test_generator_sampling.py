@@ -6,9 +6,9 @@ import math
 import pytest
 import torch
 
-from satagraph.nn.generators import (corrupt_tokens, cosine_schedule, guided, mask_ratio,
-                                     random_mask, residual_layer_schedule, sample_logits,
-                                     top_k_filter)
+from satagraph.nn.generators import (corrupt_tokens, cosine_schedule, guided,
+                                     guided_candidates, mask_ratio, random_mask,
+                                     residual_layer_schedule, sample_logits, top_k_filter)
 from satagraph.nn.generators.sampling import lowest_ranked, ranking_scores, spread_choice
 
 K = 16
@@ -112,6 +112,23 @@ def test_guidance_math():
     assert torch.equal(guided(cond, uncond, 1.0), cond)
     torch.testing.assert_close(guided(cond, uncond, 0.0), uncond)
     torch.testing.assert_close(guided(cond, uncond, 4.0), uncond + 4 * (cond - uncond))
+
+
+def test_guided_candidates_draw_the_conditional_logits_among_the_guided_top_k():
+    """The codes the guided logits rank in their top k keep their
+    conditional logits, the others are ruled out; guidance can move the
+    draw's favourite from the guided logits' extreme back to the
+    conditional one's, and without guidance it is the conditional top k."""
+    cond = torch.tensor([[3.0, 2.5, 0.0, -1.0, -2.0]])
+    uncond = torch.tensor([[3.0, 1.0, 0.5, -1.0, -2.0]])
+    out = guided_candidates(cond, uncond, 4.0, 0.4)  # two of five codes
+    assert guided(cond, uncond, 4.0).argmax() == 1 and out.argmax() == 0
+    assert torch.equal(out[0, :2], cond[0, :2]) and torch.isinf(out[0, 2:]).all()
+    rows = torch.randn(6, K), torch.randn(6, K)
+    assert torch.equal(guided_candidates(rows[0], rows[1], 1.0, 0.1),
+                       top_k_filter(rows[0], 0.1))
+    kept = guided_candidates(*rows, 3.0, 0.1) > float("-inf")
+    assert torch.equal(kept, top_k_filter(guided(*rows, 3.0), 0.1) > float("-inf"))
 
 
 def test_ranking_scores_noise_fades_with_the_steps():

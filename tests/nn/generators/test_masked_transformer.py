@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from satagraph.nn.generators import MaskedTransformer, masked_cross_entropy
+from satagraph.nn.generators import MaskedTransformer, masked_cross_entropy, top_k_filter
 from tests.nn.generators.generator_helpers import (NUM_CODES, SKEL, TEXT, TREE, skeleton,
                                                    tiny_masked, tiny_skeleton_net)
 
@@ -257,3 +257,23 @@ def test_generate_in_windows_continues_each_window_from_the_one_before(condition
     seeded = lambda window: model.generate(text, skel, lengths, window=window,
                                            generator=torch.Generator().manual_seed(3))
     assert torch.equal(seeded(30), seeded(None))
+
+
+def test_candidates_guide_draws_the_conditional_choice_among_the_guided_top_k(conditions):
+    """With ``guide="candidates"`` a greedy single step takes, at every
+    position, the conditional logits' best code among the guided logits'
+    top k; an unknown guide is refused."""
+    text, skel, lengths = conditions
+    model = tiny_masked().eval()
+    out = model.generate(text, skel, lengths, steps=1, guidance=8.0, temperature=0.0,
+                         topk_ratio=0.25, guide="candidates")
+    masked = torch.full((3, 10), model.mask_id)
+    cond, uncond = model(masked, text, skel, lengths), model(masked, None, skel, lengths)
+    allowed = top_k_filter(uncond + 8.0 * (cond - uncond), 0.25) > float("-inf")
+    expected = cond.masked_fill(~allowed, float("-inf")).argmax(-1)
+    real = torch.arange(10) < lengths.unsqueeze(-1)
+    assert torch.equal(out[real], expected[real])
+    greedy = model.generate(text, skel, lengths, steps=1, guidance=8.0, temperature=0.0)
+    assert not torch.equal(out, greedy)
+    with pytest.raises(ValueError, match="unknown guide"):
+        model.generate(text, skel, lengths, guide="guided")

@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from satagraph.nn import RVQBottleneck
-from satagraph.nn.generators import ResidualTransformer
+from satagraph.nn.generators import ResidualTransformer, top_k_filter
 from tests.nn.generators.generator_helpers import (NUM_CODES, SKEL, TEXT, TREE, skeleton,
                                                    tiny_residual, tiny_skeleton_net)
 
@@ -212,3 +212,25 @@ def test_position_jitter_starts_each_training_sequence_at_a_drawn_position(condi
     assert torch.equal(tiny_residual(Q).train().backbone.token_positions(h), table[:10])
     with pytest.raises(ValueError, match="position_jitter"):
         tiny_residual(Q, position_jitter=-1)
+
+
+def test_candidates_guide_takes_the_conditional_best_among_the_guided_top_k(conditions):
+    """Greedy residual filling with ``guide="candidates"``: each layer's code
+    is the conditional logits' best among the guided logits' top k, given
+    the layers below it."""
+    text, skel, _ = conditions
+    model = tiny_residual(3).eval()
+    lengths = torch.tensor([6, 4, 5])
+    base = random_stack(lengths)[..., 0]
+    fill = dict(guidance=4.0, temperature=0.0, topk_ratio=0.25)
+    out = model.generate(base, text, skel, lengths, guide="candidates", **fill)
+    layer = torch.ones(3, dtype=torch.long)
+    codes = torch.full((3, 6, 3), model.pad_id)
+    codes[..., 0] = base.masked_fill(~(torch.arange(6) < lengths.unsqueeze(-1)), model.pad_id)
+    cond = model(codes, layer, text, skel, lengths)
+    uncond = model(codes, layer, None, skel, lengths)
+    allowed = top_k_filter(uncond + 4.0 * (cond - uncond), 0.25) > float("-inf")
+    expected = cond.masked_fill(~allowed, float("-inf")).argmax(-1)
+    real = torch.arange(6) < lengths.unsqueeze(-1)
+    assert torch.equal(out[..., 1][real], expected[real])
+    assert not torch.equal(out, model.generate(base, text, skel, lengths, **fill))
