@@ -858,7 +858,8 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
                                            "topk_ratio", "residual_temperature", "layers",
                                            "smooth", "output_smooth", "plant",
                                            "choice_temperature",
-                                           "spread", "rest", "residual_window", "guide")
+                                           "spread", "rest", "residual_window", "guide",
+                                           "draw_guidance")
              if getattr(args, k, None) is not None}
     if "decoding_steps" in given:
         given["steps"] = given.pop("decoding_steps")
@@ -888,6 +889,8 @@ def main(argv=None) -> int:
     parser.add_argument("--residual-guidance", type=float, default=None)
     parser.add_argument("--guide", choices=("logits", "candidates"), default=None,
                         help="how guidance enters each draw (GenerationSettings.guide)")
+    parser.add_argument("--draw-guidance", type=float, default=None,
+                        help="with --guide candidates: GenerationSettings.draw_guidance")
     parser.add_argument("--residual-window", type=float, default=None,
                         help="seconds of the windows the residual layers are filled in "
                         "(0: whole clips; default: generate's)")

@@ -77,8 +77,11 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--guide", default="logits", metavar="{logits,candidates}",
                    help="how guidance enters each draw: logits (MoMask's: codes drawn from "
                    "the guided logits) or candidates (the guided logits choose the most "
-                   "likely tenth of the codes and the text-conditioned logits draw among "
-                   "them; experiments/T2M.md section 63)")
+                   "likely tenth of the codes and logits guided by --draw-guidance draw "
+                   "among them; experiments/T2M.md sections 63-64)")
+    p.add_argument("--draw-guidance", type=float, default=1.0,
+                   help="with --guide candidates, the guidance of the draw among the "
+                   "candidates (default 1: the text-conditioned logits)")
     p.add_argument("--window", type=_window, default=None, metavar="SECONDS",
                    help="generate a clip longer than this many seconds window after window, "
                    "each continuing the half window before it (default: the length the "
@@ -212,7 +215,7 @@ def run_generate(args) -> int:
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant,
                                   residual_window=args.residual_window, window=args.window,
-                                  guide=args.guide)
+                                  guide=args.guide, draw_guidance=args.draw_guidance)
     if args.prompts is not None:
         return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()

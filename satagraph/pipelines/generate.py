@@ -99,9 +99,10 @@ class GenerationSettings:
     section 61); and how guidance enters each draw of both transformers
     (``guide``, :data:`~satagraph.nn.generators.sampling.GUIDES`:
     ``"logits"``, MoMask's, codes drawn from the guided logits;
-    ``"candidates"``, the guided logits choose the top-k codes and the
-    conditional logits draw among them, :func:`~satagraph.nn.generators.sampling.guided_candidates`,
-    ``experiments/T2M.md`` section 63)."""
+    ``"candidates"``, the guided logits choose the top-k codes and logits
+    guided by ``draw_guidance`` draw among them (1: the conditional logits),
+    :func:`~satagraph.nn.generators.sampling.guided_candidates`,
+    ``experiments/T2M.md`` sections 63-64)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -120,6 +121,7 @@ class GenerationSettings:
     residual_window: float = 0.0
     window: Optional[float] = None
     guide: str = "logits"
+    draw_guidance: float = 1.0
 
     def window_frames(self, module) -> Optional[int]:
         """:attr:`window` in frames of :obj:`module` (``None``: whole clips;
@@ -243,13 +245,14 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                   known=known, keep=keep,
                                   choice_temperature=settings.choice_temperature,
                                   spread=settings.spread, window=settings.window_frames(module),
-                                  guide=settings.guide)
+                                  guide=settings.guide, draw_guidance=settings.draw_guidance)
     temperature = (settings.temperature if settings.residual_temperature is None
                    else settings.residual_temperature)
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers,
-                                     settings.residual_frames(module), settings.guide)
+                                     settings.residual_frames(module), settings.guide,
+                                     settings.draw_guidance)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
                      settings.ground, settings.smooth, settings.plant, settings.output_smooth)
 

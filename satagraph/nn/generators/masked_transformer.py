@@ -149,13 +149,15 @@ class MaskedTransformer(nn.Module):
 
     def candidate_logits(self, tokens: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
                          lengths: Tensor, guidance: float,
-                         topk_ratio: Optional[float]) -> Tensor:
-        """The conditional logits over the guided logits' top-k codes
+                         topk_ratio: Optional[float], draw_guidance: float = 1.0) -> Tensor:
+        """The logits guided by :obj:`draw_guidance` over the top-k codes of
+        those guided by :obj:`guidance`
         (:func:`~satagraph.nn.generators.sampling.guided_candidates`)."""
         if text_emb is None or guidance == 1.0:
             return top_k_filter(self(tokens, text_emb, skel_emb, lengths), topk_ratio)
         return guided_candidates(*self._with_and_without_text(tokens, text_emb, skel_emb,
-                                                              lengths), guidance, topk_ratio)
+                                                              lengths), guidance, topk_ratio,
+                                 draw_guidance)
 
     def _with_and_without_text(self, tokens: Tensor, text_emb: Tensor, skel_emb: Tensor,
                                lengths: Tensor) -> Tuple[Tensor, Tensor]:
@@ -211,7 +213,8 @@ class MaskedTransformer(nn.Module):
                  generator: Optional[torch.Generator] = None,
                  known: Optional[Tensor] = None, keep: Optional[Tensor] = None,
                  choice_temperature: float = 0.0, spread: float = 0.0,
-                 window: Optional[int] = None, guide: str = "logits") -> Tensor:
+                 window: Optional[int] = None, guide: str = "logits",
+                 draw_guidance: float = 1.0) -> Tensor:
         r"""Layer-0 codes by iterative decoding (MoMask): all tokens start
         as [MASK] (but the :obj:`keep` positions of :obj:`known`, which stay
         as given: infilling); at step :math:`i` of :obj:`steps` (:math:`n`) the
@@ -252,16 +255,18 @@ class MaskedTransformer(nn.Module):
                 this length reads no position it never learnt (default: whole
                 sequences at once).
             guide (str, optional): ``"logits"`` (MoMask: draw from the guided
-                logits) or ``"candidates"`` (draw from the conditional logits
-                among the guided logits' top k,
+                logits) or ``"candidates"`` (draw from the logits guided by
+                :obj:`draw_guidance` among the guided logits' top k,
                 :func:`~satagraph.nn.generators.sampling.guided_candidates`).
+            draw_guidance (float, optional): Guidance of the draw among the
+                candidates (1: the conditional logits).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T_{max})`, :attr:`pad_id`
             after each sequence's length.
         """
         args = (steps, guidance, temperature, topk_ratio, generator, choice_temperature, spread,
-                check_guide(guide))
+                check_guide(guide), draw_guidance)
         with evaluating(self):
             tok_lengths = token_lengths(lengths, self.pool)
             valid = length_mask(tok_lengths, int(tok_lengths.max()))
@@ -287,7 +292,8 @@ class MaskedTransformer(nn.Module):
     def _decode(self, ids: Tensor, keep: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
                 tok_lengths: Tensor, steps: int, guidance: float, temperature: float,
                 topk_ratio: Optional[float], generator: Optional[torch.Generator],
-                choice_temperature: float, spread: float, guide: str) -> Tensor:
+                choice_temperature: float, spread: float, guide: str,
+                draw_guidance: float) -> Tensor:
         """:meth:`generate`'s iterative decoding of whole token sequences
         (:obj:`ids` hold the kept tokens where :obj:`keep` is set); tokens,
         :attr:`pad_id` after each length."""
@@ -306,7 +312,7 @@ class MaskedTransformer(nn.Module):
             ids = ids.masked_fill(remask, self.mask_id)
             if guide == "candidates":
                 logits = self.candidate_logits(ids, text_emb, skel_emb, tok_lengths, guidance,
-                                               topk_ratio)
+                                               topk_ratio, draw_guidance)
                 pred = sample_logits(logits, temperature, None, generator)
             else:
                 logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)

@@ -163,13 +163,15 @@ class ResidualTransformer(nn.Module):
 
     def candidate_logits(self, codes: Tensor, layer: Tensor, text_emb: Optional[Tensor],
                          skel_emb: Tensor, lengths: Tensor, guidance: float,
-                         topk_ratio: Optional[float]) -> Tensor:
-        """The conditional logits over the guided logits' top-k codes
+                         topk_ratio: Optional[float], draw_guidance: float = 1.0) -> Tensor:
+        """The logits guided by :obj:`draw_guidance` over the top-k codes of
+        those guided by :obj:`guidance`
         (:func:`~satagraph.nn.generators.sampling.guided_candidates`)."""
         if text_emb is None or guidance == 1.0:
             return top_k_filter(self(codes, layer, text_emb, skel_emb, lengths), topk_ratio)
         return guided_candidates(*self._with_and_without_text(codes, layer, text_emb, skel_emb,
-                                                              lengths), guidance, topk_ratio)
+                                                              lengths), guidance, topk_ratio,
+                                 draw_guidance)
 
     def _with_and_without_text(self, codes: Tensor, layer: Tensor, text_emb: Tensor,
                                skel_emb: Tensor, lengths: Tensor) -> Tuple[Tensor, Tensor]:
@@ -208,7 +210,7 @@ class ResidualTransformer(nn.Module):
                  topk_ratio: Optional[float] = 0.1,
                  generator: Optional[torch.Generator] = None,
                  num_quantizers: Optional[int] = None, window: Optional[int] = None,
-                 guide: str = "logits") -> Tensor:
+                 guide: str = "logits", draw_guidance: float = 1.0) -> Tensor:
         r"""Fills layers :math:`1..Q-1` one after the other given layer-0
         codes, with classifier-free guidance (MoMask: 5).
 
@@ -231,15 +233,18 @@ class ResidualTransformer(nn.Module):
                 three seconds or more, the shipped generator's walks speed
                 up along it (``experiments/T2M.md`` section 57).
             guide (str, optional): ``"logits"`` (MoMask: draw from the guided
-                logits) or ``"candidates"`` (draw from the conditional logits
-                among the guided logits' top k,
+                logits) or ``"candidates"`` (draw from the logits guided by
+                :obj:`draw_guidance` among the guided logits' top k,
                 :func:`~satagraph.nn.generators.sampling.guided_candidates`).
+            draw_guidance (float, optional): Guidance of the draw among the
+                candidates (1: the conditional logits).
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T, Q)`, :attr:`pad_id` after
             each sequence's length.
         """
-        args = (guidance, temperature, topk_ratio, generator, num_quantizers, check_guide(guide))
+        args = (guidance, temperature, topk_ratio, generator, num_quantizers, check_guide(guide),
+                draw_guidance)
         if window is None or int(lengths.max()) <= window:
             return self._fill(base_codes, text_emb, skel_emb, lengths, *args)
         depth = num_quantizers or self.num_quantizers
@@ -255,7 +260,7 @@ class ResidualTransformer(nn.Module):
     def _fill(self, base_codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
               lengths: Tensor, guidance: float, temperature: float,
               topk_ratio: Optional[float], generator: Optional[torch.Generator],
-              num_quantizers: Optional[int], guide: str) -> Tensor:
+              num_quantizers: Optional[int], guide: str, draw_guidance: float) -> Tensor:
         """:meth:`generate` over whole sequences (under its ``no_grad``)."""
         depth = num_quantizers or self.num_quantizers
         with evaluating(self):
@@ -268,7 +273,7 @@ class ResidualTransformer(nn.Module):
                 layer = torch.full((base.size(0),), q, dtype=torch.long, device=base.device)
                 if guide == "candidates":
                     logits = self.candidate_logits(codes, layer, text_emb, skel_emb, tok_lengths,
-                                                   guidance, topk_ratio)
+                                                   guidance, topk_ratio, draw_guidance)
                     pred = sample_logits(logits, temperature, None, generator)
                 else:
                     logits = self.guided_logits(codes, layer, text_emb, skel_emb, tok_lengths,

@@ -234,26 +234,26 @@ def guided(cond: Tensor, uncond: Tensor, scale: float) -> Tensor:
 
 #: How guidance enters a draw: ``"logits"``, codes drawn from the guided
 #: logits (MoMask); ``"candidates"``, the guided logits choose which codes may
-#: be drawn (their top k) and the conditional logits draw among them
+#: be drawn (their top k) and logits guided less draw among them
 #: (:func:`guided_candidates`).
 GUIDES = ("logits", "candidates")
 
 
 def guided_candidates(cond: Tensor, uncond: Tensor, scale: float,
-                      topk_ratio: Optional[float]) -> Tensor:
-    r"""The conditional logits over the codes that the guided logits
-    (:func:`guided`) rank in their top :obj:`topk_ratio`, the others
-    ``-inf``: guidance rules out the codes the text does not ask for, and
-    the text-conditioned model draws among the rest as it learnt to,
-    instead of from logits pushed past it (drawn from the guided logits,
-    the built-in generator's walks, runs and dashes are 30-45 % faster than
-    real ones; ``experiments/T2M.md`` section 63).
+                      topk_ratio: Optional[float], draw_scale: float = 1.0) -> Tensor:
+    r"""The logits guided by :obj:`draw_scale` (1: the conditional ones)
+    over the codes that the logits guided by :obj:`scale` rank in their top
+    :obj:`topk_ratio`, the others ``-inf``: full guidance rules out the codes
+    the text does not ask for, and a milder one draws among the rest
+    instead of logits pushed far past the conditional ones (drawn from the
+    guided logits, the built-in generator's walks, runs and dashes are
+    30-45 % faster than real ones; ``experiments/T2M.md`` sections 63-64).
 
     Shapes:
         - **cond**, **uncond**: :math:`(\ldots, K)`, **output**: alike
     """
     allowed = top_k_filter(guided(cond, uncond, scale), topk_ratio) > float("-inf")
-    return cond.masked_fill(~allowed, float("-inf"))
+    return guided(cond, uncond, draw_scale).masked_fill(~allowed, float("-inf"))
 
 
 def check_guide(guide: str) -> str:

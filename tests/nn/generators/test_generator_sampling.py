@@ -129,6 +129,11 @@ def test_guided_candidates_draw_the_conditional_logits_among_the_guided_top_k():
                        top_k_filter(rows[0], 0.1))
     kept = guided_candidates(*rows, 3.0, 0.1) > float("-inf")
     assert torch.equal(kept, top_k_filter(guided(*rows, 3.0), 0.1) > float("-inf"))
+    milder = guided_candidates(*rows, 3.0, 0.1, draw_scale=2.0)
+    assert torch.equal(milder > float("-inf"), kept)
+    torch.testing.assert_close(milder[kept], guided(*rows, 2.0)[kept])
+    assert torch.equal(guided_candidates(*rows, 3.0, 0.1, draw_scale=3.0),
+                       top_k_filter(guided(*rows, 3.0), 0.1))
 
 
 def test_ranking_scores_noise_fades_with_the_steps():
