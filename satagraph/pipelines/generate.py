@@ -98,11 +98,13 @@ class GenerationSettings:
     transformers never learnt and slows to a shuffle, ``experiments/T2M.md``
     section 61); and how guidance enters each draw of both transformers
     (``guide``, :data:`~satagraph.nn.generators.sampling.GUIDES`:
-    ``"logits"``, MoMask's, codes drawn from the guided logits;
-    ``"candidates"``, the guided logits choose the top-k codes and logits
-    guided by ``draw_guidance`` draw among them (1: the conditional logits),
-    :func:`~satagraph.nn.generators.sampling.guided_candidates`,
-    ``experiments/T2M.md`` sections 63-64)."""
+    ``"candidates"``, the default, the guided logits choose the top-k codes
+    and logits guided by ``draw_guidance`` (2; 1: the conditional logits)
+    draw among them, :func:`~satagraph.nn.generators.sampling.guided_candidates`:
+    on validation prompts R@3 0.817 against 0.735, FID 0.233 against 0.282,
+    action 0.60 against 0.52, gaits at nearly real speed, ``experiments/T2M.md``
+    sections 63-64; ``"logits"``, MoMask's, codes drawn from the guided
+    logits, which makes walks, runs and dashes 30-45 % faster than real)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -120,8 +122,8 @@ class GenerationSettings:
     rest: str = "auto"
     residual_window: float = 0.0
     window: Optional[float] = None
-    guide: str = "logits"
-    draw_guidance: float = 1.0
+    guide: str = "candidates"
+    draw_guidance: float = 2.0
 
     def window_frames(self, module) -> Optional[int]:
         """:attr:`window` in frames of :obj:`module` (``None``: whole clips;
