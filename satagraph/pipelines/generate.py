@@ -98,13 +98,15 @@ class GenerationSettings:
     transformers never learnt and slows to a shuffle, ``experiments/T2M.md``
     section 61); and how guidance enters each draw of both transformers
     (``guide``, :data:`~satagraph.nn.generators.sampling.GUIDES`:
-    ``"candidates"``, the default, the guided logits choose the top-k codes
-    and logits guided by ``draw_guidance`` (2; 1: the conditional logits)
-    draw among them, :func:`~satagraph.nn.generators.sampling.guided_candidates`:
-    on validation prompts R@3 0.817 against 0.735, FID 0.233 against 0.282,
-    action 0.60 against 0.52, gaits at nearly real speed, ``experiments/T2M.md``
-    sections 63-64; ``"logits"``, MoMask's, codes drawn from the guided
-    logits, which makes walks, runs and dashes 30-45 % faster than real)."""
+    ``"logits"``, the default, MoMask's, codes drawn from the guided logits,
+    which makes walks, runs and dashes 30-45 % faster than real;
+    ``"candidates"``, the guided logits choose the top-k codes and logits
+    guided by ``draw_guidance`` (2; 1: the conditional logits) draw among
+    them, :func:`~satagraph.nn.generators.sampling.guided_candidates`: on
+    validation prompts R@3 0.817 against 0.735, FID 0.233 against 0.282,
+    action 0.60 against 0.52, gaits at nearly real speed, but a person asked
+    to walk backward on a real human rig walks forward, ``experiments/T2M.md``
+    sections 63-64)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -122,7 +124,7 @@ class GenerationSettings:
     rest: str = "auto"
     residual_window: float = 0.0
     window: Optional[float] = None
-    guide: str = "candidates"
+    guide: str = "logits"
     draw_guidance: float = 2.0
 
     def window_frames(self, module) -> Optional[int]:
