@@ -775,6 +775,20 @@ def action_table(rows: Sequence[Dict[str, object]]) -> str:
     return "\n".join(out) + "\n" if out else ""
 
 
+def cached_encoder() -> Callable[[List[str]], torch.Tensor]:
+    """The offline text encoder as ``encode(texts) -> [N, D]``, each text
+    encoded once."""
+    encoder = build_text_encoder("offline")
+    cache: Dict[str, torch.Tensor] = {}
+
+    def encode(texts: List[str]) -> torch.Tensor:
+        missing = [t for t in dict.fromkeys(texts) if t not in cache]
+        if missing:
+            cache.update(zip(missing, torch.as_tensor(encoder.encode(missing)).float()))
+        return torch.stack([cache[t] for t in texts])
+    return encode
+
+
 def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[int] = None,
              reps: Optional[int] = None, gen_seeds: int = 2,
              reference: Optional[str] = None, prompts: str = "test",
@@ -793,15 +807,7 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     settings = settings or GenerationSettings()
     probe_seeds = probe_seeds or (2 if quick else PROBE_SEEDS)
     start = time.perf_counter()
-    encoder = build_text_encoder("offline")
-    cache: Dict[str, torch.Tensor] = {}
-
-    def encode(texts: List[str]) -> torch.Tensor:
-        missing = [t for t in dict.fromkeys(texts) if t not in cache]
-        if missing:
-            cache.update(zip(missing, torch.as_tensor(encoder.encode(missing)).float()))
-        return torch.stack([cache[t] for t in texts])
-
+    encode = cached_encoder()
     train, test = real_items(quick, seed, prompts)
     loaded = time.perf_counter()
     steps = steps or (150 if quick else 3000)

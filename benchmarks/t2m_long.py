@@ -44,7 +44,6 @@ from satagraph.data.dataset import _frames  # noqa: E402
 from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # noqa: E402
                                           load_generator)
-from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.transforms.rig_reading import RigReadingWarning  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
@@ -93,15 +92,7 @@ def row(name: str, items: List[t2m.Item], test: List[t2m.Item], own: List[t2m.It
 
 def evaluate(args: argparse.Namespace) -> Dict:
     start = time.perf_counter()
-    encoder = build_text_encoder("offline")
-    cache: Dict[str, torch.Tensor] = {}
-
-    def encode(texts: List[str]) -> torch.Tensor:
-        missing = [t for t in dict.fromkeys(texts) if t not in cache]
-        if missing:
-            cache.update(zip(missing, torch.as_tensor(encoder.encode(missing)).float()))
-        return torch.stack([cache[t] for t in texts])
-
+    encode = t2m.cached_encoder()
     train, test = t2m.real_items(args.quick, args.seed, args.prompts)
     test = [it for it in test if it.group == "zoo" and it.label in STEADY]
     steps = 150 if args.quick else 3000

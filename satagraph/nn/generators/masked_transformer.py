@@ -289,6 +289,19 @@ class MaskedTransformer(nn.Module):
                                                       *args)[0]
             return self.to_frames(ids, lengths)
 
+    def _draw(self, ids: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+              tok_lengths: Tensor, guidance: float, temperature: float,
+              topk_ratio: Optional[float], generator: Optional[torch.Generator], guide: str,
+              draw_guidance: float) -> Tuple[Tensor, Tensor]:
+        """One decoding step's logits (their softmax ranks the draws) and the
+        codes drawn, as :obj:`guide` says."""
+        if guide == "candidates":
+            logits = self.candidate_logits(ids, text_emb, skel_emb, tok_lengths, guidance,
+                                           topk_ratio, draw_guidance)
+            return logits, sample_logits(logits, temperature, None, generator)
+        logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
+        return logits, sample_logits(logits, temperature, topk_ratio, generator)
+
     def _decode(self, ids: Tensor, keep: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
                 tok_lengths: Tensor, steps: int, guidance: float, temperature: float,
                 topk_ratio: Optional[float], generator: Optional[torch.Generator],
@@ -310,13 +323,8 @@ class MaskedTransformer(nn.Module):
             count = torch.round(ratio * free).clamp(min=1).long()
             remask = self._remask(scores, fixed, valid, count, spread)
             ids = ids.masked_fill(remask, self.mask_id)
-            if guide == "candidates":
-                logits = self.candidate_logits(ids, text_emb, skel_emb, tok_lengths, guidance,
-                                               topk_ratio, draw_guidance)
-                pred = sample_logits(logits, temperature, None, generator)
-            else:
-                logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
-                pred = sample_logits(logits, temperature, topk_ratio, generator)
+            logits, pred = self._draw(ids, text_emb, skel_emb, tok_lengths, guidance,
+                                      temperature, topk_ratio, generator, guide, draw_guidance)
             ids = torch.where(remask, pred, ids)
             conf = logits.softmax(-1).gather(-1, pred.unsqueeze(-1)).squeeze(-1)
             conf = ranking_scores(conf, choice_temperature, (step + 1) / steps, generator)

@@ -274,10 +274,11 @@ class ResidualTransformer(nn.Module):
                 if guide == "candidates":
                     logits = self.candidate_logits(codes, layer, text_emb, skel_emb, tok_lengths,
                                                    guidance, topk_ratio, draw_guidance)
-                    pred = sample_logits(logits, temperature, None, generator)
+                    topk = None  # the candidates are the top k already
                 else:
                     logits = self.guided_logits(codes, layer, text_emb, skel_emb, tok_lengths,
                                                 guidance)
-                    pred = sample_logits(logits, temperature, topk_ratio, generator)
+                    topk = topk_ratio
+                pred = sample_logits(logits, temperature, topk, generator)
                 codes[..., q] = pred.masked_fill(~valid, self.pad_id)
             return unpool_codes(codes, lengths, self.pool, self.pad_id)
