@@ -80,6 +80,7 @@ from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa: E402
                                           encode_windows, generate_on, load_generator,
                                           rig_inputs)
+from satagraph.nn.generators.sampling import GUIDES  # noqa: E402
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.quality import heading_gap, pace_drift, turn_rate  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
@@ -893,7 +894,7 @@ def main(argv=None) -> int:
     parser.add_argument("--decoding-steps", type=int, default=None,
                         help="iterative decoding steps (default: generate's, 10)")
     parser.add_argument("--residual-guidance", type=float, default=None)
-    parser.add_argument("--guide", choices=("logits", "candidates"), default=None,
+    parser.add_argument("--guide", choices=GUIDES, default=None,
                         help="how guidance enters each draw (GenerationSettings.guide)")
     parser.add_argument("--draw-guidance", type=float, default=None,
                         help="with --guide candidates: GenerationSettings.draw_guidance")

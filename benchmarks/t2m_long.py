@@ -123,11 +123,8 @@ def evaluate(args: argparse.Namespace) -> Dict:
 
 
 def cell(value, digits: int = 3) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, (tuple, list)):
-        return f"{value[0]:.{digits}f} ± {value[1]:.{digits}f}"
-    return f"{value:.{digits}f}"
+    """:func:`t2m.fmt`, with a dash where there is no value."""
+    return t2m.fmt(value, digits) or "-"
 
 
 def table(result: Dict) -> str:
