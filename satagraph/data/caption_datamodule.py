@@ -14,6 +14,7 @@ A config's ``data`` section (``module: t2m``)::
       min_frames: 32      # fewest frames per zoo clip
       batch_size: 16
       mirror: 0.5         # left/right mirroring of motion and captions
+      reverse: 0.0        # files' walks played backwards as backward walks
       scale: 0.5          # bone scaling of the skeleton (training windows)
       semantic_encoder: offline   # the autoencoder's
 """
@@ -82,6 +83,10 @@ class CaptionDataModule(WindowDataModule):
         batch_size (int): Windows per batch.
         mirror (float): Probability of mirroring a training window (motion
             and captions together).
+        reverse (float): Probability of playing a file's training window
+            backwards with its captions, where their reversal is known (walks;
+            :func:`~satagraph.datasets.reverse.reverse_text`). The zoo draws
+            its backward walks itself and is never reversed.
         scale (float): Probability of putting a training window on a
             bone-scaled skeleton (see
             :class:`~satagraph.data.captioned.CaptionWindows`).
@@ -106,8 +111,10 @@ class CaptionDataModule(WindowDataModule):
                  preprocessing: Optional[Dict] = None, cache_dir: Optional[str] = None,
                  num_workers: int = 0, max_files: Optional[int] = None,
                  seed: int = 0, scale: float = 0.0,
-                 code_bank: Optional[Union[str, Sequence[str]]] = None) -> None:
+                 code_bank: Optional[Union[str, Sequence[str]]] = None,
+                 reverse: float = 0.0) -> None:
         super().__init__()
+        self.reverse = float(reverse)
         #: The bank files (``code_bank``, as a list; empty: none).
         self.code_bank = _bank_paths(code_bank)
         #: The training bank (``code_bank``), read by :meth:`setup`.
@@ -157,8 +164,9 @@ class CaptionDataModule(WindowDataModule):
             self.skipped += [f"{split}: {e}" for e in bad]
             warnings.warn(f"left out {len(bad)} {split} files: {bad[:3]}", stacklevel=2)
         stride = self.stride if split == "train" else self.window
+        reverse = self.reverse if split == "train" else 0.0
         parts: List[Dataset] = [FileCaptionWindows(kept, feats, self.window, stride,
-                                                   seed=self.seed, **kwargs)]
+                                                   seed=self.seed, reverse=reverse, **kwargs)]
         for spec in zoos:
             parts += zoo_caption_datasets(spec, split, self.window, self.min_frames,
                                           self.seed, **kwargs)

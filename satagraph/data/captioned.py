@@ -15,7 +15,12 @@ the caption it is trained with:
 - ``meta["mirrored"]``: whether the window was mirrored left/right, in
   which case the motion (:func:`~satagraph.transforms.augment.mirror`) and every
   caption (:func:`~satagraph.datasets.mirror.mirror_text`) were mirrored
-  together.
+  together;
+- ``meta["reversed"]``: whether the window was played backwards
+  (:func:`~satagraph.transforms.augment.reverse_time`), its captions
+  reversed with it (:func:`~satagraph.datasets.reverse.reverse_text`; walks
+  only: a window none of whose captions has a known reversal is never
+  reversed).
 
 Two sources:
 
@@ -36,7 +41,7 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset
 
-from satagraph.transforms.augment import mirror as mirror_motion
+from satagraph.transforms.augment import mirror as mirror_motion, reverse_time
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, _frames, shown_as,
@@ -79,6 +84,33 @@ def mirror_features(feats: MotionFeatures, start: int, stop: int,
     return motion_to_features(mirrored, **options, facing_axis=axis), lead
 
 
+def reverse_features(feats: MotionFeatures, start: int, stop: int,
+                     options: Dict[str, float]) -> Tuple[MotionFeatures, int]:
+    r"""Frames ``start:stop`` of a clip played backwards, featurised again
+    with the frame after them in front where there is one (so that the
+    first frame's velocities are those of the reversed clip).
+
+    Args:
+        feats: Features of the clip.
+        start: First frame.
+        stop: Frame after the last.
+        options: :func:`~satagraph.data.dataset.feature_options`.
+
+    Returns:
+        The reversed features and the position of frame ``stop - 1`` (the
+        reversed window's first) in them.
+    """
+    lead = 1 if stop < feats.num_frames else 0
+    motion = reverse_time(features_to_motion(_frames(feats, slice(start, stop + lead))))
+    return motion_to_features(motion, **options, facing_axis=feats.facing_axis), lead
+
+
+def reversible(captions: Sequence[Caption]) -> List[Caption]:
+    """The captions of a window played backwards: those whose reversal is
+    known (:meth:`~satagraph.datasets.caption.Caption.reversed`)."""
+    return [c for c in (c.reversed() for c in captions) if c is not None]
+
+
 def choose_caption(captions: Sequence[Caption], rng: Optional[np.random.Generator]
                    ) -> Caption:
     """One caption: a draw of :obj:`rng`, or the first without one."""
@@ -116,17 +148,20 @@ class CaptionWindows(Dataset):
         seed (int): Seed of mirroring, scaling and caption choice.
         preprocessing (dict, optional): Overrides of
             :data:`~satagraph.data.dataset.DEFAULT_PREPROCESSING`.
+        reverse (float): Probability of playing a training window backwards
+            with its captions, where its captions' reversal is known (a walk
+            becomes a backward walk; see
+            :func:`~satagraph.datasets.reverse.reverse_text`).
     """
 
     def __init__(self, semantic: Optional[Callable] = None, mirror: float = 0.0,
                  seed: int = 0, preprocessing: Optional[Mapping] = None,
-                 scale: float = 0.0) -> None:
-        if not 0.0 <= mirror <= 1.0:
-            raise ValueError(f"mirror must be in [0, 1], got {mirror}")
-        if not 0.0 <= scale <= 1.0:
-            raise ValueError(f"scale must be in [0, 1], got {scale}")
+                 scale: float = 0.0, reverse: float = 0.0) -> None:
+        for name, p in (("mirror", mirror), ("scale", scale), ("reverse", reverse)):
+            if not 0.0 <= p <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {p}")
         self.semantic_fn, self.p_mirror, self.seed = semantic, float(mirror), int(seed)
-        self.p_scale = float(scale)
+        self.p_scale, self.p_reverse = float(scale), float(reverse)
         self.config = dict(DEFAULT_PREPROCESSING, **(preprocessing or {}))
         self.options = feature_options(self.config)
         self.scaler = WindowAugment(scale=1.0, mirror=0.0, drop=0.0, merge=0.0, insert=0.0,
@@ -152,17 +187,24 @@ class CaptionWindows(Dataset):
                   captions: Sequence[Caption], rng: Optional[np.random.Generator],
                   meta: Dict, censored: bool = False) -> MotionClip:
         """The item of frames ``start:stop``: mirrored with its captions at
-        probability :attr:`p_mirror` and bone-scaled at :attr:`p_scale`
-        (training only), with a caption drawn; its duration is the drawn
-        caption's time range in :obj:`feats`, or the item's own where it is
-        only a lower bound (:obj:`censored`)."""
-        total, mirrored = feats.num_frames, None
+        probability :attr:`p_mirror`, played backwards at :attr:`p_reverse`
+        and bone-scaled at :attr:`p_scale` (training only), with a caption
+        drawn; its duration is the drawn caption's time range in
+        :obj:`feats`, or the item's own where it is only a lower bound
+        (:obj:`censored`)."""
+        total, mirrored, backwards = feats.num_frames, None, []
         if rng is not None and rng.random() < self.p_mirror:
             mirrored = mirror_features(feats, start, stop, self.options)
         if mirrored is not None:
             feats, lead = mirrored
             start, stop = lead, None
             captions = [c.mirrored() for c in captions]
+        if rng is not None and self.p_reverse and rng.random() < self.p_reverse:
+            backwards = reversible(captions)
+        if backwards:
+            stop = feats.num_frames if stop is None else stop
+            feats, start = reverse_features(feats, start, stop, self.options)
+            stop, captions = None, backwards
         scaled = rng is not None and rng.random() < self.p_scale
         if scaled:
             feats, start = self.scaler(feats, start, stop, int(rng.integers(2 ** 31)))
@@ -174,7 +216,7 @@ class CaptionWindows(Dataset):
         frames = clip.num_frames if censored else span.stop - span.start
         clip.meta.update(text=caption.text, seconds=frames / fps, censored=bool(censored),
                          captions=[c.text for c in captions], mirrored=mirrored is not None,
-                         scaled=scaled)
+                         reversed=bool(backwards), scaled=scaled)
         return clip
 
     @staticmethod
@@ -327,5 +369,6 @@ def batch_censored(batch) -> torch.Tensor:
 
 
 __all__ = ["CaptionWindows", "FileCaptionWindows", "ZooCaptionWindows", "mirror_features",
+           "reverse_features", "reversible",
            "overlapping", "choose_caption", "batch_texts", "batch_seconds",
            "batch_censored"]

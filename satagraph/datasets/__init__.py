@@ -12,6 +12,8 @@ r"""Where motion comes from, and its captions for text-to-motion
   ``clip.json``.
 * :mod:`.mirror`: :func:`mirror_text`, the caption of a left/right mirrored
   motion.
+* :mod:`.reverse`: :func:`reverse_text`, the caption of a motion played
+  backwards (walks only).
 """
 from satagraph._lazy import lazy_exports
 
@@ -21,13 +23,14 @@ _EXPORTS = {
     **dict.fromkeys(("CAPTIONERS", "CaptionedClip", "captioned_clips", "captions_for",
                      "infer_dataset"), "satagraph.datasets.captions"),
     **dict.fromkeys(("MIRROR_WORDS", "mirror_text"), "satagraph.datasets.mirror"),
+    **dict.fromkeys(("REVERSIBLE_WORDS", "reverse_text"), "satagraph.datasets.reverse"),
     **dict.fromkeys(("parse_caption_json", "parse_humanml3d", "read_sidecar",
                      "read_sidecars", "sidecar_paths"), "satagraph.datasets.sidecar"),
     **dict.fromkeys(("ZooClip", "zoo_clip_of_row", "zoo_phrasings"),
                     "satagraph.datasets.zoo_captions")}
 __all__ = ["Caption", "CaptionError", "CaptionedClip", "CAPTIONERS", "MIRROR_WORDS",
            "ZooClip", "captioned_clips", "captions_for", "choose", "infer_dataset",
-           "mirror_captions", "mirror_text", "parse_caption_json", "parse_humanml3d",
+           "mirror_captions", "mirror_text", "parse_caption_json", "REVERSIBLE_WORDS", "reverse_text", "parse_humanml3d",
            "read_sidecar", "read_sidecars", "sidecar_paths", "zoo_clip_of_row",
            "zoo_phrasings"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

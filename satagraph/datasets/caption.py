@@ -9,6 +9,7 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 from satagraph.datasets.mirror import mirror_text
+from satagraph.datasets.reverse import reverse_text
 
 
 class CaptionError(ValueError):
@@ -44,6 +45,12 @@ class Caption:
         """The caption of the left/right mirrored clip (see
         :func:`~satagraph.datasets.mirror.mirror_text`)."""
         return replace(self, text=mirror_text(self.text))
+
+    def reversed(self) -> Optional["Caption"]:
+        """The caption of the clip played backwards, or ``None`` where that is
+        not known (see :func:`~satagraph.datasets.reverse.reverse_text`)."""
+        text = reverse_text(self.text)
+        return None if text is None else replace(self, text=text)
 
     def frames(self, fps: float, num_frames: int) -> slice:
         """The frames the caption describes.

@@ -284,6 +284,20 @@ def mirror(motion: Motion, axis: int = 0) -> Motion:
     return motion.with_(skeleton=new, rotations=rot, translations=trans)
 
 
+def reverse_time(motion: Motion) -> Motion:
+    r"""The motion played backwards: frame :math:`t` becomes frame
+    :math:`T - 1 - t`, the skeleton and frame rate kept. A walk becomes a
+    backward walk facing the same way (see
+    :func:`~satagraph.datasets.reverse.reverse_text` for its caption);
+    reversing twice gives the motion back.
+
+    Args:
+        motion (Motion): The motion.
+    """
+    return motion.with_(rotations=motion.rotations[::-1].copy(),
+                        translations=motion.translations[::-1].copy())
+
+
 # ------------------------------------------------------- topology changes
 def _rebuild(motion: Motion, keep: List[int], parents: List[int],
              offsets: np.ndarray, rotations: np.ndarray,

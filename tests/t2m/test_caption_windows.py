@@ -160,3 +160,36 @@ def test_bone_scaling_changes_the_skeleton_not_the_caption_or_the_length():
         assert ((ratio > 0.5) & (ratio < 1.6)).all()
     # evaluation windows are never scaled
     assert not scaled[0].meta["scaled"]
+
+
+def test_file_windows_play_walks_backwards_with_their_captions():
+    motion = canonicalize(example_motion(90, fps=30.0), fps=30.0)
+    feats = motion_to_features(motion)
+    f = MotionFile("clip.bvh", "user", "example", "train")
+    walk = [Caption("a person walks forward", 0.0, None), Caption("a person takes a walk")]
+    plain = FileCaptionWindows([f], [feats], window=40, stride=20, captions=[walk])
+    back = FileCaptionWindows([f], [feats], window=40, stride=20, captions=[walk], reverse=1.0)
+    for key in ((0, 0), (2, 1), (1, 2)):
+        a, b = plain[key], back[key]
+        assert b.meta["reversed"] and not a.meta["reversed"]
+        assert b.meta["captions"] == ["a person walks backward"]  # the other has no reversal
+        assert b.num_frames == a.num_frames == 40
+        assert b.meta["seconds"] == pytest.approx(a.meta["seconds"])
+        # the root travels the other way at the same speed, and the pose plays backwards
+        assert b.root[:, 2].mean().item() == pytest.approx(-a.root[:, 2].mean().item(), rel=0.05)
+        assert a.root[:, 2].mean().item() > 0.5
+        assert torch.allclose(b.dynamic.flip(0)[..., :3], a.dynamic[..., :3], atol=1e-4)
+    assert not back[0].meta["reversed"]  # evaluation windows are never reversed
+
+
+def test_windows_without_a_known_reversal_stay_as_they_are():
+    motion = canonicalize(example_motion(60, fps=30.0), fps=30.0)
+    feats = motion_to_features(motion)
+    f = MotionFile("clip.bvh", "user", "example", "train")
+    jump = [Caption("a person jumps forward")]
+    ds = FileCaptionWindows([f], [feats], window=60, captions=[jump], reverse=1.0)
+    clip = ds[(0, 0)]
+    assert not clip.meta["reversed"] and clip.meta["captions"] == ["a person jumps forward"]
+    assert clip.root[:, 2].mean().item() > 0.5
+    with pytest.raises(ValueError, match="reverse must be in"):
+        FileCaptionWindows([f], [feats], window=60, captions=[jump], reverse=1.5)
