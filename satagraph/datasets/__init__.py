@@ -29,8 +29,8 @@ _EXPORTS = {
     **dict.fromkeys(("ZooClip", "zoo_clip_of_row", "zoo_phrasings"),
                     "satagraph.datasets.zoo_captions")}
 __all__ = ["Caption", "CaptionError", "CaptionedClip", "CAPTIONERS", "MIRROR_WORDS",
-           "ZooClip", "captioned_clips", "captions_for", "choose", "infer_dataset",
-           "mirror_captions", "mirror_text", "parse_caption_json", "REVERSIBLE_WORDS", "reverse_text", "parse_humanml3d",
-           "read_sidecar", "read_sidecars", "sidecar_paths", "zoo_clip_of_row",
-           "zoo_phrasings"]
+           "REVERSIBLE_WORDS", "ZooClip", "captioned_clips", "captions_for", "choose",
+           "infer_dataset", "mirror_captions", "mirror_text", "parse_caption_json",
+           "parse_humanml3d", "read_sidecar", "read_sidecars", "reverse_text", "sidecar_paths",
+           "zoo_clip_of_row", "zoo_phrasings"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
