@@ -60,7 +60,7 @@ def walked(model, rig: str, prompt: str, label: str, seeds: int,
     for seed in range(seeds):
         motion = generate_on(model, prompt, target, 4.0, seed, settings)
         item = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label, "", "")
-        count += direction_ok(label, item.travel)
+        count += int(direction_ok(label, item.travel))
     return count
 
 
