@@ -866,7 +866,7 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
                                            "smooth", "output_smooth", "plant",
                                            "choice_temperature",
                                            "spread", "rest", "residual_window", "guide",
-                                           "draw_guidance")
+                                           "draw_guidance", "residual_guide")
              if getattr(args, k, None) is not None}
     if "decoding_steps" in given:
         given["steps"] = given.pop("decoding_steps")
@@ -898,6 +898,9 @@ def main(argv=None) -> int:
                         help="how guidance enters each draw (GenerationSettings.guide)")
     parser.add_argument("--draw-guidance", type=float, default=None,
                         help="with --guide candidates: GenerationSettings.draw_guidance")
+    parser.add_argument("--residual-guide", choices=GUIDES, default=None,
+                        help="the residual transformer's (GenerationSettings.residual_guide; "
+                        "default: --guide's)")
     parser.add_argument("--residual-window", type=float, default=None,
                         help="seconds of the windows the residual layers are filled in "
                         "(0: whole clips; default: generate's)")

@@ -40,7 +40,8 @@ from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # no
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 #: Sampling name -> :class:`GenerationSettings` overrides.
-SAMPLINGS = {"logits": {"guide": "logits"}, "candidates": {"guide": "candidates"}}
+SAMPLINGS = {"logits": {"guide": "logits"}, "candidates": {"guide": "candidates"},
+             "masked-candidates": {"guide": "candidates", "residual_guide": "logits"}}
 PROMPTS = [(p.format("a person"), label) for p, label in PROBE_PROMPTS if label in DIRECTIONS]
 
 

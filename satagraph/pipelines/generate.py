@@ -106,7 +106,9 @@ class GenerationSettings:
     validation prompts R@3 0.817 against 0.735, FID 0.233 against 0.282,
     action 0.60 against 0.52, gaits at nearly real speed, but a person asked
     to walk backward on a real human rig walks forward, ``experiments/T2M.md``
-    sections 63-64)."""
+    sections 63-64); and the residual transformer's own (``residual_guide``,
+    ``None``: ``guide``'s; its guided logits are what walks a person
+    backward on a CMU rig, section 66)."""
 
     steps: int = 10
     guidance: float = 4.0
@@ -126,6 +128,13 @@ class GenerationSettings:
     window: Optional[float] = None
     guide: str = "logits"
     draw_guidance: float = 2.0
+    residual_guide: Optional[str] = None
+
+    @property
+    def residual_draw(self) -> str:
+        """How guidance enters the residual transformer's draws:
+        :attr:`residual_guide`, else :attr:`guide`."""
+        return self.guide if self.residual_guide is None else self.residual_guide
 
     def window_frames(self, module) -> Optional[int]:
         """:attr:`window` in frames of :obj:`module` (``None``: whole clips;
@@ -255,7 +264,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     codes = module.residual.generate(base, text_emb, skel_emb, lengths,
                                      settings.residual_guidance, temperature,
                                      settings.topk_ratio, gen, settings.layers,
-                                     settings.residual_frames(module), settings.guide,
+                                     settings.residual_frames(module), settings.residual_draw,
                                      settings.draw_guidance)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
                      settings.ground, settings.smooth, settings.plant, settings.output_smooth)

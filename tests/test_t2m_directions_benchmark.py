@@ -1,0 +1,38 @@
+"""benchmarks/t2m_directions.py: which way a generated person walks."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+import t2m  # noqa: E402
+import t2m_directions  # noqa: E402
+from tests.conftest import data_dir  # noqa: E402
+
+
+def test_the_built_in_generator_walks_a_zoo_biped_the_asked_way(tmp_path):
+    from satagraph.io import write_bvh
+    from satagraph.pipelines.generate import GenerationSettings, load_generator
+    item = [it for it in t2m.zoo_items("val", 8, seed=0, keep=True) if it.label == "walk"][0]
+    rig = tmp_path / "biped.bvh"
+    write_bvh(item.motion, rig)
+    model, settings = load_generator("builtin"), GenerationSettings()
+    assert t2m_directions.walked(model, str(rig), "a person walks forward", "walk", 1,
+                                 settings) == 1
+    assert t2m_directions.walked(model, str(rig), "a person walks backward", "walk-back", 1,
+                                 settings) == 1
+    row = {"rig": "biped", "sampling": "logits", "seeds": 2, "walk": 2, "walk-back": 1,
+           "walk-left": 0, "walk-right": 2}
+    assert t2m_directions._row(row) == "| biped | logits | 2 / 2 | 1 / 2 | 0 / 2 | 2 / 2 |"
+
+
+@pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: the manifest's "
+                    "human rigs are needed")
+def test_human_rigs_are_the_splits_cmu_and_ccbase_files():
+    val = [Path(p).name for p in t2m_directions.human_rigs("val")]
+    assert val == ["depressed_13_000.bvh", "old_13_000.bvh", "007_07.bvh", "007_08.bvh",
+                   "007_09.bvh"]
+    assert not set(val) & {Path(p).name for p in t2m_directions.human_rigs("test")}
