@@ -520,3 +520,26 @@ def test_settings_generate_in_the_window_the_model_was_trained_on_unless_told():
     assert GenerationSettings(window=2.5).window_frames(module) == 75
     assert GenerationSettings(residual_window=2.0).residual_frames(module) == 60
     assert GenerationSettings().window_frames(SimpleNamespace(fps=30.0, meta={})) is None
+
+
+def test_the_residual_transformer_draws_as_guide_says_unless_told_otherwise(
+        t2m_ckpt, zoo_skeletons, monkeypatch):
+    """``residual_guide`` ``None`` follows ``guide``; set, it changes only the
+    residual transformer's draws (the same layer-0 codes)."""
+    from satagraph.pipelines import generate as G
+    module, target, seen = _decoded_codes(t2m_ckpt, zoo_skeletons, monkeypatch)
+    guides = []
+    for part in ("masked", "residual"):
+        real = getattr(module, part).generate
+        monkeypatch.setattr(getattr(module, part), "generate", lambda *a, _p=part, _r=real, **k: (
+            guides.append((_p, k.get("guide", a[-2] if _p == "residual" else None))),
+            _r(*a, **k))[1])
+    cases = (G.GenerationSettings(), G.GenerationSettings(guide="candidates"),
+             G.GenerationSettings(guide="candidates", residual_guide="logits"))
+    for settings in cases:
+        G.generate_on(module, TEXT, target, 1.0, 0, settings)
+    assert guides == [("masked", "logits"), ("residual", "logits"),
+                      ("masked", "candidates"), ("residual", "candidates"),
+                      ("masked", "candidates"), ("residual", "logits")]
+    assert [s.residual_draw for s in cases] == ["logits", "candidates", "logits"]
+    assert torch.equal(seen[1][:, 0], seen[2][:, 0])
