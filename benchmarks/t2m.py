@@ -895,12 +895,12 @@ def main(argv=None) -> int:
                         help="iterative decoding steps (default: generate's, 10)")
     parser.add_argument("--residual-guidance", type=float, default=None)
     parser.add_argument("--guide", choices=GUIDES, default=None,
-                        help="how guidance enters each draw (GenerationSettings.guide)")
+                        help="how guidance enters the masked transformer's draws "
+                        "(GenerationSettings.guide)")
     parser.add_argument("--draw-guidance", type=float, default=None,
                         help="with --guide candidates: GenerationSettings.draw_guidance")
     parser.add_argument("--residual-guide", choices=GUIDES, default=None,
-                        help="the residual transformer's (GenerationSettings.residual_guide; "
-                        "default: --guide's)")
+                        help="the residual transformer's (GenerationSettings.residual_guide)")
     parser.add_argument("--residual-window", type=float, default=None,
                         help="seconds of the windows the residual layers are filled in "
                         "(0: whole clips; default: generate's)")

@@ -1,19 +1,20 @@
 """Which way a generated person walks, on real human rigs (issue 19;
-``experiments/T2M.md`` sections 64-65).
+``experiments/T2M.md`` sections 64-66).
 
 ``benchmarks/t2m.py`` probes direction on one rig per body plan. The zoo's
 bipeds walk backward in their captions and the captioned real human data
 (CMU, CC_Base) did not, so a sampling or a model can keep the zoo's
 directions and lose them on real human rigs. This benchmark asks "a
 person walks forward / backward / forward and to the left / right" for
-4 s on each rig with several seeds, per sampling, and counts the
-generations that travel the asked way (``t2m.py``'s direction probe).
+4 s on each rig with several seeds, per sampling (:data:`SAMPLINGS`;
+``default``: :class:`GenerationSettings`'s), and counts the generations
+that travel the asked way (``t2m.py``'s direction probe).
 
 Rigs: the manifest's human validation files of CMU and CC_Base by default
 (``--split test`` for the test files, or ``--rigs`` paths).
 
     .venv/bin/python benchmarks/t2m_directions.py [--ckpt builtin] [--split val] \\
-        [--seeds 6] [--sampling logits candidates] [--json OUT.json]
+        [--seeds 6] [--sampling default logits candidates masked-candidates] [--json OUT.json]
 
 Prints a markdown table: one row per rig and sampling, ``k / n`` per
 prompt.
@@ -39,8 +40,13 @@ from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # no
                                           load_generator)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
-#: Sampling name -> :class:`GenerationSettings` overrides.
-SAMPLINGS = {"logits": {"guide": "logits"}, "candidates": {"guide": "candidates"},
+#: Sampling name -> :class:`GenerationSettings` overrides: ``logits``,
+#: both transformers drawing from their guided logits (the default before
+#: stop 57); ``candidates``, both among candidates; ``masked-candidates``,
+#: the masked transformer among candidates and the residual one from its
+#: guided logits (the default since, ``experiments/T2M.md`` section 66).
+SAMPLINGS = {"default": {}, "logits": {"guide": "logits", "residual_guide": "logits"},
+             "candidates": {"guide": "candidates", "residual_guide": "candidates"},
              "masked-candidates": {"guide": "candidates", "residual_guide": "logits"}}
 PROMPTS = [(p.format("a person"), label) for p, label in PROBE_PROMPTS if label in DIRECTIONS]
 
@@ -89,7 +95,7 @@ def main(argv=None) -> None:
     parser.add_argument("--rigs", nargs="*", default=None, help="BVH files (default: the split's)")
     parser.add_argument("--seeds", type=int, default=6)
     parser.add_argument("--sampling", nargs="+", choices=sorted(SAMPLINGS),
-                        default=["logits", "candidates"])
+                        default=["default"])
     parser.add_argument("--json", default=None, help="also write the rows as JSON")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")

@@ -74,16 +74,18 @@ def add_generate_parser(sub) -> None:
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")
     p.add_argument("--steps", type=int, default=10, help="decoding steps (default 10)")
-    p.add_argument("--guide", default="logits", metavar="{logits,candidates}",
-                   help="how guidance enters each draw: logits (the default, MoMask's: codes "
-                   "drawn from the guided logits, which makes gaits 30-45%% faster than real "
-                   "ones) or candidates (the guided logits choose the most likely tenth of "
-                   "the codes and logits guided by --draw-guidance draw among them: real-paced "
-                   "gaits and text read better on the zoo, but on real human rigs \"walks "
-                   "backward\" walks forward; experiments/T2M.md sections 63-64)")
+    p.add_argument("--guide", default="candidates", metavar="{candidates,logits}",
+                   help="how guidance enters the masked transformer's draws: candidates (the "
+                   "default: the guided logits choose the most likely tenth of the codes and "
+                   "logits guided by --draw-guidance draw among them) or logits (MoMask's: "
+                   "codes drawn from the guided logits, which makes gaits 30-45%% faster than "
+                   "real ones); experiments/T2M.md sections 63-66")
     p.add_argument("--draw-guidance", type=float, default=2.0,
-                   help="with --guide candidates, the guidance of the draw among the "
-                   "candidates (default 2; 1: the text-conditioned logits)")
+                   help="with candidates, the guidance of the draw among the candidates "
+                   "(default 2; 1: the text-conditioned logits)")
+    p.add_argument("--residual-guide", default="logits", metavar="{logits,candidates}",
+                   help="the same for the residual transformer (default logits: its guided "
+                   "logits are what walks a person backward on a CMU rig)")
     p.add_argument("--window", type=_window, default=None, metavar="SECONDS",
                    help="generate a clip longer than this many seconds window after window, "
                    "each continuing the half window before it (default: the length the "
@@ -204,7 +206,7 @@ def run_generate(args) -> int:
         raise ValueError(f"--steps and --threads must be at least 1, got {args.steps} "
                          f"and {args.threads}")
     from satagraph.nn.generators.sampling import check_guide
-    check_guide(args.guide)
+    check_guide(args.guide), check_guide(args.residual_guide)
     torch.set_num_threads(args.threads)
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths + ([args.render] if args.render else []):
@@ -217,7 +219,8 @@ def run_generate(args) -> int:
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant,
                                   residual_window=args.residual_window, window=args.window,
-                                  guide=args.guide, draw_guidance=args.draw_guidance)
+                                  guide=args.guide, draw_guidance=args.draw_guidance,
+                                  residual_guide=args.residual_guide)
     if args.prompts is not None:
         return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()

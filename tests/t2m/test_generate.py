@@ -522,10 +522,12 @@ def test_settings_generate_in_the_window_the_model_was_trained_on_unless_told():
     assert GenerationSettings().window_frames(SimpleNamespace(fps=30.0, meta={})) is None
 
 
-def test_the_residual_transformer_draws_as_guide_says_unless_told_otherwise(
+def test_the_masked_transformer_draws_among_candidates_the_residual_one_from_guided_logits(
         t2m_ckpt, zoo_skeletons, monkeypatch):
-    """``residual_guide`` ``None`` follows ``guide``; set, it changes only the
-    residual transformer's draws (the same layer-0 codes)."""
+    """By default the masked transformer draws among candidates and the
+    residual one from its guided logits (``experiments/T2M.md`` section
+    66); ``residual_guide=None`` follows ``guide``; the residual draw
+    changes only the residual layers (the same layer-0 codes)."""
     from satagraph.pipelines import generate as G
     module, target, seen = _decoded_codes(t2m_ckpt, zoo_skeletons, monkeypatch)
     guides = []
@@ -534,12 +536,12 @@ def test_the_residual_transformer_draws_as_guide_says_unless_told_otherwise(
         monkeypatch.setattr(getattr(module, part), "generate", lambda *a, _p=part, _r=real, **k: (
             guides.append((_p, k.get("guide", a[-2] if _p == "residual" else None))),
             _r(*a, **k))[1])
-    cases = (G.GenerationSettings(), G.GenerationSettings(guide="candidates"),
-             G.GenerationSettings(guide="candidates", residual_guide="logits"))
+    cases = (G.GenerationSettings(), G.GenerationSettings(guide="logits"),
+             G.GenerationSettings(residual_guide=None))
     for settings in cases:
         G.generate_on(module, TEXT, target, 1.0, 0, settings)
-    assert guides == [("masked", "logits"), ("residual", "logits"),
-                      ("masked", "candidates"), ("residual", "candidates"),
-                      ("masked", "candidates"), ("residual", "logits")]
-    assert [s.residual_draw for s in cases] == ["logits", "candidates", "logits"]
-    assert torch.equal(seen[1][:, 0], seen[2][:, 0])
+    assert guides == [("masked", "candidates"), ("residual", "logits"),
+                      ("masked", "logits"), ("residual", "logits"),
+                      ("masked", "candidates"), ("residual", "candidates")]
+    assert [s.residual_draw for s in cases] == ["logits", "logits", "candidates"]
+    assert torch.equal(seen[0][:, 0], seen[2][:, 0])
