@@ -72,6 +72,8 @@ def walked(model, rig: str, prompt: str, label: str, seeds: int,
 
 
 def table(model, rigs: Sequence[str], samplings: Sequence[str], seeds: int) -> List[Dict]:
+    """One row per rig and sampling (printed as it comes): the counts per
+    direction prompt."""
     rows = []
     for rig in rigs:
         for name in samplings:

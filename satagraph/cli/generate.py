@@ -206,7 +206,8 @@ def run_generate(args) -> int:
         raise ValueError(f"--steps and --threads must be at least 1, got {args.steps} "
                          f"and {args.threads}")
     from satagraph.nn.generators.sampling import check_guide
-    check_guide(args.guide), check_guide(args.residual_guide)
+    for guide in (args.guide, args.residual_guide):
+        check_guide(guide)
     torch.set_num_threads(args.threads)
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths + ([args.render] if args.render else []):

@@ -88,13 +88,8 @@ def reverse_features(feats: MotionFeatures, start: int, stop: int,
                      options: Dict[str, float]) -> Tuple[MotionFeatures, int]:
     r"""Frames ``start:stop`` of a clip played backwards, featurised again
     with the frame after them in front where there is one (so that the
-    first frame's velocities are those of the reversed clip).
-
-    Args:
-        feats: Features of the clip.
-        start: First frame.
-        stop: Frame after the last.
-        options: :func:`~satagraph.data.dataset.feature_options`.
+    first frame's velocities are those of the reversed clip); the arguments
+    are :func:`mirror_features`'.
 
     Returns:
         The reversed features and the position of frame ``stop - 1`` (the
@@ -145,7 +140,7 @@ class CaptionWindows(Dataset):
             bone-scaled copy of its skeleton (every bone scaled per axis in
             ``[low, high]`` of :class:`~satagraph.data.dataset.WindowAugment`;
             the captions still hold: no word names a size).
-        seed (int): Seed of mirroring, scaling and caption choice.
+        seed (int): Seed of mirroring, reversal, scaling and caption choice.
         preprocessing (dict, optional): Overrides of
             :data:`~satagraph.data.dataset.DEFAULT_PREPROCESSING`.
         reverse (float): Probability of playing a training window backwards
