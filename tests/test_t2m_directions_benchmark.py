@@ -36,3 +36,17 @@ def test_human_rigs_are_the_splits_cmu_and_ccbase_files():
     assert val == ["depressed_13_000.bvh", "old_13_000.bvh", "007_07.bvh", "007_08.bvh",
                    "007_09.bvh"]
     assert not set(val) & {Path(p).name for p in t2m_directions.human_rigs("test")}
+
+
+@pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: a CMU test rig is "
+                    "needed")
+def test_the_built_in_generator_walks_a_person_backward_on_a_cmu_rig():
+    """The CMU skeleton has one captioned training clip (jumps); the default
+    sampling keeps the residual transformer's guided logits, which walk a
+    person backward there (``experiments/T2M.md`` sections 64-66; both
+    transformers drawing among candidates walked forward)."""
+    from satagraph.pipelines.generate import GenerationSettings, load_generator
+    rig = str(data_dir() / "cmu" / "neutral_16_000.bvh")
+    model = load_generator("builtin")
+    back = ("a person walks backward", "walk-back")
+    assert t2m_directions.walked(model, rig, *back, 2, GenerationSettings()) == 2
