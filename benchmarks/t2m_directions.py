@@ -36,6 +36,7 @@ from t2m import DIRECTIONS, FPS, MANIFEST, PROBE_PROMPTS, direction_ok, measure 
 from satagraph.data.features import motion_to_features  # noqa: E402
 from satagraph.datasets.sources import read_manifest  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
+from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # noqa: E402
                                           load_generator)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
@@ -59,10 +60,10 @@ def human_rigs(split: str) -> List[str]:
             if f.dataset in ("cmu", "ccbase") and f.split == split]
 
 
-def walked(model, rig: str, prompt: str, label: str, seeds: int,
+def walked(model, target: Motion, prompt: str, label: str, seeds: int,
            settings: GenerationSettings) -> int:
-    """How many of :obj:`seeds` 4-s generations travel the asked way."""
-    target = read_bvh(rig)
+    """How many of :obj:`seeds` 4-s generations on :obj:`target`'s rig
+    travel the asked way."""
     count = 0
     for seed in range(seeds):
         motion = generate_on(model, prompt, target, 4.0, seed, settings)
@@ -76,9 +77,10 @@ def table(model, rigs: Sequence[str], samplings: Sequence[str], seeds: int) -> L
     direction prompt."""
     rows = []
     for rig in rigs:
+        target = read_bvh(rig)
         for name in samplings:
             settings = GenerationSettings(**SAMPLINGS[name])
-            counts = {label: walked(model, rig, prompt, label, seeds, settings)
+            counts = {label: walked(model, target, prompt, label, seeds, settings)
                       for prompt, label in PROMPTS}
             rows.append({"rig": Path(rig).stem, "sampling": name, "seeds": seeds, **counts})
             print(_row(rows[-1]), flush=True)

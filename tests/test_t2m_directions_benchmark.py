@@ -14,15 +14,16 @@ from tests.conftest import data_dir  # noqa: E402
 
 
 def test_the_built_in_generator_walks_a_zoo_biped_the_asked_way(tmp_path):
-    from satagraph.io import write_bvh
+    from satagraph.io import read_bvh, write_bvh
     from satagraph.pipelines.generate import GenerationSettings, load_generator
     item = [it for it in t2m.zoo_items("val", 8, seed=0, keep=True) if it.label == "walk"][0]
     rig = tmp_path / "biped.bvh"
     write_bvh(item.motion, rig)
+    target = read_bvh(str(rig))
     model, settings = load_generator("builtin"), GenerationSettings()
-    assert t2m_directions.walked(model, str(rig), "a person walks forward", "walk", 1,
+    assert t2m_directions.walked(model, target, "a person walks forward", "walk", 1,
                                  settings) == 1
-    assert t2m_directions.walked(model, str(rig), "a person walks backward", "walk-back", 1,
+    assert t2m_directions.walked(model, target, "a person walks backward", "walk-back", 1,
                                  settings) == 1
     row = {"rig": "biped", "sampling": "logits", "seeds": 2, "walk": 2, "walk-back": 1,
            "walk-left": 0, "walk-right": 2}
@@ -46,7 +47,8 @@ def test_the_built_in_generator_walks_a_person_backward_on_a_cmu_rig():
     person backward there (``experiments/T2M.md`` sections 64-66; both
     transformers drawing among candidates walked forward)."""
     from satagraph.pipelines.generate import GenerationSettings, load_generator
-    rig = str(data_dir() / "cmu" / "neutral_16_000.bvh")
+    from satagraph.io import read_bvh
+    rig = read_bvh(str(data_dir() / "cmu" / "neutral_16_000.bvh"))
     model = load_generator("builtin")
     back = ("a person walks backward", "walk-back")
     assert t2m_directions.walked(model, rig, *back, 2, GenerationSettings()) == 2

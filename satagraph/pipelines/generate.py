@@ -96,7 +96,7 @@ class GenerationSettings:
     windows of that length too unless ``residual_window`` is set; 0: the
     whole clip at once, which past the trained length reads positions the
     transformers never learnt and slows to a shuffle, ``experiments/T2M.md``
-    section 61); and how guidance enters each draw of both transformers
+    section 61); and how guidance enters the masked transformer's draws
     (``guide``, :data:`~satagraph.nn.generators.sampling.GUIDES`:
     ``"candidates"``, the default, the guided logits choose the top-k codes
     and logits guided by ``draw_guidance`` (2; 1: the conditional logits)

@@ -20,8 +20,9 @@ from satagraph.nn.generators.codes import (code_run_lengths, length_mask, merge_
 from satagraph.nn.generators.length_model import LengthModel
 from satagraph.nn.generators.masked_transformer import MaskedLoss, MaskedTransformer
 from satagraph.nn.generators.residual_transformer import ResidualLoss, ResidualTransformer
-from satagraph.nn.generators.sampling import (GUIDES, corrupt_tokens, cosine_schedule, guided,
-                                              guided_candidates, mask_ratio, random_mask,
+from satagraph.nn.generators.sampling import (GUIDES, corrupt_tokens, cosine_schedule,
+                                              draw_logits, guided, guided_candidates,
+                                              mask_ratio, random_mask,
                                               residual_layer_schedule, sample_logits,
                                               top_k_filter)
 from satagraph.nn.generators.skeleton_embedding import (SkeletonEmbedding, SkeletonGraph,
@@ -41,5 +42,5 @@ __all__ = [
     "split_codes", "merge_codes", "pool_codes", "unpool_codes", "token_lengths",
     "length_mask", "code_run_lengths",
     "cosine_schedule", "mask_ratio", "random_mask", "corrupt_tokens", "top_k_filter",
-    "sample_logits", "residual_layer_schedule", "guided", "guided_candidates", "GUIDES",
+    "sample_logits", "residual_layer_schedule", "guided", "guided_candidates", "draw_logits", "GUIDES",
 ]

@@ -10,10 +10,10 @@ from torch import Tensor, nn
 
 from satagraph.nn.generators.codes import (check_codes, continuation_spans, length_mask,
                                            pool_codes, token_lengths, unpool_codes)
-from satagraph.nn.generators.sampling import (Corruption, check_guide, corrupt_tokens, guided,
-                                              guided_candidates, lowest_ranked, mask_ratio,
+from satagraph.nn.generators.sampling import (Corruption, check_guide, corrupt_tokens,
+                                              draw_logits, guided, lowest_ranked, mask_ratio,
                                               random_mask, ranking_scores, sample_logits,
-                                              spread_choice, top_k_filter, uniform)
+                                              spread_choice, uniform)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
                                                        masked_cross_entropy)
@@ -142,26 +142,16 @@ class MaskedTransformer(nn.Module):
         r"""Classifier-free guided logits ``uncond + s (cond - uncond)``;
         ``uncond`` drops the text only. ``text_emb=None``: the unconditional
         logits; :math:`s = 1`: the conditional ones (one pass each)."""
-        if text_emb is None or guidance == 1.0:
-            return self(tokens, text_emb, skel_emb, lengths)
-        return guided(*self._with_and_without_text(tokens, text_emb, skel_emb, lengths),
-                      guidance)
+        cond, uncond = self._logit_pair(tokens, text_emb, skel_emb, lengths, guidance)
+        return cond if uncond is None else guided(cond, uncond, guidance)
 
-    def candidate_logits(self, tokens: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
-                         lengths: Tensor, guidance: float,
-                         topk_ratio: Optional[float], draw_guidance: float = 1.0) -> Tensor:
-        """The logits guided by :obj:`draw_guidance` over the top-k codes of
-        those guided by :obj:`guidance`
-        (:func:`~satagraph.nn.generators.sampling.guided_candidates`)."""
+    def _logit_pair(self, tokens: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
+                    lengths: Tensor, guidance: float) -> Tuple[Tensor, Optional[Tensor]]:
+        """Conditional and text-dropped logits in one batch, or the plain
+        logits and ``None`` where no guidance applies (no text, or
+        :obj:`guidance` 1)."""
         if text_emb is None or guidance == 1.0:
-            return top_k_filter(self(tokens, text_emb, skel_emb, lengths), topk_ratio)
-        return guided_candidates(*self._with_and_without_text(tokens, text_emb, skel_emb,
-                                                              lengths), guidance, topk_ratio,
-                                 draw_guidance)
-
-    def _with_and_without_text(self, tokens: Tensor, text_emb: Tensor, skel_emb: Tensor,
-                               lengths: Tensor) -> Tuple[Tensor, Tensor]:
-        """Conditional and text-dropped logits, in one batch."""
+            return self(tokens, text_emb, skel_emb, lengths), None
         size = tokens.size(0)
         drop = torch.arange(2 * size, device=tokens.device) >= size
         both = self(tokens.repeat(2, 1), text_emb.repeat(2, 1), skel_emb.repeat(2, 1),
@@ -294,13 +284,12 @@ class MaskedTransformer(nn.Module):
               topk_ratio: Optional[float], generator: Optional[torch.Generator], guide: str,
               draw_guidance: float) -> Tuple[Tensor, Tensor]:
         """One decoding step's logits (their softmax ranks the draws) and the
-        codes drawn, as :obj:`guide` says."""
-        if guide == "candidates":
-            logits = self.candidate_logits(ids, text_emb, skel_emb, tok_lengths, guidance,
-                                           topk_ratio, draw_guidance)
-            return logits, sample_logits(logits, temperature, None, generator)
-        logits = self.guided_logits(ids, text_emb, skel_emb, tok_lengths, guidance)
-        return logits, sample_logits(logits, temperature, topk_ratio, generator)
+        codes drawn, as :obj:`guide` says
+        (:func:`~satagraph.nn.generators.sampling.draw_logits`)."""
+        logits, topk = draw_logits(*self._logit_pair(ids, text_emb, skel_emb, tok_lengths,
+                                                     guidance),
+                                   guidance, guide, topk_ratio, draw_guidance)
+        return logits, sample_logits(logits, temperature, topk, generator)
 
     def _decode(self, ids: Tensor, keep: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
                 tok_lengths: Tensor, steps: int, guidance: float, temperature: float,

@@ -9,9 +9,8 @@ from torch import Tensor, nn
 
 from satagraph.nn.generators.codes import (check_codes, length_mask, pool_codes,
                                            unpool_codes, window_spans)
-from satagraph.nn.generators.sampling import (check_guide, guided, guided_candidates,
-                                              residual_layer_schedule, sample_logits,
-                                              top_k_filter)
+from satagraph.nn.generators.sampling import (check_guide, draw_logits, guided,
+                                              residual_layer_schedule, sample_logits)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
                                                        masked_cross_entropy)
@@ -156,26 +155,17 @@ class ResidualTransformer(nn.Module):
     def guided_logits(self, codes: Tensor, layer: Tensor, text_emb: Optional[Tensor],
                       skel_emb: Tensor, lengths: Tensor, guidance: float = 1.0) -> Tensor:
         """Classifier-free guided logits; ``uncond`` drops the text only."""
-        if text_emb is None or guidance == 1.0:
-            return self(codes, layer, text_emb, skel_emb, lengths)
-        return guided(*self._with_and_without_text(codes, layer, text_emb, skel_emb, lengths),
-                      guidance)
+        cond, uncond = self._logit_pair(codes, layer, text_emb, skel_emb, lengths, guidance)
+        return cond if uncond is None else guided(cond, uncond, guidance)
 
-    def candidate_logits(self, codes: Tensor, layer: Tensor, text_emb: Optional[Tensor],
-                         skel_emb: Tensor, lengths: Tensor, guidance: float,
-                         topk_ratio: Optional[float], draw_guidance: float = 1.0) -> Tensor:
-        """The logits guided by :obj:`draw_guidance` over the top-k codes of
-        those guided by :obj:`guidance`
-        (:func:`~satagraph.nn.generators.sampling.guided_candidates`)."""
+    def _logit_pair(self, codes: Tensor, layer: Tensor, text_emb: Optional[Tensor],
+                    skel_emb: Tensor, lengths: Tensor,
+                    guidance: float) -> Tuple[Tensor, Optional[Tensor]]:
+        """Conditional and text-dropped logits in one batch, or the plain
+        logits and ``None`` where no guidance applies (no text, or
+        :obj:`guidance` 1)."""
         if text_emb is None or guidance == 1.0:
-            return top_k_filter(self(codes, layer, text_emb, skel_emb, lengths), topk_ratio)
-        return guided_candidates(*self._with_and_without_text(codes, layer, text_emb, skel_emb,
-                                                              lengths), guidance, topk_ratio,
-                                 draw_guidance)
-
-    def _with_and_without_text(self, codes: Tensor, layer: Tensor, text_emb: Tensor,
-                               skel_emb: Tensor, lengths: Tensor) -> Tuple[Tensor, Tensor]:
-        """Conditional and text-dropped logits, in one batch."""
+            return self(codes, layer, text_emb, skel_emb, lengths), None
         size = codes.size(0)
         drop = torch.arange(2 * size, device=codes.device) >= size
         both = self(codes.repeat(2, 1, 1), layer.repeat(2), text_emb.repeat(2, 1),
@@ -232,12 +222,10 @@ class ResidualTransformer(nn.Module):
                 default: whole sequences). Guided over a whole sequence of
                 three seconds or more, the shipped generator's walks speed
                 up along it (``experiments/T2M.md`` section 57).
-            guide (str, optional): ``"logits"`` (MoMask: draw from the guided
-                logits) or ``"candidates"`` (draw from the logits guided by
-                :obj:`draw_guidance` among the guided logits' top k,
-                :func:`~satagraph.nn.generators.sampling.guided_candidates`).
-            draw_guidance (float, optional): Guidance of the draw among the
-                candidates (1: the conditional logits).
+            guide (str, optional): How guidance enters each draw, as in
+                :meth:`MaskedTransformer.generate`.
+            draw_guidance (float, optional): The guidance of a draw among
+                candidates, as in :meth:`MaskedTransformer.generate`.
 
         Returns:
             Tensor: Per-frame codes :math:`(B, T, Q)`, :attr:`pad_id` after
@@ -271,14 +259,9 @@ class ResidualTransformer(nn.Module):
             codes[..., 0] = base
             for q in range(1, depth):
                 layer = torch.full((base.size(0),), q, dtype=torch.long, device=base.device)
-                if guide == "candidates":
-                    logits = self.candidate_logits(codes, layer, text_emb, skel_emb, tok_lengths,
-                                                   guidance, topk_ratio, draw_guidance)
-                    topk = None  # the candidates are the top k already
-                else:
-                    logits = self.guided_logits(codes, layer, text_emb, skel_emb, tok_lengths,
-                                                guidance)
-                    topk = topk_ratio
+                logits, topk = draw_logits(*self._logit_pair(codes, layer, text_emb, skel_emb,
+                                                             tok_lengths, guidance),
+                                           guidance, guide, topk_ratio, draw_guidance)
                 pred = sample_logits(logits, temperature, topk, generator)
                 codes[..., q] = pred.masked_fill(~valid, self.pad_id)
             return unpool_codes(codes, lengths, self.pool, self.pad_id)

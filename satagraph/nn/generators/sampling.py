@@ -5,7 +5,7 @@ reproducible."""
 from __future__ import annotations
 
 import math
-from typing import List, NamedTuple, Optional
+from typing import List, NamedTuple, Optional, Tuple
 
 import torch
 from torch import Tensor
@@ -254,6 +254,33 @@ def guided_candidates(cond: Tensor, uncond: Tensor, scale: float,
     """
     allowed = top_k_filter(guided(cond, uncond, scale), topk_ratio) > float("-inf")
     return guided(cond, uncond, draw_scale).masked_fill(~allowed, float("-inf"))
+
+
+def draw_logits(cond: Tensor, uncond: Optional[Tensor], guidance: float, guide: str,
+                topk_ratio: Optional[float], draw_guidance: float = 1.0
+                ) -> Tuple[Tensor, Optional[float]]:
+    r"""The logits one draw samples from, as :obj:`guide` says
+    (:data:`GUIDES`), and the top-k ratio still to apply to them (``None``
+    where they are the candidates already).
+
+    Args:
+        cond (Tensor): Text-conditioned logits (the plain ones where no
+            guidance applies).
+        uncond (Tensor, optional): Text-dropped logits; ``None``: no guidance.
+        guidance (float): Guidance scale of the guided logits.
+        guide (str): ``"logits"`` (:func:`guided`) or ``"candidates"``
+            (:func:`guided_candidates`).
+        topk_ratio (float, optional): MoMask's top-k share.
+        draw_guidance (float): Guidance of the draw among the candidates.
+
+    Shapes:
+        - **cond**, **uncond**: :math:`(\ldots, K)`, **output**: alike
+    """
+    if guide == "candidates":
+        if uncond is None:
+            return top_k_filter(cond, topk_ratio), None
+        return guided_candidates(cond, uncond, guidance, topk_ratio, draw_guidance), None
+    return (cond if uncond is None else guided(cond, uncond, guidance)), topk_ratio
 
 
 def check_guide(guide: str) -> str:
