@@ -14,7 +14,8 @@ Rigs: the manifest's human validation files of CMU and CC_Base by default
 (``--split test`` for the test files, or ``--rigs`` paths).
 
     .venv/bin/python benchmarks/t2m_directions.py [--ckpt builtin] [--split val] \\
-        [--seeds 6] [--sampling default logits candidates masked-candidates] [--json OUT.json]
+        [--seeds 6] [--sampling default logits candidates masked-candidates] \\
+        [--smooth F] [--output-smooth F] [--draw-guidance G] [--json OUT.json]
 
 Prints a markdown table: one row per rig and sampling, ``k / n`` per
 prompt.
@@ -26,7 +27,7 @@ import json
 import sys
 import warnings
 from pathlib import Path
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -72,14 +73,16 @@ def walked(model, target: Motion, prompt: str, label: str, seeds: int,
     return count
 
 
-def table(model, rigs: Sequence[str], samplings: Sequence[str], seeds: int) -> List[Dict]:
+def table(model, rigs: Sequence[str], samplings: Sequence[str], seeds: int,
+          overrides: Optional[Dict] = None) -> List[Dict]:
     """One row per rig and sampling (printed as it comes): the counts per
-    direction prompt."""
+    direction prompt; :obj:`overrides` (:class:`GenerationSettings` fields)
+    apply on top of every sampling."""
     rows = []
     for rig in rigs:
         target = read_bvh(rig)
         for name in samplings:
-            settings = GenerationSettings(**SAMPLINGS[name])
+            settings = GenerationSettings(**{**SAMPLINGS[name], **(overrides or {})})
             counts = {label: walked(model, target, prompt, label, seeds, settings)
                       for prompt, label in PROMPTS}
             rows.append({"rig": Path(rig).stem, "sampling": name, "seeds": seeds, **counts})
@@ -100,8 +103,16 @@ def main(argv=None) -> None:
     parser.add_argument("--seeds", type=int, default=6)
     parser.add_argument("--sampling", nargs="+", choices=sorted(SAMPLINGS),
                         default=["default"])
+    parser.add_argument("--smooth", type=float, default=None,
+                        help="latent smoothing in frames, every sampling (default: generate's)")
+    parser.add_argument("--output-smooth", type=float, default=None,
+                        help="smoothing of the decoded motion in frames, every sampling")
+    parser.add_argument("--draw-guidance", type=float, default=None,
+                        help="GenerationSettings.draw_guidance, every sampling")
     parser.add_argument("--json", default=None, help="also write the rows as JSON")
     args = parser.parse_args(argv)
+    overrides = {k: getattr(args, k) for k in ("smooth", "output_smooth", "draw_guidance")
+                 if getattr(args, k) is not None}
     warnings.simplefilter("ignore")
     rigs = args.rigs or human_rigs(args.split)
     if not rigs:
@@ -109,7 +120,7 @@ def main(argv=None) -> None:
     print(f"generator {args.ckpt}; {args.seeds} seeds a prompt, 4 s")
     print("| rig | sampling | " + " | ".join(label for _, label in PROMPTS) + " |")
     print("|---|---|" + "---:|" * len(PROMPTS))
-    rows = table(load_generator(args.ckpt), rigs, args.sampling, args.seeds)
+    rows = table(load_generator(args.ckpt), rigs, args.sampling, args.seeds, overrides)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
 
