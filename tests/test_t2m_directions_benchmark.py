@@ -52,3 +52,24 @@ def test_the_built_in_generator_walks_a_person_backward_on_a_cmu_rig():
     model = load_generator("builtin")
     back = ("a person walks backward", "walk-back")
     assert t2m_directions.walked(model, rig, *back, 2, GenerationSettings()) == 2
+
+
+def test_overrides_apply_on_top_of_every_sampling(tmp_path, monkeypatch):
+    """``--smooth``/``--output-smooth``/``--draw-guidance`` reach each
+    sampling's :class:`GenerationSettings`, its own fields kept."""
+    from satagraph.io import write_bvh
+    item = t2m.zoo_items("val", 2, seed=0, keep=True)[0]
+    rig = tmp_path / "rig.bvh"
+    write_bvh(item.motion, rig)
+    seen = []
+    monkeypatch.setattr(t2m_directions, "walked",
+                        lambda model, target, prompt, label, seeds, settings:
+                        seen.append(settings) or seeds)
+    rows = t2m_directions.table(None, [str(rig)], ["logits", "masked-candidates"], 3,
+                                {"smooth": 0.0, "output_smooth": 2.0})
+    assert [r["walk"] for r in rows] == [3, 3]
+    assert {(s.guide, s.residual_guide) for s in seen} == {("logits", "logits"),
+                                                          ("candidates", "logits")}
+    assert all(s.smooth == 0.0 and s.output_smooth == 2.0 for s in seen)
+    assert all(s.draw_guidance == t2m_directions.GenerationSettings().draw_guidance
+               for s in seen)
