@@ -561,7 +561,8 @@ def transfer(module, source: Motion, target: Motion,
         codes = encode_windows(module.autoencoder, feats, rig.semantic)
         motion = decode_on(module, codes, rig_inputs(module, target), ground=True,
                            smooth=settings.smooth, plant=settings.plant,
-                           output_smooth=settings.output_smooth)
+                           output_smooth=settings.output_smooth,
+                           root_smooth=settings.root_smooth)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 
@@ -863,7 +864,7 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
     given = {k: getattr(args, k) for k in ("decoding_steps", "guidance", "residual_guidance",
                                            "temperature",
                                            "topk_ratio", "residual_temperature", "layers",
-                                           "smooth", "output_smooth", "plant",
+                                           "smooth", "output_smooth", "root_smooth", "plant",
                                            "choice_temperature",
                                            "spread", "rest", "residual_window", "guide",
                                            "draw_guidance", "residual_guide")
@@ -923,6 +924,9 @@ def main(argv=None) -> int:
     parser.add_argument("--output-smooth", type=float, default=None,
                         help="smoothing of the decoded rotations and root in frames "
                              "(default: generate's)")
+    parser.add_argument("--root-smooth", type=float, default=None,
+                        help="smoothing of the decoded root features in frames "
+                             "(default: generate's; unset: --output-smooth's)")
     parser.add_argument("--plant", action=argparse.BooleanOptionalAction, default=None,
                         help="plant the feet of decoded motion (default: generate's)")
     parser.add_argument("--probe-seeds", type=int, default=None,

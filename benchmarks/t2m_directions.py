@@ -15,7 +15,7 @@ Rigs: the manifest's human validation files of CMU and CC_Base by default
 
     .venv/bin/python benchmarks/t2m_directions.py [--ckpt builtin] [--split val] \\
         [--seeds 6] [--sampling default logits candidates masked-candidates] \\
-        [--smooth F] [--output-smooth F] [--draw-guidance G] [--json OUT.json]
+        [--smooth F] [--output-smooth F] [--root-smooth F] [--draw-guidance G] [--json OUT.json]
 
 Prints a markdown table: one row per rig and sampling, ``k / n`` per
 prompt.
@@ -107,11 +107,14 @@ def main(argv=None) -> None:
                         help="latent smoothing in frames, every sampling (default: generate's)")
     parser.add_argument("--output-smooth", type=float, default=None,
                         help="smoothing of the decoded motion in frames, every sampling")
+    parser.add_argument("--root-smooth", type=float, default=None,
+                        help="smoothing of the decoded root features in frames, every sampling")
     parser.add_argument("--draw-guidance", type=float, default=None,
                         help="GenerationSettings.draw_guidance, every sampling")
     parser.add_argument("--json", default=None, help="also write the rows as JSON")
     args = parser.parse_args(argv)
-    overrides = {k: getattr(args, k) for k in ("smooth", "output_smooth", "draw_guidance")
+    overrides = {k: getattr(args, k) for k in ("smooth", "output_smooth", "root_smooth",
+                                               "draw_guidance")
                  if getattr(args, k) is not None}
     warnings.simplefilter("ignore")
     rigs = args.rigs or human_rigs(args.split)

@@ -66,7 +66,9 @@ class GenerationSettings:
     :meth:`~satagraph.lightning.SATARVQModule.decode_codes`); a Gaussian
     smoothing of the decoded rotations and root features over
     ``output_smooth`` frames instead (:func:`smooth_decoded`; 0: none, the
-    default); whether the
+    default), and of the root features (yaw rate, planar velocity, height)
+    over ``root_smooth`` frames where it is set (``None``, the default:
+    ``output_smooth``'s); whether the
     motion is put on the floor
     (:func:`~satagraph.transforms.ground.ground_at`: one vertical shift, the
     median lowest joint at 0, then each frame that would sink raised onto
@@ -122,6 +124,7 @@ class GenerationSettings:
     ground: bool = True
     plant: bool = True
     output_smooth: float = 0.0
+    root_smooth: Optional[float] = None
     choice_temperature: float = 0.0
     spread: float = 0.0
     rest: str = "auto"
@@ -268,7 +271,8 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                      settings.residual_frames(module), settings.residual_draw,
                                      settings.draw_guidance)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
-                     settings.ground, settings.smooth, settings.plant, settings.output_smooth)
+                     settings.ground, settings.smooth, settings.plant, settings.output_smooth,
+                     settings.root_smooth)
 
 
 def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
@@ -285,13 +289,15 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
 
 
 def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
-              smooth: float = 0.0, plant: bool = False, output_smooth: float = 0.0) -> Motion:
+              smooth: float = 0.0, plant: bool = False, output_smooth: float = 0.0,
+              root_smooth: Optional[float] = None) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
     its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`
     and :func:`~satagraph.transforms.ground.lift_above_floor`;
     the latents smoothed over :obj:`smooth` frames first, see
     :meth:`~satagraph.lightning.SATARVQModule.decode_codes`, and the
-    decoded rotations and root features over :obj:`output_smooth` frames
+    decoded rotations and root features over :obj:`output_smooth` frames,
+    the root's over :obj:`root_smooth` where it is set
     (:func:`smooth_decoded`); the feet held
     through their stances with :obj:`plant`:
     :func:`~satagraph.transforms.foot_plant.plant_feet`). Decoded window
@@ -301,7 +307,8 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
         - **codes**: :math:`(T, Q)`
     """
     frames, num = codes.size(0), rig.feats.skeleton.num_joints
-    q, r = smooth_decoded(*decode_windows(module.autoencoder, codes, rig, smooth), output_smooth)
+    q, r = smooth_decoded(*decode_windows(module.autoencoder, codes, rig, smooth), output_smooth,
+                          root_smooth)
     q = q.view(frames, num, 6).cpu().double().numpy()
     r = r.cpu().double().numpy()
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
@@ -351,10 +358,11 @@ def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,
     return torch.cat(qs), torch.cat(rs)
 
 
-def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float
-                   ) -> Tuple[torch.Tensor, torch.Tensor]:
+def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float,
+                   root_sigma: Optional[float] = None) -> Tuple[torch.Tensor, torch.Tensor]:
     r"""Decoded rotations (6D) and root features of one motion smoothed
-    along time by a Gaussian of :obj:`sigma` frames
+    along time by a Gaussian of :obj:`sigma` frames, the root features by
+    one of :obj:`root_sigma` where it is given
     (:func:`~satagraph.ops.smoothing.gaussian_smooth`; 0: as is). Where
     smoothing the latents averages codes that the decoder reads as
     different poses, and so shortens every swing, this smooths what was
@@ -366,7 +374,7 @@ def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float
     """
     frames = torch.tensor([r.size(0)])
     q = gaussian_smooth(q.reshape(r.size(0), -1), frames, sigma).reshape(-1, 6)
-    return q, gaussian_smooth(r, frames, sigma)
+    return q, gaussian_smooth(r, frames, sigma if root_sigma is None else root_sigma)
 
 
 def output_paths(output: str, skeletons: Sequence[str]) -> List[str]:

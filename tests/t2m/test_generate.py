@@ -504,6 +504,10 @@ def test_smooth_decoded_smooths_each_joint_along_time_only():
     torch.testing.assert_close(sq[7:-7, 2, 3], q[7:-7, 2, 3], atol=1e-5, rtol=0)  # a ramp stays
     assert (sq[:, 1, 1:] == 0).all() and (sq[:, 2, :3] == 0).all()  # nothing leaks across
     assert sr[5:-5].sub(0.5).abs().max() < 0.05
+    rq, rr = smooth_decoded(q.reshape(-1, 6), r, 0.0, root_sigma=2.0)  # the root alone
+    assert torch.equal(rq, q.reshape(-1, 6)) and torch.equal(rr, sr)
+    bq, br = smooth_decoded(q.reshape(-1, 6), r, 2.0, root_sigma=0.0)  # all but the root
+    assert torch.equal(bq, sq.reshape(-1, 6)) and torch.equal(br, r)
 
 
 def test_settings_generate_in_the_window_the_model_was_trained_on_unless_told():
