@@ -551,18 +551,15 @@ def generated_items(module, items: Sequence[Item], seeds: int,
 def transfer(module, source: Motion, target: Motion,
              settings: Optional[GenerationSettings] = None) -> MotionFeatures:
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
-    its own rig, decoded on :obj:`target`'s rig as generated motion is
-    (the latent smoothing and the planting of :obj:`settings`, on the
-    floor; canonical features); both in the RVQ's training windows."""
+    its own rig, decoded on :obj:`target`'s rig as :obj:`settings` decode
+    generated motion (:func:`~satagraph.pipelines.generate.decode_on`;
+    canonical features); both in the RVQ's training windows."""
     settings = settings or GenerationSettings()
     with torch.no_grad():
         rig = rig_inputs(module, source)
         feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
         codes = encode_windows(module.autoencoder, feats, rig.semantic)
-        motion = decode_on(module, codes, rig_inputs(module, target), ground=True,
-                           smooth=settings.smooth, plant=settings.plant,
-                           output_smooth=settings.output_smooth,
-                           root_smooth=settings.root_smooth)
+        motion = decode_on(module, codes, rig_inputs(module, target), settings)
     return motion_to_features(canonicalize(motion, fps=FPS))
 
 

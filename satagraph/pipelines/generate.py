@@ -271,8 +271,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
                                      settings.residual_frames(module), settings.residual_draw,
                                      settings.draw_guidance)
     return decode_on(module, _all_layers(codes[0, :frames], module.num_quantizers), rig,
-                     settings.ground, settings.smooth, settings.plant, settings.output_smooth,
-                     settings.root_smooth)
+                     settings)
 
 
 def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
@@ -288,35 +287,40 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
     return torch.cat([codes, codes.new_full((codes.size(0), missing), -1)], dim=-1)
 
 
-def decode_on(module, codes: torch.Tensor, rig: RigInputs, ground: bool = False,
-              smooth: float = 0.0, plant: bool = False, output_smooth: float = 0.0,
-              root_smooth: Optional[float] = None) -> Motion:
+#: Codes decoded as the decoder gives them: no smoothing, no grounding, no
+#: planting (:func:`decode_on`'s default).
+RAW_DECODING = GenerationSettings(smooth=0.0, ground=False, plant=False)
+
+
+def decode_on(module, codes: torch.Tensor, rig: RigInputs,
+              settings: GenerationSettings = RAW_DECODING) -> Motion:
     r"""Per-frame codes decoded onto a target (:func:`rig_inputs`), back on
-    its rig (on the floor with :obj:`ground`: :func:`~satagraph.transforms.ground.ground_at`
-    and :func:`~satagraph.transforms.ground.lift_above_floor`;
-    the latents smoothed over :obj:`smooth` frames first, see
-    :meth:`~satagraph.lightning.SATARVQModule.decode_codes`, and the
-    decoded rotations and root features over :obj:`output_smooth` frames,
-    the root's over :obj:`root_smooth` where it is set
-    (:func:`smooth_decoded`); the feet held
-    through their stances with :obj:`plant`:
-    :func:`~satagraph.transforms.foot_plant.plant_feet`). Decoded window
+    its rig, as :obj:`settings` decode (:data:`RAW_DECODING`, the default:
+    as the decoder gives them): the latents smoothed over ``smooth`` frames
+    first (:meth:`~satagraph.lightning.SATARVQModule.decode_codes`), the
+    decoded rotations and root features over ``output_smooth`` frames and
+    the root's over ``root_smooth`` where it is set (:func:`smooth_decoded`),
+    on the floor with ``ground``
+    (:func:`~satagraph.transforms.ground.ground_at` and
+    :func:`~satagraph.transforms.ground.lift_above_floor`), the feet held
+    through their stances with ``plant``
+    (:func:`~satagraph.transforms.foot_plant.plant_feet`). Decoded window
     by window (:func:`decode_windows`).
 
     Shapes:
         - **codes**: :math:`(T, Q)`
     """
     frames, num = codes.size(0), rig.feats.skeleton.num_joints
-    q, r = smooth_decoded(*decode_windows(module.autoencoder, codes, rig, smooth), output_smooth,
-                          root_smooth)
+    decoded = decode_windows(module.autoencoder, codes, rig, settings.smooth)
+    q, r = smooth_decoded(*decoded, settings.output_smooth, settings.root_smooth)
     q = q.view(frames, num, 6).cpu().double().numpy()
     r = r.cpu().double().numpy()
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
     motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
                           rig.undo, rig.canon.skeleton)
-    if ground:
+    if settings.ground:
         motion = lift_above_floor(ground_at(motion))
-    if plant:
+    if settings.plant:
         motion = plant_feet(motion)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)
 
@@ -414,4 +418,4 @@ def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
 
 
 __all__ = ["GenerationSettings", "RigInputs", "rig_inputs", "load_generator", "generate_on",
-           "decode_on", "output_paths", "write_all"]
+           "RAW_DECODING", "decode_on", "output_paths", "write_all"]
