@@ -29,8 +29,9 @@ def test_paired_differences_mean_sd_and_t_interval(tmp_path, capsys):
             for s, fid, b in ((1, 0.20, 0.42), (2, 0.21, 0.28), (3, 0.19, 0.53))]
     cells = ["zoo|generator (GT length)|fid", "bandai (val)|generator (GT length)|R@3",
              "zoo|generator (GT length)|diversity"]
+    cell_args = [a for c in cells for a in ("--cell", c)]
     assert t2m_paired.main(["--baseline", *base, "--candidate", *cand, "--out",
-                            str(tmp_path / "t.md")] + [a for c in cells for a in ("--cell", c)]) == 0
+                            str(tmp_path / "t.md")] + cell_args) == 0
     text = (tmp_path / "t.md").read_text()
     assert text in capsys.readouterr().out
     mean, sd, half = t2m_paired.summary([0.02, -0.02, 0.03])
@@ -53,7 +54,8 @@ def test_one_pair_has_no_spread():
 def test_unpaired_or_unreadable_runs_are_refused_naming_the_files(tmp_path):
     b = _run(tmp_path / "b.json", 19, 0.8, 0.2, 0.4)
     c = _run(tmp_path / "c.json", 20, 0.8, 0.2, 0.4)
-    with pytest.raises(SystemExit, match=r"b\.json and .*c\.json: not a pair \(seed 19 against 20\)"):
+    with pytest.raises(SystemExit,
+                       match=r"b\.json and .*c\.json: not a pair \(seed 19 against 20\)"):
         t2m_paired.pair_runs([b], [c])
     with pytest.raises(SystemExit, match="1 baseline and 2 candidate files"):
         t2m_paired.pair_runs([b], [c, c])

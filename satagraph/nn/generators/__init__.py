@@ -42,5 +42,6 @@ __all__ = [
     "split_codes", "merge_codes", "pool_codes", "unpool_codes", "token_lengths",
     "length_mask", "code_run_lengths",
     "cosine_schedule", "mask_ratio", "random_mask", "corrupt_tokens", "top_k_filter",
-    "sample_logits", "residual_layer_schedule", "guided", "guided_candidates", "draw_logits", "GUIDES",
+    "sample_logits", "residual_layer_schedule", "guided", "guided_candidates", "draw_logits",
+    "GUIDES",
 ]

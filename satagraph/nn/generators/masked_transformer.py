@@ -16,7 +16,7 @@ from satagraph.nn.generators.sampling import (Corruption, check_guide, corrupt_t
                                               spread_choice, uniform)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
-                                                       masked_cross_entropy)
+                                                       masked_cross_entropy, with_and_without_text)
 
 
 class MaskedLoss(NamedTuple):
@@ -150,13 +150,8 @@ class MaskedTransformer(nn.Module):
         """Conditional and text-dropped logits in one batch, or the plain
         logits and ``None`` where no guidance applies (no text, or
         :obj:`guidance` 1)."""
-        if text_emb is None or guidance == 1.0:
-            return self(tokens, text_emb, skel_emb, lengths), None
-        size = tokens.size(0)
-        drop = torch.arange(2 * size, device=tokens.device) >= size
-        both = self(tokens.repeat(2, 1), text_emb.repeat(2, 1), skel_emb.repeat(2, 1),
-                    lengths.repeat(2), drop_text=drop)
-        return both[:size], both[size:]
+        return with_and_without_text(self, (tokens, text_emb, skel_emb, lengths),
+                                     text_emb is not None, guidance)
 
     # ------------------------------------------------------------ training
     def corrupt(self, tokens: Tensor, lengths: Tensor,

@@ -13,7 +13,7 @@ from satagraph.nn.generators.sampling import (check_guide, draw_logits, guided,
                                               residual_layer_schedule, sample_logits)
 from satagraph.nn.generators.token_transformer import (TokenTransformer, evaluating,
                                                        init_token_model, masked_accuracy,
-                                                       masked_cross_entropy)
+                                                       masked_cross_entropy, with_and_without_text)
 
 
 class ResidualLoss(NamedTuple):
@@ -164,13 +164,8 @@ class ResidualTransformer(nn.Module):
         """Conditional and text-dropped logits in one batch, or the plain
         logits and ``None`` where no guidance applies (no text, or
         :obj:`guidance` 1)."""
-        if text_emb is None or guidance == 1.0:
-            return self(codes, layer, text_emb, skel_emb, lengths), None
-        size = codes.size(0)
-        drop = torch.arange(2 * size, device=codes.device) >= size
-        both = self(codes.repeat(2, 1, 1), layer.repeat(2), text_emb.repeat(2, 1),
-                    skel_emb.repeat(2, 1), lengths.repeat(2), drop_text=drop)
-        return both[:size], both[size:]
+        return with_and_without_text(self, (codes, layer, text_emb, skel_emb, lengths),
+                                     text_emb is not None, guidance)
 
     # ------------------------------------------------------------ training
     def loss(self, codes: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,

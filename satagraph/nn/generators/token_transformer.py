@@ -4,7 +4,7 @@ Transformer encoder over code tokens with a key padding mask."""
 from __future__ import annotations
 
 from contextlib import contextmanager
-from typing import Iterator, Optional
+from typing import Callable, Iterator, Optional, Sequence, Tuple
 
 import torch
 import torch.nn.functional as F
@@ -155,6 +155,25 @@ def masked_accuracy(logits: Tensor, targets: Tensor, mask: Tensor) -> Tensor:
     """Share of the ``True`` positions of :obj:`mask` whose argmax is right."""
     hit = (logits.argmax(-1) == targets) & mask
     return hit.sum() / mask.sum().clamp(min=1)
+
+
+def with_and_without_text(forward: Callable[..., Tensor], inputs: Sequence[Tensor],
+                          has_text: bool, guidance: float) -> Tuple[Tensor, Optional[Tensor]]:
+    r"""The text-conditioned and text-dropped outputs of :obj:`forward` on
+    :obj:`inputs` (its positional arguments, batch first) in one batch of
+    twice the size, the second half with ``drop_text``; the plain output and
+    ``None`` where no guidance applies (no text, or :obj:`guidance` 1).
+
+    Shapes:
+        - **inputs**: each :math:`(B, \ldots)`
+        - **output**: two :math:`(B, \ldots, K)`
+    """
+    if not has_text or guidance == 1.0:
+        return forward(*inputs), None
+    size = inputs[0].size(0)
+    drop = torch.arange(2 * size, device=inputs[0].device) >= size
+    both = forward(*(x.repeat(2, *[1] * (x.dim() - 1)) for x in inputs), drop_text=drop)
+    return both[:size], both[size:]
 
 
 @contextmanager
