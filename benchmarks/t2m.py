@@ -864,7 +864,7 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
                                            "smooth", "output_smooth", "root_smooth", "plant",
                                            "choice_temperature",
                                            "spread", "rest", "residual_window", "guide",
-                                           "draw_guidance", "residual_guide")
+                                           "draw_guidance", "residual_guide", "rerank")
              if getattr(args, k, None) is not None}
     if "decoding_steps" in given:
         given["steps"] = given.pop("decoding_steps")
@@ -902,6 +902,9 @@ def main(argv=None) -> int:
     parser.add_argument("--residual-window", type=float, default=None,
                         help="seconds of the windows the residual layers are filled in "
                         "(0: whole clips; default: generate's)")
+    parser.add_argument("--rerank", type=int, default=None,
+                        help="layer-0 draws per prompt, the one the text explains best "
+                             "kept (GenerationSettings.rerank; default: generate's, 1)")
     parser.add_argument("--temperature", type=float, default=None)
     parser.add_argument("--topk-ratio", type=float, default=None)
     parser.add_argument("--residual-temperature", type=float, default=None)

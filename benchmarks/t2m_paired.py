@@ -16,7 +16,8 @@ cell, each seed's difference, their mean, their standard deviation and a
         [--cell "zoo|generator (GT length)|fid" ...] [--out OUT.md]
 
 Cells are ``group|row|metric`` (metrics: ``R@1``-``R@3``, ``fid``, ``kid``,
-``action``, ``diversity``, ``matching``, ``slide``, ``hover``); by default
+``action``, ``diversity``, ``matching``, ``slide``, ``hover``, and
+``action:LABEL``, the action accuracy on the prompts asking for LABEL); by default
 :data:`CELLS`, what sections 69-72's rules read.
 """
 from __future__ import annotations
@@ -64,11 +65,20 @@ def cell_value(run: Dict, cell: str) -> float:
         raise SystemExit(f"cell {cell!r}: not GROUP|ROW|METRIC")
     for r in run["rows"]:
         if r["group"] == group and r["row"] == row:
-            value = r.get(metric)
+            value = _metric(r, metric)
             if value is None:
                 break
             return float(value[0] if isinstance(value, (list, tuple)) else value)
     raise SystemExit(f"{run.get('path', 'a run')}: no cell {cell!r}")
+
+
+def _metric(row: Dict, metric: str):
+    """A row's metric; ``action:LABEL`` is the action accuracy on the
+    prompts asking for LABEL (``None`` where the row has none)."""
+    if metric.startswith("action:"):
+        label = (row.get("action_by_label") or {}).get(metric.split(":", 1)[1])
+        return None if label is None else label.get("accuracy")
+    return row.get(metric)
 
 
 def pair_runs(baseline: Sequence[str], candidate: Sequence[str]) -> List[Tuple[int, Dict, Dict]]:

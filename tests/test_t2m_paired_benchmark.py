@@ -66,3 +66,16 @@ def test_unpaired_or_unreadable_runs_are_refused_naming_the_files(tmp_path):
         t2m_paired.cell_value(t2m_paired.load_run(b), "zoo|real|fid")
     with pytest.raises(SystemExit, match="not GROUP\\|ROW\\|METRIC"):
         t2m_paired.cell_value(t2m_paired.load_run(b), "zoo-fid")
+
+
+def test_action_of_one_asked_label_is_a_cell():
+    """``action:LABEL`` reads the accuracy on the prompts asking for LABEL;
+    a label the row never asked for is no cell."""
+    run = {"path": "r.json", "rows": [{"group": "zoo", "row": "reconstruction (SATA-RVQ)",
+                                       "action": [0.5, 0.06],
+                                       "action_by_label": {"jump": {"n": 23, "accuracy": 0.35,
+                                                                    "instead": "look"}}}]}
+    assert t2m_paired.cell_value(run, "zoo|reconstruction (SATA-RVQ)|action:jump") == 0.35
+    assert t2m_paired.cell_value(run, "zoo|reconstruction (SATA-RVQ)|action") == 0.5
+    with pytest.raises(SystemExit, match="r.json: no cell 'zoo|reconstruction"):
+        t2m_paired.cell_value(run, "zoo|reconstruction (SATA-RVQ)|action:idle")

@@ -67,9 +67,12 @@ def stance_frames(track: np.ndarray, lowest: np.ndarray, root: np.ndarray, fps: 
                   height: float, floor: float = 0.0) -> np.ndarray:
     r"""Frames where a limb stands: the lowest joint of its end's subtree
     (:obj:`lowest`, its height) within :data:`HEIGHT_FACTOR` contact
-    heights of the floor, and the end horizontally slower than the contact
-    speed plus :data:`ROOT_SPEED_FACTOR` of the root's, in runs of at least
-    :data:`MIN_STANCE` frames (+Y up).
+    heights of the floor and rising or falling slower than the contact
+    speed, and the end horizontally slower than the contact speed plus
+    :data:`ROOT_SPEED_FACTOR` of the root's, in runs of at least
+    :data:`MIN_STANCE` frames (+Y up). A foot leaving the floor in a jump
+    is low but not level: counted as standing, the root would be lowered
+    onto it and the jump flattened (``experiments/T2M.md`` section 74).
 
     Shapes:
         - **track**, **root**: :math:`(T, 3)` positions, **lowest**: :math:`(T,)`
@@ -82,7 +85,8 @@ def stance_frames(track: np.ndarray, lowest: np.ndarray, root: np.ndarray, fps: 
         return np.zeros(len(track), dtype=bool)
     low = lowest - floor < HEIGHT_FACTOR * CONTACT_HEIGHT * height
     slow = speed(track) < CONTACT_SPEED * height + ROOT_SPEED_FACTOR * speed(root)
-    return _drop_short(low & slow, MIN_STANCE)
+    level = np.abs(np.gradient(lowest)) * fps < CONTACT_SPEED * height
+    return _drop_short(low & slow & level, MIN_STANCE)
 
 
 def subtree(children: Sequence[Sequence[int]], joint: int) -> List[int]:

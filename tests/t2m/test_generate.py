@@ -549,3 +549,31 @@ def test_the_masked_transformer_draws_among_candidates_the_residual_one_from_gui
                       ("masked", "candidates"), ("residual", "candidates")]
     assert [s.residual_draw for s in cases] == ["logits", "logits", "candidates"]
     assert torch.equal(seen[0][:, 0], seen[2][:, 0])
+
+
+def test_rerank_keeps_the_draw_the_text_explains_best(t2m_ckpt, zoo_skeletons, monkeypatch):
+    """``GenerationSettings.rerank``: that many layer-0 draws in one batch,
+    the one of the highest ``text_score`` decoded; one draw (the default)
+    never scores and gives what it gave before; without a text there is
+    nothing to rank by."""
+    from satagraph.pipelines import generate as G
+    module, target, seen = _decoded_codes(t2m_ckpt, zoo_skeletons, monkeypatch)
+    drawn, scores = [], []
+    real_generate, real_score = module.masked.generate, module.masked.text_score
+    monkeypatch.setattr(module.masked, "generate",
+                        lambda *a, **k: (drawn.append(real_generate(*a, **k)), drawn[-1])[1])
+
+    def score(codes, *a, **k):
+        scores.append(real_score(codes, *a, **k))
+        return scores[-1]
+    monkeypatch.setattr(module.masked, "text_score", score)
+    G.generate_on(module, TEXT, target, 1.0, 0)
+    G.generate_on(module, TEXT, target, 1.0, 0, G.GenerationSettings(rerank=1))
+    assert not scores and torch.equal(seen[0], seen[1])
+    G.generate_on(module, TEXT, target, 1.0, 0, G.GenerationSettings(rerank=4))
+    assert drawn[2].size(0) == 4 and len(scores) == 1
+    best = int(scores[0].argmax())
+    assert len({tuple(row.tolist()) for row in drawn[2]}) > 1
+    assert torch.equal(seen[2][:, 0], drawn[2][best, :seen[2].size(0)])
+    G.generate_on(module, None, target, 1.0, 0, G.GenerationSettings(rerank=4))
+    assert drawn[3].size(0) == 1 and len(scores) == 1

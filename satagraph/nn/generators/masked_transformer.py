@@ -274,6 +274,42 @@ class MaskedTransformer(nn.Module):
                                                       *args)[0]
             return self.to_frames(ids, lengths)
 
+    @torch.no_grad()
+    def text_score(self, codes: Tensor, text_emb: Tensor, skel_emb: Tensor, lengths: Tensor,
+                   rounds: int = 4, ratio: float = 0.5,
+                   generator: Optional[torch.Generator] = None) -> Tensor:
+        r"""How much the text explains each sequence of layer-0 codes: the
+        pointwise mutual information of text and tokens as this model reads
+        it, :math:`\log p(x_i \mid \text{context}, \text{text}) - \log
+        p(x_i \mid \text{context})` (the skeleton kept in both), averaged
+        over the tokens of :obj:`rounds` random maskings of :obj:`ratio` of
+        each sequence. Every sequence of a call is masked alike where their
+        lengths agree, so that candidates of one prompt compare on the same
+        positions (:func:`~satagraph.pipelines.generate.generate_on`'s
+        ``rerank``).
+
+        Shapes:
+            - **codes**: :math:`(B, T_f)` or :math:`(B, T_f, Q)` per-frame
+              codes, **lengths**: :math:`(B,)` frames
+            - **output**: :math:`(B,)`
+        """
+        tokens, tok_lengths = self.to_tokens(codes, lengths)
+        valid = length_mask(tok_lengths, tokens.size(1))
+        count = torch.round(ratio * tok_lengths).clamp(min=1)
+        total = torch.zeros(tokens.size(0), device=tokens.device)
+        with evaluating(self):
+            for _ in range(rounds):
+                pattern = uniform((1, tokens.size(1)), generator, tokens.device)
+                mask = lowest_ranked(pattern.expand_as(valid).masked_fill(~valid, 2.0),
+                                     count.long()) & valid
+                inputs = tokens.masked_fill(mask, self.mask_id)
+                cond, uncond = with_and_without_text(
+                    self, (inputs, text_emb, skel_emb, tok_lengths), True, 0.0)
+                gain = (cond.log_softmax(-1) - uncond.log_softmax(-1)).gather(
+                    -1, tokens.clamp(max=self.num_codes - 1).unsqueeze(-1)).squeeze(-1)
+                total += (gain * mask).sum(-1) / mask.sum(-1).clamp(min=1)
+        return total / max(rounds, 1)
+
     def _draw(self, ids: Tensor, text_emb: Optional[Tensor], skel_emb: Tensor,
               tok_lengths: Tensor, guidance: float, temperature: float,
               topk_ratio: Optional[float], generator: Optional[torch.Generator], guide: str,
