@@ -72,7 +72,7 @@ def stance_frames(track: np.ndarray, lowest: np.ndarray, root: np.ndarray, fps: 
     :data:`ROOT_SPEED_FACTOR` of the root's, in runs of at least
     :data:`MIN_STANCE` frames (+Y up). A foot leaving the floor in a jump
     is low but not level: counted as standing, the root would be lowered
-    onto it and the jump flattened (``experiments/T2M.md`` section 74).
+    onto it and the jump flattened (``experiments/T2M.md`` section 76).
 
     Shapes:
         - **track**, **root**: :math:`(T, 3)` positions, **lowest**: :math:`(T,)`

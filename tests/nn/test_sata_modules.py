@@ -238,6 +238,26 @@ def test_sata_gradients(options, bottleneck):
     assert_finite_grads(model)
 
 
+def test_code_pool_holds_each_code_over_its_frames_within_each_clip():
+    """``code_pool=2``: codes and latents the same over each pair of a
+    clip's frames (the last frame of an odd clip alone), never across two
+    clips; a pooled model's gradients reach its encoder; the VAE refuses it."""
+    clips = make_clips(SPECS)
+    batch = collate_clips(clips)
+    model = SATA(bottleneck="rvq", codebook_size=16, quantize_dropout=0.0, code_pool=2,
+                 **TINY).train()
+    out = model(batch)
+    group = torch.tensor([0, 0, 1, 1, 2, 3, 3, 4, 5, 5, 6, 6, 7, 7])  # clips of 5, 3, 6 frames
+    for key in ("codes", "z"):
+        for g in group.unique():
+            rows = out[key][group == g]
+            assert (rows == rows[0]).all()
+    output_sum(out).backward()
+    assert_finite_grads(model)
+    with pytest.raises(ValueError, match="code_pool=2"):
+        SATA(bottleneck="vae", code_pool=2, **TINY)
+
+
 def test_decode_on_another_skeleton():
     source = collate_clips(make_clips([(5, 4), (3, 7)]))
     target = collate_clips(make_clips([(5, 9), (3, 3)], seed=10))

@@ -10,6 +10,7 @@ from satagraph.nn.bottlenecks.rvq import RVQBottleneck
 from satagraph.nn.bottlenecks.vae import VAEBottleneck
 from satagraph.nn.autoencoders.decoder import SATADecoder
 from satagraph.nn.autoencoders.encoder import SATAEncoder
+from satagraph.ops.frame_pool import frame_groups, pool_frames
 from satagraph.ops.smoothing import gaussian_smooth
 
 #: Default latent width per bottleneck (paper section 4.1).
@@ -51,6 +52,14 @@ class SATA(MotionAutoencoder):
             none). Generation decodes code sequences with smoothed latents;
             a decoder trained with the same smoothing reads them as the
             motion they were encoded from instead of as a damped copy.
+        code_pool (int, optional): Frames per code of the RVQ: the
+            encoder's features averaged over each run of this many frames
+            of a clip (:func:`~satagraph.ops.frame_pool.frame_groups`)
+            before the quantiser, and the codes and latents repeated over
+            those frames after it, so that the decoder learns from latents
+            that hold for :obj:`code_pool` frames, as a generator pooling
+            its tokens over that many frames gives them (1: a code per
+            frame, as the paper).
 
     Shapes:
         - **batch**, **target_batch**: :class:`~satagraph.data.FrameBatch`
@@ -72,11 +81,15 @@ class SATA(MotionAutoencoder):
                  commitment_weight: float = 1.0, quantize_dropout: float = 0.2,
                  codebook_decay: float = 0.99, kmeans_init: bool = True,
                  threshold_ema_dead_code: float = 1.0, act: str = "relu",
-                 latent_smooth: float = 0.0) -> None:
+                 latent_smooth: float = 0.0, code_pool: int = 1) -> None:
         super().__init__()
         self.latent_smooth = float(latent_smooth)
         if bottleneck not in DEFAULT_LATENT:
             raise ValueError(f"unknown bottleneck {bottleneck!r}: use 'vae' or 'rvq'")
+        if int(code_pool) < 1 or (int(code_pool) > 1 and bottleneck != "rvq"):
+            raise ValueError(f"code_pool={code_pool}: a positive number of frames, above 1 "
+                             "for the RVQ only")
+        self.code_pool = int(code_pool)
         self.bottleneck_type = bottleneck
         latent = latent_channels or DEFAULT_LATENT[bottleneck]
         shared = dict(hidden_channels=hidden_channels, heads=heads, ff_channels=ff_channels,
@@ -95,8 +108,14 @@ class SATA(MotionAutoencoder):
         self.decoder = SATADecoder(latent_channels=latent, **shared)
 
     def encode(self, batch) -> Dict[str, Tensor]:
-        """Latent per frame ``z`` and the bottleneck terms."""
-        return self.bottleneck(self.encoder(batch))._asdict()
+        """Latent per frame ``z`` and the bottleneck terms (RVQ codes per
+        frame, the same over each :attr:`code_pool` frames)."""
+        h = self.encoder(batch)
+        if self.code_pool == 1:
+            return self.bottleneck(h)._asdict()
+        group = frame_groups(batch.clip_num_frames, self.code_pool)
+        out = self.bottleneck(pool_frames(h, group))._asdict()
+        return {**out, "z": out["z"][group], "codes": out["codes"][group]}
 
     def decode(self, z: Tensor, target_batch) -> Dict[str, Tensor]:
         """``q``, ``r``, ``c`` (logits) on the target frame graphs, from the
