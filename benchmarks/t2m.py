@@ -926,7 +926,7 @@ def main(argv=None) -> int:
                              "(default: generate's)")
     parser.add_argument("--root-smooth", type=float, default=None,
                         help="smoothing of the decoded root features in frames "
-                             "(default: generate's; unset: --output-smooth's)")
+                             "(default: generate's, 2)")
     parser.add_argument("--plant", action=argparse.BooleanOptionalAction, default=None,
                         help="plant the feet of decoded motion (default: generate's)")
     parser.add_argument("--probe-seeds", type=int, default=None,
