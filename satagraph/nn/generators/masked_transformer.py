@@ -303,7 +303,7 @@ class MaskedTransformer(nn.Module):
                 mask = lowest_ranked(pattern.expand_as(valid).masked_fill(~valid, 2.0),
                                      count.long()) & valid
                 inputs = tokens.masked_fill(mask, self.mask_id)
-                cond, uncond = with_and_without_text(
+                cond, uncond = with_and_without_text(  # any guidance but 1 gives both
                     self, (inputs, text_emb, skel_emb, tok_lengths), True, 0.0)
                 gain = (cond.log_softmax(-1) - uncond.log_softmax(-1)).gather(
                     -1, tokens.clamp(max=self.num_codes - 1).unsqueeze(-1)).squeeze(-1)
