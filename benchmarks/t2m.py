@@ -904,7 +904,8 @@ def main(argv=None) -> int:
                         "(0: whole clips; default: generate's)")
     parser.add_argument("--rerank", type=int, default=None,
                         help="layer-0 draws per prompt, the one the text explains best "
-                             "kept (GenerationSettings.rerank; default: generate's, 1)")
+                             "kept (GenerationSettings.rerank; default: generate's, "
+                             f"{GenerationSettings.rerank})")
     parser.add_argument("--temperature", type=float, default=None)
     parser.add_argument("--topk-ratio", type=float, default=None)
     parser.add_argument("--residual-temperature", type=float, default=None)
@@ -926,7 +927,7 @@ def main(argv=None) -> int:
                              "(default: generate's)")
     parser.add_argument("--root-smooth", type=float, default=None,
                         help="smoothing of the decoded root features in frames "
-                             "(default: generate's, 2)")
+                             f"(default: generate's, {GenerationSettings.root_smooth:g})")
     parser.add_argument("--plant", action=argparse.BooleanOptionalAction, default=None,
                         help="plant the feet of decoded motion (default: generate's)")
     parser.add_argument("--probe-seeds", type=int, default=None,

@@ -285,17 +285,18 @@ def _layer0(module, text_emb: Optional[torch.Tensor], skel_emb: torch.Tensor,
         - **output**: :math:`(1, T)`
     """
     draws = max(int(settings.rerank), 1) if text_emb is not None else 1
-    many = [None if x is None else x.repeat(draws, *[1] * (x.dim() - 1))
-            for x in (text_emb, skel_emb, lengths, known, keep)]
-    base = module.masked.generate(many[0], many[1], many[2], settings.steps,
+    text_emb, skel_emb, lengths, known, keep = (
+        None if x is None else x.repeat(draws, *[1] * (x.dim() - 1))
+        for x in (text_emb, skel_emb, lengths, known, keep))
+    base = module.masked.generate(text_emb, skel_emb, lengths, settings.steps,
                                   settings.guidance, settings.temperature,
-                                  settings.topk_ratio, gen, known=many[3], keep=many[4],
+                                  settings.topk_ratio, gen, known=known, keep=keep,
                                   choice_temperature=settings.choice_temperature,
                                   spread=settings.spread, window=settings.window_frames(module),
                                   guide=settings.guide, draw_guidance=settings.draw_guidance)
     if draws == 1:
         return base
-    best = int(module.masked.text_score(base, many[0], many[1], many[2], generator=gen).argmax())
+    best = int(module.masked.text_score(base, text_emb, skel_emb, lengths, generator=gen).argmax())
     return base[best:best + 1]
 
 

@@ -86,10 +86,10 @@ class SATA(MotionAutoencoder):
         self.latent_smooth = float(latent_smooth)
         if bottleneck not in DEFAULT_LATENT:
             raise ValueError(f"unknown bottleneck {bottleneck!r}: use 'vae' or 'rvq'")
-        if int(code_pool) < 1 or (int(code_pool) > 1 and bottleneck != "rvq"):
+        self.code_pool = int(code_pool)
+        if self.code_pool < 1 or (self.code_pool > 1 and bottleneck != "rvq"):
             raise ValueError(f"code_pool={code_pool}: a positive number of frames, above 1 "
                              "for the RVQ only")
-        self.code_pool = int(code_pool)
         self.bottleneck_type = bottleneck
         latent = latent_channels or DEFAULT_LATENT[bottleneck]
         shared = dict(hidden_channels=hidden_channels, heads=heads, ff_channels=ff_channels,
@@ -113,7 +113,7 @@ class SATA(MotionAutoencoder):
         h = self.encoder(batch)
         if self.code_pool == 1:
             return self.bottleneck(h)._asdict()
-        group = frame_groups(batch.clip_num_frames, self.code_pool)
+        group = frame_groups(batch, self.code_pool)
         out = self.bottleneck(pool_frames(h, group))._asdict()
         return {**out, "z": out["z"][group], "codes": out["codes"][group]}
 

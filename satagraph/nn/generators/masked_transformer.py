@@ -295,13 +295,13 @@ class MaskedTransformer(nn.Module):
         """
         tokens, tok_lengths = self.to_tokens(codes, lengths)
         valid = length_mask(tok_lengths, tokens.size(1))
-        count = torch.round(ratio * tok_lengths).clamp(min=1)
+        count = torch.round(ratio * tok_lengths).clamp(min=1).long()
         total = torch.zeros(tokens.size(0), device=tokens.device)
         with evaluating(self):
             for _ in range(rounds):
                 pattern = uniform((1, tokens.size(1)), generator, tokens.device)
                 mask = lowest_ranked(pattern.expand_as(valid).masked_fill(~valid, 2.0),
-                                     count.long()) & valid
+                                     count) & valid
                 inputs = tokens.masked_fill(mask, self.mask_id)
                 cond, uncond = with_and_without_text(  # any guidance but 1 gives both
                     self, (inputs, text_emb, skel_emb, tok_lengths), True, 0.0)
