@@ -435,7 +435,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.formatwarning = _format_warning
     warnings.showwarning = _once(shown)
     try:
-        code = args.func(args)
+        with warnings.catch_warnings():
+            if getattr(args, "scale_free", False):
+                from satagraph.transforms.rig_reading import UnitsWarning
+                warnings.simplefilter("ignore", UnitsWarning)
+            code = args.func(args)
     except (BVHError, CommandError, OSError, ValueError) as err:
         if args.traceback:
             raise

@@ -59,7 +59,7 @@ def add_train_parsers(sub) -> None:
     add_mirror_argument(p, default=True)
     add_two_rests_argument(p, default="unmirrored")
     _in_out(p, "input", "IN")
-    _rig(p)
+    _rig(p, scale_free=True)
     p.set_defaults(func=run_reconstruct)
 
     p = sub.add_parser("retarget", help="transfer a motion onto another skeleton",
@@ -75,8 +75,8 @@ def add_train_parsers(sub) -> None:
     add_two_rests_argument(p, default=False)
     p.add_argument("--target", required=True, metavar="TARGET.bvh")
     _in_out(p, "source", "SOURCE")
-    _rig(p, what="SOURCE.bvh")
-    _rig(p, "target", "TARGET.bvh")
+    _rig(p, what="SOURCE.bvh", scale_free=True)
+    _rig(p, "target", "TARGET.bvh", scale_free=True)
     p.set_defaults(func=run_retarget)
 
     p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
@@ -180,9 +180,11 @@ def _ground(p, default: bool) -> None:
                    f"{'on' if default else 'off'})")
 
 
-def _rig(p, prefix: str = "", what: str = "the input") -> None:
-    from satagraph.cli.arguments import add_rig_arguments
-    add_rig_arguments(p, prefix, what)
+def _rig(p, prefix: str = "", what: str = "the input", scale_free: bool = False) -> None:
+    from satagraph.cli import arguments
+    arguments.add_rig_arguments(p, prefix, what, scale_free=scale_free)
+    if scale_free:
+        arguments.scale_free(p)
 
 
 def _data_rig(p) -> None:

@@ -432,10 +432,21 @@ class RigReadingWarning(UserWarning):
     units could not be decided (the file's own are kept)."""
 
 
+class UnitsWarning(RigReadingWarning):
+    """The units part of a :class:`RigReadingWarning`. Whatever reads bodies
+    in their own heights (the models' features, contacts, grounding and
+    planting) gives the same output in any units, so the commands built on
+    that alone (``retarget``, ``reconstruct``, ``generate``) do not show
+    it."""
+
+
 def warn_reading(reading: "RigReading", source: Optional[str] = None) -> None:
-    """Warn (:class:`RigReadingWarning`) about each doubtful part of a reading."""
-    for line in reading.warnings:
+    """Warn about each doubtful part of a reading: the up axis as a
+    :class:`RigReadingWarning`, the units as a :class:`UnitsWarning`."""
+    for line in reading.up_warnings:
         warnings.warn(f"{source or 'motion'}: {line}", RigReadingWarning, stacklevel=3)
+    for line in reading.unit_warnings:
+        warnings.warn(f"{source or 'motion'}: {line}", UnitsWarning, stacklevel=3)
 
 
 @dataclass
@@ -448,17 +459,27 @@ class RigReading:
 
     @property
     def warnings(self) -> List[str]:
-        """Lines to show a user: low-confidence or undecided readings."""
-        out = []
-        if self.up.low_confidence:
-            out.append(f"up axis {self.up.axis} is a low-confidence guess "
-                       f"({self.up.confidence:.2f}); pass --up-axis to set it")
+        """Lines to show a user: low-confidence or undecided readings
+        (:attr:`up_warnings`, then :attr:`unit_warnings`)."""
+        return self.up_warnings + self.unit_warnings
+
+    @property
+    def up_warnings(self) -> List[str]:
+        """The line of a low-confidence up axis, if any."""
+        if not self.up.low_confidence:
+            return []
+        return [f"up axis {self.up.axis} is a low-confidence guess "
+                f"({self.up.confidence:.2f}); pass --up-axis to set it"]
+
+    @property
+    def unit_warnings(self) -> List[str]:
+        """The line of undecided or low-confidence units, if any."""
         if self.units.kept:
-            out.append(f"units unknown: {self.units.reason}")
-        elif self.units.low_confidence:
-            out.append(f"units {unit_name(self.units.scale)} are a "
-                       f"low-confidence guess; pass --units to set them")
-        return out
+            return [f"units unknown: {self.units.reason}"]
+        if self.units.low_confidence:
+            return [f"units {unit_name(self.units.scale)} are a "
+                    f"low-confidence guess; pass --units to set them"]
+        return []
 
     def to_dict(self) -> dict:
         return {"up_axis": self.up.axis, "up_axis_how": self.up.how,

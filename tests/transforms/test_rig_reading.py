@@ -39,9 +39,18 @@ def test_up_axis_of_walking_zoo_rigs_in_every_axis(species: str) -> None:
 
 def test_a_still_clip_is_decided_on_its_pose_and_flagged_when_doubtful() -> None:
     clip = _clip("snake", kind="idle")
-    guess = guess_up_axis(apply_dialect(clip, Dialect(up_axis="-X"))[0])
+    motion = apply_dialect(clip, Dialect(up_axis="-X"))[0]
+    guess = guess_up_axis(motion)
     assert guess.axis == "-X"
     assert not guess.moving and guess.confidence < 0.6
+    reading = read_rig(motion)
+    assert reading.up_warnings and reading.warnings[:1] == reading.up_warnings
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rr.warn_reading(reading, "snake")
+    up = [w for w in caught if "up axis" in str(w.message)]
+    assert up and all(w.category is RigReadingWarning for w in up)  # not a units warning
+    assert issubclass(rr.UnitsWarning, RigReadingWarning)
 
 
 def test_units_of_a_human_from_its_body_plan() -> None:
@@ -57,7 +66,7 @@ def test_units_of_an_animal_are_kept_and_reported_not_humanised() -> None:
     reading = read_rig(motion)
     assert reading.units.kept and reading.units.scale == 1.0
     assert any("units unknown" in w for w in reading.warnings)
-    with pytest.warns(RigReadingWarning, match="units unknown"):
+    with pytest.warns(rr.UnitsWarning, match="units unknown"):  # a RigReadingWarning too
         canonicalize(motion)
     metres = read_rig(apply_dialect(bird, Dialect(unit="m"))[0]).units
     assert metres.how == "magnitude" and metres.scale == 1.0
