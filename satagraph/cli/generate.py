@@ -203,12 +203,13 @@ def run_generate(args) -> int:
     prompts = read_prompts(args.prompts) if args.prompts is not None else None
     if prompts is not None:
         _prompt_folder(args.output)
-    if args.steps < 1 or args.threads < 1:
-        raise ValueError(f"--steps and --threads must be at least 1, got {args.steps} "
-                         f"and {args.threads}")
-    from satagraph.nn.generators.sampling import check_guide
-    for guide in (args.guide, args.residual_guide):
-        check_guide(guide)
+    if args.threads < 1:
+        raise ValueError(f"--threads must be at least 1, got {args.threads}")
+    settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
+                                  ground=args.ground, plant=args.plant,
+                                  residual_window=args.residual_window, window=args.window,
+                                  guide=args.guide, draw_guidance=args.draw_guidance,
+                                  residual_guide=args.residual_guide)
     torch.set_num_threads(args.threads)
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths + ([args.render] if args.render else []):
@@ -218,11 +219,6 @@ def run_generate(args) -> int:
     module = load_generator(args.ckpt)
     if args.ckpt == BUILTIN:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
-    settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
-                                  ground=args.ground, plant=args.plant,
-                                  residual_window=args.residual_window, window=args.window,
-                                  guide=args.guide, draw_guidance=args.draw_guidance,
-                                  residual_guide=args.residual_guide)
     if args.prompts is not None:
         return _generate_prompts(args, module, targets, prompts, settings)
     start = time.time()

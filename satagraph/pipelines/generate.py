@@ -48,6 +48,11 @@ from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion
 
 
+#: The :class:`GenerationSettings` fields that must be finite and >= 0 (or ``None``).
+_NON_NEGATIVE = ("guidance", "residual_guidance", "temperature", "residual_temperature",
+                 "smooth", "output_smooth", "root_smooth", "choice_temperature", "spread",
+                 "residual_window", "window", "draw_guidance")
+
 @dataclass(frozen=True)
 class GenerationSettings:
     """How to sample: decoding steps and guidance of the masked transformer
@@ -139,6 +144,24 @@ class GenerationSettings:
     draw_guidance: float = 2.0
     residual_guide: Optional[str] = "logits"
     rerank: int = 1
+
+    def __post_init__(self) -> None:
+        """Refuse, in one line naming the field, settings no sampling has a
+        meaning for (a NaN guidance made every draw fail deep in
+        ``torch.multinomial``)."""
+        from satagraph.nn.generators.sampling import check_guide
+        for name in ("steps", "rerank") + (("layers",) if self.layers is not None else ()):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
+        for name in _NON_NEGATIVE:
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+        if not 0 < self.topk_ratio <= 1:
+            raise ValueError(f"topk_ratio must be in (0, 1], got {self.topk_ratio}")
+        check_guide(self.guide)
+        if self.residual_guide is not None:
+            check_guide(self.residual_guide)
 
     @property
     def residual_draw(self) -> str:

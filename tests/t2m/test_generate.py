@@ -138,10 +138,30 @@ def test_an_empty_text_generates_for_the_skeleton_alone(t2m_ckpt, zoo_skeletons,
     assert any(differ)
 
 
-def test_bad_numbers_are_one_line(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
+@pytest.mark.parametrize("flag,value,said", [
+    ("--threads", "0", "--threads must be at least 1"),
+    ("--steps", "0", "steps must be at least 1"),
+    ("--guidance", "nan", "guidance must be a finite number >= 0, got nan"),
+    ("--draw-guidance", "-1", "draw_guidance must be a finite number >= 0"),
+    ("--guide", "greedy", "unknown guide 'greedy'"),
+])
+def test_bad_numbers_are_one_line(t2m_ckpt, zoo_skeletons, tmp_path, capsys, flag, value, said):
     out = tmp_path / "x.bvh"
-    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--threads", "0") == 2
-    assert "--threads" in _error(capsys) and not out.exists()
+    assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, flag, value) == 2
+    assert said in _error(capsys) and not out.exists()
+
+
+def test_settings_refuse_what_no_sampling_means():
+    GenerationSettings(guidance=0.0, temperature=0.0, window=None, layers=1)  # all meaningful
+    for bad, said in ((dict(guidance=float("inf")), "guidance must be a finite"),
+                      (dict(temperature=-0.5), "temperature must be a finite"),
+                      (dict(topk_ratio=1.5), r"topk_ratio must be in \(0, 1\]"),
+                      (dict(rerank=0), "rerank must be at least 1"),
+                      (dict(layers=0), "layers must be at least 1"),
+                      (dict(residual_guide="x"), "unknown guide 'x'"),
+                      (dict(smooth=-1.0), "smooth must be a finite")):
+        with pytest.raises(ValueError, match=said):
+            GenerationSettings(**bad)
 
 
 def test_an_exported_weights_file_generates_like_its_checkpoint(t2m_ckpt, zoo_skeletons,
