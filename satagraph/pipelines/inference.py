@@ -36,8 +36,9 @@ def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tu
     stride ``window - overlap``), where each window's frames before the
     previous window's stop are cropped (``keep_from`` is the first frame of
     the window that is kept). A clip shorter than a window is one window."""
-    if overlap >= window:
-        raise ValueError(f"overlap ({overlap}) must be smaller than window ({window})")
+    if window < 1 or not 0 <= overlap < window:
+        raise ValueError(f"windows of {window} frames sharing {overlap}: a window needs at "
+                         f"least 1 frame and its overlap 0 to window - 1 frames")
     starts = window_starts(num_frames, window, window - overlap)
     keep = [0] + [start + window for start in starts[:-1]]
     return [(start, min(start + window, num_frames), k) for start, k in zip(starts, keep)]

@@ -24,9 +24,10 @@ def test_window_plan_starts_are_the_training_windows():
             assert [a for a, _, _ in plan] == window_starts(num, window, window - overlap)
 
 
-def test_window_plan_rejects_bad_overlap():
-    with pytest.raises(ValueError, match="overlap"):
-        window_plan(100, 16, 16)
+@pytest.mark.parametrize("window,overlap", [(16, 16), (16, 20), (16, -1), (0, 0), (-5, -2)])
+def test_window_plan_rejects_windows_that_cover_nothing(window, overlap):
+    with pytest.raises(ValueError, match=f"windows of {window} frames sharing {overlap}: "):
+        window_plan(100, window, overlap)
 
 
 def test_lr_schedule():
