@@ -145,6 +145,12 @@ def add_train_parsers(sub) -> None:
                    help="stop drawing after this long and write the windows drawn "
                    "(default: no limit)")
     p.add_argument("--device", default="cpu", help="where to run the autoencoder")
+    p.add_argument("--swap-rigs", type=float, default=0.0, metavar="SHARE",
+                   help="show this share of the captured human rigs' windows (CMU's, "
+                   "CC_Base's: rigs of 20 windows or more, never the zoo's) on another "
+                   "such rig's skeleton, codes and captions kept, so that a rig with one "
+                   "captioned clip learns what the others do (default 0; "
+                   "experiments/T2M.md section 82)")
     p.set_defaults(func=run_code_bank)
 
 
@@ -233,10 +239,12 @@ def run_code_bank(args) -> int:
     import lightning as L
     import torch
 
-    from satagraph.data.code_bank import draw_code_bank
+    from satagraph.data.code_bank import draw_code_bank, swap_skeletons
     from satagraph.experiment.config import load_config
     from satagraph.experiment.train import build_datamodule, build_module, check_config
     from satagraph.utils.files import check_output_path
+    if not 0.0 <= args.swap_rigs <= 1.0:
+        raise ValueError(f"--swap-rigs must be in [0, 1], got {args.swap_rigs}")
     cfg = check_config(load_config(args.config, list(args.overrides)))
     if cfg["module"] != "t2m":
         raise ValueError(f"{args.config}: module {cfg['module']!r} is not a text-to-motion "
@@ -264,6 +272,7 @@ def run_code_bank(args) -> int:
 
     bank = draw_code_bank(module, batches, args.windows, progress,
                           None if args.max_minutes is None else 60.0 * args.max_minutes)
+    bank = swap_skeletons(bank, args.swap_rigs, seed=int(cfg["seed"]))
     bank.save(args.output)
     print(f"\nwrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
           f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)

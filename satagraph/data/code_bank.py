@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import time
 from pathlib import Path
 from typing import Any, Iterable, List, NamedTuple, Optional, Sequence, Union
@@ -206,6 +207,64 @@ class CodeBank(Dataset):
                              "`satagraph code-bank`")
 
 
+#: Fewest windows of one skeleton that make it a captured rig to
+#: :func:`swap_skeletons` (the endless zoo draws a new rig for every window).
+RIG_WINDOWS = 20
+
+
+def skeleton_keys(bank: CodeBank) -> List[bytes]:
+    """A key per window that is equal for windows of one skeleton (its
+    parents and node features, as banked)."""
+    return [bank.parent[bank._node_start[i]:bank._node_start[i + 1]].numpy().tobytes()
+            + bank.x[bank._node_start[i]:bank._node_start[i + 1]].half().numpy().tobytes()
+            for i in range(len(bank))]
+
+
+#: Caption words that make a window a human's to :func:`swap_skeletons`.
+HUMAN_WORDS = ("person", "someone")
+
+
+def swap_skeletons(bank: CodeBank, share: float, words: Sequence[str] = HUMAN_WORDS,
+                   seed: int = 0, min_windows: int = RIG_WINDOWS) -> CodeBank:
+    r"""A bank in which windows of captured rigs of one kind are shown on
+    each other's skeletons: each window whose caption has one of
+    :obj:`words` and whose skeleton has at least :obj:`min_windows` windows
+    (a captured rig: CMU's, CC_Base's; never a zoo rig) takes, with
+    probability :obj:`share`, the skeleton of a window of another such rig,
+    its codes and caption kept.
+
+    SATA's codes are meant to be the same whatever the rig: codes generated
+    for a CC_Base skeleton decode on CMU's rig as the motion asked
+    (``experiments/T2M.md`` section 82). A generator shown each captured
+    human rig with the others' motion learns what any of them can do; a rig
+    with one captioned clip (CMU's) is otherwise tied to that clip's
+    actions.
+    """
+    if not 0.0 <= share <= 1.0:
+        raise ValueError(f"swap share must be in [0, 1], got {share}")
+    said = re.compile(r"\b(" + "|".join(map(re.escape, words)) + r")\b")
+    windows: dict = {}
+    for i, key in enumerate(skeleton_keys(bank)):
+        if said.search(bank.texts[i]):
+            windows.setdefault(key, []).append(i)
+    rigs = [w for w in windows.values() if len(w) >= min_windows]
+    if len(rigs) < 2 or share == 0.0:
+        return bank
+    rng = torch.Generator().manual_seed(int(seed))
+    donor = list(range(len(bank)))
+    for r, members in enumerate(rigs):
+        others = [w for k, rig in enumerate(rigs) if k != r for w in rig]
+        for i in members:
+            if float(torch.rand((), generator=rng)) < share:
+                donor[i] = others[int(torch.randint(len(others), (), generator=rng))]
+    pick = lambda t, start, i: t[start[i]:start[i + 1]]  # noqa: E731
+    return CodeBank(bank.codes, bank.num_frames,
+                    torch.cat([pick(bank.x, bank._node_start, d) for d in donor]),
+                    torch.cat([pick(bank.parent, bank._node_start, d) for d in donor]),
+                    bank.num_nodes[donor], bank.seconds, bank.texts, bank.fingerprint,
+                    bank.censored)
+
+
 def concat_banks(banks: Iterable[CodeBank]) -> CodeBank:
     """One bank of several of the same autoencoder."""
     banks = list(banks)
@@ -259,4 +318,5 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
     return concat_banks(parts)
 
 
-__all__ = ["CodeBank", "CodeBatch", "autoencoder_fingerprint", "concat_banks", "draw_code_bank"]
+__all__ = ["CodeBank", "CodeBatch", "HUMAN_WORDS", "RIG_WINDOWS", "autoencoder_fingerprint", "concat_banks",
+           "draw_code_bank", "skeleton_keys", "swap_skeletons"]

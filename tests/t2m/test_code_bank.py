@@ -11,7 +11,7 @@ import torch
 
 from satagraph.cli import main
 from satagraph.data.code_bank import (CodeBank, CodeBatch, autoencoder_fingerprint,
-                                      concat_banks, draw_code_bank)
+                                      concat_banks, draw_code_bank, swap_skeletons)
 from satagraph.experiment.config import load_config
 from satagraph.experiment.train import train
 from tests.t2m.conftest import build_t2m, tiny_train_overrides, zoo_batch
@@ -109,7 +109,8 @@ def test_damaged_and_foreign_files_are_named(tmp_path):
 def test_satagraph_code_bank_then_train_on_it(autoencoder_ckpt, tmp_path, capsys):
     path = tmp_path / "bank.safetensors"
     overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "run", windows=4)
-    assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "6"]) == 0
+    assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "6",
+                 "--swap-rigs", "1"]) == 0  # nothing to swap on the zoo alone
     bank = CodeBank.load(path)
     # two epochs of 4 zoo windows: the second epoch's rigs are new ones
     assert len(bank) == 8 and len(set(bank.texts)) > 1
@@ -167,4 +168,39 @@ def test_code_bank_refuses_what_it_cannot_bank(autoencoder_ckpt, tmp_path, capsy
     assert main(["code-bank", "t2m_tiny", str(path), *overrides, f"data.code_bank={path}",
                  "--windows", "2"]) == 2
     assert "unset data.code_bank" in capsys.readouterr().err
+    assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "2",
+                 "--swap-rigs", "1.5"]) == 2
+    assert "--swap-rigs must be in [0, 1], got 1.5" in capsys.readouterr().err
     assert not path.exists()
+
+
+def _rig_bank(rigs, texts) -> CodeBank:
+    """A bank of one-frame windows on the skeletons :obj:`rigs` (a node
+    count each: a chain with node features equal to that count)."""
+    x = torch.cat([torch.full((n, 3), float(n)) for n in rigs])
+    parent = torch.cat([torch.arange(-1, n - 1) for n in rigs])
+    count = len(rigs)
+    return CodeBank(torch.arange(count)[:, None], torch.ones(count, dtype=torch.long), x,
+                    parent, torch.tensor(rigs), torch.ones(count), texts, "f")
+
+
+def test_captured_human_rigs_swap_skeletons_and_nothing_else_moves():
+    # two captured human rigs (5 and 7 nodes, 30 windows each), a dog rig
+    # as often, and zoo people whose rigs are new in every window
+    rigs = [5] * 30 + [7] * 30 + [9] * 30 + list(range(10, 40))
+    texts = (["a person walks"] * 30 + ["someone jumps"] * 30 + ["a dog trots"] * 30
+             + ["a person waves"] * 30)
+    bank = _rig_bank(rigs, texts)
+    swapped = swap_skeletons(bank, share=0.5, seed=3)
+    assert swapped.texts == bank.texts and torch.equal(swapped.codes, bank.codes)
+    nodes = swapped.num_nodes.tolist()
+    human = nodes[:60]
+    assert set(human) == {5, 7} and 10 <= sum(a != b for a, b in zip(human, rigs[:60])) <= 50
+    assert nodes[60:] == rigs[60:]  # the dog and the zoo's rigs keep theirs
+    batch = swapped.collate(range(len(swapped)))  # every window whole on its new rig
+    for i, n in enumerate(nodes):
+        assert torch.equal(batch.x[batch.node_clip == i], torch.full((n, 3), float(n)))
+    assert swap_skeletons(bank, share=0.5, seed=3).num_nodes.tolist() == nodes  # seeded
+    assert swap_skeletons(bank, share=0.0) is bank
+    with pytest.raises(ValueError, match="share"):
+        swap_skeletons(bank, share=1.5)
