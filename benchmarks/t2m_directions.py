@@ -111,10 +111,12 @@ def main(argv=None) -> None:
                         help="smoothing of the decoded root features in frames, every sampling")
     parser.add_argument("--draw-guidance", type=float, default=None,
                         help="GenerationSettings.draw_guidance, every sampling")
+    parser.add_argument("--residual-guidance", type=float, default=None,
+                        help="GenerationSettings.residual_guidance, every sampling")
     parser.add_argument("--json", default=None, help="also write the rows as JSON")
     args = parser.parse_args(argv)
     overrides = {k: getattr(args, k) for k in ("smooth", "output_smooth", "root_smooth",
-                                               "draw_guidance")
+                                               "draw_guidance", "residual_guidance")
                  if getattr(args, k) is not None}
     warnings.simplefilter("ignore")
     rigs = args.rigs or human_rigs(args.split)

@@ -55,7 +55,7 @@ def test_the_built_in_generator_walks_a_person_backward_on_a_cmu_rig():
 
 
 def test_overrides_apply_on_top_of_every_sampling(tmp_path, monkeypatch):
-    """``--smooth``/``--output-smooth``/``--draw-guidance`` reach each
+    """``--smooth``/``--output-smooth``/``--residual-guidance`` reach each
     sampling's :class:`GenerationSettings`, its own fields kept."""
     from satagraph.io import write_bvh
     item = t2m.zoo_items("val", 2, seed=0, keep=True)[0]
@@ -66,10 +66,12 @@ def test_overrides_apply_on_top_of_every_sampling(tmp_path, monkeypatch):
                         lambda model, target, prompt, label, seeds, settings:
                         seen.append(settings) or seeds)
     rows = t2m_directions.table(None, [str(rig)], ["logits", "masked-candidates"], 3,
-                                {"smooth": 0.0, "output_smooth": 2.0})
+                                {"smooth": 0.0, "output_smooth": 2.0,
+                                 "residual_guidance": 3.0})
     assert [r["walk"] for r in rows] == [3, 3]
     assert {(s.guide, s.residual_guide) for s in seen} == {("logits", "logits"),
                                                           ("candidates", "logits")}
-    assert all(s.smooth == 0.0 and s.output_smooth == 2.0 for s in seen)
+    assert all(s.smooth == 0.0 and s.output_smooth == 2.0 and s.residual_guidance == 3.0
+               for s in seen)
     assert all(s.draw_guidance == t2m_directions.GenerationSettings().draw_guidance
                for s in seen)
