@@ -224,6 +224,19 @@ def skeleton_keys(bank: CodeBank) -> List[bytes]:
 HUMAN_WORDS = ("person", "someone")
 
 
+def captured_rigs(bank: CodeBank, words: Sequence[str] = HUMAN_WORDS,
+                  min_windows: int = RIG_WINDOWS) -> List[List[int]]:
+    """The windows of each skeleton (:func:`skeleton_keys`) that has at
+    least :obj:`min_windows` windows whose captions have one of
+    :obj:`words`."""
+    said = re.compile(r"\b(" + "|".join(map(re.escape, words)) + r")\b")
+    windows: dict = {}
+    for i, key in enumerate(skeleton_keys(bank)):
+        if said.search(bank.texts[i]):
+            windows.setdefault(key, []).append(i)
+    return [w for w in windows.values() if len(w) >= min_windows]
+
+
 def swap_skeletons(bank: CodeBank, share: float, words: Sequence[str] = HUMAN_WORDS,
                    seed: int = 0, min_windows: int = RIG_WINDOWS) -> CodeBank:
     r"""A bank in which windows of captured rigs of one kind are shown on
@@ -242,12 +255,7 @@ def swap_skeletons(bank: CodeBank, share: float, words: Sequence[str] = HUMAN_WO
     """
     if not 0.0 <= share <= 1.0:
         raise ValueError(f"swap share must be in [0, 1], got {share}")
-    said = re.compile(r"\b(" + "|".join(map(re.escape, words)) + r")\b")
-    windows: dict = {}
-    for i, key in enumerate(skeleton_keys(bank)):
-        if said.search(bank.texts[i]):
-            windows.setdefault(key, []).append(i)
-    rigs = [w for w in windows.values() if len(w) >= min_windows]
+    rigs = captured_rigs(bank, words, min_windows)
     if len(rigs) < 2 or share == 0.0:
         return bank
     rng = torch.Generator().manual_seed(int(seed))
@@ -318,5 +326,5 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
     return concat_banks(parts)
 
 
-__all__ = ["CodeBank", "CodeBatch", "HUMAN_WORDS", "RIG_WINDOWS", "autoencoder_fingerprint", "concat_banks",
-           "draw_code_bank", "skeleton_keys", "swap_skeletons"]
+__all__ = ["CodeBank", "CodeBatch", "HUMAN_WORDS", "RIG_WINDOWS", "autoencoder_fingerprint",
+           "captured_rigs", "concat_banks", "draw_code_bank", "skeleton_keys", "swap_skeletons"]
