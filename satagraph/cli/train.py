@@ -239,12 +239,11 @@ def run_code_bank(args) -> int:
     import lightning as L
     import torch
 
-    from satagraph.data.code_bank import draw_code_bank, swap_skeletons
+    from satagraph.data.code_bank import check_swap_share, draw_code_bank, swap_skeletons
     from satagraph.experiment.config import load_config
     from satagraph.experiment.train import build_datamodule, build_module, check_config
     from satagraph.utils.files import check_output_path
-    if not 0.0 <= args.swap_rigs <= 1.0:
-        raise ValueError(f"--swap-rigs must be in [0, 1], got {args.swap_rigs}")
+    check_swap_share(args.swap_rigs)
     cfg = check_config(load_config(args.config, list(args.overrides)))
     if cfg["module"] != "t2m":
         raise ValueError(f"{args.config}: module {cfg['module']!r} is not a text-to-motion "

@@ -237,6 +237,14 @@ def captured_rigs(bank: CodeBank, words: Sequence[str] = HUMAN_WORDS,
     return [w for w in windows.values() if len(w) >= min_windows]
 
 
+def check_swap_share(share: float) -> float:
+    """:obj:`share` if it is a probability, else a ``ValueError``."""
+    if not 0.0 <= share <= 1.0:
+        raise ValueError(f"the share of windows to swap (--swap-rigs) must be in [0, 1], "
+                         f"got {share}")
+    return share
+
+
 def swap_skeletons(bank: CodeBank, share: float, words: Sequence[str] = HUMAN_WORDS,
                    seed: int = 0, min_windows: int = RIG_WINDOWS) -> CodeBank:
     r"""A bank in which windows of captured rigs of one kind are shown on
@@ -253,8 +261,7 @@ def swap_skeletons(bank: CodeBank, share: float, words: Sequence[str] = HUMAN_WO
     with one captioned clip (CMU's) is otherwise tied to that clip's
     actions.
     """
-    if not 0.0 <= share <= 1.0:
-        raise ValueError(f"swap share must be in [0, 1], got {share}")
+    check_swap_share(share)
     rigs = captured_rigs(bank, words, min_windows)
     if len(rigs) < 2 or share == 0.0:
         return bank
@@ -327,4 +334,5 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
 
 
 __all__ = ["CodeBank", "CodeBatch", "HUMAN_WORDS", "RIG_WINDOWS", "autoencoder_fingerprint",
-           "captured_rigs", "concat_banks", "draw_code_bank", "skeleton_keys", "swap_skeletons"]
+           "captured_rigs", "check_swap_share", "concat_banks", "draw_code_bank",
+           "skeleton_keys", "swap_skeletons"]

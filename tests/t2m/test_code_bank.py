@@ -170,7 +170,7 @@ def test_code_bank_refuses_what_it_cannot_bank(autoencoder_ckpt, tmp_path, capsy
     assert "unset data.code_bank" in capsys.readouterr().err
     assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "2",
                  "--swap-rigs", "1.5"]) == 2
-    assert "--swap-rigs must be in [0, 1], got 1.5" in capsys.readouterr().err
+    assert "(--swap-rigs) must be in [0, 1], got 1.5" in capsys.readouterr().err
     assert not path.exists()
 
 
