@@ -205,6 +205,9 @@ def run_generate(args) -> int:
         _prompt_folder(args.output)
     if args.threads < 1:
         raise ValueError(f"--threads must be at least 1, got {args.threads}")
+    from satagraph.nn.generators.sampling import check_guide
+    for guide in (args.guide, args.residual_guide):
+        check_guide(guide)
     settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
                                   ground=args.ground, plant=args.plant,
                                   residual_window=args.residual_window, window=args.window,

@@ -146,10 +146,9 @@ class GenerationSettings:
     rerank: int = 1
 
     def __post_init__(self) -> None:
-        """Refuse, in one line naming the field, settings no sampling has a
+        """Refuse, in one line naming the field, numbers no sampling has a
         meaning for (a NaN guidance made every draw fail deep in
-        ``torch.multinomial``)."""
-        from satagraph.nn.generators.sampling import check_guide
+        ``torch.multinomial``); the guides' names are the sampler's to check."""
         for name in ("steps", "rerank") + (("layers",) if self.layers is not None else ()):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
@@ -159,9 +158,6 @@ class GenerationSettings:
                 raise ValueError(f"{name} must be a finite number >= 0, got {value}")
         if not 0 < self.topk_ratio <= 1:
             raise ValueError(f"topk_ratio must be in (0, 1], got {self.topk_ratio}")
-        check_guide(self.guide)
-        if self.residual_guide is not None:
-            check_guide(self.residual_guide)
 
     @property
     def residual_draw(self) -> str:

@@ -158,7 +158,6 @@ def test_settings_refuse_what_no_sampling_means():
                       (dict(topk_ratio=1.5), r"topk_ratio must be in \(0, 1\]"),
                       (dict(rerank=0), "rerank must be at least 1"),
                       (dict(layers=0), "layers must be at least 1"),
-                      (dict(residual_guide="x"), "unknown guide 'x'"),
                       (dict(smooth=-1.0), "smooth must be a finite")):
         with pytest.raises(ValueError, match=said):
             GenerationSettings(**bad)
