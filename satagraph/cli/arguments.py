@@ -69,8 +69,11 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
     :obj:`per_input` (commands that read several files) each takes one
     value for every file or a comma-separated value per file, in order
     (``--units cm,cmu``: a dog in centimetres beside a CMU human). With
-    :obj:`scale_free` (a command whose output is the same in any units,
-    :func:`scale_free`) the units' help says so."""
+    :obj:`scale_free` (a command whose output is the same in any units: the
+    models, contacts, grounding and planting read bodies in their own
+    heights) the units' help says so, and :func:`~satagraph.cli.main` does
+    not show the command's
+    :class:`~satagraph.transforms.rig_reading.UnitsWarning`."""
     dash = f"--{prefix}-" if prefix else "--"
     wrap = _each if per_input else (lambda parse: parse)
 
@@ -86,19 +89,13 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
                         "ft, cmu (CMU mocap units), file (keep the file's own), a "
                         "factor to metres or auto (guessed), instead of guessing them"
                         + each("auto,cm") + (SCALE_FREE_NOTE if scale_free else ""))
+    if scale_free:
+        parser.set_defaults(scale_free=True)
 
 
-#: What ``--units`` help adds for a :func:`scale_free` command.
+#: What ``--units`` help adds for a command whose output is the same in any units.
 SCALE_FREE_NOTE = ("; this command's output is the same in any units (the model reads a "
                    "body in its own heights), so units it cannot decide are not warned about")
-
-
-def scale_free(parser: argparse.ArgumentParser) -> None:
-    """Mark a command whose output does not depend on its inputs' units
-    (the models, contacts, grounding and planting read bodies in their own
-    heights): :func:`~satagraph.cli.main` does not show its
-    :class:`~satagraph.transforms.rig_reading.UnitsWarning`."""
-    parser.set_defaults(scale_free=True)
 
 
 def check_per_input(args: argparse.Namespace, count: int, prefix: str = "") -> None:
@@ -201,7 +198,7 @@ def one_of(choices, what: str = "value"):
 
 
 __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
-           "scale_free", "check_per_input", "read_with_rig", "ListThenFolder", "Folder",
+           "check_per_input", "read_with_rig", "ListThenFolder", "Folder",
            "one_of"]
 
 

@@ -38,7 +38,7 @@ def _window(text: str) -> float:
 
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
-    from satagraph.cli.arguments import add_plant_argument, add_rig_arguments, scale_free
+    from satagraph.cli.arguments import add_plant_argument, add_rig_arguments
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
@@ -116,7 +116,6 @@ def add_generate_parser(sub) -> None:
     p.add_argument("output", metavar="OUT.bvh", nargs="?",
                    help="output file (may also come last after the --skeleton files)")
     add_rig_arguments(p, "", "the skeleton files", per_input=True, scale_free=True)
-    scale_free(p)
     p.set_defaults(func=run_generate)
 
 

@@ -187,10 +187,8 @@ def _ground(p, default: bool) -> None:
 
 
 def _rig(p, prefix: str = "", what: str = "the input", scale_free: bool = False) -> None:
-    from satagraph.cli import arguments
-    arguments.add_rig_arguments(p, prefix, what, scale_free=scale_free)
-    if scale_free:
-        arguments.scale_free(p)
+    from satagraph.cli.arguments import add_rig_arguments
+    add_rig_arguments(p, prefix, what, scale_free=scale_free)
 
 
 def _data_rig(p) -> None:

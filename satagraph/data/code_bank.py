@@ -24,7 +24,7 @@ import json
 import re
 import time
 from pathlib import Path
-from typing import Any, Iterable, List, NamedTuple, Optional, Sequence, Union
+from typing import Any, Iterable, List, NamedTuple, Optional, Sequence, Tuple, Union
 
 import torch
 from torch import Tensor
@@ -143,6 +143,12 @@ class CodeBank(Dataset):
                    seconds.cpu(), texts, fingerprint,
                    None if censored is None else censored.cpu())
 
+    def skeleton(self, index: int) -> Tuple[Tensor, Tensor]:
+        """Window :obj:`index`'s node features and parents (within the
+        window, ``-1``: the root), as banked."""
+        nodes = slice(int(self._node_start[index]), int(self._node_start[index + 1]))
+        return self.x[nodes], self.parent[nodes]
+
     def collate(self, indices: Sequence[int]) -> CodeBatch:
         """The :class:`CodeBatch` of windows :obj:`indices` (a loader's
         ``collate_fn``)."""
@@ -150,10 +156,9 @@ class CodeBank(Dataset):
         nodes = self.num_nodes[index]
         codes = torch.cat([self.codes[self._frame_start[i]:self._frame_start[i + 1]]
                            for i in index.tolist()]).long()
-        x = torch.cat([self.x[self._node_start[i]:self._node_start[i + 1]]
-                       for i in index.tolist()]).float()
-        local = torch.cat([self.parent[self._node_start[i]:self._node_start[i + 1]]
-                           for i in index.tolist()])
+        x, local = (torch.cat(parts) for parts in
+                    zip(*(self.skeleton(i) for i in index.tolist())))
+        x = x.float()
         clip = torch.arange(len(index)).repeat_interleave(nodes)
         parent = torch.where(local < 0, -1, local + _offsets(nodes)[:-1][clip])
         return CodeBatch(codes, self.num_frames[index], x, parent, clip,
@@ -215,9 +220,8 @@ RIG_WINDOWS = 20
 def skeleton_keys(bank: CodeBank) -> List[bytes]:
     """A key per window that is equal for windows of one skeleton (its
     parents and node features, as banked)."""
-    return [bank.parent[bank._node_start[i]:bank._node_start[i + 1]].numpy().tobytes()
-            + bank.x[bank._node_start[i]:bank._node_start[i + 1]].half().numpy().tobytes()
-            for i in range(len(bank))]
+    return [parent.numpy().tobytes() + x.half().numpy().tobytes()
+            for x, parent in map(bank.skeleton, range(len(bank)))]
 
 
 #: Caption words that make a window a human's to :func:`swap_skeletons`.
@@ -272,12 +276,9 @@ def swap_skeletons(bank: CodeBank, share: float, words: Sequence[str] = HUMAN_WO
         for i in members:
             if float(torch.rand((), generator=rng)) < share:
                 donor[i] = others[int(torch.randint(len(others), (), generator=rng))]
-    pick = lambda t, start, i: t[start[i]:start[i + 1]]  # noqa: E731
-    return CodeBank(bank.codes, bank.num_frames,
-                    torch.cat([pick(bank.x, bank._node_start, d) for d in donor]),
-                    torch.cat([pick(bank.parent, bank._node_start, d) for d in donor]),
-                    bank.num_nodes[donor], bank.seconds, bank.texts, bank.fingerprint,
-                    bank.censored)
+    x, parent = (torch.cat(parts) for parts in zip(*map(bank.skeleton, donor)))
+    return CodeBank(bank.codes, bank.num_frames, x, parent, bank.num_nodes[donor],
+                    bank.seconds, bank.texts, bank.fingerprint, bank.censored)
 
 
 def concat_banks(banks: Iterable[CodeBank]) -> CodeBank:

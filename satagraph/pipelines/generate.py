@@ -53,6 +53,7 @@ _NON_NEGATIVE = ("guidance", "residual_guidance", "temperature", "residual_tempe
                  "smooth", "output_smooth", "root_smooth", "choice_temperature", "spread",
                  "residual_window", "window", "draw_guidance")
 
+
 @dataclass(frozen=True)
 class GenerationSettings:
     """How to sample: decoding steps and guidance of the masked transformer
