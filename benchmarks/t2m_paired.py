@@ -18,7 +18,7 @@ cell, each seed's difference, their mean, their standard deviation and a
 Cells are ``group|row|metric`` (metrics: ``R@1``-``R@3``, ``fid``, ``kid``,
 ``action``, ``diversity``, ``matching``, ``slide``, ``hover``, and
 ``action:LABEL``, the action accuracy on the prompts asking for LABEL); by default
-:data:`CELLS`, what sections 69-72's rules read.
+:data:`CELLS`, what sections 69-72's and 83-85's rules read.
 """
 from __future__ import annotations
 
@@ -30,12 +30,15 @@ from pathlib import Path
 from typing import Dict, List, Sequence, Tuple
 
 #: The cells a decoding or sampling rule reads (``experiments/T2M.md``
-#: section 69): the zoo generator's R@3, FID, action accuracy and
-#: diversity, Bandai's generator R@3, the baseline the FID target names,
-#: and the RVQ's reconstruction.
+#: sections 69 and 83-85): the zoo generator's R@3, FID, action accuracy,
+#: diversity and foot sliding, Bandai's generator R@3, FID and action
+#: accuracy, the baseline the FID target names, and the RVQ's
+#: reconstruction.
 CELLS = ("zoo|generator (GT length)|R@3", "zoo|generator (GT length)|fid",
          "zoo|generator (GT length)|action", "zoo|generator (GT length)|diversity",
-         "bandai (val)|generator (GT length)|R@3",
+         "zoo|generator (GT length)|slide",
+         "bandai (val)|generator (GT length)|R@3", "bandai (val)|generator (GT length)|fid",
+         "bandai (val)|generator (GT length)|action",
          "zoo|retrieval (retargeted)|fid", "zoo|retrieval (retargeted)|diversity",
          "zoo|reconstruction (SATA-RVQ)|R@3")
 
