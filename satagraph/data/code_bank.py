@@ -217,11 +217,12 @@ class CodeBank(Dataset):
 RIG_WINDOWS = 20
 
 
-def skeleton_keys(bank: CodeBank) -> List[bytes]:
-    """A key per window that is equal for windows of one skeleton (its
-    parents and node features, as banked)."""
+def skeleton_keys(bank: CodeBank, indices: Optional[Sequence[int]] = None) -> List[bytes]:
+    """A key per window (of :obj:`indices`, default all) that is equal for
+    windows of one skeleton (its parents and node features, as banked)."""
+    indices = range(len(bank)) if indices is None else indices
     return [parent.numpy().tobytes() + x.half().numpy().tobytes()
-            for x, parent in map(bank.skeleton, range(len(bank)))]
+            for x, parent in map(bank.skeleton, indices)]
 
 
 #: Caption words that make a window a human's to :func:`swap_skeletons`.
@@ -234,10 +235,10 @@ def captured_rigs(bank: CodeBank, words: Sequence[str] = HUMAN_WORDS,
     least :obj:`min_windows` windows whose captions have one of
     :obj:`words`."""
     said = re.compile(r"\b(" + "|".join(map(re.escape, words)) + r")\b")
+    spoken = [i for i, text in enumerate(bank.texts) if said.search(text)]
     windows: dict = {}
-    for i, key in enumerate(skeleton_keys(bank)):
-        if said.search(bank.texts[i]):
-            windows.setdefault(key, []).append(i)
+    for i, key in zip(spoken, skeleton_keys(bank, spoken)):
+        windows.setdefault(key, []).append(i)
     return [w for w in windows.values() if len(w) >= min_windows]
 
 
