@@ -6,6 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
@@ -21,6 +22,7 @@ def test_pace_ratio_is_the_median_over_moving_prompts_of_their_own_length_clips(
     assert t2m_long.pace_ratio(long, own) == 1.0  # median of 0.5, 1, 1.5: idle left out
 
 
+@pytest.mark.slow
 def test_stretches_are_the_prompts_length_at_either_end_of_the_long_clip():
     """Both stretches last as long as the prompt's own clip; the first is
     the start of the long generation and the last its end."""

@@ -95,6 +95,7 @@ def test_named_configs_found_without_a_source_checkout(tmp_path, monkeypatch):
         config.config_path("sata_vae")
 
 
+@pytest.mark.slow
 def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
     """The data files of ``setup.cfg`` cover every config, and each loads
     (inheritance included) from a copy laid out as a non-editable install

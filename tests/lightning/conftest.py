@@ -8,7 +8,6 @@ from typing import Any, Callable, Dict, Iterator, List
 
 import lightning as L
 import pytest
-import torch
 
 from satagraph.experiment.config import load_config
 from satagraph.data.collate import FrameBatch
@@ -27,16 +26,6 @@ def _shortest(rows: List[Dict[str, str]], dataset: str, split: str,
     chosen = [r for r in rows if r["dataset"] == dataset and r["split"] == split]
     chosen.sort(key=lambda r: (int(r["frames"]) / float(r["fps"]), r["path"]))
     return chosen[:count]
-
-
-@pytest.fixture(scope="session", autouse=True)
-def _one_thread() -> Iterator[None]:
-    """One intra-op thread: the tiny models gain nothing from more, and on
-    a busy machine extra threads make every step many times slower."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -71,7 +60,8 @@ def config_overrides(small_manifest: Path, _private_cache: Path) -> List[str]:
     return [f"data.sources=[{small_manifest}]", f"data.cache_dir={_private_cache}",
             f"data.window={WINDOW}", f"data.stride={WINDOW}", "data.batch_size=4",
             "data.max_files=null", "logger.name=csv", "trainer.progress=false",
-            "trainer.enable_model_summary=false", "trainer.log_every_n_steps=1"]
+            "trainer.enable_model_summary=false", "trainer.log_every_n_steps=1",
+            "trainer.limit_train_batches=2", "trainer.limit_val_batches=1"]
 
 
 @pytest.fixture(scope="session")

@@ -197,6 +197,7 @@ def test_two_rests_read_in_either_order_agree(no_network: None) -> None:
     assert gap < 1e-6 < 1e-3 < change, (gap, change)
 
 
+@pytest.mark.slow
 def test_reconstruction_reads_a_second_rest_where_no_mirror_image_is_read(
         no_network: None) -> None:
     """By default (``two_rests="unmirrored"``, PRETRAIN.md 40) a spider,

@@ -67,6 +67,7 @@ def test_spawned_workers_get_a_picklable_datamodule(tiny_config: Dict[str, Any],
     assert not seen["spawns"] and seen["datamodule"].datasets
 
 
+@pytest.mark.slow
 def test_ddp_validation_logs_per_dataset_figures_of_both_processes(
         tiny_config: Dict[str, Any]) -> None:
     """Each process validates its own share of the batches; the per-dataset

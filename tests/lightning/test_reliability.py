@@ -273,6 +273,7 @@ def test_ema_checkpoints_the_average_and_resumes_the_trained_weights(
     decay = 0.5
     cfg = dict(copy.deepcopy(tiny_config), checkpoint={"every_n_steps": 1})
     cfg["optim"] = dict(cfg.get("optim") or {}, ema=decay)
+    cfg["trainer"] = dict(cfg["trainer"], limit_train_batches=4)  # steps 1-3: one epoch
     train(cfg, max_steps=2)
     folder = Path(cfg["output_dir"]) / "checkpoints"
     first, second = load_checkpoint(folder / PREVIOUS), load_checkpoint(folder / LAST)

@@ -4,7 +4,6 @@ text-to-motion module on it and its checkpoint, and zoo skeleton files."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterator
 
 import lightning as L
 import pytest
@@ -32,14 +31,6 @@ T2M_MODEL = {"text_encoder": "offline:32",
              "residual": {"hidden_channels": 32, "heads": 2, "num_layers": 1, "dropout": 0.0,
                           "pool": 2},
              "length": {"hidden_channels": 16, "max_seconds": 3.0, "dropout": 0.0}}
-
-
-@pytest.fixture(scope="session", autouse=True)
-def _one_thread() -> Iterator[None]:
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
 
 
 def zoo_windows(count: int = 8, mirror: float = 0.0, seed: int = 0,

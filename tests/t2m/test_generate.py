@@ -453,6 +453,7 @@ def _refuses_a_moved_part(tuned, part, flag: str, name: str, half, tmp_path, cap
     assert not bad.exists()
 
 
+@pytest.mark.slow
 def test_render_draws_every_skeletons_motion_side_by_side(t2m_ckpt, zoo_skeletons, tmp_path,
                                                           capsys):
     """`generate --render OUT.gif`: the motions written, rendered one panel
