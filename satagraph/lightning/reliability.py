@@ -173,7 +173,9 @@ class ResumeCheckpoint(Checkpoint):
     Its state in the checkpoint holds every random state (restored at the
     first training batch after a resume) and the position of the run
     (epoch, batches done in it, step), which the training sampler resumes
-    from.
+    from. Resuming with ``trainer.max_steps`` set from a checkpoint that
+    ends an epoch warns: Lightning 2.6 then skips the next epoch
+    (Lightning-AI/pytorch-lightning#19617).
 
     Args:
         dirpath (str): The checkpoint folder.
@@ -228,6 +230,17 @@ class ResumeCheckpoint(Checkpoint):
 
     def load_state_dict(self, state_dict: Dict[str, Any]) -> None:
         self._pending = state_dict
+
+    def on_load_checkpoint(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                           checkpoint: Dict[str, Any]) -> None:
+        loop = checkpoint.get("loops", {}).get("fit_loop", {})
+        ends_epoch = loop.get("epoch_loop.batch_progress", {}).get("is_last_batch", False)
+        if trainer.max_steps >= 0 and ends_epoch:
+            warnings.warn(
+                f"--resume with trainer.max_steps={trainer.max_steps}: the checkpoint ends "
+                f"epoch {checkpoint.get('epoch')}, and Lightning {L.__version__} then skips "
+                "the next epoch (Lightning-AI/pytorch-lightning#19617); bound the run by "
+                "trainer.max_epochs or trainer.max_time to train every epoch", stacklevel=2)
 
     def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
         self._trainer = trainer

@@ -6,10 +6,12 @@ import copy
 import os
 import pickle
 import random
+import shutil
 import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Any, Dict, List
 
@@ -162,6 +164,25 @@ def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]
     assert Path(state["best_model_path"]) == best
     train(tiny_config, resume=True, max_epochs=3)
     assert len(list(folder.glob("epoch=*.ckpt"))) == 1
+
+
+def test_resume_warns_where_lightning_would_skip_an_epoch(tiny_config: Dict[str, Any]) -> None:
+    """Resumed with ``max_steps`` from a checkpoint that ends an epoch,
+    Lightning 2.6 skips the next epoch (here: trains nothing although
+    epoch 1 and step 3 are left): a one-line warning names the bug and
+    the way round it; bounded by epochs, the same resume trains on, and
+    says nothing."""
+    train(tiny_config, max_steps=2)  # two batches an epoch: step 2 ends epoch 0
+    run = Path(tiny_config["output_dir"])
+    twin = dict(tiny_config, output_dir=str(run.parent / "twin"))
+    shutil.copytree(run / "checkpoints", Path(twin["output_dir"]) / "checkpoints")
+    with pytest.warns(UserWarning, match=r"max_steps=3: .* ends epoch \d.*#19617"):
+        _, _, trainer, _ = train(tiny_config, resume=True, max_steps=3)
+    assert trainer.global_step == 2  # the bug the warning is about
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message=".*19617")
+        _, _, trainer, _ = train(twin, resume=True, max_epochs=2)
+    assert trainer.global_step == 4
 
 
 def test_keep_every_epoch_keeps_one_checkpoint_per_epoch(tiny_config: Dict[str, Any]) -> None:
