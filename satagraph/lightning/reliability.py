@@ -173,9 +173,9 @@ class ResumeCheckpoint(Checkpoint):
     Its state in the checkpoint holds every random state (restored at the
     first training batch after a resume) and the position of the run
     (epoch, batches done in it, step), which the training sampler resumes
-    from. Resuming with ``trainer.max_steps`` set from a checkpoint that
-    ends an epoch warns: Lightning 2.6 then skips the next epoch
-    (Lightning-AI/pytorch-lightning#19617).
+    from. A run bounded by ``trainer.max_steps`` resumes from a checkpoint
+    that ends an epoch into the next epoch, which Lightning 2.6 alone
+    skips (:meth:`on_load_checkpoint`).
 
     Args:
         dirpath (str): The checkpoint folder.
@@ -197,6 +197,7 @@ class ResumeCheckpoint(Checkpoint):
         self._epoch_done = False
         self._saved_step = -1
         self._pending: Optional[Dict[str, Any]] = None
+        self._max_steps: Optional[int] = None
         self.saves = 0
 
     @property
@@ -233,14 +234,19 @@ class ResumeCheckpoint(Checkpoint):
 
     def on_load_checkpoint(self, trainer: L.Trainer, pl_module: L.LightningModule,
                            checkpoint: Dict[str, Any]) -> None:
-        loop = checkpoint.get("loops", {}).get("fit_loop", {})
-        ends_epoch = loop.get("epoch_loop.batch_progress", {}).get("is_last_batch", False)
-        if trainer.max_steps >= 0 and ends_epoch:
-            warnings.warn(
-                f"--resume with trainer.max_steps={trainer.max_steps}: the checkpoint ends "
-                f"epoch {checkpoint.get('epoch')}, and Lightning {L.__version__} then skips "
-                "the next epoch (Lightning-AI/pytorch-lightning#19617); bound the run by "
-                "trainer.max_epochs or trainer.max_time to train every epoch", stacklevel=2)
+        """Lightning 2.6 restores the loops of a run bounded by ``max_steps``
+        as if its checkpoint were left mid-epoch, so one written at an
+        epoch's end loses the next epoch (Lightning-AI/pytorch-lightning
+        #19617). The loops are restored without the step bound, as an
+        epoch-bounded run's are (the same for a checkpoint left mid-epoch),
+        and :meth:`on_train_start` puts it back."""
+        if trainer.max_steps >= 0:
+            self._max_steps = trainer.max_steps
+            trainer.fit_loop.epoch_loop.max_steps = -1
+
+    def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        if self._max_steps is not None:
+            trainer.fit_loop.epoch_loop.max_steps, self._max_steps = self._max_steps, None
 
     def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
         self._trainer = trainer

@@ -6,12 +6,10 @@ import copy
 import os
 import pickle
 import random
-import shutil
 import signal
 import subprocess
 import sys
 import time
-import warnings
 from pathlib import Path
 from typing import Any, Dict, List
 
@@ -166,23 +164,20 @@ def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]
     assert len(list(folder.glob("epoch=*.ckpt"))) == 1
 
 
-def test_resume_warns_where_lightning_would_skip_an_epoch(tiny_config: Dict[str, Any]) -> None:
-    """Resumed with ``max_steps`` from a checkpoint that ends an epoch,
-    Lightning 2.6 skips the next epoch (here: trains nothing although
-    epoch 1 and step 3 are left): a one-line warning names the bug and
-    the way round it; bounded by epochs, the same resume trains on, and
-    says nothing."""
-    train(tiny_config, max_steps=2)  # two batches an epoch: step 2 ends epoch 0
-    run = Path(tiny_config["output_dir"])
-    twin = dict(tiny_config, output_dir=str(run.parent / "twin"))
-    shutil.copytree(run / "checkpoints", Path(twin["output_dir"]) / "checkpoints")
-    with pytest.warns(UserWarning, match=r"max_steps=3: .* ends epoch \d.*#19617"):
-        _, _, trainer, _ = train(tiny_config, resume=True, max_steps=3)
-    assert trainer.global_step == 2  # the bug the warning is about
-    with warnings.catch_warnings():
-        warnings.filterwarnings("error", message=".*19617")
-        _, _, trainer, _ = train(twin, resume=True, max_epochs=2)
-    assert trainer.global_step == 4
+@pytest.mark.parametrize("first", [2, 1])
+def test_a_run_bounded_by_steps_resumes_as_far_as_one_never_stopped(
+        tiny_config: Dict[str, Any], first: int) -> None:
+    """Stopped by ``max_steps`` at an epoch's end (2 of 2 batches) or inside
+    it (1 of 2), then resumed with a larger ``max_steps``, a run ends at the
+    step and epoch of one that was never stopped. Lightning 2.6 alone
+    trains nothing more in either case: it takes the finished epoch for an
+    unfinished one (Lightning-AI/pytorch-lightning#19617)."""
+    whole = dict(tiny_config, output_dir=tiny_config["output_dir"] + "_whole")
+    _, _, never_stopped, _ = train(whole, max_steps=3, max_epochs=2)
+    train(tiny_config, max_steps=first, max_epochs=2)
+    _, _, resumed, _ = train(tiny_config, resume=True, max_steps=3, max_epochs=2)
+    assert (resumed.global_step, resumed.current_epoch) == (3, never_stopped.current_epoch)
+    assert never_stopped.global_step == 3 and resumed.max_steps == 3
 
 
 def test_keep_every_epoch_keeps_one_checkpoint_per_epoch(tiny_config: Dict[str, Any]) -> None:
