@@ -169,9 +169,9 @@ def test_a_run_bounded_by_steps_resumes_as_far_as_one_never_stopped(
         tiny_config: Dict[str, Any], first: int) -> None:
     """Stopped by ``max_steps`` at an epoch's end (2 of 2 batches) or inside
     it (1 of 2), then resumed with a larger ``max_steps``, a run ends at the
-    step and epoch of one that was never stopped. Lightning 2.6 alone
-    trains nothing more in either case: it takes the finished epoch for an
-    unfinished one (Lightning-AI/pytorch-lightning#19617)."""
+    step and epoch of one that was never stopped. Lightning 2.6 alone ends
+    both at step 2: it takes the epoch it finished for an unfinished one
+    (Lightning-AI/pytorch-lightning#19617)."""
     whole = dict(tiny_config, output_dir=tiny_config["output_dir"] + "_whole")
     _, _, never_stopped, _ = train(whole, max_steps=3, max_epochs=2)
     train(tiny_config, max_steps=first, max_epochs=2)
