@@ -173,9 +173,12 @@ class ResumeCheckpoint(Checkpoint):
     Its state in the checkpoint holds every random state (restored at the
     first training batch after a resume) and the position of the run
     (epoch, batches done in it, step), which the training sampler resumes
-    from. A run bounded by ``trainer.max_steps`` resumes from a checkpoint
-    that ends an epoch into the next epoch, which Lightning 2.6 alone
-    skips (:meth:`on_load_checkpoint`).
+    from. A run stopped inside an epoch (``max_time``, ``max_steps``,
+    ``should_stop``) resumes with that epoch's remaining batches, and one
+    bounded by ``max_steps`` goes on past an epoch's end: the losses are
+    those of a run never stopped, where Lightning 2.6 alone would count the
+    cut epoch as finished or skip the next one
+    (:meth:`on_load_checkpoint`).
 
     Args:
         dirpath (str): The checkpoint folder.
@@ -239,10 +242,12 @@ class ResumeCheckpoint(Checkpoint):
         epoch's end loses the next epoch (Lightning-AI/pytorch-lightning
         #19617). The loops are restored without the step bound, as an
         epoch-bounded run's are (the same for a checkpoint left mid-epoch),
-        and :meth:`on_train_start` puts it back."""
+        and :meth:`on_train_start` puts it back; an epoch that a stop cut
+        short is counted back as unfinished (:func:`_reopen_cut_epoch`)."""
         if trainer.max_steps >= 0:
             self._max_steps = trainer.max_steps
             trainer.fit_loop.epoch_loop.max_steps = -1
+        _reopen_cut_epoch(checkpoint)
 
     def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if self._max_steps is not None:
@@ -273,7 +278,7 @@ class ResumeCheckpoint(Checkpoint):
             self.save(trainer)
 
     def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
-        self._epoch_done = True
+        self._epoch_done = self._batches_done >= trainer.num_training_batches
         self.save(trainer)
 
     def save(self, trainer: L.Trainer) -> None:
@@ -286,6 +291,22 @@ class ResumeCheckpoint(Checkpoint):
         trainer.save_checkpoint(self.last_path, weights_only=False)
         self._last_time, self._saved_step = time.monotonic(), step
         self.saves += 1
+
+
+def _reopen_cut_epoch(checkpoint: Dict[str, Any]) -> None:
+    """An epoch that a stop cut short (``max_time``, ``max_steps``,
+    ``should_stop``) is counted as processed when its end hooks write the
+    checkpoint; counted back as unfinished, a resumed run trains its
+    remaining batches, as a run never stopped would."""
+    loop = checkpoint.get("loops", {}).get("fit_loop", {})
+    batches = loop.get("epoch_loop.batch_progress", {})
+    epochs = loop.get("epoch_progress", {})
+    if not batches or not epochs or batches.get("is_last_batch", True):
+        return
+    for counts in (epochs["total"], epochs["current"]):
+        ended = counts["completed"] == counts["processed"] - 1
+        if counts["processed"] == counts["started"] and ended:
+            counts["processed"] -= 1
 
 
 def resume_checkpoint(checkpoints: Path) -> Path:

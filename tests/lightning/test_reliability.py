@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 from typing import Any, Dict, List
 
+import lightning as L
 import pytest
 import torch
 
@@ -23,6 +24,7 @@ from satagraph.io.checkpoint import CheckpointError, load_checkpoint
 from satagraph.lightning.reliability import (LAST, PREVIOUS, RunLockedError,
                                              TrainingStopped, read_loss_log,
                                              resume_checkpoint, run_lock)
+from satagraph.experiment import train as train_mod
 from satagraph.experiment.train import load_module, train
 
 REPO = Path(__file__).resolve().parents[2]
@@ -86,6 +88,49 @@ def test_kill9_then_resume_gives_the_same_losses(zoo_overrides: List[str],
     assert main(["train", "tiny", *zoo_overrides, f"output_dir={run}", "--resume"]) == 0
     resumed = read_loss_log(run / "losses.tsv")
     assert resumed == full, (kill_step, saved)
+
+
+class _StopAt(L.Callback):
+    """Stops training after step :obj:`step`, as Lightning's ``max_time``
+    timer does when time is up (``trainer.should_stop``)."""
+
+    def __init__(self, step: int) -> None:
+        self.step = step
+
+    def on_train_batch_end(self, trainer: L.Trainer, *args: Any) -> None:
+        if trainer.global_step >= self.step:
+            trainer.should_stop = True
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stop", ["max_time", "max_steps"])
+def test_a_run_stopped_inside_an_epoch_resumes_with_the_same_losses(
+        zoo_overrides: List[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        stop: str) -> None:
+    """Stopped at step 4 of a 9-step epoch, by the clock (a callback
+    setting ``should_stop``, as the ``max_time`` timer does) or by
+    ``max_steps``, then resumed: the epoch's remaining batches are trained
+    and every loss is the one a run never stopped gives, bit for bit."""
+    reference = load_config("tiny", zoo_overrides + [f"output_dir={tmp_path / 'a'}"])
+    train(reference)
+    full = read_loss_log(tmp_path / "a" / "losses.tsv")
+    cfg = load_config("tiny", zoo_overrides + [f"output_dir={tmp_path / 'b'}"])
+    if stop == "max_time":
+        build = train_mod.build_trainer
+
+        def stopping(*args: Any, **kwargs: Any) -> L.Trainer:
+            trainer = build(*args, **kwargs)
+            trainer.callbacks.insert(0, _StopAt(4))
+            return trainer
+
+        with monkeypatch.context() as patch:
+            patch.setattr(train_mod, "build_trainer", stopping)
+            train(cfg)
+    else:
+        train(cfg, max_steps=4)
+    assert max(read_loss_log(tmp_path / "b" / "losses.tsv")) == 4
+    train(cfg, resume=True)
+    assert read_loss_log(tmp_path / "b" / "losses.tsv") == full
 
 
 def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
@@ -164,20 +209,21 @@ def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]
     assert len(list(folder.glob("epoch=*.ckpt"))) == 1
 
 
-@pytest.mark.parametrize("first", [2, 1])
+@pytest.mark.parametrize("first", [2, 1, 3])
 def test_a_run_bounded_by_steps_resumes_as_far_as_one_never_stopped(
         tiny_config: Dict[str, Any], first: int) -> None:
-    """Stopped by ``max_steps`` at an epoch's end (2 of 2 batches) or inside
-    it (1 of 2), then resumed with a larger ``max_steps``, a run ends at the
-    step and epoch of one that was never stopped. Lightning 2.6 alone ends
-    both at step 2: it takes the epoch it finished for an unfinished one
-    (Lightning-AI/pytorch-lightning#19617)."""
+    """Stopped by ``max_steps`` at an epoch's end (step 2, 2 batches an
+    epoch) or inside one (step 1, step 3 of the last), then resumed with
+    ``max_steps=4``, a run ends where one never stopped ends. Lightning 2.6
+    alone ends each short: it takes a finished epoch for an unfinished one
+    (Lightning-AI/pytorch-lightning#19617) and counts one cut short as
+    finished."""
     whole = dict(tiny_config, output_dir=tiny_config["output_dir"] + "_whole")
-    _, _, never_stopped, _ = train(whole, max_steps=3, max_epochs=2)
+    _, _, never_stopped, _ = train(whole, max_steps=4, max_epochs=2)
     train(tiny_config, max_steps=first, max_epochs=2)
-    _, _, resumed, _ = train(tiny_config, resume=True, max_steps=3, max_epochs=2)
-    assert (resumed.global_step, resumed.current_epoch) == (3, never_stopped.current_epoch)
-    assert never_stopped.global_step == 3 and resumed.max_steps == 3
+    _, _, resumed, _ = train(tiny_config, resume=True, max_steps=4, max_epochs=2)
+    assert never_stopped.global_step == 4 and resumed.max_steps == 4
+    assert (resumed.global_step, resumed.current_epoch) == (4, never_stopped.current_epoch)
 
 
 def test_keep_every_epoch_keeps_one_checkpoint_per_epoch(tiny_config: Dict[str, Any]) -> None:
