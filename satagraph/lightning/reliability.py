@@ -197,7 +197,6 @@ class ResumeCheckpoint(Checkpoint):
         self.every_seconds = 60.0 * float(every_minutes) if every_minutes else None
         self._last_time = time.monotonic()
         self._batches_done = 0
-        self._epoch_done = False
         self._saved_step = -1
         self._pending: Optional[Dict[str, Any]] = None
         self._max_steps: Optional[int] = None
@@ -221,7 +220,7 @@ class ResumeCheckpoint(Checkpoint):
         step = trainer.global_step if trainer is not None else 0
         total = trainer.num_training_batches if trainer is not None else float("inf")
         return {"epoch": epoch, "batches": self._batches_done, "step": step,
-                "epoch_done": self._epoch_done or self._batches_done >= total,
+                "epoch_done": self._batches_done >= total,
                 "rng": rng_states()}
 
     @property
@@ -259,7 +258,7 @@ class ResumeCheckpoint(Checkpoint):
 
     def on_train_epoch_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if self._pending is None:
-            self._batches_done, self._epoch_done = 0, False
+            self._batches_done = 0
 
     def on_train_batch_start(self, trainer: L.Trainer, pl_module: L.LightningModule,
                              batch: Any, batch_idx: int) -> None:
@@ -278,7 +277,6 @@ class ResumeCheckpoint(Checkpoint):
             self.save(trainer)
 
     def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
-        self._epoch_done = self._batches_done >= trainer.num_training_batches
         self.save(trainer)
 
     def save(self, trainer: L.Trainer) -> None:
