@@ -13,6 +13,8 @@ from __future__ import annotations
 import re
 from typing import Dict, List
 
+import numpy as np
+
 from satagraph.semantics.evidence import EvidenceLike
 from satagraph.skeleton import Skeleton
 
@@ -33,6 +35,36 @@ def limb_ends(skeleton: Skeleton, evidence: EvidenceLike = None) -> Dict[str, in
             if text.startswith(f"{limb} limb terminal segment") and limb not in found:
                 found[limb] = j
     return found
+
+
+def helper_joints(skeleton: Skeleton, evidence: EvidenceLike = None) -> np.ndarray:
+    """Which joints are helpers: twist, share and inverse-kinematics bones
+    that ride along a segment and lead to no real joint (CC_Base's
+    ``CC_Base_L_CalfTwist01`` and ``CC_Base_L_KneeShareBone``, Unreal's
+    ``calf_twist_01_l``), and their tips, as
+    :func:`~satagraph.semantics.describe_joints` (with the optional
+    geometry / motion :obj:`evidence`) reads them.
+
+    Shapes:
+        - **output**: :math:`(J,)` bool
+    """
+    from satagraph.semantics import describe_joints  # the package imports this module
+    return np.array([" helper" in text for text in describe_joints(skeleton, evidence=evidence)],
+                    dtype=bool)
+
+
+def hip_bones(skeleton: Skeleton, evidence: EvidenceLike = None) -> np.ndarray:
+    """Which joints are hip bones: a tetrapod's pelvic girdle, which is
+    fused to its trunk (CMU's ``LHipJoint``, the bone from the pelvis to
+    the hip socket), as :func:`~satagraph.semantics.describe_joints` reads
+    them. The shoulder blade and an arthropod's coxa move; they are not.
+
+    Shapes:
+        - **output**: :math:`(J,)` bool
+    """
+    from satagraph.semantics import describe_joints  # the package imports this module
+    return np.array(["limb girdle segment (hip bone)" in text
+                     for text in describe_joints(skeleton, evidence=evidence)], dtype=bool)
 
 
 def limb_end_index(skeleton: Skeleton, evidence: EvidenceLike = None) -> List[int]:

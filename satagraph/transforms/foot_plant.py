@@ -27,7 +27,7 @@ import numpy as np
 
 from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion
 from satagraph.ops.rotation_numpy import rotation_between_numpy
-from satagraph.semantics.limbs import limb_ends
+from satagraph.semantics.limbs import helper_joints, hip_bones, limb_ends
 from satagraph.transforms.ground import levels, lift_above_floor, raise_root
 
 #: Most bones above a limb end that :func:`plant_feet` bends.
@@ -49,15 +49,27 @@ ROOT_SPEED_FACTOR = 0.8
 DROP_FRAMES = 5
 
 
-def limb_chain(parents: Sequence[int], end: int, max_bones: int = MAX_CHAIN_BONES) -> List[int]:
+def limb_chain(parents: Sequence[int], end: int, max_bones: int = MAX_CHAIN_BONES,
+               helpers: Optional[Sequence[bool]] = None,
+               rigid: Optional[Sequence[bool]] = None) -> List[int]:
     """The joints from a limb's top down to :obj:`end`: :obj:`end`'s
     ancestors while each has that one child, at most :obj:`max_bones`
-    bones, top first (the top's position is its parent's business)."""
-    children = np.bincount(np.asarray(parents)[1:], minlength=len(parents))
+    bones, top first (the top's position is its parent's business).
+    Children marked in :obj:`helpers` (twist and share bones riding along
+    a segment: :func:`~satagraph.semantics.helper_joints`) do not count:
+    a CC_Base calf with its foot, a twist bone and a knee share bone
+    bends like a calf with its foot alone. A joint marked in :obj:`rigid`
+    (a hip bone, fused to the pelvis: :func:`~satagraph.semantics.hip_bones`)
+    is never part of a chain, so that the hip socket stays where the
+    pelvis holds it."""
+    parents = np.asarray(parents)
+    counted = np.ones(len(parents), dtype=bool) if helpers is None else ~np.asarray(helpers, bool)
+    fixed = np.zeros(len(parents), dtype=bool) if rigid is None else np.asarray(rigid, bool)
+    children = np.bincount(parents[1:][counted[1:]], minlength=len(parents))
     chain = [int(end)]
     while len(chain) <= max_bones:
         parent = int(parents[chain[-1]])
-        if parent < 0 or children[parent] != 1:
+        if parent < 0 or children[parent] != 1 or fixed[parent]:
             break
         chain.append(parent)
     return chain[::-1]
@@ -229,19 +241,22 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     gaps = np.full(motion.num_frames, np.nan)
     for end, stance in stances.items():  # the lowest standing limb's height above the floor
         gaps[stance] = np.fmin(gaps[stance], lowest[end][stance] - floor)
-    motion = _hold_stances(raise_root(motion, -stance_drop(gaps)), stances, members, floor)
+    motion = _hold_stances(raise_root(motion, -stance_drop(gaps)), stances, members, floor,
+                           helper_joints(skeleton), hip_bones(skeleton))
     return lift_above_floor(motion, floor)
 
 
 def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray],
-                  members: Dict[int, List[int]], floor: float) -> Motion:
+                  members: Dict[int, List[int]], floor: float, helpers: np.ndarray,
+                  rigid: np.ndarray) -> Motion:
     """Each limb end of :obj:`stances` (end -> :math:`(T,)` bool) held on
     the floor through its stances (its subtree :obj:`members` at the floor),
-    the chain above it bent to reach there."""
+    the chain above it (:func:`limb_chain` of the :obj:`helpers` and
+    :obj:`rigid` masks) bent to reach there."""
     skeleton = motion.skeleton
     pos = motion.global_positions()
     for end, stance in stances.items():
-        chain = limb_chain(skeleton.parents, end)
+        chain = limb_chain(skeleton.parents, end, helpers=helpers, rigid=rigid)
         if len(chain) < 3:  # one bone cannot bend
             continue
         track = pos[:, end]

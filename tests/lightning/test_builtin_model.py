@@ -112,7 +112,7 @@ def test_retarget_plant_holds_the_stance_feet_and_keeps_the_rest(tmp_path: Path)
     from satagraph.datasets.zoo import generate_clip, zoo_rigs
     from satagraph.io import write_bvh
     from satagraph.pipelines.quality import stride
-    from satagraph.semantics import limb_ends
+    from satagraph.semantics import helper_joints, hip_bones, limb_ends
     from satagraph.transforms.canonical import canonicalize
     from satagraph.transforms.foot_plant import limb_chain
 
@@ -128,7 +128,9 @@ def test_retarget_plant_holds_the_stance_feet_and_keeps_the_rest(tmp_path: Path)
                       for f in ((), ("--plant",)))
     skeleton = plain.skeleton
     ends = limb_ends(skeleton)
-    bent = {j for end in ends.values() for j in limb_chain(skeleton.parents, end)}
+    helpers, rigid = helper_joints(skeleton), hip_bones(skeleton)
+    bent = {j for end in ends.values()
+            for j in limb_chain(skeleton.parents, end, helpers=helpers, rigid=rigid)}
     below = {j for j in range(skeleton.num_joints) if any(
         a in bent for a in _ancestors(skeleton.parents, j))}
     kept = [j for j in range(skeleton.num_joints) if j not in bent | below]

@@ -3,9 +3,12 @@ the root lowered onto them, FABRIK, and a gliding leg planted."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from satagraph.io import read_bvh
 from satagraph.motion import Motion
 from satagraph.ops.rotation_numpy import rotation_about_numpy
+from satagraph.semantics import helper_joints, hip_bones, limb_ends
 from satagraph.skeleton import Skeleton
 from satagraph.transforms.foot_plant import (BLEND_FRAMES, limb_chain, plant_feet, planted_track,
                                              reach, stance_drop, stance_frames)
@@ -42,6 +45,72 @@ def test_limb_chain_stops_below_a_branching_joint_and_at_max_bones():
     assert limb_chain(PARENTS, 5) == [2, 3, 4, 5]
     assert limb_chain(PARENTS, 5, max_bones=2) == [3, 4, 5]
     assert limb_chain(PARENTS, 1) == [1]  # the root's child: no bone to bend
+
+
+# CMU's leg: root (hips), spine, hip bone, hip, knee, foot, toe, and a twist
+# bone riding on the shin (CC_Base and Unreal rigs carry such helpers)
+HELPED = ["Hips", "Spine", "LHipJoint", "LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToeBase",
+          "LeftLegTwist"]
+HELPED_PARENTS = np.array([-1, 0, 0, 2, 3, 4, 5, 4])
+HELPED_OFFSETS = np.array([[0, 0, 0], [0, 0.6, 0], [0, 0, 0], [0.1, -0.05, 0], [0, -0.45, 0],
+                           [0, -0.45, 0], [0, -0.03, 0.1], [0, -0.2, 0]], dtype=float)
+
+
+def helped_gliding_leg(frames: int = 20) -> Motion:
+    """:func:`gliding_leg`'s glide on :data:`HELPED`: the hip (joint 3)
+    swings back slower than the root travels, so the foot glides."""
+    skeleton = Skeleton(names=HELPED, parents=HELPED_PARENTS, offsets=HELPED_OFFSETS)
+    t = (np.arange(frames) - (frames - 1) / 2) / FPS
+    rotations = np.broadcast_to(np.eye(3), (frames, 8, 3, 3)).copy()
+    rotations[:, 3] = rotation_about_numpy(np.array([1.0, 0, 0]), np.arcsin(0.3 * t / 0.9))
+    translations = np.broadcast_to(HELPED_OFFSETS, (frames, 8, 3)).copy()
+    translations[:, 0] = np.stack([np.zeros(frames), np.full(frames, 0.95),
+                                   0.6 * (t - t[0])], -1)
+    return Motion(skeleton, rotations, translations, fps=FPS)
+
+
+def test_limb_chain_skips_helpers_and_stops_below_a_hip_bone():
+    helpers, rigid = np.arange(8) == 7, np.arange(8) == 2
+    assert limb_chain(HELPED_PARENTS, 5) == [5]  # the knee's two children: nothing to bend
+    assert limb_chain(HELPED_PARENTS, 5, helpers=helpers) == [2, 3, 4, 5]
+    assert limb_chain(HELPED_PARENTS, 5, helpers=helpers, rigid=rigid) == [3, 4, 5]
+
+
+def test_a_foot_above_a_twist_bone_is_held_and_the_hip_socket_stays_on_the_pelvis():
+    """The semantics read the twist bone as a helper and the hip bone as
+    fused to the pelvis: the gliding foot is held (before helpers were
+    skipped it was left gliding), only the hip and knee turn, and the hip
+    socket keeps its place relative to the root."""
+    motion = helped_gliding_leg()
+    before = motion.global_positions()
+    planted = plant_feet(motion, ends=[5])
+    after = planted.global_positions()
+    glide = np.ptp(before[:, 5, 2])
+    assert glide > 0.09
+    assert np.ptp(after[BLEND_FRAMES:-BLEND_FRAMES, 5, 2]) < 0.02 * glide
+    np.testing.assert_allclose(after[:, 3] - after[:, 0], before[:, 3] - before[:, 0], atol=1e-12)
+    np.testing.assert_allclose(planted.rotations[:, 2], motion.rotations[:, 2])
+    assert not np.allclose(planted.rotations[:, 3], motion.rotations[:, 3])
+    for a, b in ((3, 4), (4, 5), (4, 7)):  # bones kept, the twist bone rides on the shin
+        np.testing.assert_allclose(np.linalg.norm(after[:, b] - after[:, a], axis=-1),
+                                   np.linalg.norm(HELPED_OFFSETS[b]), atol=1e-9)
+
+
+@pytest.mark.parametrize("rel, leg", [
+    ("ccbase/006_01.bvh", ["CC_Base_L_Thigh", "CC_Base_L_Calf", "CC_Base_L_Foot"]),
+    ("cmu/01_01.bvh", ["LeftUpLeg", "LeftLeg", "LeftFoot"])])
+def test_the_legs_of_real_rigs_bend_at_hip_and_knee(shared_data, rel: str, leg: list) -> None:
+    """CC_Base's calf carries a twist and a knee share bone, CMU's thigh
+    hangs from a hip bone: on both the planted chain is thigh, shin, foot."""
+    skeleton = read_bvh(shared_data / rel).skeleton
+    helpers, rigid = helper_joints(skeleton), hip_bones(skeleton)
+    chain = limb_chain(skeleton.parents, limb_ends(skeleton)["left hind"], helpers=helpers,
+                       rigid=rigid)
+    assert [skeleton.names[j] for j in chain] == leg
+    assert helpers.any() == rel.startswith("ccbase")
+    assert all("Twist" in n or "Share" in n for n in np.array(skeleton.names)[helpers])
+    assert [n for n in np.array(skeleton.names)[rigid]] == (
+        ["LHipJoint", "RHipJoint"] if rel.startswith("cmu") else [])
 
 
 def test_stance_is_low_and_slow_relative_to_the_body():
