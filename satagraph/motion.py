@@ -32,9 +32,11 @@ class CanonicalTransform:
         translation (np.ndarray): Translation (canonical units) applied last.
         scale (float): Source units to metres.
         source_fps (float): Frame rate of the source.
-        removed_root (dict, optional): A motionless root above the moving
-            root that canonicalisation removed (name, channels, offset,
-            constant rotation and translation), for writing back.
+        removed_root (dict, optional): A root above the hips that
+            canonicalisation folded into them
+            (:func:`~satagraph.transforms.canonical.fold_root`: name,
+            channels, offset, frame 0's rotation and translation, the hips'
+            offset and whether it carried them), for writing back.
         source_rig (RigSettings, optional): How the source was read (up
             axis and units, as given, declared or detected), given back by
             decanonicalisation so that results on the source's rig are read

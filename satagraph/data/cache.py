@@ -21,7 +21,9 @@ from satagraph.utils.files import atomic_write
 #: 2: files are checked (satagraph.data.validate) before they are cached.
 #: 4: the canonical facing is read from the left/right pairs nearest the root.
 #: 5: a leading bind-pose frame is given frame 1's pose (transforms.bind_frame).
-FEATURE_VERSION = 5
+#: 6: a root that carries the hips along the floor is folded into them
+#: (transforms.canonical.fold_root), as a motionless one was.
+FEATURE_VERSION = 6
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
            "r", "c", "facing_axis")
@@ -58,7 +60,8 @@ def _pack(feats: MotionFeatures) -> Dict[str, np.ndarray]:
             out.update(rr_name=np.array(rr["name"]),
                        rr_channels=np.array(" ".join(rr["channels"])),
                        rr_offset=rr["offset"], rr_rotation=rr["rotation"],
-                       rr_translation=rr["translation"])
+                       rr_translation=rr["translation"], rr_child_offset=rr["child_offset"],
+                       rr_carries=np.array(rr["carries"]))
     return out
 
 
@@ -74,7 +77,9 @@ def _unpack(data) -> MotionFeatures:
             removed = {"name": str(data["rr_name"]),
                        "channels": tuple(str(data["rr_channels"]).split()),
                        "offset": data["rr_offset"], "rotation": data["rr_rotation"],
-                       "translation": data["rr_translation"]}
+                       "translation": data["rr_translation"],
+                       "child_offset": data["rr_child_offset"],
+                       "carries": bool(data["rr_carries"])}
         transform = CanonicalTransform(
             up_axis=str(data["tf_up_axis"]), up_rotation=data["tf_up_rotation"],
             yaw=float(data["tf_yaw"]), translation=data["tf_translation"],

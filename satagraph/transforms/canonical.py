@@ -129,23 +129,39 @@ def _orthogonal(up: np.ndarray) -> np.ndarray:
     return vec / np.linalg.norm(vec)
 
 
-def remove_static_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
-    r"""Fold a motionless root with a single child into that child.
+#: A moving root is folded into its only child (:func:`fold_root`) when the
+#: child sits at least this share of the body's size away from it: a
+#: ground reference that carries the body's travel along the floor, far
+#: below the hips (Bandai's ``joint_Root`` in four of its takes,
+#: Reallusion's ``RL_BoneRoot``), not a root that moves with the body
+#: (3ds Max's ``Bip01`` and the zoo's crab ``Root`` sit within 2 % of the
+#: body's size of their child; Bandai's and ``RL_BoneRoot``'s hips 60 %).
+FLOOR_ROOT_DISTANCE = 0.25
 
-    Some rigs put a fixed helper joint (``joint_Root``, ``RL_BoneRoot``) above
-    the moving hips. Global positions of the remaining joints are unchanged.
+
+def fold_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
+    r"""Fold a root joint above the hips into its single child.
+
+    Some rigs put a helper root above the hips: motionless (Bandai's
+    ``joint_Root`` in most takes) or carrying the body's travel along the
+    floor while the hips ride on it (``RL_BoneRoot``, Bandai's run and dash
+    takes; :data:`FLOOR_ROOT_DISTANCE`). Either way the hips become joint 0,
+    as on every other rig, so that the root's features describe the body.
+    Global positions of the remaining joints are unchanged.
 
     Returns:
         The motion, and a description of the removed root (name, channels,
-        offset, constant rotation and translation) or ``None``.
+        offset, frame 0's rotation and translation, the child's offset, and
+        ``carries``: whether it moved) or ``None``.
     """
     skel = motion.skeleton
     if motion.num_frames < 2 or skel.num_joints < 2 or len(skel.children[0]) != 1:
         return motion, None
-    rot0, trans0 = motion.rotations[:, 0], motion.translations[:, 0]
-    if np.ptp(rot0, axis=0).max() > 1e-9 or np.ptp(trans0, axis=0).max() > 1e-9:
-        return motion, None
     child = skel.children[0][0]
+    rot0, trans0 = motion.rotations[:, 0], motion.translations[:, 0]
+    moves = np.ptp(rot0, axis=0).max() > 1e-9 or np.ptp(trans0, axis=0).max() > 1e-9
+    if moves and not _carries_the_hips(motion, child):
+        return motion, None
     rot = motion.rotations[:, 1:].copy()
     trans = motion.translations[:, 1:].copy()
     rot[:, child - 1] = rot0 @ motion.rotations[:, child]
@@ -156,9 +172,19 @@ def remove_static_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
     offsets[0] = trans[0, 0]
     removed = {"name": skel.names[0], "channels": skel.channels[0],
                "offset": skel.offsets[0].copy(), "rotation": rot0[0].copy(),
-               "translation": trans0[0].copy()}
+               "translation": trans0[0].copy(), "child_offset": skel.offsets[child].copy(),
+               "carries": bool(moves)}
     return motion.with_(skeleton=sub.replace(offsets=offsets), rotations=rot,
                         translations=trans), removed
+
+
+def _carries_the_hips(motion: Motion, child: int) -> bool:
+    """Whether the root's only :obj:`child` sits :data:`FLOOR_ROOT_DISTANCE`
+    of the body's size or more away from it (its median distance: the
+    norm of its own translation)."""
+    size = float(np.ptp(motion.first_pose(), axis=0).max())
+    gap = float(np.median(np.linalg.norm(motion.translations[:, child], axis=-1)))
+    return size > 0 and gap >= FLOOR_ROOT_DISTANCE * size
 
 
 def resample(motion: Motion, fps: float) -> Motion:
@@ -233,8 +259,7 @@ def canonicalize(
 
     if replace_bind:
         motion = replace_bind_frame(motion)
-    motion, removed = (remove_static_root(motion) if remove_root
-                       else (motion, None))
+    motion, removed = fold_root(motion) if remove_root else (motion, None)
     reading = read_rig(motion, up_axis, unit_scale)
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
@@ -308,24 +333,34 @@ def decanonicalize(motion: Motion, transform: Optional[CanonicalTransform] = Non
     back.rig = tf.source_rig
     back = resample(back, fps or tf.source_fps)
     if tf.removed_root is not None:
-        back = _restore_root(back, tf.removed_root)
+        back = _restore_root(back, tf.removed_root, axis_vector(tf.up_axis))
     return back
 
 
-def _restore_root(motion: Motion, removed: dict) -> Motion:
-    """Put the motionless root removed by :func:`remove_static_root` back."""
+def _restore_root(motion: Motion, removed: dict, up: np.ndarray) -> Motion:
+    """Put the root folded by :func:`fold_root` back: held at frame 0's
+    transform, the hips moving below it, where it stood still in the
+    source; where it moved, carrying the hips' travel (its rotation held)
+    at its frame-0 level along :obj:`up` when the hips have position
+    channels to rise and fall by (Bandai), the whole of it when they have
+    none (``RL_BoneRoot``'s hips)."""
     skel = motion.skeleton
     num_frames = motion.num_frames
     rot0, trans0 = removed["rotation"], removed["translation"]
     rotations = motion.rotations.copy()
     translations = motion.translations.copy()
+    offsets = np.concatenate([removed["offset"][None], skel.offsets])
     rotations[:, 0] = rot0.T @ rotations[:, 0]
-    translations[:, 0] = (translations[:, 0] - trans0) @ rot0
+    root_trans = np.broadcast_to(trans0, (num_frames, 3))
+    if removed.get("carries"):
+        offsets[1] = removed["child_offset"]
+        root_trans = translations[:, 0] - rot0 @ offsets[1]
+        if any(c.endswith("position") for c in skel.channels[0]):
+            root_trans = root_trans - np.outer(root_trans @ up - trans0 @ up, up)
+    translations[:, 0] = (translations[:, 0] - root_trans) @ rot0
     rot = np.concatenate([np.broadcast_to(rot0, (num_frames, 1, 3, 3)),
                           rotations], axis=1)
-    trans = np.concatenate([np.broadcast_to(trans0, (num_frames, 1, 3)),
-                            translations], axis=1)
-    offsets = np.concatenate([removed["offset"][None], skel.offsets])
+    trans = np.concatenate([root_trans[:, None], translations], axis=1)
     new = Skeleton(names=[removed["name"]] + skel.names,
                    parents=np.concatenate([[-1, 0], skel.parents[1:] + 1]),
                    offsets=offsets, channels=[removed["channels"]] + skel.channels,

@@ -11,7 +11,9 @@ It holds the end at one floor position through each
 such stance (fading in and out over :data:`BLEND_FRAMES`), on the floor
 (the lowest joint of its subtree at the floor's height), and bends the
 limb's single-child chain above it to reach there (FABRIK,
-:func:`reach`). Before that the root is lowered, frame by frame, onto the
+:func:`reach`; twist and share bones riding along a segment do not
+count as children, and a hip bone, fused to the pelvis, is never bent:
+:func:`limb_chain`). Before that the root is lowered, frame by frame, onto the
 lowest of its standing limbs (:func:`stance_drop`): a decoded body bobs
 above its feet (``experiments/T2M.md`` section 47), and a leg that has
 to reach a floor below its foot's decoded height can only stretch. The

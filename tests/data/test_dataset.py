@@ -126,8 +126,10 @@ def test_normaliser_of_an_old_checkpoint_stays_in_metres():
 
 def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
     """Bone scaling of ccbase/007_01 (a moving RL_BoneRoot above the hips)
-    gave root speeds of 1e5 (a 1e9 training loss); such a window is used as
-    it is instead."""
+    gave root speeds of 1e5 (a 1e9 training loss) while that root was read
+    as the body's; folded into the hips (canonical.fold_root) it scales
+    like any rig, and the guard that used such windows as they were has
+    nothing left to catch there."""
     from satagraph.data import motion_to_features
     from satagraph.transforms import canonicalize
     from satagraph.data.dataset import WindowAugment
@@ -137,7 +139,20 @@ def test_augmentation_never_makes_an_implausible_root(read_real) -> None:
     for i, start in enumerate(range(0, 44, 4)):
         out, _ = aug(feats, start, start + 32, 0, i)
         assert np.abs(out.r[:, :3]).max() <= bound
-    assert aug.rejected > 0  # the bug is still there: the guard catches it
+    assert aug.rejected == 0
+
+
+def test_the_augmentation_guard_refuses_a_root_four_times_faster(read_real) -> None:
+    """What the guard reads: an augmented window whose root moves more than
+    four times as fast as its source's (or is not finite) is implausible."""
+    from dataclasses import replace
+    from satagraph.data import motion_to_features
+    from satagraph.data.dataset import _plausible_root
+    from satagraph.transforms import canonicalize
+    feats = motion_to_features(canonicalize(read_real("ccbase/007_02.bvh")))
+    assert _plausible_root(feats, feats)
+    assert not _plausible_root(replace(feats, r=feats.r * 5.0), feats)
+    assert not _plausible_root(replace(feats, r=feats.r * np.nan), feats)
 
 
 def test_facing_smooth_is_a_preprocessing_option_end_to_end(shared_data):

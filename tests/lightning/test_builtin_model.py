@@ -366,3 +366,26 @@ def test_a_retarget_of_a_standing_dog_stands(shared_data: Path) -> None:
                                     - (ends[0][1] - ends[0][0]) / leg_length(src)))
 
     assert gap(False) > 1.0 and gap(True) < 0.1
+
+
+@pytest.mark.parametrize("source, target", [
+    ("bandai/dataset-1_walk_normal_002.bvh", "cmu/01_01.bvh"),       # the source's root travels
+    ("bandai/dataset-1_walk_normal_001.bvh", "ccbase/007_01.bvh")])  # the target's root does
+def test_a_rig_whose_root_travels_on_the_floor_is_read_and_written_at_its_hips(
+        shared_data: Path, source: str, target: str) -> None:
+    """Bandai's run and some walk takes carry the body's travel in a
+    ``joint_Root`` on the floor, Reallusion's ``RL_BoneRoot`` likewise.
+    Read as the root, the walk was taken for a body lying on the floor:
+    retargeted, it went 10 times the source's distance (as a source) or a
+    twelfth of it (as a target). Folded into the hips it travels as far as
+    the source, leg length for leg length."""
+    from satagraph.experiment.train import load_module
+    from satagraph.pipelines.inference import retarget_canonical
+    from satagraph.pipelines.quality import root_travel
+
+    module = load_module("builtin").eval()
+    walk = read_bvh(shared_data / source)
+    src, out = retarget_canonical(module, walk.slice(0, 60), read_bvh(shared_data / target),
+                                  module.embed)
+    assert 0.8 < root_travel(out) / root_travel(src) < 1.25
+    assert src.skeleton.names[0] == "Hips" and "Hip" in out.skeleton.names[0]

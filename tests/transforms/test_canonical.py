@@ -51,6 +51,47 @@ def test_static_root_removed_and_restored(shared_data, tmp_path):
                                atol=1e-4)
 
 
+@pytest.mark.parametrize("rel, hips", [
+    ("bandai/dataset-1_run_normal_001.bvh", "Hips"),  # the hips have position channels
+    ("ccbase/007_01.bvh", "CC_Base_Hip")])            # RL_BoneRoot's hips have none
+def test_a_root_carrying_the_hips_along_the_floor_is_folded_into_them(
+        shared_data, tmp_path, rel: str, hips: str):
+    """A root that travels on the floor below the hips (Bandai's run take,
+    Reallusion's RL_BoneRoot) is folded into them like a motionless one:
+    the hips are joint 0, at hip height, as on the rig's other takes; the
+    file written back has the rig's joints and channels and every body
+    joint where the source had it; the root travels with the body, at the
+    source root's height (the floor)."""
+    src = read_bvh(shared_data / rel)
+    c = canonicalize(src, fps=None, replace_bind=False)
+    assert c.skeleton.names[0] == hips and c.transform.removed_root["carries"]
+    pos = c.global_positions()
+    assert 0.45 < np.median(pos[:, 0, 1]) / c.height() < 0.75
+    write_bvh(decanonicalize(c), tmp_path / "back.bvh")
+    again = read_bvh(tmp_path / "back.bvh")
+    assert again.skeleton.names == src.skeleton.names
+    assert again.skeleton.channels == src.skeleton.channels
+    a, b = again.global_positions(), src.global_positions()
+    np.testing.assert_allclose(a[:, 1:], b[:, 1:], atol=1e-3)
+    travel = lambda p: np.linalg.norm(p[-1, 0] - p[0, 0])
+    assert abs(travel(a) - travel(b)) < 0.02 * travel(b)
+    np.testing.assert_allclose(a[:, 0, 1], b[:, 0, 1], atol=1e-3)  # +Y up, on the floor
+
+
+def test_a_root_moving_with_the_body_stays_the_root():
+    """The zoo's crab ``Root`` and 3ds Max's ``Bip01`` move with the body
+    and sit at its centre, right on their only child: not folded."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.transforms.canonical import fold_root
+    for species in ("crab", "fowl"):
+        rig = zoo_rigs([species])[0]
+        motion = generate_clip(rig, "walk", frames=30, seed=1)
+        assert len(motion.skeleton.children[0]) == 1
+        assert np.ptp(motion.translations[:, 0], axis=0).max() > 0.05  # it moves
+        folded, removed = fold_root(motion)
+        assert removed is None and folded is motion
+
+
 def test_resample_keeps_endpoints_and_is_slerp(human):
     clip = human.slice(0, 121)
     down = resample(clip, 30)
