@@ -31,6 +31,8 @@ def limb_ends(skeleton: Skeleton, evidence: EvidenceLike = None) -> Dict[str, in
     from satagraph.semantics import describe_joints  # the package imports this module
     found: Dict[str, int] = {}
     for j, text in enumerate(describe_joints(skeleton, evidence=evidence)):
+        if _helper(text):  # Unreal's ik_foot_l: a target, not the foot
+            continue
         for limb in LIMBS:
             if text.startswith(f"{limb} limb terminal segment") and limb not in found:
                 found[limb] = j
@@ -49,8 +51,13 @@ def helper_joints(skeleton: Skeleton, evidence: EvidenceLike = None) -> np.ndarr
         - **output**: :math:`(J,)` bool
     """
     from satagraph.semantics import describe_joints  # the package imports this module
-    return np.array([" helper" in text for text in describe_joints(skeleton, evidence=evidence)],
+    return np.array([_helper(text) for text in describe_joints(skeleton, evidence=evidence)],
                     dtype=bool)
+
+
+def _helper(description: str) -> bool:
+    """Whether a joint's description is a helper's (twist, share, IK)."""
+    return " helper" in description
 
 
 def hip_bones(skeleton: Skeleton, evidence: EvidenceLike = None) -> np.ndarray:

@@ -64,7 +64,8 @@ FLOOR_PERCENTILE = 2.0
 
 def facing_pairs(skeleton: Skeleton, pose: np.ndarray) -> Tuple[List[int], List[int]]:
     r"""The left/right joint pairs that give a body's facing: of the pairs
-    :func:`lateral_pairs` finds, those fewest hops from the root among the
+    :func:`lateral_pairs` finds (helper joints left out:
+    :func:`~satagraph.semantics.helper_joints`), those fewest hops from the root among the
     ones at least :data:`FACING_PAIR_GAP` of the pose's extent apart (the
     hips of a human or a dog, the legs' roots of a zoo rig); every pair
     where none is that far apart.
@@ -78,7 +79,12 @@ def facing_pairs(skeleton: Skeleton, pose: np.ndarray) -> Tuple[List[int], List[
     Shapes:
         - **pose**: :math:`(J, 3)`, the global joint positions of one frame
     """
+    from satagraph.semantics import helper_joints
     left, right = lateral_pairs(skeleton.names)
+    if left:  # Unreal's ik_foot_l / ik_foot_r: targets, not the body
+        helpers = helper_joints(skeleton)
+        pairs = [(a, b) for a, b in zip(left, right) if not (helpers[a] or helpers[b])]
+        left, right = [a for a, _ in pairs], [b for _, b in pairs]
     if not left:
         return left, right
     left, right = np.asarray(left), np.asarray(right)
