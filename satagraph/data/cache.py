@@ -22,7 +22,8 @@ from satagraph.utils.files import atomic_write
 #: 4: the canonical facing is read from the left/right pairs nearest the root.
 #: 5: a leading bind-pose frame is given frame 1's pose (transforms.bind_frame).
 #: 6: a root that carries the hips along the floor is folded into them
-#: (transforms.canonical.fold_root), as a motionless one was.
+#: (transforms.canonical.fold_root), as a motionless one was, and so is one
+#: with helper chains beside the hips (Unreal's IK roots), set aside.
 FEATURE_VERSION = 6
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
@@ -41,6 +42,10 @@ def cache_key(path: str, config: Dict) -> str:
     blob = json.dumps([os.path.abspath(path), st.st_size, st.st_mtime_ns,
                        config, FEATURE_VERSION], sort_keys=True)
     return hashlib.sha1(blob.encode()).hexdigest()
+
+
+#: The arrays of the helper chains a folded root set aside (canonical.fold_root).
+_HELPER_ARRAYS = ("index", "parents", "offsets", "end_site", "rotation", "translation")
 
 
 def _pack(feats: MotionFeatures) -> Dict[str, np.ndarray]:
@@ -62,6 +67,11 @@ def _pack(feats: MotionFeatures) -> Dict[str, np.ndarray]:
                        rr_offset=rr["offset"], rr_rotation=rr["rotation"],
                        rr_translation=rr["translation"], rr_child_offset=rr["child_offset"],
                        rr_carries=np.array(rr["carries"]))
+            if rr.get("helpers"):
+                h = rr["helpers"]
+                out.update({f"rr_h_{k}": np.asarray(h[k]) for k in _HELPER_ARRAYS},
+                           rr_h_names=np.array(h["names"]),
+                           rr_h_channels=np.array([" ".join(c) for c in h["channels"]]))
     return out
 
 
@@ -79,7 +89,12 @@ def _unpack(data) -> MotionFeatures:
                        "offset": data["rr_offset"], "rotation": data["rr_rotation"],
                        "translation": data["rr_translation"],
                        "child_offset": data["rr_child_offset"],
-                       "carries": bool(data["rr_carries"])}
+                       "carries": bool(data["rr_carries"]), "helpers": None}
+            if "rr_h_index" in data:
+                removed["helpers"] = dict(
+                    {k: data[f"rr_h_{k}"] for k in _HELPER_ARRAYS},
+                    names=[str(n) for n in data["rr_h_names"]],
+                    channels=[tuple(str(c).split()) for c in data["rr_h_channels"]])
         transform = CanonicalTransform(
             up_axis=str(data["tf_up_axis"]), up_rotation=data["tf_up_rotation"],
             yaw=float(data["tf_yaw"]), translation=data["tf_translation"],

@@ -146,42 +146,88 @@ FLOOR_ROOT_DISTANCE = 0.25
 
 
 def fold_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
-    r"""Fold a root joint above the hips into its single child.
+    r"""Fold a root joint above the hips into its one body child.
 
     Some rigs put a helper root above the hips: motionless (Bandai's
     ``joint_Root`` in most takes) or carrying the body's travel along the
     floor while the hips ride on it (``RL_BoneRoot``, Bandai's run and dash
     takes; :data:`FLOOR_ROOT_DISTANCE`). Either way the hips become joint 0,
     as on every other rig, so that the root's features describe the body.
+    Helper chains hanging from such a root beside the hips (Unreal's
+    ``ik_foot_root`` and ``ik_hand_root``:
+    :func:`~satagraph.semantics.helper_joints`) are set aside with it.
     Global positions of the remaining joints are unchanged.
 
     Returns:
         The motion, and a description of the removed root (name, channels,
-        offset, frame 0's rotation and translation, the child's offset, and
-        ``carries``: whether it moved) or ``None``.
+        offset, frame 0's rotation and translation, the child's offset,
+        ``carries``: whether it moved, and ``helpers``: the chains set aside,
+        with frame 0's pose, or ``None``) or ``None``.
     """
     skel = motion.skeleton
-    if motion.num_frames < 2 or skel.num_joints < 2 or len(skel.children[0]) != 1:
+    if motion.num_frames < 2 or skel.num_joints < 2:
         return motion, None
-    child = skel.children[0][0]
+    child, aside = _body_below_root(skel)
+    if child is None:
+        return motion, None
     rot0, trans0 = motion.rotations[:, 0], motion.translations[:, 0]
     moves = np.ptp(rot0, axis=0).max() > 1e-9 or np.ptp(trans0, axis=0).max() > 1e-9
     if moves and not _carries_the_hips(motion, child):
         return motion, None
-    rot = motion.rotations[:, 1:].copy()
-    trans = motion.translations[:, 1:].copy()
-    rot[:, child - 1] = rot0 @ motion.rotations[:, child]
-    trans[:, child - 1] = trans0 + np.einsum("tij,tj->ti", rot0,
-                                             motion.translations[:, child])
-    sub = skel.subset(range(1, skel.num_joints))
+    keep = [j for j in range(1, skel.num_joints) if j not in set(aside)]
+    rot = motion.rotations[:, keep].copy()
+    trans = motion.translations[:, keep].copy()
+    rot[:, 0] = rot0 @ motion.rotations[:, child]  # keep[0] is the child: the rest hang below
+    trans[:, 0] = trans0 + np.einsum("tij,tj->ti", rot0, motion.translations[:, child])
+    sub = skel.subset(keep)
     offsets = sub.offsets.copy()
     offsets[0] = trans[0, 0]
     removed = {"name": skel.names[0], "channels": skel.channels[0],
                "offset": skel.offsets[0].copy(), "rotation": rot0[0].copy(),
                "translation": trans0[0].copy(), "child_offset": skel.offsets[child].copy(),
-               "carries": bool(moves)}
+               "carries": bool(moves), "helpers": _set_aside(motion, aside)}
     return motion.with_(skeleton=sub.replace(offsets=offsets), rotations=rot,
                         translations=trans), removed
+
+
+def _body_below_root(skel: Skeleton) -> Tuple[Optional[int], List[int]]:
+    """The root's one child that is not a helper chain's top, and the
+    joints of the helper chains beside it; ``(None, [])`` where the root
+    has several body children."""
+    kids = list(skel.children[0])
+    if len(kids) == 1:
+        return kids[0], []
+    from satagraph.semantics import helper_joints
+    helpers = helper_joints(skel)
+    below = {k: _subtree(skel.parents, k) for k in kids}
+    body = [k for k in kids if not helpers[below[k]].all()]
+    if len(body) != 1:
+        return None, []
+    return body[0], sorted(j for k in kids if k != body[0] for j in below[k])
+
+
+def _subtree(parents: np.ndarray, top: int) -> np.ndarray:
+    """:obj:`top` and its descendants (parents come before children)."""
+    inside = np.zeros(len(parents), dtype=bool)
+    inside[top] = True
+    for j in range(top + 1, len(parents)):
+        inside[j] = inside[parents[j]]
+    return np.flatnonzero(inside)
+
+
+def _set_aside(motion: Motion, joints: List[int]) -> Optional[dict]:
+    """The helper joints :func:`fold_root` leaves out, as
+    :func:`_restore_root` puts them back: where they were, their parents,
+    rest and channels, and frame 0's local pose (held)."""
+    if not joints:
+        return None
+    skel = motion.skeleton
+    return {"index": np.array(joints), "names": [skel.names[j] for j in joints],
+            "parents": skel.parents[joints].copy(), "offsets": skel.offsets[joints].copy(),
+            "channels": [skel.channels[j] for j in joints],
+            "end_site": skel.end_site[joints].copy(),
+            "rotation": motion.rotations[0, joints].copy(),
+            "translation": motion.translations[0, joints].copy()}
 
 
 def _carries_the_hips(motion: Motion, child: int) -> bool:
@@ -371,4 +417,32 @@ def _restore_root(motion: Motion, removed: dict, up: np.ndarray) -> Motion:
                    parents=np.concatenate([[-1, 0], skel.parents[1:] + 1]),
                    offsets=offsets, channels=[removed["channels"]] + skel.channels,
                    end_site=np.concatenate([[False], skel.end_site]))
-    return motion.with_(skeleton=new, rotations=rot, translations=trans)
+    motion = motion.with_(skeleton=new, rotations=rot, translations=trans)
+    return motion if removed.get("helpers") is None else _helpers_back(motion,
+                                                                       removed["helpers"])
+
+
+def _helpers_back(motion: Motion, helpers: dict) -> Motion:
+    """The helper chains :func:`fold_root` set aside, back in their places
+    of the rig's joint order, held in frame 0's pose."""
+    skel, aside = motion.skeleton, [int(j) for j in helpers["index"]]
+    count = skel.num_joints + len(aside)
+    kept = [j for j in range(count) if j not in set(aside)]
+    names, channels = [""] * count, [()] * count
+    parents, end_site = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=bool)
+    offsets = np.zeros((count, 3))
+    rot = np.zeros((motion.num_frames, count, 3, 3))
+    trans = np.zeros((motion.num_frames, count, 3))
+    for new, old in enumerate(kept):
+        names[old], channels[old] = skel.names[new], skel.channels[new]
+        parents[old] = -1 if skel.parents[new] < 0 else kept[skel.parents[new]]
+    offsets[kept], end_site[kept] = skel.offsets, skel.end_site
+    rot[:, kept], trans[:, kept] = motion.rotations, motion.translations
+    for i, old in enumerate(aside):
+        names[old], channels[old] = helpers["names"][i], tuple(helpers["channels"][i])
+        parents[old], end_site[old] = helpers["parents"][i], helpers["end_site"][i]
+        offsets[old] = helpers["offsets"][i]
+        rot[:, old], trans[:, old] = helpers["rotation"][i], helpers["translation"][i]
+    rig = Skeleton(names=names, parents=parents, offsets=offsets, channels=channels,
+                   end_site=end_site)
+    return motion.with_(skeleton=rig, rotations=rot, translations=trans)

@@ -78,6 +78,64 @@ def test_a_root_carrying_the_hips_along_the_floor_is_folded_into_them(
     np.testing.assert_allclose(a[:, 0, 1], b[:, 0, 1], atol=1e-3)  # +Y up, on the floor
 
 
+def unreal_wrap(motion, ik_first: bool = False):
+    """:obj:`motion` (root = hips, +Y up, metres) as Unreal exports root
+    motion: a ``root`` on the floor under the hips carrying their travel,
+    the hips at a fixed offset above it, and the IK targets' helper chains
+    (``ik_foot_root``, ``ik_hand_root``) hanging from the root beside them,
+    before or after the body in the file."""
+    from satagraph.motion import Motion
+    from satagraph.skeleton import Skeleton
+    sk, frames = motion.skeleton, motion.num_frames
+    rot3 = ("Zrotation", "Xrotation", "Yrotation")
+    lift = np.array([0.0, motion.translations[0, 0, 1], 0.0])
+    ik = [(name, parent, np.array(offset, dtype=float), rot3, np.eye(3), None)
+          for name, parent, offset in [
+              ("ik_foot_root", "root", (0, 0, 0)), ("ik_foot_l", "ik_foot_root", (0.09, 0.08, 0)),
+              ("ik_foot_r", "ik_foot_root", (-0.09, 0.08, 0)), ("ik_hand_root", "root", (0, 0, 0)),
+              ("ik_hand_gun", "ik_hand_root", (0, 1.1, 0.4)),
+              ("ik_hand_l", "ik_hand_gun", (0.2, 0, 0)), ("ik_hand_r", "ik_hand_gun", (0, 0, 0))]]
+    body = [(n, "root" if p < 0 else sk.names[p], lift if p < 0 else sk.offsets[j],
+             rot3 if p < 0 else sk.channels[j], motion.rotations[:, j],
+             lift if p < 0 else motion.translations[:, j]) for j, (n, p) in enumerate(zip(
+                 sk.names, sk.parents))]
+    root = [("root", None, np.zeros(3), ("Xposition", "Yposition", "Zposition") + rot3,
+             np.eye(3), motion.translations[:, 0] - lift)]
+    joints = root + (ik + body if ik_first else body + ik)
+    names = [j[0] for j in joints]
+    skeleton = Skeleton(names=names, parents=np.array([-1] + [names.index(j[1]) for j in joints[1:]]),
+                        offsets=np.array([j[2] for j in joints]), channels=[j[3] for j in joints],
+                        end_site=np.array([bool(n in sk.names and sk.end_site[sk.names.index(n)])
+                                           for n in names]))
+    rot = np.stack([np.broadcast_to(j[4], (frames, 3, 3)) for j in joints], axis=1)
+    trans = np.stack([np.broadcast_to(j[2] if j[5] is None else j[5], (frames, 3))
+                      for j in joints], axis=1)
+    return Motion(skeleton, rot, trans, fps=motion.fps)
+
+
+@pytest.mark.parametrize("ik_first", [False, True])
+def test_an_unreal_root_with_ik_chains_is_folded_and_put_back(tmp_path, ik_first: bool):
+    """Unreal's ``root`` has three children, the hips and two IK chains:
+    the IK chains are set aside, the root folded into the hips, and the
+    canonical motion is the body's alone, the same as the unwrapped clip's;
+    written back, the rig has its joints in its order and the body is where
+    it was."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    plain = generate_clip(zoo_rigs(["biped"])[0], "walk", frames=40, seed=2)
+    wrapped = unreal_wrap(plain, ik_first)
+    a, b = canonicalize(plain, fps=None), canonicalize(wrapped, fps=None)
+    assert b.skeleton.names == plain.skeleton.names
+    np.testing.assert_allclose(b.global_positions(), a.global_positions(), atol=1e-9)
+    assert b.transform.removed_root["carries"]
+    write_bvh(decanonicalize(b), tmp_path / "back.bvh")
+    again = read_bvh(tmp_path / "back.bvh")
+    assert again.skeleton.names == wrapped.skeleton.names
+    assert list(again.skeleton.parents) == list(wrapped.skeleton.parents)
+    body = [wrapped.skeleton.names.index(n) for n in plain.skeleton.names]
+    np.testing.assert_allclose(again.global_positions()[:, body],
+                               wrapped.global_positions()[:, body], atol=1e-4)
+
+
 def test_a_root_moving_with_the_body_stays_the_root():
     """The zoo's crab ``Root`` and 3ds Max's ``Bip01`` move with the body
     and sit at its centre, right on their only child: not folded."""
