@@ -311,8 +311,8 @@ def canonicalize(
 
     if replace_bind:
         motion = replace_bind_frame(motion)
+    reading = read_rig(motion, up_axis, unit_scale)  # read on the body, folded
     motion, removed = fold_root(motion) if remove_root else (motion, None)
-    reading = read_rig(motion, up_axis, unit_scale)
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
     up_rot = rotation_between_numpy(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))

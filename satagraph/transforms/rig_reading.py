@@ -513,8 +513,12 @@ def read_rig(motion: Motion, up_axis: Optional[str] = None,
     r"""Up axis and units of a motion: :obj:`up_axis` / :obj:`scale` when
     given, else the motion's :class:`~satagraph.motion.RigSettings` (a
     declaration in its file, or overrides attached by a manifest or the
-    command line), else detection."""
+    command line), else detection, on the body: a root above the hips is
+    folded into them first (:func:`~satagraph.transforms.canonical.fold_root`),
+    as canonicalisation does."""
+    from satagraph.transforms.canonical import fold_root
     rig = motion.rig or RigSettings()
+    motion = fold_root(motion)[0]
     how = "declared" if rig.declared else "given"
     if up_axis is not None:
         up = UpAxisGuess(normalize_up_axis(up_axis), how="given")

@@ -223,3 +223,17 @@ def test_facing_is_read_from_the_pairs_nearest_the_root(species, monkeypatch):
                         lambda skeleton, pose: canonical.lateral_pairs(skeleton.names))
     old = np.mean([_facing_error(w) for w in walks])
     assert new < 4.0 < 10.0 < old
+
+
+def test_an_unreal_rig_is_read_on_its_body(shared_data):
+    """``read_rig`` (what ``inspect`` and ``render`` print) reads the body
+    below a folded root: a human on Unreal's rig in cm is a human in cm,
+    where the floor root with three children hid its hips."""
+    from satagraph.transforms.rig_reading import read_rig
+    human = canonicalize(read_bvh(shared_data / "bandai" / "dataset-1_walk_normal_001.bvh"))
+    wrapped = unreal_wrap(human)
+    in_cm = wrapped.with_(skeleton=wrapped.skeleton.replace(offsets=wrapped.skeleton.offsets * 100),
+                          translations=wrapped.translations * 100)
+    in_cm.rig = None
+    reading = read_rig(in_cm)
+    assert reading.up.axis == "+Y" and reading.units.scale == 0.01 and not reading.units.kept
