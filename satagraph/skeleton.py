@@ -97,6 +97,14 @@ class Skeleton:
             out[p].append(j)
         return out
 
+    def subtree(self, joint: int) -> np.ndarray:
+        """:obj:`joint` and all its descendants, in joint order."""
+        inside = np.zeros(self.num_joints, dtype=bool)
+        inside[joint] = True
+        for j in range(int(joint) + 1, self.num_joints):
+            inside[j] = inside[self.parents[j]]
+        return np.flatnonzero(inside)
+
     @cached_property
     def is_leaf(self) -> np.ndarray:
         """``True`` for joints without children."""

@@ -60,6 +60,15 @@ def test_depth_and_reverse_depth(tiny_skeleton):
     assert tiny_skeleton.reverse_depth.tolist() == [3, 2, 1, 0, 2, 1, 0, 2, 1, 0]
 
 
+def test_subtree_is_a_joint_and_everything_below_it(tiny_skeleton):
+    assert tiny_skeleton.subtree(4).tolist() == [4, 5, 6]
+    assert tiny_skeleton.subtree(0).tolist() == list(range(10))
+    assert tiny_skeleton.subtree(9).tolist() == [9]
+    # joints listed breadth first: a subtree need not be contiguous
+    skel = Skeleton(list("abcde"), np.array([-1, 0, 0, 1, 2]), np.zeros((5, 3)))
+    assert skel.subtree(1).tolist() == [1, 3]
+
+
 def test_reverse_depth_uneven_branches():
     #   0 - 1 - 2 - 3
     #   +-- 4

@@ -199,20 +199,11 @@ def _body_below_root(skel: Skeleton) -> Tuple[Optional[int], List[int]]:
         return kids[0], []
     from satagraph.semantics import helper_joints
     helpers = helper_joints(skel)
-    below = {k: _subtree(skel.parents, k) for k in kids}
+    below = {k: skel.subtree(k) for k in kids}
     body = [k for k in kids if not helpers[below[k]].all()]
     if len(body) != 1:
         return None, []
     return body[0], sorted(j for k in kids if k != body[0] for j in below[k])
-
-
-def _subtree(parents: np.ndarray, top: int) -> np.ndarray:
-    """:obj:`top` and its descendants (parents come before children)."""
-    inside = np.zeros(len(parents), dtype=bool)
-    inside[top] = True
-    for j in range(top + 1, len(parents)):
-        inside[j] = inside[parents[j]]
-    return np.flatnonzero(inside)
 
 
 def _set_aside(motion: Motion, joints: List[int]) -> Optional[dict]:
@@ -407,7 +398,7 @@ def _restore_root(motion: Motion, removed: dict, up: np.ndarray) -> Motion:
     if removed.get("carries"):
         offsets[1] = removed["child_offset"]
         root_trans = translations[:, 0] - rot0 @ offsets[1]
-        if any(c.endswith("position") for c in skel.channels[0]):
+        if skel.has_position_channels[0]:
             root_trans = root_trans - np.outer(root_trans @ up - trans0 @ up, up)
     translations[:, 0] = (translations[:, 0] - root_trans) @ rot0
     rot = np.concatenate([np.broadcast_to(rot0, (num_frames, 1, 3, 3)),

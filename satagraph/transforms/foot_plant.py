@@ -103,15 +103,6 @@ def stance_frames(track: np.ndarray, lowest: np.ndarray, root: np.ndarray, fps: 
     return _drop_short(low & slow & level, MIN_STANCE)
 
 
-def subtree(children: Sequence[Sequence[int]], joint: int) -> List[int]:
-    """:obj:`joint` and all its descendants."""
-    out, todo = [], [int(joint)]
-    while todo:
-        out.append(todo.pop())
-        todo.extend(children[out[-1]])
-    return out
-
-
 def _runs(mask: np.ndarray) -> List[tuple]:
     """``(start, stop)`` of every run of ``True``."""
     edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
@@ -234,7 +225,7 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     skeleton = motion.skeleton
     pos = motion.global_positions()
     floor, height = levels(skeleton, pos)
-    members = {end: subtree(skeleton.children, end) for end in ends}
+    members = {end: skeleton.subtree(end) for end in ends}
     lowest = {end: pos[:, members[end], 1].min(axis=1) for end in ends}
     stances = {end: stance_frames(pos[:, end], lowest[end], pos[:, 0], motion.fps, height, floor)
                for end in ends}
@@ -273,5 +264,4 @@ def _hold_stances(motion: Motion, stances: Dict[int, np.ndarray],
 
 
 __all__ = ["BLEND_FRAMES", "DROP_FRAMES", "MAX_CHAIN_BONES", "MIN_STANCE", "ROOT_SPEED_FACTOR",
-           "limb_chain", "plant_feet", "planted_track", "reach", "stance_drop", "stance_frames",
-           "subtree"]
+           "limb_chain", "plant_feet", "planted_track", "reach", "stance_drop", "stance_frames"]
