@@ -19,10 +19,11 @@ version tags ``_v2`` and hashes ``_a1b2c3`` -- are dropped before parsing
 """
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Dict, FrozenSet, List, Optional, Tuple
+from typing import Dict, FrozenSet, List, Optional, Sequence, Tuple
 
 from satagraph.sides import LEG_CODES, SIDE_WORDS, side_of_words
 
@@ -178,6 +179,7 @@ _CAMEL = (re.compile(r"([a-z])([A-Z])"), re.compile(r"([A-Z]+)([A-Z][a-z])"),
           re.compile(r"([A-Za-z])(\d)"), re.compile(r"(\d)([A-Za-z])"))
 _SEPARATORS = re.compile(r"[^A-Za-z0-9]+")
 _TOKEN = re.compile(r"[A-Za-z0-9]+")
+_LETTER = re.compile(r"[A-Za-z]")
 _VERSION = re.compile(r"v(?:er|ersion)?\d+")
 _MIXED = re.compile(r"[A-Za-z]\d+[A-Za-z]")
 _HEX = re.compile(r"[0-9a-f]{5,}")
@@ -275,6 +277,23 @@ def strip_prefixes(name: str) -> str:
     while previous != name:
         previous, name = name, _PREFIX.sub("", name, count=1)
     return name
+
+
+def shared_prefix(names: Sequence[str]) -> str:
+    """The longest prefix every name of a rig begins with, up to a
+    separator, that leaves every name some letters (``Character1_Ctrl_``
+    of MotionBuilder's HumanIK control rig: read per name, its ``Ctrl``
+    would make every joint a helper). ``""`` for a rig of one joint.
+
+    Args:
+        names: The raw joint names of one rig.
+    """
+    if len(names) < 2:
+        return ""
+    common = os.path.commonprefix(list(names))
+    cut = max((i + 1 for i, c in enumerate(common) if _SEPARATORS.fullmatch(c)), default=0)
+    prefix = common[:cut]
+    return prefix if all(_LETTER.search(n[len(prefix):]) for n in names) else ""
 
 
 def split_words(name: str) -> List[str]:

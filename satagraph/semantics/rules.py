@@ -48,7 +48,7 @@ from functools import lru_cache
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from satagraph.semantics.evidence import JointEvidence
-from satagraph.semantics.lexicon import NameInfo, parse_name
+from satagraph.semantics.lexicon import NameInfo, parse_name, shared_prefix
 
 SEGMENTS = ("girdle segment", "upper segment", "lower segment",
             "terminal segment", "digit segment")
@@ -770,7 +770,8 @@ def describe_structure(names: Tuple[str, ...], parents: Tuple[int, ...],
         RuleResult: descriptions and fallback flags.
     """
     tree = _Tree(parents)
-    states = [_initial_kind(parse_name(n), j, bool(e))
+    cut = len(shared_prefix(names))
+    states = [_initial_kind(parse_name(n[cut:]), j, bool(e))
               for j, (n, e) in enumerate(zip(names, end_site))]
     _mark_helpers(states, tree)
     trunk = _trunk_path(states, tree)

@@ -25,9 +25,10 @@ def detect_up_axis(motion: Motion) -> str:
 def lateral_pairs(names: List[str]) -> Tuple[List[int], List[int]]:
     """Indices of left joints and their right counterparts (by
     :func:`satagraph.sides.side_pairs`, matched case-blind with exporter
-    noise such as ``__x7Q`` removed)."""
-    from satagraph.semantics.lexicon import drop_noise_tokens
-    return side_pairs(names, key=drop_noise_tokens)
+    noise such as ``__x7Q`` and the prefix every name shares removed)."""
+    from satagraph.semantics.lexicon import drop_noise_tokens, shared_prefix
+    cut = len(shared_prefix(names))
+    return side_pairs([name[cut:] for name in names], key=drop_noise_tokens)
 
 
 def lateral_forward(positions: np.ndarray, names: List[str],

@@ -51,3 +51,28 @@ def test_unreal_helpers_are_not_limbs(ik_first: bool) -> None:
     assert not hip_bones(skeleton).any()
     left, right = facing_pairs(skeleton, skeleton.rest_positions())
     assert (list(names[left]), list(names[right])) == (["thigh_l"], ["thigh_r"])
+
+
+@pytest.mark.parametrize("prefix", ["Character1_Ctrl_", "Rig_IK_", "Hero_Target_", "Model::"])
+def test_a_helper_word_every_joint_shares_is_a_prefix_not_a_helper(prefix: str) -> None:
+    """MotionBuilder's HumanIK control rig names every joint
+    ``Character1_Ctrl_...``: read per name, ``Ctrl`` made every joint a
+    helper, so the rig had no limbs and no facing. A prefix all names share
+    is read as a prefix."""
+    from satagraph.datasets.zoo import zoo_rigs
+    plain = zoo_rigs(["biped"])[0].skeleton
+    rig = plain.replace(names=[prefix + n for n in plain.names])
+    assert not helper_joints(rig).any()
+    assert {k: rig.names[j][len(prefix):] for k, j in limb_ends(rig).items()} == {
+        k: plain.names[j] for k, j in limb_ends(plain).items()}
+    pose = plain.rest_positions()
+    assert facing_pairs(rig, pose) == facing_pairs(plain, pose)
+
+
+def test_shared_prefix_ends_at_a_separator_and_leaves_letters() -> None:
+    from satagraph.semantics.lexicon import shared_prefix
+    assert shared_prefix(["Character1_Ctrl_Hips", "Character1_Ctrl_LeftUpLeg"]) == "Character1_Ctrl_"
+    assert shared_prefix(["Bip01", "Bip01 Pelvis"]) == ""      # the root is the prefix itself
+    assert shared_prefix(["Bone_001", "Bone_002"]) == ""       # nothing but numbers left
+    assert shared_prefix(["LeftArm", "LeftLeg"]) == ""         # no separator
+    assert shared_prefix(["Hips"]) == ""
