@@ -283,17 +283,20 @@ def shared_prefix(names: Sequence[str]) -> str:
     """The longest prefix every name of a rig begins with, up to a
     separator, that leaves every name some letters (``Character1_Ctrl_``
     of MotionBuilder's HumanIK control rig: read per name, its ``Ctrl``
-    would make every joint a helper). ``""`` for a rig of one joint.
+    would make every joint a helper), exporter noise
+    (:func:`drop_noise_tokens`) aside. ``""`` for a rig of one joint.
 
     Args:
         names: The raw joint names of one rig.
     """
     if len(names) < 2:
         return ""
-    common = os.path.commonprefix(list(names))
+    clean = [drop_noise_tokens(name) for name in names]  # "Bip01__lg2" is "Bip01"
+    common = os.path.commonprefix(clean)
     cut = max((i + 1 for i, c in enumerate(common) if _SEPARATORS.fullmatch(c)), default=0)
     prefix = common[:cut]
-    return prefix if all(_LETTER.search(n[len(prefix):]) for n in names) else ""
+    keeps = all(_LETTER.search(c[cut:]) and n.startswith(prefix) for c, n in zip(clean, names))
+    return prefix if keeps else ""
 
 
 def split_words(name: str) -> List[str]:
@@ -377,9 +380,10 @@ def is_noise_token(token: str, suffix: bool = False) -> bool:
     real = any(_is_word(run) for run in _letter_runs(token))
     if _MIXED.search(token) or _HEX.fullmatch(low):
         return not real
-    if suffix:
+    if suffix:  # "LeftHand" after "Model::" is camel case of words, "wnH" is not
+        camel = all(w in KNOWN_WORDS for w in split_words(token))
         return not (real or low in SIDE_WORDS or low in TIP_WORDS) \
-            or bool(_ODD_CASE.search(token))
+            or (bool(_ODD_CASE.search(token)) and not camel)
     return len(token) <= 4 and bool(_ODD_CASE.search(token)) and not real
 
 

@@ -259,6 +259,7 @@ def test_exporter_noise_is_dropped(rig):
     ("Bip01 L Finger0Nub", "Bip01 L Finger0Nub"), ("Face01", "Face01"),
     ("DEF-spine.003", "DEF-spine.003"), ("CC_Base_L_Pinky1", "CC_Base_L_Pinky1"),
     ("LeftHandIndex1", "LeftHandIndex1"), ("Leg_R_05_1", "Leg_R_05_1"),
+    ("Model::LeftHand", "Model::LeftHand"), ("Rig__LeftUpLeg", "Rig__LeftUpLeg"),
 ])
 def test_noise_tokens(name, clean):
     assert drop_noise_tokens(name) == clean
