@@ -319,6 +319,10 @@ _DIALECTS = (
 )
 #: Heights (metres) a human body plan allows.
 HUMAN_HEIGHT = (1.0, 2.3)
+#: A human rig of a known exporter is read in the exporter's units unless
+#: that makes it shorter or taller than this (metres): then by its height,
+#: as any human (Mixamo's names re-exported from Blender in metres).
+DIALECT_HUMAN_HEIGHT = (0.8, 3.0)
 #: The units a human body plan may be read in: a file in an arbitrary unit
 #: that makes it :data:`HUMAN_HEIGHT` tall in one of them reads as that unit.
 STANDARD_UNITS = ("m", "cm", "mm", "in", "cmu")
@@ -398,11 +402,14 @@ def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
     r"""Guess the units of a rig from what its file says (see the module
     docstring), never from a human prior unless the rig is human."""
     height, pose = _height(motion, axis_vector(up_axis))
-    dialect = _dialect(motion)
+    dialect, human = _dialect(motion), looks_human(motion, pose)
     if dialect is not None:
         label, units = dialect
-        return UnitGuess(UNITS[units], 0.9, "dialect", f"{label} rig", height)
-    if looks_human(motion, pose):
+        tall = height * UNITS[units]
+        if not human or DIALECT_HUMAN_HEIGHT[0] <= tall <= DIALECT_HUMAN_HEIGHT[1]:
+            return UnitGuess(UNITS[units], 0.9, "dialect", f"{label} rig", height)
+        # a Mixamo rig re-exported in metres is no 1.5 cm human: read the body
+    if human:
         fits = [u for u in STANDARD_UNITS
                 if HUMAN_HEIGHT[0] <= height * UNITS[u] <= HUMAN_HEIGHT[1]]
         if fits:

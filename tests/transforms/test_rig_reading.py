@@ -91,6 +91,19 @@ def test_a_human_in_an_arbitrary_unit_is_kept_unless_it_looks_standard() -> None
     assert (alike.how, alike.scale) == ("human", 0.01) and " m in cm" in alike.reason
 
 
+@pytest.mark.parametrize("unit, scale, how", [("cm", 0.01, "dialect"), ("m", 1.0, "human"),
+                                               ("in", 0.0254, "human")])
+def test_an_exporters_units_give_way_to_a_human_height_they_contradict(
+        unit: str, scale: float, how: str) -> None:
+    """Mixamo's names mean cm, unless the body is then no human: the same
+    rig re-exported in metres read as cm was 1.5 cm tall, in inches 0.6 m."""
+    clip = _clip("biped")
+    mixamo = clip.with_(skeleton=clip.skeleton.replace(
+        names=[f"mixamorig:{n}" for n in clip.skeleton.names]))
+    units = read_rig(apply_dialect(mixamo, Dialect(unit=unit))[0]).units
+    assert (units.scale, units.how) == (scale, how)
+
+
 def test_real_files_keep_their_readings(read_real) -> None:
     expect = {"bandai/dataset-1_walk_normal_001.bvh": ("+Y", "cm"),
               "cmu/01_01.bvh": ("+Y", "cmu"), "ccbase/007_01.bvh": ("+Y", "cm"),
