@@ -140,19 +140,26 @@ def _orthogonal(up: np.ndarray) -> np.ndarray:
 #: child sits at least this share of the body's size away from it: a
 #: ground reference that carries the body's travel along the floor, far
 #: below the hips (Bandai's ``joint_Root`` in four of its takes,
-#: Reallusion's ``RL_BoneRoot``), not a root that moves with the body
-#: (3ds Max's ``Bip01`` and the zoo's crab ``Root`` sit within 2 % of the
-#: body's size of their child; Bandai's and ``RL_BoneRoot``'s hips 60 %).
+#: Reallusion's ``RL_BoneRoot``), not a joint of the body that has one
+#: child (the zoo's crab ``Root`` and fowl ``Bip01`` sit 0.7-5 % of the
+#: body's size from their child; Bandai's and ``RL_BoneRoot``'s hips 60 %).
 FLOOR_ROOT_DISTANCE = 0.25
+#: ... or when the child sits on it, within this share of the body's size:
+#: 3ds Max's ``Bip01`` carries the body and ``Bip01 Pelvis`` sits at its
+#: origin (read as the root, a Bandai walk retargeted onto such a rig went
+#: 0.84 of the distance it goes onto the same rig without ``Bip01``).
+COINCIDENT_ROOT_DISTANCE = 1e-3
 
 
 def fold_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
     r"""Fold a root joint above the hips into its one body child.
 
     Some rigs put a helper root above the hips: motionless (Bandai's
-    ``joint_Root`` in most takes) or carrying the body's travel along the
+    ``joint_Root`` in most takes), carrying the body's travel along the
     floor while the hips ride on it (``RL_BoneRoot``, Bandai's run and dash
-    takes; :data:`FLOOR_ROOT_DISTANCE`). Either way the hips become joint 0,
+    takes; :data:`FLOOR_ROOT_DISTANCE`) or carrying the body with the hips
+    at its origin (3ds Max's ``Bip01``; :data:`COINCIDENT_ROOT_DISTANCE`).
+    Either way the hips become joint 0,
     as on every other rig, so that the root's features describe the body.
     Helper chains hanging from such a root beside the hips (Unreal's
     ``ik_foot_root`` and ``ik_hand_root``:
@@ -173,7 +180,7 @@ def fold_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
         return motion, None
     rot0, trans0 = motion.rotations[:, 0], motion.translations[:, 0]
     moves = np.ptp(rot0, axis=0).max() > 1e-9 or np.ptp(trans0, axis=0).max() > 1e-9
-    if moves and not _carries_the_hips(motion, child):
+    if moves and not _redundant_root(motion, child):
         return motion, None
     keep = [j for j in range(1, skel.num_joints) if j not in set(aside)]
     rot = motion.rotations[:, keep].copy()
@@ -222,13 +229,14 @@ def _set_aside(motion: Motion, joints: List[int]) -> Optional[dict]:
             "translation": motion.translations[0, joints].copy()}
 
 
-def _carries_the_hips(motion: Motion, child: int) -> bool:
-    """Whether the root's only :obj:`child` sits :data:`FLOOR_ROOT_DISTANCE`
-    of the body's size or more away from it (its median distance: the
-    norm of its own translation)."""
+def _redundant_root(motion: Motion, child: int) -> bool:
+    """Whether a moving root is no joint of the body: its body
+    :obj:`child` sits :data:`FLOOR_ROOT_DISTANCE` of the body's size or
+    more away from it, or within :data:`COINCIDENT_ROOT_DISTANCE` of it
+    (the median distance: the norm of the child's own translation)."""
     size = float(np.ptp(motion.first_pose(), axis=0).max())
     gap = float(np.median(np.linalg.norm(motion.translations[:, child], axis=-1)))
-    return size > 0 and gap >= FLOOR_ROOT_DISTANCE * size
+    return size > 0 and not COINCIDENT_ROOT_DISTANCE * size < gap < FLOOR_ROOT_DISTANCE * size
 
 
 def resample(motion: Motion, fps: float) -> Motion:

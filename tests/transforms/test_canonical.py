@@ -7,6 +7,7 @@ from satagraph.transforms.canonical import (_apply_rotation,
                                             canonicalize, decanonicalize,
                                             detect_up_axis, resample)
 from satagraph.io import read_bvh, write_bvh
+from satagraph.skeleton import Skeleton
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +86,6 @@ def unreal_wrap(motion, ik_first: bool = False):
     (``ik_foot_root``, ``ik_hand_root``) hanging from the root beside them,
     before or after the body in the file."""
     from satagraph.motion import Motion
-    from satagraph.skeleton import Skeleton
     sk, frames = motion.skeleton, motion.num_frames
     rot3 = ("Zrotation", "Xrotation", "Yrotation")
     lift = np.array([0.0, motion.translations[0, 0, 1], 0.0])
@@ -134,6 +134,36 @@ def test_an_unreal_root_with_ik_chains_is_folded_and_put_back(tmp_path, ik_first
     body = [wrapped.skeleton.names.index(n) for n in plain.skeleton.names]
     np.testing.assert_allclose(again.global_positions()[:, body],
                                wrapped.global_positions()[:, body], atol=1e-4)
+
+
+def test_a_root_carrying_the_body_with_the_hips_at_its_origin_is_folded(tmp_path):
+    """3ds Max's ``Bip01`` carries the body and ``Bip01 Pelvis`` sits at its
+    origin, turning below it: folded, the clip reads as the bare one, and
+    written back the rig keeps both joints and every position."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.motion import Motion
+    from satagraph.ops.rotation_numpy import rotation_about_numpy
+    plain = generate_clip(zoo_rigs(["biped"])[0], "walk", frames=40, seed=2)
+    sk, frames = plain.skeleton, plain.num_frames
+    yaw = rotation_about_numpy(np.array([0.0, 1, 0]), np.linspace(0, 0.5, frames))
+    rig = Skeleton(names=["Bip01"] + sk.names, parents=np.r_[-1, 0, sk.parents[1:] + 1],
+                   offsets=np.r_[sk.offsets[:1], np.zeros((1, 3)), sk.offsets[1:]],
+                   channels=[sk.channels[0], ("Zrotation", "Xrotation", "Yrotation")]
+                   + list(sk.channels[1:]), end_site=np.r_[False, sk.end_site])
+    rot = np.concatenate([yaw[:, None], np.swapaxes(yaw, -1, -2)[:, None] @ plain.rotations[:, :1],
+                          plain.rotations[:, 1:]], axis=1)
+    trans = np.concatenate([plain.translations[:, :1], np.zeros((frames, 1, 3)),
+                            plain.translations[:, 1:]], axis=1)
+    biped = Motion(rig, rot, trans, fps=plain.fps)
+    np.testing.assert_allclose(biped.global_positions()[:, 1:], plain.global_positions(), atol=1e-9)
+    a, b = canonicalize(plain, fps=None), canonicalize(biped, fps=None)
+    assert b.skeleton.names == sk.names
+    np.testing.assert_allclose(b.global_positions(), a.global_positions(), atol=1e-9)
+    write_bvh(decanonicalize(b), tmp_path / "back.bvh")
+    again = read_bvh(tmp_path / "back.bvh")
+    assert again.skeleton.names == rig.names and again.skeleton.channels == rig.channels
+    np.testing.assert_allclose(again.global_positions()[:, 1:], plain.global_positions(),
+                               atol=1e-4)
 
 
 def test_a_root_moving_with_the_body_stays_the_root():
