@@ -445,6 +445,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             raise
         print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        if args.traceback:
+            raise
+        print(f"{PROG}: interrupted (outputs are written whole or not at all; a training "
+              "run resumes with train --resume)", file=sys.stderr)
+        return 130
     finally:
         warnings.formatwarning, warnings.showwarning = before, shown
     return int(code or 0)

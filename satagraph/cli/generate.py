@@ -142,6 +142,23 @@ def _split_output(args) -> None:
         args.output = args.skeleton.pop()
 
 
+def _spare_inputs(paths: List[str], skeletons: List[str]) -> None:
+    """Refuse an output that would overwrite a skeleton given as input, or a
+    BVH file satagraph did not write: ``--skeleton a.bvh clip.bvh`` without
+    OUT makes ``clip.bvh`` the output."""
+    from satagraph.io.bvh_reader import written_by_satagraph
+    for path in paths:
+        if not Path(path).is_file():
+            continue
+        if any(Path(s).is_file() and Path(path).samefile(s) for s in skeletons):
+            raise ValueError(f"{path}: the output would overwrite an input skeleton; "
+                             "give OUT.bvh a new name")
+        if not written_by_satagraph(path):
+            raise ValueError(f"{path}: exists and was not written by satagraph (a motion "
+                             "of yours?); give OUT.bvh a new name or delete it first (with "
+                             "several --skeleton files, the last path is OUT when none follows)")
+
+
 def _prompt_folder(output: str) -> None:
     """Refuse an output of ``--prompts`` that is a file or named as one."""
     folder = Path(output)
@@ -216,6 +233,7 @@ def run_generate(args) -> int:
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths + ([args.render] if args.render else []):
         check_output_path(path)
+    _spare_inputs(paths, args.skeleton)
     _check_render(args)
     targets = _targets(args)
     module = load_generator(args.ckpt)

@@ -99,8 +99,10 @@ def add_train_parsers(sub) -> None:
                        "needed to rebuild the model offline (config, normaliser, semantic "
                        "encoder, fps, window, training data, provenance). No pickle: "
                        "the file cannot carry code.")
-    p.add_argument("source", metavar="RUN_OR_CKPT")
-    p.add_argument("output", metavar="OUT.safetensors")
+    p.add_argument("source", metavar="RUN_OR_CKPT",
+                   help="a run folder (its checkpoints/last.ckpt) or a checkpoint file")
+    p.add_argument("output", metavar="OUT.safetensors",
+                   help="the weights file to write (refused unless it ends in .safetensors)")
     p.add_argument("--half", action="store_true",
                    help="store the network in float16 (the normaliser stays float32)")
     p.add_argument("--force", action="store_true",
@@ -450,6 +452,9 @@ def run_export_weights(args) -> int:
     from satagraph.experiment.train import load_module
     if (args.blend is None) != (args.alpha is None):  # before any file is read
         raise ValueError("--blend BASE and --alpha A go together")
+    if not args.output.endswith(".safetensors"):  # "export-weights w.safetensors last.ckpt"
+        raise ValueError(f"{args.output}: the weights file must end in .safetensors (the "
+                         "order is RUN_OR_CKPT OUT.safetensors)")
     check_output_path(args.output)
     source = _export_source(args.source)
     module = load_module(source)

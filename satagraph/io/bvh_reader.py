@@ -216,6 +216,20 @@ _DECLARATION = re.compile(r"(?:\r?\n|\r)[ \t]*#[ \t]*satagraph:[ \t]*(?:canonica
 _MOTION = re.compile(r"^[ \t]*MOTION[ \t]*\r?$", re.M | re.I)
 
 
+def written_by_satagraph(path: str) -> bool:
+    """Whether a file ends with the declaration line satagraph writes
+    (:data:`_DECLARATION`): a result of ``retarget``, ``reconstruct``,
+    ``generate`` or ``convert --canonical``, not someone's capture."""
+    try:
+        with open(path, "rb") as handle:
+            handle.seek(0, os.SEEK_END)
+            handle.seek(max(handle.tell() - 4096, 0))
+            tail = handle.read().decode("utf-8", errors="replace")
+    except OSError:
+        return False
+    return _DECLARATION.search(tail) is not None
+
+
 def _next_line(text: str, pos: int) -> Tuple[str, int]:
     end = text.find("\n", pos)
     end = len(text) if end < 0 else end

@@ -394,3 +394,19 @@ def test_each_warning_line_is_shown_once_per_command():
                  "a.bvh: units unknown"):
         once(UserWarning(text), UserWarning, "f.py", 1)
     assert shown == ["a.bvh: units unknown", "b.bvh: up axis guessed"]
+
+
+def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
+    """Ctrl-C in any command: one line, exit code 130, no traceback."""
+    def interrupted(args):
+        raise KeyboardInterrupt
+    real = cli.build_parser
+    def patched():
+        parser = real()
+        for action in parser._subparsers._group_actions[0].choices.values():
+            action.set_defaults(func=interrupted)
+        return parser
+    monkeypatch.setattr(cli, "build_parser", patched)
+    assert cli.main(["inspect", "anything.bvh"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "interrupted" in err[0]

@@ -111,3 +111,16 @@ def test_export_weights_blend_refusals(tuned_file: Path, tmp_path: Path,
                  "--alpha", "0.5"]) == 2
     assert "facing_smooth 0.0 in one and 0.25 in the other" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_export_weights_refuses_an_output_that_is_no_weights_file(
+        tuned_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """``export-weights w.safetensors last.ckpt`` (the arguments swapped)
+    wrote the weights over the checkpoint; a name not ending in
+    .safetensors is refused before anything is read."""
+    ckpt = tmp_path / "last.ckpt"
+    ckpt.write_bytes(b"a checkpoint")
+    for target in (ckpt, tmp_path / "w.bvh"):
+        assert main(["export-weights", str(tuned_file), str(target)]) == 2
+        assert "must end in .safetensors" in capsys.readouterr().err
+    assert ckpt.read_bytes() == b"a checkpoint" and not (tmp_path / "w.bvh").exists()

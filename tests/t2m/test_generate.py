@@ -112,6 +112,25 @@ def test_an_autoencoder_checkpoint_is_refused(autoencoder_ckpt, zoo_skeletons, t
     assert not out.exists()
 
 
+def test_an_input_or_a_capture_is_never_overwritten(t2m_ckpt, zoo_skeletons, tmp_path,
+                                                    capsys):
+    """Without OUT, ``--skeleton a.bvh clip.bvh`` makes ``clip.bvh`` the
+    output: a capture satagraph did not write is refused, as is an output
+    that is an input; a file generate wrote may be written again."""
+    import shutil
+    clip = tmp_path / "clip.bvh"
+    shutil.copy(zoo_skeletons["quadruped"], clip)
+    before = clip.read_bytes()
+    assert main(["generate", "--ckpt", str(t2m_ckpt), "--text", TEXT, "--skeleton",
+                 str(zoo_skeletons["biped"]), str(clip)]) == 2
+    assert "not written by satagraph" in _error(capsys) and clip.read_bytes() == before
+    assert _generate(t2m_ckpt, [clip], clip, "--seconds", "1") == 2
+    assert "overwrite an input" in _error(capsys) and clip.read_bytes() == before
+    out = tmp_path / "again.bvh"
+    for _ in range(2):
+        assert _generate(t2m_ckpt, [zoo_skeletons["biped"]], out, "--seconds", "1") == 0
+
+
 def test_a_bad_skeleton_file_is_named(t2m_ckpt, zoo_skeletons, tmp_path, capsys):
     bad = tmp_path / "bad.bvh"
     bad.write_text("HIERARCHY\nROOT Hips\n{\n")
