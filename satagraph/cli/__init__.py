@@ -199,6 +199,9 @@ def run_convert(args: argparse.Namespace) -> int:
         from satagraph.transforms.canonical import canonicalize
         motion = canonicalize(motion, fps=args.fps)
         tf = motion.transform
+        if tf.source_rig.scale is None:  # the file's own units kept, undecided
+            raise CommandError(f"{args.input}: its units are unknown, and a canonical file "
+                               "declares metres: pass --units (cm, in, m, ... or a factor)")
         notes.append(f"canonical: source up axis {tf.up_axis}, scale {tf.scale:g} "
                      "to metres; the file declares itself +Y up in metres")
     elif args.fps:

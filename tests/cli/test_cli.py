@@ -193,7 +193,8 @@ def test_convert_canonical_up_axis_flag(capsys, tiny_skeleton, tmp_path):
     src = tmp_path / "zup.bvh"
     write_bvh(rest_motion(tiny_skeleton, up="+Z"), src)
     out = tmp_path / "yup.bvh"
-    assert main(["convert", str(src), str(out), "--canonical", "--up-axis", "z"]) == 0
+    assert main(["convert", str(src), str(out), "--canonical", "--up-axis", "z",
+                 "--units", "m"]) == 0
     pos = read_bvh(out).global_positions()[0]
     assert np.argmax(np.ptp(pos, axis=0)) == 1  # now Y up
 

@@ -34,11 +34,11 @@ def _positions(path: Path) -> np.ndarray:
     return read_bvh(path).global_positions()
 
 
-def _units_warnings(argv: List[str]) -> List[str]:
-    """The units warnings that running :obj:`argv` raises (the command must succeed)."""
+def _units_warnings(argv: List[str], code: int = 0) -> List[str]:
+    """The units warnings that running :obj:`argv` raises (it must exit with :obj:`code`)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        assert main(argv) == 0
+        assert main(argv) == code
     return [str(w.message) for w in caught if issubclass(w.category, UnitsWarning)]
 
 
@@ -60,8 +60,9 @@ def test_reconstruct_does_not_warn_where_convert_does(files, tmp_path) -> None:
     assert _units_warnings(["reconstruct", str(files["fowl"]), str(tmp_path / "r.bvh"),
                             "--no-mirror"]) == []
     said = _units_warnings(["convert", str(files["fowl"]), str(tmp_path / "c.bvh"),
-                            "--canonical"])
+                            "--canonical"], code=2)  # a canonical file declares metres
     assert said and said[0].startswith(f"{files['fowl']}: units unknown: 28 units tall")
+    assert not (tmp_path / "c.bvh").exists()
 
 
 def _help(command, capsys) -> str:
