@@ -244,6 +244,7 @@ def run_code_bank(args) -> int:
     from satagraph.experiment.train import build_datamodule, build_module, check_config
     from satagraph.utils.files import check_output_path
     check_swap_share(args.swap_rigs)
+    _check_device(args.device)
     cfg = check_config(load_config(args.config, list(args.overrides)))
     if cfg["module"] != "t2m":
         raise ValueError(f"{args.config}: module {cfg['module']!r} is not a text-to-motion "
@@ -278,6 +279,29 @@ def run_code_bank(args) -> int:
     return 0
 
 
+def _check_device(device: str) -> None:
+    """Refuse a ``--device`` torch cannot name or this machine lacks."""
+    import torch
+    try:
+        kind = torch.device(device).type
+    except RuntimeError:
+        raise ValueError(f"--device {device}: not a device (cpu, cuda, cuda:1, mps)") from None
+    if kind == "cuda" and not torch.cuda.is_available():
+        raise ValueError(f"--device {device}: no CUDA device on this machine")
+    if kind == "mps" and not torch.backends.mps.is_available():
+        raise ValueError(f"--device {device}: no MPS device on this machine")
+
+
+def motion_autoencoder(module, name: str):
+    """:obj:`module`, refused (one line) where it is a text-to-motion model:
+    ``retarget``, ``reconstruct`` and ``eval`` need a motion autoencoder."""
+    if not hasattr(module, "embed"):
+        raise ValueError(f"{name}: a text-to-motion model; this command needs a motion "
+                         "autoencoder (builtin, builtin-wide, or a run of satagraph train "
+                         "with a SATA, SAME or padded model)")
+    return module
+
+
 def _load(args, motions: Sequence, paths: Sequence[str], cache: Optional[dict] = None):
     """The model of ``--ckpt`` (``auto``: the built-in one for the rigs of
     :obj:`motions`, :mod:`~satagraph.pipelines.builtin_choice`), saying on
@@ -292,7 +316,7 @@ def _load(args, motions: Sequence, paths: Sequence[str], cache: Optional[dict] =
         why = f"--ckpt auto ({reason}): "
     if cache is not None and name in cache:
         return cache[name], cache[name].embed
-    module = load_module(name)
+    module = motion_autoencoder(load_module(name), name)
     if is_builtin(name):
         print(f"satagraph: {why}{builtin_notice(name=name)}", file=sys.stderr)
     if cache is not None:
@@ -381,7 +405,7 @@ def run_eval(args) -> int:
     from satagraph.experiment.train import load_module
     if args.json:
         check_output_path(args.json)
-    module = load_module(args.ckpt)
+    module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
     data = dict(module.meta.get("data") or {})
     if args.data:
         data["sources"] = args.data
@@ -391,8 +415,14 @@ def run_eval(args) -> int:
     prep.update({k: v for k, v in (("up_axis", args.up_axis),
                                    ("scale", args.units)) if v is not None})
     data["preprocessing"] = prep
+    if args.max_batches is not None and args.max_batches < 1:
+        raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     dm = MotionDataModule(**data)
     dm.setup("test")
+    if not len(dm.datasets[args.split]):
+        raise ValueError(f"no windows in the {args.split!r} split of {data['sources']} (a "
+                         "folder without a manifest puts its files in the train split: "
+                         "--split train)")
     loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)
     results = evaluate(module, loader, args.max_batches)
     print(format_table(results))

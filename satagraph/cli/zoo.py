@@ -135,6 +135,8 @@ def run_zoo(args: argparse.Namespace) -> int:
     """Write the zoo and print a one-line summary per species."""
     if args.out_dir is None:
         raise ValueError("zoo: no output folder: satagraph zoo OUT_DIR [--species ...]")
+    if not 1.0 <= args.fps <= 1000.0:  # also NaN
+        raise ValueError(f"zoo: --fps must be between 1 and 1000, got {args.fps:g}")
     start = time.perf_counter()
     frames = max(args.frames, 2)
     if args.dialect_variants:

@@ -194,8 +194,14 @@ def load_generator(ckpt: str = "builtin"):
     """
     from satagraph.lightning.text_to_motion import TextToMotionModule
     from satagraph.experiment.train import load_module
-    from satagraph.io.weights import resolve_weights
+    from satagraph.io.weights import BUILTIN_VARIANTS, resolve_weights
+    if ckpt in BUILTIN_VARIANTS:
+        raise CheckpointError(f"{ckpt}: a built-in retargeting model, not a text-to-motion "
+                              "one (generate's built-in model is --ckpt builtin)")
     ckpt = resolve_weights(ckpt, kind="text-to-motion")
+    if os.path.isdir(ckpt):
+        raise CheckpointError(f"{ckpt}: a folder; give a checkpoint or weights file "
+                              "(a run's checkpoints/last.ckpt)")
     if not os.path.isfile(ckpt):
         raise CheckpointError(f"{ckpt}: no such checkpoint file")
     try:

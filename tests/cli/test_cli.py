@@ -411,3 +411,31 @@ def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
     assert cli.main(["inspect", "anything.bvh"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "interrupted" in err[0]
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["zoo", "{tmp}/z", "--fps", "0"], "--fps must be between 1 and 1000"),
+    (["zoo", "{tmp}/z", "--fps", "nan"], "--fps must be between 1 and 1000"),
+    (["code-bank", "t2m_tiny", "{tmp}/b.safetensors", "--windows", "4", "--device", "gpu0"],
+     "--device gpu0: not a device"),
+    (["generate", "--ckpt", "builtin-wide", "--text", "walk", "--skeleton", "{zoo}",
+      "{tmp}/g.bvh"], "builtin-wide: a built-in retargeting model, not a text-to-motion"),
+    (["generate", "--ckpt", "{tmp}", "--text", "walk", "--skeleton", "{zoo}", "{tmp}/g.bvh"],
+     "a folder; give a checkpoint or weights file"),
+    (["reconstruct", "{zoo}", "{tmp}/r.bvh", "--ckpt", "{t2m}"],
+     "a text-to-motion model; this command needs a motion autoencoder"),
+    (["eval", "--ckpt", "builtin", "--data", "{tmp}/clips"], "no windows in the 'test' split"),
+])
+def test_wrong_arguments_are_one_line(argv, said, tmp_path, capsys) -> None:
+    """Mistakes a new user makes: one line each, exit 2, nothing written."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io.weights import builtin_path
+    (tmp_path / "clips").mkdir()
+    zoo = tmp_path / "clips" / "walk.bvh"
+    write_bvh(generate_clip(zoo_rigs(["biped"])[0], "walk", frames=40, seed=1), zoo)
+    t2m = builtin_path(kind="text-to-motion")
+    argv = [a.format(tmp=tmp_path, zoo=zoo, t2m=t2m) for a in argv]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and said in err[0], err
+    assert not [p for p in tmp_path.iterdir() if p.name not in ("clips",)]
