@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import re
 import sys
 import tempfile
 import warnings
@@ -404,13 +405,31 @@ def _format_warning(message, category, filename, lineno, line=None) -> str:
     return f"{PROG}: warning: {message}\n"
 
 
+#: Options whose value may be a negative axis (``-Y``), which argparse
+#: would take for an option.
+_AXIS_OPTIONS = ("--up-axis", "--target-up-axis")
+_NEGATIVE_AXIS = re.compile(r"^-[XYZxyz](,.*)?$")
+
+
+def _glued_axes(argv: Sequence[str]) -> List[str]:
+    """``--up-axis -Y`` as ``--up-axis=-Y``: argparse alone reads ``-Y`` as
+    an option and says the value is missing."""
+    out: List[str] = []
+    for arg in argv:
+        if out and out[-1] in _AXIS_OPTIONS and _NEGATIVE_AXIS.match(arg):
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def parse_args(parser: argparse.ArgumentParser,
                argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
     """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
     (also after an option such as ``--init-from CKPT``, where argparse alone
     would reject them), and a command's ``files`` (``render``) also after
     its options."""
-    args, extra = parser.parse_known_args(argv)
+    args, extra = parser.parse_known_args(_glued_axes(sys.argv[1:] if argv is None else argv))
     overrides = [a for a in extra if "=" in a and not a.startswith("-")]
     if hasattr(args, "overrides") and overrides:
         args.overrides = list(args.overrides or []) + overrides

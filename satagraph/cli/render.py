@@ -99,7 +99,12 @@ def run_render(args: argparse.Namespace) -> int:
     """Render the files and print what was written."""
     from satagraph.viz import render
 
+    from satagraph.utils.files import check_output_path
     inputs, output = _split_files(args.files)
+    if args.png is not None and os.path.splitext(args.png)[1].lower() != ".png":
+        raise ValueError(f"--png {args.png}: the contact sheet is a .png file")
+    for path in [output] + ([args.png] if args.png else []):
+        check_output_path(path)  # before any frame is drawn: both or neither
     if args.fps is not None and not args.fps > 0:
         raise ValueError(f"--fps must be positive, got {args.fps}")
     if args.max_frames is not None and args.max_frames < 1:

@@ -439,3 +439,18 @@ def test_wrong_arguments_are_one_line(argv, said, tmp_path, capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and said in err[0], err
     assert not [p for p in tmp_path.iterdir() if p.name not in ("clips",)]
+
+
+def test_a_negative_up_axis_needs_no_equals_sign(capsys, tiny_file) -> None:
+    """``--up-axis -Y`` (argparse alone took ``-Y`` for an option)."""
+    assert cli.main(["inspect", str(tiny_file), "--up-axis", "-Y"]) == 0
+    assert "-Y (given)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("png, said", [("nodir/s.png", "folder nodir does not exist"),
+                                       ("s.jpg", "the contact sheet is a .png file")])
+def test_render_checks_the_sheet_before_drawing(tiny_file, tmp_path, capsys, png, said):
+    """A sheet that cannot be written is refused before the GIF is drawn."""
+    gif = tmp_path / "o.gif"
+    assert cli.main(["render", str(tiny_file), str(gif), "--png", str(tmp_path / png)]) == 2
+    assert said in capsys.readouterr().err and not gif.exists()
