@@ -447,7 +447,7 @@ def test_a_negative_up_axis_needs_no_equals_sign(capsys, tiny_file) -> None:
     assert "-Y (given)" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("png, said", [("nodir/s.png", "folder nodir does not exist"),
+@pytest.mark.parametrize("png, said", [("nodir/s.png", "nodir does not exist"),
                                        ("s.jpg", "the contact sheet is a .png file")])
 def test_render_checks_the_sheet_before_drawing(tiny_file, tmp_path, capsys, png, said):
     """A sheet that cannot be written is refused before the GIF is drawn."""
