@@ -98,13 +98,39 @@ def merge_overrides(cfg: Mapping[str, Any], overrides: Sequence[str] = (),
         if "=" not in item:
             raise ValueError(f"override {item!r} is not of the form key=value")
     try:
-        merged = OmegaConf.merge(OmegaConf.create(dict(cfg)),
-                                 OmegaConf.from_dotlist(list(overrides)))
-        return OmegaConf.to_container(merged, resolve=True)
+        changes = OmegaConf.from_dotlist(list(overrides))
+        merged = OmegaConf.merge(OmegaConf.create(dict(cfg)), changes)
+        out = OmegaConf.to_container(merged, resolve=True)
     except Exception as err:  # omegaconf: bad override or interpolation
         detail = " ".join(str(err).split())[:200]
         raise ValueError(f"{where}: cannot apply the config and its overrides "
                          f"({detail})") from None
+    for item in overrides:
+        _check_number(cfg, out, item.split("=", 1)[0].strip(), where)
+    return out
+
+
+#: Config sections whose numbers take no text (:func:`_check_number`).
+NUMBER_SECTIONS = ("optim", "loss", "model")
+
+
+def _check_number(before: Mapping[str, Any], after: Mapping[str, Any], key: str,
+                  where: str) -> None:
+    """Refuse an override that puts text where the config has a number in
+    a section of numbers (:data:`NUMBER_SECTIONS`: ``optim.lr=abc``),
+    before anything fails on it far from the cause (``data`` takes units
+    such as ``cm`` where a factor stood, ``trainer`` times as text)."""
+    if key.split(".", 1)[0] not in NUMBER_SECTIONS:
+        return
+    old, new = before, after
+    for part in key.split("."):
+        if not isinstance(old, Mapping) or not isinstance(new, Mapping) or part not in old:
+            return
+        old, new = old[part], new.get(part)
+    number = isinstance(old, (int, float)) and not isinstance(old, bool)
+    if number and isinstance(new, str):
+        raise ValueError(f"{where}: {key}={new}: a number is expected (the config has "
+                         f"{old!r})")
 
 
 def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:

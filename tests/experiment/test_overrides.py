@@ -32,6 +32,15 @@ def test_bad_overrides_are_one_line():
     assert "\n" not in str(err.value)
 
 
+def test_text_where_a_number_stands_is_one_line():
+    """``optim.lr=abc`` failed as a TypeError deep in the optimiser."""
+    with pytest.raises(ValueError, match=r"optim.lr=abc: a number is expected \(the config "
+                       r"has 0.001\)"):
+        merge_overrides({"optim": {"lr": 1e-3}}, ["optim.lr=abc"])
+    # where text may stand for a number: units for a factor
+    assert merge_overrides({"data": {"scale": 0.01}}, ["data.scale=cm"])["data"]["scale"] == "cm"
+
+
 def test_load_config_applies_overrides_after_inheritance():
     cfg = load_config("cpu_joint_finetune", ["optim.lr=2e-3", "data.window=16",
                                              "data.sources=[a, b]"])
