@@ -80,12 +80,20 @@ def add_train_parsers(sub) -> None:
     p.set_defaults(func=run_retarget)
 
     p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
-                       description="Evaluate JR, RT, JP, FS, GP per dataset on a split.")
-    p.add_argument("--ckpt", required=True)
+                       description="Evaluate JR, RT, JP, FS, GP per dataset on a split, "
+                       "each skeleton read in the rest pose reconstruct shows it (--rest).")
+    p.add_argument("--ckpt", required=True,
+                   help="a checkpoint, a weights file, builtin or builtin-wide")
     p.add_argument("--split", default="test", choices=["train", "val", "test"])
     p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
-    p.add_argument("--max-batches", type=int, default=None)
+    p.add_argument("--max-batches", type=int, default=None,
+                   help="evaluate at most this many batches (default: the whole split)")
+    p.add_argument("--rest", choices=REST_MODES, default="auto",
+                   help="the rest pose the model sees each skeleton in, as reconstruct "
+                   "and retarget show it (default auto: a line or captured rest is "
+                   "replaced by the standing pose; file: the file's own, as the "
+                   "checkpoint's data section may read it for training)")
     p.add_argument("--retarget", action="store_true",
                    help="also the retarget error onto copies of each split file's "
                    "skeleton with paired ground truth: bone-scaled (internal) and "
@@ -411,7 +419,7 @@ def run_eval(args) -> int:
         data["sources"] = args.data
     if not data.get("sources"):
         raise ValueError("the checkpoint does not name its data: pass --data")
-    prep = dict(data.get("preprocessing") or {})
+    prep = dict(data.get("preprocessing") or {}, rest=args.rest)
     prep.update({k: v for k, v in (("up_axis", args.up_axis),
                                    ("scale", args.units)) if v is not None})
     data["preprocessing"] = prep
