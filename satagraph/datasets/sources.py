@@ -111,6 +111,9 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         path = Path(os.path.expanduser(str(spec["path"])))
         if not path.exists():
             raise FileNotFoundError(f"motion source not found: {path}")
+        if path.suffix.lower() == ".bvh":
+            raise ValueError(f"{path}: a motion source is a folder of .bvh files or a "
+                             "manifest (.tsv), not one .bvh file: put it in a folder")
         found = (read_manifest(path, spec.get("dataset")) if path.is_file()
                  else scan_folder(path, spec.get("dataset")))
         exclude = set(spec.get("exclude") or ())

@@ -425,6 +425,7 @@ def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
     (["reconstruct", "{zoo}", "{tmp}/r.bvh", "--ckpt", "{t2m}"],
      "a text-to-motion model; this command needs a motion autoencoder"),
     (["eval", "--ckpt", "builtin", "--data", "{tmp}/clips"], "no windows in the 'test' split"),
+    (["eval", "--ckpt", "builtin", "--data", "{zoo}"], "not one .bvh file: put it in a folder"),
 ])
 def test_wrong_arguments_are_one_line(argv, said, tmp_path, capsys) -> None:
     """Mistakes a new user makes: one line each, exit 2, nothing written."""
