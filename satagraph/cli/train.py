@@ -150,7 +150,7 @@ def add_train_parsers(sub) -> None:
     p.add_argument("output", metavar="OUT.safetensors")
     p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
     p.add_argument("--windows", type=positive_int, required=True,
-                   help="windows to draw")
+                   help="windows to draw (rounded up to whole batches of data.batch_size)")
     p.add_argument("--max-minutes", type=positive_float, default=None,
                    help="stop drawing after this long and write the windows drawn "
                    "(default: no limit)")
