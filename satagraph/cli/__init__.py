@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import re
 import sys
 import tempfile
@@ -462,6 +463,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 from satagraph.transforms.rig_reading import UnitsWarning
                 warnings.simplefilter("ignore", UnitsWarning)
             code = args.func(args)
+    except BrokenPipeError:  # `satagraph inspect FOLDER | head`: the reader has gone
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except (BVHError, CommandError, OSError, ValueError) as err:
         if args.traceback:
             raise
