@@ -398,9 +398,11 @@ def run_lock(run_dir: Path) -> Iterator[Path]:
     Raises:
         RunLockedError: Another live process holds it.
     """
+    made = [d for d in (run_dir, *run_dir.parents) if not d.exists()]  # deepest first
     run_dir.mkdir(parents=True, exist_ok=True)
     lock = run_dir / ".lock"
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    held = False
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -408,11 +410,28 @@ def run_lock(run_dir: Path) -> Iterator[Path]:
             raise RunLockedError(
                 f"{run_dir}: output_dir is in use by another live run ({_holder(lock)}); "
                 "wait for it or choose another output_dir") from None
+        held = True
         os.ftruncate(fd, 0)
         os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
         yield lock
     finally:
+        if held and made:
+            _drop_if_empty(made, lock)
         os.close(fd)
+
+
+def _drop_if_empty(made: List[Path], lock: Path) -> None:
+    """Remove the folders a run made (deepest first) where it left nothing
+    but its lock: a run refused before its first step leaves no empty
+    folders behind."""
+    try:
+        if [p.name for p in made[0].iterdir()] != [lock.name]:
+            return
+        lock.unlink()
+        for folder in made:
+            folder.rmdir()  # stops at the first that is not empty
+    except OSError:
+        pass
 
 
 __all__ = ["TrainingStopped", "RunLockedError", "SafeCheckpointIO", "NonFiniteGuard",

@@ -250,6 +250,24 @@ def test_a_live_run_holds_its_output_dir(tmp_path: Path) -> None:
         pass
 
 
+def test_a_run_that_made_nothing_leaves_no_folder(tmp_path: Path) -> None:
+    """The folders a run made go again when it leaves nothing but its lock
+    (a run refused before its first step); folders that were there, or that
+    hold something, stay."""
+    made = tmp_path / "runs" / "tiny"
+    with run_lock(made):
+        pass
+    assert not (tmp_path / "runs").exists()
+    with run_lock(made):
+        (made / "losses.tsv").write_text("step\n")
+    assert (made / "losses.tsv").is_file()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    with run_lock(kept):
+        pass
+    assert kept.is_dir()
+
+
 class _Payload:
     def __init__(self, marker: Path) -> None:
         self.marker = marker
