@@ -226,6 +226,18 @@ class Motion:
                           raw_channels=raw)
 
 
+def require_motion(value: object, name: str = "motion") -> Motion:
+    """:obj:`value` if it is a :class:`Motion`, else a one-line
+    :class:`TypeError` saying how to get one (a path is read with
+    :func:`satagraph.io.read_bvh`)."""
+    if not isinstance(value, Motion):
+        hint = (f"; read it first: satagraph.io.read_bvh({str(value)!r})"
+                if isinstance(value, (str, bytes)) or hasattr(value, "__fspath__") else "")
+        raise TypeError(f"{name}: expected a satagraph Motion, got "
+                        f"{type(value).__name__}{hint}")
+    return value
+
+
 def ground_contacts(positions: np.ndarray, fps: float, size: float,
                     height: float = CONTACT_HEIGHT,
                     speed: float = CONTACT_SPEED) -> np.ndarray:

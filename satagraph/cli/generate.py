@@ -20,9 +20,11 @@ def _number(text: str) -> float:
 
 
 def _seconds(text: str) -> float:
+    from satagraph.pipelines.generate import SECONDS_RANGE
     value = _number(text)
-    if not 0.1 <= value <= 60.0:
-        raise argparse.ArgumentTypeError(f"must be between 0.1 and 60 seconds: {text!r}")
+    if not SECONDS_RANGE[0] <= value <= SECONDS_RANGE[1]:
+        raise argparse.ArgumentTypeError(f"must be between {SECONDS_RANGE[0]:g} and "
+                                         f"{SECONDS_RANGE[1]:g} seconds: {text!r}")
     return value
 
 

@@ -329,7 +329,10 @@ def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:
 def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     """A trained module, whatever its class, loaded safely: from a
     checkpoint (``weights_only=True``), a weights file (``.safetensors``,
-    :mod:`satagraph.io.weights`) or ``"builtin"`` (the package's weights).
+    :mod:`satagraph.io.weights`) or ``"builtin"`` (the package's weights),
+    in evaluation mode (a VAE's latent is then its mean, so the same input
+    decodes the same; ``.train()`` before fine-tuning it by hand, which
+    ``Trainer.fit`` does itself).
 
     Raises:
         CheckpointError: The file is not a satagraph model checkpoint or
@@ -353,4 +356,4 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
         first = str(err).strip().splitlines()[0]
         raise CheckpointError(f"{ckpt}: weights do not fit the {name!r} model its "
                               f"hyperparameters describe ({first})") from None
-    return module.to(map_location)
+    return module.to(map_location).eval()

@@ -45,7 +45,7 @@ from satagraph.pipelines.inference import (default_windows, restore_rest, shown_
                                            static_features, target_clip, window_codes,
                                            window_plan)
 from satagraph.io.checkpoint import CheckpointError
-from satagraph.motion import Motion
+from satagraph.motion import Motion, require_motion
 
 
 #: The :class:`GenerationSettings` fields that must be finite and >= 0 (or ``None``).
@@ -245,10 +245,24 @@ def rig_inputs(module, target: Motion, rest: str = "auto") -> RigInputs:
     return RigInputs(canon, shown, feats, sem, undo)
 
 
+#: Durations a generation may ask for, seconds (``generate --seconds``).
+SECONDS_RANGE = (0.1, 60.0)
+
+
+def check_seconds(seconds: float) -> float:
+    """:obj:`seconds`, refused (one line) outside :data:`SECONDS_RANGE`."""
+    if not SECONDS_RANGE[0] <= seconds <= SECONDS_RANGE[1]:  # also NaN
+        raise ValueError(f"a duration must be between {SECONDS_RANGE[0]:g} and "
+                         f"{SECONDS_RANGE[1]:g} seconds, got {seconds!r}")
+    return float(seconds)
+
+
 def _frames(module, text_emb, skel_emb, seconds: Optional[float],
             generator: torch.Generator) -> int:
-    """Frames to generate: the user's duration, else a draw of the length
-    model (at least two frames)."""
+    """Frames to generate: the user's duration (:func:`check_seconds`), else
+    a draw of the length model (at least two frames)."""
+    if seconds is not None:
+        check_seconds(seconds)
     if seconds is None:
         seconds = float(module.length.sample(text_emb, skel_emb, generator=generator)[0])
     return max(2, int(round(seconds * module.fps)))
@@ -279,6 +293,7 @@ def generate_on(module, text: Optional[str], target: Motion, seconds: Optional[f
     Returns:
         Motion: On the target's rig at the model's frame rate.
     """
+    require_motion(target, "target")
     module.eval()
     gen = torch.Generator().manual_seed(int(seed))
     rig = rig_inputs(module, target, settings.rest)
@@ -469,5 +484,5 @@ def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
         raise
 
 
-__all__ = ["GenerationSettings", "RigInputs", "rig_inputs", "load_generator", "generate_on",
+__all__ = ["SECONDS_RANGE", "check_seconds", "GenerationSettings", "RigInputs", "rig_inputs", "load_generator", "generate_on",
            "RAW_DECODING", "decode_on", "output_paths", "write_all"]

@@ -2,6 +2,7 @@
 (:func:`resample_frames` is :mod:`satagraph.transforms.canonical`'s)."""
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from functools import partial
 from typing import Callable, List, Optional, Sequence, Tuple, Union
@@ -27,7 +28,7 @@ from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
-from satagraph.motion import Motion
+from satagraph.motion import Motion, require_motion
 
 
 def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tuple[int, int, int]]:
@@ -236,9 +237,30 @@ def retarget_motion(module, source: Motion, target: Motion,
             model's time, four times with :obj:`mirror`); :data:`UNMIRRORED`:
             only for a rig without a mirror image.
     """
+    check_inputs(module, source, target)
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
                                   rest, ground, plant, settle, still, mirror, two_rests)
     return from_canonical(canon, source)
+
+
+def check_inputs(module, source: Motion, target: Optional[Motion] = None) -> None:
+    """What ``retarget`` and ``reconstruct`` check on the command line,
+    for Python callers: a loaded model, a source that is a valid motion
+    (:func:`~satagraph.data.validate.check_motion`: two frames or more, a
+    skeleton of two joints or more, finite values) and a target skeleton
+    that is one (:func:`~satagraph.data.validate.check_skeleton`).
+
+    Raises:
+        TypeError: A path or name where a model or a motion is expected.
+        MotionValidationError: One line naming the motion and the problem.
+    """
+    from satagraph.data.validate import check_motion, check_skeleton
+    if isinstance(module, (str, bytes, os.PathLike)):
+        raise TypeError(f"module: expected a loaded model, got {module!r}; load it first: "
+                        "satagraph.experiment.train.load_module(...)")
+    check_motion(require_motion(source, "source"))
+    if target is not None:
+        check_skeleton(require_motion(target, "target"), target.source or "<target>")
 
 
 def from_canonical(canon: Motion, source: Motion) -> Motion:
@@ -429,6 +451,7 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     The root is never held where the input stands still
     (:func:`reconstruct_canonical`): a reconstruction is the model's
     alone."""
+    check_inputs(module, motion)
     _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
                                      rest=rest, ground=ground, settle=settle, mirror=mirror,
                                      two_rests=two_rests)

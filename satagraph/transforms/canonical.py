@@ -7,7 +7,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from satagraph.transforms.rig_reading import axis_vector
-from satagraph.motion import CanonicalTransform, Motion, RigSettings
+from satagraph.motion import CanonicalTransform, Motion, RigSettings, require_motion
 from satagraph.ops.rotation_numpy import rotation_between_numpy, yaw_of
 from satagraph.sides import side_pairs
 from satagraph.skeleton import Skeleton
@@ -309,6 +309,7 @@ def canonicalize(
     from satagraph.transforms.bind_frame import replace_bind_frame
     from satagraph.transforms.rig_reading import read_rig, warn_reading
 
+    require_motion(motion)
     if replace_bind:
         motion = replace_bind_frame(motion)
     reading = read_rig(motion, up_axis, unit_scale)  # read on the body, folded
