@@ -430,7 +430,10 @@ def parse_args(parser: argparse.ArgumentParser,
     (also after an option such as ``--init-from CKPT``, where argparse alone
     would reject them), and a command's ``files`` (``render``) also after
     its options."""
-    args, extra = parser.parse_known_args(_glued_axes(sys.argv[1:] if argv is None else argv))
+    argv = _glued_axes(sys.argv[1:] if argv is None else argv)
+    if "--traceback" in argv[1:]:  # also after the command's name
+        argv = ["--traceback"] + [a for a in argv if a != "--traceback"]
+    args, extra = parser.parse_known_args(argv)
     overrides = [a for a in extra if "=" in a and not a.startswith("-")]
     if hasattr(args, "overrides") and overrides:
         args.overrides = list(args.overrides or []) + overrides

@@ -455,3 +455,9 @@ def test_render_checks_the_sheet_before_drawing(tiny_file, tmp_path, capsys, png
     gif = tmp_path / "o.gif"
     assert cli.main(["render", str(tiny_file), str(gif), "--png", str(tmp_path / png)]) == 2
     assert said in capsys.readouterr().err and not gif.exists()
+
+
+def test_traceback_may_follow_the_command(tmp_path) -> None:
+    """``satagraph inspect missing.bvh --traceback`` raises instead of one line."""
+    with pytest.raises(BVHError):
+        cli.main(["inspect", str(tmp_path / "missing.bvh"), "--traceback"])
