@@ -58,6 +58,9 @@ def to_temporal_streams(x: Tensor, batch: Any) -> Tuple[Tensor, Tensor]:
         - **x**: :math:`(N, F)`
         - **output**: :math:`(S, T_{max}, F)` and :math:`(S, T_{max})`
     """
+    if x.dim() != 2 or x.size(0) != batch.num_nodes:
+        raise ValueError(f"to_temporal_streams: x must be (N, F) with the batch's "
+                         f"N = {batch.num_nodes} nodes, got {tuple(x.shape)}")
     node, mask = _slot_node(batch)
     out = x.index_select(0, node.view(-1))  # a gather: faster than a scatter
     if x.size(0) != mask.numel():  # some clips are shorter than max_time
@@ -78,5 +81,9 @@ def from_temporal_streams(streams: Tensor, batch: Any) -> Tensor:
         - **streams**: :math:`(S, T_{max}, F)`
         - **output**: :math:`(N, F)`
     """
+    if streams.dim() != 3 or tuple(streams.shape[:2]) != (batch.num_streams, batch.max_time):
+        raise ValueError(f"from_temporal_streams: streams must be (S, T_max, F) with the "
+                         f"batch's S = {batch.num_streams} streams and T_max = "
+                         f"{batch.max_time} frames, got {tuple(streams.shape)}")
     flat = streams.reshape(-1, streams.size(-1))
     return flat.index_select(0, _node_slot(batch))

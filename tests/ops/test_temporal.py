@@ -103,3 +103,17 @@ def test_dtype_is_kept():
     streams, _ = to_temporal_streams(x, batch)
     assert streams.dtype == torch.float64
     assert from_temporal_streams(streams, batch).dtype == torch.float64
+
+
+def test_features_of_another_batch_are_one_line():
+    """Node features or streams of the wrong size raise a ValueError naming
+    the sizes, not an IndexError from the gather."""
+    _, batch = make_batch()
+    x = torch.randn(batch.num_nodes, 9)
+    streams, _ = to_temporal_streams(x, batch)
+    for bad in (x[:-1], x[:, :, None]):
+        with pytest.raises(ValueError, match=f"N = {batch.num_nodes} nodes"):
+            to_temporal_streams(bad, batch)
+    for bad in (streams[:-1], streams[:, :-1], streams[0]):
+        with pytest.raises(ValueError, match=f"S = {batch.num_streams} streams"):
+            from_temporal_streams(bad, batch)
