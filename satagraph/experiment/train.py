@@ -348,7 +348,13 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     name = (hparams.get("meta") or {}).get("module", "vae")
     sections = ModuleSections(**{k: hparams[k] for k in ("model", "loss", "optim", "fps",
                                                          "meta") if hparams.get(k) is not None})
-    module = module_entry(name).build(sections)
+    try:
+        entry = module_entry(name)
+    except ValueError as err:  # a subclass registered in code this process has not run
+        raise CheckpointError(f"{ckpt}: a {name!r} model, which is not registered here: "
+                              "import the code that registers it (register_module) first "
+                              f"({' '.join(str(err).split())[:160]})") from None
+    module = entry.build(sections)
     module.on_load_checkpoint(data)
     try:
         module.load_state_dict(data["state_dict"])

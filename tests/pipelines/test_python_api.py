@@ -48,3 +48,21 @@ def test_the_text_to_motion_module_is_exported_with_the_others() -> None:
     from satagraph.lightning import TextToMotionModule, __all__
     from satagraph.lightning.text_to_motion import TextToMotionModule as where
     assert TextToMotionModule is where and "TextToMotionModule" in __all__
+
+
+def test_a_checkpoint_of_an_unregistered_module_names_the_file(tmp_path) -> None:
+    """A subclass registered in code this process has not run: the error
+    names the file and says to import that code first."""
+    import copy
+
+    import torch
+
+    from satagraph.io.checkpoint import CheckpointError
+    module = load_module("builtin")
+    hparams = copy.deepcopy(dict(module.hparams))
+    hparams["meta"] = dict(hparams["meta"], module="my_module")
+    path = tmp_path / "mine.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": hparams}, path)
+    with pytest.raises(CheckpointError, match=f"{path}: a 'my_module' model, which is not "
+                       "registered here"):
+        load_module(str(path))
