@@ -97,7 +97,20 @@ class MotionFeatures:
     def to_clip(self, start: int = 0, stop: Optional[int] = None,
                 semantic: Optional[torch.Tensor] = None,
                 meta: Optional[dict] = None) -> MotionClip:
-        """Frames ``start:stop`` as a float32 :class:`MotionClip`."""
+        """Frames ``start:stop`` as a float32 :class:`MotionClip`.
+
+        Args:
+            start (int): First frame.
+            stop (int, optional): One past the last frame (default: the end).
+            semantic (Tensor, optional): The skeleton's semantic embedding
+                :math:`(J, D_t)` (``model.embed(skeleton)``), which a model
+                trained with one needs; default: none, :math:`(J, 0)`.
+            meta (dict, optional): Extra metadata (dataset, file, ...).
+
+        Returns:
+            MotionClip: Dynamic, root, static and semantic features, the
+            bones and the metadata (height, leg length, fps).
+        """
         sl = slice(start, stop)
         num = self.skeleton.num_joints
         return MotionClip(

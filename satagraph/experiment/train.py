@@ -334,6 +334,15 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     decodes the same; ``.train()`` before fine-tuning it by hand, which
     ``Trainer.fit`` does itself).
 
+    Args:
+        ckpt (str): A checkpoint path, a ``.safetensors`` weights file,
+            ``"builtin"`` or ``"builtin-wide"``.
+        map_location (str): Device the weights are loaded to.
+
+    Returns:
+        LightningModule: The module of the class its hyperparameters name
+        (``meta.module``: :func:`~satagraph.experiment.registry.module_entry`).
+
     Raises:
         CheckpointError: The file is not a satagraph model checkpoint or
             weights file, is damaged, or holds non-finite weights; or

@@ -305,6 +305,23 @@ def canonicalize(
     A leading bind-pose frame (:mod:`~satagraph.transforms.bind_frame`:
     CMU's and CC_Base's exporters write one) is first given frame 1's pose
     unless :obj:`replace_bind` is ``False``.
+
+    Args:
+        motion (Motion): A motion as read (:func:`~satagraph.io.read_bvh`).
+        fps (float, optional): Frame rate of the result (``None``: the source's).
+        up_axis (str, optional): The source's up axis (``"+Z"``), instead of
+            its declaration or a guess.
+        unit_scale (float, optional): Source units to metres, likewise.
+        floor (bool): Put the floor at y = 0.
+        remove_root (bool): Fold a root above the hips into them
+            (:func:`fold_root`).
+        replace_bind (bool): Give a leading bind-pose frame frame 1's pose.
+
+    Returns:
+        Motion: The canonical motion, its :attr:`~Motion.transform` set.
+
+    Raises:
+        TypeError: :obj:`motion` is not a :class:`~satagraph.motion.Motion`.
     """
     from satagraph.transforms.bind_frame import replace_bind_frame
     from satagraph.transforms.rig_reading import read_rig, warn_reading
