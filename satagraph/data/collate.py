@@ -260,6 +260,25 @@ def _separation(out: FrameBatch, num_graphs: int) -> None:
     out._inc_dict["edge_index"] = out._inc_dict["root_node"] = out.ptr[:-1]
 
 
+def _check_clip(index: int, clip: MotionClip) -> None:
+    """One line naming the clip whose arrays disagree with its
+    :math:`(T, J, F_d)` dynamic features (:class:`MotionClip`'s Shapes)."""
+    if not isinstance(clip, MotionClip):
+        raise TypeError(f"collate_clips: clip {index} is a {type(clip).__name__}, not a "
+                        "MotionClip (MotionFeatures.to_clip(start, stop) makes one)")
+    if clip.dynamic.dim() != 3 or clip.num_frames < 1 or clip.num_joints < 1:
+        raise ValueError(f"collate_clips: clip {index}: dynamic features must be (T, J, F) "
+                         f"with T, J >= 1, got {tuple(clip.dynamic.shape)}")
+    frames, joints = clip.num_frames, clip.num_joints
+    for name, rows, want in (("root", clip.root.shape[0], frames),
+                             ("static", clip.static.shape[0], joints),
+                             ("semantic", clip.semantic.shape[0], joints),
+                             ("parents", clip.parents.shape[0], joints)):
+        if rows != want:
+            raise ValueError(f"collate_clips: clip {index}: {name} has {rows} rows for its "
+                             f"{frames} frames and {joints} joints")
+
+
 def collate_clips(clips: List[MotionClip]) -> FrameBatch:
     r"""Batches clips of any skeletons and lengths into frame graphs,
     vectorised (no loop over frames, no padding).
@@ -273,6 +292,8 @@ def collate_clips(clips: List[MotionClip]) -> FrameBatch:
     """
     if not clips:
         raise ValueError("collate_clips: no clips")
+    for i, clip in enumerate(clips):
+        _check_clip(i, clip)
     frames = [c.num_frames for c in clips]
     joints = [c.num_joints for c in clips]
     num_frames, num_joints = torch.tensor(frames), torch.tensor(joints)

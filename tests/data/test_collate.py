@@ -282,3 +282,18 @@ def test_losses_and_metrics_read_the_batch_frame_rate(clips):
     root = torch.randn(batch.root.shape, generator=gen)
     torch.testing.assert_close(to_global(pos, root, batch), to_global(pos, root, batch, 60.0))
     assert not torch.allclose(to_global(pos, root, batch), to_global(pos, root, batch, 30.0))
+
+
+def test_a_clip_whose_arrays_disagree_is_named():
+    """Arrays of the wrong length used to batch silently and fail later in
+    the model; a features object instead of a clip failed on an attribute."""
+    from dataclasses import replace
+    good = make_clips(((5, 3),))[0]
+    with pytest.raises(TypeError, match="clip 1 is a dict, not a MotionClip"):
+        collate_clips([good, {}])
+    for bad, said in ((replace(good, root=good.root[:2]), "root has 2 rows for its 3 frames"),
+                      (replace(good, static=good.static[:4]), "static has 4 rows"),
+                      (replace(good, semantic=torch.zeros(2, 0)), "semantic has 2 rows"),
+                      (replace(good, dynamic=good.dynamic[:0]), "with T, J >= 1")):
+        with pytest.raises(ValueError, match=f"clip 0: .*{said}"):
+            collate_clips([bad])
