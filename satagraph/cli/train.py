@@ -339,14 +339,6 @@ def _read(args, key: str):
     return read_with_rig(getattr(args, key), args, "target" if key == "target" else "")
 
 
-def _check(motion, path: str, fps: float) -> None:
-    """:obj:`motion` checked for inference, its timing and values too
-    (:mod:`satagraph.data.validate`; a target needs only its skeleton:
-    ``check_skeleton``)."""
-    from satagraph.data.validate import check_motion
-    check_motion(motion, path, fps=fps)
-
-
 def run_reconstruct(args) -> int:
     """Reconstruct a file, or every BVH file of a folder (:mod:`satagraph.cli.folders`)."""
     models: dict = {}
@@ -366,7 +358,6 @@ def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
     check_output_path(output)
     motion = read_with_rig(source, args)
     module, embed = _load(args, [motion], [source], models)
-    _check(motion, source, module.fps)
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
                              args.ground, args.settle, args.mirror, args.two_rests)
     write_bvh(out, output)
@@ -396,7 +387,6 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict) ->
     check_output_path(output)
     source = read_with_rig(source_path, args)
     module, embed = _load(args, [source, target], [source_path, args.target], models)
-    _check(source, source_path, module.fps)
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
                          settle=args.settle, still=args.still, mirror=args.mirror,
@@ -413,6 +403,8 @@ def run_eval(args) -> int:
     from satagraph.experiment.train import load_module
     if args.json:
         check_output_path(args.json)
+    if args.max_batches is not None and args.max_batches < 1:
+        raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
     data = dict(module.meta.get("data") or {})
     if args.data:
@@ -423,8 +415,6 @@ def run_eval(args) -> int:
     prep.update({k: v for k, v in (("up_axis", args.up_axis),
                                    ("scale", args.units)) if v is not None})
     data["preprocessing"] = prep
-    if args.max_batches is not None and args.max_batches < 1:
-        raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     dm = MotionDataModule(**data)
     dm.setup("test")
     if not len(dm.datasets[args.split]):

@@ -98,8 +98,8 @@ def merge_overrides(cfg: Mapping[str, Any], overrides: Sequence[str] = (),
         if "=" not in item:
             raise ValueError(f"override {item!r} is not of the form key=value")
     try:
-        changes = OmegaConf.from_dotlist(list(overrides))
-        merged = OmegaConf.merge(OmegaConf.create(dict(cfg)), changes)
+        merged = OmegaConf.merge(OmegaConf.create(dict(cfg)),
+                                 OmegaConf.from_dotlist(list(overrides)))
         out = OmegaConf.to_container(merged, resolve=True)
     except Exception as err:  # omegaconf: bad override or interpolation
         detail = " ".join(str(err).split())[:200]

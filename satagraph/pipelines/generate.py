@@ -261,10 +261,10 @@ def _frames(module, text_emb, skel_emb, seconds: Optional[float],
             generator: torch.Generator) -> int:
     """Frames to generate: the user's duration (:func:`check_seconds`), else
     a draw of the length model (at least two frames)."""
-    if seconds is not None:
-        check_seconds(seconds)
     if seconds is None:
         seconds = float(module.length.sample(text_emb, skel_emb, generator=generator)[0])
+    else:
+        check_seconds(seconds)
     return max(2, int(round(seconds * module.fps)))
 
 
@@ -484,5 +484,5 @@ def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
         raise
 
 
-__all__ = ["SECONDS_RANGE", "check_seconds", "GenerationSettings", "RigInputs", "rig_inputs", "load_generator", "generate_on",
-           "RAW_DECODING", "decode_on", "output_paths", "write_all"]
+__all__ = ["SECONDS_RANGE", "check_seconds", "GenerationSettings", "RigInputs", "rig_inputs",
+           "load_generator", "generate_on", "RAW_DECODING", "decode_on", "output_paths", "write_all"]

@@ -245,9 +245,10 @@ def retarget_motion(module, source: Motion, target: Motion,
 
 def check_inputs(module, source: Motion, target: Optional[Motion] = None) -> None:
     """What ``retarget`` and ``reconstruct`` check on the command line,
-    for Python callers: a loaded model, a source that is a valid motion
-    (:func:`~satagraph.data.validate.check_motion`: two frames or more, a
-    skeleton of two joints or more, finite values) and a target skeleton
+    for both: a loaded model, a source that is a valid motion at the
+    model's frame rate (:func:`~satagraph.data.validate.check_motion`: two
+    frames or more, a skeleton of two joints or more, finite values) and a
+    target skeleton
     that is one (:func:`~satagraph.data.validate.check_skeleton`).
 
     Raises:
@@ -258,7 +259,7 @@ def check_inputs(module, source: Motion, target: Optional[Motion] = None) -> Non
     if isinstance(module, (str, bytes, os.PathLike)):
         raise TypeError(f"module: expected a loaded model, got {module!r}; load it first: "
                         "satagraph.experiment.train.load_module(...)")
-    check_motion(require_motion(source, "source"))
+    check_motion(require_motion(source, "source"), fps=getattr(module, "fps", None))
     if target is not None:
         check_skeleton(require_motion(target, "target"), target.source or "<target>")
 

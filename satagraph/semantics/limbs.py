@@ -11,7 +11,7 @@ segment", whatever their names.
 from __future__ import annotations
 
 import re
-from typing import Dict, List
+from typing import Callable, Dict, List
 
 import numpy as np
 
@@ -50,9 +50,7 @@ def helper_joints(skeleton: Skeleton, evidence: EvidenceLike = None) -> np.ndarr
     Shapes:
         - **output**: :math:`(J,)` bool
     """
-    from satagraph.semantics import describe_joints  # the package imports this module
-    return np.array([_helper(text) for text in describe_joints(skeleton, evidence=evidence)],
-                    dtype=bool)
+    return _marked(skeleton, evidence, _helper)
 
 
 def _helper(description: str) -> bool:
@@ -69,9 +67,15 @@ def hip_bones(skeleton: Skeleton, evidence: EvidenceLike = None) -> np.ndarray:
     Shapes:
         - **output**: :math:`(J,)` bool
     """
+    return _marked(skeleton, evidence, lambda text: "limb girdle segment (hip bone)" in text)
+
+
+def _marked(skeleton: Skeleton, evidence: EvidenceLike,
+            test: Callable[[str], bool]) -> np.ndarray:
+    """Which joints' descriptions pass :obj:`test`, :math:`(J,)` bool."""
     from satagraph.semantics import describe_joints  # the package imports this module
-    return np.array(["limb girdle segment (hip bone)" in text
-                     for text in describe_joints(skeleton, evidence=evidence)], dtype=bool)
+    return np.array([test(text) for text in describe_joints(skeleton, evidence=evidence)],
+                    dtype=bool)
 
 
 def limb_end_index(skeleton: Skeleton, evidence: EvidenceLike = None) -> List[int]:

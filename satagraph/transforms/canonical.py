@@ -324,13 +324,16 @@ def canonicalize(
         TypeError: :obj:`motion` is not a :class:`~satagraph.motion.Motion`.
     """
     from satagraph.transforms.bind_frame import replace_bind_frame
-    from satagraph.transforms.rig_reading import read_rig, warn_reading
+    from satagraph.transforms.rig_reading import read_body, read_rig, warn_reading
 
     require_motion(motion)
     if replace_bind:
         motion = replace_bind_frame(motion)
-    reading = read_rig(motion, up_axis, unit_scale)  # read on the body, folded
-    motion, removed = fold_root(motion) if remove_root else (motion, None)
+    if remove_root:  # folded once: the rig is read on the body
+        motion, removed = fold_root(motion)
+        reading = read_body(motion, up_axis, unit_scale)
+    else:
+        removed, reading = None, read_rig(motion, up_axis, unit_scale)
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
     up_rot = rotation_between_numpy(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))

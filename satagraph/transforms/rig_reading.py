@@ -524,8 +524,14 @@ def read_rig(motion: Motion, up_axis: Optional[str] = None,
     folded into them first (:func:`~satagraph.transforms.canonical.fold_root`),
     as canonicalisation does."""
     from satagraph.transforms.canonical import fold_root
+    return read_body(fold_root(motion)[0], up_axis, scale)
+
+
+def read_body(motion: Motion, up_axis: Optional[str] = None,
+              scale: Optional[float] = None) -> RigReading:
+    r""":func:`read_rig` of a motion whose root is already the body's
+    (:func:`~satagraph.transforms.canonical.fold_root` done)."""
     rig = motion.rig or RigSettings()
-    motion = fold_root(motion)[0]
     how = "declared" if rig.declared else "given"
     if up_axis is not None:
         up = UpAxisGuess(normalize_up_axis(up_axis), how="given")
