@@ -89,11 +89,8 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
     p.add_argument("--max-batches", type=int, default=None,
                    help="evaluate at most this many batches (default: the whole split)")
-    p.add_argument("--rest", choices=REST_MODES, default="auto",
-                   help="the rest pose the model sees each skeleton in, as reconstruct "
-                   "and retarget show it (default auto: a line or captured rest is "
-                   "replaced by the standing pose; file: the file's own, as the "
-                   "checkpoint's data section may read it for training)")
+    _rest(p, "As reconstruct and retarget show it; file: as the checkpoint's data "
+          "section may read it for training")
     p.add_argument("--retarget", action="store_true",
                    help="also the retarget error onto copies of each split file's "
                    "skeleton with paired ground truth: bone-scaled (internal) and "
@@ -176,14 +173,18 @@ def _common(p) -> None:
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
                    help="frames shared by consecutive windows (default: window / 4)")
+    _rest(p, "The output keeps the target file's rest pose either way")
+
+
+def _rest(p, note: str) -> None:
+    """``--rest``: how reconstruct, retarget and eval show each skeleton."""
     p.add_argument("--rest", choices=REST_MODES, default="auto",
                    help="the rest pose the model sees each skeleton in: the file's, its "
                    "first frame's pose, its mean pose over the frames in which the body "
                    "stands (standing), or auto (default): standing for rigs whose rest pose "
                    "is a line (every bone along its joint's X as Bandai's, or all up as "
                    "Reallusion's) or a captured pose, else the file's; alternate: the pose "
-                   "auto does not choose. The output keeps the target file's rest pose "
-                   "either way")
+                   f"auto does not choose. {note}")
 
 
 def _ground(p, default: bool) -> None:
