@@ -74,10 +74,16 @@ def describe(motion: Motion, path: str) -> Dict[str, Any]:
     (:func:`~satagraph.transforms.bind_frame.has_bind_frame`: it is read as
     frame 1's pose).
     """
+    from satagraph.data.validate import DEFAULT_LIMITS
     from satagraph.transforms.bind_frame import has_bind_frame
     from satagraph.transforms.rig_reading import read_rig
     skel = motion.skeleton
     reading = read_rig(motion)
+    rig = reading.to_dict()
+    if motion.num_frames < DEFAULT_LIMITS.min_frames:
+        rig["warnings"] = [*rig["warnings"], (
+            f"{motion.num_frames} frame(s): a rig without motion; it serves as a target "
+            f"skeleton, but motions need at least {DEFAULT_LIMITS.min_frames}")]
     layout = Counter(len(c) for c in skel.channels)
     return {
         "file": path,
@@ -91,7 +97,7 @@ def describe(motion: Motion, path: str) -> Dict[str, Any]:
         "up_axis": reading.up.axis,
         "height": reading.units.height,
         "height_m": reading.units.height * reading.units.scale,
-        "rig": reading.to_dict(),
+        "rig": rig,
         "max_depth": int(skel.depth.max()),
         "rotation_orders": dict(sorted(Counter(
             o for o in skel.rotation_orders if o).items())),
@@ -144,7 +150,8 @@ def format_table(info: Dict[str, Any]) -> str:
         ("rotation orders", orders or "none"),
         ("channels", f"{info['channels_per_frame']} per frame: {channels}"),
         ("position channels", f"on {info['position_channel_joints']} joint(s)"),
-        ("frame 0", "the rig's bind pose, not motion: read as frame 1's pose"
+        ("frame 0", "none" if not info["frames"] else
+         "the rig's bind pose, not motion: read as frame 1's pose"
          if info["bind_frame"] else "motion"),
     ]
     width = max(len(k) for k, _ in rows)
@@ -253,6 +260,20 @@ def _quick_demo_path(output: Optional[str], tmp: str) -> str:
     return str(Path(output) / "example_walk.bvh")
 
 
+def _write_example(motion: Motion, path: str, tmp: str) -> None:
+    """Write the example walk to :obj:`path`, refusing to replace a file
+    that holds anything else (a motion the user named by mistake)."""
+    draft = str(Path(tmp) / "draft.bvh")
+    _write(motion, draft)
+    target = Path(path)
+    if target.exists() and (not target.is_file()
+                            or target.read_bytes() != Path(draft).read_bytes()):
+        raise CommandError(f"{path}: exists and is not the example walk (a motion of "
+                           "yours?); give --output a new name or delete it first")
+    if target != Path(draft):
+        _write(motion, path)
+
+
 def run_quick_demo(args: argparse.Namespace) -> int:
     """Write the built-in example walk and inspect it (``demo --quick``)."""
     from satagraph.data.examples import example_motion
@@ -260,7 +281,7 @@ def run_quick_demo(args: argparse.Namespace) -> int:
     motion = example_motion()
     with tempfile.TemporaryDirectory(prefix="satagraph-demo-") as tmp:
         path = _quick_demo_path(args.output, tmp)
-        _write(motion, path)
+        _write_example(motion, path, tmp)
         print(f"satagraph demo: wrote the built-in example walk "
               f"({motion.skeleton.num_joints} joints, {motion.num_frames} "
               f"frames at {motion.fps:g} fps) to {path}")

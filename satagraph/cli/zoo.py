@@ -98,7 +98,7 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
                    help="clips per skeleton (default: 4)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     p.add_argument("--frames", type=positive_int, default=120,
-                   help="frames per clip (default: 120)")
+                   help="frames per clip, at least 2 (default: 120)")
     p.add_argument("--fps", type=float, default=30.0,
                    help="frames per second (default: 30)")
     p.add_argument("--kinds", nargs="+", action=ListThenFolder, default=None,
@@ -137,8 +137,11 @@ def run_zoo(args: argparse.Namespace) -> int:
         raise ValueError("zoo: no output folder: satagraph zoo OUT_DIR [--species ...]")
     if not 1.0 <= args.fps <= 1000.0:  # also NaN
         raise ValueError(f"zoo: --fps must be between 1 and 1000, got {args.fps:g}")
+    if args.frames < 2:
+        raise ValueError(f"zoo: --frames must be at least 2 (a motion needs two frames "
+                         f"for its velocities), got {args.frames}")
     start = time.perf_counter()
-    frames = max(args.frames, 2)
+    frames = args.frames
     if args.dialect_variants:
         axes = _flat(args.up_axes)
         axes = UP_AXES if axes == ["+Y"] else axes

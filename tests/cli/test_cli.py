@@ -290,6 +290,35 @@ def test_demo_keeps_output(capsys, tmp_path):
     assert info["rig"]["units"] == "m"
 
 
+def test_inspect_says_a_rig_has_no_motion(capsys, tmp_path):
+    """A file of no frames is a rig: ``inspect`` says so instead of calling
+    frame 0 motion."""
+    path = tmp_path / "rig.bvh"
+    path.write_text("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Zrotation "
+                    "Xrotation Yrotation\n End Site\n {\n  OFFSET 0 1 0\n }\n}\n"
+                    "MOTION\nFrames: 0\nFrame Time: 0.04\n")
+    code, out, _ = run(capsys, "inspect", str(path))
+    assert code == 0
+    assert "0 frame(s): a rig without motion" in out
+    assert re.search(r"^frame 0\s+none$", out, re.M)
+
+
+def test_demo_quick_spares_a_users_file(capsys, tmp_path):
+    """``demo --quick --output FILE.bvh`` rewrites its own walk, never another
+    motion."""
+    path = tmp_path / "capture.bvh"
+    capture = ("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Zrotation Xrotation "
+               "Yrotation\n End Site\n {\n  OFFSET 0 1 0\n }\n}\nMOTION\nFrames: 1\n"
+               "Frame Time: 0.04\n0 0 0\n")
+    path.write_text(capture)
+    code, _, err = run(capsys, "demo", "--quick", "--output", str(path))
+    assert code == 2 and "is not the example walk" in err
+    assert path.read_text() == capture
+    fresh = tmp_path / "walk.bvh"
+    assert run(capsys, "demo", "--quick", "--output", str(fresh))[0] == 0
+    assert run(capsys, "demo", "--quick", "--output", str(fresh))[0] == 0
+
+
 def test_example_motion_is_plausible():
     from satagraph.data.examples import example_motion
 
@@ -416,6 +445,7 @@ def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
 @pytest.mark.parametrize("argv, said", [
     (["zoo", "{tmp}/z", "--fps", "0"], "--fps must be between 1 and 1000"),
     (["zoo", "{tmp}/z", "--fps", "nan"], "--fps must be between 1 and 1000"),
+    (["zoo", "{tmp}/z", "--frames", "1"], "--frames must be at least 2"),
     (["code-bank", "t2m_tiny", "{tmp}/b.safetensors", "--windows", "4", "--device", "gpu0"],
      "--device gpu0: not a device"),
     (["generate", "--ckpt", "builtin-wide", "--text", "walk", "--skeleton", "{zoo}",
