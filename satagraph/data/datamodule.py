@@ -208,6 +208,11 @@ class MotionDataModule(WindowDataModule):
                         z, split, self.window, embed, self.preprocessing, self.seed)])
         if not len(self.datasets["train"]):
             raise ValueError(f"no training windows in {self.sources!r}")
+        if not len(self.datasets["val"]):
+            warnings.warn(f"no validation windows in {self.sources!r}: no file is in the "
+                          "'val' split (a manifest's split column; a folder without one is "
+                          "split 80/10/10 by file name), so nothing is validated and the "
+                          "checkpoints are the last epoch's", stacklevel=2)
         self._fit_normalizer(loaded["train"], zoos)
 
     def _fit_normalizer(self, train, zoos) -> None:

@@ -138,7 +138,21 @@ def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
     the same folder), apply ``key.sub=value`` overrides
     (:func:`merge_overrides`) and check it against the schema, every default
     filled (:func:`~satagraph.experiment.schema.resolve_config`); ``name``
-    defaults to the file's stem."""
+    defaults to the file's stem.
+
+    Args:
+        name (str): A config of ``experiments/`` by its stem (``"tiny"``) or
+            the path of a YAML file.
+        overrides (Sequence[str]): Dotted ``key.sub=value`` overrides, applied
+            in order (``["data.batch_size=8", "optim.lr=1e-4"]``).
+
+    Returns:
+        dict: The whole config as plain Python values.
+
+    Raises:
+        FileNotFoundError: No such config (the message lists the known ones).
+        ValueError: An override or a value the schema refuses, in one line.
+    """
     path = config_path(name)
     cfg = merge_overrides(_read(path), overrides, str(path))
     if not cfg.get("name"):

@@ -298,6 +298,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         module = build_module(cfg, dm)
         if init_from:
             init_weights(module, init_from, init_normalizer)
+        if not len(dm.datasets["val"]):  # said by the data module; nothing to validate
+            trainer_overrides = dict(trainer_overrides, monitor=None, limit_val_batches=0)
         trainer = build_trainer(cfg, run_dir, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
         # set up (its datasets hold the semantic embedder, a closure); each worker

@@ -118,7 +118,26 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
     in evaluation mode and given back in the mode it was in. :obj:`window`
     defaults to the module's training window and :obj:`overlap` to a
     quarter of the window (see :func:`default_windows`). :obj:`semantic`
-    defaults to the module's own encoder (``module.embed``)."""
+    defaults to the module's own encoder (``module.embed``).
+
+    Args:
+        module: A motion autoencoder (:func:`~satagraph.experiment.train.load_module`).
+        source (MotionFeatures): The motion's features, canonical.
+        target (MotionFeatures): Features of the target skeleton (its motion
+            is not read).
+        semantic (callable, optional): The semantic encoder of joint names.
+        window (int, optional): Frames per window.
+        overlap (int, optional): Frames two windows share, blended.
+        batch_size (int): Windows decoded at once.
+
+    Returns:
+        (np.ndarray, np.ndarray, np.ndarray): ``q``, ``r`` and ``c``.
+
+    Shapes:
+        - **input:** source features of :math:`T` frames, a target of
+          :math:`J_t` joints.
+        - **output:** :math:`(T, J_t, 6)`, :math:`(T, 4)`, :math:`(T, J_t)`.
+    """
     window, overlap = default_windows(module, window, overlap)
     semantic = semantic if semantic is not None else getattr(module, "embed", None)
     was_training = module.training

@@ -383,3 +383,22 @@ def test_ema_outside_its_range_is_one_line(tiny_config: Dict[str, Any], decay: f
     cfg = dict(copy.deepcopy(tiny_config), optim={"ema": decay})
     with pytest.raises(ValueError, match=r"optim.ema must be 0 \(none\) or a decay in"):
         train(cfg, max_steps=1)
+
+
+def test_a_run_without_validation_data_says_so_once(tiny_config: Dict[str, Any],
+                                                     small_manifest: Path) -> None:
+    """Sources whose files are all in 'train': one warning naming them, no
+    validation loop, and the run ends with its checkpoints."""
+    rows = small_manifest.read_text().splitlines()
+    only_train = small_manifest.parent / "train_only.tsv"
+    only_train.write_text("\n".join([rows[0]] + [r for r in rows[1:]
+                                                 if r.endswith("\ttrain")]) + "\n")
+    cfg = copy.deepcopy(tiny_config)
+    cfg["data"]["sources"] = [str(only_train)]
+    cfg["trainer"].update(max_epochs=1, limit_train_batches=1)
+    with pytest.warns(UserWarning, match="no validation windows") as caught:
+        _, dm, trainer, run_dir = train(cfg)
+    assert not len(dm.datasets["val"]) and len(dm.datasets["train"])
+    assert not any("could not find the monitored key" in str(w.message) for w in caught)
+    assert trainer.global_step == 1
+    assert (run_dir / "checkpoints" / "last.ckpt").is_file()
