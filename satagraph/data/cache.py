@@ -36,11 +36,21 @@ def default_cache_dir() -> Path:
     return cache_root()
 
 
+def content_digest(path: str, chunk: int = 1 << 20) -> str:
+    """SHA-1 of a file's bytes, read a chunk at a time."""
+    digest = hashlib.sha1()
+    with open(path, "rb") as handle:
+        while block := handle.read(chunk):
+            digest.update(block)
+    return digest.hexdigest()
+
+
 def cache_key(path: str, config: Dict) -> str:
-    """Key from the file's identity (path, size, mtime) and the config."""
-    st = os.stat(path)
-    blob = json.dumps([os.path.abspath(path), st.st_size, st.st_mtime_ns,
-                       config, FEATURE_VERSION], sort_keys=True)
+    """Key from the file (its path and its content: an edit that keeps the
+    size and the modification time, as ``cp -p`` or ``rsync -t`` make, is
+    another key) and the config."""
+    blob = json.dumps([os.path.abspath(path), content_digest(path), config,
+                       FEATURE_VERSION], sort_keys=True)
     return hashlib.sha1(blob.encode()).hexdigest()
 
 

@@ -7,7 +7,7 @@ import os
 import re
 import warnings
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -376,11 +376,12 @@ class _ChannelMap:
     rotations: Dict[str, Tuple[List[int], List[List[int]]]] = field(default_factory=dict)
 
     @classmethod
-    def of(cls, joints: List[_Joint]) -> "_ChannelMap":
+    def of(cls, channels: Sequence[Sequence[str]]) -> "_ChannelMap":
+        """The map of each joint's channel names, in file order."""
         out, column = cls(), 0
-        for j, joint in enumerate(joints):
+        for j, names in enumerate(channels):
             order, cols = "", []
-            for name in joint.channels:
+            for name in names:
                 if name.endswith("position"):
                     out.pos_joint.append(j)
                     out.pos_axis.append("XYZ".index(name[0]))
@@ -416,6 +417,23 @@ def _local_rotations(data: np.ndarray, channels: _ChannelMap,
     return out
 
 
+def channel_transforms(skeleton: Skeleton, data: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    r"""Local rotations and translations of BVH channel values in the
+    skeleton's channel layout (what :func:`read_bvh` makes of a file's
+    frame lines): joints without position channels stand at their offsets,
+    joints without rotation channels keep the identity.
+
+    Shapes:
+        - **data**: :math:`(T, C)`
+        - **output**: :math:`(T, J, 3, 3)` and :math:`(T, J, 3)`
+    """
+    channels = _ChannelMap.of(skeleton.channels)
+    trans = np.empty((data.shape[0], skeleton.num_joints, 3))
+    trans[...] = skeleton.offsets
+    trans[:, channels.pos_joint, channels.pos_axis] = data[:, channels.pos_column]
+    return _local_rotations(data, channels, skeleton.num_joints), trans
+
+
 def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) -> Motion:
     joints = header.joints
     skeleton = Skeleton(
@@ -425,11 +443,7 @@ def _to_motion(path: str, header: _Header, data: np.ndarray, frame_time: float) 
         channels=[j.channels for j in joints],
         end_site=np.array([j.end_site for j in joints]),
     )
-    channels = _ChannelMap.of(joints)
-    trans = np.empty((data.shape[0], len(joints), 3))
-    trans[...] = skeleton.offsets
-    trans[:, channels.pos_joint, channels.pos_axis] = data[:, channels.pos_column]
-    rot = _local_rotations(data, channels, len(joints))
+    rot, trans = channel_transforms(skeleton, data)
     fps = 1.0 / frame_time
     if round(fps) >= 1 and abs(fps - round(fps)) < 1e-2 * max(1.0, fps / 100):
         fps = float(round(fps))

@@ -14,8 +14,15 @@ from satagraph.ops.rotation import matrix_to_euler
 PathLike = Union[str, "os.PathLike[str]"]
 
 
+#: How values read from a file are written back: every decimal of up to 15
+#: significant digits (any exporter's) comes back digit for digit.
+EXACT = "%.15g"
+
+
 def _fmt(values: np.ndarray) -> str:
-    return " ".join(f"{v:.6f}" for v in values)
+    """An OFFSET's numbers, exactly and without exponents, six decimals at
+    least (a tenth of a micron is not rounded to a bone of length zero)."""
+    return " ".join(np.format_float_positional(v, unique=True, min_digits=6) for v in values)
 
 
 def _hierarchy(motion: Motion) -> List[str]:
@@ -86,16 +93,30 @@ def _euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
     return out
 
 
+def raw_channels_hold(motion: Motion, atol: float = 1e-9) -> bool:
+    """Whether the motion's channel values as read (:attr:`Motion.raw_channels`)
+    still say what it holds: rotations and translations unchanged since
+    (an edit in place, or a :func:`dataclasses.replace`, leaves the values
+    of the file behind)."""
+    raw = motion.raw_channels
+    if raw is None or raw.shape != (motion.num_frames, motion.skeleton.num_channels):
+        return False
+    from satagraph.io.bvh_reader import channel_transforms
+    rot, trans = channel_transforms(motion.skeleton, raw)
+    return (np.allclose(rot, motion.rotations, rtol=0.0, atol=atol)
+            and np.allclose(trans, motion.translations, rtol=1e-12, atol=atol))
+
+
 def channel_values(motion: Motion) -> np.ndarray:
     r"""The motion as BVH channel values (Euler angles in degrees, unwrapped
-    over time, and positions), in the skeleton's channel layout.
+    over time, and positions), in the skeleton's channel layout: the values
+    as read where they still hold (:func:`raw_channels_hold`).
 
     Shapes:
         - **output**: :math:`(T, C)`
     """
     skel = motion.skeleton
-    if motion.raw_channels is not None and motion.raw_channels.shape == (
-            motion.num_frames, skel.num_channels):
+    if raw_channels_hold(motion):
         return motion.raw_channels
     euler, columns = _euler_degrees(motion), []
     for j, chans in enumerate(skel.channels):
@@ -136,7 +157,9 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
         motion (Motion): The motion; joints flagged as end sites with no
             children and no channels are written as ``End Site`` blocks.
         path (str or PathLike): Output path.
-        precision (int, optional): Decimals per channel value (at least 6).
+        precision (int, optional): Decimals per computed channel value (at
+            least 6); values as read from a file that still hold are written
+            back exactly (:func:`raw_channels_hold`).
 
     Raises:
         ValueError: A non-finite offset, channel value or frame rate, or a
@@ -147,15 +170,16 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     if motion.skeleton.num_joints and not motion.skeleton.channels[0]:
         raise ValueError(f"{path}: the root joint needs channels to be written")
     values = channel_values(motion)
+    exact = values is motion.raw_channels
     _check_finite(motion, values, path)
     header = _hierarchy(motion)
     header += ["MOTION", f"Frames: {motion.num_frames}",
-               f"Frame Time: {1.0 / motion.fps:.8f}"]
+               f"Frame Time: {1.0 / motion.fps:.10g}"]
 
     def write(f) -> None:
         f.write("\n".join(header) + "\n")
         if values.size:
-            np.savetxt(f, values, fmt=f"%.{max(precision, 6)}f")
+            np.savetxt(f, values, fmt=EXACT if exact else f"%.{max(precision, 6)}f")
         f.write(declaration(motion))
 
     atomic_write(path, write, newline="\n")

@@ -182,3 +182,28 @@ def test_facing_smooth_is_a_preprocessing_option_end_to_end(shared_data):
         meta = {"data": {"preprocessing": {"facing_smooth": 0.25}}}
 
     assert facing_smooth_of(Trained()) == 0.25 and facing_smooth_of(object()) == 0.0
+
+
+def test_cache_sees_an_edit_that_keeps_size_and_time(tmp_path):
+    """A file replaced by one of the same size and modification time (``cp
+    -p``, ``rsync -t``) is read again, not served from the cache."""
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=8)
+    files = scan_folder(tmp_path / "zoo")[:1]
+    path = files[0].path
+    before = load_features(files, cache_dir=str(tmp_path / "cache"))[0]
+    text = open(path).read()
+    head, motion = text.split("MOTION\n")
+    lines = motion.splitlines()
+    frames = [" ".join(v if i != 4 else ("7" if v[0] != "7" else "1") + v[1:]
+                       for i, v in enumerate(line.split())) for line in lines[2:]]
+    edited = head + "MOTION\n" + "\n".join(lines[:2] + frames) + "\n"
+    assert len(edited) == len(text) and edited != text
+    stat = os.stat(path)
+    with open(path, "w") as handle:
+        handle.write(edited)
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    after = load_features(files, cache_dir=str(tmp_path / "cache"))[0]
+    fresh = load_features(files)[0]
+    assert not np.allclose(after.q, before.q)
+    np.testing.assert_array_equal(after.q, fresh.q)

@@ -88,9 +88,13 @@ def test_roundtrip_synthetic(tiny_motion, tmp_path, assert_same_hierarchy):
     np.testing.assert_allclose(again.rotations, tiny_motion.rotations, atol=1e-6)
     np.testing.assert_allclose(again.translations, tiny_motion.translations,
                                atol=1e-6)
-    # Written values read back and re-written are stable.
+    # Written values read back and re-written are the same values, and the
+    # same text from then on.
     write_bvh(again, tmp_path / "again.bvh")
-    assert (tmp_path / "again.bvh").read_text() == out.read_text()
+    third = read_bvh(tmp_path / "again.bvh")
+    np.testing.assert_array_equal(third.raw_channels, again.raw_channels)
+    write_bvh(third, tmp_path / "third.bvh")
+    assert (tmp_path / "third.bvh").read_text() == (tmp_path / "again.bvh").read_text()
 
 
 def test_channel_values_layout(tiny_motion):
@@ -99,9 +103,12 @@ def test_channel_values_layout(tiny_motion):
     assert values.shape == (tiny_motion.num_frames, skel.num_channels)
     # Root position channels come first, verbatim.
     np.testing.assert_allclose(values[:, :3], tiny_motion.translations[:, 0])
-    # Raw channels, when present, are used verbatim.
-    raw = np.arange(values.size, dtype=float).reshape(values.shape)
+    # Raw channels, when present and still saying what the motion holds,
+    # are used verbatim; values that say something else are not.
+    raw = values.copy()
     assert channel_values(tiny_motion.with_(raw_channels=raw)) is raw
+    other = np.arange(values.size, dtype=float).reshape(values.shape)
+    np.testing.assert_allclose(channel_values(tiny_motion.with_(raw_channels=other)), values)
 
 
 def test_position_channels_in_any_order(tmp_path, random_motion):
@@ -297,3 +304,51 @@ def test_accepts_str_and_pathlike(tiny_motion, tmp_path):
     write_bvh(tiny_motion, str(tmp_path / "a.bvh"))
     write_bvh(tiny_motion, tmp_path / "b.bvh")
     assert (tmp_path / "a.bvh").read_text() == (tmp_path / "b.bvh").read_text()
+
+
+# ------------------------------------------------------- what is written back
+TEXT = ("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition "
+        "Zrotation Xrotation Yrotation\n JOINT Spine\n {\n  OFFSET 1.2345e-07 1.1234567891 0\n"
+        "  CHANNELS 3 Zrotation Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 0.5 0\n  }\n"
+        " }\n}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n"
+        "0 90 0 5.1072e-06 1.1234567891 -3 0.25 0 0\n1 91 0 0 0 0 0 12.3456789012 0\n")
+
+
+def test_values_as_read_are_written_back_exactly(tmp_path):
+    """Channel values and offsets read from a file come back value for value,
+    tiny ones included (``%.6f`` made 5.1e-06 a zero and a 0.12 micron bone
+    one of length zero)."""
+    (tmp_path / "in.bvh").write_text(TEXT)
+    motion = read_bvh(tmp_path / "in.bvh")
+    write_bvh(motion, tmp_path / "out.bvh")
+    again = read_bvh(tmp_path / "out.bvh")
+    np.testing.assert_array_equal(again.raw_channels, motion.raw_channels)
+    np.testing.assert_array_equal(again.skeleton.offsets, motion.skeleton.offsets)
+    assert "e-" not in (tmp_path / "out.bvh").read_text().split("MOTION")[0]
+
+
+def test_a_motion_edited_after_reading_is_written_as_it_now_is(tmp_path):
+    """An edit in place or a :func:`dataclasses.replace` is written, not the
+    values the file held."""
+    import dataclasses
+    (tmp_path / "in.bvh").write_text(TEXT)
+    motion = read_bvh(tmp_path / "in.bvh")
+    assert bvh_writer.raw_channels_hold(motion)
+    motion.translations[:, 0, 1] += 100.0
+    assert not bvh_writer.raw_channels_hold(motion)
+    write_bvh(motion, tmp_path / "moved.bvh")
+    np.testing.assert_allclose(read_bvh(tmp_path / "moved.bvh").translations[:, 0, 1],
+                               [190.0, 191.0], atol=1e-6)
+    still = dataclasses.replace(motion, rotations=np.broadcast_to(
+        np.eye(3), motion.rotations.shape).copy())
+    write_bvh(still, tmp_path / "still.bvh")
+    np.testing.assert_allclose(read_bvh(tmp_path / "still.bvh").rotations,
+                               still.rotations, atol=1e-6)
+
+
+def test_a_tiny_frame_time_is_written_as_it_reads(tiny_motion, tmp_path):
+    """``Frame Time`` keeps ten significant digits: 1e-10 s is not written as
+    0, which no reader takes."""
+    fast = tiny_motion.with_(fps=1e10)
+    write_bvh(fast, tmp_path / "fast.bvh")
+    assert read_bvh(tmp_path / "fast.bvh").fps == pytest.approx(1e10)
