@@ -24,7 +24,9 @@ from satagraph.utils.files import atomic_write
 #: 6: a root that carries the hips along the floor is folded into them
 #: (transforms.canonical.fold_root), as a motionless one was, and so is one
 #: with helper chains beside the hips (Unreal's IK roots), set aside.
-FEATURE_VERSION = 6
+#: 7: a rig whose up axis is not +Y has its rest pose turned upright too
+#: (every joint's local axes, not the root's alone).
+FEATURE_VERSION = 7
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
            "r", "c", "facing_axis")

@@ -337,14 +337,15 @@ def canonicalize(
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
     up_rot = rotation_between_numpy(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
-    moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3))
+    moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3), frame=up_rot)
     forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
     yaw = -float(yaw_of(forward))  # rotate forward onto +Z
     transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
                                    scale=reading.units.scale, source_fps=motion.fps,
                                    removed_root=removed,
                                    source_rig=_as_read(reading))
-    out = _apply_rotation(motion, transform.rotation, transform.scale, np.zeros(3))
+    out = _apply_rotation(motion, transform.rotation, transform.scale, np.zeros(3),
+                          frame=up_rot)
     shift = np.zeros(3)
     if out.num_frames:
         shift[[0, 2]] = -out.translations[0, 0, [0, 2]]
@@ -378,14 +379,24 @@ def _shift_root(translations: np.ndarray, shift: np.ndarray) -> np.ndarray:
 
 
 def _apply_rotation(motion: Motion, rot: np.ndarray, scale: float,
-                    shift: np.ndarray) -> Motion:
-    """p' = scale * rot @ p + shift applied to the whole motion."""
-    rotations = motion.rotations.copy()
-    rotations[:, 0] = rot @ rotations[:, 0]
-    trans = motion.translations * scale
-    trans[:, 0] = trans[:, 0] @ rot.T + shift
+                    shift: np.ndarray, frame: Optional[np.ndarray] = None) -> Motion:
+    r"""p' = scale * rot @ p + shift applied to the whole motion, with every
+    joint's local axes turned by :obj:`frame` (default: kept): offsets and
+    translations below the root become ``frame @ t``, local rotations
+    ``frame @ R @ frame.T`` and the root's ``rot @ R @ frame.T``, so that
+    the rest pose is turned with the motion (a +Z-up rig's rest stands up
+    in +Y) while every global position is the same."""
     skel = motion.skeleton
+    rotations = motion.rotations.copy()
+    trans = motion.translations * scale
     offsets = skel.offsets * scale
+    if frame is not None:
+        rotations[:, 1:] = frame @ rotations[:, 1:] @ frame.T
+        rotations[:, 0] = rotations[:, 0] @ frame.T
+        trans[:, 1:] = trans[:, 1:] @ frame.T
+        offsets[1:] = offsets[1:] @ frame.T
+    rotations[:, 0] = rot @ rotations[:, 0]
+    trans[:, 0] = trans[:, 0] @ rot.T + shift
     offsets[0] = offsets[0] @ rot.T
     return motion.with_(skeleton=skel.replace(offsets=offsets),
                         rotations=rotations, translations=trans)
@@ -401,7 +412,7 @@ def decanonicalize(motion: Motion, transform: Optional[CanonicalTransform] = Non
         return motion
     back = _apply_rotation(motion.with_(
         translations=_shift_root(motion.translations, -tf.translation)),
-        tf.rotation.T, 1.0 / tf.scale, np.zeros(3))
+        tf.rotation.T, 1.0 / tf.scale, np.zeros(3), frame=tf.up_rotation.T)
     back.transform = None
     back.rig = tf.source_rig
     back = resample(back, fps or tf.source_fps)

@@ -267,3 +267,23 @@ def test_an_unreal_rig_is_read_on_its_body(shared_data):
     in_cm.rig = None
     reading = read_rig(in_cm)
     assert reading.up.axis == "+Y" and reading.units.scale == 0.01 and not reading.units.kept
+
+
+@pytest.mark.parametrize("up", ["+Z", "-Z", "-X"])
+def test_a_rig_of_another_up_axis_stands_up_whole(up):
+    """A rig exported with another up axis (offsets along +Z, as Blender
+    writes) canonicalises to its +Y twin's rest pose and local rotations, not
+    only its global positions (a lying rest made every retarget onto a +Z rig
+    collapse to 0.8 of the height); the inverse gives the file back."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.datasets.zoo.dialects import Dialect, apply_dialect
+    clip = generate_clip(zoo_rigs(["biped"])[0], "walk", frames=30, seed=3)
+    twin, _ = apply_dialect(clip, Dialect(up_axis=up))
+    assert not np.allclose(twin.skeleton.offsets, clip.skeleton.offsets)
+    a, b = canonicalize(clip, up_axis="+Y"), canonicalize(twin, up_axis=up)
+    np.testing.assert_allclose(b.skeleton.offsets[1:], a.skeleton.offsets[1:], atol=1e-9)
+    np.testing.assert_allclose(b.rotations, a.rotations, atol=1e-9)
+    np.testing.assert_allclose(b.global_positions(), a.global_positions(), atol=1e-9)
+    back = decanonicalize(b, fps=twin.fps)
+    np.testing.assert_allclose(back.skeleton.offsets, twin.skeleton.offsets, atol=1e-9)
+    np.testing.assert_allclose(back.global_positions(), twin.global_positions(), atol=1e-9)
