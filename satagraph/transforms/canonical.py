@@ -434,10 +434,10 @@ def _restore_root(motion: Motion, removed: dict, up: np.ndarray) -> Motion:
     rotations = motion.rotations.copy()
     translations = motion.translations.copy()
     offsets = np.concatenate([removed["offset"][None], skel.offsets])
+    offsets[1] = removed["child_offset"]  # the hips' own rest, not frame 0's place
     rotations[:, 0] = rot0.T @ rotations[:, 0]
     root_trans = np.broadcast_to(trans0, (num_frames, 3))
     if removed.get("carries"):
-        offsets[1] = removed["child_offset"]
         root_trans = translations[:, 0] - rot0 @ offsets[1]
         if skel.has_position_channels[0]:
             root_trans = root_trans - np.outer(root_trans @ up - trans0 @ up, up)

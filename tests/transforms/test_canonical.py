@@ -48,6 +48,8 @@ def test_static_root_removed_and_restored(shared_data, tmp_path):
     again = read_bvh(tmp_path / "back.bvh")
     assert again.skeleton.names == src.skeleton.names
     assert again.skeleton.channels == src.skeleton.channels
+    # every rest offset the file's, the hips' too (not where they stood at frame 0)
+    np.testing.assert_allclose(again.skeleton.offsets, src.skeleton.offsets, atol=1e-9)
     np.testing.assert_allclose(again.global_positions(), src.global_positions(),
                                atol=1e-4)
 
