@@ -408,6 +408,7 @@ def run_eval(args) -> int:
         raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
     data = dict(module.meta.get("data") or {})
+    data["max_files"] = None  # the whole split, whatever the training run read of it
     if args.data:
         data["sources"] = args.data
     if not data.get("sources"):
@@ -420,8 +421,8 @@ def run_eval(args) -> int:
     dm.setup("test")
     if not len(dm.datasets[args.split]):
         raise ValueError(f"no windows in the {args.split!r} split of {data['sources']} (a "
-                         "folder without a manifest puts its files in the train split: "
-                         "--split train)")
+                         "manifest's split column; a folder without one is split 80/10/10 "
+                         "by file name: try another --split)")
     loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)
     results = evaluate(module, loader, args.max_batches)
     print(format_table(results))

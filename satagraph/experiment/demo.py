@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import shutil
 import sys
 import time
 import warnings
@@ -191,9 +192,11 @@ def train_demo(cfg: Dict[str, Any], init_from: Optional[str] = None) -> Tuple[An
     the trained module and the trainer."""
     from satagraph.experiment.train import train
 
+    run_dir = Path(cfg["output_dir"])
+    if (run_dir / "checkpoints").is_dir():  # the demo's own run of a previous call
+        shutil.rmtree(run_dir / "checkpoints")
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", ".*does not have many workers.*")
-        warnings.filterwarnings("ignore", ".*Checkpoint directory.*exists.*")
         module, _, trainer, _ = train(cfg, init_from=init_from)
     return module, trainer
 

@@ -225,6 +225,7 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
     state = vae_to_rvq({k: v for k, v in state.items() if not k.startswith(keep)}, own)
     reshaped = [k for k, v in state.items() if k in own and own[k].shape != v.shape]
     state = {k: v for k, v in state.items() if k not in reshaped}
+    _refuse_other_architecture(ckpt, payload, module, own, state, keep)
     result = module.load_state_dict(state, strict=False)
     missing = [k for k in result.missing_keys if not k.startswith(keep) and k not in reshaped]
     if missing or result.unexpected_keys or reshaped:
@@ -233,6 +234,34 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
                       f"{len(result.unexpected_keys)} unused "
                       f"({result.unexpected_keys[:5]}), {len(reshaped)} of another shape "
                       f"(kept at initialisation: {reshaped[:5]})", stacklevel=2)
+
+
+#: Fewest of a module's weights (a fraction) that ``--init-from`` must fill;
+#: below it the checkpoint is another architecture and training would start
+#: from scratch under a fine-tune's name.
+MIN_INIT_FRACTION = 0.5
+
+
+def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.LightningModule,
+                               own: Dict[str, torch.Tensor], state: Dict[str, torch.Tensor],
+                               keep: Tuple[str, ...]) -> None:
+    """One line when fewer than :data:`MIN_INIT_FRACTION` of the module's
+    weights would load, naming the model settings that differ."""
+    wanted = [k for k in own if not k.startswith(keep)]
+    filled = sum(k in state for k in wanted)
+    if not wanted or filled >= MIN_INIT_FRACTION * len(wanted):
+        return
+    theirs = (payload.get("hyper_parameters") or {}).get("model") or {}
+    ours = dict(getattr(module, "hparams", {}).get("model") or {})
+    differ = [f"model.{k}={v}" for k, v in sorted(theirs.items())
+              if k in ours and ours[k] != v and k != "semantic_channels"]
+    hint = (f"train with its settings ({' '.join(differ[:6])})" if differ
+            else "train with the config that made it")
+    raise ValueError(f"--init-from {ckpt}: only {filled} of {len(wanted)} weights fit this "
+                     f"model: it is another architecture; {hint}"
+                     + ("; for the built-in model: satagraph train finetune_builtin "
+                        "--init-from builtin data.sources=[...]"
+                        if str(ckpt).startswith("builtin") else ""))
 
 
 def _spawns_workers(trainer: L.Trainer) -> bool:
@@ -284,6 +313,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     if resume and not (run_dir / "checkpoints").is_dir():
         raise FileNotFoundError(f"--resume: no checkpoint at "
                                 f"{run_dir / 'checkpoints' / 'last.ckpt'}")
+    if not resume:
+        refuse_trained_folder(run_dir)
     if init_from:  # a bad file, or one of other features, fails before any work
         check_init_features(load_weights_or_checkpoint(init_from), cfg, init_from)
     if cfg["threads"]:
@@ -310,6 +341,22 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
             trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
     return module, dm, trainer, run_dir
+
+
+def refuse_trained_folder(run_dir: Path) -> None:
+    """Refuse to start a new run in a folder that holds a trained one: its
+    checkpoints would be replaced and its loss log mixed with the new run's.
+
+    Raises:
+        ValueError: One line naming the folder and the ways on.
+    """
+    folder = run_dir / "checkpoints"
+    kept = sorted(p.name for p in folder.glob("*.ckpt")) if folder.is_dir() else []
+    if kept:
+        raise ValueError(f"{run_dir}: holds a trained run ({len(kept)} checkpoint(s): "
+                         f"{', '.join(kept[:3])}{', ...' if len(kept) > 3 else ''}); "
+                         "--resume continues it, another output_dir starts a new one "
+                         "(or delete the folder to start over)")
 
 
 def _lock(run_dir: Path):

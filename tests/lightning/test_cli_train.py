@@ -90,6 +90,18 @@ def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: 
     assert saved["all"]["retarget"] == pytest.approx(float(errors["all"][0]), abs=1e-3)
 
 
+def test_eval_reads_the_whole_split_whatever_training_read(
+        config_overrides: List[str], tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A run trained on one file per split (``data.max_files=1``) is still
+    evaluated on every file of the split asked for."""
+    run = tmp_path / "run"
+    assert main(_train_args(config_overrides, run, "data.max_files=1")) == 0
+    capsys.readouterr()
+    assert main(["--traceback", "eval", "--ckpt", str(run / "checkpoints" / "last.ckpt"),
+                 "--split", "test"]) == 0
+    assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
+
+
 def test_resume_without_checkpoint_is_a_usage_error(config_overrides: List[str],
                                                     tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch,

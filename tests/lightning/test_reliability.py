@@ -402,3 +402,17 @@ def test_a_run_without_validation_data_says_so_once(tiny_config: Dict[str, Any],
     assert not any("could not find the monitored key" in str(w.message) for w in caught)
     assert trainer.global_step == 1
     assert (run_dir / "checkpoints" / "last.ckpt").is_file()
+
+
+def test_a_new_run_never_replaces_a_trained_one(tiny_config: Dict[str, Any]) -> None:
+    """Training again into a folder that holds a run, without ``--resume``,
+    is refused in one line; its checkpoints and loss log stay as they were."""
+    cfg = copy.deepcopy(tiny_config)
+    cfg["trainer"].update(max_epochs=1, limit_train_batches=1)
+    cfg["loss_log"] = True
+    _, _, _, run_dir = train(cfg)
+    last = run_dir / "checkpoints" / LAST
+    before = last.read_bytes(), (run_dir / "losses.tsv").read_text()
+    with pytest.raises(ValueError, match="holds a trained run .*--resume continues it"):
+        train(cfg)
+    assert (last.read_bytes(), (run_dir / "losses.tsv").read_text()) == before

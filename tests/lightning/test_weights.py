@@ -302,3 +302,34 @@ def test_builtin_notice_tells_the_first_training_of_a_blend(
         weights.read_weights_metadata(shipped)["provenance"])] == [39.0, 12.0, 400.0]
     assert weights.builtin_notice() == ("using the built-in model (satagraph train "
                                         "pretrain_zoo, 451 min, a 2-core VM): short")
+
+
+def test_init_from_another_architecture_is_refused(config_overrides: List[str],
+                                                   tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture) -> None:
+    """``--init-from builtin`` on a config of another size would fill 3 of
+    102 weights and train from scratch under a fine-tune's name: refused in
+    one line naming the settings to use, and no run folder is left."""
+    run = tmp_path / "run"
+    args = _train_args(config_overrides, run, "data.preprocessing.facing_smooth=0.25",
+                       "--init-from", "builtin")[1:]  # without --traceback
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "another architecture" in err[-1] and "model.hidden_channels=64" in err[-1]
+    assert "satagraph train finetune_builtin" in err[-1]
+    assert not run.exists()
+
+
+def test_the_fine_tune_config_is_the_builtin_models_architecture() -> None:
+    """``finetune_builtin`` (README) builds what ``builtin`` holds: its model,
+    losses, window and facing smoothing."""
+    from satagraph.data.dataset import data_facing_smooth
+    from satagraph.experiment.config import load_config
+    from satagraph.experiment.train import load_weights_or_checkpoint
+    cfg = load_config("finetune_builtin", ["data.sources=[mine]"])
+    hp = load_weights_or_checkpoint("builtin")["hyper_parameters"]
+    assert {k: v for k, v in hp["model"].items() if k != "semantic_channels"} == {
+        k: cfg["model"][k] for k in hp["model"] if k != "semantic_channels"}
+    assert hp["loss"] == {k: cfg["loss"][k] for k in hp["loss"]}
+    assert cfg["data"]["window"] == hp["meta"]["window"]
+    assert data_facing_smooth(cfg["data"]) == data_facing_smooth(hp["meta"]["data"])
