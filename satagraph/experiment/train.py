@@ -321,6 +321,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         torch.set_num_threads(int(cfg["threads"]))
     with _lock(run_dir):
         last = resume_checkpoint(run_dir / "checkpoints") if resume else None
+        if last is not None:
+            check_resumable(last, cfg)
         sweep_stale_temps(run_dir / "checkpoints")
         L.seed_everything(int(cfg["seed"]), workers=True)
         dm = build_datamodule(cfg)
@@ -341,6 +343,29 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
             trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
     return module, dm, trainer, run_dir
+
+
+def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
+    """Refuse to resume a run with a model of other settings (its weights
+    would not load) or on other data (the run would go on silently, its
+    record then naming data it mostly did not see).
+
+    Raises:
+        ValueError: One line naming the checkpoint and what differs.
+    """
+    from satagraph.io.checkpoint import load_checkpoint
+    hp = load_checkpoint(path).get("hyper_parameters") or {}
+    theirs, ours = hp.get("model") or {}, cfg.get("model") or {}
+    differ = [f"model.{k}={theirs[k]} (here {ours[k]})" for k in sorted(theirs)
+              if k in ours and ours[k] is not None and ours[k] != theirs[k]]
+    before = ((hp.get("meta") or {}).get("data") or {}).get("sources")
+    now = data_section(cfg).get("sources")
+    if before is not None and before != now:
+        differ.append(f"data.sources={before} (here {now})")
+    if differ:
+        raise ValueError(f"--resume {path}: the run was trained with {'; '.join(differ[:4])}; "
+                         "resume with its own settings, or start from its weights in another "
+                         "output_dir with --init-from")
 
 
 def refuse_trained_folder(run_dir: Path) -> None:

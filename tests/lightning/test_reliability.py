@@ -6,6 +6,7 @@ import copy
 import os
 import pickle
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -416,3 +417,23 @@ def test_a_new_run_never_replaces_a_trained_one(tiny_config: Dict[str, Any]) -> 
     with pytest.raises(ValueError, match="holds a trained run .*--resume continues it"):
         train(cfg)
     assert (last.read_bytes(), (run_dir / "losses.tsv").read_text()) == before
+
+
+@pytest.mark.parametrize("change, said", [
+    ({"model": {"hidden_channels": 48}}, "model.hidden_channels=32 (here 48)"),
+    ({"data": {"sources": ["elsewhere"]}}, "data.sources="),
+])
+def test_resume_with_another_model_or_data_is_refused(tiny_config: Dict[str, Any],
+                                                      change: Dict[str, Any], said: str) -> None:
+    """``--resume`` with other model settings (a 133-line size mismatch) or
+    other data (silently re-recorded): one line, the run untouched."""
+    cfg = copy.deepcopy(tiny_config)
+    cfg["trainer"].update(max_epochs=1, limit_train_batches=1)
+    _, _, _, run_dir = train(cfg)
+    before = (run_dir / "checkpoints" / LAST).read_bytes()
+    other = copy.deepcopy(cfg)
+    for section, values in change.items():
+        other[section].update(values)
+    with pytest.raises(ValueError, match=re.escape(said)):
+        train(other, resume=True)
+    assert (run_dir / "checkpoints" / LAST).read_bytes() == before
