@@ -91,7 +91,7 @@ class TrainerExtras:
     :obj:`monitor` (the metric the best checkpoint keeps) and
     :obj:`progress` (a rich progress bar)."""
 
-    monitor: str = "val_loss"
+    monitor: Optional[str] = "val_loss"
     progress: bool = True
 
 
@@ -169,12 +169,60 @@ def defaults(schema: type) -> Dict[str, Any]:
     return out
 
 
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value: Any) -> bool:
+    return _is_int(value) or isinstance(value, float)
+
+
+#: What a field of each annotation accepts (the others accept anything).
+TYPE_CHECKS = {"int": (_is_int, "an integer"), "float": (_is_number, "a number"),
+               "bool": (lambda v: isinstance(v, bool), "true or false"),
+               "str": (lambda v: isinstance(v, str), "a string")}
+
+
+def check_types(where: str, schema: type, values: Mapping[str, Any]) -> None:
+    """One line for a value of the wrong type in a field annotated ``int``,
+    ``float``, ``bool`` or ``str`` (or ``Optional`` of one, which also takes
+    ``null``): ``seed=abc`` or ``data.balanced=maybe``, before anything
+    fails on it far from the cause."""
+    for f in fields(schema):
+        kind = str(f.type)
+        optional = kind.startswith("Optional[")
+        check = TYPE_CHECKS.get(kind[9:-1] if optional else kind)
+        if check is None or f.name not in values:
+            continue
+        value = values[f.name]
+        if not (check[0](value) or (optional and value is None)):
+            name = f"{where}.{f.name}" if where else f.name
+            raise ValueError(f"{name}={value!r}: {check[1]} is expected"
+                             f"{' (or null)' if optional else ''}")
+
+
 def fill(where: str, schema: type, values: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
-    """:obj:`values` checked against the fields of :obj:`schema`, with the
-    defaults of the missing ones."""
+    """:obj:`values` checked against the fields of :obj:`schema` (their
+    names and simple types, :func:`check_types`), with the defaults of the
+    missing ones."""
     values = dict(values or {})
     check_keys(where, values, (f.name for f in fields(schema)))
+    check_types(where, schema, values)
     return dict(defaults(schema), **values)
+
+
+#: Smallest value of the ``data`` counts (``data.window=-5`` failed as an
+#: ``IndexError`` far from the cause).
+DATA_AT_LEAST = {"window": 2, "stride": 1, "eval_stride": 1, "batch_size": 1,
+                 "max_files": 1, "num_workers": 0}
+
+#: ``trainer`` keys that take a whole number (``-1``: no limit, where Lightning
+#: says so), and those that take a number.
+TRAINER_INTS = ("max_epochs", "min_epochs", "max_steps", "min_steps", "log_every_n_steps",
+                "accumulate_grad_batches", "num_sanity_val_steps",
+                "check_val_every_n_epoch")
+TRAINER_NUMBERS = ("limit_train_batches", "limit_val_batches", "limit_test_batches",
+                   "val_check_interval")
 
 
 def resolve_data(data: Optional[Mapping[str, Any]],
@@ -184,6 +232,10 @@ def resolve_data(data: Optional[Mapping[str, Any]],
     from satagraph.data.dataset import DEFAULT_PREPROCESSING
     from satagraph.transforms.augment import AugmentConfig
     out = fill("data", schema, data)
+    for key, least in DATA_AT_LEAST.items():
+        value = out.get(key)
+        if _is_number(value) and value < least:
+            raise ValueError(f"data.{key}={value}: at least {least} is expected")
     check_keys("data.preprocessing", out.get("preprocessing") or {}, DEFAULT_PREPROCESSING)
     augment = out.get("augment")
     if isinstance(augment, Mapping):
@@ -201,7 +253,15 @@ def resolve_trainer(trainer: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
     if "gradient_clip_val" in trainer:
         raise ValueError("trainer.gradient_clip_val: set optim.grad_clip instead "
                          "(the one owner of gradient clipping)")
-    return dict(defaults(TrainerExtras), **trainer)
+    for key in TRAINER_INTS + TRAINER_NUMBERS:
+        value = trainer.get(key)
+        ok = _is_int(value) if key in TRAINER_INTS else _is_number(value)
+        if value is not None and not ok:
+            kind = "an integer" if key in TRAINER_INTS else "a number"
+            raise ValueError(f"trainer.{key}={value!r}: {kind} is expected (or null)")
+    out = dict(defaults(TrainerExtras), **trainer)
+    check_types("trainer", TrainerExtras, out)
+    return out
 
 
 def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
@@ -231,5 +291,6 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
            "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config",
-           "resolve_data", "fill", "check_keys", "unknown_key_error", "defaults",
+           "resolve_data", "fill", "check_keys", "check_types", "unknown_key_error",
+           "defaults", "DATA_AT_LEAST",
            "signature_schema"]

@@ -3,6 +3,7 @@ for an unknown key (naming it, the known keys and the closest)."""
 from __future__ import annotations
 
 import inspect
+import re
 from dataclasses import asdict, fields
 
 import pytest
@@ -108,3 +109,28 @@ def test_train_checks_every_key_before_reading_data(tmp_path):
         with pytest.raises(ValueError, match="did you mean"):
             train(cfg)
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("override, message", [
+    ("seed=abc", "seed='abc': an integer is expected"),
+    ("data.balanced=maybe", "data.balanced='maybe': true or false is expected"),
+    ("data.window=-5", "data.window=-5: at least 2 is expected"),
+    ("data.batch_size=0", "data.batch_size=0: at least 1 is expected"),
+    ("trainer.max_steps=abc", "trainer.max_steps='abc': an integer is expected"),
+    ("trainer.limit_val_batches=all", "trainer.limit_val_batches='all': a number"),
+    ("checkpoint.every_minutes=soon", "checkpoint.every_minutes='soon': a number is expected"),
+])
+def test_a_value_of_the_wrong_type_is_one_line(override, message):
+    """Values the schema can type are checked where they are given, not
+    where they fail (an ``IndexError`` in windowing, a ``TypeError`` in
+    Lightning)."""
+    with pytest.raises(ValueError, match=re.escape(message)):
+        load_config("tiny", [override])
+    assert load_config("tiny", ["data.max_files=null", "threads=null", "seed=3"])["seed"] == 3
+
+
+def test_heads_must_divide_the_width():
+    from satagraph.nn.layers.spatio_temporal import SpatioTemporalBlock
+    with pytest.raises(ValueError, match="hidden_channels=33 must be a multiple of "
+                                         "model.heads=4"):
+        SpatioTemporalBlock(33, heads=4)

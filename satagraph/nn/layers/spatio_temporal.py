@@ -101,6 +101,9 @@ class SpatioTemporalBlock(nn.Module):
                  spatial_attention: bool = True, temporal: bool = True,
                  edge_channels: int = 2, act: str = "relu") -> None:
         super().__init__()
+        if heads < 1 or channels % heads:
+            raise ValueError(f"model.hidden_channels={channels} must be a multiple of "
+                             f"model.heads={heads} (each head attends over an equal share)")
         conv = build_local_conv(local_conv, channels, heads, edge_dim=channels, act=act)
         self.use_edge_attr = accepts_edge_attr(conv)
         self.edge_lin = nn.Linear(edge_channels, channels) if self.use_edge_attr else None
