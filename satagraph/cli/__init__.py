@@ -198,6 +198,8 @@ def run_convert(args: argparse.Namespace) -> int:
         raise CommandError("--up-axis and --units need --canonical")
     check_output_path(args.output)
     motion = read_with_rig(args.input, args)
+    from satagraph.data.validate import check_writable
+    check_writable(motion, args.input)
     if args.canonical or args.fps:  # resampling: bounded memory, a sane skeleton
         from satagraph.data.validate import check_resample, check_skeleton
         check_resample(motion, args.input, args.fps)

@@ -10,16 +10,10 @@ import time
 from pathlib import Path
 from typing import Callable, List, Optional, Sequence, Tuple, TypeVar, Union
 
+from satagraph.datasets.sources import bvh_files
+
 PathLike = Union[str, Path]
 Item, Result = TypeVar("Item"), TypeVar("Result")
-
-
-def bvh_files(folder: PathLike) -> List[Path]:
-    """Every ``.bvh`` entry (any case) below :obj:`folder` but folders,
-    sorted: special files and broken links too, which the reader refuses
-    in one line rather than the listing leaving them out unsaid."""
-    return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() == ".bvh"
-                  and not p.is_dir())
 
 
 def input_files(source: PathLike, output: Optional[PathLike] = None) -> List[Path]:
@@ -105,4 +99,4 @@ def _failed(failed: List[Path], shown: int = 10) -> str:
     return f"; {len(failed)} failed: {names}{more}"
 
 
-__all__ = ["bvh_files", "input_files", "failure_line", "each_kept", "run_over_folder"]
+__all__ = ["input_files", "failure_line", "each_kept", "run_over_folder"]

@@ -124,12 +124,13 @@ def add_generate_parser(sub) -> None:
 def _targets(args) -> list:
     """The skeleton files, read and checked (one line naming a bad file)."""
     from satagraph.cli.arguments import check_per_input, read_with_rig
-    from satagraph.data.validate import check_skeleton
+    from satagraph.data.validate import check_skeleton, check_writable
     check_per_input(args, len(args.skeleton))
     out = []
     for i, path in enumerate(args.skeleton):
         motion = read_with_rig(path, args, index=i)
         check_skeleton(motion, path)
+        check_writable(motion, path)
         out.append(motion)
     return out
 

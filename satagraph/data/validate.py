@@ -180,6 +180,20 @@ def check_motion(motion: Motion, path: Optional[str] = None, fps: Optional[float
     check_values(motion, path, size, limits)
 
 
+def check_writable(motion: Motion, path: Optional[str] = None) -> None:
+    """A rig that motion can be written onto: a root with channels (the
+    root's motion goes into them), checked before any work is done on it.
+
+    Raises:
+        MotionValidationError: One line naming the file.
+    """
+    skel = motion.skeleton
+    if skel.num_joints and not skel.channels[0]:
+        raise _error(path or motion.source or "<motion>",
+                     f"its root joint {skel.names[0]!r} has no CHANNELS, so no motion can be "
+                     "written onto this rig")
+
+
 def check_features(feats, path: str) -> None:
     """Finite features and a positive height (the last check before a
     file's features are cached or trained on).
@@ -196,5 +210,6 @@ def check_features(feats, path: str) -> None:
 
 
 __all__ = ["MotionValidationError", "MotionLimits", "DEFAULT_LIMITS", "check_motion",
+           "check_writable",
            "check_timing", "check_resample", "check_skeleton", "check_values", "check_features",
            "skeleton_size"]

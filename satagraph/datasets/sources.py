@@ -56,6 +56,14 @@ def _hash_split(name: str, val: float = 0.1, test: float = 0.1) -> str:
     return "test" if u < test else "val" if u < test + val else "train"
 
 
+def bvh_files(folder: Union[str, os.PathLike]) -> List[Path]:
+    """Every ``.bvh`` entry (any case: ``.BVH``, ``.Bvh``) below :obj:`folder`
+    but folders, sorted: special files and broken links too, which the reader
+    refuses in one line rather than the listing leaving them out unsaid."""
+    return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() == ".bvh"
+                  and not p.is_dir())
+
+
 def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
     r"""Rows of a manifest TSV with at least the columns ``path`` (relative
     to the manifest's folder) and ``split``; ``dataset`` and ``skeleton``
@@ -87,7 +95,7 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
                     if Path(r.path).resolve().is_relative_to(path.resolve())]
             if rows:
                 return [replace(r, dataset=dataset or r.dataset) for r in rows]
-    files = sorted(path.rglob("*.bvh")) + sorted(path.rglob("*.BVH"))
+    files = bvh_files(path)
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
     name = dataset or path.name

@@ -44,11 +44,17 @@ class _Header:
 
 
 def _floats(path: str, lineno: int, tokens: List[str], what: str) -> np.ndarray:
-    try:
-        values = [float(t) for t in tokens]
-    except ValueError:
-        raise BVHError(path, lineno, f"non-numeric value in {what}: "
-                       f"{' '.join(tokens)!r}") from None
+    """The numbers of a line, or an error naming the first token that is not
+    one (a BVH number: no digit separators, which Python's ``float`` takes)."""
+    values = []
+    for i, token in enumerate(tokens):
+        try:
+            if "_" in token:
+                raise ValueError(token)
+            values.append(float(token))
+        except ValueError:
+            raise BVHError(path, lineno, f"non-numeric value {token[:40]!r} in {what} "
+                           f"(value {i + 1} of {len(tokens)})") from None
     if not all(map(math.isfinite, values)):
         raise BVHError(path, lineno, f"non-finite value in {what}")
     return np.array(values)
@@ -84,6 +90,8 @@ class _HeaderParser:
         self.stack: List[int] = []  # open joint indices
         self.pending: Optional[int] = None  # joint waiting for its '{'
         self.names: set = set()
+        #: Names made up for End Sites (``<parent>_end``): joint index by name.
+        self.made_up: Dict[str, int] = {}
 
     def error(self, lineno: int, msg: str) -> BVHError:
         return BVHError(self.path, lineno, msg)
@@ -153,12 +161,15 @@ class _HeaderParser:
         parent = self.stack[-1] if self.stack else -1
         if kind == "END":
             name = _unique(f"{joints[parent].name}_end", self.names)
+            self.made_up[name] = len(joints)
         else:
             if name.endswith("{"):
                 name, tail = name[:-1].strip(), "{"
             if not name:
                 raise self.error(lineno, f"{kind} without a name")
-            if name in self.names:
+            if name in self.made_up:  # the file's own name wins over one made up
+                self._rename_end_site(name)
+            elif name in self.names:
                 raise self.error(lineno, f"duplicate joint name {name!r}")
         joints.append(_Joint(name, parent, lineno, end_site=kind == "END"))
         self.names.add(name)
@@ -167,6 +178,14 @@ class _HeaderParser:
             self._open_brace(lineno)
         elif tail:
             raise self.error(lineno, f"unexpected {tail!r}")
+
+    def _rename_end_site(self, name: str) -> None:
+        """Give the End Site called :obj:`name` another made-up name."""
+        index = self.made_up.pop(name)
+        new = _unique(name, self.names)
+        self.header.joints[index].name = new
+        self.names.add(new)
+        self.made_up[new] = index
 
     def _open_brace(self, lineno: int) -> None:
         if self.pending is None:
@@ -295,6 +314,10 @@ def _parse_frames(path: str, text: str, pos: int, raw: Optional[bytes], lineno: 
     the vectorised fast path for plain decimals, else the C parser of numpy;
     on any problem, find and name the offending line."""
     if width == 0:  # a skeleton without channels: frame lines are empty
+        present = text.count("\n", pos) + bool(text[pos:] and not text.endswith("\n"))
+        if frames > present:
+            raise BVHError(path, lineno, f"'Frames: {frames}' but only {present} lines "
+                           "follow (a skeleton without channels has an empty line a frame)")
         return np.zeros((frames, 0))
     if frames == 0:
         if text[pos:].strip():

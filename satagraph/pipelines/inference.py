@@ -274,13 +274,14 @@ def check_inputs(module, source: Motion, target: Optional[Motion] = None) -> Non
         TypeError: A path or name where a model or a motion is expected.
         MotionValidationError: One line naming the motion and the problem.
     """
-    from satagraph.data.validate import check_motion, check_skeleton
+    from satagraph.data.validate import check_motion, check_skeleton, check_writable
     if isinstance(module, (str, bytes, os.PathLike)):
         raise TypeError(f"module: expected a loaded model, got {module!r}; load it first: "
                         "satagraph.experiment.train.load_module(...)")
     check_motion(require_motion(source, "source"), fps=getattr(module, "fps", None))
     if target is not None:
         check_skeleton(require_motion(target, "target"), target.source or "<target>")
+    check_writable(target if target is not None else source)
 
 
 def from_canonical(canon: Motion, source: Motion) -> Motion:

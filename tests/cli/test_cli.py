@@ -472,6 +472,30 @@ def test_wrong_arguments_are_one_line(argv, said, tmp_path, capsys) -> None:
     assert not [p for p in tmp_path.iterdir() if p.name not in ("clips",)]
 
 
+NO_ROOT_CHANNELS = ("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n JOINT Spine\n {\n  OFFSET 0 0.5 0"
+                    "\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  JOINT Head\n  {\n   OFFSET 0 "
+                    "0.5 0\n   CHANNELS 3 Zrotation Xrotation Yrotation\n   End Site\n   {\n"
+                    "    OFFSET 0 0.2 0\n   }\n  }\n }\n}\nMOTION\nFrames: 3\nFrame Time: 0.04\n"
+                    + "0 0 0 0 0 0\n0 5 0 0 5 0\n0 9 0 0 9 0\n")
+
+
+@pytest.mark.parametrize("command", ["reconstruct", "retarget", "convert"])
+def test_a_rig_whose_root_has_no_channels_is_refused_before_any_work(command, tmp_path,
+                                                                     capsys) -> None:
+    """Nothing can be written onto a root without CHANNELS: one line naming
+    the input whose rig would be written, before the model runs."""
+    rig = tmp_path / "rig.bvh"
+    rig.write_text(NO_ROOT_CHANNELS)
+    out = tmp_path / "out.bvh"
+    argv = {"reconstruct": ["reconstruct", str(rig), str(out)],
+            "convert": ["convert", str(rig), str(out)],
+            "retarget": ["retarget", str(rig), "--target", str(rig), str(out)]}[command]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert f"{rig}: its root joint 'Hips' has no CHANNELS" in err[-1]
+    assert not out.exists()
+
+
 def test_a_negative_up_axis_needs_no_equals_sign(capsys, tiny_file) -> None:
     """``--up-axis -Y`` (argparse alone took ``-Y`` for an option)."""
     assert cli.main(["inspect", str(tiny_file), "--up-axis", "-Y"]) == 0

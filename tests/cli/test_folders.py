@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from satagraph.cli import main
-from satagraph.cli.folders import bvh_files, failure_line
+from satagraph.cli.folders import failure_line
+from satagraph.datasets.sources import bvh_files, scan_folder
 from satagraph.datasets.zoo import write_zoo
 from satagraph.io import read_bvh
 
@@ -37,6 +38,15 @@ def test_bvh_files_are_found_below_the_folder_in_any_case(folder: Path) -> None:
     names = [p.relative_to(folder).as_posix() for p in bvh_files(folder)]
     assert names == ["deep/Trot.BVH", "deep/broken.bvh", "deep/gone.bvh", "target.bvh",
                      "walk.bvh"]  # a broken link too: the reader says what it is
+
+def test_training_reads_a_folder_by_the_same_rule(tmp_path: Path) -> None:
+    """``scan_folder`` (training) found ``.bvh`` and ``.BVH`` only, leaving a
+    ``.Bvh`` out unsaid while ``inspect`` listed it."""
+    for name in ("a.bvh", "b.Bvh", "sub/c.BVH"):
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_text("")
+    assert [f.path for f in scan_folder(tmp_path)] == [str(p) for p in bvh_files(tmp_path)]
+    assert len(bvh_files(tmp_path)) == 3
 
 
 def test_retarget_a_folder_goes_on_past_a_bad_file(folder: Path, tmp_path: Path,

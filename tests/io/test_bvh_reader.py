@@ -242,10 +242,23 @@ def test_error_too_many_frames(tmp_path):
     expect_error(path, L_FRAME1 + 1, "more frame lines")
 
 
-@pytest.mark.parametrize("token", ["abc", "1,5", "0x10", "--1"])
+@pytest.mark.parametrize("token", ["abc", "1,5", "0x10", "--1", "1_1"])
 def test_error_non_numeric_frame(tmp_path, token):
+    """The error names the token and its place, not the whole line (Python's
+    ``float`` takes ``1_1``; BVH does not)."""
     path = write(tmp_path, replace(L_FRAME1, f"1 90 0 {token} 0 0 20 0 0"))
-    expect_error(path, L_FRAME1, "non-numeric", "frame 1")
+    expect_error(path, L_FRAME1, "non-numeric", "frame 1", repr(token), "value 4 of 9")
+
+
+def test_a_skeleton_without_channels_names_missing_frame_lines(tmp_path):
+    """``Frames: 100000000000`` over no channels: one error line, not the
+    allocation of terabytes."""
+    path = tmp_path / "nochan.bvh"
+    path.write_text("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n JOINT Spine\n {\n  OFFSET 0 1 0"
+                    "\n  End Site\n  {\n   OFFSET 0 1 0\n  }\n }\n}\nMOTION\n"
+                    "Frames: 100000000000\nFrame Time: 0.04\n\n\n")
+    with pytest.raises(BVHError, match="'Frames: 100000000000' but only 2 lines follow"):
+        read_bvh(path)
 
 
 @pytest.mark.parametrize("token", ["nan", "NaN", "inf", "-inf", "1e999"])
@@ -375,3 +388,18 @@ def test_declaration_is_read_on_the_last_line_only(text, found):
     assert (rig and (rig.up_axis, rig.scale)) == (found or None)
     whole = _DECLARATION.search(text)  # what a whole-text search finds
     assert rest == (text if whole is None else text[:whole.start()] + "\n")
+
+
+def test_a_joint_named_like_a_made_up_end_site_name_is_read(tmp_path):
+    """End Sites are named ``<parent>_end``; a later joint of the file called
+    that keeps its name and the End Site takes another."""
+    path = tmp_path / "named.bvh"
+    path.write_text("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Zrotation Xrotation "
+                    "Yrotation\n JOINT Spine\n {\n  OFFSET 0 1 0\n  CHANNELS 3 Zrotation "
+                    "Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 1 0\n  }\n }\n"
+                    " JOINT Spine_end\n {\n  OFFSET 1 0 0\n  CHANNELS 3 Zrotation Xrotation "
+                    "Yrotation\n  End Site\n  {\n   OFFSET 1 0 0\n  }\n }\n}\nMOTION\n"
+                    "Frames: 1\nFrame Time: 0.04\n0 0 0 0 0 0 0 0 0\n")
+    skeleton = read_bvh(path).skeleton
+    assert skeleton.names == ["Hips", "Spine", "Spine_end2", "Spine_end", "Spine_end_end"]
+    assert list(skeleton.end_site) == [False, False, True, False, True]
