@@ -1,6 +1,7 @@
 """Windows of motion features from many files and skeletons."""
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import (Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence,
@@ -130,17 +131,17 @@ def try_load_features(files: Sequence[MotionFile], config: Optional[Dict] = None
         The good files, their features, and the errors of the others.
     """
     config = dict(DEFAULT_PREPROCESSING, **(config or {}))
-    folder = Path(cache_dir or default_cache_dir()) / "processed"
+    folder: Optional[Path] = Path(cache_dir or default_cache_dir()) / "processed"
     kept, out, errors = [], [], []
     iterator = progress(files) if progress else files
     for f in iterator:
         try:
             own = file_config(f, config)
             key = cache_key(f.path, own)
-            feats = load_cached(folder, key)
+            feats = _cache_read(folder, key)
             if feats is None:
                 feats = preprocess_file(f.path, own)
-                store_cached(folder, key, feats)
+                folder = _cache_write(folder, key, feats)
             else:
                 check_features(feats, f.path)
         except (BVHError, OSError, ValueError, MemoryError) as err:
@@ -149,6 +150,37 @@ def try_load_features(files: Sequence[MotionFile], config: Optional[Dict] = None
         kept.append(f)
         out.append(feats)
     return kept, out, errors
+
+
+def _cache_failed(folder: Path, err: OSError) -> None:
+    warnings.warn(f"feature cache {folder} cannot be used ({err.strerror or err}): features "
+                  "are computed without it (data.cache_dir or SATAGRAPH_CACHE sets another)",
+                  stacklevel=3)
+
+
+def _cache_read(folder: Optional[Path], key: str) -> Optional[MotionFeatures]:
+    """A cached entry; ``None`` without a cache, on a miss, or when the cache
+    cannot be read (said once: a problem of the cache, not of a data file)."""
+    if folder is None:
+        return None
+    try:
+        return load_cached(folder, key)
+    except OSError as err:
+        _cache_failed(folder, err)
+        return None
+
+
+def _cache_write(folder: Optional[Path], key: str, feats: MotionFeatures) -> Optional[Path]:
+    """Store an entry; the cache folder to go on with (``None`` once it
+    cannot be written: said once, and no data file is blamed for it)."""
+    if folder is None:
+        return None
+    try:
+        store_cached(folder, key, feats)
+    except OSError as err:
+        _cache_failed(folder, err)
+        return None
+    return folder
 
 
 def dataset_error(errors: Sequence[str], total: int) -> MotionDatasetError:

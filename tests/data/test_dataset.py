@@ -207,3 +207,20 @@ def test_cache_sees_an_edit_that_keeps_size_and_time(tmp_path):
     fresh = load_features(files)[0]
     assert not np.allclose(after.q, before.q)
     np.testing.assert_array_equal(after.q, fresh.q)
+
+
+def test_a_cache_that_cannot_be_written_is_said_once_and_blames_no_file(tmp_path):
+    """A cache folder that is a file (or full, or read-only): one warning
+    naming it, and every data file still read; before, each file was
+    reported as bad (and left out with ``on_error=skip``)."""
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=8)
+    files = scan_folder(tmp_path / "zoo")[:2]
+    blocked = tmp_path / "cache"
+    blocked.write_text("a file where the cache folder should be")
+    with pytest.warns(UserWarning, match=f"feature cache {blocked}/processed cannot be used") \
+            as caught:
+        feats = load_features(files, cache_dir=str(blocked))
+    assert len(feats) == 2 and len([w for w in caught if "feature cache" in str(w.message)]) == 1
+    fresh = load_features(files[:1], cache_dir=str(tmp_path / "fresh"))
+    np.testing.assert_array_equal(feats[0].q, fresh[0].q)
