@@ -204,7 +204,7 @@ def test_cache_sees_an_edit_that_keeps_size_and_time(tmp_path):
         handle.write(edited)
     os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
     after = load_features(files, cache_dir=str(tmp_path / "cache"))[0]
-    fresh = load_features(files)[0]
+    fresh = load_features(files, cache_dir=str(tmp_path / "fresh"))[0]
     assert not np.allclose(after.q, before.q)
     np.testing.assert_array_equal(after.q, fresh.q)
 
