@@ -26,6 +26,7 @@ when :mod:`satagraph.experiment.modules` is imported, on first look-up
 from __future__ import annotations
 
 import importlib
+import sys
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Iterable, Optional
 
@@ -134,6 +135,9 @@ def register_module(name: str, target: Any = None, *, datamodule: Optional[Calla
         ValueError: :obj:`name` is registered already.
     """
     def register(obj: Any) -> Any:
+        owner = PLUGINS.get(name)
+        if owner is not None and name not in _REGISTRY and owner not in sys.modules:
+            importlib.import_module(owner)  # a built-in name is its own module's first
         if name in _REGISTRY:
             raise ValueError(f"module {name!r} is registered already (by "
                              f"{_REGISTRY[name].build.__qualname__}); pick another name")

@@ -114,3 +114,17 @@ def test_t2m_data_schema_is_its_data_module_signature():
                if k not in ("seed", "sources"))
     with pytest.raises(ValueError, match=r"'data.min_frame' \(did you mean 'min_frames'\?\)"):
         load_config("t2m_tiny", ["data.min_frame=8"])
+
+
+def test_a_built_in_name_is_taken_before_its_module_is_imported():
+    """In a fresh process nothing has imported the built-in modules yet;
+    registering ``vae`` then took the name silently and ``load_module
+    ("builtin")`` built the user's class."""
+    import subprocess
+    import sys
+    code = ("from satagraph.experiment.registry import register_module\n"
+            "try:\n    register_module('vae', type('Mine', (), {}))\n"
+            "except ValueError as err:\n    print(err)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert "'vae' is registered already" in out
