@@ -116,15 +116,19 @@ def test_t2m_data_schema_is_its_data_module_signature():
         load_config("t2m_tiny", ["data.min_frame=8"])
 
 
-def test_a_built_in_name_is_taken_before_its_module_is_imported():
-    """In a fresh process nothing has imported the built-in modules yet;
-    registering ``vae`` then took the name silently and ``load_module
-    ("builtin")`` built the user's class."""
-    import subprocess
+def test_a_built_in_name_is_taken_before_its_module_is_imported(tmp_path, monkeypatch, names):
+    """A name of :data:`PLUGINS` whose module nothing has imported yet (``vae``
+    in a fresh process) was taken silently, and ``load_module("builtin")``
+    then built the user's class: its module registers it first."""
     import sys
-    code = ("from satagraph.experiment.registry import register_module\n"
-            "try:\n    register_module('vae', type('Mine', (), {}))\n"
-            "except ValueError as err:\n    print(err)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
-    assert "'vae' is registered already" in out
+    from satagraph.experiment import registry
+    (tmp_path / "fake_builtin_plugin.py").write_text(
+        "from satagraph.experiment.registry import register_module\n"
+        "register_module('test_builtin', lambda sections: 'built-in')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setitem(registry.PLUGINS, "test_builtin", "fake_builtin_plugin")
+    monkeypatch.delitem(sys.modules, "fake_builtin_plugin", raising=False)
+    names.append("test_builtin")
+    with pytest.raises(ValueError, match="'test_builtin' is registered already"):
+        register_module("test_builtin", lambda sections: "mine")
+    assert module_entry("test_builtin").build(None) == "built-in"
