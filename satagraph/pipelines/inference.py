@@ -27,6 +27,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
+from satagraph.data.validate import check_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion, require_motion
 
@@ -92,10 +93,14 @@ def target_clip(feats: MotionFeatures, num_frames: int,
 
 
 def static_features(motion: Motion) -> MotionFeatures:
-    """Features of a target motion (only its static part is used)."""
-    return motion_to_features(motion if motion.num_frames else motion.with_(
+    """Features of a target motion (only its static part is used), checked
+    as training checks a file's (:func:`~satagraph.data.validate.check_features`:
+    a body of some height)."""
+    feats = motion_to_features(motion if motion.num_frames else motion.with_(
         rotations=np.broadcast_to(np.eye(3), (1, motion.num_joints, 3, 3)).copy(),
         translations=motion.skeleton.offsets[None].copy()))
+    check_features(feats, motion.source or "<target>")
+    return feats
 
 
 def default_windows(module, window: Optional[int] = None,
@@ -417,7 +422,9 @@ def source_features(canon: Motion, rest: str, facing_smooth: float = 0.0
     if axis is not None:
         turn = yaw_matrix_numpy(-yaw_of(shown.rotations[0, 0] @ axis))
         canon, shown = turn_world(canon, turn), turn_world(shown, turn)
-    return canon, motion_to_features(shown, facing_axis=axis, facing_smooth=facing_smooth)
+    feats = motion_to_features(shown, facing_axis=axis, facing_smooth=facing_smooth)
+    check_features(feats, canon.source or "<source>")  # as training checks a file's
+    return canon, feats
 
 
 def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:

@@ -496,6 +496,20 @@ def test_a_rig_whose_root_has_no_channels_is_refused_before_any_work(command, tm
     assert not out.exists()
 
 
+def test_a_body_of_one_joint_is_refused_as_training_refuses_it(tmp_path, capsys) -> None:
+    """A root and its End Site: training says "degenerate"; reconstruct
+    wrote it with the moving root frozen in place."""
+    rig = tmp_path / "one.bvh"
+    rig.write_text("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition "
+                   "Zposition Zrotation Xrotation Yrotation\n End Site\n {\n  OFFSET 0 10 0\n"
+                   " }\n}\nMOTION\nFrames: 3\nFrame Time: 0.04\n"
+                   + "".join(f"{i} 0 0 0 {9 * i} 0\n" for i in range(3)))
+    out = tmp_path / "out.bvh"
+    assert cli.main(["reconstruct", str(rig), str(out)]) == 2
+    assert "the skeleton is degenerate" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_a_negative_up_axis_needs_no_equals_sign(capsys, tiny_file) -> None:
     """``--up-axis -Y`` (argparse alone took ``-Y`` for an option)."""
     assert cli.main(["inspect", str(tiny_file), "--up-axis", "-Y"]) == 0
