@@ -60,11 +60,38 @@ def module_sections(cfg: Dict[str, Any], dm: Optional[Any] = None) -> ModuleSect
 
 def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
     """The config resolved and every key checked, the module's sections and
-    the trainer's included, before any data is read."""
+    the trainer's included, and an online logger's login, before any data
+    is read."""
     cfg = resolve_config(cfg)
     module_entry(cfg["module"]).check(module_sections(cfg))
     check_keys("trainer", cfg["trainer"], trainer_keys())
+    check_wandb_login(cfg["logger"])
     return cfg
+
+
+def check_wandb_login(logger: Dict[str, Any]) -> None:
+    """Online W&B logging needs a login (``WANDB_API_KEY``, or the
+    ``~/.netrc`` entry ``wandb login`` writes); without one it failed with a
+    50-line traceback once the data had loaded.
+
+    Raises:
+        ValueError: One line saying what to do.
+    """
+    import netrc
+    if logger.get("name") != "wandb" or logger.get("offline", True):
+        return
+    if os.environ.get("WANDB_API_KEY") or os.environ.get("WANDB_MODE") in ("offline",
+                                                                            "disabled"):
+        return
+    try:
+        host = os.environ.get("WANDB_BASE_URL", "https://api.wandb.ai").split("//")[-1]
+        if netrc.netrc().authenticators(host):
+            return
+    except (OSError, netrc.NetrcParseError):
+        pass
+    raise ValueError("logger.offline=false: W&B needs a login (`wandb login`, or "
+                     "WANDB_API_KEY); logger.offline=true logs into the run folder instead, "
+                     "to `wandb sync` later")
 
 
 def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):

@@ -187,3 +187,15 @@ def test_init_from_weights_of_other_facing_features_is_refused() -> None:
     check_init_features(payload(0.25), smooth, "w.ckpt")
     # a generator keeps its own autoencoder: the checkpoint's facing is not its data's
     check_init_features(payload(0.0), dict(smooth, module="t2m"), "w.ckpt")
+
+
+def test_online_wandb_without_a_login_is_one_line_before_any_data(tmp_path, monkeypatch,
+                                                                  capsys) -> None:
+    monkeypatch.delenv("WANDB_API_KEY", raising=False)
+    monkeypatch.delenv("WANDB_MODE", raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path))  # no ~/.netrc
+    monkeypatch.setenv("NETRC", str(tmp_path / "none"))
+    assert main(["train", "tiny", "logger.name=wandb", "logger.offline=false",
+                 "data.sources=[nowhere]", f"output_dir={tmp_path / 'run'}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "W&B needs a login" in err[-1] and not (tmp_path / "run").exists()
