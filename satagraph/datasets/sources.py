@@ -5,11 +5,15 @@ import csv
 import fnmatch
 import hashlib
 import os
+import warnings
+from collections import Counter
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterable, List, Optional, Sequence, Union
 
 SPLITS = ("train", "val", "test")
+#: Splits a manifest may hold that no run reads (the shared data's reader tests).
+UNUSED_SPLITS = ("parser_test",)
 
 
 @dataclass(frozen=True)
@@ -73,14 +77,19 @@ def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) 
         rows = list(csv.DictReader(f, delimiter="\t"))
     if not rows or "path" not in rows[0] or "split" not in rows[0]:
         raise ValueError(f"{path}: a manifest needs 'path' and 'split' columns")
-    out = []
+    out, odd = [], Counter()
     for line, row in enumerate(rows, start=2):
         name = row.get("dataset") or dataset or path.parent.name
         if dataset and name != dataset:
             continue
+        if row["split"] not in SPLITS + UNUSED_SPLITS:
+            odd[row["split"]] += 1
         out.append(MotionFile(str(path.parent / row["path"]), name,
                               row.get("skeleton") or name, row["split"],
                               **_row_settings(row, f"{path}:{line}")))
+    if odd:
+        warnings.warn(f"{path}: rows of splits other than {', '.join(SPLITS)} are not used: "
+                      + ", ".join(f"{k!r} ({n})" for k, n in odd.most_common()), stacklevel=2)
     return out
 
 
@@ -128,7 +137,7 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         include = _patterns(spec.get("include"))
         settings = _row_settings(spec, f"data.sources entry {spec['path']}")
         files += [_with_defaults(f, settings) for f in found
-                  if f.dataset not in exclude and f.split != "parser_test"
+                  if f.dataset not in exclude and f.split not in UNUSED_SPLITS
                   and (include is None or _included(f.path, include))]
     return files
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 import contextlib
 import inspect
 import os
+import signal
+import threading
 import warnings
 from dataclasses import fields
 from pathlib import Path
@@ -368,7 +370,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         with warnings.catch_warnings():
             # the sampler resumes mid-epoch itself (ResumeCheckpoint)
             warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
-            trainer.fit(module, datamodule=fit_dm, ckpt_path=str(last) if last else None)
+            _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
 
 
@@ -411,6 +413,23 @@ def refuse_trained_folder(run_dir: Path) -> None:
                          "(or delete the folder to start over)")
 
 
+def _fit_interruptibly(trainer: L.Trainer, module: L.LightningModule, datamodule,
+                       last: Optional[Path]) -> None:
+    """:meth:`~lightning.pytorch.Trainer.fit`, a Ctrl-C given back as the
+    :class:`KeyboardInterrupt` it was (Lightning ends one with ``exit(1)``
+    and leaves Ctrl-C ignored), so that the command says how to resume and
+    exits 130, and a notebook keeps its Ctrl-C."""
+    handler = signal.getsignal(signal.SIGINT)
+    try:
+        trainer.fit(module, datamodule=datamodule, ckpt_path=str(last) if last else None)
+    except SystemExit:
+        if not trainer.interrupted:
+            raise
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, handler)
+        raise KeyboardInterrupt from None
+
+
 def _lock(run_dir: Path):
     """:func:`run_lock` in the launching process; processes that Lightning
     starts for distributed training (``LOCAL_RANK`` > 0) share it."""
@@ -421,10 +440,13 @@ def _lock(run_dir: Path):
 
 def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:
     """Write the files ``data.on_error=skip`` left out to
-    ``<run>/skipped_files.txt`` (one ``split: path: reason`` per line)."""
+    ``<run>/skipped_files.txt`` (one ``split: path: reason`` per line), or
+    remove the file when none was left out."""
     path = run_dir / "skipped_files.txt"
     if dm.skipped:
         atomic_write_text(path, "\n".join(dm.skipped) + "\n", create_parent=True)
+    else:  # a resumed run whose files were mended since
+        path.unlink(missing_ok=True)
 
 
 def load_module(ckpt: str = "builtin", map_location: str = "cpu"):

@@ -224,3 +224,12 @@ def test_a_cache_that_cannot_be_written_is_said_once_and_blames_no_file(tmp_path
     assert len(feats) == 2 and len([w for w in caught if "feature cache" in str(w.message)]) == 1
     fresh = load_features(files[:1], cache_dir=str(tmp_path / "fresh"))
     np.testing.assert_array_equal(feats[0].q, fresh[0].q)
+
+
+def test_a_manifest_row_of_an_unknown_split_is_said(tmp_path):
+    """A misspelt split (``trian``) was left out unsaid."""
+    (tmp_path / "manifest.tsv").write_text("path\tsplit\na.bvh\ttrain\nb.bvh\ttrian\n"
+                                           "c.bvh\ttrian\nd.bvh\tparser_test\n")
+    with pytest.warns(UserWarning, match=r"not used: 'trian' \(2\)"):
+        files = resolve_sources(str(tmp_path / "manifest.tsv"))
+    assert [f.split for f in files] == ["train", "trian", "trian"]

@@ -437,3 +437,40 @@ def test_resume_with_another_model_or_data_is_refused(tiny_config: Dict[str, Any
     with pytest.raises(ValueError, match=re.escape(said)):
         train(other, resume=True)
     assert (run_dir / "checkpoints" / LAST).read_bytes() == before
+
+
+def test_ctrl_c_is_given_back_as_an_interrupt(tiny_config: Dict[str, Any]) -> None:
+    """Lightning ends a Ctrl-C with ``exit(1)`` and leaves Ctrl-C ignored:
+    ``train`` gives the interrupt back (the command then says how to resume,
+    exit 130) with the process's own Ctrl-C handler."""
+    class Interrupt(L.Callback):
+        def on_train_batch_start(self, *args) -> None:
+            raise KeyboardInterrupt
+
+    cfg = copy.deepcopy(tiny_config)
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        train(cfg, callbacks=[Interrupt()])
+    assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_skipped_files_are_listed_and_the_list_goes_once_they_read(
+        tiny_config: Dict[str, Any], tmp_path: Path) -> None:
+    """``data.on_error=skip``: the run lists what it left out in
+    ``skipped_files.txt``; resumed after the file was mended, the list goes."""
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=3, frames=40)
+    victim = sorted((tmp_path / "zoo").rglob("*.bvh"))[0]
+    good = victim.read_text()
+    victim.write_text(good[: len(good) // 2])
+    cfg = copy.deepcopy(tiny_config)
+    cfg["data"].update(sources=[str(tmp_path / "zoo")], on_error="skip", max_files=None)
+    cfg["trainer"].update(max_epochs=1, limit_train_batches=1)
+    with pytest.warns(UserWarning, match="left out 1 of"):
+        _, _, _, run_dir = train(cfg)
+    listed = (run_dir / "skipped_files.txt").read_text()
+    assert victim.name in listed and len(listed.splitlines()) == 1
+    victim.write_text(good)
+    cfg["trainer"].update(max_epochs=2)
+    train(cfg, resume=True)
+    assert not (run_dir / "skipped_files.txt").exists()
