@@ -172,7 +172,7 @@ def run_tags(args: argparse.Namespace) -> int:
         return _run(args)
     except (SemanticsError, BVHError, OSError) as err:
         message = str(err).splitlines()[0] if str(err) else repr(err)
-        print(f"satagraph tags: error: {message}", file=sys.stderr)
+        print(f"satagraph: error: {message}", file=sys.stderr)
         return 2
 
 

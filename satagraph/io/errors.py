@@ -5,9 +5,9 @@ from __future__ import annotations
 class BVHError(ValueError):
     r"""A malformed or unreadable BVH file.
 
-    The message always names the file and the line (1-based; 0 when no line
-    applies) and what is wrong: ``"walk.bvh:12: frame 3 has 68 values,
-    expected 69"``.
+    The message names the file, the line (1-based; :attr:`line` is 0 and the
+    message gives none when no line applies: a missing file) and what is
+    wrong: ``"walk.bvh:12: frame 3 has 68 values, expected 69"``.
 
     Args:
         path (str): The file.
@@ -17,4 +17,4 @@ class BVHError(ValueError):
 
     def __init__(self, path: str, line: int, message: str) -> None:
         self.path, self.line, self.message = path, line, message
-        super().__init__(f"{path}:{line}: {message}")
+        super().__init__(f"{path}:{line}: {message}" if line > 0 else f"{path}: {message}")

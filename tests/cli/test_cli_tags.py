@@ -154,7 +154,7 @@ def test_errors_are_one_line_exit_2(bvh, tmp_path, capsys, extra, needle):
              "VOCAB": tmp_path / "none.json", "BADDICT": bad}
     code, out, err = run(capsys, bvh, *[subst.get(a, a) for a in extra])
     assert code == 2 and out == ""
-    assert err.count("\n") == 1 and err.startswith("satagraph tags: error:")
+    assert err.count("\n") == 1 and err.startswith("satagraph: error:")
     assert needle in err
 
 

@@ -57,7 +57,7 @@ def expect_error(path: Path, line: int, *words: str) -> BVHError:
         read_bvh(path)
     err = info.value
     msg = str(err)
-    assert msg.startswith(f"{path}:{line}: "), msg
+    assert msg.startswith(f"{path}:{line}: " if line else f"{path}: "), msg
     assert err.path == str(path) and err.line == line
     for word in words:
         assert word.lower() in msg.lower(), msg
