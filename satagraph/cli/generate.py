@@ -94,13 +94,13 @@ def add_generate_parser(sub) -> None:
                    "model was trained on, 4 s for the built-in one; 0: the whole clip at "
                    "once, which past that length reads positions the model never learnt: "
                    "on the benchmark's test prompts the last stretch of a 12-s clip then "
-                   "moves at 0.68 of the pace asked and matches its text with R@3 0.67 "
-                   "against 0.74 in windows, benchmarks/results/t2m_long.md)")
+                   "moves at 0.70 of the pace asked and matches its text with R@3 0.608 "
+                   "against 0.824 in windows, benchmarks/results/t2m_long.md)")
     p.add_argument("--residual-window", type=_window, default=0.0, metavar="SECONDS",
                    help="fill the residual code layers in overlapping windows of this many "
                    "seconds (default 0: the whole clip at once). The built-in generator's "
-                   "walks of three seconds or more speed up along the clip (7-31 %% over four "
-                   "seconds on the benchmark's probe rigs); 2 "
+                   "walks of three seconds or more speed up along the clip (+10 to +21 %% over "
+                   "four seconds on the benchmark's probe rigs, README); 2 "
                    "holds their pace, at some cost to how closely the motion matches the "
                    "text on the benchmark (experiments/T2M.md sections 57-58)")
     p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=True,
@@ -170,10 +170,10 @@ def _prompt_folder(output: str) -> None:
                          "motions go to")
 
 
-def _prompt(module, text: str, literal: bool):
+def _prompt(module, text: str, literal: bool, where: str = ""):
     """The prompt the model is given (``None``: unconditional), with a
     note on stderr where it was read in the model's words or holds words
-    the model never saw."""
+    the model never saw (:obj:`where`: which prompt of a ``--prompts`` file)."""
     from satagraph.pipelines.prompt_reading import read_prompt, vocabulary_of
     if not text:
         return None
@@ -181,7 +181,7 @@ def _prompt(module, text: str, literal: bool):
     note = reading.note()
     if note:
         keep = " (--literal keeps the prompt as written)" if reading.replaced else ""
-        print(f"satagraph: the generator {note}{keep}", file=sys.stderr)
+        print(f"satagraph: {where}the generator {note}{keep}", file=sys.stderr)
     return reading.text
 
 
@@ -302,7 +302,7 @@ def _generate_prompts(args, module, targets, prompts: List[str], settings) -> in
         i, prompt = item
         paths = output_paths(str(Path(args.output) / f"{prompt_stem(i, prompt)}.bvh"),
                              args.skeleton)
-        text = _prompt(module, prompt, args.literal)
+        text = _prompt(module, prompt, args.literal, f"prompt {i + 1} ({prompt!r}): ")
         motions = [generate_on(module, text, t, args.seconds, args.seed + i, settings)
                    for t in targets]
         write_all(motions, paths)

@@ -73,7 +73,9 @@ def add_train_parsers(sub) -> None:
     add_still_argument(p)
     add_mirror_argument(p, default=False)
     add_two_rests_argument(p, default=False)
-    p.add_argument("--target", required=True, metavar="TARGET.bvh")
+    p.add_argument("--target", required=True, metavar="TARGET.bvh",
+                   help="the skeleton to put the motion on (its motion is not read); OUT "
+                   "is written on its rig: joints, channels, rest offsets, axes and units")
     _in_out(p, "source", "SOURCE")
     _rig(p, what="SOURCE.bvh", scale_free=True)
     _rig(p, "target", "TARGET.bvh", scale_free=True)
@@ -84,7 +86,8 @@ def add_train_parsers(sub) -> None:
                        "each skeleton read in the rest pose reconstruct shows it (--rest).")
     p.add_argument("--ckpt", required=True,
                    help="a checkpoint, a weights file, builtin or builtin-wide")
-    p.add_argument("--split", default="test", choices=["train", "val", "test"])
+    p.add_argument("--split", default="test", choices=["train", "val", "test"],
+                   help="which split of the data to score (default: test)")
     p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
     p.add_argument("--max-batches", type=int, default=None,
@@ -144,14 +147,16 @@ def add_train_parsers(sub) -> None:
                        "autoencoder (model.autoencoder) and write them to OUT.safetensors. "
                        "Train on it with `satagraph train CONFIG data.code_bank=OUT`.")
     p.add_argument("config", help="a text-to-motion config name or path")
-    p.add_argument("output", metavar="OUT.safetensors")
+    p.add_argument("output", metavar="OUT.safetensors",
+                   help="the bank of drawn windows' codes and captions to write")
     p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
     p.add_argument("--windows", type=positive_int, required=True,
                    help="windows to draw (rounded up to whole batches of data.batch_size)")
     p.add_argument("--max-minutes", type=positive_float, default=None,
                    help="stop drawing after this long and write the windows drawn "
                    "(default: no limit)")
-    p.add_argument("--device", default="cpu", help="where to run the autoencoder")
+    p.add_argument("--device", default="cpu",
+                   help="where to run the autoencoder: cpu, cuda, cuda:1, ... (default: cpu)")
     p.add_argument("--swap-rigs", type=float, default=0.0, metavar="SHARE",
                    help="show this share of the captured human rigs' windows (CMU's, "
                    "CC_Base's: rigs of 20 windows or more, never the zoo's) on another "

@@ -39,10 +39,14 @@ def test_every_prompt_is_the_motion_text_gives_with_its_seed(tmp_path: Path, cap
     write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=20, seed=4)
     rig = str(sorted((tmp_path / "zoo" / "biped").glob("*.bvh"))[0])
     prompts = tmp_path / "p.txt"
-    prompts.write_text("a person walks forward\na person runs forward\n")
+    prompts.write_text("a dog walks forward\na person runs forward\n")
     out = tmp_path / "out"
     assert main(["generate", "--prompts", str(prompts), "--skeleton", rig, str(out),
                  "--seconds", "1.5", "--seed", "5"]) == 0
+    said = capsys.readouterr()
+    assert "generated 2 motions of 2 of 2 prompts" in said.out
+    # a note on how a prompt was read says which prompt it is
+    assert "prompt 1 ('a dog walks forward'): the generator read" in said.err
     rows = (out / "prompts.tsv").read_text().splitlines()
     assert rows[0] == "path\tprompt\tskeleton\tseconds\tseed" and len(rows) == 3
     second = rows[2].split("\t")
@@ -51,7 +55,6 @@ def test_every_prompt_is_the_motion_text_gives_with_its_seed(tmp_path: Path, cap
                  str(tmp_path / "one.bvh"), "--seconds", "1.5", "--seed", "6"]) == 0
     listed, alone = read_bvh(out / second[0]), read_bvh(tmp_path / "one.bvh")
     np.testing.assert_array_equal(listed.raw_channels, alone.raw_channels)
-    assert "generated 2 motions of 2 of 2 prompts" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("case", ["bvh-name", "file", "empty"])
