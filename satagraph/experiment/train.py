@@ -331,6 +331,9 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             unless :obj:`init_normalizer` is ``"checkpoint"`` (see
             :func:`init_weights`).
         init_normalizer (str): ``"data"`` (default) or ``"checkpoint"``.
+        **trainer_overrides: Keyword arguments of :class:`lightning.Trainer`
+            over the config's ``trainer`` section (``callbacks=[...]`` are
+            added to the run's own).
 
     Returns:
         The trained module, the data module, the trainer and the run folder.

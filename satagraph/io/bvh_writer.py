@@ -112,6 +112,12 @@ def channel_values(motion: Motion) -> np.ndarray:
     over time, and positions), in the skeleton's channel layout: the values
     as read where they still hold (:func:`raw_channels_hold`).
 
+    Args:
+        motion (Motion): The motion.
+
+    Returns:
+        np.ndarray: One row of channel values per frame.
+
     Shapes:
         - **output**: :math:`(T, C)`
     """

@@ -187,6 +187,13 @@ def load_generator(ckpt: str = "builtin"):
     """A trained text-to-motion module from a checkpoint or weights file
     (``"builtin"``: the one shipped in the package), in eval mode.
 
+    Args:
+        ckpt (str): ``"builtin"``, a ``.ckpt`` checkpoint or a
+            ``.safetensors`` weights file of a text-to-motion module.
+
+    Returns:
+        TextToMotionModule: The generator, ready for :func:`generate_on`.
+
     Raises:
         CheckpointError: Missing or damaged file, another kind of
             checkpoint (an autoencoder), or a text encoder other than the

@@ -478,7 +478,25 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     different poses, and mirror on: see :func:`reconstruct_canonical`).
     The root is never held where the input stands still
     (:func:`reconstruct_canonical`): a reconstruction is the model's
-    alone."""
+    alone.
+
+    Args:
+        module: A motion autoencoder (:func:`~satagraph.experiment.train.load_module`).
+        motion (Motion): The motion as read (any axes, units and rig).
+        semantic (callable, optional): The semantic encoder of joint names
+            (default: the module's own).
+        window (int, optional): Frames per window (default: the module's).
+        overlap (int, optional): Frames two windows share.
+        rest, ground, settle, mirror, two_rests: See :func:`retarget_motion`.
+
+    Returns:
+        Motion: The decoded motion on the input's own rig, axes and units,
+        at its frame rate.
+
+    Raises:
+        TypeError: A path or name where a model or a motion is expected.
+        MotionValidationError: A motion unfit for the model (one line).
+    """
     check_inputs(module, motion)
     _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
                                      rest=rest, ground=ground, settle=settle, mirror=mirror,
