@@ -210,7 +210,7 @@ def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]
     assert len(list(folder.glob("epoch=*.ckpt"))) == 1
 
 
-@pytest.mark.parametrize("first", [2, 1, 3])
+@pytest.mark.parametrize("first", [2, 1, pytest.param(3, marks=pytest.mark.slow)])
 def test_a_run_bounded_by_steps_resumes_as_far_as_one_never_stopped(
         tiny_config: Dict[str, Any], first: int) -> None:
     """Stopped by ``max_steps`` at an epoch's end (step 2, 2 batches an
@@ -227,6 +227,7 @@ def test_a_run_bounded_by_steps_resumes_as_far_as_one_never_stopped(
     assert (resumed.global_step, resumed.current_epoch) == (4, never_stopped.current_epoch)
 
 
+@pytest.mark.slow
 def test_keep_every_epoch_keeps_one_checkpoint_per_epoch(tiny_config: Dict[str, Any]) -> None:
     """``checkpoint.keep_every_epoch`` keeps each epoch's end, across a
     resume, each holding the weights of its own step."""

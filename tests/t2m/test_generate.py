@@ -292,6 +292,7 @@ def test_generate_on_infills_around_kept_tokens(t2m_ckpt, zoo_skeletons, monkeyp
         assert (layer0[token * pool:(token + 1) * pool] == known[0, token]).all()
 
 
+@pytest.mark.slow
 def test_export_swaps_in_a_decoder_fine_tuned_under_frozen_codes(
         t2m_ckpt, autoencoder_ckpt, zoo_skeletons, tmp_path, capsys):
     """`export-weights --decoder`: the generator keeps its codes and decodes

@@ -66,6 +66,7 @@ def test_masked_transformer_generates_what_it_memorised(masked, data):
     assert torch.equal(swapped[0, :9], codes[1, :9, 0])  # the text decides the sequence
 
 
+@pytest.mark.slow
 def test_residual_transformer_generates_what_it_memorised(data):
     codes, text, skel, lengths = data
     model = tiny_residual(num_quantizers=3, cond_drop=0.2)
