@@ -243,7 +243,9 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
     signed axes and summed with :data:`CUE_WEIGHTS`; the confidence is the
     margin of the best total over the runner-up (a margin of 0.5 or more is
     certain). A clip that barely moves is decided on its pose alone, with a
-    lower confidence.
+    lower confidence; a rig without frames on its rest pose alone, with half
+    of that (always low: exporters need not write a rest upright, and
+    CC_Base's lies along +Z, its motion standing it up).
     """
     pos, vel = _sample(motion)
     size = body_size(pos)
@@ -271,6 +273,8 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
     ranked = sorted(UP_AXES, key=scores.get, reverse=True)
     margin = scores[ranked[0]] - scores[ranked[1]]
     confidence = float(np.clip(margin / 0.5, 0.0, 1.0)) * (0.6 + 0.4 * min(1.0, 4 * moving))
+    if motion.num_frames == 0:
+        confidence *= 0.5
     return UpAxisGuess(ranked[0], confidence, "detected", scores, evidence, moving > 0.05)
 
 

@@ -219,3 +219,14 @@ def test_zoo_body_plans_read_the_same_in_any_dialect(species: str, tmp_path: Pat
     else:
         wings = [t for n, t in zip(clip.skeleton.names, clean) if "UpperArm" in n]
         assert all("front limb" in t for t in wings) and wings
+
+
+def test_a_rig_without_frames_is_never_a_confident_up_axis():
+    """Its rest pose is all there is, and exporters need not write it
+    upright (CC_Base's lies along +Z): the guess always warns."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.transforms.rig_reading import guess_up_axis
+    clip = generate_clip(zoo_rigs(["biped"])[0], "walk", frames=30, seed=3)
+    rig = clip.slice(0, 0)
+    assert not guess_up_axis(clip).low_confidence
+    assert guess_up_axis(rig).low_confidence and guess_up_axis(rig).axis == "+Y"
