@@ -1,13 +1,13 @@
 r"""Safe file handling shared by every reader and writer.
 
 - :func:`atomic_write` is the ONE way satagraph writes a file: into a
-  temporary file beside the destination (``.<name>.<pid>.<random>.tmp``),
+  temporary file beside the destination (``.<name>.<host>-<pid>.<random>.tmp``),
   flushed and fsynced, then moved into place with :func:`os.replace`.
   Readers never see a half-written file, a failed write leaves the previous
   file untouched and removes its temporary file, errors name the
   destination (never the temporary file), and temporary files left by a
   killed process (``kill -9``) are swept by the first write of a process in
-  that folder (:func:`sweep_stale_temps`).
+  that folder (:func:`sweep_stale_temps`; those of this machine only).
 - :func:`check_output_path` checks an output path before any work is done.
 - :func:`check_input_file` refuses what is not a regular file (FIFOs,
   devices, sockets, directories: reading them hangs or never ends) and
@@ -16,10 +16,12 @@ r"""Safe file handling shared by every reader and writer.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import re
 import secrets
 import shutil
+import socket
 import stat
 from pathlib import Path
 from typing import IO, Any, Callable, Iterator, Optional, Union
@@ -29,8 +31,14 @@ PathLike = Union[str, "os.PathLike[str]"]
 #: Largest input file read into memory (bytes).
 MAX_INPUT_BYTES = 4 << 30
 
-#: Temporary files: ``.<destination name>.<pid>.<8 hex>.tmp[.<extension>]``.
-_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[0-9a-f]{8}\.tmp(?:\.[^.]+)?$")
+#: Temporary files: ``.<destination name>.<host>-<pid>.<8 hex>.tmp[.<extension>]``
+#: (``<host>``: :data:`HOST`; files of versions before it have none).
+_TEMP = re.compile(r"^\.(?P<name>.+)\.(?:(?P<host>[0-9a-f]{6})-)?(?P<pid>\d+)\.[0-9a-f]{8}"
+                   r"\.tmp(?:\.[^.]+)?$")
+#: This machine (or container) in temporary file names: a process id means
+#: something only where it was given, so a folder shared between machines
+#: (a cache in a network home) is swept of this machine's leftovers alone.
+HOST = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:6]
 
 
 class InputFileError(ValueError):
@@ -164,7 +172,7 @@ def sweep_stale_temps(directory: PathLike, name: Optional[str] = None) -> int:
         match = _TEMP.match(entry.name)
         if match is None or (name is not None and match["name"] != name):
             continue
-        if _pid_alive(int(match["pid"])):
+        if match["host"] not in (None, HOST) or _pid_alive(int(match["pid"])):
             continue
         with contextlib.suppress(OSError):
             os.unlink(entry.path)
@@ -203,7 +211,8 @@ def atomic_path(path: PathLike, create_parent: bool = False,
         sweep_stale_temps(directory)
         _SWEPT.add(directory)
     ext = os.path.splitext(name)[1]
-    tmp = os.path.join(directory, f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp{ext}")
+    tmp = os.path.join(directory,
+                       f".{name}.{HOST}-{os.getpid()}.{secrets.token_hex(4)}.tmp{ext}")
     mode = _file_mode(path)
     try:
         yield tmp

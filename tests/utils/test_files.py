@@ -61,14 +61,20 @@ def test_atomic_path_keeps_the_extension(tmp_path: Path) -> None:
 def test_stale_temps_of_dead_processes_are_swept(tmp_path: Path) -> None:
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()
-    stale = tmp_path / f".out.bvh.{dead}.0123abcd.tmp.bvh"
-    live = tmp_path / f".out.bvh.{os.getpid()}.0123abcd.tmp.bvh"
+    from satagraph.utils.files import HOST
+    stale = tmp_path / f".out.bvh.{HOST}-{dead}.0123abcd.tmp.bvh"
+    old_style = tmp_path / f".walk.bvh.{dead}.0123abcd.tmp.bvh"  # before host tags
+    live = tmp_path / f".out.bvh.{HOST}-{os.getpid()}.0123abcd.tmp.bvh"
+    # another machine's write into a shared folder: its pid means nothing here
+    elsewhere = tmp_path / f".out.bvh.{'0' * 6 if HOST != '0' * 6 else '1' * 6}-{dead}.0123abcd.tmp"
     other = tmp_path / ".notes.tmp"
-    for p in (stale, live, other):
+    for p in (stale, old_style, live, elsewhere, other):
         p.write_text("x")
     atomic_write_text(tmp_path / "out.bvh", "data")  # first write in the folder
-    assert not stale.exists() and live.exists() and other.exists()
+    assert not stale.exists() and not old_style.exists()
+    assert live.exists() and elsewhere.exists() and other.exists()
     live.unlink()
+    elsewhere.unlink()
     assert sweep_stale_temps(tmp_path) == 0
 
 
