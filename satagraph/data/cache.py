@@ -15,7 +15,7 @@ from satagraph.data.features import MotionFeatures
 from satagraph.motion import CanonicalTransform
 from satagraph.skeleton import Skeleton
 from satagraph.utils.cache import cache_root
-from satagraph.utils.files import atomic_write
+from satagraph.utils.files import atomic_write, check_input_file
 
 #: Bump when the feature definition changes: old cache entries are ignored.
 #: 2: files are checked (satagraph.data.validate) before they are cached.
@@ -39,7 +39,10 @@ def default_cache_dir() -> Path:
 
 
 def content_digest(path: str, chunk: int = 1 << 20) -> str:
-    """SHA-1 of a file's bytes, read a chunk at a time."""
+    """SHA-1 of a file's bytes, read a chunk at a time; what is not a
+    regular file (a FIFO would block, ``/dev/zero`` never end) is refused
+    first (:func:`~satagraph.utils.files.check_input_file`)."""
+    check_input_file(path, "BVH file")
     digest = hashlib.sha1()
     with open(path, "rb") as handle:
         while block := handle.read(chunk):

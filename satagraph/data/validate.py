@@ -203,7 +203,8 @@ def check_features(feats, path: str) -> None:
     """
     if not (np.isfinite(feats.height) and feats.height > 0):
         raise _error(path, f"character height {feats.height:.3g} after "
-                     "canonicalisation: the skeleton is degenerate")
+                     "canonicalisation: the skeleton is degenerate, or read with the "
+                     "wrong up axis (--up-axis sets it)")
     for name in ("q", "x", "x_rel", "v_q", "v_x", "r", "c", "x_local", "x_global"):
         if not np.isfinite(getattr(feats, name)).all():
             raise _error(path, f"non-finite features ({name}) after preprocessing")

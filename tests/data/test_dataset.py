@@ -233,3 +233,17 @@ def test_a_manifest_row_of_an_unknown_split_is_said(tmp_path):
     with pytest.warns(UserWarning, match=r"not used: 'trian' \(2\)"):
         files = resolve_sources(str(tmp_path / "manifest.tsv"))
     assert [f.split for f in files] == ["train", "trian", "trian"]
+
+
+def test_special_files_among_sources_are_refused_not_read(tmp_path):
+    """The cache key reads a file's content: a FIFO would block it and
+    ``/dev/zero`` never end; each is one error line instead."""
+    from satagraph.data.dataset import try_load_features
+    from satagraph.datasets.sources import MotionFile
+    fifo = tmp_path / "pipe.bvh"
+    os.mkfifo(fifo)
+    files = [MotionFile(str(fifo), "x", "x", "train"), MotionFile("/dev/zero", "x", "x", "train")]
+    kept, _, errors = try_load_features(files, cache_dir=str(tmp_path / "cache"))
+    assert not kept
+    assert errors == [f"{fifo}: is a FIFO (named pipe), not a BVH file",
+                      "/dev/zero: is a character device, not a BVH file"]
