@@ -79,6 +79,12 @@ def own_scales(motions: Sequence[Motion], names: Sequence[str], fit: bool) -> bo
 
 def _shown(motion: Motion, raw: bool) -> Motion:
     if raw:
+        from satagraph.transforms.rig_reading import read_rig
+        up = read_rig(motion).up
+        if up.axis != "+Y" and not up.low_confidence:
+            print(f"satagraph: warning: {motion.source}: --raw draws +Y up, and this rig "
+                  f"reads {up.axis} up ({up.how}): it will lie on its side (drop --raw to "
+                  "stand it up)", file=sys.stderr)
         return motion
     from satagraph.transforms.canonical import canonicalize
     return canonicalize(motion, fps=None)

@@ -510,6 +510,17 @@ def test_a_body_of_one_joint_is_refused_as_training_refuses_it(tmp_path, capsys)
     assert not out.exists()
 
 
+def test_render_raw_says_a_rig_of_another_up_axis_will_lie(tmp_path, capsys) -> None:
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.datasets.zoo.dialects import Dialect, apply_dialect
+    clip = generate_clip(zoo_rigs(["biped"])[0], "walk", frames=30, seed=3)
+    write_bvh(apply_dialect(clip, Dialect(up_axis="+Z"))[0], tmp_path / "z.bvh")
+    args = ["render", str(tmp_path / "z.bvh"), str(tmp_path / "z.gif"), "--max-frames", "2"]
+    assert cli.main(args + ["--raw"]) == 0
+    assert "reads +Z up (detected): it will lie on its side" in capsys.readouterr().err
+    assert cli.main(args) == 0 and "lie on its side" not in capsys.readouterr().err
+
+
 def test_a_negative_up_axis_needs_no_equals_sign(capsys, tiny_file) -> None:
     """``--up-axis -Y`` (argparse alone took ``-Y`` for an option)."""
     assert cli.main(["inspect", str(tiny_file), "--up-axis", "-Y"]) == 0
