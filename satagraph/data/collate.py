@@ -277,6 +277,32 @@ def _check_clip(index: int, clip: MotionClip) -> None:
         if rows != want:
             raise ValueError(f"collate_clips: clip {index}: {name} has {rows} rows for its "
                              f"{frames} frames and {joints} joints")
+    if clip.edge_attr.shape[0] != 2 * (joints - 1):
+        raise ValueError(f"collate_clips: clip {index}: edge_attr has {clip.edge_attr.shape[0]} "
+                         f"rows; {joints} joints have {2 * (joints - 1)} directed bones")
+    parents = clip.parents.tolist()
+    if parents[0] != -1 or any(not 0 <= p < j for j, p in enumerate(parents[1:], start=1)):
+        raise ValueError(f"collate_clips: clip {index}: parents {parents[:12]}"
+                         f"{'...' if len(parents) > 12 else ''} are not a tree rooted at joint "
+                         "0 with each parent before its child (its edges would join other "
+                         "frames and clips)")
+
+
+def _check_widths(clips: List[MotionClip]) -> None:
+    """One line naming the first clip whose feature widths differ from
+    clip 0's (the widths every clip of a batch shares)."""
+    def widths(clip: MotionClip) -> tuple:
+        return tuple(getattr(clip, name).shape[-1] for name in _WIDTHS)
+    first = widths(clips[0])
+    for i, clip in enumerate(clips[1:], start=1):
+        if widths(clip) != first:
+            got = ", ".join(f"{n} {a} (clip 0: {b})" for n, a, b in
+                            zip(_WIDTHS, widths(clip), first) if a != b)
+            raise ValueError(f"collate_clips: clip {i}: feature widths differ: {got}")
+
+
+#: The per-clip arrays whose last dimension every clip of a batch shares.
+_WIDTHS = ("dynamic", "root", "static", "semantic", "edge_attr")
 
 
 def collate_clips(clips: List[MotionClip]) -> FrameBatch:
@@ -294,6 +320,7 @@ def collate_clips(clips: List[MotionClip]) -> FrameBatch:
         raise ValueError("collate_clips: no clips")
     for i, clip in enumerate(clips):
         _check_clip(i, clip)
+    _check_widths(clips)
     frames = [c.num_frames for c in clips]
     joints = [c.num_joints for c in clips]
     num_frames, num_joints = torch.tensor(frames), torch.tensor(joints)

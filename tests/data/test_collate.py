@@ -294,6 +294,27 @@ def test_a_clip_whose_arrays_disagree_is_named():
     for bad, said in ((replace(good, root=good.root[:2]), "root has 2 rows for its 3 frames"),
                       (replace(good, static=good.static[:4]), "static has 4 rows"),
                       (replace(good, semantic=torch.zeros(2, 0)), "semantic has 2 rows"),
-                      (replace(good, dynamic=good.dynamic[:0]), "with T, J >= 1")):
+                      (replace(good, dynamic=good.dynamic[:0]), "with T, J >= 1"),
+                      (replace(good, edge_attr=good.edge_attr[:3]), "edge_attr has 3 rows")):
         with pytest.raises(ValueError, match=f"clip 0: .*{said}"):
             collate_clips([bad])
+
+
+@pytest.mark.parametrize("parents", [[-1, 0, -1, 2, 3], [0, -1, 1, 2, 3], [-1, 2, 0, 2, 3]])
+def test_parents_that_are_not_a_tree_from_joint_0_are_refused(parents):
+    """A second root, a root that is not joint 0, or a child before its
+    parent made edges between clips and frames: the next clip's output
+    changed with its neighbour."""
+    from dataclasses import replace
+    good = make_clips(((5, 3),))[0]
+    bad = replace(good, parents=torch.tensor(parents))
+    with pytest.raises(ValueError, match="clip 1: parents .* are not a tree rooted at joint 0"):
+        collate_clips([good, bad])
+
+
+def test_clips_of_other_feature_widths_are_named():
+    from dataclasses import replace
+    good = make_clips(((5, 3),))[0]
+    wide = replace(good, semantic=torch.zeros(5, 7))
+    with pytest.raises(ValueError, match=r"clip 1: feature widths differ: semantic 7 \(clip 0: "):
+        collate_clips([good, wide])

@@ -378,3 +378,16 @@ def count(module: torch.nn.Module) -> int:
 def test_paper_size_parameter_count():
     model = SATA(semantic_channels=256, bottleneck="vae")
     assert abs(count(model) - 8.41e6) / 8.41e6 < 0.05, count(model)
+
+
+def test_a_target_of_other_clip_lengths_is_refused():
+    """Target clips of 5 and 10 frames under source clips of 10 and 5: the
+    frame count matches, and the temporal transformer decoded each target
+    clip from latents of both source clips."""
+    model = SATA(bottleneck="vae", **TINY).eval()
+    source = collate_clips(make_clips([(10, 4), (5, 6)]))
+    target = collate_clips(make_clips([(5, 4), (10, 6)], seed=7))
+    with pytest.raises(ValueError, match=r"clips of \[5, 10\] frames from clips of \[10, 5\]"):
+        model(source, target)
+    same = collate_clips(make_clips([(10, 5), (5, 3)], seed=9))
+    assert model(source, same)["q"].shape[0] == same.num_nodes

@@ -42,10 +42,27 @@ class MotionAutoencoder(nn.Module):
 
     def forward(self, batch, target_batch=None) -> Dict[str, Tensor]:
         """Encode :obj:`batch` and decode onto :obj:`target_batch` (default:
-        :obj:`batch` itself)."""
-        enc = self.encode(batch)
+        :obj:`batch` itself), whose clips must be as long as the source's, in
+        the same order: the frame count alone can match while a clip's
+        latents are decoded with its neighbour's.
+
+        Raises:
+            ValueError: The target's clip lengths are not the source's.
+        """
         target = batch if target_batch is None else target_batch
+        check_clip_lengths(batch, target)
+        enc = self.encode(batch)
         return dict(enc, **self.decode(enc["z"], target))
 
 
-__all__ = ["MotionAutoencoder"]
+def check_clip_lengths(batch, target) -> None:
+    """One line when :obj:`target`'s clips are not as long as
+    :obj:`batch`'s, clip by clip."""
+    source, wanted = batch.clip_num_frames.tolist(), target.clip_num_frames.tolist()
+    if source != wanted:
+        raise ValueError(f"decoding onto clips of {wanted[:8]} frames from clips of "
+                         f"{source[:8]}: the target's clips must be the source's lengths, "
+                         "in its order")
+
+
+__all__ = ["MotionAutoencoder", "check_clip_lengths"]
