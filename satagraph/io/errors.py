@@ -18,3 +18,8 @@ class BVHError(ValueError):
     def __init__(self, path: str, line: int, message: str) -> None:
         self.path, self.line, self.message = path, line, message
         super().__init__(f"{path}:{line}: {message}" if line > 0 else f"{path}: {message}")
+
+    def __reduce__(self):
+        """Pickled with its three arguments (an error raised in a worker
+        process reaches the parent whole)."""
+        return type(self), (self.path, self.line, self.message)

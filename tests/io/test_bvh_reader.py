@@ -403,3 +403,12 @@ def test_a_joint_named_like_a_made_up_end_site_name_is_read(tmp_path):
     skeleton = read_bvh(path).skeleton
     assert skeleton.names == ["Hips", "Spine", "Spine_end2", "Spine_end", "Spine_end_end"]
     assert list(skeleton.end_site) == [False, False, True, False, True]
+
+
+def test_the_error_crosses_process_boundaries_whole():
+    """An error raised in a worker process reaches its parent pickled: it
+    failed to unpickle, and a benchmark's pool broke without the reason."""
+    import pickle
+    err = pickle.loads(pickle.dumps(BVHError("x.bvh", 3, "bad frame")))
+    assert (err.path, err.line, err.message, str(err)) == ("x.bvh", 3, "bad frame",
+                                                           "x.bvh:3: bad frame")

@@ -199,3 +199,19 @@ def test_online_wandb_without_a_login_is_one_line_before_any_data(tmp_path, monk
                  "data.sources=[nowhere]", f"output_dir={tmp_path / 'run'}"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert "W&B needs a login" in err[-1] and not (tmp_path / "run").exists()
+
+
+def test_eval_scores_a_manifest_of_test_files_only(config_overrides: List[str],
+                                                   small_manifest: Path, tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture) -> None:
+    """A trained model carries its statistics: ``eval --data`` needs no
+    training files beside the ones it scores."""
+    run = tmp_path / "run"
+    assert main(_train_args(config_overrides, run)) == 0
+    rows = small_manifest.read_text().splitlines()
+    only_test = tmp_path / "test_only.tsv"
+    only_test.write_text("\n".join([rows[0]] + [r for r in rows[1:] if r.endswith("\ttest")]))
+    capsys.readouterr()
+    assert main(["--traceback", "eval", "--ckpt", str(run / "checkpoints" / "last.ckpt"),
+                 "--data", str(only_test)]) == 0
+    assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
