@@ -34,8 +34,12 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
         description="Train each CONFIG for the same wall-clock budget "
         "(trainer.max_time) on the first config's data, evaluate each on the "
         "test split and write sweep.md and sweep.json (one row per config) "
-        "into --output. key=value items override every config. Options come "
-        "first: satagraph sweep --budget 10 tiny gnn_gin data.batch_size=8")
+        "into --output. key=value items override every config. Each config keeps its "
+        "own model, losses, optimiser and trainer settings: the table lists every "
+        "setting the rows differ in. Every config is checked before any trains; one "
+        "that fails while training is a row saying why, and the others go on (exit "
+        "code 2). Options come first: satagraph sweep --budget 10 sata_vae gnn_gin "
+        "ablation_no_gnn data.batch_size=8")
     p.add_argument("items", nargs="+", metavar="CONFIG|key=value",
                    help="config names or paths, and dotted overrides for all")
     p.add_argument("--budget", type=float, default=5.0, metavar="MINUTES",
@@ -50,7 +54,7 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
                    help="training logger (default csv; wandb: online, for a wandb "
                    "sweep agent; config: each config's own)")
     p.add_argument("--max-batches", type=int, default=None,
-                   help="evaluation batches per config (default: all)")
+                   help="evaluation batches per config (default: all; the table says so)")
     p.set_defaults(func=run_sweep_command)
     return p
 
@@ -64,10 +68,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     if not args.budget > 0:
         raise ValueError(f"sweep: --budget must be positive, got {args.budget}")
     logger = None if args.logger == "config" else args.logger
-    run_sweep(configs, args.budget, args.output, overrides, retarget=args.retarget,
-              max_batches=args.max_batches, logger=logger)
+    rows = run_sweep(configs, args.budget, args.output, overrides, retarget=args.retarget,
+                     max_batches=args.max_batches, logger=logger)
     print((Path(args.output) / "sweep.md").read_text())
-    return 0
+    return 2 if any(r.error for r in rows) else 0
 
 
 __all__: List[str] = ["add_sweep_parser", "run_sweep_command"]

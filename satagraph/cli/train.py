@@ -403,8 +403,8 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict) ->
 
 
 def run_eval(args) -> int:
-    from satagraph.data.datamodule import MotionDataModule
-    from satagraph.pipelines.evaluation import evaluate, format_table
+    from satagraph.pipelines.evaluation import (evaluate, format_table, scoring_data,
+                                                split_loader)
     from satagraph.utils.files import atomic_write_text, check_output_path
     from satagraph.experiment.train import load_module
     if args.json:
@@ -412,24 +412,13 @@ def run_eval(args) -> int:
     if args.max_batches is not None and args.max_batches < 1:
         raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
-    data = dict(module.meta.get("data") or {})
-    data["max_files"] = None  # the whole split, whatever the training run read of it
-    if args.data:
-        data["sources"] = args.data
-    if not data.get("sources"):
-        raise ValueError("the checkpoint does not name its data: pass --data")
-    prep = dict(data.get("preprocessing") or {}, rest=args.rest)
-    prep.update({k: v for k, v in (("up_axis", args.up_axis),
-                                   ("scale", args.units)) if v is not None})
-    data["preprocessing"] = prep
-    dm = MotionDataModule(**data)
-    dm.setup("test")
+    dm = scoring_data(module.meta.get("data") or {}, args.rest, args.data, args.up_axis,
+                      args.units)
     if not len(dm.datasets[args.split]):
-        raise ValueError(f"no windows in the {args.split!r} split of {data['sources']} (a "
+        raise ValueError(f"no windows in the {args.split!r} split of {dm.sources} (a "
                          "manifest's split column; a folder without one is split 80/10/10 "
                          "by file name: try another --split)")
-    loader = dm.test_dataloader() if args.split == "test" else dm._loader(args.split, False)
-    results = evaluate(module, loader, args.max_batches)
+    results = evaluate(module, split_loader(dm, args.split), args.max_batches)
     print(format_table(results))
     if args.retarget:
         _print_retarget(module, dm.datasets[args.split].files, results)

@@ -11,8 +11,10 @@ Example::
 Every config gets the data section of the first one (``same_data``), a CSV
 logger, no progress bar, ``trainer.max_time`` set to the budget and no
 epoch limit, and its own run folder under the output folder. The metrics
-are those of the final weights (not the best checkpoint) on the test split
-(:func:`~satagraph.pipelines.evaluation.evaluate`).
+are those of the final weights (not the best checkpoint) on the test split,
+read as ``satagraph eval`` reads it (:func:`~satagraph.pipelines.evaluation.
+scoring_data`: each skeleton in the rest pose ``reconstruct`` shows it;
+:func:`~satagraph.pipelines.evaluation.evaluate`).
 """
 from __future__ import annotations
 
@@ -62,6 +64,8 @@ class SweepRow:
             :data:`~satagraph.pipelines.evaluation.RETARGET_SETTINGS`), group a file
             label or ``"label:dataset"`` (empty when not asked).
         run_dir (str): The run folder (checkpoints, CSV logs).
+        error (str): Why the config failed (empty when it did not); its
+            row is kept, the others go on.
     """
 
     name: str
@@ -74,6 +78,7 @@ class SweepRow:
     metrics: Dict[str, Dict[str, float]] = field(default_factory=dict)
     retarget: Dict[str, Dict[str, float]] = field(default_factory=dict)
     run_dir: str = ""
+    error: str = ""
 
 
 # ----------------------------------------------------------- configs
@@ -203,7 +208,7 @@ def run_config(run: SweepRun, eval_split: str = "test",
             value's key takes the evaluation split's files.
         max_batches (int, optional): Evaluation batches per loader.
     """
-    from satagraph.pipelines.evaluation import evaluate
+    from satagraph.pipelines.evaluation import evaluate, split_loader
     from satagraph.lightning.autoencoder import count_parameters
     cfg = run.cfg
     module, dm, trainer, seconds, train_loss = train_budgeted(cfg)
@@ -211,13 +216,25 @@ def run_config(run: SweepRun, eval_split: str = "test",
                    params=count_parameters(module), steps=int(trainer.global_step),
                    epochs=int(trainer.current_epoch), seconds=seconds,
                    train_loss=train_loss, run_dir=cfg["output_dir"])
-    row.metrics = evaluate(module, dm._loader(eval_split, False), max_batches)
+    scored = _scored(cfg, dm)
+    row.metrics = evaluate(module, split_loader(scored, eval_split), max_batches)
     for label, make_loader in (extra_loaders or {}).items():
         for group, values in evaluate(module, make_loader(module), max_batches).items():
             row.metrics[f"{label}" if group == "all" else f"{label}:{group}"] = values
     if retarget_files is not None:
-        row.retarget = retarget_table(module, dm, retarget_files, eval_split)
+        row.retarget = retarget_table(module, scored, retarget_files, eval_split)
     return row
+
+
+def _scored(cfg: Dict[str, Any], dm):
+    """The data a row is scored on: as ``satagraph eval`` reads it
+    (:func:`~satagraph.pipelines.evaluation.scoring_data`: each skeleton in
+    the rest pose ``reconstruct`` shows it), for the motion data module;
+    another module's own data module as it trained."""
+    from satagraph.data.datamodule import MotionDataModule
+    from satagraph.experiment.train import data_section
+    from satagraph.pipelines.evaluation import scoring_data
+    return scoring_data(data_section(cfg)) if type(dm) is MotionDataModule else dm
 
 
 def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
@@ -287,20 +304,70 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         logger (str, optional): Training logger (see :func:`budget_config`).
         log (callable): Progress lines.
     """
+    if max_batches is not None and max_batches < 1:
+        raise ValueError(f"sweep: --max-batches must be at least 1, got {max_batches}")
     cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
                          logger=logger)
+    check_runs(cfgs)
     rows = []
     for i, run in enumerate(cfgs):
         log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for {budget_minutes:g} min")
-        row = run_config(run, retarget_files={"test": "split"} if retarget else None,
-                         max_batches=max_batches)
+        try:
+            row = run_config(run, retarget_files={"test": "split"} if retarget else None,
+                             max_batches=max_batches)
+        except (ValueError, RuntimeError, OSError) as err:  # the other rows go on
+            message = str(err).splitlines()[0] if str(err) else type(err).__name__
+            log(f"    failed: {message}")
+            rows.append(SweepRow(name=run.cfg["name"], config=run.source,
+                                 run_dir=run.cfg["output_dir"], error=message))
+            continue
         log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
             f"{row.train_loss:.4f}")
         rows.append(row)
     # all share the first's data
     write_results(rows, Path(output), budget_minutes, overrides,
-                  data=cfgs[0].cfg["data"]["sources"] if cfgs else None)
+                  data=cfgs[0].cfg["data"]["sources"] if cfgs else None,
+                  differences=config_differences(cfgs), max_batches=max_batches)
     return rows
+
+
+def check_runs(runs: Sequence[SweepRun]) -> None:
+    """Every config of a sweep checked before any trains: its keys and
+    values, its model built, and a run folder that holds no trained run.
+
+    Raises:
+        ValueError: One line naming the config.
+    """
+    from satagraph.experiment.train import build_module, check_config, refuse_trained_folder
+    for run in runs:
+        try:
+            refuse_trained_folder(Path(run.cfg["output_dir"]))
+            build_module(check_config(run.cfg))
+        except (ValueError, KeyError, TypeError) as err:
+            raise ValueError(f"sweep: config {run.cfg['name']} ({run.source}): "
+                             f"{str(err).splitlines()[0]}") from None
+
+
+#: Config sections whose settings a sweep's rows may differ in (``data`` is
+#: the first config's for every row; names, folders and loggers are a row's
+#: own).
+COMPARED = ("module", "seed", "threads", "model", "loss", "optim", "trainer")
+
+
+def config_differences(runs: Sequence[SweepRun]) -> Dict[str, List[Any]]:
+    """Every setting (dotted key) in which the rows' configs differ, with
+    each row's value (``None``: not set): what a row's name does not say."""
+    def flat(value: Any, key: str, out: Dict[str, Any]) -> Dict[str, Any]:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                flat(v, f"{key}.{k}" if key else str(k), out)
+        else:
+            out[key] = value
+        return out
+    tables = [flat({k: run.cfg.get(k) for k in COMPARED}, "", {}) for run in runs]
+    keys = sorted(set().union(*tables)) if tables else []
+    return {k: [t.get(k) for t in tables] for k in keys
+            if len({json.dumps(t.get(k), sort_keys=True, default=str) for t in tables}) > 1}
 
 
 # ------------------------------------------------------------- table
@@ -316,7 +383,10 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
     head += [RETARGET_HEADERS[s] for s in settings]
     lines = ["| " + " | ".join(head) + " |", "|---" + "|---:" * (len(head) - 1) + "|"]
     for r in rows:
-        cells = [r.name, f"{r.params / 1e6:.2f}", str(r.steps), f"{r.train_loss:.4f}"]
+        if r.error:
+            lines.append(f"| {r.name} | failed: {r.error} |" + " |" * (len(head) - 2))
+            continue
+        cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), f"{r.train_loss:.4f}"]
         cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
         for setting in settings:
             value = r.retarget.get(setting, {}).get("test" if group == "all" else f"test:{group}")
@@ -326,7 +396,9 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
 
 
 def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
-                  overrides: Sequence[str] = (), data: Any = None) -> str:
+                  overrides: Sequence[str] = (), data: Any = None,
+                  differences: Optional[Dict[str, List[Any]]] = None,
+                  max_batches: Optional[int] = None) -> str:
     """Write ``sweep.md`` and ``sweep.json``; returns the markdown.
 
     Args:
@@ -335,21 +407,45 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
         budget_minutes (float): Training budget per config.
         overrides (list[str]): Overrides applied to every config (recorded).
         data (Any, optional): The data sources of the sweep (recorded).
+        differences (dict, optional): :func:`config_differences` of the rows.
+        max_batches (int, optional): Evaluation batches each row was scored on.
     """
     output.mkdir(parents=True, exist_ok=True)
     text = (f"# Sweep: {len(rows)} configs, {budget_minutes:g} min of training each\n\n"
-            f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data)}\n")
+            f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data, max_batches)}\n"
+            f"{_differences(rows, differences)}")
     atomic_write_text(output / "sweep.md", text)
     payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
-               "overrides": list(overrides), "data": data,
+               "overrides": list(overrides), "data": data, "max_batches": max_batches,
+               "differences": differences or {},
                "rows": [asdict(r) for r in rows]}
     atomic_write_text(output / "sweep.json", json.dumps(payload, indent=1, default=float))
     return text
 
 
-def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> str:
+def _differences(rows: Sequence[SweepRow], differences: Optional[Dict[str, List[Any]]]
+                 ) -> str:
+    """The settings the rows differ in, a column per row (``sweep.md``)."""
+    if differences is None:
+        return ""
+    if not differences:
+        return "\nThe configs differ in no setting but their names.\n"
+    head = "| setting | " + " | ".join(r.name for r in rows) + " |"
+    lines = ["", "How the configs differ (every setting but the data, which is the first "
+             "config's for all):", "", head, "|---" * (len(rows) + 1) + "|"]
+    lines += ["| " + " | ".join([f"`{k}`"] + ["-" if v is None else str(v) for v in values])
+              + " |" for k, values in differences.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
+            max_batches: Optional[int] = None) -> str:
+    scope = ("every window" if max_batches is None
+             else f"the first {max_batches} batch(es) of windows")
     lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
-             "final weights on the test split (all datasets); RT, JP, FS, GP in cm."]
+             f"final weights over {scope} of the test split (all datasets; sweep.json has "
+             "each dataset's), each skeleton read in the rest pose `reconstruct` shows it "
+             "(as `satagraph eval` reads it); RT, JP, FS, GP in cm."]
     if any(r.retarget for r in rows):
         lines.append("Retarget: 1000 x mean squared joint error / H^2 over the test files; "
                      "int.: onto bone-scaled copies of each source skeleton; cross: onto "
@@ -364,4 +460,5 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any) -> st
 
 __all__ = ["SweepRow", "SweepRun", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
            "train_budgeted", "run_config", "retarget_table", "held_out_loader",
-           "run_sweep", "format_sweep", "write_results"]
+           "run_sweep", "check_runs", "config_differences", "format_sweep",
+           "write_results"]

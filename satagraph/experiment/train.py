@@ -93,7 +93,8 @@ def check_wandb_login(logger: Dict[str, Any]) -> None:
         pass
     raise ValueError("logger.offline=false: W&B needs a login (`wandb login`, or "
                      "WANDB_API_KEY); logger.offline=true logs into the run folder instead, "
-                     "to `wandb sync` later")
+                     "to `wandb sync` later (in `satagraph sweep`, whose --logger wandb is "
+                     "online: --logger config keeps each config's own logger)")
 
 
 def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):

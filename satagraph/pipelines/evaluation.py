@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 from dataclasses import replace
-from typing import Callable, Dict, Optional, Sequence
+from typing import Any, Callable, Dict, Mapping, Optional, Sequence
 
 import torch
 
@@ -20,6 +20,44 @@ from satagraph.motion import Motion
 #: "internal" keeps the skeleton's structure and changes its proportions,
 #: "cross" also drops a leaf chain and splits a bone.
 RETARGET_SETTINGS: Dict[str, Callable] = {"internal": scale_bones, "cross": restructure}
+
+
+#: The rest pose each skeleton is read in when a model is scored: the one
+#: ``reconstruct`` shows it (``eval --rest``, and every sweep row).
+SCORING_REST = "auto"
+
+
+def scoring_data(data: Mapping[str, Any], rest: str = SCORING_REST, sources: Any = None,
+                 up_axis: Optional[str] = None, scale: Any = None):
+    r"""The data a trained model is scored on, the one rule of ``eval`` and
+    of sweeps: its data section (:obj:`sources` in place of its sources),
+    every file of each split whatever ``data.max_files`` training read, each
+    skeleton in the rest pose :obj:`rest`, the rig read as :obj:`up_axis`
+    and :obj:`scale` where given; set up for testing (no training file is
+    needed: the model has its own statistics).
+
+    Returns:
+        MotionDataModule: Its ``datasets[split]`` and :func:`split_loader`.
+
+    Raises:
+        ValueError: No sources.
+    """
+    from satagraph.data.datamodule import MotionDataModule
+    data = dict(data, max_files=None)
+    if sources:
+        data["sources"] = sources
+    if not data.get("sources"):
+        raise ValueError("the checkpoint does not name its data: pass --data")
+    prep = dict(data.get("preprocessing") or {}, rest=rest)
+    prep.update({k: v for k, v in (("up_axis", up_axis), ("scale", scale)) if v is not None})
+    dm = MotionDataModule(**dict(data, preprocessing=prep))
+    dm.setup("test")
+    return dm
+
+
+def split_loader(dm, split: str):
+    """The evaluation loader of one split (unshuffled)."""
+    return dm.test_dataloader() if split == "test" else dm._loader(split, False)
 
 
 def evaluate(module, loader, max_batches: Optional[int] = None) -> Dict[str, Dict[str, float]]:

@@ -10,8 +10,9 @@ import yaml
 
 from satagraph.cli import main
 from satagraph.experiment.config import load_config
-from satagraph.experiment.sweep import (SweepRow, budget_config, format_sweep, split_arguments,
-                                        sweep_configs)
+from satagraph.experiment import sweep as sweep_mod
+from satagraph.experiment.sweep import (SweepRow, budget_config, config_differences,
+                                        format_sweep, split_arguments, sweep_configs)
 from tests.conftest import data_dir
 
 needs_data = pytest.mark.skipif(data_dir() is None, reason="../shared/data not found")
@@ -74,6 +75,7 @@ def test_sweep_cli_end_to_end(tmp_path):
     table = (out / "sweep.md").read_text()
     assert "| tiny |" in table and "| tiny_gin |" in table
     assert "`data.max_files=3`" in table and "Retarget:" not in table
+    assert "first 2 batch(es)" in table and "| `model.local_conv` | gine | gin |" in table
     payload = json.loads((out / "sweep.json").read_text())
     assert payload["overrides"][-1] == "data.max_files=3"
     assert payload["data"] == [str(data_dir())]
@@ -84,3 +86,42 @@ def test_sweep_cli_end_to_end(tmp_path):
         assert math.isfinite(row["train_loss"])
         assert set(row["metrics"]["all"]) >= {"JR", "RT", "JP", "FS", "GP"}
         assert Path(row["run_dir"]).is_dir()
+
+
+def test_the_table_lists_every_setting_the_rows_differ_in(tmp_path):
+    """`sweep tiny gnn_gin` compared a 32-wide model with a 256-wide one at
+    another learning rate under the name "gnn_gin"; the table now says so."""
+    runs = sweep_configs(["tiny", "gnn_gin"], output=str(tmp_path))
+    differ = config_differences(runs)
+    assert differ["model.local_conv"] == ["gine", "gin"]
+    assert differ["model.hidden_channels"] == [32, 256] and "optim.lr" in differ
+    assert "data.window" not in differ and "seed" not in differ  # the same data and seed
+    same = sweep_configs(["tiny", "tiny"], output=str(tmp_path / "same"))
+    assert config_differences(same) == {}
+
+
+def test_every_config_is_checked_before_any_trains(tmp_path, monkeypatch):
+    """A config that cannot build stopped the sweep after the others had
+    trained, and no table was written."""
+    trained = []
+    monkeypatch.setattr(sweep_mod, "run_config", lambda run, **kw: trained.append(run))
+    with pytest.raises(ValueError,
+                       match="sweep: config tiny\\+local_conv=bogus .*unknown local conv"):
+        sweep_mod.run_sweep(["tiny", "tiny"], 0.01, str(tmp_path),
+                            variants=[[], ["model.local_conv=bogus"]])
+    assert trained == [] and not list(tmp_path.iterdir())
+
+
+def test_a_config_that_fails_while_training_is_a_row_and_the_others_go_on(tmp_path,
+                                                                          monkeypatch):
+    def run_config(run, **kw):
+        if run.cfg["name"] == "tiny":
+            raise RuntimeError("out of memory\nmore lines")
+        return SweepRow(run.cfg["name"], run.source, params=5, steps=3, train_loss=1.0,
+                        metrics={"all": {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}})
+    monkeypatch.setattr(sweep_mod, "run_config", run_config)
+    monkeypatch.setattr(sweep_mod, "check_runs", lambda runs: None)
+    rows = sweep_mod.run_sweep(["tiny", "tiny"], 0.01, str(tmp_path), log=lambda *a: None)
+    assert [r.error for r in rows] == ["out of memory", ""]
+    table = (tmp_path / "sweep.md").read_text()
+    assert "| tiny | failed: out of memory |" in table and "| tiny_2 | 5e-06 |" in table
