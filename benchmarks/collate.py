@@ -26,6 +26,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
 from satagraph.memory import retain_freed_memory
+from results_io import data_folder  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = ("dog", "ccbase")
@@ -79,7 +80,8 @@ def time_rows(clips: List[MotionClip], repeat: int, thread_counts: List[int],
 
 def main(argv: Optional[List[str]] = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    parser.add_argument("--data", type=data_folder,
+                        default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--clips", type=int, default=32)
     parser.add_argument("--frames", type=int, default=64)
     parser.add_argument("--repeat", type=int, default=50)

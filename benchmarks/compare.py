@@ -36,7 +36,7 @@ from typing import Dict, List, Optional, Sequence
 
 import torch
 
-from results_io import write_results
+from results_io import data_folder, write_results
 from satagraph.datasets.sources import MotionFile, resolve_sources, select
 from satagraph.experiment.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
                                         held_out_loader, run_config, sweep_configs)
@@ -179,7 +179,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
                         help="training minutes per model (default 5)")
     parser.add_argument("--paper-sizes", action="store_true",
                         help="train the configs' (paper) sizes instead of reduced widths")
-    parser.add_argument("--data", default=str(DATA))
+    parser.add_argument("--data", type=data_folder, default=str(DATA))
     parser.add_argument("--held-out", default="cmu")
     parser.add_argument("--models", default=",".join(m for m, _ in MODELS))
     parser.add_argument("--retarget-files", type=int, default=2,

@@ -47,7 +47,7 @@ from torch.profiler import ProfilerActivity, profile
 from satagraph.nn import SpatioTemporalBlock
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from results_io import write_results  # noqa: E402
+from results_io import data_folder, write_results  # noqa: E402
 from throughput import (DATA, build_module, time_steps, train_step,  # noqa: E402
                         training_batch, training_files)
 
@@ -134,7 +134,7 @@ def table(rows: List[Dict]) -> str:
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--data", type=Path, default=DATA)
+    parser.add_argument("--data", type=lambda t: Path(data_folder(t)), default=str(DATA))
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--config", default="sata_vae")
     parser.add_argument("--variants", default=",".join(VARIANTS))

@@ -25,6 +25,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.io import read_bvh
 from satagraph.io._floats import parse_decimal_table
+from results_io import data_folder  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -140,7 +141,8 @@ def _time_interleaved(fns: List[Callable], files: list,
 
 def main(argv: List[str] = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    parser.add_argument("--data", type=data_folder,
+                        default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--repeat", type=int, default=3,
                         help="best of this many runs per row")
     parser.add_argument("--threads", type=int, default=None,

@@ -1,6 +1,7 @@
 """Writing a benchmark's table (markdown) and data (JSON) side by side."""
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 from typing import Any
@@ -14,3 +15,14 @@ def write_results(out: Path, title: str, text: str, data: Any) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out.with_suffix(".md"), f"# {title}\n\n{text}")
     atomic_write_text(out.with_suffix(".json"), json.dumps(data, indent=1, default=float))
+
+
+def data_folder(text: str) -> str:
+    """The ``--data`` argument of a benchmark that reads the real files: a
+    folder holding their ``manifest.tsv`` (``../shared/data``), else one
+    usage line saying so (a traceback deep in the reader before)."""
+    if not (Path(text) / "manifest.tsv").is_file():
+        raise argparse.ArgumentTypeError(
+            f"{text}: no manifest.tsv there: this benchmark reads the real BVH files of "
+            "../shared/data; pass --data DIR for a folder that has them")
+    return text

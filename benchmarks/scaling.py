@@ -47,7 +47,7 @@ import numpy as np
 import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from results_io import write_results  # noqa: E402
+from results_io import data_folder, write_results  # noqa: E402
 from throughput import (DATA, build_module, isolated, memory_baseline,  # noqa: E402
                         peak_memory, random_semantic, time_steps, train_step)
 
@@ -215,7 +215,7 @@ def notes(args) -> str:
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--data", default=str(DATA))
+    parser.add_argument("--data", type=data_folder, default=str(DATA))
     parser.add_argument("--joints", default="20,40,70,100,150")
     parser.add_argument("--frames", type=int, default=16)
     parser.add_argument("--clips", type=int, default=2)

@@ -57,7 +57,7 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from model_cost import MISSED  # noqa: E402
-from results_io import write_results  # noqa: E402
+from results_io import data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
@@ -320,7 +320,7 @@ def notes(steps: int) -> str:
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--data", default=str(DATA))
+    parser.add_argument("--data", type=data_folder, default=str(DATA))
     parser.add_argument("--steps", type=int, default=5, help="timed training steps")
     parser.add_argument("--models", default=",".join(m for m, _ in MODELS),
                         help="comma-separated model labels")
