@@ -364,7 +364,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         module = build_module(cfg, dm)
         if init_from:
             init_weights(module, init_from, init_normalizer)
-        if not len(dm.datasets["val"]):  # said by the data module; nothing to validate
+        if _no_validation(dm):  # said by the data module; nothing to validate
             trainer_overrides = dict(trainer_overrides, monitor=None, limit_val_batches=0)
         trainer = build_trainer(cfg, run_dir, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
@@ -376,6 +376,13 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
             _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
+
+
+def _no_validation(dm) -> bool:
+    """Whether a data module holds a validation split without a window (a
+    registered module's own data module may keep its splits otherwise)."""
+    val = (getattr(dm, "datasets", None) or {}).get("val")
+    return val is not None and len(val) == 0
 
 
 def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
