@@ -81,6 +81,19 @@ class FrameBatch(Batch):
           :data:`~satagraph.semantics.LIMBS`, ``-1`` where missing)
     """
 
+    @classmethod
+    def from_data_list(cls, data_list, follow_batch=None, exclude_keys=None):
+        """Refused: frame graphs alone do not hold the clips' context (their
+        streams, heights, limb ends) that a :class:`FrameBatch` carries;
+        :func:`collate_clips` builds one from clips, and
+        :meth:`Batch.from_data_list <torch_geometric.data.Batch.from_data_list>`
+        of :class:`~satagraph.data.FrameGraph` objects gives the plain PyG
+        batch (an ``AttributeError`` deep in a model before)."""
+        raise TypeError("FrameBatch.from_data_list: build a FrameBatch from clips with "
+                        "satagraph.data.collate_clips(clips) (MotionFeatures.to_clip makes "
+                        "them); torch_geometric.data.Batch.from_data_list(frame_graphs) "
+                        "gives the plain PyG batch")
+
     def heights(self, level: str) -> Tensor:
         r"""The clip height of every row of a feature tensor: ``"node"``
         (:math:`N`, rows of :obj:`x`), ``"frame"`` (:math:`G`, rows of

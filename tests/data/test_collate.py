@@ -318,3 +318,12 @@ def test_clips_of_other_feature_widths_are_named():
     wide = replace(good, semantic=torch.zeros(5, 7))
     with pytest.raises(ValueError, match=r"clip 1: feature widths differ: semantic 7 \(clip 0: "):
         collate_clips([good, wide])
+
+
+def test_frame_batch_is_built_from_clips_not_frame_graphs(clips):
+    """``FrameBatch.from_data_list`` of frame graphs failed later, deep in a
+    model, on an attribute only clips give."""
+    with pytest.raises(TypeError, match="collate_clips"):
+        FrameBatch.from_data_list(frame_graphs(clips))
+    batch = collate_clips(clips)
+    assert len(batch.index_select([0, 1])) == 2 and batch.get_example(0).num_nodes > 0
