@@ -160,6 +160,6 @@ def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
     return resolve_config(cfg)
 
 
-def expand_path(value: str) -> str:
+def expand_path(value: Any) -> str:
     """User and environment variables expanded."""
-    return os.path.expandvars(os.path.expanduser(value))
+    return os.path.expandvars(os.path.expanduser(str(value)))  # output_dir=2024 reads as a number

@@ -177,15 +177,15 @@ def _is_number(value: Any) -> bool:
     return _is_int(value) or isinstance(value, float)
 
 
-#: What a field of each annotation accepts (the others accept anything).
+#: What a field of each annotation accepts (the others, ``str`` among them,
+#: accept anything: ``output_dir=2024`` reads as a number and names a folder).
 TYPE_CHECKS = {"int": (_is_int, "an integer"), "float": (_is_number, "a number"),
-               "bool": (lambda v: isinstance(v, bool), "true or false"),
-               "str": (lambda v: isinstance(v, str), "a string")}
+               "bool": (lambda v: isinstance(v, bool), "true or false")}
 
 
 def check_types(where: str, schema: type, values: Mapping[str, Any]) -> None:
     """One line for a value of the wrong type in a field annotated ``int``,
-    ``float``, ``bool`` or ``str`` (or ``Optional`` of one, which also takes
+    ``float`` or ``bool`` (or ``Optional`` of one, which also takes
     ``null``): ``seed=abc`` or ``data.balanced=maybe``, before anything
     fails on it far from the cause."""
     for f in fields(schema):

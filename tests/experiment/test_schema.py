@@ -127,6 +127,8 @@ def test_a_value_of_the_wrong_type_is_one_line(override, message):
     with pytest.raises(ValueError, match=re.escape(message)):
         load_config("tiny", [override])
     assert load_config("tiny", ["data.max_files=null", "threads=null", "seed=3"])["seed"] == 3
+    # a folder named by a number reads as one: names and folders take any value
+    assert load_config("tiny", ["output_dir=2024"])["output_dir"] == 2024
 
 
 def test_heads_must_divide_the_width():
