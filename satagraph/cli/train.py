@@ -242,6 +242,13 @@ def run_train(args) -> int:
     best = trainer.checkpoint_callback.best_model_path
     skipped = f"; {len(dm.skipped)} bad files left out (skipped_files.txt)" \
         if dm.skipped else ""
+    resumed = [c.resumed_step for c in trainer.callbacks
+               if getattr(c, "resumed_step", None) is not None]
+    if resumed and trainer.global_step == resumed[0]:
+        print(f"nothing to train: {cfg['name']} stood at step {trainer.global_step}, where "
+              "its limit stops it (raise trainer.max_steps, max_epochs or max_time to go "
+              f"on); checkpoints in {run_dir / 'checkpoints'}")
+        return 0
     print(f"trained {cfg['name']} for {trainer.current_epoch} epochs in "
           f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
           f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")

@@ -201,6 +201,9 @@ class ResumeCheckpoint(Checkpoint):
         self._pending: Optional[Dict[str, Any]] = None
         self._max_steps: Optional[int] = None
         self.saves = 0
+        #: The step of the checkpoint a resumed run started from (``None``:
+        #: not resumed); the command compares it with where the run ended.
+        self.resumed_step: Optional[int] = None
 
     @property
     def last_path(self) -> Path:
@@ -243,6 +246,7 @@ class ResumeCheckpoint(Checkpoint):
         epoch-bounded run's are (the same for a checkpoint left mid-epoch),
         and :meth:`on_train_start` puts it back; an epoch that a stop cut
         short is counted back as unfinished (:func:`_reopen_cut_epoch`)."""
+        self.resumed_step = int(checkpoint.get("global_step", 0))
         if trainer.max_steps >= 0:
             self._max_steps = trainer.max_steps
             trainer.fit_loop.epoch_loop.max_steps = -1
