@@ -47,6 +47,10 @@ def add_train_parsers(sub) -> None:
                    "config's data (default) or the checkpoint's own, so that its weights "
                    "see the features as they were trained to (needed to --blend the "
                    "fine-tune back with the checkpoint)")
+    p.add_argument("--data", action="append", metavar="PATH", default=None,
+                   help="a BVH folder or manifest to train on, in place of the config's "
+                   "data.sources; repeat it for several (a folder without a manifest.tsv "
+                   "is split 80/10/10 by file name)")
     _data_rig(p)
     p.set_defaults(func=run_train)
 
@@ -231,6 +235,8 @@ def run_train(args) -> int:
     if args.init_normalizer != "data" and not args.init_from:
         raise ValueError("--init-normalizer goes with --init-from CKPT")
     cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
+    if args.data:
+        cfg["data"]["sources"] = list(args.data)
     start = time.time()
     try:
         module, dm, trainer, run_dir = train(cfg, resume=args.resume,

@@ -183,7 +183,8 @@ class MotionDataModule(WindowDataModule):
             else [self.sources]
         if not [s for s in sources if s]:
             raise ValueError("data.sources is empty: name your BVH folders or manifests, "
-                             "e.g. data.sources=[path/to/bvh_folder]")
+                             "e.g. --data path/to/bvh_folder (train) or "
+                             "data.sources=[path/to/bvh_folder]")
         zoos = [zoo_entry(s) for s in sources if is_zoo_entry(s)]
         files = resolve_sources([s for s in sources if not is_zoo_entry(s)])
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)

@@ -290,7 +290,7 @@ def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.Lig
     raise ValueError(f"--init-from {ckpt}: only {filled} of {len(wanted)} weights fit this "
                      f"model: it is another architecture; {hint}"
                      + ("; for the built-in model: satagraph train finetune_builtin "
-                        "--init-from builtin data.sources=[...]"
+                        "--init-from builtin --data FOLDER"
                         if str(ckpt).startswith("builtin") else ""))
 
 

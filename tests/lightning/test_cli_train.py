@@ -218,3 +218,16 @@ def test_eval_scores_a_manifest_of_test_files_only(config_overrides: List[str],
     assert main(["--traceback", "eval", "--ckpt", str(run / "checkpoints" / "last.ckpt"),
                  "--data", str(only_test)]) == 0
     assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
+
+
+def test_train_data_names_the_folders_to_train_on(config_overrides: List[str],
+                                                  small_manifest: Path, tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture) -> None:
+    """``train CONFIG --data PATH`` (as ``eval`` and ``demo`` take it) in place of
+    ``data.sources``; overrides after it stay overrides."""
+    run = tmp_path / "run"
+    args = _train_args([o for o in config_overrides if not o.startswith("data.sources")],
+                       run)
+    assert main(args[:3] + ["--data", str(small_manifest)] + args[3:]) == 0
+    ckpt = torch.load(run / "checkpoints" / "last.ckpt", weights_only=True)
+    assert ckpt["hyper_parameters"]["meta"]["data"]["sources"] == [str(small_manifest)]
