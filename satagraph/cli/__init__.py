@@ -197,11 +197,10 @@ def run_convert(args: argparse.Namespace) -> int:
     if (args.up_axis or args.units) and not args.canonical:
         raise CommandError("--up-axis and --units need --canonical")
     check_output_path(args.output)
+    from satagraph.data.validate import check_resample, check_skeleton, check_writable
     motion = read_with_rig(args.input, args)
-    from satagraph.data.validate import check_writable
     check_writable(motion, args.input)
     if args.canonical or args.fps:  # resampling: bounded memory, a sane skeleton
-        from satagraph.data.validate import check_resample, check_skeleton
         check_resample(motion, args.input, args.fps)
         if args.canonical:
             check_skeleton(motion, args.input)
@@ -272,8 +271,7 @@ def _write_example(motion: Motion, path: str, tmp: str) -> None:
                             or target.read_bytes() != Path(draft).read_bytes()):
         raise CommandError(f"{path}: exists and is not the example walk (a motion of "
                            "yours?); give --output a new name or delete it first")
-    if target != Path(draft):
-        _write(motion, path)
+    _write(motion, path)
 
 
 def run_quick_demo(args: argparse.Namespace) -> int:

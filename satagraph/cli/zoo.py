@@ -141,16 +141,15 @@ def run_zoo(args: argparse.Namespace) -> int:
         raise ValueError(f"zoo: --frames must be at least 2 (a motion needs two frames "
                          f"for its velocities), got {args.frames}")
     start = time.perf_counter()
-    frames = args.frames
     if args.dialect_variants:
         axes = _flat(args.up_axes)
         axes = UP_AXES if axes == ["+Y"] else axes
         variants = dialect_variants(args.seed, args.species, up_axes=axes)
         rows = write_dialect_zoo(args.out_dir, variants, seed=args.seed,
-                                 fps=args.fps, frames=frames)
+                                 fps=args.fps, frames=args.frames)
     else:
         rows = write_zoo(args.out_dir, species=args.species, clips=args.clips,
-                         seed=args.seed, fps=args.fps, frames=frames,
+                         seed=args.seed, fps=args.fps, frames=args.frames,
                          dialects=_dialects(args), kinds=args.kinds)
     for name in dict.fromkeys(r["species"] for r in rows):
         mine = [r for r in rows if r["species"] == name]

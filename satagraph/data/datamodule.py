@@ -211,8 +211,6 @@ class MotionDataModule(WindowDataModule):
                     d for z in zoos for d in zoo_datasets(
                         z, split, self.window, embed, self.preprocessing, self.seed)])
         if stage not in (None, "fit"):  # scoring a trained model: its own statistics
-            if len(self.datasets["train"]):
-                self._fit_normalizer(loaded["train"], zoos)
             return
         if not len(self.datasets["train"]):
             raise ValueError(f"no training windows in {self.sources!r}")

@@ -189,16 +189,22 @@ def check_types(where: str, schema: type, values: Mapping[str, Any]) -> None:
     ``null``): ``seed=abc`` or ``data.balanced=maybe``, before anything
     fails on it far from the cause."""
     for f in fields(schema):
-        kind = str(f.type)
-        optional = kind.startswith("Optional[")
-        check = TYPE_CHECKS.get(kind[9:-1] if optional else kind)
-        if check is None or f.name not in values:
-            continue
-        value = values[f.name]
-        if not (check[0](value) or (optional and value is None)):
-            name = f"{where}.{f.name}" if where else f.name
-            raise ValueError(f"{name}={value!r}: {check[1]} is expected"
-                             f"{' (or null)' if optional else ''}")
+        if f.name in values:
+            check_value(f"{where}.{f.name}" if where else f.name, values[f.name], str(f.type))
+
+
+def check_value(name: str, value: Any, kind: str) -> None:
+    """:obj:`value` against an annotation (:data:`TYPE_CHECKS`; another
+    annotation takes anything).
+
+    Raises:
+        ValueError: One line naming :obj:`name`.
+    """
+    optional = kind.startswith("Optional[")
+    check = TYPE_CHECKS.get(kind[9:-1] if optional else kind)
+    if check is not None and not (check[0](value) or (optional and value is None)):
+        raise ValueError(f"{name}={value!r}: {check[1]} is expected"
+                         f"{' (or null)' if optional else ''}")
 
 
 def fill(where: str, schema: type, values: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
@@ -216,13 +222,15 @@ def fill(where: str, schema: type, values: Optional[Mapping[str, Any]]) -> Dict[
 DATA_AT_LEAST = {"window": 2, "stride": 1, "eval_stride": 1, "batch_size": 1,
                  "max_files": 1, "num_workers": 0}
 
-#: ``trainer`` keys that take a whole number (``-1``: no limit, where Lightning
-#: says so), and those that take a number.
-TRAINER_INTS = ("max_epochs", "min_epochs", "max_steps", "min_steps", "log_every_n_steps",
-                "accumulate_grad_batches", "num_sanity_val_steps",
-                "check_val_every_n_epoch")
-TRAINER_NUMBERS = ("limit_train_batches", "limit_val_batches", "limit_test_batches",
-                   "val_check_interval")
+#: ``trainer`` keys of :class:`lightning.Trainer` that take a whole number
+#: (``-1``: no limit, where Lightning says so) or a number, as annotations.
+TRAINER_TYPES = {**dict.fromkeys(("max_epochs", "min_epochs", "max_steps", "min_steps",
+                                  "log_every_n_steps", "accumulate_grad_batches",
+                                  "num_sanity_val_steps", "check_val_every_n_epoch"),
+                                 "Optional[int]"),
+                 **dict.fromkeys(("limit_train_batches", "limit_val_batches",
+                                  "limit_test_batches", "val_check_interval"),
+                                 "Optional[float]")}
 
 
 def resolve_data(data: Optional[Mapping[str, Any]],
@@ -253,12 +261,9 @@ def resolve_trainer(trainer: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
     if "gradient_clip_val" in trainer:
         raise ValueError("trainer.gradient_clip_val: set optim.grad_clip instead "
                          "(the one owner of gradient clipping)")
-    for key in TRAINER_INTS + TRAINER_NUMBERS:
-        value = trainer.get(key)
-        ok = _is_int(value) if key in TRAINER_INTS else _is_number(value)
-        if value is not None and not ok:
-            kind = "an integer" if key in TRAINER_INTS else "a number"
-            raise ValueError(f"trainer.{key}={value!r}: {kind} is expected (or null)")
+    for key, kind in TRAINER_TYPES.items():
+        if key in trainer:
+            check_value(f"trainer.{key}", trainer[key], kind)
     out = dict(defaults(TrainerExtras), **trainer)
     check_types("trainer", TrainerExtras, out)
     return out
@@ -291,6 +296,6 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
            "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config",
-           "resolve_data", "fill", "check_keys", "check_types", "unknown_key_error",
+           "resolve_data", "fill", "check_keys", "check_types", "check_value", "unknown_key_error",
            "defaults", "DATA_AT_LEAST",
            "signature_schema"]
