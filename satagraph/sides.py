@@ -13,6 +13,9 @@ between digits) carry no side. A piece marks a side when
 - failing any such piece, it is a quadruped leg code (:data:`LEG_CODES`:
   ``FL``, ``HR``, ``BL``, ...; ``Fr`` next to a side word is *front* only).
 
+The Japanese and Chinese side characters (:data:`SIDE_CHARACTERS`: ``左``,
+``右``, as in an MMD model's ``左ひざ``) are side words wherever they stand.
+
 The first marker gives the side; :func:`swap_side` mirrors every marker,
 keeping its case, so ``swap_side(swap_side(name)) == name``.
 
@@ -33,6 +36,9 @@ SIDE_WORDS: Dict[str, str] = {
     "left": "left", "l": "left", "lt": "left", "lft": "left", "lf": "left",
     "lht": "left", "right": "right", "r": "right", "rt": "right",
     "rgt": "right", "rht": "right", "rf": "right"}
+#: Side characters of Japanese and Chinese names (``左ひざ``: the left knee).
+SIDE_CHARACTERS: Dict[str, str] = {"左": "left", "右": "right"}
+SIDE_WORDS.update(SIDE_CHARACTERS)
 #: Quadruped leg codes: front/hind and side, read as a side only in a name
 #: without a side word.
 LEG_CODES: Dict[str, Tuple[str, str]] = {
@@ -41,7 +47,7 @@ LEG_CODES: Dict[str, Tuple[str, str]] = {
     "bl": ("hind", "left"), "br": ("hind", "right")}
 _PAIRS = (("left", "right"), ("l", "r"), ("lt", "rt"), ("lft", "rgt"),
           ("lf", "rf"), ("lht", "rht"), ("fl", "fr"), ("hl", "hr"),
-          ("bl", "br"))
+          ("bl", "br"), ("左", "右"))
 #: Each side word or leg code and its mirror image (lower case).
 MIRROR_WORDS: Dict[str, str] = {**dict(_PAIRS), **{b: a for a, b in _PAIRS}}
 
@@ -49,6 +55,7 @@ _TOKEN = re.compile(r"[A-Za-z0-9]+")
 _PIECE = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|\d+")
 _NOISE = re.compile(r"(?:[A-Za-z]?\d+)+[A-Za-z]?")  # k8L, a1b2c3, l9V
 _GLUED = re.compile(r"left|right", re.IGNORECASE)
+_CHARACTERS = re.compile("|".join(SIDE_CHARACTERS))
 
 #: A side marker: start, end (character positions in the name) and word.
 Marker = Tuple[int, int, str]
@@ -87,7 +94,8 @@ def side_markers(name: str) -> List[Marker]:
         else:
             words += [(start + m.start(), start + m.end(), m.group().lower())
                       for m in _GLUED.finditer(piece)]
-    return words or codes
+    words += [(m.start(), m.end(), m.group()) for m in _CHARACTERS.finditer(name)]
+    return sorted(words) or codes
 
 
 def side_of_words(words: Iterable[str]) -> Optional[str]:

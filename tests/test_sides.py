@@ -31,6 +31,8 @@ TABLE = [
     ("lefthand", "left", "righthand"),
     ("Finger1L", "left", "Finger1R"),
     ("RightArm__k8L", "right", "LeftArm__k8L"),  # an exporter tag has no side
+    ("左ひざ", "left", "右ひざ"), ("右足ＩＫ", "right", "左足ＩＫ"),  # MMD
+    ("腰キャンセル左", "left", "腰キャンセル右"), ("左大腿", "left", "右大腿"),
     ("Hips", None, "Hips"), ("Spine", None, "Spine"), ("Spine1", None, "Spine1"),
     ("Lower", None, "Lower"), ("LowerBack", None, "LowerBack"),
     ("Leg", None, "Leg"), ("Tail", None, "Tail"), ("Root", None, "Root"),
@@ -88,6 +90,9 @@ def test_pairs_follow_the_rule():
     assert list(mirror_pairs_of(names)) == [0, 2, 1, 4, 3, 6, 5, 7, 8]
     noisy = ["Hips", "LeftArm__x7Q", "rightarm__k3Z", "LHipJoint", "RHipJoint"]
     assert lateral_pairs(noisy) == ([1, 3], [2, 4])
+    mmd = ["センター", "左足", "右足", "左ひざ", "右ひざ", "上半身"]
+    assert lateral_pairs(mmd) == ([1, 3], [2, 4])
+    assert list(mirror_pairs_of(mmd)) == [0, 2, 1, 4, 3, 5]
 
 
 def mirror_pairs_of(names):

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Dict, FrozenSet, List, Optional, Sequence, Tuple
 
+from satagraph.semantics.foreign import english_name
 from satagraph.sides import LEG_CODES, SIDE_WORDS, side_of_words
 
 # (family, candidate ranks, default rank). Family "arm" is a strong hint of a
@@ -425,7 +426,7 @@ def parse_name(raw: str) -> NameInfo:
         NameInfo: The understood words.
     """
     words: List[str] = []
-    clean = strip_prefixes(drop_noise_tokens(raw))
+    clean = strip_prefixes(drop_noise_tokens(english_name(raw)))
     for word in split_words(clean):
         words.extend(_segment(word))
     words = _merge_compounds([w for w in words if not w.isdigit()])

@@ -43,7 +43,7 @@ UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 
 #: File units to metres, by name (``file`` keeps the file's own units).
 UNITS: Dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254,
-                           "ft": 0.3048, "cmu": 0.056444, "file": 1.0}
+                           "ft": 0.3048, "cmu": 0.056444, "mmd": 0.08, "file": 1.0}
 _UNIT_ALIASES = {"metre": "m", "metres": "m", "meter": "m", "meters": "m",
                  "centimetre": "cm", "centimetres": "cm", "centimeter": "cm",
                  "centimeters": "cm", "millimetre": "mm", "millimetres": "mm",
@@ -255,7 +255,7 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
         moving = float((speed > _CONTACT_SPEED * size).mean())
     evidence: Dict[str, Dict[str, float]] = {k: {} for k in CUE_WEIGHTS}
     root = _root_cue(pos, size) if vel is not None else None
-    rest = np.median([_rest_cue(p, motion.skeleton.names, motion.skeleton.is_leaf)
+    rest = np.median([_rest_cue(p, english_names(motion), motion.skeleton.is_leaf)
                       for p in pos[:: max(1, len(pos) // 8)]], axis=0)
     busy = (slice(None) if vel is None or (speed > _CONTACT_SPEED * size).sum() < 8
             else speed > _CONTACT_SPEED * size)  # motion cues where it moves
@@ -320,6 +320,7 @@ _DIALECTS = (
     ("CMU mocap", re.compile(r"^(LHipJoint|RHipJoint|LowerBack)$"), 120.0, "cmu"),
     ("Mixamo", re.compile(r"^mixamorig\d*:", re.I), None, "cm"),
     ("Reallusion CC", re.compile(r"^CC_Base_"), None, "cm"),
+    ("MikuMikuDance", re.compile(r"^(センター|上半身|下半身|全ての親)$"), None, "mmd"),
 )
 #: Heights (metres) a human body plan allows.
 HUMAN_HEIGHT = (1.0, 2.3)
@@ -332,6 +333,14 @@ DIALECT_HUMAN_HEIGHT = (0.8, 3.0)
 STANDARD_UNITS = ("m", "cm", "mm", "in", "cmu")
 _NOT_HUMAN = re.compile(r"tail|wing|beak|snout|muzzle|paw|hoof|antenn|claw|"
                         r"pincer|fin(?![a-z])|horn|mane|feather|tentacle", re.I)
+
+
+def english_names(motion: Motion) -> List[str]:
+    """The joint names of :obj:`motion` with foreign words in English
+    (:func:`~satagraph.semantics.foreign.english_name`), as the name cues
+    read them."""
+    from satagraph.semantics.foreign import english_name
+    return [english_name(name) for name in motion.skeleton.names]
 
 
 def _dialect(motion: Motion) -> Optional[Tuple[str, str]]:
@@ -357,7 +366,7 @@ def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:
     Shapes:
         - **pose_up**: :math:`(J,)` heights of the joints in a pose.
     """
-    names = motion.skeleton.names
+    names = english_names(motion)
     if any(_NOT_HUMAN.search(n) for n in names):
         return False
     if not any(_TOP.search(n) for n in names):
