@@ -8,6 +8,11 @@ _EXPORTS = {**dict.fromkeys(_FEATURES, "satagraph.data.features"),
             "MotionClip": "satagraph.data.clip",
             "FrameBatch": "satagraph.data.collate",
             "collate_clips": "satagraph.data.collate",
-            "FrameGraph": "satagraph.data.frame_graph"}
-__all__ = ["MotionClip", "FrameGraph", "FrameBatch", "collate_clips", *_FEATURES]
+            "FrameGraph": "satagraph.data.frame_graph",
+            "FeatureNormalizer": "satagraph.data.normalizer",
+            "MotionDataset": "satagraph.data.dataset",
+            "MotionDataModule": "satagraph.data.datamodule",
+            "CaptionDataModule": "satagraph.data.caption_datamodule"}
+__all__ = ["MotionClip", "FrameGraph", "FrameBatch", "collate_clips", "FeatureNormalizer",
+           "MotionDataset", "MotionDataModule", "CaptionDataModule", *_FEATURES]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -31,7 +31,7 @@ from satagraph.data.code_bank import CodeBank, concat_banks
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
 from satagraph.data.endless import MixedDataset, endless_zoo, is_zoo_entry, zoo_entry
-from satagraph.datasets.sources import SPLITS, resolve_sources, select
+from satagraph.datasets.sources import SPLITS, resolve_sources, select, spread_files
 from satagraph.data.captioned import FileCaptionWindows, ZooCaptionWindows
 from satagraph.utils.files import check_input_file
 
@@ -97,7 +97,9 @@ class CaptionDataModule(WindowDataModule):
             :data:`~satagraph.data.dataset.DEFAULT_PREPROCESSING`.
         cache_dir (str, optional): Feature cache folder.
         num_workers (int): DataLoader workers.
-        max_files (int, optional): At most this many files per split.
+        max_files (int, optional): At most this many files per split, taken
+            in turn from each dataset and skeleton
+            (:func:`~satagraph.datasets.sources.spread_files`).
         seed (int): Seed of sampling, mirroring and caption choice.
         code_bank (str or list, optional): Train on the windows of this
             :class:`~satagraph.data.code_bank.CodeBank` (``satagraph
@@ -158,7 +160,7 @@ class CaptionDataModule(WindowDataModule):
         kwargs = {"semantic": embed, "preprocessing": self.preprocessing,
                   "mirror": self.mirror if split == "train" else 0.0,
                   "scale": self.scale if split == "train" else 0.0}
-        chosen = select(files, split)[: self.max_files or None]
+        chosen = spread_files(select(files, split), self.max_files)
         kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
         if bad:
             self.skipped += [f"{split}: {e}" for e in bad]

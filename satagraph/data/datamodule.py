@@ -17,7 +17,8 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import ROOT_UNITS, FeatureNormalizer
 from satagraph.data.pairing import PartnerCollate
-from satagraph.datasets.sources import SPLITS, MotionFile, resolve_sources, select
+from satagraph.datasets.sources import (SPLITS, MotionFile, limit_note, resolve_sources,
+                                       select, spread_files)
 
 
 def semantic_embedder(encoder: Optional[str] = "offline",
@@ -114,7 +115,9 @@ class MotionDataModule(WindowDataModule):
             embeddings).
         num_workers (int): DataLoader workers.
         max_files (int, optional): Use at most this many files per split
-            (quick experiments).
+            (quick experiments), taken in turn from each dataset and
+            skeleton (:func:`~satagraph.datasets.sources.spread_files`); a
+            warning says what was kept.
         seed (int): Seed of the training order (drawn per epoch from
             ``(seed, epoch)``, see
             :class:`~satagraph.data.sampler.ResumableSampler`) and of the
@@ -157,6 +160,7 @@ class MotionDataModule(WindowDataModule):
             raise ValueError(f"data.root_unit must be one of {ROOT_UNITS}, got {root_unit!r}")
         #: ``(split, error line)`` of every file left out (``on_error="skip"``).
         self.skipped: List[str] = []
+        self._limited: List[str] = []  # what data.max_files kept, per split
         self.sources, self.window, self.stride = sources, window, stride
         self.eval_stride = eval_stride or window
         self.batch_size, self.balanced = batch_size, balanced
@@ -173,8 +177,11 @@ class MotionDataModule(WindowDataModule):
         self.pair_partners = False
 
     def _files(self, split: str, files: List[MotionFile]) -> List[MotionFile]:
-        chosen = select(files, split)
-        return chosen[: self.max_files] if self.max_files else chosen
+        every = select(files, split)
+        chosen = spread_files(every, self.max_files)
+        if len(chosen) < len(every):
+            self._limited.append(limit_note(split, chosen, every))
+        return chosen
 
     def setup(self, stage: Optional[str] = None) -> None:
         if self.datasets:
@@ -195,6 +202,9 @@ class MotionDataModule(WindowDataModule):
             loaded[split] = (kept, feats)
             errors += [f"{split}: {e}" for e in bad]
             total += len(chosen)
+        if self._limited:
+            warnings.warn(f"data.max_files={self.max_files} reads " + "; ".join(self._limited)
+                          + " files (data.max_files=null reads them all)", stacklevel=2)
         if errors and self.on_error == "raise":
             raise dataset_error(errors, total)
         if errors:

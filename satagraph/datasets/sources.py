@@ -9,7 +9,7 @@ import warnings
 from collections import Counter
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, List, Optional, Sequence, Union
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 SPLITS = ("train", "val", "test")
 #: Splits a manifest may hold that no run reads (the shared data's reader tests).
@@ -163,3 +163,30 @@ def _with_defaults(f: MotionFile, settings: dict) -> MotionFile:
 def select(files: Iterable[MotionFile], split: str) -> List[MotionFile]:
     """Files of one split."""
     return [f for f in files if f.split == split]
+
+
+def spread_files(files: Sequence[MotionFile], limit: Optional[int]) -> List[MotionFile]:
+    """At most :obj:`limit` of :obj:`files` (all for ``None`` or 0), taken
+    in turn from each (dataset, skeleton) group, in the order the groups
+    first appear and each group's own order: a limit keeps every source
+    and body plan it has room for (the first ``limit`` files of a folder
+    listed by name were one rig's, and of two sources the first's only).
+    The files keep their order."""
+    if not limit or len(files) <= limit:
+        return list(files)
+    groups: Dict[Tuple[str, str], List[int]] = {}
+    for i, f in enumerate(files):
+        groups.setdefault((f.dataset, f.skeleton), []).append(i)
+    taken: List[int] = []
+    for rank in range(max(len(g) for g in groups.values())):
+        taken += [g[rank] for g in groups.values() if rank < len(g)]
+    return [files[i] for i in sorted(taken[:limit])]
+
+
+def limit_note(split: str, chosen: Sequence[MotionFile], files: Sequence[MotionFile]) -> str:
+    """``"train 4 of 18 (cmu 2 of 6, zoo 2 of 12)"``: what a file limit
+    kept of one split, per dataset."""
+    count = lambda fs, name: sum(1 for f in fs if f.dataset == name)  # noqa: E731
+    names = list(dict.fromkeys(f.dataset for f in files))
+    parts = ", ".join(f"{n} {count(chosen, n)} of {count(files, n)}" for n in names)
+    return f"{split} {len(chosen)} of {len(files)} ({parts})"

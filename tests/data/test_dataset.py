@@ -247,3 +247,29 @@ def test_special_files_among_sources_are_refused_not_read(tmp_path):
     assert not kept
     assert errors == [f"{fifo}: is a FIFO (named pipe), not a BVH file",
                       "/dev/zero: is a character device, not a BVH file"]
+
+
+def test_a_file_limit_keeps_every_source_and_rig_it_has_room_for():
+    """``data.max_files`` took the first files in order: with a CMU folder
+    and a zoo, the CMU files only; of a zoo folder, one rig's."""
+    from satagraph.datasets.sources import MotionFile, limit_note, spread_files
+    files = ([MotionFile(f"cmu/{i}.bvh", "cmu", "cmu", "train") for i in range(6)]
+             + [MotionFile(f"zoo/{k}{i}.bvh", "zoo", k, "train")
+                for k in ("biped", "quadruped") for i in range(6)])
+    kept = spread_files(files, 4)
+    assert [f.path for f in kept] == ["cmu/0.bvh", "cmu/1.bvh", "zoo/biped0.bvh",
+                                      "zoo/quadruped0.bvh"]
+    assert spread_files(files, None) == files and spread_files(files, 100) == files
+    assert limit_note("train", kept, files) == "train 4 of 18 (cmu 2 of 6, zoo 2 of 12)"
+
+
+def test_a_file_limit_is_said(tmp_path):
+    from satagraph.data.datamodule import MotionDataModule
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "zoo", species=["biped", "quadruped"], clips=1, seed=0)
+    dm = MotionDataModule([str(tmp_path / "zoo")], window=8, stride=8, max_files=2,
+                          semantic_encoder=None, cache_dir=str(tmp_path / "cache"))
+    with pytest.warns(UserWarning, match=r"data.max_files=2 reads train 2 of \d+"):
+        dm.setup("fit")
+    skeletons = {f.skeleton for f in dm.datasets["train"].files}
+    assert len(skeletons) == 2
