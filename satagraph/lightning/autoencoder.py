@@ -153,6 +153,27 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         if dm is not None and hasattr(dm, "pair_partners"):
             # partners for the retarget term are collated with the batch
             dm.pair_partners = self._retarget_weight() > 0
+        if dm is not None:
+            self._check_semantic_width(dm)
+
+    def _check_semantic_width(self, dm: Any) -> None:
+        """Refuse data whose semantic features the network would not read
+        (a module built with ``semantic_channels`` 0 ignored the data's
+        256-wide ones, silently) or would read at another width."""
+        from satagraph.nn.layers.modulation import SemanticModulation
+        layers = [m for m in self.model.modules() if isinstance(m, SemanticModulation)]
+        width = _semantic_width(dm)
+        if width is None or not layers:
+            return
+        ours = layers[0].phi_t.in_features if layers[0].phi_t is not None else 0
+        if ours == width or (not ours and self.hparams["model"].get("use_text") is False):
+            return
+        encoder = getattr(dm, "semantic_encoder", None)
+        raise ValueError(
+            f"the data's semantic features are {width} wide (semantic_encoder "
+            f"{encoder!r}) but the model reads {ours or 'none'}: build the module "
+            f"with model.semantic_channels={width} (build_module(cfg, datamodule) sets "
+            "it from the data), or model.use_text=false to train without them")
 
     def normalize_batch(self, batch):
         """A shallow copy of :obj:`batch` with normalised features (lengths
@@ -350,6 +371,15 @@ class SATARVQModule(MotionAutoencoderModule):
         z = gaussian_smooth(self.model.bottleneck.decode_codes(codes), target.clip_num_frames,
                             rest)
         return self.denormalize_output(self.decode(z, self.normalize_batch(target)), target)
+
+
+def _semantic_width(dm: Any) -> Optional[int]:
+    """Width of the semantic features a data module's windows carry
+    (``None`` before its set-up, or for data without windows)."""
+    for ds in (getattr(dm, "datasets", None) or {}).values():
+        if len(ds) and hasattr(ds[0], "semantic"):
+            return int(ds[0].semantic.shape[-1])
+    return None
 
 
 def _no_semantics(skeleton, evidence=None) -> Tensor:

@@ -292,6 +292,21 @@ def test_module_owns_its_semantic_encoder(build_tiny_module: Callable, embed: Ca
     assert module.embed(skeleton).shape == (skeleton.num_joints, 0)
 
 
+def test_setup_refuses_semantics_the_network_would_not_read(build_tiny_module: Callable,
+                                                           datamodule) -> None:
+    """A module built without ``semantic_channels`` trained on the data's
+    semantic features without reading them, silently."""
+    width = datamodule.semantic_channels
+    assert width > 0
+    build_tiny_module("vae", semantic_channels=width)._check_semantic_width(datamodule)
+    build_tiny_module("vae", semantic_channels=0, use_text=False)._check_semantic_width(
+        datamodule)
+    for ours in (0, width // 2):
+        with pytest.raises(ValueError, match=f"semantic features are {width} wide .* "
+                           f"model.semantic_channels={width}"):
+            build_tiny_module("vae", semantic_channels=ours)._check_semantic_width(datamodule)
+
+
 def test_rvq_module_codes_round_trip(build_tiny_module: Callable, train_batch) -> None:
     """codes() refuses training mode; decode_codes of a batch's codes gives
     the module's own evaluation-mode prediction."""
