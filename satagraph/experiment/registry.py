@@ -22,10 +22,27 @@ The built-in modules (``vae``, ``rvq``, ``same``, ``padded_rvq``) register
 when :mod:`satagraph.experiment.modules` is imported, on first look-up
 (``t2m`` when :mod:`satagraph.experiment.t2m` is);
 :data:`PLUGINS` names such modules, so that this registry imports no torch.
+
+A subclass of a built-in module registered without ``model_keys`` /
+``optim_keys`` has its config keys checked as its base class's are: the
+``model`` keys of its base (with the named arguments of its own
+``build_model``, or only those when that takes no ``**kwargs``), and the
+``optim`` keys unless it has its own ``configure_optimizers``.
+
+The command line (``train``, ``eval``, ``sweep``, ``reconstruct`` ...) finds
+modules of one's own through the environment variable
+:data:`PLUGIN_VARIABLE`: the Python modules (or ``.py`` files) it names,
+comma-separated, are imported before a ``module:`` name is called unknown::
+
+    SATAGRAPH_PLUGINS=my_models satagraph train my_config.yaml
 """
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import inspect
+import os
+import re
 import sys
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Iterable, Optional
@@ -92,11 +109,27 @@ class ModuleEntry:
 
     def check(self, sections: ModuleSections) -> None:
         """Raise one line for a ``model`` or ``optim`` key the builder does
-        not take."""
+        not take (a class whose ``model`` keys are not known is built once to
+        find out)."""
         if self.model_keys is not None:
             check_keys("model", sections.model, self.model_keys())
+        elif self.cls is not None:
+            self._try_build(sections)
         if self.optim_keys is not None:
             check_keys("optim", sections.optim, set(self.optim_keys) | set(TRAINER_OPTIM))
+
+
+    def _try_build(self, sections: ModuleSections) -> None:
+        """Build the class once: a ``model`` key its network does not take
+        is one line before any data is read, not a traceback after."""
+        try:
+            self.build(sections)
+        except TypeError as err:
+            bad = re.search(r"unexpected keyword argument '(\w+)'", str(err))
+            if bad is None or bad.group(1) not in sections.model:
+                raise
+            raise ValueError(f"unknown config key 'model.{bad.group(1)}': "
+                             f"{self.cls.__name__}'s network does not take it ({err})") from None
 
 
 _REGISTRY: Dict[str, ModuleEntry] = {}
@@ -105,6 +138,62 @@ _REGISTRY: Dict[str, ModuleEntry] = {}
 PLUGINS: Dict[str, str] = dict({name: "satagraph.experiment.modules"
                                 for name in ("vae", "rvq", "same", "padded_rvq")},
                                t2m="satagraph.experiment.t2m")
+
+
+#: Environment variable naming the user's plugin modules (see the module).
+PLUGIN_VARIABLE = "SATAGRAPH_PLUGINS"
+_IMPORTED_PLUGINS: set = set()
+
+
+def import_user_plugins() -> None:
+    """Import each module or ``.py`` file that :data:`PLUGIN_VARIABLE`
+    names (once per process).
+
+    Raises:
+        ValueError: One line naming a plugin that does not import.
+    """
+    for spec in (s.strip() for s in os.environ.get(PLUGIN_VARIABLE, "").split(",")):
+        if not spec or spec in _IMPORTED_PLUGINS:
+            continue
+        _IMPORTED_PLUGINS.add(spec)
+        try:
+            if spec.endswith(".py"):
+                name = f"satagraph_plugin_{len(_IMPORTED_PLUGINS)}"
+                loader = importlib.util.spec_from_file_location(name, spec)
+                if loader is None or not os.path.isfile(spec):
+                    raise ImportError("no such file")
+                module = importlib.util.module_from_spec(loader)
+                sys.modules[name] = module
+                loader.loader.exec_module(module)
+            else:
+                importlib.import_module(spec)
+        except ImportError as err:
+            raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} ({err})") from None
+
+
+def _inherited_keys(cls: type) -> tuple:
+    """``(model_keys, optim_keys)`` a class inherits from the nearest
+    registered class it derives from, or from
+    :class:`~satagraph.lightning.MotionAutoencoderModule` (its ``optim``
+    keys; see the module)."""
+    from satagraph.lightning.autoencoder import DEFAULT_OPTIM, MotionAutoencoderModule
+    _load_builtins()
+    bases = [(e.cls, e.model_keys, e.optim_keys)
+             for c in cls.__mro__[1:] for e in _REGISTRY.values() if e.cls is c]
+    if not bases and not issubclass(cls, MotionAutoencoderModule):
+        return None, None
+    base, model_keys, optim_keys = bases[0] if bases else (
+        MotionAutoencoderModule, None, DEFAULT_OPTIM)
+    build = getattr(cls, "build_model", None)
+    if build is not getattr(base, "build_model", None) and model_keys is not None:
+        params = list(inspect.signature(build).parameters.values())[1:]
+        named = {p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
+        inherited = model_keys
+        model_keys = ((lambda: set(inherited()) | named)
+                      if any(p.kind == p.VAR_KEYWORD for p in params) else (lambda: named))
+    own_optimizer = getattr(cls, "configure_optimizers", None) is not getattr(
+        base, "configure_optimizers", None)
+    return model_keys, None if own_optimizer else optim_keys
 
 
 def class_builder(cls: type) -> Builder:
@@ -142,11 +231,20 @@ def register_module(name: str, target: Any = None, *, datamodule: Optional[Calla
             raise ValueError(f"module {name!r} is registered already (by "
                              f"{_REGISTRY[name].build.__qualname__}); pick another name")
         is_class = isinstance(obj, type)
+        keys = (model_keys, optim_keys)
+        if is_class and keys == (None, None):
+            keys = _inherited_keys(obj)
         _REGISTRY[name] = ModuleEntry(name, class_builder(obj) if is_class else obj,
-                                      obj if is_class else None, datamodule, data,
-                                      model_keys, optim_keys)
+                                      obj if is_class else None, datamodule, data, *keys)
         return obj
     return register if target is None else register(target)
+
+
+def _load_builtins() -> None:
+    """Register the built-in autoencoder modules (their keys are inherited)."""
+    owner = PLUGINS["vae"]
+    if owner not in sys.modules:
+        importlib.import_module(owner)
 
 
 def unregister_module(name: str) -> None:
@@ -160,7 +258,11 @@ def module_entry(name: str) -> ModuleEntry:
     if name not in _REGISTRY and name in PLUGINS:
         importlib.import_module(PLUGINS[name])
     if name not in _REGISTRY:
-        raise unknown_key_error("", name, registered_names(), what="module")
+        import_user_plugins()
+    if name not in _REGISTRY:
+        err = unknown_key_error("", name, registered_names(), what="module")
+        raise ValueError(f"{err} (a module of your own: name the code that registers it "
+                         f"in {PLUGIN_VARIABLE}, e.g. {PLUGIN_VARIABLE}=my_models)")
     return _REGISTRY[name]
 
 
@@ -184,6 +286,7 @@ def build_registered(name: str, sections: ModuleSections):
     return entry.build(sections)
 
 
-__all__ = ["ModuleSections", "ModuleEntry", "Builder", "PLUGINS", "register_module",
+__all__ = ["ModuleSections", "ModuleEntry", "Builder", "PLUGINS", "PLUGIN_VARIABLE",
+           "import_user_plugins", "register_module",
            "unregister_module", "module_entry", "module_class", "registered_names",
            "build_registered", "class_builder"]

@@ -254,13 +254,25 @@ def resolve_data(data: Optional[Mapping[str, Any]],
     return out
 
 
+#: Trainer arguments that a run sets itself, and the config keys that set
+#: them (from Python, ``train(cfg, logger=..., default_root_dir=...)`` may
+#: still replace the first two).
+RUN_TRAINER_KEYS = {
+    "gradient_clip_val": "set optim.grad_clip instead (the one owner of gradient clipping)",
+    "default_root_dir": "the run's folder is output_dir (runs/<name> by default): set output_dir",
+    "logger": "set logger.name (wandb, csv, tensorboard or none)",
+    "enable_checkpointing": "every run writes checkpoints (last.ckpt resumes it); "
+                            "checkpoint.every_n_steps and every_minutes set how often",
+}
+
+
 def resolve_trainer(trainer: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
-    """The ``trainer`` section with :class:`TrainerExtras` filled; gradient
-    clipping is ``optim.grad_clip``'s alone."""
+    """The ``trainer`` section with :class:`TrainerExtras` filled; what a
+    run sets itself (:data:`RUN_TRAINER_KEYS`) is refused."""
     trainer = dict(trainer or {})
-    if "gradient_clip_val" in trainer:
-        raise ValueError("trainer.gradient_clip_val: set optim.grad_clip instead "
-                         "(the one owner of gradient clipping)")
+    for key in RUN_TRAINER_KEYS:
+        if key in trainer:
+            raise ValueError(f"trainer.{key}: {RUN_TRAINER_KEYS[key]}")
     for key, kind in TRAINER_TYPES.items():
         if key in trainer:
             check_value(f"trainer.{key}", trainer[key], kind)

@@ -145,6 +145,7 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     (:func:`weight_average`)."""
     from lightning.pytorch.callbacks import ModelCheckpoint, RichProgressBar
     cfg = resolve_config(cfg)
+    own = {k: overrides.pop(k) for k in ("logger", "default_root_dir") if k in overrides}
     opts = resolve_trainer(dict(cfg["trainer"], **overrides))
     check_keys("trainer", opts, trainer_keys())
     opts["gradient_clip_val"] = cfg["optim"]["grad_clip"]
@@ -163,7 +164,8 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     if opts.pop("progress"):
         callbacks.append(RichProgressBar())
     plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
-    return L.Trainer(default_root_dir=str(run_dir), logger=build_logger(cfg, run_dir),
+    return L.Trainer(logger=own.get("logger", build_logger(cfg, run_dir)),
+                     default_root_dir=own.get("default_root_dir", str(run_dir)),
                      callbacks=callbacks, plugins=plugins, **opts)
 
 
@@ -334,7 +336,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         init_normalizer (str): ``"data"`` (default) or ``"checkpoint"``.
         **trainer_overrides: Keyword arguments of :class:`lightning.Trainer`
             over the config's ``trainer`` section (``callbacks=[...]`` are
-            added to the run's own).
+            added to the run's own; ``logger=`` and ``default_root_dir=``
+            replace what the config's ``logger`` and ``output_dir`` give).
 
     Returns:
         The trained module, the data module, the trainer and the run folder.

@@ -132,3 +132,59 @@ def test_a_built_in_name_is_taken_before_its_module_is_imported(tmp_path, monkey
     with pytest.raises(ValueError, match="'test_builtin' is registered already"):
         register_module("test_builtin", lambda sections: "mine")
     assert module_entry("test_builtin").build(None) == "built-in"
+
+
+def _check(name: str, overrides: List[str]) -> None:
+    from satagraph.experiment.train import check_config
+    check_config(load_config("tiny", [f"module={name}", "data.sources=[zoo]"] + overrides))
+
+
+def test_a_subclass_has_its_keys_checked_as_its_base_class(names):
+    """Registered as the README shows, a subclass took any ``optim`` key
+    (a typo trained with the default) and failed on a ``model`` typo with
+    a traceback once the data had loaded."""
+    from satagraph.lightning import MotionAutoencoderModule, SATAVAEModule
+    from satagraph.nn import SATA
+
+    class Plain(MotionAutoencoderModule):
+        def build_model(self, **kwargs):
+            return SATA(**dict(kwargs, bottleneck="vae"))
+
+    class Widened(SATAVAEModule):
+        def build_model(self, width: int = 2, **kwargs):
+            return super().build_model(**kwargs)
+
+    class OwnOptimiser(SATAVAEModule):
+        def configure_optimizers(self):
+            return torch.optim.SGD(self.parameters(), lr=float(self.optim["lr"]))
+
+    for name, cls in (("plain", Plain), ("widened", Widened), ("own_optim", OwnOptimiser)):
+        register_module(name, cls)
+        names.append(name)
+    for name in ("plain", "widened"):
+        with pytest.raises(ValueError, match=r"optim.lrr' \(did you mean 'lr'\?\)"):
+            _check(name, ["optim.lrr=0.5"])
+    with pytest.raises(ValueError, match=r"unknown config key 'model.hiden_channels': Plain's"):
+        _check("plain", ["model.hiden_channels=16"])
+    with pytest.raises(ValueError, match=r"model.hiden_channels' \(did you mean"):
+        _check("widened", ["model.hiden_channels=16"])
+    _check("widened", ["model.width=3"])
+    _check("own_optim", ["optim.momentum=0.9"])  # its optimiser reads what it likes
+
+
+def test_the_command_line_finds_modules_named_in_the_plugin_variable(
+        names, tmp_path, monkeypatch):
+    from satagraph.experiment import registry
+    plugin = tmp_path / "my_models.py"
+    plugin.write_text("from satagraph.experiment.registry import register_module\n"
+                      "from satagraph.lightning import SATAVAEModule\n"
+                      "register_module('from_plugin', type('P', (SATAVAEModule,), {}))\n")
+    with pytest.raises(ValueError, match="SATAGRAPH_PLUGINS"):
+        module_entry("from_plugin")
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", f" {plugin} ")
+    names.append("from_plugin")
+    assert module_entry("from_plugin").cls.__name__ == "P"
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", "no_such_module_here")
+    with pytest.raises(ValueError, match="SATAGRAPH_PLUGINS: cannot import 'no_such_module_here'"):
+        module_entry("another_unknown")

@@ -101,6 +101,28 @@ def test_grad_clip_has_one_owner(tmp_path):
         load_config("tiny", ["trainer.gradient_clip_val=1.0"])
 
 
+@pytest.mark.parametrize("key,value,says", [
+    ("default_root_dir", "/tmp/x", "set output_dir"), ("logger", "false", "logger.name"),
+    ("enable_checkpointing", "false", "checkpoint.every_n_steps")])
+def test_what_a_run_sets_itself_is_refused_in_a_config(key, value, says):
+    """These passed the key check, then failed with a traceback (a keyword
+    given twice, or Lightning refusing a checkpoint callback) once the data
+    had loaded."""
+    with pytest.raises(ValueError, match=f"trainer.{key}: .*{says}"):
+        load_config("tiny", [f"trainer.{key}={value}"])
+
+
+def test_python_may_hand_the_trainer_its_own_logger_and_folder(tmp_path):
+    from lightning.pytorch.loggers import CSVLogger
+    from satagraph.experiment.train import build_trainer
+    cfg = load_config("tiny", ["logger.name=none", "trainer.progress=false"])
+    mine = CSVLogger(str(tmp_path / "mine"))
+    trainer = build_trainer(cfg, tmp_path / "run", logger=mine,
+                            default_root_dir=str(tmp_path / "elsewhere"))
+    assert trainer.logger is mine and trainer.default_root_dir == str(tmp_path / "elsewhere")
+    assert build_trainer(cfg, tmp_path / "run").logger is None
+
+
 def test_train_checks_every_key_before_reading_data(tmp_path):
     from satagraph.experiment.train import train
     for override in ("model.hidden_chanels=8", "trainer.max_epoch=1"):
