@@ -446,7 +446,7 @@ def standing_facing_axis(motion: Motion) -> Optional[np.ndarray]:
     if not motion.num_frames:
         return None
     pos = motion.global_positions()
-    frame = int(np.argmax(stands(pos)))
+    frame = int(np.argmax(stands(pos, motion.skeleton, motion.fps)))
     if not root_tilted(motion, frame):
         return None
     # across x up: already horizontal

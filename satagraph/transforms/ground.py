@@ -134,17 +134,20 @@ def lift_above_floor(motion: Motion, floor: float = 0.0) -> Motion:
 #: Share of its greatest stance height at which a body counts as standing
 #: (:func:`standing_frame`).
 STANDING_SHARE = 0.95
+#: Seconds a stance height must be held to count as the body's greatest
+#: (:func:`stands`): a dog landing a jump on its front paws, hind legs up,
+#: holds its hips highest for a tenth of a second.
+STANDING_HOLD = 0.3
 
 
 def standing_frame(motion: Motion) -> int:
     r"""The first frame of a canonical motion (+Y up) in which the body
-    stands: its root at least :data:`STANDING_SHARE` as high above its
-    lowest joint as in any frame: the frame whose root orientation the
+    stands (:func:`stands`): the frame whose root orientation the
     rest of ``rest="auto"`` takes
     (:func:`~satagraph.transforms.rest.shown_rest`), so that a clip
     that starts lying or sitting (many of the dog's) does not show the
     model a curled-up skeleton."""
-    return int(np.argmax(stands(motion.global_positions())))
+    return int(np.argmax(stands(motion.global_positions(), motion.skeleton, motion.fps)))
 
 
 def standing_frames(motion: Motion) -> np.ndarray:
@@ -153,21 +156,48 @@ def standing_frames(motion: Motion) -> np.ndarray:
     ``rest="auto"`` shows the model, and where
     :func:`~satagraph.pipelines.quality.posture` reads how a character
     carries itself."""
-    return np.flatnonzero(stands(motion.global_positions()))
+    return np.flatnonzero(stands(motion.global_positions(), motion.skeleton, motion.fps))
 
 
-def stands(positions: np.ndarray) -> np.ndarray:
-    r"""Per frame, whether the root stands at least :data:`STANDING_SHARE`
-    as high above the lowest joint as in any frame.
+def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0) -> np.ndarray:
+    r"""Per frame, whether the root stands above its :func:`support_joints`
+    within :data:`STANDING_SHARE` of the greatest height it holds there for
+    :data:`STANDING_HOLD` seconds (the greatest of a running median), below
+    as above. The frames of a dog's jump, landing on its front paws with
+    its hips and hind legs up (``dog/D1_ex04_KAN02_003``: the only three
+    frames that counted, a handstand shown as the dog's rest), are not
+    standing: its hind paws, not its front ones, say how high it stands.
+
+    Args:
+        positions (np.ndarray): Global joint positions.
+        skeleton (Skeleton): Their skeleton.
+        fps (float): Their frame rate.
 
     Shapes:
         - **positions**: :math:`(T, J, 3)` global, +Y up
         - **output**: :math:`(T,)` bool
     """
-    stance = positions[:, 0, 1] - positions[:, :, 1].min(axis=1)
-    return stance >= STANDING_SHARE * stance.max()
+    support = support_joints(skeleton)
+    stance = positions[:, 0, 1] - positions[:, support, 1].min(axis=1)
+    width = max(1, int(round(STANDING_HOLD * fps)))
+    padded = np.pad(stance, (width // 2, width - 1 - width // 2), mode="edge")
+    held = np.median(np.lib.stride_tricks.sliding_window_view(padded, width), axis=1).max()
+    return (stance >= STANDING_SHARE * held) & (stance * STANDING_SHARE <= held)
+
+
+def support_joints(skeleton: Skeleton) -> np.ndarray:
+    """The joints a body stands on below its root: all but the root's
+    largest child chain (the spine, which carries a quadruped's front legs
+    where its root is the hips) when the root has two children or more,
+    every joint otherwise."""
+    children = skeleton.children[0]
+    if len(children) < 2:
+        return np.arange(skeleton.num_joints)
+    chains = [skeleton.subtree(c) for c in children]
+    largest = max(range(len(chains)), key=lambda i: len(chains[i]))
+    return np.concatenate([c for i, c in enumerate(chains) if i != largest])
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "lift_above_floor", "raise_root", "STANDING_SHARE", "standing_frame",
+           "lift_above_floor", "raise_root", "STANDING_SHARE", "STANDING_HOLD", "standing_frame", "support_joints",
            "standing_frames", "stands"]

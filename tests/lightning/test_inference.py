@@ -198,22 +198,25 @@ def test_first_frame_rest_is_undone_on_the_target_rig(build_tiny_module: Callabl
 def test_auto_rest_re_rests_on_the_mean_standing_pose(
         read_real: Callable[[str], Motion]) -> None:
     """``rest="auto"`` re-rests a line rest on the mean pose of the frames
-    in which the body stands (root at least 95 % as high above the lowest
-    joint as ever), not on a first frame that lies: this dog clip starts
+    in which the body stands (root within 5 % of the greatest height it
+    holds above its hind legs), not on a first frame that lies: this dog clip starts
     on the floor and gets up after about 3 s. In the new rest every joint
     but the root averages to no turn over those frames; the first standing
     frame itself is a pose of its own."""
     from satagraph.ops.rotation_numpy import mean_rotation_numpy
     from satagraph.pipelines.inference import (STANDING_SHARE, shown_rest, standing_frame,
                                                standing_frames)
+    from satagraph.transforms.ground import support_joints
     canon = canonicalize(read_real("dog/D1_006_KAN01_002.bvh"), fps=30)
     pos = canon.global_positions()
-    stance = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
+    hind = support_joints(canon.skeleton)
+    assert {canon.skeleton.names[j] for j in hind} >= {"LeftFoot", "RightFoot", "Tail"}
+    stance = pos[:, 0, 1] - pos[:, hind, 1].min(axis=1)
     k, frames = standing_frame(canon), standing_frames(canon)
     assert stance[0] < 0.5 * stance.max()  # lying
     assert k > 30 and stance[k] >= STANDING_SHARE * stance.max()
     assert (stance[:k] < STANDING_SHARE * stance.max()).all() and frames[0] == k
-    np.testing.assert_array_equal(frames, np.flatnonzero(stance >= STANDING_SHARE * stance.max()))
+    assert (stance[frames] >= STANDING_SHARE ** 2 * stance.max()).all()
     shown, undo = shown_rest(canon, "auto")
     eye = np.broadcast_to(np.eye(3), (canon.skeleton.num_joints - 1, 3, 3))
     np.testing.assert_allclose(mean_rotation_numpy(shown.rotations[frames, 1:]), eye, atol=1e-9)
@@ -222,6 +225,29 @@ def test_auto_rest_re_rests_on_the_mean_standing_pose(
     np.testing.assert_allclose(shown.global_positions(), pos, atol=1e-6)
     first, _ = shown_rest(canon, "first-frame")
     np.testing.assert_allclose(first.rotations[0, 1:], eye, atol=1e-9)
+
+
+def test_a_jump_landing_is_not_the_standing_pose(read_real: Callable[[str], Motion]) -> None:
+    """This dog jumps a hurdle: landing on its front paws, hind legs up, its
+    hips stood highest above the lowest joint, so those three frames were
+    its standing pose, and every retarget onto it did a handstand. Its
+    standing frames are where its hind paws are on the floor."""
+    from satagraph.pipelines.inference import standing_frames
+    canon = canonicalize(read_real("dog/D1_ex04_KAN02_003.bvh"), fps=30)
+    pos = canon.global_positions()
+    frames = standing_frames(canon)
+    names = canon.skeleton.names
+    hind = [names.index(n) for n in ("LeftFoot_end", "RightFoot_end")]
+    front = [names.index(n) for n in ("LeftHand_end", "RightHand_end")]
+    above = pos[frames][..., 1] - pos[frames][..., 1].min(axis=1, keepdims=True)
+    height = np.median(np.ptp(pos[..., 1], axis=1))
+    assert len(frames) > 50
+    assert np.median(above[:, hind]) < 0.1 * height
+    assert np.median(above[:, front]) < 0.1 * height
+    old = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
+    landing = old >= 0.95 * old.max()
+    assert np.median((pos[landing][..., 1] - pos[landing][..., 1].min(axis=1, keepdims=True))
+                     [:, hind]) > 0.8 * height
 
 
 def test_the_second_rest_is_the_pose_auto_does_not_choose(

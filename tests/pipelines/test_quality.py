@@ -112,7 +112,7 @@ def test_posture_reads_a_dog_that_lies_most_of_its_clip_where_it_stands(read_rea
     from satagraph.transforms.rig_reading import with_rig
     dog = canonicalize(with_rig(read_real("dog/D1_031_KAN01_001.bvh"), scale="cm"), fps=30.0)
     frames = standing_frames(dog)
-    assert len(frames) < 0.1 * dog.num_frames
+    assert len(frames) < 0.2 * dog.num_frames
     standing = dog.with_(rotations=dog.rotations[frames], translations=dog.translations[frames])
     assert posture(standing, dog) > 0.99
     every = np.median(dog.global_positions()[..., 1] - dog.global_positions()[:, :1, 1], axis=0)
