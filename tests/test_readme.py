@@ -57,6 +57,8 @@ def test_readme_has_snippets():
 
 
 def test_readme_snippets_run(tmp_path, monkeypatch, capsys):
+    from satagraph.nn.layers import local_conv
+    monkeypatch.setattr(local_conv, "_BUILDERS", dict(local_conv._BUILDERS))  # its "graph"
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("SATAGRAPH_CACHE", str(tmp_path / "cache"))
     scope: dict = {"__name__": "readme"}

@@ -69,8 +69,8 @@ def window_loader(ds, batch_size: int, seed: int, shuffle: bool, balanced: bool,
 
 class WindowDataModule(L.LightningDataModule):
     """The split loaders of a data module of windows: training shuffled,
-    validation and test in order; subclasses build them in
-    :meth:`_loader`."""
+    validation and test in order (``trainer.predict`` reads the test split,
+    in order); subclasses build them in :meth:`_loader`."""
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         raise NotImplementedError
@@ -82,6 +82,9 @@ class WindowDataModule(L.LightningDataModule):
         return self._loader("val", False)
 
     def test_dataloader(self) -> DataLoader:
+        return self._loader("test", False)
+
+    def predict_dataloader(self) -> DataLoader:
         return self._loader("test", False)
 
 

@@ -94,6 +94,12 @@ def split_arguments(items: Sequence[str]) -> tuple:
     return configs, overrides
 
 
+#: Trainer limits a sweep sets itself (:func:`budget_config`): an override
+#: of one is refused, not dropped.
+BUDGET_KEYS = ("trainer.max_steps", "trainer.max_epochs", "trainer.max_time",
+               "trainer.min_steps", "trainer.min_epochs")
+
+
 def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
                   data: Optional[Dict[str, Any]] = None,
                   logger: Optional[str] = "csv") -> Dict[str, Any]:
@@ -152,6 +158,12 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
     variants = list(variants or [[] for _ in configs])
     if len(variants) != len(configs):
         raise ValueError(f"{len(variants)} variants for {len(configs)} configs")
+    for item in list(overrides) + [o for v in variants for o in v]:
+        key = item.split("=", 1)[0].lstrip("+~")
+        if key in BUDGET_KEYS:
+            raise ValueError(f"sweep: {item}: every config trains for the budget "
+                             f"(--budget minutes, budget_minutes here) and no other limit, "
+                             "so that its rows compare at equal time: drop it")
     loaded = [load_config(c, list(overrides) + list(v)) for c, v in zip(configs, variants)]
     data = loaded[0]["data"] if same_data and loaded else None
     out, names = [], []

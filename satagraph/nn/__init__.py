@@ -14,8 +14,9 @@ from satagraph.nn.bottlenecks import (RVQBottleneck, RVQOutput, VAEBottleneck, V
 from satagraph.nn.layers import (LOCAL_CONVS, ConcatProjection, FastDropout, FrameGPSConv,
                                  LocalSpatialLayer, SemanticModulation, SinusoidalEncoding,
                                  SpatioTemporalBlock, accepts_edge_attr, build_input_layer,
-                                 build_local_conv, fast_dropout, make_blocks,
-                                 sinusoidal_positions, use_fast_dropout)
+                                 build_local_conv, fast_dropout, local_conv_names,
+                                 make_blocks, register_local_conv, sinusoidal_positions,
+                                 use_fast_dropout)
 
 __all__ = [
     "MotionAutoencoder", "SATA", "SAME", "PaddedRVQ", "FrameGPSConv", "SATAEncoder", "SATADecoder", "SemanticModulation", "ConcatProjection",
@@ -23,4 +24,5 @@ __all__ = [
     "VAEOutput", "RVQBottleneck", "RVQOutput", "build_local_conv", "accepts_edge_attr",
     "build_input_layer", "make_blocks", "sinusoidal_positions", "node_motion_features",
     "gaussian_kl", "LOCAL_CONVS", "FastDropout", "fast_dropout", "use_fast_dropout",
+    "register_local_conv", "local_conv_names",
 ]

@@ -46,6 +46,15 @@ def test_sweep_configs_share_data_and_unique_names(tmp_path):
     assert cfgs[0]["output_dir"] != cfgs[1]["output_dir"]
 
 
+def test_a_step_limit_is_refused_not_dropped(tmp_path):
+    """trainer.max_steps was dropped for the time budget while the table's
+    legend listed it as applied to every config."""
+    for overrides, variants in ((["trainer.max_steps=20"], None),
+                                ([], [[], ["trainer.max_epochs=2"]])):
+        with pytest.raises(ValueError, match="sweep: trainer.max_(steps|epochs)=.*budget"):
+            sweep_configs(["tiny", "tiny"], overrides, variants=variants, output=str(tmp_path))
+
+
 def test_sweep_table_has_internal_and_cross_retarget_columns():
     """As the SATA paper's Table 4: INT. and CROSS retargeting columns, per
     evaluation group; a config without retarget errors shows dashes."""

@@ -307,6 +307,19 @@ def test_setup_refuses_semantics_the_network_would_not_read(build_tiny_module: C
             build_tiny_module("vae", semantic_channels=ours)._check_semantic_width(datamodule)
 
 
+def test_trainer_predict_decodes_the_test_split_in_order(build_tiny_module: Callable,
+                                                         datamodule) -> None:
+    module = build_tiny_module("vae").eval()
+    trainer = L.Trainer(accelerator="cpu", logger=False, enable_progress_bar=False,
+                        enable_model_summary=False, limit_predict_batches=2)
+    predicted = trainer.predict(module, datamodule=datamodule)
+    batches = list(datamodule.test_dataloader())[:2]
+    assert len(predicted) == len(batches) == 2
+    with torch.no_grad():
+        for out, batch in zip(predicted, batches):
+            torch.testing.assert_close(out["q"], module(batch)["q"])
+
+
 def test_rvq_module_codes_round_trip(build_tiny_module: Callable, train_batch) -> None:
     """codes() refuses training mode; decode_codes of a batch's codes gives
     the module's own evaluation-mode prediction."""

@@ -11,7 +11,7 @@ import torch
 from satagraph.data import collate_clips
 from satagraph.data.clip import MotionClip
 from satagraph.losses import MotionLoss
-from satagraph.nn import (LOCAL_CONVS, SATA, ConcatProjection, RVQBottleneck,
+from satagraph.nn import (LOCAL_CONVS, SATA, local_conv_names, register_local_conv, ConcatProjection, RVQBottleneck,
                           SATADecoder, SATAEncoder, SemanticModulation, SinusoidalEncoding,
                           SpatioTemporalBlock, VAEBottleneck, build_local_conv,
                           gaussian_kl, sinusoidal_positions)
@@ -172,8 +172,30 @@ def test_local_conv_names(name, batch):
 
 
 def test_unknown_local_conv():
-    with pytest.raises(ValueError, match="unknown local conv"):
+    with pytest.raises(ValueError, match="unknown local conv .*register_local_conv"):
         build_local_conv("sage", 16)
+
+
+def test_a_registered_local_conv_is_a_layer_name(batch, monkeypatch):
+    """Any PyG layer becomes a ``model.local_conv`` name; one whose forward
+    takes edge features gets them."""
+    from torch_geometric.nn import GraphConv, ResGatedGraphConv
+    from satagraph.nn.layers import local_conv
+    monkeypatch.setattr(local_conv, "_BUILDERS", dict(local_conv._BUILDERS))
+    register_local_conv("graph_t", lambda channels, heads, edge_dim, act:
+                        GraphConv(channels, channels))
+    register_local_conv("resgated_t", lambda channels, heads, edge_dim, act:
+                        ResGatedGraphConv(channels, channels, edge_dim=edge_dim))
+    assert {"graph_t", "resgated_t"} <= set(local_conv_names())
+    with pytest.raises(ValueError, match="registered already"):
+        register_local_conv("GINE", lambda *args: None)
+    for name, cls in (("graph_t", GraphConv), ("resgated_t", ResGatedGraphConv)):
+        block = SpatioTemporalBlock(16, heads=2, ff_channels=32, dropout=0.0, local_conv=name)
+        assert any(isinstance(m, cls) for m in block.modules())
+        out = block(torch.randn(batch.num_nodes, 16), batch)
+        assert torch.isfinite(out).all()
+        out.pow(2).sum().backward()
+        assert_finite_grads(block)
 
 
 @pytest.mark.parametrize("local_conv", ["gine", None])

@@ -1,8 +1,10 @@
-"""Factory of the local message-passing layer of the spatial branch."""
+"""Factory of the local message-passing layer of the spatial branch, and
+its registry: :func:`register_local_conv` makes any PyG layer a
+``model.local_conv`` name (a GNN-layer ablation of one's own)."""
 from __future__ import annotations
 
 import inspect
-from typing import Optional
+from typing import Callable, Dict, Optional, Tuple
 
 from torch import nn
 from torch_geometric.nn import (MLP, GATConv, GATv2Conv, GCNConv, GINConv, GINEConv,
@@ -23,6 +25,58 @@ def _per_head(channels: int, heads: int) -> int:
     return channels // heads
 
 
+def _attention(cls: type) -> Callable[..., MessagePassing]:
+    def build(channels: int, heads: int, edge_dim: Optional[int], act: str) -> MessagePassing:
+        return cls(channels, _per_head(channels, heads), heads=heads, edge_dim=edge_dim)
+    return build
+
+
+#: Builders ``(channels, heads, edge_dim, act) -> layer`` by name: the
+#: built-in :data:`LOCAL_CONVS` and those :func:`register_local_conv` adds.
+_BUILDERS: Dict[str, Callable[..., MessagePassing]] = {
+    "gine": lambda channels, heads, edge_dim, act: GINEConv(_edge_mlp(channels, act),
+                                                             edge_dim=edge_dim),
+    "gin": lambda channels, heads, edge_dim, act: GINConv(_edge_mlp(channels, act)),
+    "gcn": lambda channels, heads, edge_dim, act: GCNConv(channels, channels),
+    "gat": _attention(GATConv), "gatv2": _attention(GATv2Conv),
+    "transformer": _attention(TransformerConv),
+}
+
+
+def register_local_conv(name: str, builder: Callable[..., MessagePassing]) -> None:
+    r"""Make :obj:`builder` the local layer ``model.local_conv=name`` names.
+
+    Example::
+
+        from torch_geometric.nn import GraphConv
+        from satagraph.nn import register_local_conv
+
+        register_local_conv("graph", lambda channels, heads, edge_dim, act:
+                            GraphConv(channels, channels))
+        # satagraph train tiny model.local_conv=graph (with SATAGRAPH_PLUGINS
+        # naming the file that registers it), or a sweep over it
+
+    Args:
+        name (str): The name (case-insensitive; not a built-in one).
+        builder (callable): ``(channels, heads, edge_dim, act)`` -> a layer
+            mapping :obj:`channels` to :obj:`channels` per node, called as
+            ``layer(x, edge_index)`` or, when its ``forward`` takes one,
+            ``layer(x, edge_index, edge_attr)`` (:obj:`edge_dim` wide).
+
+    Raises:
+        ValueError: The name is taken.
+    """
+    key = str(name).lower()
+    if key in _BUILDERS or key in ("none", "null", ""):
+        raise ValueError(f"local conv {name!r} is registered already; pick another name")
+    _BUILDERS[key] = builder
+
+
+def local_conv_names() -> Tuple[str, ...]:
+    """Every name :func:`build_local_conv` takes, registered ones included."""
+    return tuple(_BUILDERS)
+
+
 def build_local_conv(name: Optional[str], channels: int, heads: int = 4,
                      edge_dim: Optional[int] = None,
                      act: str = "relu") -> Optional[MessagePassing]:
@@ -32,8 +86,9 @@ def build_local_conv(name: Optional[str], channels: int, heads: int = 4,
         name (str, optional): One of :data:`LOCAL_CONVS` (``"gine"``: the
             paper's GINEConv with a two-layer ReLU MLP; ``"gin"``;
             ``"gat"``; ``"gatv2"``; ``"gcn"``; ``"transformer"``:
-            :class:`~torch_geometric.nn.conv.TransformerConv`), or ``None``
-            (also ``"none"``) for no local layer.
+            :class:`~torch_geometric.nn.conv.TransformerConv`), a name
+            :func:`register_local_conv` added, or ``None`` (also ``"none"``)
+            for no local layer.
         channels (int): Node feature width (input and output).
         heads (int, optional): Attention heads of the attention-based
             layers (their per-head width is ``channels // heads``).
@@ -48,17 +103,10 @@ def build_local_conv(name: Optional[str], channels: int, heads: int = 4,
     if name is None or str(name).lower() in ("none", "null", ""):
         return None
     key = str(name).lower()
-    if key == "gine":
-        return GINEConv(_edge_mlp(channels, act), edge_dim=edge_dim)
-    if key == "gin":
-        return GINConv(_edge_mlp(channels, act))
-    if key == "gcn":
-        return GCNConv(channels, channels)
-    builders = {"gat": GATConv, "gatv2": GATv2Conv, "transformer": TransformerConv}
-    if key in builders:
-        return builders[key](channels, _per_head(channels, heads), heads=heads,
-                             edge_dim=edge_dim)
-    raise ValueError(f"unknown local conv {name!r}; known: {LOCAL_CONVS} or None")
+    if key not in _BUILDERS:
+        raise ValueError(f"unknown local conv {name!r}; known: {local_conv_names()} or None "
+                         "(register_local_conv adds one)")
+    return _BUILDERS[key](channels, heads, edge_dim, act)
 
 
 def accepts_edge_attr(conv: Optional[nn.Module]) -> bool:

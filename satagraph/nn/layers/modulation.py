@@ -46,8 +46,10 @@ def _check_semantic(semantic: Optional[Tensor], width: int) -> None:
     got = None if semantic is None else semantic.shape[-1]
     if got != width:
         raise ValueError(f"SemanticModulation: expected semantic features of width "
-                         f"{width}, got {got} (set semantic_channels to the data's "
-                         f"semantic encoder width, or use_text=False)")
+                         f"{width}, got {got}: build clips with the model's own, "
+                         "to_clip(semantic=module.embed(skeleton)) as retarget does; "
+                         "training: semantic_channels must be the data's width "
+                         "(use_text=False trains without them)")
 
 
 def _gather(value: Tensor, index: Optional[Tensor]) -> Tensor:
