@@ -286,7 +286,25 @@ def check_inputs(module, source: Motion, target: Optional[Motion] = None) -> Non
     check_motion(require_motion(source, "source"), fps=getattr(module, "fps", None))
     if target is not None:
         check_skeleton(require_motion(target, "target"), target.source or "<target>")
+        check_shown_body(target)
     check_writable(target if target is not None else source)
+
+
+def check_shown_body(target: Motion) -> None:
+    """A target without frames whose rest is a line (:func:`is_line_rest`)
+    shows the model no body: no pose to stand it in, no up axis to read
+    (Bandai's rig without its frames came out 77 cm tall for 131, hovering
+    24 cm, or lying along -Z and 34 cm under the floor).
+
+    Raises:
+        MotionValidationError: One line naming the target.
+    """
+    from satagraph.data.validate import MotionValidationError
+    if target.num_frames == 0 and is_line_rest(target.skeleton):
+        raise MotionValidationError(
+            f"{target.source or '<target>'}: a rig without frames whose rest pose is a line "
+            "(every bone along one axis, as Bandai's and the dog's files write it) shows no "
+            "body to retarget onto: give a clip of it (a file with frames)")
 
 
 def from_canonical(canon: Motion, source: Motion) -> Motion:

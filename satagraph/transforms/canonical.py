@@ -173,14 +173,15 @@ def fold_root(motion: Motion) -> Tuple[Motion, Optional[dict]]:
         with frame 0's pose, or ``None``) or ``None``.
     """
     skel = motion.skeleton
-    if motion.num_frames < 2 or skel.num_joints < 2:
+    if motion.num_frames < 1 or skel.num_joints < 2:
         return motion, None
     child, aside = _body_below_root(skel)
     if child is None:
         return motion, None
     rot0, trans0 = motion.rotations[:, 0], motion.translations[:, 0]
     moves = np.ptp(rot0, axis=0).max() > 1e-9 or np.ptp(trans0, axis=0).max() > 1e-9
-    if moves and not _redundant_root(motion, child):
+    # one frame cannot tell a still root from a moving one: its place must
+    if (moves or motion.num_frames < 2) and not _redundant_root(motion, child):
         return motion, None
     keep = [j for j in range(1, skel.num_joints) if j not in set(aside)]
     rot = motion.rotations[:, keep].copy()

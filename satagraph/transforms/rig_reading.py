@@ -245,7 +245,10 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
     certain). A clip that barely moves is decided on its pose alone, with a
     lower confidence; a rig without frames on its rest pose alone, with half
     of that (always low: exporters need not write a rest upright, and
-    CC_Base's lies along +Z, its motion standing it up).
+    CC_Base's lies along +Z, its motion standing it up), and as +Y, the
+    convention of most files, at confidence 0 where that rest is a line
+    (:func:`~satagraph.transforms.rest.is_line_rest`: Bandai's and the
+    dog's lie along X, no pose to read an axis from).
     """
     pos, vel = _sample(motion)
     size = body_size(pos)
@@ -275,6 +278,9 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
     confidence = float(np.clip(margin / 0.5, 0.0, 1.0)) * (0.6 + 0.4 * min(1.0, 4 * moving))
     if motion.num_frames == 0:
         confidence *= 0.5
+        from satagraph.transforms.rest import is_line_rest
+        if is_line_rest(motion.skeleton):  # no pose to read: the convention
+            return UpAxisGuess("+Y", 0.0, "detected", scores, evidence, False)
     return UpAxisGuess(ranked[0], confidence, "detected", scores, evidence, moving > 0.05)
 
 

@@ -434,3 +434,22 @@ def test_auto_rest_re_rests_captured_poses_but_not_designed_rests(
     skel = posed.skeleton
     turned = Skeleton(skel.names, skel.parents, skel.offsets @ turn.T)
     assert rest_asymmetry(turned) == pytest.approx(rest_asymmetry(skel), abs=1e-9)
+
+
+def test_a_line_rest_without_frames_is_no_body_to_retarget_onto(
+        read_real: Callable[[str], Motion]) -> None:
+    """Bandai's rig without its frames read lying along -Z (confidence
+    0.02), and a retarget onto it sank 34 cm under the floor: its rest, a
+    line along X, has no up axis to read; it reads as +Y, the convention,
+    at confidence 0, and a retarget onto it is refused in one line."""
+    from satagraph.data.validate import MotionValidationError
+    from satagraph.pipelines.inference import check_shown_body
+    from satagraph.transforms.rig_reading import guess_up_axis
+    bandai = read_real("bandai/dataset-1_walk_normal_001.bvh")
+    rig = bandai.slice(0, 0)
+    guess = guess_up_axis(rig)
+    assert (guess.axis, guess.confidence) == ("+Y", 0.0)
+    with pytest.raises(MotionValidationError, match="without frames whose rest pose is a line"):
+        check_shown_body(rig)
+    check_shown_body(bandai)
+    check_shown_body(read_real("cmu/01_01.bvh").slice(0, 0))  # a designed rest: a body

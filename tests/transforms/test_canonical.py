@@ -182,6 +182,23 @@ def test_a_root_moving_with_the_body_stays_the_root():
         assert removed is None and folded is motion
 
 
+def test_a_one_frame_rig_folds_the_roots_its_full_clip_folds(shared_data):
+    """One frame cannot tell a still root from a moving one: Bandai's
+    ``joint_Root`` on the floor under the hips stayed the model's root of a
+    one-frame target (a retarget onto it travelled 0.69 heights, onto the
+    whole file 1.75); a root at the body's centre stays, as in a clip."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.transforms.canonical import fold_root
+    src = read_bvh(shared_data / "bandai" / "dataset-1_walk_normal_001.bvh")
+    for frames in (1, 2):
+        c = canonicalize(src.slice(0, frames), fps=None)
+        assert c.skeleton.names[0] == "Hips"
+        assert c.transform.removed_root["name"] == "joint_Root"
+    for species in ("crab", "fowl"):
+        motion = generate_clip(zoo_rigs([species])[0], "walk", frames=30, seed=1).slice(0, 1)
+        assert fold_root(motion)[1] is None
+
+
 def test_resample_keeps_endpoints_and_is_slerp(human):
     clip = human.slice(0, 121)
     down = resample(clip, 30)
