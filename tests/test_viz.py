@@ -14,6 +14,7 @@ from satagraph.data.examples import example_motion  # noqa: E402
 from satagraph.datasets.zoo import generate_clip, zoo_rigs  # noqa: E402
 from satagraph.io import write_bvh  # noqa: E402
 from satagraph.viz import contacts, frame_count, render, render_frames  # noqa: E402
+from satagraph.viz.render import display_rate, on_clock  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -24,11 +25,13 @@ def motions():
 
 
 def test_gif_has_one_frame_per_time_step(tmp_path, motions):
+    """At 30 fps a GIF (whole hundredths of a second a frame) plays 33.3
+    frames a second exactly: 12 frames of 30 fps are 13 of it."""
     path = tmp_path / "a.gif"
     count = render(motions, path, titles=["walk", "dog"], panel_px=160)
-    assert count == 12 == frame_count(motions)
+    assert count == 13 == frame_count(on_clock(motions, 100 / 3))
     with Image.open(path) as gif:
-        assert gif.n_frames == 12
+        assert gif.n_frames == 13 and gif.info["duration"] == 30
         assert gif.size == (320, 160)
         gif.seek(5)
         assert np.asarray(gif.convert("L")).std() > 5  # not blank
@@ -40,6 +43,25 @@ def test_max_frames_and_fps(tmp_path, motions):
     with Image.open(path) as gif:
         assert gif.n_frames == 4
         assert gif.info["duration"] == 100
+
+
+def test_panels_of_other_rates_play_in_real_time_together(tmp_path, motions):
+    """A 120 fps clip was written at 20 ms a frame (2.4 times slow), and a
+    60 fps panel beside a 30 fps one ran twice as fast, then stood."""
+    from satagraph.transforms.canonical import resample
+    fast = resample(motions[0], 120.0)
+    assert display_rate([fast], ".gif") == 50.0 and display_rate([fast], ".mp4") == 120.0
+    assert display_rate([motions[0]], ".gif", fps=24) == 25.0
+    pair = on_clock([fast, motions[0]], 50.0)
+    assert [m.fps for m in pair] == [50.0, 50.0]
+    assert pair[0].num_frames == pair[1].num_frames  # the same 0.37 s each
+    np.testing.assert_allclose(pair[0].global_positions(), pair[1].global_positions(),
+                               atol=1e-6)
+    path = tmp_path / "fast.gif"
+    count = render([fast], path, panel_px=96)
+    with Image.open(path) as gif:
+        seconds = gif.n_frames * gif.info["duration"] / 1000
+    assert count == gif.n_frames and abs(seconds - motions[0].duration) < 0.03
 
 
 def test_mp4(tmp_path, motions):
@@ -88,9 +110,9 @@ def test_render_blits_instead_of_redrawing(tmp_path, monkeypatch):
 
     monkeypatch.setattr(FigureCanvasAgg, "draw", counting_draw)
     clip = example_motion(num_frames=12)
-    render([clip, clip], tmp_path / "fast.gif", panel_px=160)
+    count = render([clip, clip], tmp_path / "fast.gif", panel_px=160)
     assert len(draws) == 1
-    assert Image.open(tmp_path / "fast.gif").n_frames == frame_count([clip, clip])
+    assert Image.open(tmp_path / "fast.gif").n_frames == count
 
 
 def test_cli_render(tmp_path, capsys):

@@ -48,7 +48,9 @@ def add_render_parser(subparsers: "argparse._SubParsersAction"
     p.add_argument("--png", metavar="SHEET.png", default=None,
                    help="also write a PNG contact sheet")
     p.add_argument("--fps", type=float, default=None,
-                   help="playback frame rate (default: the first file's)")
+                   help="frames per second shown, every file resampled to it so that all "
+                   "play in real time together (default: the first file's; a GIF's nearest "
+                   "rate it plays exactly, at most 50)")
     p.add_argument("--max-frames", type=int, default=None, metavar="N",
                    help="render at most N frames (the clip is cut)")
     p.add_argument("--raw", action="store_true",

@@ -227,7 +227,7 @@ def save_gif(frames: Sequence[np.ndarray], path: PathLike, fps: float) -> None:
     from PIL import Image
 
     images = [Image.fromarray(f) for f in frames]
-    duration = max(int(round(1000.0 / fps)), 20)
+    duration = 10 * max(2, int(round(100.0 / fps)))  # whole hundredths: what a GIF stores
     _atomic(path, lambda tmp: images[0].save(
         tmp, format="GIF", save_all=True, append_images=images[1:],
         duration=duration, loop=0, optimize=False))
@@ -279,6 +279,27 @@ def sheet_frames(count: int, samples: int = 6) -> List[int]:
     return sorted({int(round(v)) for v in np.linspace(0, count - 1, min(samples, count))})
 
 
+def display_rate(motions: Sequence[Motion], ext: str, fps: Optional[float] = None) -> float:
+    """Frames per second an animation shows: :obj:`fps`, else the first
+    motion's; for a GIF the nearest rate it plays exactly, at most 50 (its
+    frame delays are whole hundredths of a second: a 120 fps clip written
+    at 20 ms a frame played 2.4 times slow, a 30 fps one at 30 ms 1.11
+    times fast)."""
+    rate = float(fps or motions[0].fps)
+    return 100.0 / max(2, int(round(100.0 / rate))) if ext == ".gif" else rate
+
+
+def on_clock(motions: Sequence[Motion], rate: float) -> List[Motion]:
+    """Every motion resampled to :obj:`rate` frames per second
+    (:func:`~satagraph.transforms.canonical.resample`), so that panels of
+    different rates show the same instant in each frame (they were lined
+    up by frame index: a 60 fps panel beside 30 fps ones ran twice as fast,
+    then stood)."""
+    from satagraph.transforms.canonical import resample
+    return [m if m.num_frames < 2 or abs(m.fps - rate) < 1e-9 else resample(m, rate)
+            for m in motions]
+
+
 def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = None,
            titles: Optional[Sequence[str]] = None, fps: Optional[float] = None,
            max_frames: Optional[int] = None, sheet: Optional[PathLike] = None,
@@ -290,7 +311,11 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
         motions (Motion or list[Motion]): One motion per panel (+Y up).
         path (str or PathLike, optional): ``.gif`` or ``.mp4`` output.
         titles (list[str], optional): Panel titles (default: file names).
-        fps (float, optional): Playback rate (default: the first motion's).
+        fps (float, optional): Frames per second shown (default: the first
+            motion's; for a GIF the nearest rate it plays exactly,
+            :func:`display_rate`); every panel is resampled to it
+            (:func:`on_clock`), so the animation runs in real time and its
+            panels together.
         max_frames (int, optional): Cut the animation to this many frames.
         sheet (str or PathLike, optional): PNG contact sheet of six evenly
             spaced frames.
@@ -309,7 +334,8 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
     ext = "" if path is None else os.path.splitext(os.fspath(path))[1].lower()
     if path is not None and ext not in (".gif", ".mp4"):
         raise ValueError(f"render: output must be .gif or .mp4, got {os.fspath(path)!r}")
-    fps = float(fps or motions[0].fps)
+    fps = display_rate(motions, ext, fps)
+    motions = on_clock(motions, fps)
     count = frame_count(motions, max_frames)
     kwargs = dict(titles=titles, max_frames=max_frames, panel_px=panel_px,
                   elev=elev, azim=azim, fit=fit)
