@@ -19,16 +19,22 @@ PathLike = Union[str, "os.PathLike[str]"]
 EXACT = "%.15g"
 
 
-def _fmt(values: np.ndarray) -> str:
-    """An OFFSET's numbers, exactly and without exponents, six decimals at
-    least (a tenth of a micron is not rounded to a bone of length zero)."""
-    return " ".join(np.format_float_positional(v, unique=True, min_digits=6) for v in values)
+def _fmt(values: np.ndarray, tiny: float = 0.0) -> str:
+    """An OFFSET's numbers without exponents, six decimals at least (a
+    tenth of a micron is not rounded to a bone of length zero), to 15
+    significant digits (any file's value comes back digit for digit, and
+    the last bits of arithmetic go: ``-17.822200000000006`` is
+    ``-17.8222``); below :obj:`tiny` a value is zero (``-6.3e-23`` from
+    turning a zero)."""
+    return " ".join(np.format_float_positional(0.0 if abs(v) < tiny else float(EXACT % v),
+                                               unique=True, min_digits=6) for v in values)
 
 
 def _hierarchy(motion: Motion) -> List[str]:
     """The HIERARCHY lines, by an explicit depth-first walk (no recursion:
     any depth)."""
     skel = motion.skeleton
+    tiny = 1e-12 * float(np.abs(skel.offsets).max(initial=0.0))  # arithmetic's zero
     lines = ["HIERARCHY"]
     children = skel.children
     stack = [(0, 0, False)]  # (joint, depth, closing)
@@ -40,11 +46,11 @@ def _hierarchy(motion: Motion) -> List[str]:
             continue
         if skel.end_site[j] and not children[j] and not skel.channels[j]:
             lines.extend([f"{pad}End Site", f"{pad}{{",
-                          f"{pad}  OFFSET {_fmt(skel.offsets[j])}", f"{pad}}}"])
+                          f"{pad}  OFFSET {_fmt(skel.offsets[j], tiny)}", f"{pad}}}"])
             continue
         kind = "ROOT" if j == 0 else "JOINT"
         lines.extend([f"{pad}{kind} {skel.names[j]}", f"{pad}{{",
-                      f"{pad}  OFFSET {_fmt(skel.offsets[j])}"])
+                      f"{pad}  OFFSET {_fmt(skel.offsets[j], tiny)}"])
         if skel.channels[j]:
             lines.append(f"{pad}  CHANNELS {len(skel.channels[j])} "
                          + " ".join(skel.channels[j]))

@@ -327,6 +327,19 @@ def test_values_as_read_are_written_back_exactly(tmp_path):
     assert "e-" not in (tmp_path / "out.bvh").read_text().split("MOTION")[0]
 
 
+def test_offsets_lose_the_last_bits_of_arithmetic(tmp_path):
+    """A retarget onto a dog file wrote ``-17.822200000000006`` for its
+    ``-17.8222`` and ``-0.0000...0006255933559731327`` for its ``0``: the
+    unit and axis turns there and back leave the last bits."""
+    (tmp_path / "in.bvh").write_text(TEXT)
+    motion = read_bvh(tmp_path / "in.bvh")
+    noisy = motion.skeleton.offsets.copy()
+    noisy[1] = [-17.822200000000006, -6.255933559731327e-23, 1.2e-7]
+    motion = motion.with_(skeleton=motion.skeleton.replace(offsets=noisy))
+    write_bvh(motion, tmp_path / "out.bvh")
+    assert "OFFSET -17.822200 0.000000 0.00000012" in (tmp_path / "out.bvh").read_text()
+
+
 def test_a_motion_edited_after_reading_is_written_as_it_now_is(tmp_path):
     """An edit in place or a :func:`dataclasses.replace` is written, not the
     values the file held."""
