@@ -115,6 +115,21 @@ def test_render_blits_instead_of_redrawing(tmp_path, monkeypatch):
     assert Image.open(tmp_path / "fast.gif").n_frames == count
 
 
+def test_a_missing_optional_package_is_one_line_before_any_work(tmp_path, capsys,
+                                                                monkeypatch):
+    """Without the viz extra an MP4 was a traceback after every frame was
+    drawn; a plain install's missing matplotlib took the demo down the same
+    way (it is a dependency now)."""
+    import sys
+    bvh = tmp_path / "walk.bvh"
+    write_bvh(example_motion(num_frames=8), bvh)
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)
+    assert main(["render", str(bvh), str(tmp_path / "a.mp4")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'imageio_ffmpeg'" in err and "satagraph[viz]" in err
+    assert not (tmp_path / "a.mp4").exists()
+
+
 def test_cli_render(tmp_path, capsys):
     bvh = tmp_path / "walk.bvh"
     write_bvh(example_motion(num_frames=8), bvh)

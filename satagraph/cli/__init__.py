@@ -495,6 +495,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             raise
         print(f"{PROG}: error: {_message(err)}", file=sys.stderr)
         return 2
+    except ModuleNotFoundError as err:
+        if args.traceback:
+            raise
+        print(f"{PROG}: error: {_missing_module(err)}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         if args.traceback:
             raise
@@ -504,6 +509,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     finally:
         warnings.formatwarning, warnings.showwarning = before, shown
     return int(code or 0)
+
+
+#: Optional packages and the extra of ``setup.cfg`` that installs each.
+EXTRAS = {"imageio_ffmpeg": "viz", "torch_scatter": "scatter", "sentencepiece": "dev",
+          "pybvh": "bench"}
+
+
+def _missing_module(err: ModuleNotFoundError) -> str:
+    """One line for a package a command needs and this installation lacks."""
+    name = (err.name or "").split(".")[0]
+    extra = EXTRAS.get(name)
+    how = (f"pip install 'satagraph[{extra}]'" if extra
+           else "reinstall satagraph (pip install satagraph) with its dependencies")
+    return f"this command needs the Python package {name!r}, which is not installed: {how}"
 
 
 def _once(show):

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import copy
 import os
+import site
 import sys
+import sysconfig
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
@@ -15,17 +17,38 @@ from omegaconf import OmegaConf
 from satagraph.experiment.schema import resolve_config
 
 ROOT = Path(__file__).resolve().parents[2]
-#: Where named configs are looked up, first existing folder wins: the
-#: source checkout's ``experiments/`` (editable installs, the repository),
-#: then the copy a non-editable install ships as data files
-#: (``<prefix>/share/satagraph/experiments``, see ``setup.cfg``).
-CONFIG_DIRS = (ROOT / "experiments",
-               Path(sys.prefix) / "share" / "satagraph" / "experiments")
+_SHARED = Path("share") / "satagraph" / "experiments"
+
+
+def config_dirs(root: Path = ROOT) -> Tuple[Path, ...]:
+    """Where named configs are looked up, first existing folder wins: the
+    source checkout's ``experiments/`` (editable installs, the repository:
+    a folder beside ``setup.cfg``, not any ``experiments`` an installed
+    package puts into site-packages), then the copy a non-editable install
+    ships as data files (``<data>/share/satagraph/experiments``, see
+    ``setup.cfg``) under this environment's data path, its prefix, or the
+    user base of a ``pip install --user``."""
+    checkout = [root / "experiments"] if (root / "setup.cfg").is_file() else []
+    bases = (sysconfig.get_paths()["data"], sys.prefix, site.USER_BASE or "")
+    return tuple(dict.fromkeys(checkout + [Path(b) / _SHARED for b in bases if b]))
+
+
+#: :func:`config_dirs` of this installation.
+CONFIG_DIRS = config_dirs()
 
 
 def experiments_dir() -> Path:
-    """The folder of the named configs (see :data:`CONFIG_DIRS`)."""
-    return next((d for d in CONFIG_DIRS if d.is_dir()), CONFIG_DIRS[0])
+    """The folder of the named configs (see :data:`CONFIG_DIRS`).
+
+    Raises:
+        FileNotFoundError: None of them exists (one line naming them).
+    """
+    found = next((d for d in CONFIG_DIRS if d.is_dir()), None)
+    if found is None:
+        raise FileNotFoundError("the named configs are not installed: looked in "
+                                + ", ".join(map(str, CONFIG_DIRS))
+                                + "; give a config's path, or reinstall satagraph")
+    return found
 
 
 def config_path(name: str) -> Path:
@@ -52,7 +75,14 @@ def _load(path: Path, files: List[Path]):
         detail = " ".join(str(err).split())[:200]
         raise ValueError(f"{path}: not a valid YAML config ({detail})") from None
     bases = cfg.pop("defaults", []) or []
-    return OmegaConf.merge(*[_load(path.parent / f"{b}.yaml", files) for b in bases], cfg)
+    return OmegaConf.merge(*[_load(_base(path, str(b)), files) for b in bases], cfg)
+
+
+def _base(path: Path, name: str) -> Path:
+    """A ``defaults`` entry of :obj:`path`: the file of that name beside
+    it, else the named config (``defaults: [tiny]`` in one's own folder)."""
+    beside = path.parent / f"{name}.yaml"
+    return beside if beside.is_file() or Path(name).suffix else config_path(name)
 
 
 def _stamp(path: Path) -> Tuple[str, int, int]:

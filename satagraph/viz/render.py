@@ -334,6 +334,8 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
     ext = "" if path is None else os.path.splitext(os.fspath(path))[1].lower()
     if path is not None and ext not in (".gif", ".mp4"):
         raise ValueError(f"render: output must be .gif or .mp4, got {os.fspath(path)!r}")
+    if ext == ".mp4":
+        import imageio_ffmpeg  # noqa: F401  (the viz extra): missing is said before any work
     fps = display_rate(motions, ext, fps)
     motions = on_clock(motions, fps)
     count = frame_count(motions, max_frames)

@@ -98,6 +98,29 @@ def test_named_configs_found_without_a_source_checkout(tmp_path, monkeypatch):
         config.config_path("sata_vae")
 
 
+def test_only_a_checkout_s_experiments_folder_is_read(tmp_path, monkeypatch):
+    """Installed, the package's parent is site-packages, whose
+    ``experiments`` may be another distribution's package; a ``pip install
+    --user`` ships the configs under the user base; with none found, the
+    error says where it looked."""
+    from satagraph.experiment import config
+    (tmp_path / "experiments").mkdir()
+    assert tmp_path / "experiments" not in config.config_dirs(tmp_path)
+    (tmp_path / "setup.cfg").write_text("[metadata]\n")
+    assert config.config_dirs(tmp_path)[0] == tmp_path / "experiments"
+    monkeypatch.setattr(config.site, "USER_BASE", str(tmp_path / "user"))
+    assert tmp_path / "user" / "share" / "satagraph" / "experiments" in config.config_dirs()
+    monkeypatch.setattr(config, "CONFIG_DIRS", (tmp_path / "a", tmp_path / "b"))
+    with pytest.raises(FileNotFoundError, match=f"looked in {tmp_path / 'a'}, {tmp_path / 'b'}"):
+        config.config_path("tiny")
+
+
+def test_one_s_own_config_inherits_a_named_one(tmp_path):
+    (tmp_path / "mine.yaml").write_text("defaults: [tiny]\nname: mine\n")
+    cfg = load_config(str(tmp_path / "mine.yaml"))
+    assert cfg["name"] == "mine" and cfg["data"] == load_config("tiny")["data"]
+
+
 @pytest.mark.slow
 def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
     """The data files of ``setup.cfg`` cover every config, and each loads
