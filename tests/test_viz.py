@@ -64,6 +64,17 @@ def test_panels_of_other_rates_play_in_real_time_together(tmp_path, motions):
     assert count == gif.n_frames and abs(seconds - motions[0].duration) < 0.03
 
 
+def test_a_frame_rate_past_reason_is_one_line_and_a_cut_is_cut_first(tmp_path, motions):
+    """``--fps inf`` was a traceback (and a GIF silently 50 fps); ``1e9``
+    resampled every clip whole before ``--max-frames`` cut it: killed."""
+    for fps in (float("inf"), 1e9, float("nan")):
+        for name in ("a.gif", "a.mp4"):
+            with pytest.raises(ValueError, match="frame rate must be above 0 and at most 1000"):
+                render(motions, tmp_path / name, fps=fps)
+    cut = on_clock(motions, 1000.0, max_frames=5)
+    assert all(m.num_frames <= 34 for m in cut)  # a frame of 30 fps, not the 367 of the clip
+
+
 def test_mp4(tmp_path, motions):
     ffmpeg = pytest.importorskip("imageio_ffmpeg")
     path = tmp_path / "a.mp4"

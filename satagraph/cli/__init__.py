@@ -486,6 +486,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             if getattr(args, "scale_free", False):
                 from satagraph.transforms.rig_reading import UnitsWarning
                 warnings.simplefilter("ignore", UnitsWarning)
+            if os.environ.get("SATAGRAPH_PLUGINS"):  # one's own modules and layers
+                from satagraph.experiment.registry import import_user_plugins
+                import_user_plugins()
             code = args.func(args)
     except BrokenPipeError:  # `satagraph inspect FOLDER | head`: the reader has gone
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -26,8 +26,8 @@ from satagraph.utils.files import atomic_write, check_input_file
 #: with helper chains beside the hips (Unreal's IK roots), set aside.
 #: 7: a rig whose up axis is not +Y has its rest pose turned upright too
 #: (every joint's local axes, not the root's alone).
-#: 8: a body stands where its root holds its height above the legs beside
-#: the spine (transforms.ground.stands): the rest shown for a line rest.
+#: 8: a body stands where its root holds its height above the legs nearest
+#: it (transforms.ground.stands): the rest shown for a line rest.
 FEATURE_VERSION = 8
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",

@@ -166,13 +166,15 @@ def select(files: Iterable[MotionFile], split: str) -> List[MotionFile]:
 
 
 def spread_files(files: Sequence[MotionFile], limit: Optional[int]) -> List[MotionFile]:
-    """At most :obj:`limit` of :obj:`files` (all for ``None`` or 0), taken
+    """At most :obj:`limit` of :obj:`files` (all for ``None``), taken
     in turn from each (dataset, skeleton) group, in the order the groups
     first appear and each group's own order: a limit keeps every source
     and body plan it has room for (the first ``limit`` files of a folder
     listed by name were one rig's, and of two sources the first's only).
     The files keep their order."""
-    if not limit or len(files) <= limit:
+    if limit is not None and limit < 1:
+        raise ValueError(f"max_files={limit}: at least 1 is expected (None reads every file)")
+    if limit is None or len(files) <= limit:
         return list(files)
     groups: Dict[Tuple[str, str], List[int]] = {}
     for i, f in enumerate(files):

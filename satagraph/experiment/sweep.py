@@ -112,7 +112,8 @@ def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
     if data is not None:
         cfg["data"] = copy.deepcopy(data)
     trainer = dict(cfg.get("trainer") or {})
-    trainer.pop("max_steps", None)
+    for key in BUDGET_KEYS:  # a config's own limits: the budget alone ends a run
+        trainer.pop(key.split(".", 1)[1], None)
     trainer.update(max_epochs=-1, progress=False, enable_model_summary=False,
                    enable_progress_bar=False,
                    max_time={"seconds": 60.0 * float(budget_minutes)})

@@ -66,9 +66,27 @@ def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
     is read."""
     cfg = resolve_config(cfg)
     module_entry(cfg["module"]).check(module_sections(cfg))
+    check_local_conv(cfg["model"].get("local_conv"))
     check_keys("trainer", cfg["trainer"], trainer_keys())
     check_wandb_login(cfg["logger"])
     return cfg
+
+
+def check_local_conv(name: Any) -> None:
+    """A ``model.local_conv`` that names no layer is one line before any
+    data is read (it was one after).
+
+    Raises:
+        ValueError: The known names, and how to add one.
+    """
+    from satagraph.nn.layers.local_conv import check_local_conv as known
+    if name is None or str(name).lower() in ("none", "null", ""):
+        return
+    try:
+        known(name)
+    except ValueError as err:
+        raise ValueError(f"model.local_conv: {err}, in a file SATAGRAPH_PLUGINS names "
+                         "for the command line") from None
 
 
 def check_wandb_login(logger: Dict[str, Any]) -> None:
@@ -336,8 +354,9 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         init_normalizer (str): ``"data"`` (default) or ``"checkpoint"``.
         **trainer_overrides: Keyword arguments of :class:`lightning.Trainer`
             over the config's ``trainer`` section (``callbacks=[...]`` are
-            added to the run's own; ``logger=`` and ``default_root_dir=``
-            replace what the config's ``logger`` and ``output_dir`` give).
+            added to the run's own; ``logger=`` replaces the config's
+            ``logger``; ``default_root_dir=`` is Lightning's own folder,
+            while the run's checkpoints and records stay in ``output_dir``).
 
     Returns:
         The trained module, the data module, the trainer and the run folder.

@@ -567,16 +567,34 @@ def _read_bytes(path: str) -> bytes:
 
 
 def _decode(path: str, raw: bytes) -> str:
-    """UTF-8 text; a file that is not UTF-8 is read as Latin-1 (every byte
-    one character, so no joint name is lost or merged), with a warning
-    naming the first offending line."""
+    """UTF-8 text; a file that is not UTF-8 is read as Shift-JIS (cp932)
+    where that gives Japanese kana (MikuMikuDance's own encoding: its
+    ``センター`` read as Latin-1 was ``ƒZƒ“ƒ^[``), else as Latin-1 (every
+    byte one character, so no joint name is lost or merged), with a
+    warning naming the first offending line and the encoding read."""
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as err:
         line = raw.count(b"\n", 0, err.start) + 1
-        warnings.warn(f"{path}:{line}: not UTF-8; the file is read as Latin-1 "
-                      "(ISO 8859-1)", BVHWarning, stacklevel=3)
-        return raw.decode("latin-1")
+        text, encoding = _japanese(raw), "Shift-JIS (cp932)"
+        if text is None:
+            text, encoding = raw.decode("latin-1"), "Latin-1 (ISO 8859-1)"
+        warnings.warn(f"{path}:{line}: not UTF-8; the file is read as {encoding}",
+                      BVHWarning, stacklevel=3)
+        return text
+
+
+_KANA = re.compile("[\u3040-\u30ff]")
+
+
+def _japanese(raw: bytes) -> Optional[str]:
+    """:obj:`raw` as Shift-JIS text if it is that and holds kana (the C1
+    bytes that begin a kana in it are no Latin-1 text's), else ``None``."""
+    try:
+        text = raw.decode("cp932")
+    except UnicodeDecodeError:
+        return None
+    return text if _KANA.search(text) else None
 
 
 class BVHWarning(UserWarning):

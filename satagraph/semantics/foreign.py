@@ -15,8 +15,8 @@ The rewrite:
 2. Known words (:data:`FOREIGN_WORDS`: MMD's standard bone names and
    common Chinese joint names), the longest first, become English words
    between spaces.
-3. Accents are dropped (``Épaule`` -> ``Epaule``); what is still not ASCII
-   is left for the lexicon, which reads it as a separator.
+3. Latin letters lose their accents (``Épaule`` -> ``Epaule``); what is
+   still not ASCII is left for the lexicon, which reads it as a separator.
 
 ASCII names come back unchanged. Where Japanese and Chinese read a
 character differently, MMD's reading is kept (``足``: a leg, the thigh
@@ -26,7 +26,7 @@ Example::
 
     english_name("左ひざ")      # "Left Knee"
     english_name("右足ＩＫ")    # "Right Leg IK"
-    english_name("上半身2")     # "Spine 2"
+    english_name("上半身2")     # "Chest"
     english_name("LeftUpLeg")   # "LeftUpLeg"
 """
 from __future__ import annotations
@@ -42,12 +42,12 @@ from satagraph.sides import SIDE_CHARACTERS
 FOREIGN_WORDS: Dict[str, str] = {
     **{c: side.capitalize() for c, side in SIDE_CHARACTERS.items()},
     # MikuMikuDance: trunk and head
-    "全ての親": "Master", "操作中心": "Root", "センター": "COG",
-    "グルーブ": "Root", "腰": "Waist", "股関節": "Hip", "下半身": "Pelvis",
+    "全ての親": "Master", "操作中心": "Root", "センター": "Hips",
+    "グルーブ": "Groove Helper", "腰": "Waist", "股関節": "Hip", "下半身": "Pelvis",
     "上半身": "Spine", "上半身2": "Chest", "上半身3": "Upper Chest", "首": "Neck", "頭": "Head", "両目": "Eyes",
     "目": "Eye", "舌": "Tongue", "歯": "Teeth", "あご": "Jaw", "顎": "Jaw",
     "髪": "Hair", "眉": "Brow", "まぶた": "Eyelid", "耳": "Ear",
-    "鼻": "Nose", "口": "Mouth", "胸": "Chest", "乳": "Breast",
+    "鼻": "Nose", "口": "Mouth", "胸": "Breast", "乳": "Breast",
     "尻尾": "Tail", "しっぽ": "Tail", "尾": "Tail",
     # MikuMikuDance: arms, hands and helpers
     "肩P": "Shoulder Helper", "肩C": "Shoulder Helper", "肩": "Shoulder",
@@ -57,13 +57,13 @@ FOREIGN_WORDS: Dict[str, str] = {
     "手": "Hand", "親指": "Thumb", "人差し指": "Index Finger",
     "人差指": "Index Finger", "人指": "Index Finger", "中指": "Middle Finger",
     "薬指": "Ring Finger", "小指": "Little Finger", "指": "Finger",
-    "キャンセル": "Helper", "親": "Parent",
+    "キャンセル": "Helper", "補助": "Helper", "親": "Parent",
     # MikuMikuDance: legs
     "前足": "Front Leg", "後ろ足": "Hind Leg", "後足": "Hind Leg",
     "足首": "Ankle", "足先": "Toe", "足": "Leg", "ひざ": "Knee", "膝": "Knee",
     "つま先": "Toe", "かかと": "Heel", "踵": "Heel",
     # Chinese
-    "头": "Head", "颈": "Neck", "脖子": "Neck", "脊椎": "Spine",
+    "头": "Head", "胸部": "Chest", "颈": "Neck", "脖子": "Neck", "脊椎": "Spine",
     "脊柱": "Spine", "骨盆": "Pelvis", "髋": "Hip", "盆骨": "Pelvis", "锁骨": "Clavicle",
     "鎖骨": "Clavicle", "上臂": "Upper Arm", "大臂": "Upper Arm",
     "前臂": "Forearm", "小臂": "Forearm", "手腕": "Wrist", "手臂": "Arm",
@@ -94,6 +94,11 @@ def english_name(name: str) -> str:
         return name
     name = unicodedata.normalize("NFKC", name)
     name = _WORDS.sub(lambda m: f" {FOREIGN_WORDS[m.group()]} ", name)
-    name = "".join(c for c in unicodedata.normalize("NFKD", name)
-                   if not unicodedata.combining(c))
-    return _SPACES.sub(" ", name).strip()
+    return _SPACES.sub(" ", "".join(map(_plain_letter, name))).strip()
+
+
+def _plain_letter(char: str) -> str:
+    """A Latin letter without its accents (``É`` -> ``E``); any other
+    character as it is (a kana keeps its voicing mark: ``ダ`` is not ``タ``)."""
+    base = unicodedata.normalize("NFKD", char)
+    return base[0] if base[:1].isascii() and base[:1].isalpha() else char

@@ -177,7 +177,7 @@ def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0) -> np.n
         - **positions**: :math:`(T, J, 3)` global, +Y up
         - **output**: :math:`(T,)` bool
     """
-    support = support_joints(skeleton)
+    support = support_joints(skeleton, positions)
     stance = positions[:, 0, 1] - positions[:, support, 1].min(axis=1)
     width = max(1, int(round(STANDING_HOLD * fps)))
     padded = np.pad(stance, (width // 2, width - 1 - width // 2), mode="edge")
@@ -185,17 +185,40 @@ def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0) -> np.n
     return (stance >= STANDING_SHARE * held) & (stance * STANDING_SHARE <= held)
 
 
-def support_joints(skeleton: Skeleton) -> np.ndarray:
-    """The joints a body stands on below its root: all but the root's
-    largest child chain (the spine, which carries a quadruped's front legs
-    where its root is the hips) when the root has two children or more,
-    every joint otherwise."""
-    children = skeleton.children[0]
-    if len(children) < 2:
+#: A chain end touches the floor (:func:`support_joints`) where it is within
+#: this share of the body's size of the frame's lowest joint ...
+SUPPORT_CONTACT = 0.05
+#: ... in at least this share of the frames.
+SUPPORT_FRAMES = 0.1
+
+
+def support_joints(skeleton: Skeleton, positions: np.ndarray) -> np.ndarray:
+    r"""The joints a body stands on below its root: the chains from the
+    root to the ends that touch the floor (:data:`SUPPORT_CONTACT` in
+    :data:`SUPPORT_FRAMES` of the frames) fewest bones from the root, up
+    to two more (a dog's hind paws, four bones from its hips, not its front
+    paws, eight along the spine; a human's feet, toes included, not the
+    hands it leans on); every joint where no end touches the floor.
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)` global, +Y up
+    """
+    heights = positions[..., 1] - positions[..., 1].min(axis=1, keepdims=True)
+    size = max(float(np.median(np.ptp(positions, axis=1).max(axis=-1))), 1e-12)
+    ends = np.flatnonzero(skeleton.is_leaf)
+    touching = ends[(heights[:, ends] < SUPPORT_CONTACT * size).mean(axis=0) >= SUPPORT_FRAMES]
+    if not len(touching):
         return np.arange(skeleton.num_joints)
-    chains = [skeleton.subtree(c) for c in children]
-    largest = max(range(len(chains)), key=lambda i: len(chains[i]))
-    return np.concatenate([c for i, c in enumerate(chains) if i != largest])
+    depth = skeleton.depth
+    near = touching[depth[touching] <= depth[touching].min() + 2]
+    chains: set = set()
+    for j in near:
+        while j > 0 and j not in chains:
+            chains.add(int(j))
+            j = skeleton.parents[j]
+    if not chains:  # the root itself is the lowest end
+        return np.arange(skeleton.num_joints)
+    return np.array(sorted(chains), dtype=np.int64)
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",

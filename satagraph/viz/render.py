@@ -16,6 +16,7 @@ Motions are expected +Y up (canonicalise them first); units are free.
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from typing import Iterator, List, Optional, Sequence, Tuple, Union
@@ -286,18 +287,41 @@ def display_rate(motions: Sequence[Motion], ext: str, fps: Optional[float] = Non
     at 20 ms a frame played 2.4 times slow, a 30 fps one at 30 ms 1.11
     times fast)."""
     rate = float(fps or motions[0].fps)
+    _check_rate(rate)
     return 100.0 / max(2, int(round(100.0 / rate))) if ext == ".gif" else rate
 
 
-def on_clock(motions: Sequence[Motion], rate: float) -> List[Motion]:
+def _check_rate(rate: float) -> None:
+    if not (math.isfinite(rate) and 0 < rate <= MAX_RATE):
+        raise ValueError(f"render: the frame rate must be above 0 and at most "
+                         f"{MAX_RATE:g}, got {rate:g}")
+
+
+#: The highest frame rate an animation is drawn at.
+MAX_RATE = 1000.0
+
+
+def on_clock(motions: Sequence[Motion], rate: float,
+             max_frames: Optional[int] = None) -> List[Motion]:
     """Every motion resampled to :obj:`rate` frames per second
     (:func:`~satagraph.transforms.canonical.resample`), so that panels of
     different rates show the same instant in each frame (they were lined
     up by frame index: a 60 fps panel beside 30 fps ones ran twice as fast,
-    then stood)."""
+    then stood); with :obj:`max_frames`, only the time those frames show
+    is resampled.
+
+    Raises:
+        ValueError: :obj:`rate` is not a positive number up to
+            :data:`MAX_RATE`.
+    """
     from satagraph.transforms.canonical import resample
-    return [m if m.num_frames < 2 or abs(m.fps - rate) < 1e-9 else resample(m, rate)
-            for m in motions]
+    _check_rate(rate)
+    out = []
+    for m in motions:
+        if max_frames is not None:
+            m = m.slice(0, min(m.num_frames, int(math.ceil(max_frames / rate * m.fps)) + 1))
+        out.append(m if m.num_frames < 2 or abs(m.fps - rate) < 1e-9 else resample(m, rate))
+    return out
 
 
 def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = None,
@@ -337,7 +361,7 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
     if ext == ".mp4":
         import imageio_ffmpeg  # noqa: F401  (the viz extra): missing is said before any work
     fps = display_rate(motions, ext, fps)
-    motions = on_clock(motions, fps)
+    motions = on_clock(motions, fps, max_frames)
     count = frame_count(motions, max_frames)
     kwargs = dict(titles=titles, max_frames=max_frames, panel_px=panel_px,
                   elev=elev, azim=azim, fit=fit)

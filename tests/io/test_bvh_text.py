@@ -44,6 +44,21 @@ def test_latin1_names_are_kept_distinct_with_a_warning(tmp_path: Path) -> None:
     assert motion.skeleton.names[1:] == ["B\xedceps", "B\xecceps"]
 
 
+def test_shift_jis_names_are_read_as_japanese(tmp_path: Path) -> None:
+    """MikuMikuDance writes Shift-JIS: read as Latin-1 its センター was
+    mojibake and no Japanese name was understood. A Latin-1 file whose bytes
+    also decode as Shift-JIS (``Tête``'s ``ê`` and ``t`` make a kanji) has
+    no kana and stays Latin-1."""
+    data = _text("\u5de6\u3072\u3056", "\u30bb\u30f3\u30bf\u30fc").encode("cp932")
+    with pytest.warns(BVHWarning, match=r"sjis.bvh:6: not UTF-8; .* Shift-JIS"):
+        motion = read_bvh(_write(tmp_path / "sjis.bvh", data))
+    assert motion.skeleton.names[1:] == ["\u5de6\u3072\u3056", "\u30bb\u30f3\u30bf\u30fc"]
+    data = _text("T\xeate", "Hanche").encode("latin-1")
+    assert "\u30bb" not in data.decode("cp932", errors="replace")
+    with pytest.warns(BVHWarning, match="Latin-1"):
+        assert read_bvh(_write(tmp_path / "tete.bvh", data)).skeleton.names[1] == "T\xeate"
+
+
 def test_utf8_names(tmp_path: Path) -> None:
     motion = read_bvh(_write(tmp_path / "u.bvh", _text("Wirbels\u00e4ule", "\u811a").encode()))
     assert motion.skeleton.names[1:] == ["Wirbels\u00e4ule", "\u811a"]

@@ -209,8 +209,9 @@ def test_auto_rest_re_rests_on_the_mean_standing_pose(
     from satagraph.transforms.ground import support_joints
     canon = canonicalize(read_real("dog/D1_006_KAN01_002.bvh"), fps=30)
     pos = canon.global_positions()
-    hind = support_joints(canon.skeleton)
-    assert {canon.skeleton.names[j] for j in hind} >= {"LeftFoot", "RightFoot", "Tail"}
+    hind = support_joints(canon.skeleton, pos)
+    names = {canon.skeleton.names[j] for j in hind}
+    assert names >= {"LeftFoot", "RightFoot"} and not any("Hand" in n for n in names)
     stance = pos[:, 0, 1] - pos[:, hind, 1].min(axis=1)
     k, frames = standing_frame(canon), standing_frames(canon)
     assert stance[0] < 0.5 * stance.max()  # lying

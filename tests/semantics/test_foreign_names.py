@@ -31,6 +31,8 @@ MMD.update({k.replace("_L", "_R"): v.replace("左", "右") for k, v in MMD.items
     ("上半身", "Spine"), ("左人指１", "Left Index Finger 1"), ("左足首", "Left Ankle"),
     ("右腕捩", "Right Arm Twist"), ("腰キャンセル左", "Waist Helper Left"),
     ("左大腿", "Left Thigh"), ("头", "Head"), ("Épaule_G", "Epaule_G"),
+    ("センター", "Hips"), ("ｾﾝﾀｰ", "Hips"), ("左ひじ補助", "Left Elbow Helper"),
+    ("左ダミー", "Left ダミー"),  # a kana keeps its voicing mark (ダ is not タ)
     ("LeftUpLeg", "LeftUpLeg"), ("mixamorig:Hips", "mixamorig:Hips")])
 def test_english_name(name, english):
     assert english_name(name) == english
@@ -81,3 +83,40 @@ def test_mmd_units(read_real):
     units = guess_units(small, "+Y")
     assert (units.scale, units.how) == (0.08, "dialect")
     assert 1.2 < units.height * units.scale < 2.0
+
+
+#: A Reallusion CC_Base rig's joints by the MMD bones in their places (its
+#: ``Hip`` carries ``Pelvis``, with the legs, and ``Waist``, with the spine,
+#: as MMD's センター carries 下半身 and 上半身), helper bones included.
+CC_MMD = {"Hip": "センター", "Pelvis": "下半身", "Waist": "上半身", "Spine01": "上半身2",
+          "Spine02": "上半身3", "NeckTwist01": "首", "Head": "頭", "JawRoot": "あご",
+          "L_Thigh": "左足", "L_Calf": "左ひざ", "L_Foot": "左足首", "L_ToeBase": "左足先EX",
+          "L_KneeShareBone": "左ひざ補助", "L_Eye": "左目", "L_Clavicle": "左肩",
+          "L_Upperarm": "左腕", "L_UpperarmTwist01": "左腕捩1", "L_Forearm": "左ひじ",
+          "L_ForearmTwist01": "左手捩1", "L_ElbowShareBone": "左ひじ補助", "L_Hand": "左手首"}
+CC_MMD.update({"R_" + k[2:]: v.replace("左", "右") for k, v in CC_MMD.items()
+               if k.startswith("L_")})
+
+
+def test_an_mmd_hierarchy_reads_as_its_english_twin(read_real):
+    """The centre of motion (センター, a cog-like name that read as the
+    ground reference), the legs under 下半身, twist and helper bones (捩,
+    補助): each as its CC_Base twin; the three trunk joints the two
+    conventions cut differently are spine segments both ways."""
+    english = read_real("ccbase/006_01.bvh")
+
+    def mmd(name: str) -> str:
+        bare = name.split("CC_Base_", 1)[-1]
+        if bare.endswith("_end") and bare[:-4] in CC_MMD:
+            return CC_MMD[bare[:-4]] + "_end"
+        return CC_MMD.get(bare, name)
+
+    names = [mmd(n) for n in english.skeleton.names]
+    renamed = english.with_(skeleton=english.skeleton.replace(names=names))
+    ours, theirs = describe_joints(renamed.skeleton), describe_joints(english.skeleton)
+    changed = [j for j, n in enumerate(names) if n != english.skeleton.names[j]]
+    assert len(changed) == 40
+    trunk = {names.index(n) for n in ("上半身", "上半身2", "上半身3")}
+    assert [j for j in changed if ours[j] != theirs[j]] == sorted(trunk)
+    assert all(ours[j].startswith("spine segment") for j in trunk)
+    assert ours[0] == theirs[0] == "pelvis, hips root (center of motion)"

@@ -80,3 +80,27 @@ def test_a_sinking_frame_is_raised_to_the_floor_and_no_other_moves():
     np.testing.assert_array_equal(out.rotations, sunk.rotations)
     above = _lifted(walk, 0.05)
     assert lift_above_floor(above) is above
+
+
+def test_a_body_stands_on_the_chains_that_touch_the_floor_nearest_its_root(read_real):
+    """Stripped of its finger and face bones, a CC_Base rig's largest chain
+    from the root was its legs, and the waist and hands became what it
+    stood on: 2 of 288 frames stood. Its support is its feet with or
+    without them, and the same frames stand."""
+    from satagraph.transforms.augment import _subset
+    from satagraph.transforms.canonical import canonicalize
+    from satagraph.transforms.ground import stands, support_joints
+    full = canonicalize(read_real("ccbase/006_07.bvh"))
+    skel = full.skeleton
+    hands = [skel.index(f"CC_Base_{s}_Hand") for s in "LR"] + [skel.index("CC_Base_FacialBone")]
+    below = {int(j) for h in hands for j in skel.subtree(h)} - set(hands)
+    stripped = _subset(full, [j for j in range(skel.num_joints) if j not in below])
+    assert len(stripped.skeleton.subtree(1)) > stripped.skeleton.num_joints / 2  # legs largest
+    for motion in (full, stripped):
+        pos = motion.global_positions()
+        ends = {motion.skeleton.names[j] for j in support_joints(motion.skeleton, pos)
+                if motion.skeleton.is_leaf[j]}
+        assert ends and all("Toe" in n for n in ends), ends
+    np.testing.assert_array_equal(stands(full.global_positions(), full.skeleton, full.fps),
+                                  stands(stripped.global_positions(), stripped.skeleton,
+                                         stripped.fps))

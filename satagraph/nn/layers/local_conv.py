@@ -102,11 +102,20 @@ def build_local_conv(name: Optional[str], channels: int, heads: int = 4,
     """
     if name is None or str(name).lower() in ("none", "null", ""):
         return None
+    return _BUILDERS[check_local_conv(name)](channels, heads, edge_dim, act)
+
+
+def check_local_conv(name: str) -> str:
+    """The registered key of a local layer's name.
+
+    Raises:
+        ValueError: No layer has that name (one line: the known ones).
+    """
     key = str(name).lower()
     if key not in _BUILDERS:
-        raise ValueError(f"unknown local conv {name!r}; known: {local_conv_names()} or None "
-                         "(register_local_conv adds one)")
-    return _BUILDERS[key](channels, heads, edge_dim, act)
+        raise ValueError(f"unknown local conv {name!r}; known: {', '.join(_BUILDERS)} or "
+                         "None (register_local_conv adds one)")
+    return key
 
 
 def accepts_edge_attr(conv: Optional[nn.Module]) -> bool:
