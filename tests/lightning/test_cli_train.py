@@ -43,6 +43,7 @@ def _table_rows(text: str) -> Dict[str, List[str]]:
     return rows
 
 
+@pytest.mark.slow
 def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: Path,
                                          capsys: pytest.CaptureFixture) -> None:
     run = tmp_path / "run"

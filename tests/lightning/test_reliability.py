@@ -196,6 +196,7 @@ def test_resume_falls_back_from_a_truncated_last_checkpoint(
         resume_checkpoint(folder)
 
 
+@pytest.mark.slow
 def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]) -> None:
     """``last.ckpt`` is written after the best checkpoint at an epoch's
     end: resumed from it, a run compares later epochs with that epoch's and
@@ -210,7 +211,7 @@ def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]
     assert len(list(folder.glob("epoch=*.ckpt"))) == 1
 
 
-@pytest.mark.parametrize("first", [2, 1, pytest.param(3, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("first", [2] + [pytest.param(f, marks=pytest.mark.slow) for f in (1, 3)])
 def test_a_run_bounded_by_steps_resumes_as_far_as_one_never_stopped(
         tiny_config: Dict[str, Any], first: int) -> None:
     """Stopped by ``max_steps`` at an epoch's end (step 2, 2 batches an
@@ -347,6 +348,7 @@ def test_loss_log_keeps_the_wall_clock_and_reads_old_files(tmp_path: Path) -> No
     assert sorted(times) == [2, 3] and before - 1 <= times[2] <= times[3] <= time.time() + 1
 
 
+@pytest.mark.slow
 def test_ema_checkpoints_the_average_and_resumes_the_trained_weights(
         tiny_config: Dict[str, Any]) -> None:
     """``optim.ema``: every checkpoint's ``state_dict`` (what loading and
@@ -455,6 +457,7 @@ def test_ctrl_c_is_given_back_as_an_interrupt(tiny_config: Dict[str, Any]) -> No
     assert signal.getsignal(signal.SIGINT) is before
 
 
+@pytest.mark.slow
 def test_skipped_files_are_listed_and_the_list_goes_once_they_read(
         tiny_config: Dict[str, Any], tmp_path: Path) -> None:
     """``data.on_error=skip``: the run lists what it left out in

@@ -148,7 +148,8 @@ def test_semantic_encoder_must_be_the_autoencoders(autoencoder_ckpt):
         build_module(cfg)
 
 
-@pytest.mark.parametrize("monitor", ["val_loss", "val/zoo-endless/masked"])
+@pytest.mark.parametrize("monitor", ["val_loss", pytest.param("val/zoo-endless/masked",
+                                                         marks=pytest.mark.slow)])
 def test_satagraph_train_t2m_selects_on_validation(autoencoder_ckpt, tmp_path, monitor):
     """`satagraph train t2m_tiny` (module: t2m) end to end for a few steps,
     keeping the best checkpoint by the overall loss or one dataset's."""
