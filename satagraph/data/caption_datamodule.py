@@ -175,12 +175,11 @@ class CaptionDataModule(WindowDataModule):
         return MixedDataset(parts)
 
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
-        if split == "train" and self.bank is not None:
-            return DataLoader(self.bank, batch_size=self.batch_size, shuffle=shuffle,
-                              collate_fn=self.bank.collate,
-                              generator=torch.Generator().manual_seed(self.seed))
+        if split == "train" and self.bank is not None:  # epoch by epoch, as a resume sees it
+            return window_loader(self.bank, self.batch_size, self.seed, shuffle, False,
+                                 collate=self.bank.collate, resume=self._resume)
         return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
-                             self.balanced, self.num_workers)
+                             self.balanced, self.num_workers, resume=self._resume)
 
 
 __all__ = ["CaptionDataModule", "zoo_caption_datasets"]

@@ -75,6 +75,16 @@ class WindowDataModule(L.LightningDataModule):
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         raise NotImplementedError
 
+    def _resume(self, sampler: ResumableSampler) -> None:
+        """Start the sampler where a resumed run stopped: the position a
+        :class:`~satagraph.lightning.reliability.ResumeCheckpoint` of the
+        trainer restored (epoch, batches done, whether the epoch was done)."""
+        trainer = getattr(self, "trainer", None)
+        for callback in getattr(trainer, "callbacks", None) or []:
+            position = getattr(callback, "resume_position", None)
+            if position is not None and not position["epoch_done"]:
+                sampler.resume(position["epoch"], position["batches"] * self.batch_size)
+
     def train_dataloader(self) -> DataLoader:
         return self._loader("train", True)
 
@@ -261,13 +271,4 @@ class MotionDataModule(WindowDataModule):
         return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
                              self.balanced, self.num_workers, collate, self._resume)
 
-    def _resume(self, sampler: ResumableSampler) -> None:
-        """Start the sampler where a resumed run stopped: the position a
-        :class:`~satagraph.lightning.reliability.ResumeCheckpoint` of the
-        trainer restored (epoch, batches done, whether the epoch was done)."""
-        trainer = getattr(self, "trainer", None)
-        for callback in getattr(trainer, "callbacks", None) or []:
-            position = getattr(callback, "resume_position", None)
-            if position is not None and not position["epoch_done"]:
-                sampler.resume(position["epoch"], position["batches"] * self.batch_size)
 

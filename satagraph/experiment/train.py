@@ -418,8 +418,8 @@ def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
     from satagraph.io.checkpoint import load_checkpoint
     hp = load_checkpoint(path).get("hyper_parameters") or {}
     theirs, ours = hp.get("model") or {}, cfg.get("model") or {}
-    differ = [f"model.{k}={theirs[k]} (here {ours[k]})" for k in sorted(theirs)
-              if k in ours and ours[k] is not None and ours[k] != theirs[k]]
+    differ = [f"model.{k}={_short(theirs[k])} (here {_short(ours[k])})" for k in sorted(theirs)
+              if k in ours and ours[k] is not None and not _same_setting(ours[k], theirs[k])]
     before = ((hp.get("meta") or {}).get("data") or {}).get("sources")
     now = data_section(cfg).get("sources")
     if before is not None and before != now:
@@ -428,6 +428,26 @@ def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
         raise ValueError(f"--resume {path}: the run was trained with {'; '.join(differ[:4])}; "
                          "resume with its own settings, or start from its weights in another "
                          "output_dir with --init-from")
+
+
+def _same_setting(ours: Any, theirs: Any) -> bool:
+    """Whether a config value is what a run recorded: a text-to-motion run
+    records its autoencoder as ``{"checkpoint": path, "hparams": ...}``
+    where the config names the path (resuming one was always refused)."""
+    if isinstance(theirs, dict) and "checkpoint" in theirs and isinstance(ours, str):
+        theirs = theirs["checkpoint"]
+        if isinstance(theirs, str) and os.path.exists(ours) and os.path.exists(theirs):
+            return os.path.samefile(ours, theirs)
+        return os.path.normpath(str(theirs)) == os.path.normpath(ours)
+    return ours == theirs
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    """A setting as a message shows it (a recorded autoencoder by its path)."""
+    if isinstance(value, dict) and "checkpoint" in value:
+        value = value["checkpoint"]
+    text = str(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def refuse_trained_folder(run_dir: Path) -> None:

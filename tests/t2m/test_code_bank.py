@@ -126,6 +126,29 @@ def test_satagraph_code_bank_then_train_on_it(autoencoder_ckpt, tmp_path, capsys
                                                    f"output_dir={tmp_path / 'run2'}"]))
 
 
+@pytest.mark.slow
+def test_a_text_to_motion_run_resumes_as_if_never_stopped(autoencoder_ckpt, tmp_path):
+    """``--resume`` of a text-to-motion run was always refused (its recorded
+    autoencoder is a dict, the config's a path), and a banked run's shuffle
+    started over at epoch 0 on resuming: its weights went another way."""
+    path = tmp_path / "bank.safetensors"
+    overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "bank_run", windows=4)
+    assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "8"]) == 0
+    banked = [f"data.code_bank={path}"]
+
+    def run(folder: str, steps: int, resume: bool = False):
+        cfg = load_config("t2m_tiny", overrides + banked + [
+            f"output_dir={tmp_path / folder}", f"trainer.max_steps={steps}",
+            "trainer.max_epochs=-1"])
+        return train(cfg, resume=resume)[0]
+
+    whole = run("whole", 7)
+    run("cut", 3)
+    resumed = run("cut", 7, resume=True)
+    for name, value in whole.state_dict().items():
+        assert torch.equal(value, resumed.state_dict()[name]), name
+
+
 def test_several_banks_are_joined_and_foreign_ones_named(banked, tmp_path):
     from satagraph.data.caption_datamodule import CaptionDataModule
     _, _, coded = banked
