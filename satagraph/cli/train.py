@@ -167,6 +167,10 @@ def add_train_parsers(sub) -> None:
                    "such rig's skeleton, codes and captions kept, so that a rig with one "
                    "captioned clip learns what the others do (default 0; "
                    "experiments/T2M.md section 82)")
+    p.add_argument("--data", action="append", metavar="PATH", default=None,
+                   help="a captioned BVH folder or manifest to draw from, in place of the "
+                   "config's data.sources (repeat it for several); train on the bank with "
+                   "the same --data")
     p.set_defaults(func=run_code_bank)
 
 
@@ -272,7 +276,10 @@ def run_code_bank(args) -> int:
     from satagraph.utils.files import check_output_path
     check_swap_share(args.swap_rigs)
     _check_device(args.device)
-    cfg = check_config(load_config(args.config, list(args.overrides)))
+    cfg = load_config(args.config, list(args.overrides))
+    if args.data:
+        cfg["data"]["sources"] = list(args.data)
+    cfg = check_config(cfg)
     if cfg["module"] != "t2m":
         raise ValueError(f"{args.config}: module {cfg['module']!r} is not a text-to-motion "
                          "model (module: t2m)")
@@ -300,6 +307,7 @@ def run_code_bank(args) -> int:
     bank = draw_code_bank(module, batches, args.windows, progress,
                           None if args.max_minutes is None else 60.0 * args.max_minutes)
     bank = swap_skeletons(bank, args.swap_rigs, seed=int(cfg["seed"]))
+    bank.data = {"sources": cfg["data"]["sources"], "window": int(cfg["data"]["window"])}
     bank.save(args.output)
     print(f"\nwrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
           f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)

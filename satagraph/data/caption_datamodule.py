@@ -150,6 +150,8 @@ class CaptionDataModule(WindowDataModule):
         for path in self.code_bank:
             check_input_file(path, "code bank (data.code_bank)")
         banks = [CodeBank.load(path) for path in self.code_bank]
+        for path, bank in zip(self.code_bank, banks):
+            bank.check_data(list(self.sources), self.window, path)
         if len({bank.fingerprint for bank in banks}) > 1:
             raise ValueError(f"data.code_bank: {', '.join(self.code_bank)} hold the codes of "
                              "different autoencoders")
@@ -167,8 +169,14 @@ class CaptionDataModule(WindowDataModule):
             warnings.warn(f"left out {len(bad)} {split} files: {bad[:3]}", stacklevel=2)
         stride = self.stride if split == "train" else self.window
         reverse = self.reverse if split == "train" else 0.0
-        parts: List[Dataset] = [FileCaptionWindows(kept, feats, self.window, stride,
-                                                   seed=self.seed, reverse=reverse, **kwargs)]
+        windows = FileCaptionWindows(kept, feats, self.window, stride, seed=self.seed,
+                                     reverse=reverse, **kwargs)
+        if windows.uncaptioned:
+            warnings.warn(f"{split}: {len(windows.uncaptioned)} of {len(kept)} files have no "
+                          f"captions and are left out ({windows.uncaptioned[0]}, ...): a "
+                          "file's captions are a sidecar beside it, NAME.txt (HumanML3D "
+                          "lines caption#tokens#from#to) or NAME.json", stacklevel=2)
+        parts: List[Dataset] = [windows]
         for spec in zoos:
             parts += zoo_caption_datasets(spec, split, self.window, self.min_frames,
                                           self.seed, **kwargs)

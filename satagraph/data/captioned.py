@@ -246,10 +246,14 @@ class FileCaptionWindows(CaptionWindows):
         if captions is None:
             captions = [captions_for(f.path, f.dataset) for f in files]
         self.files, self.features, self.captions = [], [], []
+        #: Paths of the files left out for having no caption.
+        self.uncaptioned: List[str] = []
         for f, feats, caps in zip(files, features, captions):
             if caps:
                 self.files.append(f), self.features.append(feats)
                 self.captions.append(list(caps))
+            else:
+                self.uncaptioned.append(f.path)
         self.window, self.stride = int(window), int(stride)
         self.index = [(i, s) for i, feats in enumerate(self.features)
                       for s in window_starts(feats.num_frames, self.window, self.stride)

@@ -23,8 +23,9 @@ import hashlib
 import json
 import re
 import time
+import warnings
 from pathlib import Path
-from typing import Any, Iterable, List, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple, Union
 
 import torch
 from torch import Tensor
@@ -118,6 +119,9 @@ class CodeBank(Dataset):
         self.codes, self.num_frames = codes, num_frames.long()
         self.x, self.parent, self.num_nodes = x, parent.long(), num_nodes.long()
         self.seconds, self.texts, self.fingerprint = seconds.float(), list(texts), fingerprint
+        #: What the windows were drawn from (``{"sources": ..., "window": ...}``,
+        #: set by ``satagraph code-bank``; ``None`` when not known).
+        self.data: Optional[Dict[str, Any]] = None
         self.censored = censored.bool()
         self._frame_start = _offsets(self.num_frames)
         self._node_start = _offsets(self.num_nodes)
@@ -177,6 +181,8 @@ class CodeBank(Dataset):
                    "seconds": self.seconds, "censored": self.censored.to(torch.uint8)}
         meta = {"format": FORMAT, "fingerprint": self.fingerprint,
                 "texts": json.dumps(self.texts)}
+        if self.data is not None:
+            meta["data"] = json.dumps(self.data)
         with atomic_path(path, create_parent=True) as tmp:
             save_file(tensors, tmp, metadata=meta)
 
@@ -198,11 +204,26 @@ class CodeBank(Dataset):
         except (OSError, RuntimeError, SafetensorError) as err:
             raise ValueError(f"{path}: cannot read the code bank ({err})") from None
         try:
-            return cls(tensors["codes"], tensors["num_frames"], tensors["x"], tensors["parent"],
+            bank = cls(tensors["codes"], tensors["num_frames"], tensors["x"], tensors["parent"],
                        tensors["num_nodes"], tensors["seconds"], json.loads(meta["texts"]),
                        meta["fingerprint"], tensors.get("censored"))
+            bank.data = json.loads(meta["data"]) if "data" in meta else None
         except (KeyError, ValueError) as err:
             raise ValueError(f"{path}: a damaged code bank ({err})") from None
+        return bank
+
+    def check_data(self, sources: Any, window: int, where: str = "code bank") -> None:
+        """Warn when the bank's windows were drawn from other sources or at
+        another window length than a run names: it trains on the bank's
+        windows, and records the run's."""
+        if self.data is None:
+            return
+        if self.data.get("sources") != sources or self.data.get("window") != window:
+            warnings.warn(f"{where}: its windows were drawn from {self.data.get('sources')} "
+                          f"({self.data.get('window')} frames); this run names {sources} "
+                          f"({window} frames), but trains on the bank's windows (draw it "
+                          "anew with `satagraph code-bank --data ...` to train on yours)",
+                          stacklevel=2)
 
     def check_autoencoder(self, autoencoder: torch.nn.Module, where: str = "code bank") -> None:
         """Refuses an autoencoder other than the one that made the codes."""

@@ -272,6 +272,7 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
     if hasattr(module, "init_meta"):
         module.init_meta((payload.get("hyper_parameters") or {}).get("meta") or {})
     state = payload["state_dict"]
+    _warn_other_kept_part(ckpt, state, own, tuple(getattr(module, "init_keeps", ())))
     state = vae_to_rvq({k: v for k, v in state.items() if not k.startswith(keep)}, own)
     reshaped = [k for k, v in state.items() if k in own and own[k].shape != v.shape]
     state = {k: v for k, v in state.items() if k not in reshaped}
@@ -284,6 +285,26 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
                       f"{len(result.unexpected_keys)} unused "
                       f"({result.unexpected_keys[:5]}), {len(reshaped)} of another shape "
                       f"(kept at initialisation: {reshaped[:5]})", stacklevel=2)
+
+
+def _warn_other_kept_part(ckpt: str, state: Dict[str, torch.Tensor],
+                          own: Dict[str, torch.Tensor], kept: Tuple[str, ...]) -> None:
+    """Warn when the part a module keeps (``init_keeps``: a text-to-motion
+    module's frozen autoencoder) is another in the checkpoint, its decoder
+    aside: the checkpoint's transformers learnt that part's codes, which
+    mean something else here (a warning, not a refusal: the length model
+    alone reads no codes, and may be taught so)."""
+    for key in sorted(k for k in own if k.startswith(kept) and ".decoder." not in f".{k}"):
+        theirs = state.get(key)
+        if theirs is not None and (theirs.shape != own[key].shape
+                                   or not torch.equal(theirs.to(own[key].dtype), own[key])):
+            part = key.split(".")[0]
+            warnings.warn(f"--init-from {ckpt}: trained over another {part} than this "
+                          f"config's ({key} differs): the weights that read its codes learnt "
+                          f"that one's; set model.{part} to the checkpoint it was trained "
+                          "over, unless only what reads no codes trains (the length model)",
+                          stacklevel=3)
+            return
 
 
 #: Fewest of a module's weights (a fraction) that ``--init-from`` must fill;

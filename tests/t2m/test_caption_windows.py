@@ -193,3 +193,25 @@ def test_windows_without_a_known_reversal_stay_as_they_are():
     assert clip.root[:, 2].mean().item() > 0.5
     with pytest.raises(ValueError, match="reverse must be in"):
         FileCaptionWindows([f], [feats], window=60, captions=[jump], reverse=1.5)
+
+
+def test_files_without_captions_are_said_when_left_out(tmp_path):
+    """An uncaptioned take (or one whose caption lies past its end) was left
+    out of training without a word."""
+    from satagraph.io import write_bvh
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    for name in ("walk", "other", "third", "fourth", "fifth"):
+        write_bvh(example_motion(num_frames=40), folder / f"{name}.bvh")
+    for name in ("walk", "third", "fourth", "fifth"):
+        (folder / f"{name}.txt").write_text("a person walks forward#a/DET#0.0#0.0\n")
+    files = [MotionFile(str(folder / f"{n}.bvh"), "mine", "example", "train")
+             for n in ("walk", "other")]
+    feats = [motion_to_features(canonicalize(f.read(), fps=30.0)) for f in files]
+    windows = FileCaptionWindows(files, feats, window=16, stride=16)
+    assert windows.uncaptioned == [files[1].path] and len(windows.files) == 1
+    dm = CaptionDataModule([str(folder)], window=16, stride=16, batch_size=2,
+                           semantic_encoder=None, cache_dir=str(tmp_path / "cache"))
+    said = r"(train|val|test): 1 of \d files have no captions .*other\.bvh"
+    with pytest.warns(UserWarning, match=said):
+        dm.setup("fit")

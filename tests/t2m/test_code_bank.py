@@ -149,6 +149,26 @@ def test_a_text_to_motion_run_resumes_as_if_never_stopped(autoencoder_ckpt, tmp_
         assert torch.equal(value, resumed.state_dict()[name]), name
 
 
+def test_a_bank_says_when_a_run_names_other_data_than_it_was_drawn_from(banked, tmp_path):
+    """A bank drawn from the zoo trained a run on ``--data mydata`` on zoo
+    windows, silently, and recorded ``mydata``; so did one of 96-frame
+    windows under ``data.window=48``."""
+    import warnings
+    _, _, coded = banked
+    bank = copy.copy(coded)
+    bank.check_data(["anything"], 16)  # a bank of unknown origin: nothing to say
+    bank.data = {"sources": ["mydata"], "window": 96}
+    bank.save(tmp_path / "b.safetensors")
+    again = CodeBank.load(tmp_path / "b.safetensors")
+    assert again.data == {"sources": ["mydata"], "window": 96}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again.check_data(["mydata"], 96)
+    for sources, window in ((["zoo"], 96), (["mydata"], 48)):
+        with pytest.warns(UserWarning, match=r"drawn from \['mydata'\] \(96 frames\)"):
+            again.check_data(sources, window, "b.safetensors")
+
+
 def test_several_banks_are_joined_and_foreign_ones_named(banked, tmp_path):
     from satagraph.data.caption_datamodule import CaptionDataModule
     _, _, coded = banked
