@@ -86,7 +86,8 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
                         "detecting it" + each("+Z,auto"))
     parser.add_argument(f"{dash}units", f"{dash}scale", type=wrap(units), default=None,
                         metavar="UNITS", help=f"units of {what}: m, cm, mm, in, "
-                        "ft, cmu (CMU mocap units), mmd (MikuMikuDance's, 8 cm), file (keep the file's own), a "
+                        "ft, cmu (CMU mocap units), mmd (MikuMikuDance's, 8 cm), file "
+                        "(keep the file's own), a "
                         "factor to metres or auto (guessed), instead of guessing them"
                         + each("auto,cm") + (SCALE_FREE_NOTE if scale_free else ""))
     if scale_free:

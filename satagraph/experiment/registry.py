@@ -30,9 +30,10 @@ A subclass of a built-in module registered without ``model_keys`` /
 ``optim`` keys unless it has its own ``configure_optimizers``.
 
 The command line (``train``, ``eval``, ``sweep``, ``reconstruct`` ...) finds
-modules of one's own through the environment variable
-:data:`PLUGIN_VARIABLE`: the Python modules (or ``.py`` files) it names,
-comma-separated, are imported before a ``module:`` name is called unknown::
+modules and layers of one's own (:func:`~satagraph.nn.register_local_conv`)
+through the environment variable :data:`PLUGIN_VARIABLE`: every command
+imports the Python modules (or ``.py`` files) it names, comma-separated,
+first; from Python, a ``module:`` name not registered imports them too::
 
     SATAGRAPH_PLUGINS=my_models satagraph train my_config.yaml
 """
@@ -117,7 +118,6 @@ class ModuleEntry:
             self._try_build(sections)
         if self.optim_keys is not None:
             check_keys("optim", sections.optim, set(self.optim_keys) | set(TRAINER_OPTIM))
-
 
     def _try_build(self, sections: ModuleSections) -> None:
         """Build the class once: a ``model`` key its network does not take

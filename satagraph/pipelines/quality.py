@@ -366,7 +366,8 @@ def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     if canonical.skeleton.names != reference.skeleton.names:
         return None
     ref = reference.global_positions()
-    a, b = _carried(canonical.global_positions()), _carried(ref[stands(ref, reference.skeleton, reference.fps)])
+    standing = stands(ref, reference.skeleton, reference.fps)
+    a, b = _carried(canonical.global_positions()), _carried(ref[standing])
     if a.std() < 1e-9 or b.std() < 1e-9:
         return None
     return float(np.corrcoef(a, b)[0, 1])

@@ -44,8 +44,9 @@ FOREIGN_WORDS: Dict[str, str] = {
     # MikuMikuDance: trunk and head
     "全ての親": "Master", "操作中心": "Root", "センター": "Hips",
     "グルーブ": "Groove Helper", "腰": "Waist", "股関節": "Hip", "下半身": "Pelvis",
-    "上半身": "Spine", "上半身2": "Chest", "上半身3": "Upper Chest", "首": "Neck", "頭": "Head", "両目": "Eyes",
-    "目": "Eye", "舌": "Tongue", "歯": "Teeth", "あご": "Jaw", "顎": "Jaw",
+    "上半身": "Spine", "上半身2": "Chest", "上半身3": "Upper Chest", "首": "Neck",
+    "頭": "Head", "両目": "Eyes", "目": "Eye", "舌": "Tongue", "歯": "Teeth",
+    "あご": "Jaw", "顎": "Jaw",
     "髪": "Hair", "眉": "Brow", "まぶた": "Eyelid", "耳": "Ear",
     "鼻": "Nose", "口": "Mouth", "胸": "Breast", "乳": "Breast",
     "尻尾": "Tail", "しっぽ": "Tail", "尾": "Tail",

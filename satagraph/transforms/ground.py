@@ -222,5 +222,5 @@ def support_joints(skeleton: Skeleton, positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "lift_above_floor", "raise_root", "STANDING_SHARE", "STANDING_HOLD", "standing_frame", "support_joints",
-           "standing_frames", "stands"]
+           "lift_above_floor", "raise_root", "STANDING_SHARE", "STANDING_HOLD", "SUPPORT_CONTACT",
+           "SUPPORT_FRAMES", "standing_frame", "standing_frames", "stands", "support_joints"]
