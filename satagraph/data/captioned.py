@@ -116,12 +116,15 @@ def choose_caption(captions: Sequence[Caption], rng: Optional[np.random.Generato
 
 def overlapping(captions: Sequence[Caption], fps: float, num_frames: int, start: int,
                 stop: int) -> List[Caption]:
-    """The captions whose frames overlap ``start:stop`` (a clip's whole
-    captions always do)."""
+    """The captions that cover ``start:stop``: whose frames overlap it by
+    half the shorter of the two at least (a clip's whole captions always
+    do). A window of a standing stretch took "walks backward" from the next
+    stretch's caption for a single shared frame."""
     out = []
     for caption in captions:
         part = caption.frames(fps, num_frames)
-        if part.start < stop and part.stop > start:
+        shared = min(stop, part.stop) - max(start, part.start)
+        if shared > 0 and 2 * shared >= min(stop - start, part.stop - part.start):
             out.append(caption)
     return out
 

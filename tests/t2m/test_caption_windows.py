@@ -86,6 +86,19 @@ def test_file_windows_keep_the_captions_overlapping_them():
     assert not any(ds[i].meta["censored"] for i in range(len(ds)))
 
 
+def test_a_caption_touching_a_window_by_a_frame_is_not_its_caption():
+    """A window of a standing stretch (0-2 s) was trained as "walks
+    backward", the next stretch's caption, for the frame they share."""
+    from satagraph.data.captioned import overlapping
+    still, back = Caption("a person stands still", 0.0, 2.0), Caption("a person walks "
+                                                                     "backward", 2.0, 6.9)
+    assert overlapping([still, back], 30.0, 207, 0, 64) == [still]  # shares 4 frames of back
+    assert overlapping([still, back], 30.0, 207, 40, 104) == [back]  # 20 of 64 still's
+    assert overlapping([still, back], 30.0, 207, 30, 90) == [still, back]  # half and half
+    whole = Caption("a person walks")
+    assert overlapping([whole], 30.0, 207, 100, 164) == [whole]
+
+
 def test_file_windows_learn_their_whole_clips_duration():
     """A window cut from a longer captioned clip carries the clip's duration
     (the caption describes all of it), mirrored or not."""
