@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -448,19 +449,6 @@ def run_eval(args) -> int:
     return 0
 
 
-def _export_source(source: str) -> str:
-    """The checkpoint of ``export-weights``' RUN_OR_CKPT: a run folder gives
-    its ``checkpoints/last.ckpt``."""
-    from pathlib import Path
-    path = Path(source)
-    if path.is_dir():
-        last = path / "checkpoints" / "last.ckpt"
-        if not last.is_file():
-            raise ValueError(f"{source}: a folder without checkpoints/last.ckpt")
-        return str(last)
-    return source
-
-
 def _previous_provenance(source: str) -> dict:
     """``{"previous": ...}``: the provenance of a weights file re-exported
     (a new decoder, half precision), so that how it was first trained
@@ -501,7 +489,8 @@ def run_export_weights(args) -> int:
         raise ValueError(f"{args.output}: the weights file must end in .safetensors (the "
                          "order is RUN_OR_CKPT OUT.safetensors)")
     check_output_path(args.output)
-    source = _export_source(args.source)
+    from satagraph.io.weights import resolve_weights
+    source = resolve_weights(args.source) if os.path.isdir(args.source) else args.source  # a run
     module = load_module(source)
     for flag, part in (("decoder", "swap_decoder"), ("length", "swap_length")):
         if getattr(args, flag):

@@ -108,13 +108,21 @@ def is_builtin(name: PathLike, kind: str = "autoencoder") -> bool:
 def resolve_weights(name: PathLike, kind: str = "autoencoder") -> str:
     """A path for :obj:`name`: ``"builtin"`` gives the package's weights of
     :obj:`kind` (:data:`BUILTIN_FILES`), ``"builtin-wide"`` its other
-    autoencoder (:data:`BUILTIN_VARIANTS`).
+    autoencoder (:data:`BUILTIN_VARIANTS`), a run folder its
+    ``checkpoints/last.ckpt`` (as ``satagraph train`` leaves it).
 
     Raises:
-        CheckpointError: a built-in name whose weights do not ship (one
-            line saying how to make them).
+        CheckpointError: a built-in name whose weights do not ship, or a
+            folder without ``checkpoints/last.ckpt`` (one line saying how
+            on).
     """
     name = os.fspath(name)
+    if os.path.isdir(name):
+        last = os.path.join(name, "checkpoints", "last.ckpt")
+        if not os.path.isfile(last):
+            raise CheckpointError(f"{name}: a folder without checkpoints/last.ckpt (give a "
+                                  "run folder of satagraph train, or a checkpoint file)")
+        return last
     if name == "auto" and kind == "autoencoder" and not os.path.exists(name):
         raise CheckpointError("auto picks a built-in model by the rigs a command reads "
                               "(satagraph.pipelines.builtin_choice.choose_builtin); name "

@@ -451,7 +451,7 @@ def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
     (["generate", "--ckpt", "builtin-wide", "--text", "walk", "--skeleton", "{zoo}",
       "{tmp}/g.bvh"], "builtin-wide: a built-in retargeting model, not a text-to-motion"),
     (["generate", "--ckpt", "{tmp}", "--text", "walk", "--skeleton", "{zoo}", "{tmp}/g.bvh"],
-     "a folder; give a checkpoint or weights file"),
+     "a folder without checkpoints/last.ckpt"),
     (["reconstruct", "{zoo}", "{tmp}/r.bvh", "--ckpt", "{t2m}"],
      "a text-to-motion model; this command needs a motion autoencoder"),
     (["eval", "--ckpt", "builtin", "--data", "{tmp}/clips"], "no windows in the 'test' split"),

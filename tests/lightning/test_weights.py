@@ -333,3 +333,17 @@ def test_the_fine_tune_config_is_the_builtin_models_architecture() -> None:
     assert hp["loss"] == {k: cfg["loss"][k] for k in hp["loss"]}
     assert cfg["data"]["window"] == hp["meta"]["window"]
     assert data_facing_smooth(cfg["data"]) == data_facing_smooth(hp["meta"]["data"])
+
+
+def test_a_run_folder_names_its_last_checkpoint(tmp_path):
+    """``--ckpt`` and ``--init-from`` take the folder ``satagraph train``
+    wrote, as ``export-weights`` did (``generate`` refused it)."""
+    from satagraph.io.checkpoint import CheckpointError
+    from satagraph.io.weights import resolve_weights
+    (tmp_path / "run" / "checkpoints").mkdir(parents=True)
+    with pytest.raises(CheckpointError, match="a folder without checkpoints/last.ckpt"):
+        resolve_weights(tmp_path / "run")
+    (tmp_path / "run" / "checkpoints" / "last.ckpt").write_bytes(b"")
+    assert resolve_weights(tmp_path / "run") == str(tmp_path / "run" / "checkpoints" /
+                                                    "last.ckpt")
+    assert resolve_weights(tmp_path / "x.ckpt") == str(tmp_path / "x.ckpt")
