@@ -53,7 +53,8 @@ def add_generate_parser(sub) -> None:
         "generates one motion per line of FILE into the folder OUT, prompt i with seed "
         "SEED + i, and lists them in OUT/prompts.tsv.")
     p.add_argument("--ckpt", default="builtin",
-                   help="a text-to-motion checkpoint or weights file, or builtin (the "
+                   help="a text-to-motion checkpoint, weights file or run folder (its "
+                   "checkpoints/last.ckpt), or builtin (the "
                    "default: the small model shipped in the package)")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--text", help="the prompt, e.g. \"a person walks "

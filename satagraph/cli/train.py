@@ -90,7 +90,8 @@ def add_train_parsers(sub) -> None:
                        description="Evaluate JR, RT, JP, FS, GP per dataset on a split, "
                        "each skeleton read in the rest pose reconstruct shows it (--rest).")
     p.add_argument("--ckpt", required=True,
-                   help="a checkpoint, a weights file, builtin or builtin-wide")
+                   help="a checkpoint, a weights file, a run folder (its "
+                   "checkpoints/last.ckpt), builtin or builtin-wide")
     p.add_argument("--split", default="test", choices=["train", "val", "test"],
                    help="which split of the data to score (default: test)")
     p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
@@ -177,7 +178,7 @@ def add_train_parsers(sub) -> None:
 
 def _common(p) -> None:
     p.add_argument("--ckpt", default="auto",
-                   help="a checkpoint from `satagraph train`, a .safetensors weights "
+                   help="a checkpoint or run folder from `satagraph train`, a .safetensors weights "
                    "file from `satagraph export-weights`, builtin (weights shipped in "
                    "the package, best on humans and animals of four limbs or fewer), "
                    "builtin-wide (shipped too: every body plan of the zoo, insects, "
