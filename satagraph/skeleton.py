@@ -74,6 +74,13 @@ class Skeleton:
     def __len__(self) -> int:
         return self.num_joints
 
+    def describe(self) -> str:
+        """``"31-joint skeleton (and 7 end sites)"``: the joints a file's
+        tool counts, its end sites apart."""
+        ends = int(np.count_nonzero(self.end_site))
+        tail = f" (and {ends} end site{'s' if ends != 1 else ''})" if ends else ""
+        return f"{self.num_joints - ends}-joint skeleton{tail}"
+
     def __repr__(self) -> str:
         return (f"Skeleton(joints={self.num_joints}, "
                 f"end_sites={int(self.end_site.sum())}, root={self.names[0]!r})")

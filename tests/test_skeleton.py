@@ -205,3 +205,14 @@ def test_replace_revalidates(tiny_skeleton):
     np.testing.assert_allclose(moved.rest_positions(),
                                2 * tiny_skeleton.rest_positions())
     assert moved.names == tiny_skeleton.names
+
+
+def test_a_skeleton_is_described_by_the_joints_a_tool_counts():
+    """Messages said "38-joint skeleton" of a CMU file of 31 joints: its 7
+    end sites were counted as joints."""
+    import numpy as np
+    from satagraph.skeleton import Skeleton
+    skel = Skeleton(names=["Hips", "Spine", "Head", "Head_end"], parents=np.array([-1, 0, 1, 2]),
+                    offsets=np.zeros((4, 3)), end_site=np.array([False, False, False, True]))
+    assert skel.describe() == "3-joint skeleton (and 1 end site)"
+    assert skel.subset([0, 1, 2]).describe() == "3-joint skeleton"

@@ -252,8 +252,8 @@ def run_generate(args) -> int:
     write_all(motions, paths)
     took = time.time() - start
     for motion, path, source in zip(motions, paths, args.skeleton):
-        print(f"wrote {path}: {motion.num_frames} frames ({motion.duration:.2f} s) on the "
-              f"{motion.num_joints}-joint skeleton of {source}")
+        print(f"wrote {path}: {motion.num_frames} frames ({motion.duration:.2f} s at "
+              f"{motion.fps:g} fps) on the {motion.skeleton.describe()} of {source}")
     print(f"generated in {took:.2f} s")
     if args.render:
         _render(motions, args)

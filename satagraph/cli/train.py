@@ -422,7 +422,7 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict) ->
                          two_rests=args.two_rests)
     write_bvh(out, output)
     return (f"wrote {output}: {out.num_frames} frames of {source_path} on the "
-            f"{out.num_joints}-joint skeleton of {args.target}")
+            f"{out.skeleton.describe()} of {args.target}")
 
 
 def run_eval(args) -> int:
