@@ -170,8 +170,11 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     folder = run_dir / "checkpoints"
     spec = cfg["checkpoint"]
     resume = ResumeCheckpoint(str(folder), spec["every_n_steps"], spec["every_minutes"])
+    monitor = opts.pop("monitor")
+    if opts.get("limit_val_batches") == 0:  # nothing validated: no 40-key warning about it
+        monitor = None
     best = ModelCheckpoint(dirpath=str(folder), save_last=False, mode="min",
-                           monitor=opts.pop("monitor"),
+                           monitor=monitor,
                            save_top_k=-1 if spec["keep_every_epoch"] else 1)
     guard = NonFiniteGuard(cfg["nonfinite"], str(resume.last_path))
     # the average is updated before any checkpoint of the same step is written

@@ -112,6 +112,17 @@ def test_what_a_run_sets_itself_is_refused_in_a_config(key, value, says):
         load_config("tiny", [f"trainer.{key}={value}"])
 
 
+def test_no_validation_asked_monitors_nothing(tmp_path):
+    """``trainer.limit_val_batches=0`` left the best checkpoint watching
+    ``val_loss``: Lightning warned of it with every logged key (40)."""
+    from satagraph.experiment.train import build_trainer
+    cfg = load_config("tiny", ["logger.name=none", "trainer.progress=false",
+                               "trainer.limit_val_batches=0"])
+    assert build_trainer(cfg, tmp_path).checkpoint_callback.monitor is None
+    cfg = load_config("tiny", ["logger.name=none", "trainer.progress=false"])
+    assert build_trainer(cfg, tmp_path).checkpoint_callback.monitor == "val_loss"
+
+
 def test_python_may_hand_the_trainer_its_own_logger_and_folder(tmp_path):
     from lightning.pytorch.loggers import CSVLogger
     from satagraph.experiment.train import build_trainer
