@@ -158,8 +158,7 @@ def add_train_parsers(sub) -> None:
     p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
     p.add_argument("--windows", type=positive_int, required=True,
                    help="windows to draw at least: batches are kept whole, and an "
-                   "epoch's last batch may be short, so a few more may come (64 of "
-                   "epochs of 38 windows in batches of 16 gave 76)")
+                   "epoch's last batch may be short, so up to a batch more may come")
     p.add_argument("--max-minutes", type=positive_float, default=None,
                    help="stop drawing after this long and write the windows drawn "
                    "(default: no limit)")
