@@ -139,6 +139,9 @@ def test_a_missing_optional_package_is_one_line_before_any_work(tmp_path, capsys
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "'imageio_ffmpeg'" in err and "satagraph[viz]" in err
     assert not (tmp_path / "a.mp4").exists()
+    assert main(["generate", "--text", "a person walks", "--skeleton", str(bvh), "--seconds",
+                 "1", "--render", str(tmp_path / "g.mp4"), str(tmp_path / "g.bvh")]) == 2
+    assert "satagraph[viz]" in capsys.readouterr().err and not (tmp_path / "g.bvh").exists()
 
 
 def test_cli_render(tmp_path, capsys):

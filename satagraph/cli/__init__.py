@@ -316,7 +316,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "demo", help="the whole pipeline on built-in data (no data needed)",
         description="Run the whole pipeline on built-in data, with no data "
         "files and no network, in under 10 minutes on a CPU: (1) write the "
-        "procedural zoo (bipeds, quadrupeds, birds, hexapods, snakes) to "
+        "procedural zoo (bipeds, quadrupeds, birds, fowl) to "
         "OUTPUT/zoo; (2) retarget a biped walk onto a quadruped, a bird and a "
         "differently proportioned human with the built-in model "
         "(OUTPUT/retarget/*.bvh), scoring each (limbs in step with the source, "
@@ -353,7 +353,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         "built-in one")
     parser.add_argument("--species", nargs="+", choices=SPECIES, default=None,
                         metavar="NAME", help="zoo species (default: biped, "
-                        "quadruped, bird, hexapod, snake; biped, quadruped and "
+                        "quadruped, bird, fowl; biped, quadruped and "
                         "bird are always written)")
     parser.add_argument("--clips", type=positive_int, default=4,
                         help="zoo clips per skeleton (default: 4)")

@@ -270,6 +270,8 @@ def _check_render(args) -> None:
                          "`satagraph render`)")
     if Path(args.render).suffix.lower() not in OUTPUTS:
         raise ValueError(f"--render: {args.render} is not a .gif or .mp4 file")
+    if Path(args.render).suffix.lower() == ".mp4":
+        import imageio_ffmpeg  # noqa: F401  (the viz extra): missing is said before any work
 
 
 def _render(motions, args) -> None:
