@@ -297,7 +297,7 @@ def test_loading_is_safe_and_errors_are_one_line(
     text.write_text("HIERARCHY\n")
     cases = {evil: "safe loading refuses", raw: "not a readable checkpoint", truncated: "not a readable checkpoint",
              text: "not a readable checkpoint", good: "no model hyperparameters",
-             tmp_path: "is a directory"}
+             tmp_path: "a folder without checkpoints/last.ckpt"}
     write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=16)
     clip = next((tmp_path / "zoo").rglob("*.bvh"))  # a good input: the model is what fails
     for path, words in cases.items():
