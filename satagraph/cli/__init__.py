@@ -522,6 +522,8 @@ EXTRAS = {"imageio_ffmpeg": "viz", "torch_scatter": "scatter", "sentencepiece": 
 def _missing_module(err: ModuleNotFoundError) -> str:
     """One line for a package a command needs and this installation lacks."""
     name = (err.name or "").split(".")[0]
+    if not name:  # a package's own message (Lightning's for TensorBoard)
+        return " ".join(str(err).split())
     extra = EXTRAS.get(name)
     how = (f"pip install 'satagraph[{extra}]'" if extra
            else "reinstall satagraph (pip install satagraph) with its dependencies")

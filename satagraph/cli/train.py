@@ -262,7 +262,9 @@ def run_train(args) -> int:
               "its limit stops it (raise trainer.max_steps, max_epochs or max_time to go "
               f"on); checkpoints in {run_dir / 'checkpoints'}")
         return 0
-    print(f"trained {cfg['name']} for {trainer.current_epoch} epochs in "
+    done = (f"from step {resumed[0]} to {trainer.global_step} (epoch {trainer.current_epoch})"
+            if resumed else f"for {trainer.current_epoch} epochs")
+    print(f"trained {cfg['name']} {done} in "
           f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
           f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")
     return 0

@@ -236,7 +236,26 @@ def run_config(run: SweepRun, eval_split: str = "test",
             row.metrics[f"{label}" if group == "all" else f"{label}:{group}"] = values
     if retarget_files is not None:
         row.retarget = retarget_table(module, scored, retarget_files, eval_split)
+    close_logger(trainer, {f"{eval_split}/{key}" if group == "all" else
+                           f"{eval_split}/{group}/{key}": value
+                           for group, values in row.metrics.items()
+                           for key, value in values.items()})
     return row
+
+
+def close_logger(trainer, metrics: Dict[str, float]) -> None:
+    """Log a row's scores to its run's logger and close the run: a W&B
+    run stayed open, and every later config of the sweep was logged into
+    it (one run, named after the first config, its steps starting over)."""
+    logger = trainer.logger
+    if not logger:
+        return
+    numbers = {k: float(v) for k, v in metrics.items() if isinstance(v, (int, float))}
+    logger.log_metrics(numbers, step=int(trainer.global_step))
+    logger.finalize("success")
+    experiment = getattr(logger, "_experiment", None)
+    if experiment is not None and hasattr(experiment, "finish"):  # a W&B run
+        experiment.finish()
 
 
 def _scored(cfg: Dict[str, Any], dm):

@@ -4,6 +4,7 @@ from __future__ import annotations
 import contextlib
 import inspect
 import os
+import re
 import signal
 import threading
 import warnings
@@ -68,8 +69,37 @@ def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
     module_entry(cfg["module"]).check(module_sections(cfg))
     check_local_conv(cfg["model"].get("local_conv"))
     check_keys("trainer", cfg["trainer"], trainer_keys())
+    check_logger(cfg["logger"])
     check_wandb_login(cfg["logger"])
     return cfg
+
+
+#: The loggers ``logger.name`` takes.
+LOGGERS = ("wandb", "csv", "tensorboard", "none")
+_BAD_PROJECT = re.compile(r"[/\\#?%:]")
+
+
+def check_logger(logger: Dict[str, Any]) -> None:
+    """A logger that cannot log is one line before any data is read: an
+    unknown name, TensorBoard without its package (a message naming no
+    package, after loading), a W&B project name W&B refuses (a 50-line
+    traceback) or an empty one (the run went into ``lightning_logs``).
+
+    Raises:
+        ValueError: What to set.
+    """
+    import importlib.util
+    name = logger.get("name")
+    if name not in LOGGERS:
+        raise ValueError(f"logger.name={name}: use {', '.join(LOGGERS)}")
+    if name == "tensorboard" and not any(importlib.util.find_spec(m)
+                                         for m in ("tensorboard", "tensorboardX")):
+        raise ValueError("logger.name=tensorboard needs the tensorboard package, which is "
+                         "not installed: pip install tensorboard (or logger.name=csv)")
+    project = str(logger.get("project") or "")
+    if name == "wandb" and (not project.strip() or _BAD_PROJECT.search(project)):
+        raise ValueError(f"logger.project={project!r}: W&B needs a non-empty name without "
+                         "/ \\ # ? % : (default satagraph)")
 
 
 def check_local_conv(name: Any) -> None:
@@ -125,9 +155,10 @@ def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
     return module
 
 
-def build_logger(cfg: Dict[str, Any], run_dir: Path):
+def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
     """``logger.name``: ``wandb`` (offline by default), ``csv``,
-    ``tensorboard`` or ``none``."""
+    ``tensorboard`` or ``none``; resuming, a W&B run goes on under the run
+    folder's last run id (it started a new run)."""
     spec = fill("logger", LoggerConfig, cfg.get("logger"))
     name = spec.pop("name")
     if name == "none":
@@ -138,8 +169,17 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path):
         return L.pytorch.loggers.TensorBoardLogger(str(run_dir), name="logs")
     if name == "wandb":
         from lightning.pytorch.loggers import WandbLogger
-        return WandbLogger(name=cfg["name"], save_dir=str(run_dir), **spec)
+        previous = _last_wandb_id(run_dir) if resume else None
+        extra = {"id": previous, "resume": "allow"} if previous else {}
+        return WandbLogger(name=cfg["name"], save_dir=str(run_dir), **spec, **extra)
     raise ValueError(f"unknown logger {name!r}: use wandb, csv, tensorboard or none")
+
+
+def _last_wandb_id(run_dir: Path) -> Optional[str]:
+    """The id of the last W&B run under :obj:`run_dir` (its folder
+    ``wandb/[offline-]run-<date>_<time>-<id>``), or ``None``."""
+    runs = sorted((run_dir / "wandb").glob("*run-*-*"), key=lambda p: p.name.split("run-")[-1])
+    return runs[-1].name.rsplit("-", 1)[-1] if runs else None
 
 
 def trainer_keys() -> set:
@@ -150,7 +190,8 @@ def trainer_keys() -> set:
         f.name for f in fields(TrainerExtras))
 
 
-def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Trainer:
+def build_trainer(cfg: Dict[str, Any], run_dir: Path, resume: bool = False,
+                  **overrides: Any) -> L.Trainer:
     """The trainer of a config: ``last.ckpt`` by :class:`ResumeCheckpoint`
     (``checkpoint.every_n_steps`` / ``every_minutes``, and every epoch end),
     the best ``val_loss`` by :class:`ModelCheckpoint` (every epoch's with
@@ -185,7 +226,8 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, **overrides: Any) -> L.Tra
     if opts.pop("progress"):
         callbacks.append(RichProgressBar())
     plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
-    return L.Trainer(logger=own.get("logger", build_logger(cfg, run_dir)),
+    logger = own["logger"] if "logger" in own else build_logger(cfg, run_dir, resume)
+    return L.Trainer(logger=logger,
                      default_root_dir=own.get("default_root_dir", str(run_dir)),
                      callbacks=callbacks, plugins=plugins, **opts)
 
@@ -412,7 +454,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             init_weights(module, init_from, init_normalizer)
         if _no_validation(dm):  # said by the data module; nothing to validate
             trainer_overrides = dict(trainer_overrides, monitor=None, limit_val_batches=0)
-        trainer = build_trainer(cfg, run_dir, **trainer_overrides)
+        trainer = build_trainer(cfg, run_dir, resume=last is not None, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
         # set up (its datasets hold the semantic embedder, a closure); each worker
         # sets it up from the feature cache.
@@ -444,6 +486,10 @@ def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
     theirs, ours = hp.get("model") or {}, cfg.get("model") or {}
     differ = [f"model.{k}={_short(theirs[k])} (here {_short(ours[k])})" for k in sorted(theirs)
               if k in ours and ours[k] is not None and not _same_setting(ours[k], theirs[k])]
+    theirs_optim, ours_optim = hp.get("optim") or {}, cfg.get("optim") or {}
+    differ += [f"optim.{k}={theirs_optim[k]} (here {ours_optim[k]}: a resume keeps the "
+               "optimiser's own state)" for k in sorted(theirs_optim)
+               if k in ours_optim and ours_optim[k] != theirs_optim[k]]
     before = ((hp.get("meta") or {}).get("data") or {}).get("sources")
     now = data_section(cfg).get("sources")
     if before is not None and before != now:

@@ -112,6 +112,40 @@ def test_what_a_run_sets_itself_is_refused_in_a_config(key, value, says):
         load_config("tiny", [f"trainer.{key}={value}"])
 
 
+@pytest.mark.parametrize("overrides,says", [
+    (["logger.name=bogus"], "logger.name=bogus: use wandb, csv, tensorboard, none"),
+    (["logger.name=wandb", "logger.project=bad/proj"], "W&B needs a non-empty name"),
+    (["logger.name=wandb", "logger.project="], "W&B needs a non-empty name")])
+def test_a_logger_that_cannot_log_is_one_line_before_the_data(overrides, says):
+    """A bad W&B project was a 50-line traceback once the data had loaded;
+    an empty one logged into ``lightning_logs``."""
+    from satagraph.experiment.train import check_config
+    with pytest.raises(ValueError, match=re.escape(says)):
+        check_config(load_config("tiny", overrides))
+
+
+def test_a_resumed_run_logs_into_its_own_w_and_b_run(tmp_path):
+    """A resume started a new W&B run beside the first (its steps from 0)."""
+    from satagraph.experiment.train import _last_wandb_id, build_logger
+    cfg = load_config("tiny", ["logger.name=wandb"])
+    assert _last_wandb_id(tmp_path) is None
+    for name in ("offline-run-20261130_120000-aaa", "offline-run-20261130_130000-bbb",
+                 "run-20261130_110000-ccc"):
+        (tmp_path / "wandb" / name).mkdir(parents=True)
+    assert _last_wandb_id(tmp_path) == "bbb"
+    logger = build_logger(cfg, tmp_path, resume=True)
+    assert logger._wandb_init["id"] == "bbb" and logger._wandb_init["resume"] == "allow"
+    assert build_logger(cfg, tmp_path)._wandb_init.get("id") is None
+
+
+def test_tensorboard_without_its_package_is_said(monkeypatch):
+    import importlib.util
+    from satagraph.experiment.train import check_logger
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None)
+    with pytest.raises(ValueError, match="needs the tensorboard package"):
+        check_logger({"name": "tensorboard"})
+
+
 def test_no_validation_asked_monitors_nothing(tmp_path):
     """``trainer.limit_val_batches=0`` left the best checkpoint watching
     ``val_loss``: Lightning warned of it with every logged key (40)."""

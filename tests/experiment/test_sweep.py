@@ -56,6 +56,23 @@ def test_a_config_s_own_limits_give_way_to_the_budget(tmp_path):
     assert trainer["max_epochs"] == -1 and trainer["max_time"] == {"seconds": 30.0}
 
 
+def test_each_row_s_run_is_closed_with_its_scores():
+    """A W&B run stayed open, and every later config of a sweep was logged
+    into the first one's; the test scores never reached it."""
+    from types import SimpleNamespace
+    from satagraph.experiment.sweep import close_logger
+    seen = {}
+    experiment = SimpleNamespace(finish=lambda: seen.setdefault("finished", True))
+    logger = SimpleNamespace(log_metrics=lambda m, step: seen.update(metrics=m, step=step),
+                             finalize=lambda status: seen.update(status=status),
+                             _experiment=experiment)
+    close_logger(SimpleNamespace(logger=logger, global_step=7),
+                 {"test/JP": 0.5, "test/dog/JP": 0.7, "note": "text"})
+    assert seen == {"metrics": {"test/JP": 0.5, "test/dog/JP": 0.7}, "step": 7,
+                    "status": "success", "finished": True}
+    close_logger(SimpleNamespace(logger=None, global_step=0), {})  # no logger: nothing
+
+
 def test_a_step_limit_is_refused_not_dropped(tmp_path):
     """trainer.max_steps was dropped for the time budget while the table's
     legend listed it as applied to every config."""

@@ -56,7 +56,7 @@ def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: 
 
     # --resume continues from last.ckpt: two more steps, not a restart.
     assert main(_train_args(config_overrides, run, "trainer.max_epochs=2", "--resume")) == 0
-    assert "trained tiny for 2 epochs" in capsys.readouterr().out
+    assert "trained tiny from step 2 to 4 (epoch 2)" in capsys.readouterr().out
     # resumed where its limit stops it: it says so instead of "trained"
     assert main(_train_args(config_overrides, run, "trainer.max_epochs=2", "--resume")) == 0
     assert "nothing to train: tiny stood at step 4" in capsys.readouterr().out

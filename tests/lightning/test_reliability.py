@@ -425,6 +425,8 @@ def test_a_new_run_never_replaces_a_trained_one(tiny_config: Dict[str, Any]) -> 
 @pytest.mark.parametrize("change, said", [
     ({"model": {"hidden_channels": 48}}, "model.hidden_channels=32 (here 48)"),
     ({"data": {"sources": ["elsewhere"]}}, "data.sources="),
+    # the optimiser resumed with its own learning rate while W&B logged the new one
+    ({"optim": {"lr": 0.0005}}, "(here 0.0005: a resume keeps the optimiser's own state)"),
 ])
 def test_resume_with_another_model_or_data_is_refused(tiny_config: Dict[str, Any],
                                                       change: Dict[str, Any], said: str) -> None:
