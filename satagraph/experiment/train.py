@@ -452,6 +452,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         module = build_module(cfg, dm)
         if init_from:
             init_weights(module, init_from, init_normalizer)
+        _record_config(cfg, run_dir)  # once nothing refuses the run
         if _no_validation(dm):  # said by the data module; nothing to validate
             trainer_overrides = dict(trainer_overrides, monitor=None, limit_val_batches=0)
         trainer = build_trainer(cfg, run_dir, resume=last is not None, **trainer_overrides)
@@ -559,6 +560,16 @@ def _lock(run_dir: Path):
     if int(os.environ.get("LOCAL_RANK", "0") or 0) > 0:
         return contextlib.nullcontext()
     return run_lock(run_dir)
+
+
+def _record_config(cfg: Dict[str, Any], run_dir: Path) -> None:
+    """Write the run's whole resolved config to ``<run>/config.yaml`` (the
+    checkpoint's hyperparameters hold the module's sections only: not the
+    trainer's, the seed, the checkpoint or logger settings); a resume
+    writes the config it goes on with."""
+    from omegaconf import OmegaConf
+    atomic_write_text(run_dir / "config.yaml", OmegaConf.to_yaml(OmegaConf.create(cfg)),
+                      create_parent=True)
 
 
 def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:

@@ -101,6 +101,11 @@ def test_eval_reads_the_whole_split_whatever_training_read(
     run = tmp_path / "run"
     assert main(_train_args(config_overrides, run, "data.max_files=1")) == 0
     capsys.readouterr()
+    # the whole resolved config is recorded beside the checkpoints, and reloads as it ran
+    from satagraph.experiment.config import load_config
+    recorded = load_config(str(run / "config.yaml"))
+    assert recorded["data"]["max_files"] == 1 and recorded["output_dir"] == str(run)
+    assert "trainer" in recorded and "checkpoint" in recorded
     assert main(["--traceback", "eval", "--ckpt", str(run / "checkpoints" / "last.ckpt"),
                  "--split", "test"]) == 0
     assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
