@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import warnings
 from collections import Counter
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import lightning as L
 import torch
@@ -173,7 +173,6 @@ class MotionDataModule(WindowDataModule):
             raise ValueError(f"data.root_unit must be one of {ROOT_UNITS}, got {root_unit!r}")
         #: ``(split, error line)`` of every file left out (``on_error="skip"``).
         self.skipped: List[str] = []
-        self._limited: List[str] = []  # what data.max_files kept, per split
         self.sources, self.window, self.stride = sources, window, stride
         self.eval_stride = eval_stride or window
         self.batch_size, self.balanced = batch_size, balanced
@@ -189,12 +188,12 @@ class MotionDataModule(WindowDataModule):
         #: unpaired retargeting term switches it on in its ``setup``.
         self.pair_partners = False
 
-    def _files(self, split: str, files: List[MotionFile]) -> List[MotionFile]:
+    def _files(self, split: str, files: List[MotionFile]) -> Tuple[List[MotionFile], List[str]]:
+        """A split's files under ``max_files``, and what the limit kept (no
+        line when it kept them all)."""
         every = select(files, split)
         chosen = spread_files(every, self.max_files)
-        if len(chosen) < len(every):
-            self._limited.append(limit_note(split, chosen, every))
-        return chosen
+        return chosen, [limit_note(split, chosen, every)] if len(chosen) < len(every) else []
 
     def setup(self, stage: Optional[str] = None) -> None:
         if self.datasets:
@@ -208,15 +207,16 @@ class MotionDataModule(WindowDataModule):
         zoos = [zoo_entry(s) for s in sources if is_zoo_entry(s)]
         files = resolve_sources([s for s in sources if not is_zoo_entry(s)])
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
-        loaded, errors, total = {}, [], 0
+        loaded, errors, total, limited = {}, [], 0, []
         for split in SPLITS:
-            chosen = self._files(split, files)
+            chosen, note = self._files(split, files)
+            limited += note
             kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
             loaded[split] = (kept, feats)
             errors += [f"{split}: {e}" for e in bad]
             total += len(chosen)
-        if self._limited:
-            warnings.warn(f"data.max_files={self.max_files} reads " + "; ".join(self._limited)
+        if limited:
+            warnings.warn(f"data.max_files={self.max_files} reads " + "; ".join(limited)
                           + " files (data.max_files=null reads them all)", stacklevel=2)
         if errors and self.on_error == "raise":
             raise dataset_error(errors, total)

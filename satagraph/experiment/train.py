@@ -110,8 +110,6 @@ def check_local_conv(name: Any) -> None:
         ValueError: The known names, and how to add one.
     """
     from satagraph.nn.layers.local_conv import check_local_conv as known
-    if name is None or str(name).lower() in ("none", "null", ""):
-        return
     try:
         known(name)
     except ValueError as err:

@@ -258,7 +258,8 @@ def guess_up_axis(motion: Motion) -> UpAxisGuess:
         moving = float((speed > _CONTACT_SPEED * size).mean())
     evidence: Dict[str, Dict[str, float]] = {k: {} for k in CUE_WEIGHTS}
     root = _root_cue(pos, size) if vel is not None else None
-    rest = np.median([_rest_cue(p, english_names(motion), motion.skeleton.is_leaf)
+    names = english_names(motion)
+    rest = np.median([_rest_cue(p, names, motion.skeleton.is_leaf)
                       for p in pos[:: max(1, len(pos) // 8)]], axis=0)
     busy = (slice(None) if vel is None or (speed > _CONTACT_SPEED * size).sum() < 8
             else speed > _CONTACT_SPEED * size)  # motion cues where it moves

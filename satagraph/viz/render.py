@@ -228,7 +228,7 @@ def save_gif(frames: Sequence[np.ndarray], path: PathLike, fps: float) -> None:
     from PIL import Image
 
     images = [Image.fromarray(f) for f in frames]
-    duration = 10 * max(2, int(round(100.0 / fps)))  # whole hundredths: what a GIF stores
+    duration = 10 * gif_hundredths(fps)
     _atomic(path, lambda tmp: images[0].save(
         tmp, format="GIF", save_all=True, append_images=images[1:],
         duration=duration, loop=0, optimize=False))
@@ -288,7 +288,13 @@ def display_rate(motions: Sequence[Motion], ext: str, fps: Optional[float] = Non
     times fast)."""
     rate = float(fps or motions[0].fps)
     _check_rate(rate)
-    return 100.0 / max(2, int(round(100.0 / rate))) if ext == ".gif" else rate
+    return 100.0 / gif_hundredths(rate) if ext == ".gif" else rate
+
+
+def gif_hundredths(rate: float) -> int:
+    """A GIF frame's delay for :obj:`rate` frames per second, in the whole
+    hundredths of a second a GIF stores (at least 2: 50 fps)."""
+    return max(2, int(round(100.0 / rate)))
 
 
 def _check_rate(rate: float) -> None:

@@ -10,10 +10,6 @@ from torch import nn
 from torch_geometric.nn import (MLP, GATConv, GATv2Conv, GCNConv, GINConv, GINEConv,
                                 MessagePassing, TransformerConv)
 
-#: Names accepted by :func:`build_local_conv` (``None`` means "no GNN").
-LOCAL_CONVS = ("gine", "gin", "gat", "gatv2", "gcn", "transformer")
-
-
 def _edge_mlp(channels: int, act: str) -> nn.Module:
     """The two-layer MLP of GIN(E) (paper section 4.1: two layers, ReLU)."""
     return MLP([channels, channels, channels], act=act, norm=None)
@@ -43,6 +39,12 @@ _BUILDERS: Dict[str, Callable[..., MessagePassing]] = {
 }
 
 
+#: Names of the built-in local layers (``None`` means "no GNN").
+LOCAL_CONVS = tuple(_BUILDERS)
+#: Names that mean no local layer.
+NO_CONV = ("none", "null", "")
+
+
 def register_local_conv(name: str, builder: Callable[..., MessagePassing]) -> None:
     r"""Make :obj:`builder` the local layer ``model.local_conv=name`` names.
 
@@ -67,7 +69,7 @@ def register_local_conv(name: str, builder: Callable[..., MessagePassing]) -> No
         ValueError: The name is taken.
     """
     key = str(name).lower()
-    if key in _BUILDERS or key in ("none", "null", ""):
+    if key in _BUILDERS or key in NO_CONV:
         raise ValueError(f"local conv {name!r} is registered already; pick another name")
     _BUILDERS[key] = builder
 
@@ -100,18 +102,20 @@ def build_local_conv(name: Optional[str], channels: int, heads: int = 4,
         The layer, or ``None``. Use :func:`accepts_edge_attr` to know whether
         it takes ``edge_attr``.
     """
-    if name is None or str(name).lower() in ("none", "null", ""):
-        return None
-    return _BUILDERS[check_local_conv(name)](channels, heads, edge_dim, act)
+    key = check_local_conv(name)
+    return None if key is None else _BUILDERS[key](channels, heads, edge_dim, act)
 
 
-def check_local_conv(name: str) -> str:
-    """The registered key of a local layer's name.
+def check_local_conv(name: Optional[str]) -> Optional[str]:
+    """The registered key of a local layer's name; ``None`` for no layer
+    (``None``, ``"none"``).
 
     Raises:
         ValueError: No layer has that name (one line: the known ones).
     """
-    key = str(name).lower()
+    key = None if name is None else str(name).lower()
+    if key is None or key in NO_CONV:
+        return None
     if key not in _BUILDERS:
         raise ValueError(f"unknown local conv {name!r}; known: {', '.join(_BUILDERS)} or "
                          "None (register_local_conv adds one)")
