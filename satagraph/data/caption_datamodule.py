@@ -31,7 +31,7 @@ from satagraph.data.code_bank import CodeBank, concat_banks
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
 from satagraph.data.endless import MixedDataset, endless_zoo, is_zoo_entry, zoo_entry
-from satagraph.datasets.sources import SPLITS, resolve_sources, select, spread_files
+from satagraph.datasets.sources import SPLITS, limit_files, limit_warning, resolve_sources
 from satagraph.data.captioned import FileCaptionWindows, ZooCaptionWindows
 from satagraph.utils.files import check_input_file
 
@@ -99,7 +99,8 @@ class CaptionDataModule(WindowDataModule):
         num_workers (int): DataLoader workers.
         max_files (int, optional): At most this many files per split, taken
             in turn from each dataset and skeleton
-            (:func:`~satagraph.datasets.sources.spread_files`).
+            (:func:`~satagraph.datasets.sources.spread_files`); a warning
+            says what was kept.
         seed (int): Seed of sampling, mirroring and caption choice.
         code_bank (str or list, optional): Train on the windows of this
             :class:`~satagraph.data.code_bank.CodeBank` (``satagraph
@@ -138,8 +139,13 @@ class CaptionDataModule(WindowDataModule):
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
         files = resolve_sources([s for s in self.sources if not is_zoo_entry(s)])
         zoos = [s for s in self.sources if is_zoo_entry(s)]
+        limited: List[str] = []
         for split in SPLITS:
-            self.datasets[split] = self._split(split, files, zoos, embed)
+            chosen, note = limit_files(files, split, self.max_files)
+            limited += note
+            self.datasets[split] = self._split(split, chosen, zoos, embed)
+        if limited:
+            warnings.warn(limit_warning(self.max_files, limited), stacklevel=2)
         if not len(self.datasets["train"]):
             raise ValueError(f"no captioned training windows in {self.sources!r}")
         if self.code_bank:
@@ -157,12 +163,12 @@ class CaptionDataModule(WindowDataModule):
                              "different autoencoders")
         return banks[0] if len(banks) == 1 else concat_banks(banks)
 
-    def _split(self, split: str, files, zoos, embed) -> Dataset:
-        """The captioned windows of one split (training windows mirrored)."""
+    def _split(self, split: str, chosen, zoos, embed) -> Dataset:
+        """The captioned windows of one split's files (training windows
+        mirrored)."""
         kwargs = {"semantic": embed, "preprocessing": self.preprocessing,
                   "mirror": self.mirror if split == "train" else 0.0,
                   "scale": self.scale if split == "train" else 0.0}
-        chosen = spread_files(select(files, split), self.max_files)
         kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
         if bad:
             self.skipped += [f"{split}: {e}" for e in bad]

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import warnings
 from collections import Counter
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
 
 import lightning as L
 import torch
@@ -17,8 +17,7 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import ROOT_UNITS, FeatureNormalizer
 from satagraph.data.pairing import PartnerCollate
-from satagraph.datasets.sources import (SPLITS, MotionFile, limit_note, resolve_sources,
-                                       select, spread_files)
+from satagraph.datasets.sources import SPLITS, limit_files, limit_warning, resolve_sources
 
 
 def semantic_embedder(encoder: Optional[str] = "offline",
@@ -188,13 +187,6 @@ class MotionDataModule(WindowDataModule):
         #: unpaired retargeting term switches it on in its ``setup``.
         self.pair_partners = False
 
-    def _files(self, split: str, files: List[MotionFile]) -> Tuple[List[MotionFile], List[str]]:
-        """A split's files under ``max_files``, and what the limit kept (no
-        line when it kept them all)."""
-        every = select(files, split)
-        chosen = spread_files(every, self.max_files)
-        return chosen, [limit_note(split, chosen, every)] if len(chosen) < len(every) else []
-
     def setup(self, stage: Optional[str] = None) -> None:
         if self.datasets:
             return
@@ -209,15 +201,14 @@ class MotionDataModule(WindowDataModule):
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
         loaded, errors, total, limited = {}, [], 0, []
         for split in SPLITS:
-            chosen, note = self._files(split, files)
+            chosen, note = limit_files(files, split, self.max_files)
             limited += note
             kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
             loaded[split] = (kept, feats)
             errors += [f"{split}: {e}" for e in bad]
             total += len(chosen)
         if limited:
-            warnings.warn(f"data.max_files={self.max_files} reads " + "; ".join(limited)
-                          + " files (data.max_files=null reads them all)", stacklevel=2)
+            warnings.warn(limit_warning(self.max_files, limited), stacklevel=2)
         if errors and self.on_error == "raise":
             raise dataset_error(errors, total)
         if errors:

@@ -192,3 +192,22 @@ def limit_note(split: str, chosen: Sequence[MotionFile], files: Sequence[MotionF
     names = list(dict.fromkeys(f.dataset for f in files))
     parts = ", ".join(f"{n} {count(chosen, n)} of {count(files, n)}" for n in names)
     return f"{split} {len(chosen)} of {len(files)} ({parts})"
+
+
+def limit_files(files: Sequence[MotionFile], split: str, limit: Optional[int]
+                ) -> Tuple[List[MotionFile], List[str]]:
+    """One split's files under a file limit (:func:`spread_files`), and
+    what the limit kept (:func:`limit_note`; no line when it kept them
+    all)."""
+    every = select(files, split)
+    chosen = spread_files(every, limit)
+    return chosen, [limit_note(split, chosen, every)] if len(chosen) < len(every) else []
+
+
+def limit_warning(limit: Optional[int], notes: Sequence[str]) -> Optional[str]:
+    """The warning a data module gives when ``data.max_files`` left files
+    out (:func:`limit_files`' notes; ``None`` when it left none out)."""
+    if not notes:
+        return None
+    return (f"data.max_files={limit} reads " + "; ".join(notes)
+            + " files (data.max_files=null reads them all)")

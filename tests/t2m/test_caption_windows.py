@@ -228,3 +228,19 @@ def test_files_without_captions_are_said_when_left_out(tmp_path):
     said = r"(train|val|test): 1 of \d files have no captions .*other\.bvh"
     with pytest.warns(UserWarning, match=said):
         dm.setup("fit")
+
+
+def test_a_file_limit_of_captioned_files_is_said(tmp_path):
+    """``data.max_files`` spread a caption data module's files as the
+    motion data module's, but said nothing of what it left out."""
+    from satagraph.io import write_bvh
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    for name in ("walk", "jog", "turn", "wave", "hop"):
+        write_bvh(example_motion(num_frames=40), folder / f"{name}.bvh")
+        (folder / f"{name}.txt").write_text("a person walks forward#a/DET#0.0#0.0\n")
+    dm = CaptionDataModule([str(folder)], window=16, stride=16, batch_size=2, max_files=2,
+                           semantic_encoder=None, cache_dir=str(tmp_path / "cache"))
+    with pytest.warns(UserWarning, match=r"data.max_files=2 reads train 2 of \d \(mine 2 of"):
+        dm.setup("fit")
+    assert len(dm.datasets["train"].parts[0].files) == 2
