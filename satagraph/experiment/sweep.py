@@ -253,8 +253,8 @@ def close_logger(trainer, metrics: Dict[str, float]) -> None:
     numbers = {k: float(v) for k, v in metrics.items() if isinstance(v, (int, float))}
     logger.log_metrics(numbers, step=int(trainer.global_step))
     logger.finalize("success")
-    experiment = getattr(logger, "_experiment", None)
-    if experiment is not None and hasattr(experiment, "finish"):  # a W&B run
+    experiment = logger.experiment  # started by log_metrics: reading it starts nothing
+    if hasattr(experiment, "finish"):  # a W&B run
         experiment.finish()
 
 

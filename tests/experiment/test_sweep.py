@@ -65,7 +65,7 @@ def test_each_row_s_run_is_closed_with_its_scores():
     experiment = SimpleNamespace(finish=lambda: seen.setdefault("finished", True))
     logger = SimpleNamespace(log_metrics=lambda m, step: seen.update(metrics=m, step=step),
                              finalize=lambda status: seen.update(status=status),
-                             _experiment=experiment)
+                             experiment=experiment)
     close_logger(SimpleNamespace(logger=logger, global_step=7),
                  {"test/JP": 0.5, "test/dog/JP": 0.7, "note": "text"})
     assert seen == {"metrics": {"test/JP": 0.5, "test/dog/JP": 0.7}, "step": 7,
