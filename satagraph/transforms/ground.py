@@ -15,7 +15,7 @@ generation applies it after :func:`ground_at`).
 """
 from __future__ import annotations
 
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 
@@ -32,20 +32,24 @@ def lowest_heights(motion: Motion) -> np.ndarray:
     return motion.global_positions()[..., 1].min(axis=1)
 
 
-def levels(skeleton: Skeleton, positions: np.ndarray) -> tuple:
-    r"""(median over frames of the lowest joint's height, character height)
-    of a motion's global positions (+Y up).
+def levels(skeleton: Skeleton, positions: np.ndarray,
+           frames: Optional[np.ndarray] = None) -> tuple:
+    r"""(median over frames, or over :obj:`frames` only, of the lowest
+    joint's height, character height) of a motion's global positions (+Y
+    up).
 
     Shapes:
         - **positions**: :math:`(T, J, 3)`
+        - **frames**: :math:`(F,)` frame indices
     """
-    return (float(np.median(positions[..., 1].min(axis=1))),
+    shown = positions if frames is None else positions[frames]
+    return (float(np.median(shown[..., 1].min(axis=1))),
             character_height(skeleton, positions))
 
 
-def _levels(motion: Motion) -> tuple:
+def _levels(motion: Motion, frames: Optional[np.ndarray] = None) -> tuple:
     """:func:`levels` from one forward kinematics pass."""
-    return levels(motion.skeleton, motion.global_positions())
+    return levels(motion.skeleton, motion.global_positions(), frames)
 
 
 def ground_level(motion: Motion) -> float:
@@ -55,18 +59,22 @@ def ground_level(motion: Motion) -> float:
     return lowest / max(height, 1e-9)
 
 
-def ground_at(motion: Motion, lift: float = 0.0) -> Motion:
+def ground_at(motion: Motion, lift: float = 0.0,
+              frames: Optional[np.ndarray] = None) -> Motion:
     r""":obj:`motion` shifted along +Y by one constant so that the median
-    height of its lowest joint over its frames is :obj:`lift` times its
-    character height (0: standing on the floor; +Y up, floor at 0).
+    height of its lowest joint over its frames (or over :obj:`frames`) is
+    :obj:`lift` times its character height (0: standing on the floor; +Y
+    up, floor at 0).
 
     Args:
         motion (Motion): A decoded motion (canonical).
         lift (float): Median lowest-joint height, in character heights.
+        frames (np.ndarray, optional): The frames the median is read over
+            (default: all).
     """
     if motion.num_frames == 0:
         return motion
-    lowest, height = _levels(motion)
+    lowest, height = _levels(motion, frames)
     return raise_root(motion, lift * height - lowest)
 
 
@@ -93,14 +101,18 @@ def ground_like(motion: Motion, reference: Motion) -> Motion:
 
 def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     r"""A retarget stood on the floor as the target character stands in its
-    own clip: :func:`ground_like` :obj:`target` where it has frames, else
-    :obj:`source`, then :func:`lift_above_floor`. How high a rig's lowest
-    joint sits above the floor is the rig's own (the dog's paw end sites
-    stay 3-6 cm, 6-11 % of its height, above the floor its tail touches):
-    copied from the source, a dog's offset left a human retarget hovering
-    9 % of its height up. The lift keeps a body that sits or crouches lower
-    than the target clip stands from passing through the floor there
-    (``experiments/PRETRAIN.md`` section 42).
+    own clip: :func:`ground_at` the :func:`ground_level` of :obj:`target`
+    where it has frames, else of :obj:`source`, read over the frames in
+    which the source stands (:func:`standing_frames`), then
+    :func:`lift_above_floor`. How high a rig's lowest joint sits above the
+    floor is the rig's own (the dog's paw end sites stay 3-6 cm, 6-11 % of
+    its height, above the floor its tail touches): copied from the source,
+    a dog's offset left a human retarget hovering 9 % of its height up.
+    Read over every frame, a dog that lies most of a clip, its human
+    retarget standing all along, left the human hovering 0.7 m up where
+    the dog stands (``experiments/PRETRAIN.md`` section 50); the lift
+    keeps a body that sits or crouches lower than where its source stands
+    from passing through the floor (section 42).
 
     Args:
         motion (Motion): The decoded retarget (canonical).
@@ -108,7 +120,11 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
         target (Motion): The canonical target clip (its skeleton and, where
             it has frames, how it stands).
     """
-    return lift_above_floor(ground_like(motion, target if target.num_frames else source))
+    reference = target if target.num_frames else source
+    if not motion.num_frames or not reference.num_frames:
+        return motion
+    frames = standing_frames(source) if source.num_frames == motion.num_frames else None
+    return lift_above_floor(ground_at(motion, ground_level(reference), frames))
 
 
 def lift_above_floor(motion: Motion, floor: float = 0.0) -> Motion:

@@ -6,7 +6,7 @@ import numpy as np
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
 from satagraph.transforms.canonical import canonicalize
 from satagraph.transforms.ground import (ground_like, ground_retarget, lift_above_floor,
-                                         lowest_heights)
+                                         lowest_heights, standing_frames)
 
 
 def _clip(species: str, kind: str = "walk", seed: int = 0):
@@ -104,3 +104,28 @@ def test_a_body_stands_on_the_chains_that_touch_the_floor_nearest_its_root(read_
     np.testing.assert_array_equal(stands(full.global_positions(), full.skeleton, full.fps),
                                   stands(stripped.global_positions(), stripped.skeleton,
                                          stripped.fps))
+
+
+def test_a_retarget_stands_on_the_floor_where_its_source_stands():
+    """A dog that lies most of a clip, its human retarget standing all along
+    with its root lower while the dog lies, was grounded on the lying
+    frames' median: the human hovered where the dog stood (0.7 m up on a
+    real clip). Read over the frames where the source stands, it stands
+    on the floor there, and the lying frames come up onto the floor."""
+    lie = canonicalize(generate_clip(zoo_rigs(["quadruped"])[0], "lie", frames=90, seed=0),
+                       fps=30.0)
+    pos = lie.global_positions()
+    depth = pos[:, 0, 1] - pos[:, :, 1].min(axis=1)
+    standing = standing_frames(lie)
+    assert 5 <= len(standing) <= 20 and standing.max() < 20  # it stands, then lies
+    decoded = canonicalize(generate_clip(zoo_rigs(["biped"])[0], "idle", frames=90, seed=2),
+                           fps=30.0)
+    sinking = _lifted(decoded, 0.4 * decoded.height() * (depth / depth.max() - 1.0) + 0.3)
+    target = _clip("biped", seed=1)
+    out = ground_retarget(sinking, lie, target)
+    level = np.median(lowest_heights(target)) / target.height()
+    low = lowest_heights(out) / out.height()
+    np.testing.assert_allclose(np.median(low[standing]), level, atol=1e-3)
+    assert low.min() >= -1e-9 and low.max() < level + 0.02
+    old = lift_above_floor(ground_like(sinking, target))  # every frame's median
+    assert (lowest_heights(old) / old.height())[standing].min() > 0.2
