@@ -5,10 +5,13 @@ torch and satagraph are imported where they are used: under ``-n 2`` the
 controlling process loads this file too, and runs no test (2 s saved)."""
 from __future__ import annotations
 
+import contextlib
 import csv
 import os
+import resource
+import signal
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional
+from typing import TYPE_CHECKING, Any, Callable, ContextManager, Dict, Iterator, List, Optional
 
 import numpy as np
 import pytest
@@ -260,6 +263,27 @@ def _assert_grounded_pair(grounded_path: Path, raw_path: Path, lifted: bool = Fa
 def assert_grounded_pair() -> Callable[..., None]:
     """Checker of a ``--ground`` / ``--no-ground`` pair of output files."""
     return _assert_grounded_pair
+
+
+@contextlib.contextmanager
+def _file_size_limit(limit: int) -> Iterator[None]:
+    """Writes past :obj:`limit` bytes fail with ``EFBIG``, as a full disk
+    fails them with ``ENOSPC`` (no mount needed)."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, handler)
+
+
+@pytest.fixture
+def file_size_limit() -> Callable[[int], ContextManager[None]]:
+    """``with file_size_limit(n):`` makes writes past ``n`` bytes fail, as
+    on a full disk."""
+    return _file_size_limit
 
 
 @pytest.fixture(autouse=True)

@@ -5,6 +5,7 @@ output folder; a file that fails gets one line on stderr and the run goes
 on, and no output file is left for it (BVH writes are atomic)."""
 from __future__ import annotations
 
+import os
 import sys
 import time
 from pathlib import Path
@@ -75,6 +76,7 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
         raise ValueError(f"{output}: not a folder: with an input folder, OUT is the folder "
                          "the results go to")
     files = input_files(source, output)
+    _check_output_folder(output)  # once: not as a failure of every input file
     start = time.perf_counter()
 
     def write(path: Path) -> None:
@@ -87,6 +89,23 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
     print(f"{verb} {done} of {len(files)} files into {output} in "
           f"{time.perf_counter() - start:.1f} s" + _failed(failed))
     return 2 if failed else 0
+
+
+def _check_output_folder(output: Path) -> None:
+    """Create :obj:`output` and check that it can be written, before any
+    file is read or model loaded.
+
+    Raises:
+        OutputPathError: One line naming the folder.
+    """
+    from satagraph.utils.files import OutputPathError
+    try:
+        output.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputPathError(f"cannot write into {output}: cannot create the folder: "
+                              f"{err.strerror or err}") from None
+    if not os.access(output, os.W_OK | os.X_OK):
+        raise OutputPathError(f"cannot write into {output}: the folder is not writable")
 
 
 def _failed(failed: List[Path], shown: int = 10) -> str:

@@ -61,7 +61,7 @@ def run_inspect_folder(args: argparse.Namespace, describe_file: Callable[[str], 
 
 def _table(rows: List[List[str]]) -> str:
     """Aligned columns: text left, numbers right."""
-    widths = [max(len(c), *(len(r[i]) for r in rows)) for i, c in enumerate(COLUMNS)]
+    widths = [max([len(c)] + [len(r[i]) for r in rows]) for i, c in enumerate(COLUMNS)]
     left = {0, 5, 6}
 
     def line(cells) -> str:

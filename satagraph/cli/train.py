@@ -252,6 +252,11 @@ def run_train(args) -> int:
     except (TrainingStopped, RunLockedError) as err:
         print(f"satagraph: error: {err}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        if args.traceback:
+            raise
+        print(_interrupted(Path(cfg["output_dir"])), file=sys.stderr)
+        return 130
     best = trainer.checkpoint_callback.best_model_path
     skipped = f"; {len(dm.skipped)} bad files left out (skipped_files.txt)" \
         if dm.skipped else ""
@@ -268,6 +273,19 @@ def run_train(args) -> int:
           f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
           f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")
     return 0
+
+
+def _interrupted(run_dir: Path) -> str:
+    """The line for a training run stopped by Ctrl-C (or SIGTERM): where
+    ``--resume`` goes on from, or that it has nothing to go on from yet."""
+    from satagraph.lightning.reliability import LAST, PREVIOUS
+    folder = run_dir / "checkpoints"
+    if (folder / LAST).is_file() or (folder / PREVIOUS).is_file():
+        return (f"satagraph: interrupted: train --resume goes on from {folder / LAST} "
+                "(the steps after it are trained again)")
+    return (f"satagraph: interrupted before {run_dir}'s first checkpoint "
+            "(checkpoint.every_n_steps, every_minutes and each epoch's end write one): "
+            "nothing to resume; run the command again without --resume")
 
 
 def run_code_bank(args) -> int:

@@ -171,10 +171,16 @@ class CodeBank(Dataset):
 
     # ------------------------------------------------------------ files
     def save(self, path: PathLike) -> None:
-        """Write the bank as one safetensors file (atomically)."""
-        from safetensors.torch import save_file
+        """Write the bank as one safetensors file (atomically).
 
-        from satagraph.utils.files import atomic_path
+        Raises:
+            OSError: It cannot be written (``No space left on device``),
+                naming :obj:`path` (safetensors' own writer raises a
+                ``SafetensorError`` that names neither).
+        """
+        from safetensors.torch import save
+
+        from satagraph.utils.files import atomic_write
         tensors = {"codes": self.codes.to(torch.int16).contiguous(),
                    "num_frames": self.num_frames, "x": self.x.half().contiguous(),
                    "parent": self.parent.to(torch.int32), "num_nodes": self.num_nodes,
@@ -183,8 +189,8 @@ class CodeBank(Dataset):
                 "texts": json.dumps(self.texts)}
         if self.data is not None:
             meta["data"] = json.dumps(self.data)
-        with atomic_path(path, create_parent=True) as tmp:
-            save_file(tensors, tmp, metadata=meta)
+        data = save(tensors, metadata=meta)
+        atomic_write(path, lambda f: f.write(data), binary=True, create_parent=True)
 
     @classmethod
     def load(cls, path: PathLike) -> "CodeBank":

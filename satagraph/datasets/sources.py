@@ -11,6 +11,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
+from satagraph.utils.files import is_temp_file
+
 SPLITS = ("train", "val", "test")
 #: Splits a manifest may hold that no run reads (the shared data's reader tests).
 UNUSED_SPLITS = ("parser_test",)
@@ -63,9 +65,12 @@ def _hash_split(name: str, val: float = 0.1, test: float = 0.1) -> str:
 def bvh_files(folder: Union[str, os.PathLike]) -> List[Path]:
     """Every ``.bvh`` entry (any case: ``.BVH``, ``.Bvh``) below :obj:`folder`
     but folders, sorted: special files and broken links too, which the reader
-    refuses in one line rather than the listing leaving them out unsaid."""
+    refuses in one line rather than the listing leaving them out unsaid.
+    Temporary files of satagraph's atomic writes (``.walk.bvh.<host>-<pid>.
+    <random>.tmp.bvh``: a write in progress, or the start of one that
+    ``kill -9`` cut short) are no motion files and are left out."""
     return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() == ".bvh"
-                  and not p.is_dir())
+                  and not is_temp_file(p.name) and not p.is_dir())
 
 
 def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:

@@ -356,11 +356,24 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
             f"{row.train_loss:.4f}")
         rows.append(row)
+        if len(rows) < len(cfgs):  # a sweep stopped later (Ctrl-C) keeps these rows
+            _write_so_far(rows, cfgs, output, budget_minutes, overrides, max_batches)
     # all share the first's data
     write_results(rows, Path(output), budget_minutes, overrides,
                   data=cfgs[0].cfg["data"]["sources"] if cfgs else None,
                   differences=config_differences(cfgs), max_batches=max_batches)
     return rows
+
+
+def _write_so_far(rows: Sequence[SweepRow], cfgs: Sequence[SweepRun], output: str,
+                  budget_minutes: float, overrides: Sequence[str],
+                  max_batches: Optional[int]) -> None:
+    """``sweep.md`` and ``sweep.json`` of the configs done so far, said to
+    be a part (the whole sweep's replace them)."""
+    write_results(rows, Path(output), budget_minutes, overrides,
+                  data=cfgs[0].cfg["data"]["sources"],
+                  differences=config_differences(cfgs[:len(rows)]), max_batches=max_batches,
+                  planned=len(cfgs))
 
 
 def check_runs(runs: Sequence[SweepRun]) -> None:
@@ -372,8 +385,15 @@ def check_runs(runs: Sequence[SweepRun]) -> None:
     """
     from satagraph.experiment.train import build_module, check_config, refuse_trained_folder
     for run in runs:
+        folder = Path(run.cfg["output_dir"])
         try:
-            refuse_trained_folder(Path(run.cfg["output_dir"]))
+            refuse_trained_folder(folder)
+        except ValueError:  # train's advice (--resume) is no sweep option
+            raise ValueError(f"sweep: config {run.cfg['name']} ({run.source}): {folder} "
+                             "holds a trained run (a sweep stopped before: its sweep.md "
+                             "lists the configs it finished); another --output runs the "
+                             "sweep again, or delete the folder") from None
+        try:
             build_module(check_config(run.cfg))
         except (ValueError, KeyError, TypeError) as err:
             raise ValueError(f"sweep: config {run.cfg['name']} ({run.source}): "
@@ -430,7 +450,7 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
 def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
                   overrides: Sequence[str] = (), data: Any = None,
                   differences: Optional[Dict[str, List[Any]]] = None,
-                  max_batches: Optional[int] = None) -> str:
+                  max_batches: Optional[int] = None, planned: Optional[int] = None) -> str:
     """Write ``sweep.md`` and ``sweep.json``; returns the markdown.
 
     Args:
@@ -441,13 +461,18 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
         data (Any, optional): The data sources of the sweep (recorded).
         differences (dict, optional): :func:`config_differences` of the rows.
         max_batches (int, optional): Evaluation batches each row was scored on.
+        planned (int, optional): The sweep's configs, where :obj:`rows` are
+            those done so far.
     """
     output.mkdir(parents=True, exist_ok=True)
-    text = (f"# Sweep: {len(rows)} configs, {budget_minutes:g} min of training each\n\n"
+    done = (f"{len(rows)} of {planned} configs so far" if planned and planned > len(rows)
+            else f"{len(rows)} configs")
+    text = (f"# Sweep: {done}, {budget_minutes:g} min of training each\n\n"
             f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data, max_batches)}\n"
             f"{_differences(rows, differences)}")
     atomic_write_text(output / "sweep.md", text)
     payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
+               "configs": planned or len(rows),
                "overrides": list(overrides), "data": data, "max_batches": max_batches,
                "differences": differences or {},
                "rows": [asdict(r) for r in rows]}

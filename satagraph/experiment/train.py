@@ -527,7 +527,9 @@ def refuse_trained_folder(run_dir: Path) -> None:
         ValueError: One line naming the folder and the ways on.
     """
     folder = run_dir / "checkpoints"
-    kept = sorted(p.name for p in folder.glob("*.ckpt")) if folder.is_dir() else []
+    # a hidden .last.ckpt.<host>-<pid>.<hex>.tmp.ckpt is a write a kill cut short
+    kept = sorted(p.name for p in folder.glob("*.ckpt")
+                  if not p.name.startswith(".")) if folder.is_dir() else []
     if kept:
         raise ValueError(f"{run_dir}: holds a trained run ({len(kept)} checkpoint(s): "
                          f"{', '.join(kept[:3])}{', ...' if len(kept) > 3 else ''}); "

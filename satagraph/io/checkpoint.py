@@ -9,6 +9,7 @@ never advice to turn safe loading off.
 """
 from __future__ import annotations
 
+import io
 import os
 import pickle
 import re
@@ -18,7 +19,7 @@ from typing import Any, Dict, Sequence, Union
 
 import torch
 
-from satagraph.utils.files import InputFileError, atomic_path, check_input_file
+from satagraph.utils.files import InputFileError, atomic_write, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -119,12 +120,23 @@ def check_finite_weights(ckpt: Dict[str, Any], path: PathLike) -> None:
 def save_checkpoint(checkpoint: Dict[str, Any], path: PathLike) -> None:
     """Save atomically (fsynced temporary file, then rename).
 
+    The checkpoint is serialised in memory first and then written as
+    bytes: torch's zip writer, given a path or a file, turns a failed write
+    (a full disk) into ``RuntimeError: [enforce fail at
+    inline_container.cc] unexpected pos``, which names neither the file nor
+    the cause.
+
     Args:
         checkpoint: The checkpoint dictionary.
         path: Destination.
+
+    Raises:
+        OSError: The file cannot be written (``No space left on device``),
+            naming :obj:`path`; the previous file is left as it was.
     """
-    with atomic_path(path, create_parent=True) as tmp:
-        torch.save(checkpoint, tmp)
+    buffer = io.BytesIO()
+    torch.save(checkpoint, buffer)
+    atomic_write(path, lambda f: f.write(buffer.getbuffer()), binary=True, create_parent=True)
 
 
 __all__ = ["CheckpointError", "load_checkpoint", "check_finite_weights", "save_checkpoint"]

@@ -21,6 +21,7 @@ import contextlib
 import fcntl
 import os
 import random
+import re
 import socket
 import time
 import warnings
@@ -311,9 +312,27 @@ def _reopen_cut_epoch(checkpoint: Dict[str, Any]) -> None:
             counts["processed"] -= 1
 
 
+_STEP = re.compile(r"(?:^|-)step=(\d+)(?:-v\d+)?\.ckpt$")
+
+
+def epoch_checkpoints(checkpoints: Path) -> List[Path]:
+    """The checkpoints a run keeps besides ``last.ckpt`` (the best epoch's,
+    or every epoch's: ``epoch=E-step=S.ckpt``), newest step first; never the
+    temporary file of a write that a kill cut short."""
+    found = []
+    with contextlib.suppress(OSError):
+        for path in checkpoints.iterdir():
+            match = _STEP.search(path.name)
+            if match and not path.name.startswith(".") and path.is_file():
+                found.append((int(match.group(1)), path.name, path))
+    return [path for *_, path in sorted(found, reverse=True)]
+
+
 def resume_checkpoint(checkpoints: Path) -> Path:
     """The checkpoint ``--resume`` starts from: ``last.ckpt``, or
-    ``last.prev.ckpt`` when the last one is damaged (with a warning).
+    ``last.prev.ckpt`` when the last one is damaged (with a warning), or,
+    where the run stopped before its first ``last.ckpt`` was whole, its
+    newest epoch checkpoint (with a warning).
 
     Raises:
         FileNotFoundError: Neither exists.
@@ -322,7 +341,15 @@ def resume_checkpoint(checkpoints: Path) -> Path:
     candidates = [checkpoints / LAST, checkpoints / PREVIOUS]
     present = [c for c in candidates if c.exists()]
     if not present:
-        raise FileNotFoundError(f"--resume: no checkpoint at {candidates[0]}")
+        kept = epoch_checkpoints(checkpoints)
+        if not kept:
+            raise FileNotFoundError(f"--resume: no checkpoint at {candidates[0]}")
+        # stopped (kill -9, a full disk) after the epoch's best checkpoint was
+        # written and before the first last.ckpt was whole: that one resumes
+        warnings.warn(f"--resume: no {LAST} in {checkpoints} (the run stopped before its "
+                      f"first was written whole); resuming from its newest epoch "
+                      f"checkpoint {kept[0]}", stacklevel=2)
+        present = kept[:1]
     reasons = []
     for path in present:
         try:
@@ -439,6 +466,6 @@ def _drop_if_empty(made: List[Path], lock: Path) -> None:
 
 
 __all__ = ["TrainingStopped", "RunLockedError", "SafeCheckpointIO", "NonFiniteGuard",
-           "ResumeCheckpoint", "resume_checkpoint", "run_lock", "LossLog", "read_loss_log",
-           "read_loss_times", "rng_states",
+           "ResumeCheckpoint", "resume_checkpoint", "epoch_checkpoints", "run_lock",
+           "LossLog", "read_loss_log", "read_loss_times", "rng_states",
            "set_rng_states", "LAST", "PREVIOUS", "NONFINITE_MODES"]

@@ -12,6 +12,7 @@ in memory and reused while the file on disk is unchanged.
 from __future__ import annotations
 
 import hashlib
+import io
 import os
 import re
 import warnings
@@ -157,8 +158,13 @@ class EmbeddingCache:
         table.add([texts[i] for i in new], emb[new])
         payload = {"format": FORMAT, "encoder_id": encoder.id,
                    "texts": table.texts, "embeddings": table.emb}
+        # serialised in memory: torch's zip writer turns a failed write (a full
+        # disk) into a RuntimeError ("enforce fail ... unexpected pos"), which
+        # would end the command instead of costing the cache alone
+        buffer = io.BytesIO()
+        torch.save(payload, buffer)
         try:
-            atomic_write(path, lambda f: torch.save(payload, f), binary=True,
+            atomic_write(path, lambda f: f.write(buffer.getbuffer()), binary=True,
                          create_parent=True)
             table.stamp = _stamp(path)
         except OSError as err:

@@ -140,6 +140,13 @@ def _file_mode(path: str) -> int:
         return 0o666 & ~umask
 
 
+def is_temp_file(name: str) -> bool:
+    """Whether a file name is one of :func:`atomic_write`'s temporary files
+    (``.<name>.<host>-<pid>.<random>.tmp.<ext>``): a write in progress or
+    one a killed process left half done, never a file to read."""
+    return _TEMP.match(os.path.basename(name)) is not None
+
+
 def _pid_alive(pid: int) -> bool:
     if pid == os.getpid():
         return True
@@ -275,4 +282,4 @@ def atomic_write_text(path: PathLike, text: str, create_parent: bool = False) ->
 
 __all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
            "check_output_path", "atomic_write", "atomic_write_text", "atomic_path",
-           "keep_copy", "sweep_stale_temps"]
+           "keep_copy", "sweep_stale_temps", "is_temp_file"]

@@ -141,3 +141,16 @@ def test_inspect_a_folder_tabulates_every_file_and_sums_up(folder: Path, capsys)
     assert main(["inspect", str(folder), "--json"]) == 2
     infos = json.loads(capsys.readouterr().out)
     assert sorted(Path(i["file"]).name for i in infos) == ["Trot.BVH", "target.bvh", "walk.bvh"]
+
+
+def test_inspect_a_folder_whose_every_file_is_unreadable(tmp_path: Path, capsys) -> None:
+    """A table of no rows was a ``TypeError`` traceback (``max`` of one
+    number); a folder holding only half a file (a killed copy) is common."""
+    (tmp_path / "half.bvh").write_text("HIERARCHY\nROOT Hips\n{\n")
+    assert main(["inspect", str(tmp_path)]) == 2
+    printed = capsys.readouterr()
+    assert printed.out.splitlines()[0].split()[:3] == ["file", "joints", "frames"]
+    assert printed.out.splitlines()[-1].startswith("1 files:")
+    assert printed.out.rstrip().endswith("1 unreadable")
+    assert printed.err.splitlines() == [printed.err.splitlines()[0]]
+    assert "half.bvh:3:" in printed.err and "Traceback" not in printed.err
