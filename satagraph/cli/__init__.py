@@ -506,8 +506,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except KeyboardInterrupt:
         if args.traceback:
             raise
-        print(f"{PROG}: interrupted (outputs are written whole or not at all; a training "
-              "run resumes with train --resume)", file=sys.stderr)
+        print(f"{PROG}: interrupted (outputs are written whole or not at all)",
+              file=sys.stderr)
         return 130
     finally:
         warnings.formatwarning, warnings.showwarning = before, shown

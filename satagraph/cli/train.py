@@ -327,12 +327,15 @@ def run_code_bank(args) -> int:
     def progress(count: int) -> None:
         print(f"\r{count} windows, {time.time() - start:.0f} s", end="", file=sys.stderr)
 
-    bank = draw_code_bank(module, batches, args.windows, progress,
-                          None if args.max_minutes is None else 60.0 * args.max_minutes)
+    try:
+        bank = draw_code_bank(module, batches, args.windows, progress,
+                              None if args.max_minutes is None else 60.0 * args.max_minutes)
+    finally:
+        print(file=sys.stderr)  # ends the progress line, before an error too
     bank = swap_skeletons(bank, args.swap_rigs, seed=int(cfg["seed"]))
     bank.data = {"sources": cfg["data"]["sources"], "window": int(cfg["data"]["window"])}
     bank.save(args.output)
-    print(f"\nwrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
+    print(f"wrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
           f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)
     return 0
 

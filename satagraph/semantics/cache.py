@@ -96,7 +96,7 @@ def _read_table(path: Path, encoder_id: str, dim: int) -> _Table:
         if not ok:
             raise ValueError("unexpected content")
     except Exception as err:  # noqa: BLE001 - any corruption is non-fatal
-        warnings.warn(f"satagraph: ignoring unreadable embedding cache {path}"
+        warnings.warn(f"ignoring unreadable embedding cache {path}"
                       f" ({type(err).__name__}: {err}); it will be rebuilt",
                       RuntimeWarning, stacklevel=3)
         return _Table()
@@ -168,7 +168,7 @@ class EmbeddingCache:
                          create_parent=True)
             table.stamp = _stamp(path)
         except OSError as err:
-            warnings.warn(f"satagraph: cannot write embedding cache {path} "
+            warnings.warn(f"cannot write embedding cache {path} "
                           f"({err}); continuing without it", RuntimeWarning,
                           stacklevel=3)
             table.stamp = None
