@@ -178,12 +178,18 @@ def bone_offsets(skeleton: Skeleton) -> np.ndarray:
     return out
 
 
+#: Frames :func:`motion_to_features` computes at once: its temporaries
+#: (rotations, their products, velocities) are those of this many frames.
+FEATURE_CHUNK = 2048
+
+
 def motion_to_features(
     motion: Motion,
     contact_height: float = CONTACT_HEIGHT,
     contact_speed: float = CONTACT_SPEED,
     facing_axis: Optional[np.ndarray] = None,
     facing_smooth: float = 0.0,
+    chunk: int = FEATURE_CHUNK,
 ) -> MotionFeatures:
     r"""Compute the features of a (canonical) motion.
 
@@ -203,37 +209,80 @@ def motion_to_features(
             by hundreds of degrees a clip), and the sway goes to the root's
             rotation, which is not integrated. 0 (default): the root's own
             yaw in every frame. Lossless either way.
+        chunk (int, optional): Frames whose per-frame features are computed
+            at once (:data:`FEATURE_CHUNK`): the temporaries are those of a
+            chunk, not of the whole take; the features are the same to the
+            bit for any chunk.
     """
+    if chunk < 1:
+        raise ValueError(f"chunk must be at least 1 frame, got {chunk}")
     skel, fps = motion.skeleton, motion.fps
-    glob_rot, pos = motion.global_transforms()
+    pos = motion.global_positions()
     root_rot = motion.rotations[:, 0]
     if facing_axis is None:
         facing_axis = (root_rot[0].T @ np.array([0.0, 0.0, 1.0])
                        if motion.num_frames else np.array([0.0, 0.0, 1.0]))
     theta = smooth_yaw(_facing(root_rot, facing_axis), facing_smooth * fps)
-    inv = yaw_matrix_numpy(theta).transpose(0, 2, 1)
     origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
-    x = np.einsum("tij,tkj->tki", inv, pos - origin[:, None])
-    x_rel = np.einsum("tij,tkj->tki", inv, pos - pos[:, np.maximum(skel.parents, 0)])
-    x_rel[:, 0] = x[:, 0]
-    local = motion.rotations.copy()
-    local[:, 0] = inv @ root_rot
-    prev = np.concatenate([local[:1], local[:-1]])
-    disp = np.concatenate([np.zeros_like(pos[:1]), pos[1:] - pos[:-1]]) * fps
     height = character_height(skel, pos)
+    frames = _empty_frame_features(motion.num_frames, motion.num_joints)
+    for start in range(0, motion.num_frames, chunk):
+        stop = min(start + chunk, motion.num_frames)
+        part = _frame_features(motion, pos, theta, origin, slice(start, stop))
+        part["c"] = ground_contacts(pos[max(start - 1, 0):stop], fps, height, contact_height,
+                                    contact_speed)[1 if start else 0:]
+        for key, value in part.items():
+            frames[key][start:stop] = value
     return MotionFeatures(
         skeleton=skel, fps=fps, height=height,
         x_local=bone_offsets(skel), x_global=skel.rest_positions(),
         edge_attr=skel.edge_attr.astype(np.float64),
-        q=_to_6d(local), x=x, x_rel=x_rel,
-        v_q=_to_6d(prev.transpose(0, 1, 3, 2) @ local),
-        v_x=np.einsum("tij,tkj->tki", inv, disp),
         r=_root_features(theta, origin, pos[:, 0, 1], fps),
-        c=ground_contacts(pos, fps, height, contact_height,
-                          contact_speed).astype(np.float64),
         facing_axis=np.asarray(facing_axis, dtype=np.float64),
-        transform=motion.transform,
+        transform=motion.transform, **frames,
     )
+
+
+def _empty_frame_features(num_frames: int, num_joints: int) -> Dict[str, np.ndarray]:
+    """The per-joint, per-frame feature arrays of a motion, to be filled.
+
+    Shapes:
+        - **q**, **v_q**: :math:`(T, J, 6)`
+        - **x**, **x_rel**, **v_x**: :math:`(T, J, 3)`
+        - **c**: :math:`(T, J)`
+    """
+    width = {"q": (6,), "x": (3,), "x_rel": (3,), "v_q": (6,), "v_x": (3,), "c": ()}
+    return {key: np.empty((num_frames, num_joints) + shape) for key, shape in width.items()}
+
+
+def _frame_features(motion: Motion, pos: np.ndarray, theta: np.ndarray,
+                    origin: np.ndarray, frames: slice) -> Dict[str, np.ndarray]:
+    r""":func:`motion_to_features`' per-frame features of :obj:`frames`
+    (``q``, ``x``, ``x_rel``, ``v_q``, ``v_x``) from the whole motion's
+    positions, facing yaw and ground origin; the velocities read the frame
+    before (none before frame 0: zero and the identity).
+
+    Shapes:
+        - **pos**: :math:`(T, J, 3)`; **theta**: :math:`(T,)`; **origin**: :math:`(T, 3)`
+        - **output**: :math:`(F, J, C)` each, :math:`F` the frames of the slice
+    """
+    start, stop = frames.start, frames.stop
+    lead = 1 if start else 0  # frames before the chunk read: one, for velocities
+    inv = yaw_matrix_numpy(theta[start - lead:stop]).transpose(0, 2, 1)
+    p = pos[start - lead:stop]
+    local = motion.rotations[start - lead:stop].copy()
+    local[:, 0] = inv @ motion.rotations[start - lead:stop, 0]
+    prev = local[:-1] if lead else np.concatenate([local[:1], local[:-1]])
+    disp = (p[1:] - p[:-1] if lead else
+            np.concatenate([np.zeros_like(p[:1]), p[1:] - p[:-1]])) * motion.fps
+    inv, p, local = inv[lead:], p[lead:], local[lead:]
+    x = np.einsum("tij,tkj->tki", inv, p - origin[frames, None])
+    x_rel = np.einsum("tij,tkj->tki", inv,
+                      p - p[:, np.maximum(motion.skeleton.parents, 0)])
+    x_rel[:, 0] = x[:, 0]
+    return {"q": _to_6d(local), "x": x, "x_rel": x_rel,
+            "v_q": _to_6d(prev.transpose(0, 1, 3, 2) @ local),
+            "v_x": np.einsum("tij,tkj->tki", inv, disp)}
 
 
 def integrate_root(r: np.ndarray, fps: float) -> tuple:

@@ -81,6 +81,13 @@ def _check_finite(motion: Motion, values: np.ndarray, path: str) -> None:
                          "is broken (a diverged model?)")
 
 
+#: Frames whose Euler angles :func:`_euler_radians` computes at once (a
+#: multiple of 64: every chunk a whole number of SIMD lanes).
+EULER_FRAMES = 4096
+#: Joint tracks :func:`_euler_degrees` unwraps at once.
+EULER_JOINTS = 8
+
+
 def _euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
     r"""Each rotating joint's Euler angles in degrees, in its own rotation
     order and unwrapped over time; the joints of one order are converted
@@ -93,9 +100,28 @@ def _euler_degrees(motion: Motion) -> Dict[int, np.ndarray]:
     out: Dict[int, np.ndarray] = {}
     for order in sorted({o for o in orders if o}):
         joints = [j for j, o in enumerate(orders) if o == order]
-        rad = matrix_to_euler(torch.from_numpy(motion.rotations[:, joints]), order)  # a copy
-        deg = np.degrees(np.unwrap(rad.numpy(), axis=0))
-        out.update({j: deg[:, k] for k, j in enumerate(joints)})
+        rad = _euler_radians(motion.rotations, joints, order)
+        for start in range(0, len(joints), EULER_JOINTS):  # unwrapped a few tracks at a time
+            group = slice(start, start + EULER_JOINTS)
+            deg = np.degrees(np.unwrap(rad[:, group], axis=0))
+            out.update({j: deg[:, k] for k, j in enumerate(joints[group])})
+    return out
+
+
+def _euler_radians(rotations: np.ndarray, joints: List[int], order: str) -> np.ndarray:
+    r"""Euler angles (radians, not unwrapped) of :obj:`joints`' rotations in
+    one rotation order, :data:`EULER_FRAMES` frames at a time: the
+    conversion's temporaries are those of a chunk of frames (a whole
+    number of SIMD lanes per chunk: the same values as all at once).
+
+    Shapes:
+        - **rotations**: :math:`(T, J, 3, 3)`
+        - **output**: :math:`(T, J', 3)`, :math:`J'` the joints given
+    """
+    out = np.empty((len(rotations), len(joints), 3))
+    for start in range(0, len(rotations), EULER_FRAMES):
+        part = slice(start, start + EULER_FRAMES)
+        out[part] = matrix_to_euler(torch.from_numpy(rotations[part][:, joints]), order).numpy()
     return out
 
 

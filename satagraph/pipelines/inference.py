@@ -103,6 +103,22 @@ def static_features(motion: Motion) -> MotionFeatures:
     return feats
 
 
+def decoding_target(feats: MotionFeatures) -> MotionFeatures:
+    r""":obj:`feats` of a target rig less the per-frame features a decoding
+    never reads of it (``q``, ``x_rel``, ``v_q``, ``v_x``, ``r``: the
+    decoder is shown its static part, height and leg length, and its
+    semantic embedding reads ``x`` and ``c``): a reconstruction's target is
+    the whole take.
+
+    Shapes:
+        - **output**: ``x`` :math:`(T, J, 3)` and ``c`` :math:`(T, J)` kept;
+          the others :math:`(0, \dots)`
+    """
+    none = {key: getattr(feats, key)[:0].copy()  # a copy: a view would keep the take's
+            for key in ("q", "x_rel", "v_q", "v_x", "r")}
+    return replace(feats, **none)
+
+
 def default_windows(module, window: Optional[int] = None,
                     overlap: Optional[int] = None) -> Tuple[int, int]:
     """The window the module was trained on (``meta["window"]``, else 64)
@@ -156,27 +172,31 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
 def _transfer(module, source: MotionFeatures, target: MotionFeatures,
               semantic: Optional[Callable], window: int, overlap: int,
               batch_size: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The window loop of :func:`transfer`."""
+    """The window loop of :func:`transfer`: each batch's kept frames are
+    written into the take's outputs as it is decoded (no batch outlives
+    its step)."""
     sem_s = _embed(semantic, source)
     sem_t = _embed(semantic, target)
     plan = window_plan(source.num_frames, window, overlap)
-    qs, rs, cs = [], [], []
+    num = target.skeleton.num_joints
+    q, r, c = (np.empty((source.num_frames, num, 6)), np.empty((source.num_frames, 4)),
+               np.empty((source.num_frames, num)))
     device = next(module.parameters()).device
+    done = 0
     for i in range(0, len(plan), batch_size):
         chunk = plan[i:i + batch_size]
         src = collate_clips([source.to_clip(a, b, sem_s) for a, b, _ in chunk]).to(device)
         tgt = collate_clips([target_clip(target, b - a, sem_t) for a, b, _ in chunk]).to(device)
         out = module(src, tgt)
-        num = target.skeleton.num_joints
-        q = out["q"].view(-1, num, 6).cpu().double()
-        c = torch.sigmoid(out["c"]).view(-1, num).cpu().double()
-        r = out["r"].cpu().double()
+        decoded = (out["q"].view(-1, num, 6).cpu().double(), out["r"].cpu().double(),
+                   torch.sigmoid(out["c"]).view(-1, num).cpu().double())  # any dtype: bf16 too
         offset = 0
         for a, b, keep in chunk:
-            sl = slice(offset + keep - a, offset + b - a)
-            qs.append(q[sl]), rs.append(r[sl]), cs.append(c[sl])
-            offset += b - a
-    return (torch.cat(qs).numpy(), torch.cat(rs).numpy(), torch.cat(cs).numpy())
+            kept = slice(done, done + b - keep)
+            for whole, part in zip((q, r, c), decoded):
+                whole[kept] = part[offset + keep - a:offset + b - a].numpy()
+            done, offset = done + b - keep, offset + b - a
+    return q, r, c
 
 
 def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torch.Tensor]:
@@ -355,12 +375,14 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     probabilities :math:`(T, J_t)`."""
     src_canon, src = source_features(source, rest, facing_smooth_of(module))
     tgt_rest, undo = shown_rest(target, rest)
-    tgt = static_features(tgt_rest)
+    tgt = decoding_target(static_features(tgt_rest))
     q, r, c = transfer(module, src, tgt, semantic, window, overlap)
+    del src  # the source's per-frame features: the take's largest arrays, read
     out_feats = replace(tgt, q=q, r=r, fps=fps, transform=target.transform)
-    out = restore_rest(features_to_motion(out_feats, q=q, r=r, use_positions=False),
-                       undo, target.skeleton)
-    return src_canon, out, c
+    del tgt, q, r  # out_feats holds what is left of them
+    out = features_to_motion(out_feats, q=out_feats.q, r=out_feats.r, use_positions=False)
+    del out_feats
+    return src_canon, restore_rest(out, undo, target.skeleton), c
 
 
 def averaged_reading(reading: Callable, source: Motion, target: Motion, rest: str,

@@ -338,8 +338,9 @@ def canonicalize(
     warn_reading(reading, motion.source)
     up_name = reading.up.axis
     up_rot = rotation_between_numpy(axis_vector(up_name), np.array([0.0, 1.0, 0.0]))
-    moved = _apply_rotation(motion, up_rot, 1.0, np.zeros(3), frame=up_rot)
-    forward = detect_forward(moved, np.array([0.0, 1.0, 0.0]))
+    first = motion.slice(0, 1)  # the facing is frame 0's: no turned copy of the take
+    forward = detect_forward(_apply_rotation(first, up_rot, 1.0, np.zeros(3), frame=up_rot),
+                             np.array([0.0, 1.0, 0.0]))
     yaw = -float(yaw_of(forward))  # rotate forward onto +Z
     transform = CanonicalTransform(up_axis=up_name, up_rotation=up_rot, yaw=yaw,
                                    scale=reading.units.scale, source_fps=motion.fps,
@@ -392,15 +393,36 @@ def _apply_rotation(motion: Motion, rot: np.ndarray, scale: float,
     trans = motion.translations * scale
     offsets = skel.offsets * scale
     if frame is not None:
-        rotations[:, 1:] = frame @ rotations[:, 1:] @ frame.T
-        rotations[:, 0] = rotations[:, 0] @ frame.T
-        trans[:, 1:] = trans[:, 1:] @ frame.T
+        _turn_local_axes(rotations, trans, frame)
         offsets[1:] = offsets[1:] @ frame.T
     rotations[:, 0] = rot @ rotations[:, 0]
     trans[:, 0] = trans[:, 0] @ rot.T + shift
     offsets[0] = offsets[0] @ rot.T
     return motion.with_(skeleton=skel.replace(offsets=offsets),
                         rotations=rotations, translations=trans)
+
+
+#: Frames :func:`_turn_local_axes` turns at once: its temporaries are
+#: those of this many frames, not of the take.
+TURN_CHUNK = 2048
+
+
+def _turn_local_axes(rotations: np.ndarray, translations: np.ndarray,
+                     frame: np.ndarray) -> None:
+    r"""Every joint's local axes turned by :obj:`frame`, in place: local
+    rotations below the root ``frame @ R @ frame.T``, the root's
+    ``R @ frame.T``, translations below the root ``frame @ t``; a chunk of
+    :data:`TURN_CHUNK` frames at a time (the same values as all at once).
+
+    Shapes:
+        - **rotations**: :math:`(T, J, 3, 3)`; **translations**: :math:`(T, J, 3)`
+        - **frame**: :math:`(3, 3)`
+    """
+    for start in range(0, len(rotations), TURN_CHUNK):
+        part = slice(start, start + TURN_CHUNK)
+        rotations[part, 1:] = frame @ rotations[part, 1:] @ frame.T
+        translations[part, 1:] = translations[part, 1:] @ frame.T
+    rotations[:, 0] = rotations[:, 0] @ frame.T
 
 
 def decanonicalize(motion: Motion, transform: Optional[CanonicalTransform] = None,

@@ -157,3 +157,23 @@ def test_smooth_yaw_unwraps_across_pi():
     np.testing.assert_allclose(np.diff(out)[10:-10], np.diff(np.unwrap(theta))[10:-10], atol=1e-9)
     assert out[0] == theta[0]
     np.testing.assert_array_equal(smooth_yaw(theta, 0.0), theta)
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 64])
+def test_features_in_chunks_are_the_whole_takes(shared_data, chunk):
+    """Per-frame features computed a chunk of frames at a time (temporaries
+    of a chunk, not of a long take) are the whole take's to the bit: the
+    velocities across a chunk's first frame read the frame before it, and
+    the facing smoothing, height and contacts stay those of the take."""
+    from satagraph.transforms.rig_reading import with_rig
+    motion = canonicalize(with_rig(read_bvh(shared_data / "dog" / "D1_009_KAN01_001.bvh"),
+                                   scale="cm"), fps=30)
+    assert motion.num_frames > 3 * chunk
+    whole = motion_to_features(motion, facing_smooth=0.25, chunk=motion.num_frames)
+    parts = motion_to_features(motion, facing_smooth=0.25, chunk=chunk)
+    for key in ("q", "x", "x_rel", "v_q", "v_x", "c", "r"):
+        np.testing.assert_array_equal(getattr(parts, key), getattr(whole, key), err_msg=key)
+    assert (parts.height, parts.leg_length) == (whole.height, whole.leg_length)
+    assert np.abs(whole.v_x[chunk]).max() > 0  # a chunk's first frame moves: read across
+    with pytest.raises(ValueError, match="chunk"):
+        motion_to_features(motion, chunk=0)

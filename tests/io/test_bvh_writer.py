@@ -365,3 +365,28 @@ def test_a_tiny_frame_time_is_written_as_it_reads(tiny_motion, tmp_path):
     fast = tiny_motion.with_(fps=1e10)
     write_bvh(fast, tmp_path / "fast.bvh")
     assert read_bvh(tmp_path / "fast.bvh").fps == pytest.approx(1e10)
+
+
+def test_euler_angles_in_chunks_are_the_whole_takes(read_real, monkeypatch) -> None:
+    """Channel values computed 64 frames and 3 joint tracks at a time
+    (temporaries of a chunk on a long take) are those computed all at once,
+    to the bit, the unwrapping across chunk borders included."""
+    motion = read_real("cmu/01_01.bvh").slice(0, 700).with_(raw_channels=None)
+    rng = np.random.default_rng(0)
+    turned = motion.rotations.copy()  # spins that wrap past 180 degrees
+    turned[:, 0] = turned[:, 0] @ np.stack([_yaw(a) for a in
+                                            np.cumsum(rng.uniform(0, 0.3, len(turned)))])
+    motion = motion.with_(rotations=turned)
+    monkeypatch.setattr(bvh_writer, "EULER_FRAMES", 10 ** 9)
+    monkeypatch.setattr(bvh_writer, "EULER_JOINTS", 10 ** 9)
+    whole = channel_values(motion)
+    monkeypatch.setattr(bvh_writer, "EULER_FRAMES", 64)
+    monkeypatch.setattr(bvh_writer, "EULER_JOINTS", 3)
+    np.testing.assert_array_equal(channel_values(motion), whole)
+    assert np.abs(np.diff(whole, axis=0)).max() < 180  # unwrapped across the borders
+    assert np.ptp(whole, axis=0).max() > 360
+
+
+def _yaw(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
