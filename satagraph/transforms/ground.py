@@ -103,7 +103,8 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     r"""A retarget stood on the floor as the target character stands in its
     own clip: :func:`ground_at` the :func:`ground_level` of :obj:`target`
     where it has frames, else of :obj:`source`, read over the frames in
-    which the source stands (:func:`standing_frames`), then
+    which the source stands where it also sits or lies
+    (:func:`ground_frames`), then
     :func:`lift_above_floor`. How high a rig's lowest joint sits above the
     floor is the rig's own (the dog's paw end sites stay 3-6 cm, 6-11 % of
     its height, above the floor its tail touches): copied from the source,
@@ -123,8 +124,27 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     reference = target if target.num_frames else source
     if not motion.num_frames or not reference.num_frames:
         return motion
-    frames = standing_frames(source) if source.num_frames == motion.num_frames else None
+    frames = ground_frames(source) if source.num_frames == motion.num_frames else None
     return lift_above_floor(ground_at(motion, ground_level(reference), frames))
+
+
+def ground_frames(source: Motion) -> Optional[np.ndarray]:
+    r"""The frames :func:`ground_retarget` stands a retarget of
+    :obj:`source` on the floor in: every frame (``None``) where the source
+    is up on its legs (:data:`UP_SHARE`) in all but :data:`DOWN_FRAMES` of
+    them (a walk, a run, a jump); where it sits or lies longer, the frames
+    in which it stands (:func:`standing_frames`): a decoded body that does
+    not follow it down stands on the floor there, and sinks (to be lifted)
+    where the source is down, instead of hovering where it stands.
+
+    Shapes:
+        - **output**: :math:`(F,)` frame indices, or ``None``
+    """
+    pos = source.global_positions()
+    up = stands(pos, source.skeleton, source.fps, UP_SHARE)
+    if 1.0 - up.mean() < DOWN_FRAMES:
+        return None
+    return np.flatnonzero(stands(pos, source.skeleton, source.fps))
 
 
 def lift_above_floor(motion: Motion, floor: float = 0.0) -> Motion:
@@ -150,6 +170,14 @@ def lift_above_floor(motion: Motion, floor: float = 0.0) -> Motion:
 #: Share of its greatest stance height at which a body counts as standing
 #: (:func:`standing_frame`).
 STANDING_SHARE = 0.95
+#: Share of its greatest stance height above which a body is up on its
+#: legs, not sitting, lying or crouched (every frame of a walk or a run,
+#: whose hips dip 5-10 %) ...
+UP_SHARE = 0.8
+#: ... and the share of its frames a source must spend below it for a
+#: retarget of it to be stood on the floor where it stands
+#: (:func:`ground_frames`).
+DOWN_FRAMES = 0.1
 #: Seconds a stance height must be held to count as the body's greatest
 #: (:func:`stands`): a dog landing a jump on its front paws, hind legs up,
 #: holds its hips highest for a tenth of a second.
@@ -166,18 +194,20 @@ def standing_frame(motion: Motion) -> int:
     return int(np.argmax(stands(motion.global_positions(), motion.skeleton, motion.fps)))
 
 
-def standing_frames(motion: Motion) -> np.ndarray:
+def standing_frames(motion: Motion, share: float = STANDING_SHARE) -> np.ndarray:
     """Every frame of a canonical motion in which the body stands (as
-    :func:`standing_frame` counts it): the frames whose mean pose
-    ``rest="auto"`` shows the model, and where
-    :func:`~satagraph.pipelines.quality.posture` reads how a character
-    carries itself."""
-    return np.flatnonzero(stands(motion.global_positions(), motion.skeleton, motion.fps))
+    :func:`standing_frame` counts it; within :obj:`share` of its held
+    stance height): the frames whose mean pose ``rest="auto"`` shows the
+    model, and where :func:`~satagraph.pipelines.quality.posture` reads how
+    a character carries itself."""
+    return np.flatnonzero(stands(motion.global_positions(), motion.skeleton, motion.fps,
+                                 share))
 
 
-def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0) -> np.ndarray:
+def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0,
+           share: float = STANDING_SHARE) -> np.ndarray:
     r"""Per frame, whether the root stands above its :func:`support_joints`
-    within :data:`STANDING_SHARE` of the greatest height it holds there for
+    within :obj:`share` (:data:`STANDING_SHARE`) of the greatest height it holds there for
     :data:`STANDING_HOLD` seconds (the greatest of a running median), below
     as above. The frames of a dog's jump, landing on its front paws with
     its hips and hind legs up (``dog/D1_ex04_KAN02_003``: the only three
@@ -188,6 +218,8 @@ def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0) -> np.n
         positions (np.ndarray): Global joint positions.
         skeleton (Skeleton): Their skeleton.
         fps (float): Their frame rate.
+        share (float): How near the greatest held height a standing
+            frame's is, below as above.
 
     Shapes:
         - **positions**: :math:`(T, J, 3)` global, +Y up
@@ -198,7 +230,7 @@ def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0) -> np.n
     width = max(1, int(round(STANDING_HOLD * fps)))
     padded = np.pad(stance, (width // 2, width - 1 - width // 2), mode="edge")
     held = np.median(np.lib.stride_tricks.sliding_window_view(padded, width), axis=1).max()
-    return (stance >= STANDING_SHARE * held) & (stance * STANDING_SHARE <= held)
+    return (stance >= share * held) & (stance * share <= held)
 
 
 #: A chain end touches the floor (:func:`support_joints`) where it is within
@@ -238,5 +270,6 @@ def support_joints(skeleton: Skeleton, positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "lift_above_floor", "raise_root", "STANDING_SHARE", "STANDING_HOLD", "SUPPORT_CONTACT",
-           "SUPPORT_FRAMES", "standing_frame", "standing_frames", "stands", "support_joints"]
+           "lift_above_floor", "raise_root", "STANDING_SHARE", "UP_SHARE", "DOWN_FRAMES", "STANDING_HOLD", "SUPPORT_CONTACT",
+           "SUPPORT_FRAMES", "standing_frame", "standing_frames", "stands", "support_joints",
+           "ground_frames"]

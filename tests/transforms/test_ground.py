@@ -6,7 +6,7 @@ import numpy as np
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
 from satagraph.transforms.canonical import canonicalize
 from satagraph.transforms.ground import (ground_like, ground_retarget, lift_above_floor,
-                                         lowest_heights, standing_frames)
+                                         ground_frames, lowest_heights, standing_frames)
 
 
 def _clip(species: str, kind: str = "walk", seed: int = 0):
@@ -111,7 +111,8 @@ def test_a_retarget_stands_on_the_floor_where_its_source_stands():
     with its root lower while the dog lies, was grounded on the lying
     frames' median: the human hovered where the dog stood (0.7 m up on a
     real clip). Read over the frames where the source stands, it stands
-    on the floor there, and the lying frames come up onto the floor."""
+    on the floor there, and the lying frames come up onto the floor. A
+    walk, up on its legs throughout, is read over every frame."""
     lie = canonicalize(generate_clip(zoo_rigs(["quadruped"])[0], "lie", frames=90, seed=0),
                        fps=30.0)
     pos = lie.global_positions()
@@ -129,3 +130,5 @@ def test_a_retarget_stands_on_the_floor_where_its_source_stands():
     assert low.min() >= -1e-9 and low.max() < level + 0.02
     old = lift_above_floor(ground_like(sinking, target))  # every frame's median
     assert (lowest_heights(old) / old.height())[standing].min() > 0.2
+    np.testing.assert_array_equal(ground_frames(lie), standing)
+    assert ground_frames(_clip("quadruped")) is None
