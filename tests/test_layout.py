@@ -10,6 +10,7 @@ import executed):
 from __future__ import annotations
 
 import ast
+import gc
 from collections import defaultdict
 from functools import lru_cache
 from pathlib import Path
@@ -24,13 +25,22 @@ MODEL = ("satagraph.nn", "satagraph.losses", "satagraph.metrics")
 
 @lru_cache(maxsize=None)
 def _modules() -> Tuple[Tuple[str, ast.Module], ...]:
-    """Every module of the package, parsed once (the tests only read the trees)."""
+    """Every module of the package, parsed once (the tests only read the
+    trees). The collector waits: the trees' million nodes hold no cycle,
+    and walking the worker's whole heap each time they pass its thresholds
+    took longer than the parse."""
     out = []
-    for path in sorted(PACKAGE.rglob("*.py")):
-        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-        if parts[-1] == "__init__":
-            parts = parts[:-1]
-        out.append((".".join(parts), ast.parse(path.read_text(encoding="utf-8"))))
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for path in sorted(PACKAGE.rglob("*.py")):
+            parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out.append((".".join(parts), ast.parse(path.read_text(encoding="utf-8"))))
+    finally:
+        if enabled:
+            gc.enable()
     return tuple(out)
 
 

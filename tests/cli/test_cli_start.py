@@ -2,47 +2,93 @@
 ``inspect`` need argparse and numpy only (behaviour, not timing)."""
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Dict, List, Sequence, Tuple
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 HEAVY = ("torch", "torch_geometric", "lightning", "roma", "transformers")
+HELP_COMMANDS = ("inspect", "convert", "demo", "tags", "train", "zoo", "render", "sweep")
 
-# Runs the CLI in-process, then prints the heavy top-level modules loaded.
+# Imports the CLI, then runs each command line of argv[1] (JSON) in-process
+# and prints the heavy top-level modules loaded. Each runs in a child forked
+# right after the import, so it starts from the state a fresh interpreter
+# that ran ``from satagraph.cli import main`` has (one interpreter start for
+# all); without fork, one command line a process.
 PROBE = """
-import sys
+import json, os, sys, traceback
 from satagraph.cli import main
-try:
-    code = main(sys.argv[1:])
-except SystemExit as exit:
-    code = exit.code
-heavy = sorted({{m.split('.')[0] for m in sys.modules}} & set({heavy!r}))
-print('HEAVY=' + ','.join(heavy))
-sys.exit(code or 0)
+argvs = json.loads(sys.argv[1])
+fork = hasattr(os, 'fork')
+assert fork or len(argvs) == 1
+for i, argv in enumerate(argvs):
+    sys.stdout.flush(); sys.stderr.flush()
+    pid = os.fork() if fork else 0
+    if pid:
+        _, status = os.waitpid(pid, 0)
+        if status:
+            print(f'RESULT{{i}}=' + json.dumps(['child status ' + str(status), []]))
+        continue
+    try:
+        try:
+            code = main(argv)
+        except SystemExit as exit:
+            code = exit.code
+    except BaseException:
+        traceback.print_exc()
+        code = 'raised'
+    heavy = sorted({{m.split('.')[0] for m in sys.modules}} & set({heavy!r}))
+    print(f'RESULT{{i}}=' + json.dumps([code or 0, heavy]))
+    sys.stdout.flush(); sys.stderr.flush()
+    if fork:
+        os._exit(0)
 """
 
 
-def _heavy_modules(*args: str) -> list:
+def _heavy_modules_of(argvs: Sequence[Sequence[str]]) -> List[List[str]]:
+    """The heavy modules each command line loads (each must exit with 0)."""
+    if len(argvs) > 1 and not hasattr(os, "fork"):
+        return [_heavy_modules_of([argv])[0] for argv in argvs]
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
-    proc = subprocess.run([sys.executable, "-c", PROBE.format(heavy=HEAVY), *args],
+    proc = subprocess.run([sys.executable, "-c", PROBE.format(heavy=HEAVY),
+                           json.dumps([list(argv) for argv in argvs])],
                           cwd=ROOT, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
-    line = proc.stdout.strip().splitlines()[-1]
-    return [m for m in line.removeprefix("HEAVY=").split(",") if m]
+    results: Dict[int, Tuple[object, List[str]]] = {}
+    for line in proc.stdout.splitlines():
+        key, _, value = line.partition("=")
+        if key.startswith("RESULT") and key[len("RESULT"):].isdigit():
+            results[int(key[len("RESULT"):])] = json.loads(value)
+    assert sorted(results) == list(range(len(argvs))), proc.stdout + proc.stderr
+    for argv, i in zip(argvs, range(len(argvs))):
+        assert results[i][0] == 0, (argv, results[i][0], proc.stderr)
+    return [results[i][1] for i in range(len(argvs))]
+
+
+def _heavy_modules(*args: str) -> list:
+    return _heavy_modules_of([args])[0]
+
+
+@pytest.fixture(scope="module")
+def help_heavy() -> Dict[str, List[str]]:
+    """The heavy modules ``COMMAND --help`` loads, for every command of
+    :data:`HELP_COMMANDS` (one probe for all)."""
+    argvs = [(command, "--help") for command in HELP_COMMANDS]
+    return dict(zip(HELP_COMMANDS, _heavy_modules_of(argvs)))
 
 
 def test_import_cli_is_light():
     assert _heavy_modules("--version") == []
 
 
-@pytest.mark.parametrize("command", ["inspect", "convert", "demo", "tags",
-                                     "train", "zoo", "render", "sweep"])
-def test_command_help_is_light(command):
-    assert _heavy_modules(command, "--help") == []
+@pytest.mark.parametrize("command", HELP_COMMANDS)
+def test_command_help_is_light(command, help_heavy):
+    assert help_heavy[command] == []
 
 
 def test_inspect_is_light(tmp_path):
