@@ -104,16 +104,16 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
     own clip: :func:`ground_at` the :func:`ground_level` of :obj:`target`
     where it has frames, else of :obj:`source`, read over the frames in
     which the source stands where it also sits or lies
-    (:func:`ground_frames`), then
-    :func:`lift_above_floor`. How high a rig's lowest joint sits above the
-    floor is the rig's own (the dog's paw end sites stay 3-6 cm, 6-11 % of
-    its height, above the floor its tail touches): copied from the source,
-    a dog's offset left a human retarget hovering 9 % of its height up.
-    Read over every frame, a dog that lies most of a clip, its human
-    retarget standing all along, left the human hovering 0.7 m up where
-    the dog stands (``experiments/PRETRAIN.md`` section 50); the lift
-    keeps a body that sits or crouches lower than where its source stands
-    from passing through the floor (section 42).
+    (:func:`ground_frames`), then :func:`lift_above_floor`. How high a
+    rig's lowest joint sits above the floor is the rig's own (the dog's
+    paw end sites stay 3-6 cm, 6-11 % of its height, above the floor its
+    tail touches): copied from the source, a dog's offset left a human
+    retarget hovering 9 % of its height up. Read over every frame, a dog
+    that lies most of a clip, its human retarget standing all along, left
+    the human hovering 0.7 m up where the dog stands
+    (``experiments/PRETRAIN.md`` section 50); the lift keeps a body that
+    sits or crouches lower than where its source stands from passing
+    through the floor (section 42).
 
     Args:
         motion (Motion): The decoded retarget (canonical).
@@ -207,9 +207,9 @@ def standing_frames(motion: Motion, share: float = STANDING_SHARE) -> np.ndarray
 def stands(positions: np.ndarray, skeleton: Skeleton, fps: float = 30.0,
            share: float = STANDING_SHARE) -> np.ndarray:
     r"""Per frame, whether the root stands above its :func:`support_joints`
-    within :obj:`share` (:data:`STANDING_SHARE`) of the greatest height it holds there for
-    :data:`STANDING_HOLD` seconds (the greatest of a running median), below
-    as above. The frames of a dog's jump, landing on its front paws with
+    within :obj:`share` (:data:`STANDING_SHARE`) of the greatest height it
+    holds there for :data:`STANDING_HOLD` seconds (the greatest of a
+    running median), below as above. The frames of a dog's jump, landing on its front paws with
     its hips and hind legs up (``dog/D1_ex04_KAN02_003``: the only three
     frames that counted, a handstand shown as the dog's rest), are not
     standing: its hind paws, not its front ones, say how high it stands.
@@ -270,6 +270,6 @@ def support_joints(skeleton: Skeleton, positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["lowest_heights", "ground_level", "ground_at", "ground_like", "ground_retarget",
-           "lift_above_floor", "raise_root", "STANDING_SHARE", "UP_SHARE", "DOWN_FRAMES", "STANDING_HOLD", "SUPPORT_CONTACT",
-           "SUPPORT_FRAMES", "standing_frame", "standing_frames", "stands", "support_joints",
-           "ground_frames"]
+           "ground_frames", "lift_above_floor", "raise_root", "STANDING_SHARE", "UP_SHARE",
+           "DOWN_FRAMES", "STANDING_HOLD", "SUPPORT_CONTACT", "SUPPORT_FRAMES",
+           "standing_frame", "standing_frames", "stands", "support_joints"]
