@@ -28,7 +28,9 @@ from satagraph.utils.files import atomic_write, check_input_file
 #: (every joint's local axes, not the root's alone).
 #: 8: a body stands where its root holds its height above the legs nearest
 #: it (transforms.ground.stands): the rest shown for a line rest.
-FEATURE_VERSION = 8
+#: 9: a file's rest that faces away from +Z is shown turned to face it
+#: (transforms.rest.rest_facing_turn).
+FEATURE_VERSION = 9
 
 _ARRAYS = ("x_local", "x_global", "edge_attr", "q", "x", "x_rel", "v_q", "v_x",
            "r", "c", "facing_axis")

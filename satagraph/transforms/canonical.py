@@ -450,7 +450,10 @@ def _restore_root(motion: Motion, removed: dict, up: np.ndarray) -> Motion:
     source; where it moved, carrying the hips' travel (its rotation held)
     at its frame-0 level along :obj:`up` when the hips have position
     channels to rise and fall by (Bandai), the whole of it when they have
-    none (``RL_BoneRoot``'s hips)."""
+    none (``RL_BoneRoot``'s hips). Hips without position channels have the
+    root carry them also where it stood still (a one-frame clip of a
+    CC_Base rig, read as still): held, the travel put on the hips was
+    dropped by the writer, and the written body walked in place."""
     skel = motion.skeleton
     num_frames = motion.num_frames
     rot0, trans0 = removed["rotation"], removed["translation"]
@@ -460,7 +463,8 @@ def _restore_root(motion: Motion, removed: dict, up: np.ndarray) -> Motion:
     offsets[1] = removed["child_offset"]  # the hips' own rest, not frame 0's place
     rotations[:, 0] = rot0.T @ rotations[:, 0]
     root_trans = np.broadcast_to(trans0, (num_frames, 3))
-    if removed.get("carries"):
+    # hips without position channels cannot carry the travel: a file would drop it
+    if removed.get("carries") or not skel.has_position_channels[0]:
         root_trans = translations[:, 0] - rot0 @ offsets[1]
         if skel.has_position_channels[0]:
             root_trans = root_trans - np.outer(root_trans @ up - trans0 @ up, up)

@@ -35,19 +35,57 @@ def shown_rest(motion: Motion, rest: str) -> Tuple[Motion, Optional[np.ndarray]]
     """A canonical motion in the rest pose :obj:`rest` (:data:`REST_MODES`)
     names, and the rest rotations that undo it (``None``: unchanged; a
     skeleton without frames keeps its file's rest); :func:`restore_rest`
-    undoes it."""
+    undoes it. A file's rest that faces away from +Z is shown turned
+    about +Y to face it (:func:`rest_facing_turn`; not without frames)."""
     if rest in ("auto", "alternate"):
         needs = needs_rest(motion.skeleton)
         rest = (("standing" if needs else "file") if rest == "auto"
                 else ("first-frame" if needs else "standing"))
-    if rest == "file" or not motion.num_frames:
+    if not motion.num_frames:
         return motion, None
+    if rest == "file":
+        turn = rest_facing_turn(motion.skeleton)
+        if turn is None:
+            return motion, None
+        new = np.repeat(turn[None], motion.num_joints, axis=0)  # the whole rest, rigidly
+        return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
     if rest == "first-frame":
         new = rebase_rotations(motion, 0)
     else:
         frames = standing_frames(motion)  # the first is the standing frame
         new = mean_pose_rotations(motion, frames, int(frames[0]))
     return set_rest_rotations(motion, new), np.swapaxes(new, -1, -2)
+
+
+#: Degrees by which a rest pose shown as it is may face away from +Z
+#: (:func:`rest_facing_turn`): the real rigs here face within 1.2.
+FACING_DEGREES = 10.0
+
+
+def rest_facing_turn(skeleton) -> Optional[np.ndarray]:
+    r"""The turn about +Y that makes a canonical skeleton's rest pose face
+    +Z (its body's facing, :func:`~satagraph.transforms.canonical.body_forward`),
+    where it faces more than :data:`FACING_DEGREES` away; ``None`` where it
+    does not, has no left/right pairs or is a line (:func:`is_line_rest`:
+    no body to face anywhere). A model reads a rig's root
+    rotation against its rest's +Z: a -Y-up rig (its rest facing -Z once
+    stood up) or a +Y-up one facing +X or -Z was decoded walking backwards
+    or sideways, its limbs stepping against its source's.
+
+    Shapes:
+        - **output**: :math:`(3, 3)`
+    """
+    from satagraph.ops.rotation_numpy import yaw_matrix_numpy, yaw_of
+    from satagraph.transforms.canonical import body_forward
+    if is_line_rest(skeleton):
+        return None
+    forward = body_forward(skeleton.rest_positions(), skeleton, np.array([0.0, 1.0, 0.0]))
+    if forward is None or np.linalg.norm(forward) < 1e-9:
+        return None
+    yaw = float(yaw_of(forward))
+    if abs(np.degrees(yaw)) <= FACING_DEGREES:
+        return None
+    return yaw_matrix_numpy(-yaw)
 
 
 def second_rest(rest: str) -> str:
@@ -151,5 +189,5 @@ def needs_rest(skeleton) -> bool:
     return asym is not None and asym > POSED_REST_DEGREES
 
 
-__all__ = ["REST_MODES", "shown_rest", "second_rest", "restore_rest", "is_line_rest",
-           "rest_asymmetry", "POSED_REST_DEGREES", "needs_rest"]
+__all__ = ["REST_MODES", "shown_rest", "FACING_DEGREES", "rest_facing_turn", "second_rest",
+           "restore_rest", "is_line_rest", "rest_asymmetry", "POSED_REST_DEGREES", "needs_rest"]

@@ -306,3 +306,25 @@ def test_a_rig_of_another_up_axis_stands_up_whole(up):
     back = decanonicalize(b, fps=twin.fps)
     np.testing.assert_allclose(back.skeleton.offsets, twin.skeleton.offsets, atol=1e-9)
     np.testing.assert_allclose(back.global_positions(), twin.global_positions(), atol=1e-9)
+
+
+def test_a_one_frame_rig_whose_hips_have_no_position_channels_writes_the_travel(
+        shared_data, tmp_path):
+    """CC_Base's ``RL_BoneRoot`` above hips with rotation channels only,
+    read from one frame, is folded as a still root: put back held, it left
+    the travel on the hips, which the writer drops (a retarget of a 4 m
+    walk onto a one-frame 007_01 walked in place, 3-9 of the rig's sizes
+    from the motion it decoded). The root carries it, as in the clip."""
+    clip = read_bvh(shared_data / "ccbase" / "007_01.bvh")
+    one = canonicalize(clip.slice(0, 1), fps=None)
+    assert one.transform.removed_root["name"] == "RL_BoneRoot"
+    assert not one.transform.removed_root["carries"]
+    walk = canonicalize(clip, fps=None)  # the clip's walk on the one-frame rig's axes
+    out = decanonicalize(walk.with_(transform=one.transform), one.transform)
+    write_bvh(out, tmp_path / "out.bvh")
+    back = read_bvh(tmp_path / "out.bvh")
+    size = float(np.ptp(clip.first_pose(), axis=0).max())
+    np.testing.assert_allclose(back.global_positions(), out.global_positions(),
+                               atol=1e-4 * size)
+    hips = back.global_positions()[:, 1]
+    assert np.linalg.norm(hips[-1] - hips[0]) > 0.5 * size
