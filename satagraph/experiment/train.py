@@ -208,17 +208,17 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, resume: bool = False,
     opts["gradient_clip_val"] = cfg["optim"]["grad_clip"]
     folder = run_dir / "checkpoints"
     spec = cfg["checkpoint"]
-    resume = ResumeCheckpoint(str(folder), spec["every_n_steps"], spec["every_minutes"])
+    last = ResumeCheckpoint(str(folder), spec["every_n_steps"], spec["every_minutes"])
     monitor = opts.pop("monitor")
     if opts.get("limit_val_batches") == 0:  # nothing validated: no 40-key warning about it
         monitor = None
     best = ModelCheckpoint(dirpath=str(folder), save_last=False, mode="min",
                            monitor=monitor,
                            save_top_k=-1 if spec["keep_every_epoch"] else 1)
-    guard = NonFiniteGuard(cfg["nonfinite"], str(resume.last_path))
+    guard = NonFiniteGuard(cfg["nonfinite"], str(last.last_path))
     # the average is updated before any checkpoint of the same step is written
     callbacks = [weight_average(cfg["optim"]["ema"])] if cfg["optim"]["ema"] else []
-    callbacks += [best, resume, guard] + list(opts.pop("callbacks", None) or [])
+    callbacks += [best, last, guard] + list(opts.pop("callbacks", None) or [])
     if cfg["loss_log"]:
         callbacks.append(LossLog(str(run_dir / "losses.tsv")))
     if opts.pop("progress"):

@@ -136,6 +136,11 @@ def test_a_resumed_run_logs_into_its_own_w_and_b_run(tmp_path):
     logger = build_logger(cfg, tmp_path, resume=True)
     assert logger._wandb_init["id"] == "bbb" and logger._wandb_init["resume"] == "allow"
     assert build_logger(cfg, tmp_path)._wandb_init.get("id") is None
+    # the trainer's own checkpoint callback was named like the flag and took its
+    # place: every new run went on under a W&B id left in its folder
+    from satagraph.experiment.train import build_trainer
+    assert build_trainer(cfg, tmp_path).logger._wandb_init.get("id") is None
+    assert build_trainer(cfg, tmp_path, resume=True).logger._wandb_init["id"] == "bbb"
 
 
 def test_tensorboard_without_its_package_is_said(monkeypatch):
