@@ -278,10 +278,12 @@ def run_train(args) -> int:
 def _interrupted(run_dir: Path) -> str:
     """The line for a training run stopped by Ctrl-C (or SIGTERM): where
     ``--resume`` goes on from, or that it has nothing to go on from yet."""
-    from satagraph.lightning.reliability import LAST, PREVIOUS
+    from satagraph.lightning.reliability import LAST, PREVIOUS, epoch_checkpoints
     folder = run_dir / "checkpoints"
-    if (folder / LAST).is_file() or (folder / PREVIOUS).is_file():
-        return (f"satagraph: interrupted: train --resume goes on from {folder / LAST} "
+    kept = [p for p in (folder / LAST, folder / PREVIOUS) if p.is_file()]
+    kept += epoch_checkpoints(folder)  # what resume_checkpoint falls back to
+    if kept:
+        return (f"satagraph: interrupted: train --resume goes on from {kept[0]} "
                 "(the steps after it are trained again)")
     return (f"satagraph: interrupted before {run_dir}'s first checkpoint "
             "(checkpoint.every_n_steps, every_minutes and each epoch's end write one): "

@@ -180,7 +180,7 @@ class CodeBank(Dataset):
         """
         from safetensors.torch import save
 
-        from satagraph.utils.files import atomic_write
+        from satagraph.utils.files import atomic_write_bytes
         tensors = {"codes": self.codes.to(torch.int16).contiguous(),
                    "num_frames": self.num_frames, "x": self.x.half().contiguous(),
                    "parent": self.parent.to(torch.int32), "num_nodes": self.num_nodes,
@@ -189,8 +189,7 @@ class CodeBank(Dataset):
                 "texts": json.dumps(self.texts)}
         if self.data is not None:
             meta["data"] = json.dumps(self.data)
-        data = save(tensors, metadata=meta)
-        atomic_write(path, lambda f: f.write(data), binary=True, create_parent=True)
+        atomic_write_bytes(path, save(tensors, metadata=meta), create_parent=True)
 
     @classmethod
     def load(cls, path: PathLike) -> "CodeBank":

@@ -21,8 +21,8 @@ relative to the world origin, so integration restores the trajectory.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
-from typing import Dict, Optional
+from functools import cached_property, partial
+from typing import Callable, Dict, Optional
 
 import numpy as np
 import torch
@@ -225,12 +225,12 @@ def motion_to_features(
     theta = smooth_yaw(_facing(root_rot, facing_axis), facing_smooth * fps)
     origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
     height = character_height(skel, pos)
+    contacts = partial(ground_contacts, fps=fps, size=height, height=contact_height,
+                       speed=contact_speed)
     frames = _empty_frame_features(motion.num_frames, motion.num_joints)
     for start in range(0, motion.num_frames, chunk):
         stop = min(start + chunk, motion.num_frames)
-        part = _frame_features(motion, pos, theta, origin, slice(start, stop))
-        part["c"] = ground_contacts(pos[max(start - 1, 0):stop], fps, height, contact_height,
-                                    contact_speed)[1 if start else 0:]
+        part = _frame_features(motion, pos, theta, origin, slice(start, stop), contacts)
         for key, value in part.items():
             frames[key][start:stop] = value
     return MotionFeatures(
@@ -256,11 +256,13 @@ def _empty_frame_features(num_frames: int, num_joints: int) -> Dict[str, np.ndar
 
 
 def _frame_features(motion: Motion, pos: np.ndarray, theta: np.ndarray,
-                    origin: np.ndarray, frames: slice) -> Dict[str, np.ndarray]:
+                    origin: np.ndarray, frames: slice,
+                    contacts: Callable[[np.ndarray], np.ndarray]) -> Dict[str, np.ndarray]:
     r""":func:`motion_to_features`' per-frame features of :obj:`frames`
-    (``q``, ``x``, ``x_rel``, ``v_q``, ``v_x``) from the whole motion's
-    positions, facing yaw and ground origin; the velocities read the frame
-    before (none before frame 0: zero and the identity).
+    (``q``, ``x``, ``x_rel``, ``v_q``, ``v_x``, and ``c`` by
+    :obj:`contacts` of positions) from the whole motion's positions,
+    facing yaw and ground origin; the velocities and contacts read the
+    frame before (none before frame 0: zero and the identity).
 
     Shapes:
         - **pos**: :math:`(T, J, 3)`; **theta**: :math:`(T,)`; **origin**: :math:`(T, 3)`
@@ -275,6 +277,7 @@ def _frame_features(motion: Motion, pos: np.ndarray, theta: np.ndarray,
     prev = local[:-1] if lead else np.concatenate([local[:1], local[:-1]])
     disp = (p[1:] - p[:-1] if lead else
             np.concatenate([np.zeros_like(p[:1]), p[1:] - p[:-1]])) * motion.fps
+    c = contacts(p)[lead:]
     inv, p, local = inv[lead:], p[lead:], local[lead:]
     x = np.einsum("tij,tkj->tki", inv, p - origin[frames, None])
     x_rel = np.einsum("tij,tkj->tki", inv,
@@ -282,7 +285,7 @@ def _frame_features(motion: Motion, pos: np.ndarray, theta: np.ndarray,
     x_rel[:, 0] = x[:, 0]
     return {"q": _to_6d(local), "x": x, "x_rel": x_rel,
             "v_q": _to_6d(prev.transpose(0, 1, 3, 2) @ local),
-            "v_x": np.einsum("tij,tkj->tki", inv, disp)}
+            "v_x": np.einsum("tij,tkj->tki", inv, disp), "c": c}
 
 
 def integrate_root(r: np.ndarray, fps: float) -> tuple:

@@ -209,10 +209,8 @@ def limit_files(files: Sequence[MotionFile], split: str, limit: Optional[int]
     return chosen, [limit_note(split, chosen, every)] if len(chosen) < len(every) else []
 
 
-def limit_warning(limit: Optional[int], notes: Sequence[str]) -> Optional[str]:
+def limit_warning(limit: Optional[int], notes: Sequence[str]) -> str:
     """The warning a data module gives when ``data.max_files`` left files
-    out (:func:`limit_files`' notes; ``None`` when it left none out)."""
-    if not notes:
-        return None
+    out (:func:`limit_files`' notes)."""
     return (f"data.max_files={limit} reads " + "; ".join(notes)
             + " files (data.max_files=null reads them all)")

@@ -26,7 +26,7 @@ from satagraph.data.datamodule import MotionDataModule
 from satagraph.data.dataset import DEFAULT_PREPROCESSING
 from satagraph.io.checkpoint import CheckpointError, check_finite_weights
 from satagraph.io.weights import NORMALIZER_PREFIX, load_weights_or_checkpoint
-from satagraph.utils.files import atomic_write_text, sweep_stale_temps
+from satagraph.utils.files import atomic_write_text, is_temp_file, sweep_stale_temps
 from satagraph.lightning.reliability import (LossLog, NonFiniteGuard, ResumeCheckpoint,
                                              SafeCheckpointIO, resume_checkpoint,
                                              run_lock)
@@ -170,7 +170,7 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
         previous = _last_wandb_id(run_dir) if resume else None
         extra = {"id": previous, "resume": "allow"} if previous else {}
         return WandbLogger(name=cfg["name"], save_dir=str(run_dir), **spec, **extra)
-    raise ValueError(f"unknown logger {name!r}: use wandb, csv, tensorboard or none")
+    raise ValueError(f"unknown logger {name!r}: use {', '.join(LOGGERS)}")
 
 
 def _last_wandb_id(run_dir: Path) -> Optional[str]:
@@ -527,9 +527,8 @@ def refuse_trained_folder(run_dir: Path) -> None:
         ValueError: One line naming the folder and the ways on.
     """
     folder = run_dir / "checkpoints"
-    # a hidden .last.ckpt.<host>-<pid>.<hex>.tmp.ckpt is a write a kill cut short
-    kept = sorted(p.name for p in folder.glob("*.ckpt")
-                  if not p.name.startswith(".")) if folder.is_dir() else []
+    kept = sorted(p.name for p in folder.glob("*.ckpt")  # not a write a kill cut short
+                  if not is_temp_file(p.name)) if folder.is_dir() else []
     if kept:
         raise ValueError(f"{run_dir}: holds a trained run ({len(kept)} checkpoint(s): "
                          f"{', '.join(kept[:3])}{', ...' if len(kept) > 3 else ''}); "

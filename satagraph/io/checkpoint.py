@@ -19,7 +19,7 @@ from typing import Any, Dict, Sequence, Union
 
 import torch
 
-from satagraph.utils.files import InputFileError, atomic_write, check_input_file
+from satagraph.utils.files import InputFileError, atomic_write_bytes, check_input_file
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -136,7 +136,7 @@ def save_checkpoint(checkpoint: Dict[str, Any], path: PathLike) -> None:
     """
     buffer = io.BytesIO()
     torch.save(checkpoint, buffer)
-    atomic_write(path, lambda f: f.write(buffer.getbuffer()), binary=True, create_parent=True)
+    atomic_write_bytes(path, buffer.getbuffer(), create_parent=True)
 
 
 __all__ = ["CheckpointError", "load_checkpoint", "check_finite_weights", "save_checkpoint"]

@@ -35,7 +35,7 @@ from lightning.fabric.plugins.io.torch_io import TorchCheckpointIO
 from lightning.pytorch.callbacks import Checkpoint
 
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
-from satagraph.utils.files import keep_copy
+from satagraph.utils.files import is_temp_file, keep_copy
 
 #: Names of the resume checkpoints in ``<run>/checkpoints``.
 LAST, PREVIOUS, DAMAGED = "last.ckpt", "last.prev.ckpt", "last.damaged.ckpt"
@@ -323,7 +323,7 @@ def epoch_checkpoints(checkpoints: Path) -> List[Path]:
     with contextlib.suppress(OSError):
         for path in checkpoints.iterdir():
             match = _STEP.search(path.name)
-            if match and not path.name.startswith(".") and path.is_file():
+            if match and not is_temp_file(path.name) and path.is_file():
                 found.append((int(match.group(1)), path.name, path))
     return [path for *_, path in sorted(found, reverse=True)]
 

@@ -378,10 +378,9 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     tgt = decoding_target(static_features(tgt_rest))
     q, r, c = transfer(module, src, tgt, semantic, window, overlap)
     del src  # the source's per-frame features: the take's largest arrays, read
-    out_feats = replace(tgt, q=q, r=r, fps=fps, transform=target.transform)
-    del tgt, q, r  # out_feats holds what is left of them
-    out = features_to_motion(out_feats, q=out_feats.q, r=out_feats.r, use_positions=False)
-    del out_feats
+    out = features_to_motion(replace(tgt, q=q, r=r, fps=fps, transform=target.transform),
+                             use_positions=False)
+    del tgt, q, r
     return src_canon, restore_rest(out, undo, target.skeleton), c
 
 

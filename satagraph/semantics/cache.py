@@ -12,7 +12,6 @@ in memory and reused while the file on disk is unchanged.
 from __future__ import annotations
 
 import hashlib
-import io
 import os
 import re
 import warnings
@@ -23,9 +22,9 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import torch
 from torch import Tensor
 
+from satagraph.io.checkpoint import save_checkpoint
 from satagraph.semantics.encoders import TextEncoder
 from satagraph.utils.cache import cache_moved, cache_root
-from satagraph.utils.files import atomic_write
 
 PathLike = Union[str, "os.PathLike[str]"]
 FORMAT = "satagraph-embeddings"
@@ -158,14 +157,8 @@ class EmbeddingCache:
         table.add([texts[i] for i in new], emb[new])
         payload = {"format": FORMAT, "encoder_id": encoder.id,
                    "texts": table.texts, "embeddings": table.emb}
-        # serialised in memory: torch's zip writer turns a failed write (a full
-        # disk) into a RuntimeError ("enforce fail ... unexpected pos"), which
-        # would end the command instead of costing the cache alone
-        buffer = io.BytesIO()
-        torch.save(payload, buffer)
-        try:
-            atomic_write(path, lambda f: f.write(buffer.getbuffer()), binary=True,
-                         create_parent=True)
+        try:  # a full disk is an OSError there, costing the cache alone
+            save_checkpoint(payload, path)
             table.stamp = _stamp(path)
         except OSError as err:
             warnings.warn(f"cannot write embedding cache {path} "

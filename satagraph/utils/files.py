@@ -280,6 +280,14 @@ def atomic_write_text(path: PathLike, text: str, create_parent: bool = False) ->
     atomic_write(path, lambda f: f.write(text), create_parent=create_parent)
 
 
+def atomic_write_bytes(path: PathLike, data: bytes, create_parent: bool = False) -> None:
+    """Write bytes atomically (see :func:`atomic_write`): a file serialised
+    in memory first (a checkpoint, a code bank), so that a failed write (a
+    full disk) is an :class:`OSError` naming :obj:`path`, not the
+    serialiser's own error."""
+    atomic_write(path, lambda f: f.write(data), binary=True, create_parent=create_parent)
+
+
 __all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
-           "check_output_path", "atomic_write", "atomic_write_text", "atomic_path",
-           "keep_copy", "sweep_stale_temps", "is_temp_file"]
+           "check_output_path", "atomic_write", "atomic_write_text", "atomic_write_bytes",
+           "atomic_path", "keep_copy", "sweep_stale_temps", "is_temp_file"]

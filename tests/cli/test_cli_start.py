@@ -65,7 +65,7 @@ def _heavy_modules_of(argvs: Sequence[Sequence[str]]) -> List[List[str]]:
         if key.startswith("RESULT") and key[len("RESULT"):].isdigit():
             results[int(key[len("RESULT"):])] = json.loads(value)
     assert sorted(results) == list(range(len(argvs))), proc.stdout + proc.stderr
-    for argv, i in zip(argvs, range(len(argvs))):
+    for i, argv in enumerate(argvs):
         assert results[i][0] == 0, (argv, results[i][0], proc.stderr)
     return [results[i][1] for i in range(len(argvs))]
 
