@@ -42,7 +42,9 @@ def add_train_parsers(sub) -> None:
                    help="continue from the run's last checkpoint")
     p.add_argument("--init-from", metavar="CKPT",
                    help="start from another run's weights (fine-tuning): a checkpoint, "
-                   "a run folder, a .safetensors weights file, builtin or builtin-wide")
+                   "a run folder, a .safetensors weights file, builtin or builtin-wide "
+                   "(builtin: the built-in generator in a text-to-motion config, e.g. "
+                   "finetune_t2m_builtin)")
     p.add_argument("--init-normalizer", choices=("data", "checkpoint"), default="data",
                    help="with --init-from, the feature normaliser: refitted on this "
                    "config's data (default) or the checkpoint's own, so that its weights "

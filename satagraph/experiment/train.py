@@ -311,7 +311,7 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
     refit = not frozen and normalizer == "data"
     keep = ((NORMALIZER_PREFIX,) if refit else ()) + tuple(getattr(module, "init_keeps", ()))
     own = module.state_dict()
-    payload = load_weights_or_checkpoint(ckpt)
+    payload = load_weights_or_checkpoint(ckpt, kind=builtin_kind(module))
     if hasattr(module, "init_meta"):
         module.init_meta((payload.get("hyper_parameters") or {}).get("meta") or {})
     state = payload["state_dict"]
@@ -350,6 +350,17 @@ def _warn_other_kept_part(ckpt: str, state: Dict[str, torch.Tensor],
             return
 
 
+def builtin_kind(module: Any) -> str:
+    """Which built-in weights ``"builtin"`` names for a module or module
+    class (its ``builtin_kind``; :data:`~satagraph.io.weights.BUILTIN_FILES`):
+    an autoencoder's unless the class says otherwise."""
+    return getattr(module, "builtin_kind", "autoencoder")
+
+
+#: The config that fine-tunes each kind of built-in weights.
+BUILTIN_FINETUNES = {"autoencoder": "finetune_builtin", "text-to-motion": "finetune_t2m_builtin"}
+
+
 #: Fewest of a module's weights (a fraction) that ``--init-from`` must fill;
 #: below it the checkpoint is another architecture and training would start
 #: from scratch under a fine-tune's name.
@@ -373,9 +384,9 @@ def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.Lig
             else "train with the config that made it")
     raise ValueError(f"--init-from {ckpt}: only {filled} of {len(wanted)} weights fit this "
                      f"model: it is another architecture; {hint}"
-                     + ("; for the built-in model: satagraph train finetune_builtin "
-                        "--init-from builtin --data FOLDER"
-                        if str(ckpt).startswith("builtin") else ""))
+                     + (f"; for the built-in model: satagraph train "
+                        f"{BUILTIN_FINETUNES[builtin_kind(module)]} --init-from builtin "
+                        "--data FOLDER" if str(ckpt).startswith("builtin") else ""))
 
 
 def _spawns_workers(trainer: L.Trainer) -> bool:
@@ -435,7 +446,9 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     if not resume:
         refuse_trained_folder(run_dir)
     if init_from:  # a bad file, or one of other features, fails before any work
-        check_init_features(load_weights_or_checkpoint(init_from), cfg, init_from)
+        payload = load_weights_or_checkpoint(init_from,
+                                             kind=builtin_kind(module_class(cfg["module"])))
+        check_init_features(payload, cfg, init_from)
     if cfg["threads"]:
         torch.set_num_threads(int(cfg["threads"]))
     with _lock(run_dir):

@@ -382,11 +382,13 @@ def load_weights(path: PathLike) -> Dict[str, Any]:
             "weights_metadata": meta}
 
 
-def load_weights_or_checkpoint(path: PathLike, require=("state_dict",)) -> Dict[str, Any]:
+def load_weights_or_checkpoint(path: PathLike, require=("state_dict",),
+                               kind: str = "autoencoder") -> Dict[str, Any]:
     """A checkpoint (``torch.save``, loaded with ``weights_only=True``) or a
-    weights file, by content; ``"builtin"`` names the package's weights."""
+    weights file, by content; ``"builtin"`` names the package's weights of
+    :obj:`kind` (:data:`BUILTIN_FILES`)."""
     from satagraph.io.checkpoint import load_checkpoint
-    path = _checked(resolve_weights(path))
+    path = _checked(resolve_weights(path, kind))
     if is_weights_file(path):
         return load_weights(path)
     return load_checkpoint(path, require=require)

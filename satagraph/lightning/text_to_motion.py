@@ -56,6 +56,7 @@ from satagraph.data.code_bank import CodeBank, CodeBatch, autoencoder_fingerprin
 from satagraph.lightning.per_dataset import PerDatasetFigures, dataset_of, log_per_dataset
 from satagraph.lightning.frozen import freeze, keep_frozen, named_parts
 from satagraph.io.checkpoint import CheckpointError
+from satagraph.io.weights import BUILTIN, is_builtin, load_weights_or_checkpoint
 from satagraph.pipelines.inference import default_windows, window_codes
 from satagraph.pipelines.prompt_reading import VOCABULARY_KEY, words_of
 from satagraph.nn.generators import (LengthModel, MaskedLoss, MaskedTransformer,
@@ -73,6 +74,10 @@ DEFAULT_OPTIM: Dict[str, Any] = {"lr": 2e-4, "weight_decay": 1e-5, "warmup_steps
                                  "decay_steps": 0, "floor": 0.1, "frozen": ()}
 #: The parts of a generator ``optim.frozen`` may name.
 GENERATOR_PARTS = ("skeleton", "masked", "residual", "length")
+
+#: The kind of built-in weights a text-to-motion module is
+#: (:data:`~satagraph.io.weights.BUILTIN_FILES`).
+BUILTIN_KIND = "text-to-motion"
 #: Checkpoint key of the text encoder's id and width.
 TEXT_ENCODER_KEY = "text_encoder"
 
@@ -92,11 +97,14 @@ def warmup_cosine(step: int, warmup_steps: int, decay_steps: int, floor: float) 
 
 def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     """The frozen autoencoder of ``model.autoencoder``: a checkpoint path
-    (loaded with its weights) or the stored ``{"checkpoint", "hparams"}``
+    (loaded with its weights), ``"builtin"`` (the built-in generator's own,
+    :func:`builtin_autoencoder`) or the stored ``{"checkpoint", "hparams"}``
     of a trained generator (built empty: the generator's own weights fill
     it). Returns the module and the stored form."""
     from satagraph.experiment.train import load_module, module_class
-    if isinstance(spec, str):
+    if isinstance(spec, str) and is_builtin(spec, BUILTIN_KIND):
+        module, stored = builtin_autoencoder()
+    elif isinstance(spec, str):
         if not os.path.isfile(spec):
             raise CheckpointError(f"{spec}: no such autoencoder checkpoint (model.autoencoder;"
                                   " train one with `satagraph train t2m_rvq_tiny`)")
@@ -109,13 +117,33 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
         module = module_class(hparams["meta"].get("module", "rvq"))(**hparams)
         stored = spec
     else:
-        raise ValueError("model.autoencoder: a SATA-RVQ checkpoint path is needed")
+        raise ValueError("model.autoencoder: a SATA-RVQ checkpoint path (or builtin) is "
+                         "needed")
     if not hasattr(module, "codes"):
         raise CheckpointError(f"{stored['checkpoint']}: a {module.meta.get('module')!r} "
                               "model has no codes: text-to-motion needs a SATA-RVQ "
                               "(module: rvq)")
     module.requires_grad_(False)
     return module.eval(), stored
+
+
+def builtin_autoencoder() -> Tuple[nn.Module, Dict[str, Any]]:
+    """The SATA-RVQ the built-in generator was trained over, from the
+    generator's own weights file (``model.autoencoder: builtin``): a
+    fine-tune of the built-in generator (``--init-from builtin``) then
+    reads the codes its weights learnt. Returns the module and the stored
+    form (``checkpoint`` is ``"builtin"``)."""
+    from satagraph.experiment.train import module_class
+    payload = load_weights_or_checkpoint(BUILTIN, require=("state_dict", "hyper_parameters"),
+                                         kind=BUILTIN_KIND)
+    stored = copy.deepcopy(payload["hyper_parameters"]["model"]["autoencoder"])
+    stored["checkpoint"] = BUILTIN
+    hparams = stored["hparams"]
+    module = module_class(hparams["meta"].get("module", "rvq"))(**hparams)
+    prefix = "autoencoder."
+    module.load_state_dict({k[len(prefix):]: v for k, v in payload["state_dict"].items()
+                            if k.startswith(prefix)})
+    return module, stored
 
 
 def check_shared(own: nn.Module, theirs: Dict[str, Tensor], prefix: str, ckpt: str,
@@ -166,6 +194,9 @@ class TextToMotionModule(PerDatasetFigures, L.LightningModule):
     #: Weights ``--init-from`` leaves as built (:func:`~satagraph.experiment.train.init_weights`):
     #: the frozen autoencoder is the one ``model.autoencoder`` names.
     init_keeps = ("autoencoder.",)
+
+    #: Which built-in weights ``--init-from builtin`` names.
+    builtin_kind = BUILTIN_KIND
 
     def __init__(self, model: Dict[str, Any], loss: Optional[Dict[str, float]] = None,
                  optim: Optional[Dict[str, float]] = None, fps: float = 30.0,

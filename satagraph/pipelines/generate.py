@@ -205,7 +205,7 @@ def load_generator(ckpt: str = "builtin"):
     if ckpt in BUILTIN_VARIANTS:
         raise CheckpointError(f"{ckpt}: a built-in retargeting model, not a text-to-motion "
                               "one (generate's built-in model is --ckpt builtin)")
-    ckpt = resolve_weights(ckpt, kind="text-to-motion")  # a run folder: its last.ckpt
+    ckpt = resolve_weights(ckpt, kind=TextToMotionModule.builtin_kind)  # a folder: its last.ckpt
     if not os.path.isfile(ckpt):
         raise CheckpointError(f"{ckpt}: no such checkpoint file")
     try:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 
 from satagraph.cli import main
 from satagraph.io import read_bvh
@@ -176,3 +177,40 @@ def test_a_clip_longer_than_the_trained_window_keeps_the_pace_of_one_within_it(t
     four = pace("4")
     windowed, whole = pace("12") / four, pace("12", "--window", "0") / four
     assert windowed >= 0.7 and whole < 0.5, (windowed, whole)
+
+
+def test_model_autoencoder_builtin_is_the_shipped_generators_own() -> None:
+    """``model.autoencoder: builtin`` builds the SATA-RVQ the built-in
+    generator was trained over from the generator's own file (it was a
+    missing checkpoint: a user could not fine-tune the shipped generator),
+    weight for weight the one ``generate`` decodes with."""
+    from satagraph.lightning.text_to_motion import load_autoencoder
+    from satagraph.pipelines.generate import load_generator
+    autoencoder, stored = load_autoencoder("builtin")
+    shipped = load_generator("builtin").autoencoder.state_dict()
+    own = autoencoder.state_dict()
+    assert stored["checkpoint"] == "builtin" and hasattr(autoencoder, "codes")
+    assert own.keys() == shipped.keys()
+    assert all(torch.equal(v, shipped[k]) for k, v in own.items())
+    assert not any(p.requires_grad for p in autoencoder.parameters())
+
+
+def test_init_from_builtin_starts_a_generator_from_the_shipped_one() -> None:
+    """``satagraph train finetune_t2m_builtin --init-from builtin``: the
+    config builds the shipped architecture over the shipped autoencoder,
+    and ``builtin`` names the built-in generator's weights (it named the
+    built-in retargeting model's, which fit none of them), every one loaded
+    without a warning."""
+    import warnings
+    from satagraph.experiment.config import load_config
+    from satagraph.experiment.train import build_module, init_weights
+    from satagraph.pipelines.generate import load_generator
+    module = build_module(load_config("finetune_t2m_builtin"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        init_weights(module, "builtin")
+    shipped = load_generator("builtin").state_dict()
+    state = module.state_dict()
+    assert state.keys() == shipped.keys()
+    assert all(torch.equal(v, shipped[k]) for k, v in state.items())
+    assert set(load_generator("builtin").meta["caption_words"]) <= set(module.meta["caption_words"])
