@@ -269,7 +269,8 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         out = self(batch)
         losses = self.compute_losses(out, batch)
         size = len(batch.meta)
-        self.log_dict({f"{stage}/{k}": v.detach() for k, v in losses.items()},
+        terms = {f"{stage}/{k}": v.detach() for k, v in losses.items() if k != "loss"}
+        self.log_dict(terms,  # the total once: {stage}_loss
                       batch_size=size, prog_bar=False, on_epoch=True,
                       on_step=stage == "train", sync_dist=stage != "train")
         self.log(f"{stage}_loss", losses["loss"].detach(), batch_size=size,

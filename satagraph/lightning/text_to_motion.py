@@ -460,7 +460,8 @@ class TextToMotionModule(PerDatasetFigures, L.LightningModule):
     def _step(self, batch, stage: str, generator: Optional[torch.Generator] = None) -> Tensor:
         losses = self.compute_losses(batch, generator, None if stage == "train" else stage)
         size = len(batch) if isinstance(batch, CodeBatch) else len(batch.meta)
-        self.log_dict({f"{stage}/{k}": v.detach() for k, v in losses.items()},
+        terms = {f"{stage}/{k}": v.detach() for k, v in losses.items() if k != "loss"}
+        self.log_dict(terms,  # the total once: {stage}_loss
                       batch_size=size, on_epoch=True, on_step=stage == "train",
                       sync_dist=stage != "train")
         self.log(f"{stage}_loss", losses["loss"].detach(), batch_size=size, prog_bar=True,
