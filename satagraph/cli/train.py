@@ -254,10 +254,10 @@ def run_train(args) -> int:
     except (TrainingStopped, RunLockedError) as err:
         print(f"satagraph: error: {err}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as err:
         if args.traceback:
             raise
-        print(_interrupted(Path(cfg["output_dir"])), file=sys.stderr)
+        print(_interrupted(Path(cfg["output_dir"]), *err.args[:1]), file=sys.stderr)
         return 130
     best = trainer.checkpoint_callback.best_model_path
     skipped = f"; {len(dm.skipped)} bad files left out (skipped_files.txt)" \
@@ -277,11 +277,15 @@ def run_train(args) -> int:
     return 0
 
 
-def _interrupted(run_dir: Path) -> str:
-    """The line for a training run stopped by Ctrl-C (or SIGTERM): where
+def _interrupted(run_dir: Path, saved_step: Optional[int] = None) -> str:
+    """The line for a training run stopped by Ctrl-C (or SIGTERM): the
+    checkpoint the interrupt wrote (at :obj:`saved_step`), else where
     ``--resume`` goes on from, or that it has nothing to go on from yet."""
     from satagraph.lightning.reliability import LAST, PREVIOUS, epoch_checkpoints
     folder = run_dir / "checkpoints"
+    if saved_step is not None:
+        return (f"satagraph: interrupted at step {saved_step}, saved as {folder / LAST}: "
+                "train --resume goes on from there")
     kept = [p for p in (folder / LAST, folder / PREVIOUS) if p.is_file()]
     kept += epoch_checkpoints(folder)  # what resume_checkpoint falls back to
     if kept:

@@ -554,7 +554,9 @@ def _fit_interruptibly(trainer: L.Trainer, module: L.LightningModule, datamodule
     """:meth:`~lightning.pytorch.Trainer.fit`, a Ctrl-C given back as the
     :class:`KeyboardInterrupt` it was (Lightning ends one with ``exit(1)``
     and leaves Ctrl-C ignored), so that the command says how to resume and
-    exits 130, and a notebook keeps its Ctrl-C."""
+    exits 130, and a notebook keeps its Ctrl-C; its argument is the step of
+    the ``last.ckpt`` the interrupt wrote, where it wrote one
+    (:meth:`ResumeCheckpoint.on_exception`)."""
     handler = signal.getsignal(signal.SIGINT)
     try:
         trainer.fit(module, datamodule=datamodule, ckpt_path=str(last) if last else None)
@@ -563,7 +565,9 @@ def _fit_interruptibly(trainer: L.Trainer, module: L.LightningModule, datamodule
             raise
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, handler)
-        raise KeyboardInterrupt from None
+        saved = [c.interrupted_step for c in trainer.callbacks
+                 if isinstance(c, ResumeCheckpoint) and c.interrupted_step is not None]
+        raise KeyboardInterrupt(*saved[:1]) from None
 
 
 def _lock(run_dir: Path):

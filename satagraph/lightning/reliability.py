@@ -6,7 +6,7 @@ r"""Training that cannot end green with a broken model, and exact resume.
   updated, so the last checkpoint stays good) or, with ``mode="skip"``,
   drops that batch's update and counts it.
 - :class:`ResumeCheckpoint` writes ``last.ckpt`` every N steps and/or M
-  minutes and at every epoch end, keeping the previous one as
+  minutes, at every epoch end and at a Ctrl-C, keeping the previous one as
   ``last.prev.ckpt``; the checkpoint carries every random state (torch,
   CUDA, numpy, Python), restored just before the first resumed step, while
   the loop state in it gives the sampler's position
@@ -179,7 +179,9 @@ class ResumeCheckpoint(Checkpoint):
     bounded by ``max_steps`` goes on past an epoch's end: the losses are
     those of a run never stopped, where Lightning 2.6 alone would count the
     cut epoch as finished or skip the next one
-    (:meth:`on_load_checkpoint`).
+    (:meth:`on_load_checkpoint`). A Ctrl-C writes ``last.ckpt`` at the last
+    training step that ended (:meth:`on_exception`), so that ``--resume``
+    goes on from there.
 
     Args:
         dirpath (str): The checkpoint folder.
@@ -201,7 +203,13 @@ class ResumeCheckpoint(Checkpoint):
         self._saved_step = -1
         self._pending: Optional[Dict[str, Any]] = None
         self._max_steps: Optional[int] = None
+        self._unsaved = False  # a training step ended since the last save
+        self._stepping = False  # from an optimizer step to the end of its batch
+        self._interrupting = False
+        self._step_rng: Optional[Dict[str, Any]] = None  # at the last step's end
         self.saves = 0
+        #: The step of the checkpoint a Ctrl-C wrote (``None``: none).
+        self.interrupted_step: Optional[int] = None
         #: The step of the checkpoint a resumed run started from (``None``:
         #: not resumed); the command compares it with where the run ended.
         self.resumed_step: Optional[int] = None
@@ -225,7 +233,7 @@ class ResumeCheckpoint(Checkpoint):
         total = trainer.num_training_batches if trainer is not None else float("inf")
         return {"epoch": epoch, "batches": self._batches_done, "step": step,
                 "epoch_done": self._batches_done >= total,
-                "rng": rng_states()}
+                "rng": self._step_rng if self._interrupting else rng_states()}
 
     @property
     def resume_position(self) -> Optional[Dict[str, Any]]:
@@ -280,6 +288,45 @@ class ResumeCheckpoint(Checkpoint):
             due = due or bool(trainer.strategy.broadcast(late, src=0))
         if due:
             self.save(trainer)
+        else:
+            self._unsaved, self._step_rng = True, rng_states()
+        self._stepping = False
+
+    def on_before_optimizer_step(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                                 optimizer: torch.optim.Optimizer) -> None:
+        self._stepping = True
+
+    def on_exception(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                     exception: BaseException) -> None:
+        """Ctrl-C: write ``last.ckpt`` at the last training step that ended,
+        as an every-N-steps save there would have (its random states, its
+        loop counts), so that ``--resume`` goes on from it. Nothing is
+        written where that checkpoint is already ``last.ckpt``, or where the
+        stop fell in validation or between an optimizer step and the end of
+        its batch (the weights may be half updated), or in a distributed
+        run (its other processes would not join the save); nor for other
+        errors (a non-finite loss keeps the last good checkpoint). A save
+        that fails is a warning: the interrupt goes on, and ``last.ckpt``
+        stays the one before (writes are atomic)."""
+        if (not isinstance(exception, KeyboardInterrupt) or not self._unsaved
+                or self._stepping or not trainer.training or trainer.world_size > 1):
+            return
+        self._interrupting = True
+        try:
+            self.save(trainer)
+        except Exception as err:  # the interrupt is what the user asked for
+            warnings.warn(f"interrupted: could not write {self.last_path} "
+                          f"({' '.join(str(err).split())}); it is left as it was",
+                          stacklevel=2)
+            return
+        finally:
+            self._interrupting = False
+        self.interrupted_step = trainer.global_step
+
+    def on_save_checkpoint(self, trainer: L.Trainer, pl_module: L.LightningModule,
+                           checkpoint: Dict[str, Any]) -> None:
+        if self._interrupting:
+            _as_batch_end(checkpoint)
 
     def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         self.save(trainer)
@@ -293,7 +340,30 @@ class ResumeCheckpoint(Checkpoint):
             keep_copy(self.last_path, self.previous_path)
         trainer.save_checkpoint(self.last_path, weights_only=False)
         self._last_time, self._saved_step = time.monotonic(), step
+        self._unsaved = False
         self.saves += 1
+
+
+def _as_batch_end(checkpoint: Dict[str, Any]) -> None:
+    """The loop counts of a checkpoint written at a Ctrl-C as those of one
+    written at the end of the last training batch that ended (whose counts
+    Lightning resumes after that batch): a batch begun after it is counted
+    back as never begun, and the one that ended was not its epoch's last.
+    Counts at that batch's end, or at the epoch's end (its last batch
+    done: the epoch-end save's), are left as they are."""
+    loop = checkpoint["loops"]["fit_loop"]
+    batches = loop["epoch_loop.batch_progress"]
+    total = batches["total"]
+    if total["processed"] != total["completed"] or (
+            total["ready"] == total["completed"] and batches["is_last_batch"]):
+        return
+    for counts in (batches["total"], batches["current"]):
+        done = counts["processed"]
+        counts.update(ready=done, started=done, processed=done, completed=done - 1)
+    batches["is_last_batch"] = False
+    state = loop.get("epoch_loop.state_dict") or {}
+    if "_batches_that_stepped" in state:  # counted at that batch's end
+        state["_batches_that_stepped"] -= 1
 
 
 def _reopen_cut_epoch(checkpoint: Dict[str, Any]) -> None:

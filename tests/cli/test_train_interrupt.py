@@ -29,3 +29,20 @@ def test_ctrl_c_says_whether_there_is_a_checkpoint_to_resume(
     assert main(["train", "tiny", f"output_dir={run}", "--resume"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"--resume goes on from {run / 'checkpoints' / 'last.ckpt'}" in err[0]
+
+
+def test_ctrl_c_names_the_checkpoint_it_saved(monkeypatch: pytest.MonkeyPatch,
+                                              tmp_path: Path, capsys) -> None:
+    """An interrupt that wrote ``last.ckpt`` (its step the interrupt's
+    argument, :meth:`ResumeCheckpoint.on_exception`) says so."""
+    import satagraph.experiment.train as train_mod
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt(6)
+
+    monkeypatch.setattr(train_mod, "train", interrupted)
+    run = tmp_path / "run"
+    assert main(["train", "tiny", f"output_dir={run}"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"satagraph: interrupted at step 6, saved as "
+                   f"{run / 'checkpoints' / 'last.ckpt'}: train --resume goes on from there"]

@@ -480,3 +480,97 @@ def test_skipped_files_are_listed_and_the_list_goes_once_they_read(
     cfg["trainer"].update(max_epochs=2)
     train(cfg, resume=True)
     assert not (run_dir / "skipped_files.txt").exists()
+
+
+class _InterruptAt(L.Callback):
+    """Ctrl-C at step :obj:`step`: as the next batch starts (``start``), in
+    its backward pass (``backward``: its forward pass has drawn its
+    dropout) or at the end of the epoch that step ends (``epoch_end``,
+    before the epoch-end save); :obj:`then` runs first."""
+
+    def __init__(self, step: int, where: str = "backward", then: Any = None) -> None:
+        self.step, self.where, self.then = step, where, then
+
+    def on_train_batch_start(self, trainer: L.Trainer, *args: Any) -> None:
+        self._stop(trainer, "start")
+
+    def on_before_backward(self, trainer: L.Trainer, *args: Any) -> None:
+        self._stop(trainer, "backward")
+
+    def on_train_epoch_end(self, trainer: L.Trainer, *args: Any) -> None:
+        self._stop(trainer, "epoch_end")
+
+    def _stop(self, trainer: L.Trainer, where: str) -> None:
+        if where == self.where and trainer.global_step == self.step:
+            if self.then is not None:
+                self.then()
+            raise KeyboardInterrupt
+
+
+def _interruptible(cfg: Dict[str, Any]) -> Dict[str, Any]:
+    """The tiny config for three exactly repeatable 2-step epochs, each
+    step's loss logged, dropout drawing from the random state."""
+    cfg = copy.deepcopy(cfg)
+    cfg["trainer"].update(max_epochs=3, deterministic=True, num_sanity_val_steps=0)
+    cfg["model"]["dropout"] = 0.1
+    cfg.update(threads=1, loss_log=True)
+    return cfg
+
+
+@pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4)])
+def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
+        tiny_config: Dict[str, Any], tmp_path: Path, where: str, step: int) -> None:
+    """Ctrl-C as step 4 starts or inside it writes ``last.ckpt`` at step 3
+    (its optimizer state too), at the second epoch's end at step 4; the
+    first epoch's at step 2 is kept as ``last.prev.ckpt``; ``--resume``
+    goes on from there with the losses of a run never stopped (the
+    interrupted step's dropout is drawn again)."""
+    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
+    train(reference)
+    full = read_loss_log(tmp_path / "a" / "losses.tsv")
+    assert max(full) == 6
+    cfg = _interruptible(tiny_config)
+    folder = Path(cfg["output_dir"]) / "checkpoints"
+    with pytest.raises(KeyboardInterrupt) as stop:
+        train(cfg, callbacks=[_InterruptAt(step, where)])
+    assert stop.value.args == (step,)
+    ckpt = load_checkpoint(folder / LAST)
+    assert ckpt["global_step"] == step
+    assert [float(s["step"]) for s in ckpt["optimizer_states"][0]["state"].values()][:1] == \
+        [float(step)]
+    assert load_checkpoint(folder / PREVIOUS)["global_step"] == 2
+    assert resume_checkpoint(folder) == folder / LAST
+    _, _, trainer, _ = train(cfg, resume=True)
+    assert trainer.global_step == 6
+    assert read_loss_log(Path(cfg["output_dir"]) / "losses.tsv") == full
+
+
+def test_a_ctrl_c_save_that_fails_leaves_nothing_to_resume_from(
+        tiny_config: Dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+    """A full disk half-way through the Ctrl-C save: a warning, no
+    ``last.ckpt`` nor temporary file, so ``--resume`` finds nothing (the
+    first checkpoint was not due yet) and the interrupt says none was
+    written."""
+    import errno
+
+    import satagraph.io.checkpoint as checkpoint_mod
+    from satagraph.utils.files import atomic_write, is_temp_file
+
+    def half_then_full(path: Any, data: bytes, create_parent: bool = False) -> None:
+        def write(f: Any) -> None:
+            f.write(bytes(data)[: len(data) // 2])
+            raise OSError(errno.ENOSPC, "No space left on device")
+        atomic_write(path, write, binary=True, create_parent=create_parent)
+
+    def disk_full() -> None:
+        monkeypatch.setattr(checkpoint_mod, "atomic_write_bytes", half_then_full)
+
+    cfg = _interruptible(tiny_config)
+    folder = Path(cfg["output_dir"]) / "checkpoints"
+    with pytest.warns(UserWarning, match="could not write .*last.ckpt.*No space left"):
+        with pytest.raises(KeyboardInterrupt) as stop:
+            train(cfg, callbacks=[_InterruptAt(1, then=disk_full)])
+    assert stop.value.args == ()
+    assert [p.name for p in folder.iterdir() if p.name == LAST or is_temp_file(p.name)] == []
+    with pytest.raises(FileNotFoundError, match="no checkpoint"):
+        resume_checkpoint(folder)
