@@ -163,7 +163,7 @@ def add_train_parsers(sub) -> None:
                    "epoch's last batch may be short, so up to a batch more may come")
     p.add_argument("--max-minutes", type=positive_float, default=None,
                    help="stop drawing after this long and write the windows drawn "
-                   "(default: no limit)")
+                   "(default: no limit; Ctrl-C writes them too, exit code 130)")
     p.add_argument("--device", default="cpu",
                    help="where to run the autoencoder: cpu, cuda, cuda:1, ... (default: cpu)")
     p.add_argument("--swap-rigs", type=float, default=0.0, metavar="SHARE",
@@ -301,7 +301,8 @@ def run_code_bank(args) -> int:
     import lightning as L
     import torch
 
-    from satagraph.data.code_bank import check_swap_share, draw_code_bank, swap_skeletons
+    from satagraph.data.code_bank import (DrawInterrupted, check_swap_share, draw_code_bank,
+                                          swap_skeletons)
     from satagraph.experiment.config import load_config
     from satagraph.experiment.train import build_datamodule, build_module, check_config
     from satagraph.utils.files import check_output_path
@@ -335,17 +336,21 @@ def run_code_bank(args) -> int:
     def progress(count: int) -> None:
         print(f"\r{count} windows, {time.time() - start:.0f} s", end="", file=sys.stderr)
 
+    interrupted = False
     try:
         bank = draw_code_bank(module, batches, args.windows, progress,
                               None if args.max_minutes is None else 60.0 * args.max_minutes)
+    except DrawInterrupted as stop:  # Ctrl-C keeps what was drawn, as --max-minutes
+        bank, interrupted = stop.bank, True
     finally:
         print(file=sys.stderr)  # ends the progress line, before an error too
     bank = swap_skeletons(bank, args.swap_rigs, seed=int(cfg["seed"]))
     bank.data = {"sources": cfg["data"]["sources"], "window": int(cfg["data"]["window"])}
     bank.save(args.output)
-    print(f"wrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
+    said = "satagraph: interrupted: " if interrupted else ""
+    print(f"{said}wrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
           f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)
-    return 0
+    return 130 if interrupted else 0
 
 
 def _check_device(device: str) -> None:

@@ -321,6 +321,17 @@ def concat_banks(banks: Iterable[CodeBank]) -> CodeBank:
                     cat("censored"))
 
 
+class DrawInterrupted(KeyboardInterrupt):
+    """Ctrl-C while :func:`draw_code_bank` drew: :attr:`bank` holds the
+    windows of the batches coded before it (the batch in hand is dropped),
+    a whole bank as ``max_seconds`` gives; a :class:`KeyboardInterrupt`,
+    so that code which does not keep them stops as before."""
+
+    def __init__(self, bank: CodeBank) -> None:
+        super().__init__(f"interrupted after {len(bank)} windows")
+        self.bank = bank
+
+
 def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
                    progress: Optional[Any] = None,
                    max_seconds: Optional[float] = None) -> CodeBank:
@@ -338,8 +349,26 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
         windows (int): Windows wanted.
         progress (callable, optional): Called with the count so far.
         max_seconds (float, optional): Stop drawing after this long.
+
+    Raises:
+        DrawInterrupted: Ctrl-C after a batch was coded, holding the bank of
+            the batches coded (before any, the plain :class:`KeyboardInterrupt`).
     """
-    parts, count, epoch = [], 0, 0
+    parts: List[CodeBank] = []
+    try:
+        _draw(module, loader_for_epoch, windows, parts, progress, max_seconds)
+    except KeyboardInterrupt:
+        if not parts:
+            raise
+        raise DrawInterrupted(concat_banks(parts)) from None
+    return concat_banks(parts)
+
+
+def _draw(module: Any, loader_for_epoch: Any, windows: int, parts: List[CodeBank],
+          progress: Optional[Any], max_seconds: Optional[float]) -> None:
+    """:func:`draw_code_bank`'s loop, appending each coded batch to
+    :obj:`parts` as it goes (what an interrupt keeps)."""
+    count, epoch = 0, 0
     deadline = None if max_seconds is None else time.monotonic() + max_seconds
     fingerprint = autoencoder_fingerprint(module.autoencoder)  # once: it hashes every weight
     with torch.no_grad():
@@ -358,9 +387,8 @@ def draw_code_bank(module: Any, loader_for_epoch: Any, windows: int,
             if deadline is not None and time.monotonic() >= deadline:
                 break
             epoch += 1
-    return concat_banks(parts)
 
 
-__all__ = ["CodeBank", "CodeBatch", "HUMAN_WORDS", "RIG_WINDOWS", "autoencoder_fingerprint",
-           "captured_rigs", "check_swap_share", "concat_banks", "draw_code_bank",
-           "skeleton_keys", "swap_skeletons"]
+__all__ = ["CodeBank", "CodeBatch", "DrawInterrupted", "HUMAN_WORDS", "RIG_WINDOWS",
+           "autoencoder_fingerprint", "captured_rigs", "check_swap_share", "concat_banks",
+           "draw_code_bank", "skeleton_keys", "swap_skeletons"]

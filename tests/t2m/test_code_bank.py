@@ -10,8 +10,9 @@ import pytest
 import torch
 
 from satagraph.cli import main
-from satagraph.data.code_bank import (CodeBank, CodeBatch, autoencoder_fingerprint,
-                                      concat_banks, draw_code_bank, swap_skeletons)
+from satagraph.data.code_bank import (CodeBank, CodeBatch, DrawInterrupted,
+                                      autoencoder_fingerprint, concat_banks, draw_code_bank,
+                                      swap_skeletons)
 from satagraph.experiment.config import load_config
 from satagraph.experiment.train import train
 from tests.t2m.conftest import build_t2m, tiny_train_overrides, zoo_batch
@@ -201,6 +202,51 @@ def test_drawing_stops_when_its_time_is_up_with_the_batch_in_hand(banked):
     bank = draw_code_bank(module, loader_for_epoch, windows=4 * n)
     assert len(bank) == 4 * n and epochs == [0, 0, 1]
     assert torch.equal(bank.codes[:coded.codes.size(0)], coded.codes)
+
+
+def test_ctrl_c_keeps_the_batches_drawn(banked):
+    """Ctrl-C after two batches: the interrupt holds their bank (still a
+    KeyboardInterrupt); before any batch, the plain interrupt."""
+    module, batch, coded = banked
+
+    def two_then_ctrl_c(epoch):
+        yield batch
+        yield batch
+        raise KeyboardInterrupt
+
+    with pytest.raises(DrawInterrupted) as stop:
+        draw_code_bank(module, two_then_ctrl_c, windows=1000)
+    assert isinstance(stop.value, KeyboardInterrupt) and len(stop.value.bank) == 2 * len(coded)
+    assert torch.equal(stop.value.bank.codes[:coded.codes.size(0)], coded.codes)
+
+    def at_once(epoch):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt) as stop:
+        draw_code_bank(module, at_once, windows=10)
+    assert type(stop.value) is KeyboardInterrupt
+
+
+def test_satagraph_code_bank_writes_what_ctrl_c_leaves(autoencoder_ckpt, tmp_path, capsys,
+                                                       monkeypatch):
+    """Ctrl-C while the second batch is coded: the first one's 4 windows
+    are written as a whole bank, said in one line, exit code 130."""
+    from satagraph.lightning.text_to_motion import TextToMotionModule
+    coded, calls = TextToMotionModule.bank_batch, []
+
+    def ctrl_c_at_the_second(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return coded(self, *args, **kwargs)
+
+    monkeypatch.setattr(TextToMotionModule, "bank_batch", ctrl_c_at_the_second)
+    path = tmp_path / "bank.safetensors"
+    overrides = tiny_train_overrides(autoencoder_ckpt, tmp_path / "run", windows=8)
+    assert main(["code-bank", "t2m_tiny", str(path), *overrides, "--windows", "100"]) == 130
+    assert len(CodeBank.load(path)) == 4
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last.startswith(f"satagraph: interrupted: wrote 4 windows (") and str(path) in last
 
 
 def test_code_bank_refuses_what_it_cannot_bank(autoencoder_ckpt, tmp_path, capsys):
