@@ -2,7 +2,9 @@
 --target T.bvh OUT_DIR``, ``satagraph reconstruct IN_DIR OUT_DIR``): every
 ``.bvh`` below the folder, written to the same relative path below the
 output folder; a file that fails gets one line on stderr and the run goes
-on, and no output file is left for it (BVH writes are atomic)."""
+on, and no output file is left for it (BVH writes are atomic). With
+``--skip-existing``, the files whose result is already there, whole, are
+left out (:func:`complete_output`): a folder run that was stopped goes on."""
 from __future__ import annotations
 
 import os
@@ -12,6 +14,7 @@ from pathlib import Path
 from typing import Callable, List, Optional, Sequence, Tuple, TypeVar, Union
 
 from satagraph.datasets.sources import bvh_files
+from satagraph.utils.files import sweep_stale_temps
 
 PathLike = Union[str, Path]
 Item, Result = TypeVar("Item"), TypeVar("Result")
@@ -57,10 +60,23 @@ def each_kept(items: Sequence[Item], work: Callable[[Item], Result],
     return results, failed
 
 
+def complete_output(path: PathLike) -> bool:
+    """Whether :obj:`path` is a whole result of an earlier run: a file that
+    satagraph wrote to the end (its closing declaration line is there). BVH
+    writes are atomic, so a write that a kill cut short left its temporary
+    file (:func:`~satagraph.utils.files.is_temp_file`) beside this path,
+    never a part of it; a file cut short otherwise (a copy) lacks the line.
+    How it was made (checkpoint, options) is not checked."""
+    from satagraph.io.bvh_reader import written_by_satagraph
+    return Path(path).is_file() and written_by_satagraph(str(path))
+
+
 def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str], str],
-                    verb: str, traceback: bool = False) -> int:
+                    verb: str, traceback: bool = False, skip_existing: bool = False) -> int:
     """Run :obj:`one` (input path, output path -> a one-line summary) on
-    every BVH file below :obj:`source`, writing below :obj:`output`.
+    every BVH file below :obj:`source`, writing below :obj:`output`; with
+    :obj:`skip_existing`, not on those whose output is already whole
+    (:func:`complete_output`), which the summary counts.
 
     Returns:
         int: 0 when every file went through, 2 when any failed (each said
@@ -78,17 +94,29 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
     files = input_files(source, output)
     _check_output_folder(output)  # once: not as a failure of every input file
     start = time.perf_counter()
+    todo = files
+    if skip_existing:
+        todo = [p for p in files if not complete_output(output / p.relative_to(source))]
+        for folder in {(output / p.relative_to(source)).parent for p in files}:
+            sweep_stale_temps(folder)  # what the stopped run's killed writes left
 
     def write(path: Path) -> None:
         out = output / path.relative_to(source)
         out.parent.mkdir(parents=True, exist_ok=True)
         print(one(str(path), str(out)))
 
-    _, failed = each_kept(files, write, failure_line, traceback)
-    done = len(files) - len(failed)
+    _, failed = each_kept(todo, write, failure_line, traceback)
+    done = len(todo) - len(failed)
     print(f"{verb} {done} of {len(files)} files into {output} in "
-          f"{time.perf_counter() - start:.1f} s" + _failed(failed))
+          f"{time.perf_counter() - start:.1f} s" + _skipped(len(files) - len(todo))
+          + _failed(failed))
     return 2 if failed else 0
+
+
+def _skipped(count: int) -> str:
+    """The part of the summary line for the files ``--skip-existing`` left out."""
+    return f"; {count} skipped, their results already there (--skip-existing)" \
+        if count else ""
 
 
 def _check_output_folder(output: Path) -> None:
@@ -118,4 +146,5 @@ def _failed(failed: List[Path], shown: int = 10) -> str:
     return f"; {len(failed)} failed: {names}{more}"
 
 
-__all__ = ["input_files", "failure_line", "each_kept", "run_over_folder"]
+__all__ = ["input_files", "failure_line", "each_kept", "complete_output",
+           "run_over_folder"]

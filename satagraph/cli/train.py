@@ -21,10 +21,28 @@ FOLDER_NOTE = ("A folder {what} reads every .bvh below it and writes each result
 
 
 def _in_out(p: argparse.ArgumentParser, dest: str, metavar: str) -> None:
-    """The input (a file or a folder) and output positionals of a model command."""
+    """The input (a file or a folder) and output positionals of a model
+    command, and ``--skip-existing``."""
     p.add_argument(dest, metavar=metavar, help="a .bvh file, or a folder of them")
     p.add_argument("output", metavar="OUT", help="the .bvh file to write, or the folder "
                    f"(created) for a folder {metavar}")
+    p.add_argument("--skip-existing", action="store_true",
+                   help="leave out every file whose result is already in OUT, whole (one "
+                   "satagraph wrote to the end; a write that was stopped leaves none), so "
+                   "that a folder run that was interrupted goes on; the summary counts "
+                   "them. It trusts those results: ones written with another --ckpt or "
+                   "other options are kept as they are (delete them, or leave the flag "
+                   "out, to redo them)")
+
+
+def _skip(args, output: str) -> bool:
+    """Whether ``--skip-existing`` leaves out the single file :obj:`output`
+    (said in one line)."""
+    from satagraph.cli.folders import complete_output
+    if not (args.skip_existing and complete_output(output)):
+        return False
+    print(f"{output}: skipped, already there (--skip-existing)")
+    return True
 
 
 def add_train_parsers(sub) -> None:
@@ -411,8 +429,9 @@ def run_reconstruct(args) -> int:
     if Path(args.input).is_dir():
         return run_over_folder(args.input, args.output,
                                lambda src, out: _reconstruct_file(args, src, out, models),
-                               "reconstructed", args.traceback)
-    print(_reconstruct_file(args, args.input, args.output, models))
+                               "reconstructed", args.traceback, args.skip_existing)
+    if not _skip(args, args.output):
+        print(_reconstruct_file(args, args.input, args.output, models))
     return 0
 
 
@@ -440,8 +459,9 @@ def run_retarget(args) -> int:
     if Path(args.source).is_dir():
         return run_over_folder(args.source, args.output,
                                lambda src, out: _retarget_file(args, src, target, out, models),
-                               "retargeted", args.traceback)
-    print(_retarget_file(args, args.source, target, args.output, models))
+                               "retargeted", args.traceback, args.skip_existing)
+    if not _skip(args, args.output):
+        print(_retarget_file(args, args.source, target, args.output, models))
     return 0
 
 

@@ -84,6 +84,42 @@ def test_reconstruct_a_folder_keeps_each_rig(folder: Path, tmp_path: Path, capsy
         assert result.num_frames == source.num_frames
 
 
+def test_skip_existing_goes_on_with_a_stopped_folder_run(folder: Path, tmp_path: Path,
+                                                        capsys) -> None:
+    """A folder run stopped with one result whole, one write killed (its
+    temporary file left) and one cut short by a copy: ``--skip-existing``
+    leaves out the whole one only (the same file, not rewritten) and counts
+    it; a single file is skipped the same way."""
+    from satagraph.io.bvh_reader import written_by_satagraph
+    from satagraph.utils.files import HOST, is_temp_file
+    good, out, target = tmp_path / "good", tmp_path / "out", folder / "target.bvh"
+    (good / "deep").mkdir(parents=True)
+    for rel in ("walk.bvh", "deep/Trot.BVH", "target.bvh"):
+        (good / rel).write_bytes((folder / rel).read_bytes())
+    assert main(["retarget", str(good), "--target", str(target), str(out)]) == 0
+    killed = out / "deep" / f".Trot.BVH.{HOST}-999999999.0123abcd.tmp.BVH"
+    (out / "deep" / "Trot.BVH").rename(killed)
+    cut = (out / "target.bvh").read_bytes()
+    (out / "target.bvh").write_bytes(cut[: len(cut) // 2])
+    kept = (out / "walk.bvh").stat().st_ino
+    capsys.readouterr()
+
+    assert main(["retarget", str(good), "--target", str(target), str(out),
+                 "--skip-existing"]) == 0
+    printed = capsys.readouterr().out
+    assert "retargeted 2 of 3 files" in printed and "; 1 skipped" in printed
+    assert f"wrote {out / 'walk.bvh'}" not in printed
+    assert (out / "walk.bvh").stat().st_ino == kept
+    for rel in ("deep/Trot.BVH", "target.bvh"):
+        assert written_by_satagraph(str(out / rel)) and read_bvh(out / rel).num_frames == 40
+    assert not [p for p in out.rglob("*") if is_temp_file(p.name)]  # swept
+
+    assert main(["retarget", str(good / "walk.bvh"), "--target", str(target),
+                 str(out / "walk.bvh"), "--skip-existing"]) == 0
+    assert "skipped, already there" in capsys.readouterr().out
+    assert (out / "walk.bvh").stat().st_ino == kept
+
+
 @pytest.mark.parametrize("case", ["file", "bvh-name", "empty"])
 def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: Path,
                                                         capsys, case: str) -> None:
