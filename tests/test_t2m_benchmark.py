@@ -146,10 +146,11 @@ def test_validation_prompts_and_sampling_settings():
     assert t2m.sampling(argparse.Namespace(**unset)) is None
 
 
-def test_bandai_validation_takes_are_neither_learnt_nor_test_prompts(shared_data):
+def test_bandai_validation_takes_are_neither_learnt_nor_test_prompts(shared_data, monkeypatch):
     """``--bandai-val`` scores Bandai's validation takes: none is among the
     files the evaluator learns from or the test prompts, and the evaluator
     learns from the same files as the test table's."""
+    monkeypatch.setattr(t2m, "MANIFEST", shared_data / "manifest.tsv")  # SATAGRAPH_DATA's
     split = t2m.file_splits(t2m.captioned_files())
     paths = {role: {f.path for f in files} for role, files in split.items()}
     assert paths["val"] and all("bandai/" in p for p in paths["val"])

@@ -32,7 +32,8 @@ def test_the_built_in_generator_walks_a_zoo_biped_the_asked_way(tmp_path):
 
 @pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: the manifest's "
                     "human rigs are needed")
-def test_human_rigs_are_the_splits_cmu_and_ccbase_files():
+def test_human_rigs_are_the_splits_cmu_and_ccbase_files(monkeypatch):
+    monkeypatch.setattr(t2m_directions, "MANIFEST", data_dir() / "manifest.tsv")
     val = [Path(p).name for p in t2m_directions.human_rigs("val")]
     assert val == ["depressed_13_000.bvh", "old_13_000.bvh", "007_07.bvh", "007_08.bvh",
                    "007_09.bvh"]
