@@ -322,7 +322,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "(OUTPUT/retarget/*.bvh), scoring each (limbs in step with the source, "
         "root travel against the source's); (3) render them side by side "
         "(OUTPUT/demo.gif, OUTPUT/demo_sheet.png); (4) fine-tune the built-in "
-        "model on the zoo (experiments/demo.yaml, 4 minutes; --minutes changes "
+        "model on the zoo (the named config demo, 4 minutes; --minutes changes "
         "it) into OUTPUT/run and score the same retargets with it "
         "(OUTPUT/retarget_finetuned); (5) print what was written where, how "
         "long each step took and the scores. --from-scratch (or --data with "
@@ -331,7 +331,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "only writes the built-in example walk (7 joints, 3 end sites, 60 "
         "frames at 30 fps) and inspects it, in seconds.",
         epilog="examples: satagraph demo --minutes 2 | satagraph demo --data "
-        "../shared/data --output runs/demo | satagraph demo --quick")
+        "my_bvh_folder --output runs/demo | satagraph demo --quick")
     parser.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
                         help="dotted overrides of the training config, e.g. "
                         "data.batch_size=8 data.augment.scale=0.5")
@@ -345,7 +345,8 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         "config's, 4)")
     parser.add_argument("--data", nargs="+", default=None, metavar="PATH",
                         help="train on these BVH folders / manifests instead "
-                        "of the zoo (e.g. ../shared/data)")
+                        "of the zoo (a folder without a manifest.tsv is split "
+                        "80/10/10 by file name)")
     parser.add_argument("--config", default="demo",
                         help="training config (default: demo)")
     parser.add_argument("--from-scratch", action="store_true",

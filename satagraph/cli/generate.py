@@ -82,7 +82,7 @@ def add_generate_parser(sub) -> None:
                    "default: the guided logits choose the most likely tenth of the codes and "
                    "logits guided by --draw-guidance draw among them) or logits (MoMask's: "
                    "codes drawn from the guided logits, which makes gaits 30-45%% faster than "
-                   "real ones); experiments/T2M.md sections 63-66")
+                   "real ones)")
     p.add_argument("--draw-guidance", type=float, default=2.0,
                    help="with candidates, the guidance of the draw among the candidates "
                    "(default 2; 1: the text-conditioned logits)")
@@ -96,14 +96,14 @@ def add_generate_parser(sub) -> None:
                    "once, which past that length reads positions the model never learnt: "
                    "on the benchmark's test prompts the last stretch of a 12-s clip then "
                    "moves at 0.70 of the pace asked and matches its text with R@3 0.608 "
-                   "against 0.824 in windows, benchmarks/results/t2m_long.md)")
+                   "against 0.824 in windows)")
     p.add_argument("--residual-window", type=_window, default=0.0, metavar="SECONDS",
                    help="fill the residual code layers in overlapping windows of this many "
                    "seconds (default 0: the whole clip at once). The built-in generator's "
                    "walks of three seconds or more speed up along the clip (+10 to +21 %% over "
-                   "four seconds on the benchmark's probe rigs, README); 2 "
+                   "four seconds on the benchmark's probe rigs); 2 "
                    "holds their pace, at some cost to how closely the motion matches the "
-                   "text on the benchmark (experiments/T2M.md sections 57-58)")
+                   "text on the benchmark")
     p.add_argument("--ground", action=argparse.BooleanOptionalAction, default=True,
                    help="put the motion on the floor: one vertical shift, its median lowest "
                    "joint at the floor, then each frame that would sink raised onto it "

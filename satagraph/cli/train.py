@@ -51,9 +51,12 @@ def add_train_parsers(sub) -> None:
                                          add_settle_argument, add_still_argument,
                                          add_two_rests_argument)
     p = sub.add_parser("train", help="train a model from a config",
-                       description="Train from an omegaconf YAML config in experiments/ "
-                       "(or a path), with dotted overrides, e.g. "
-                       "`satagraph train tiny trainer.max_epochs=2 data.batch_size=8`.")
+                       description="Train from an omegaconf YAML config, one of the named "
+                       "configs shipped with satagraph (a name it does not know lists them) "
+                       "or a path, with dotted overrides, e.g. `satagraph train tiny "
+                       "--data my_bvh_folder trainer.max_epochs=2 data.batch_size=8`. A named "
+                       "config's data.sources may be the project's own data folder, which "
+                       "an installed satagraph does not have: --data trains on yours.")
     p.add_argument("config", help="config name (tiny, sata_vae, ...) or path")
     p.add_argument("overrides", nargs="*", help="key.sub=value overrides")
     p.add_argument("--resume", action="store_true",
@@ -188,8 +191,7 @@ def add_train_parsers(sub) -> None:
                    help="show this share of the captured human rigs' windows (CMU's, "
                    "CC_Base's: rigs of 20 windows or more, never the zoo's) on another "
                    "such rig's skeleton, codes and captions kept, so that a rig with one "
-                   "captioned clip learns what the others do (default 0; "
-                   "experiments/T2M.md section 82)")
+                   "captioned clip learns what the others do (default 0)")
     p.add_argument("--data", action="append", metavar="PATH", default=None,
                    help="a captioned BVH folder or manifest to draw from, in place of the "
                    "config's data.sources (repeat it for several); train on the bank with "

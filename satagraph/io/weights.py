@@ -171,13 +171,21 @@ def provenance_chain(provenance: dict) -> List[dict]:
     return chain
 
 
+def _builtin_path_call(kind: str, name: str) -> str:
+    """The call of :func:`builtin_path` that gives the built-in weights
+    :obj:`name` of :obj:`kind`, its default arguments left out."""
+    args = [kind, name] if name != BUILTIN else [kind] if kind != "autoencoder" else []
+    return f"builtin_path({', '.join(map(repr, args))})"
+
+
 def builtin_notice(kind: str = "autoencoder", name: str = BUILTIN) -> str:
     """One short line on a built-in model, from its own metadata: what made
     it (the first training's command and machine, cut to their first
     clause, and the minutes of every step of :func:`provenance_chain`) and
-    its provenance note when that is short (a long one is pointed to:
-    :func:`read_weights_metadata` and the README give it whole); shown by
-    the commands that fall back on it."""
+    its provenance note when that is short (a long one is pointed to: the
+    call of :func:`read_weights_metadata` that gives it whole, which an
+    installed package has, unlike a source checkout's README); shown by the
+    commands that fall back on it."""
     meta = read_weights_metadata(resolve_weights(name, kind))
     chain = provenance_chain(meta.get("provenance") or {})
     prov, minutes = chain[-1], sum(float(p.get("minutes") or 0.0) for p in chain)
@@ -187,8 +195,8 @@ def builtin_notice(kind: str = "autoencoder", name: str = BUILTIN) -> str:
     made = ", ".join(str(part) for part in parts if part)
     note = str(prov.get("note") or "")
     if len(note) > NOTICE_PART_CHARS:
-        note = ("what it can and cannot do: the README, or "
-                "satagraph.io.weights.read_weights_metadata() of its file")
+        note = ("what it can and cannot do: the provenance notes of satagraph.io."
+                f"weights.read_weights_metadata({_builtin_path_call(kind, name)})")
     what = "model" if kind == "autoencoder" else f"{kind} model"
     which = "" if name == BUILTIN else f" {name}"
     return f"using the built-in {what}{which} ({made})" + (f": {note}" if note else "")

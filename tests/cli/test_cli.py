@@ -364,6 +364,24 @@ def test_tags_registered_when_available():
     assert ("tags" in choices) == has_tags
 
 
+#: Paths of the repository that an installed satagraph (a wheel) does not have.
+CHECKOUT_ONLY = ("README", "experiments/", "benchmarks/", "tests/", "../shared", "Makefile",
+                 ".venv")
+
+
+def test_no_help_sends_a_user_where_only_a_source_checkout_goes():
+    """``satagraph --help`` and every command's: what they cite, a user of
+    the installed package has (a command, a named config, the fact itself)."""
+    for module, _ in cli.OPTIONAL_COMMANDS:  # one that fails to import has no --help
+        importlib.import_module(module)
+    parser = cli.build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    for name, command in [("satagraph", parser), *commands.items()]:
+        text = " ".join(command.format_help().split())
+        cited = [path for path in CHECKOUT_ONLY if path in text]
+        assert not cited, f"{name} --help cites {cited}"
+
+
 def test_optional_commands(capsys, monkeypatch, tmp_path):
     calls = []
     plugin = types.ModuleType("fake_satagraph_plugin")

@@ -230,9 +230,23 @@ def test_builtin_notice_stays_one_short_line(build_tiny_module: Callable, tmp_pa
     notice = weights.builtin_notice()
     assert notice == ("using the built-in model (satagraph train pretrain_zoo, 723 min, "
                       "a 2-core VM, one thread, beside other jobs): what it can and cannot "
-                      "do: the README, or satagraph.io.weights.read_weights_metadata() of "
-                      "its file")
+                      "do: the provenance notes of satagraph.io.weights."
+                      "read_weights_metadata(builtin_path())")
     assert "\n" not in notice and len(notice) < 300
+
+
+@pytest.mark.parametrize("kind,name,call", [
+    ("autoencoder", "builtin", "builtin_path()"),
+    ("autoencoder", "builtin-wide", "builtin_path('autoencoder', 'builtin-wide')"),
+    ("text-to-motion", "builtin", "builtin_path('text-to-motion')")])
+def test_builtin_notice_points_to_what_an_installed_package_has(kind: str, name: str,
+                                                                call: str) -> None:
+    """The shipped models' notes are long: the notice names the call that
+    reads them whole (a wheel has no README)."""
+    notice = weights.builtin_notice(kind, name)
+    assert "README" not in notice
+    assert notice.endswith(f"satagraph.io.weights.read_weights_metadata({call})")
+    assert len(notice) < 300
 
 
 def test_init_normalizer_keeps_the_checkpoints_or_refits(config_overrides: List[str],
