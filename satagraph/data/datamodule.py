@@ -17,7 +17,8 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import ROOT_UNITS, FeatureNormalizer
 from satagraph.data.pairing import PartnerCollate
-from satagraph.datasets.sources import SPLITS, limit_files, limit_warning, resolve_sources
+from satagraph.datasets.sources import (SOURCES_HINT, SPLITS, limit_files, limit_warning,
+                                        resolve_sources)
 
 
 def semantic_embedder(encoder: Optional[str] = "offline",
@@ -193,9 +194,7 @@ class MotionDataModule(WindowDataModule):
         sources = self.sources if isinstance(self.sources, (list, tuple)) \
             else [self.sources]
         if not [s for s in sources if s]:
-            raise ValueError("data.sources is empty: name your BVH folders or manifests, "
-                             "e.g. --data path/to/bvh_folder (train) or "
-                             "data.sources=[path/to/bvh_folder]")
+            raise ValueError(f"data.sources is empty: {SOURCES_HINT}")
         zoos = [zoo_entry(s) for s in sources if is_zoo_entry(s)]
         files = resolve_sources([s for s in sources if not is_zoo_entry(s)])
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)

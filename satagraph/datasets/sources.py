@@ -16,6 +16,11 @@ from satagraph.utils.files import is_temp_file
 SPLITS = ("train", "val", "test")
 #: Splits a manifest may hold that no run reads (the shared data's reader tests).
 UNUSED_SPLITS = ("parser_test",)
+#: How to give a run its data, said when its ``data.sources`` has none to read
+#: (a named config's may be the project's data folder, which an installed
+#: package does not have).
+SOURCES_HINT = ("name your BVH folders or manifests, e.g. --data path/to/bvh_folder "
+                "(train) or data.sources=[path/to/bvh_folder]")
 
 
 @dataclass(frozen=True)
@@ -132,7 +137,7 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         spec = dict(src) if isinstance(src, dict) else {"path": str(src)}
         path = Path(os.path.expanduser(str(spec["path"])))
         if not path.exists():
-            raise FileNotFoundError(f"motion source not found: {path}")
+            raise FileNotFoundError(_missing_source(path))
         if path.suffix.lower() == ".bvh":
             raise ValueError(f"{path}: a motion source is a folder of .bvh files or a "
                              "manifest (.tsv), not one .bvh file: put it in a folder")
@@ -145,6 +150,13 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
                   if f.dataset not in exclude and f.split not in UNUSED_SPLITS
                   and (include is None or _included(f.path, include))]
     return files
+
+
+def _missing_source(path: Path) -> str:
+    """The one line for a source that does not exist: where a relative one
+    was looked for, and how to name one's own (:data:`SOURCES_HINT`)."""
+    where = "" if path.is_absolute() else f" (looked for in {Path.cwd()})"
+    return f"motion source not found: {path}{where}; {SOURCES_HINT}"
 
 
 def _patterns(include) -> Optional[List[str]]:

@@ -382,6 +382,18 @@ def test_no_help_sends_a_user_where_only_a_source_checkout_goes():
         assert not cited, f"{name} --help cites {cited}"
 
 
+def test_a_named_config_s_missing_data_says_where_it_looked_and_what_to_give(
+        capsys, monkeypatch, tmp_path):
+    """Installed, ``satagraph train tiny`` runs where the config's
+    ``../shared/data`` is not: the error says where that was looked for
+    and that ``--data`` names one's own."""
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, "train", "tiny", "logger.name=none")
+    assert code == 2
+    assert f"motion source not found: ../shared/data (looked for in {tmp_path})" in err
+    assert "--data path/to/bvh_folder" in err
+
+
 def test_optional_commands(capsys, monkeypatch, tmp_path):
     calls = []
     plugin = types.ModuleType("fake_satagraph_plugin")
