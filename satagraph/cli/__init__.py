@@ -282,9 +282,10 @@ def run_quick_demo(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix="satagraph-demo-") as tmp:
         path = _quick_demo_path(args.output, tmp)
         _write_example(motion, path, tmp)
-        print(f"satagraph demo: wrote the built-in example walk "
-              f"({motion.skeleton.num_joints} joints, {motion.num_frames} "
-              f"frames at {motion.fps:g} fps) to {path}")
+        kept = "" if args.output else " (removed when the demo ends: --output PATH keeps it)"
+        print(f"satagraph demo: wrote the built-in example walk, {motion.num_frames} "
+              f"frames at {motion.fps:g} fps on a {motion.skeleton.describe()}, "
+              f"to {path}{kept}")
         print(f"$ satagraph inspect {path}")
         return run_inspect(argparse.Namespace(file=path, json=args.json))
 

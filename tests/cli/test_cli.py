@@ -278,6 +278,18 @@ def test_demo(capsys):
     assert "+Y" in out
 
 
+def test_demo_quick_says_its_file_is_gone_unless_kept(capsys):
+    """Without --output the example lives in a temporary folder: the path it
+    prints is gone when the command returns, and the line says so (and
+    counts the joints as --help and the other commands do)."""
+    out = run(capsys, "demo", "--quick")[1]
+    wrote = next(line for line in out.splitlines() if " wrote " in line)
+    assert "60 frames at 30 fps on a 7-joint skeleton (and 3 end sites)" in wrote
+    path = Path(re.search(r" to (\S+\.bvh)", wrote).group(1))
+    assert not path.exists()
+    assert wrote.endswith(f"{path} (removed when the demo ends: --output PATH keeps it)")
+
+
 def test_demo_keeps_output(capsys, tmp_path):
     path = tmp_path / "walk.bvh"
     code, out, _ = run(capsys, "demo", "--quick", "--output", str(path), "--json")
