@@ -156,6 +156,26 @@ def test_every_package_has_an_init():
     assert not missing
 
 
+def test_every_data_file_of_the_package_is_package_data():
+    """A file under ``satagraph/`` that is not Python (the built-in weights,
+    which ``importlib.resources`` loads) reaches a wheel only through a glob
+    of ``setup.cfg``'s ``options.package_data`` for its package."""
+    import configparser
+    import fnmatch
+    setup = configparser.ConfigParser()
+    setup.read(EXPERIMENTS.parent / "setup.cfg")
+    globs = {package: value.replace(",", " ").split()
+             for package, value in setup["options.package_data"].items()}
+    package = EXPERIMENTS.parent / "satagraph"
+    data = [p for p in package.rglob("*") if p.is_file() and p.suffix not in (".py", ".pyc")
+            and "__pycache__" not in p.parts]
+    assert data, "the package ships its built-in weights"
+    for path in data:
+        owner = ".".join(path.parent.relative_to(package.parent).parts)
+        patterns = globs.get(owner, []) + globs.get("*", [])
+        assert any(fnmatch.fnmatch(path.name, g) for g in patterns), f"{path} is not shipped"
+
+
 def test_a_config_is_read_again_when_one_of_its_files_changes(tmp_path):
     """Configs are kept once read, as copies: a caller's edit never reaches
     the next load, and an edited file (the config or a default it inherits)
