@@ -376,10 +376,11 @@ def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.Lig
     filled = sum(k in state for k in wanted)
     if not wanted or filled >= MIN_INIT_FRACTION * len(wanted):
         return
-    theirs = (payload.get("hyper_parameters") or {}).get("model") or {}
-    ours = dict(getattr(module, "hparams", {}).get("model") or {})
-    differ = [f"model.{k}={v}" for k, v in sorted(theirs.items())
-              if k in ours and ours[k] != v and k != "semantic_channels"]
+    theirs = _settings((payload.get("hyper_parameters") or {}).get("model") or {})
+    ours = _settings(dict(getattr(module, "hparams", {}).get("model") or {}))
+    skip = ("model.semantic_channels",) + tuple(f"model.{k}" for k in keep)
+    differ = [f"{k}={v}" for k, v in sorted(theirs.items())
+              if k in ours and ours[k] != v and not k.startswith(skip)]
     hint = (f"train with its settings ({' '.join(differ[:6])})" if differ
             else "train with the config that made it")
     raise ValueError(f"--init-from {ckpt}: only {filled} of {len(wanted)} weights fit this "
@@ -387,6 +388,18 @@ def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.Lig
                      + (f"; for the built-in model: satagraph train "
                         f"{BUILTIN_FINETUNES[builtin_kind(module)]} --init-from builtin "
                         "--data FOLDER" if str(ckpt).startswith("builtin") else ""))
+
+
+def _settings(section: Dict[str, Any], prefix: str = "model.") -> Dict[str, Any]:
+    """A config section's settings by dotted name (``model.masked.heads``),
+    as an override names them."""
+    flat: Dict[str, Any] = {}
+    for key, value in section.items():
+        if isinstance(value, dict):
+            flat.update(_settings(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
 
 
 def _spawns_workers(trainer: L.Trainer) -> bool:

@@ -214,3 +214,18 @@ def test_init_from_builtin_starts_a_generator_from_the_shipped_one() -> None:
     assert state.keys() == shipped.keys()
     assert all(torch.equal(v, shipped[k]) for k, v in state.items())
     assert set(load_generator("builtin").meta["caption_words"]) <= set(module.meta["caption_words"])
+
+
+def test_init_from_builtin_on_another_generator_size_names_its_settings_shortly(
+        autoencoder_ckpt: Path) -> None:
+    """A generator of another size refuses ``--init-from builtin`` naming the
+    settings that differ by their override names (``model.masked.heads=4``),
+    not whole sections: the line held the built-in autoencoder's every
+    hyperparameter, 2 000 characters."""
+    from satagraph.experiment.train import init_weights
+    from tests.t2m.conftest import build_t2m
+    with pytest.raises(ValueError, match="another architecture") as err:
+        init_weights(build_t2m(autoencoder_ckpt), "builtin")
+    line = str(err.value)
+    assert "model.masked.hidden_channels=128" in line and "finetune_t2m_builtin" in line
+    assert "hparams" not in line and len(line) < 400, line
