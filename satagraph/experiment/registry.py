@@ -45,7 +45,7 @@ import inspect
 import os
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, Callable, Dict, Iterable, Optional
 
 from satagraph.experiment.schema import (TRAINER_OPTIM, DataConfig, check_keys,
@@ -63,6 +63,10 @@ class ModuleSections:
         fps (float): Frame rate of the data.
         meta (dict): What inference needs to know about the data
             (``module``, ``semantic_encoder``, ``window``, ``data``).
+        extra (dict): A subclass's own constructor arguments beyond these
+            five (``z_weight`` of ``__init__(self, model, ..., z_weight=0.1)``),
+            as its checkpoint saved them (:func:`class_arguments`); a class's
+            builder passes them on.
     """
 
     model: Dict[str, Any] = field(default_factory=dict)
@@ -70,6 +74,7 @@ class ModuleSections:
     optim: Dict[str, Any] = field(default_factory=dict)
     fps: float = 30.0
     meta: Dict[str, Any] = field(default_factory=dict)
+    extra: Dict[str, Any] = field(default_factory=dict)
 
     def kwargs(self) -> Dict[str, Any]:
         """The sections as keyword arguments of the autoencoder constructor."""
@@ -196,10 +201,26 @@ def _inherited_keys(cls: type) -> tuple:
     return model_keys, None if own_optimizer else optim_keys
 
 
+def class_arguments(cls: Optional[type], hparams: Dict[str, Any]) -> Dict[str, Any]:
+    """The hyperparameters beyond the five sections that :obj:`cls`'s
+    constructor takes (all of them when it takes ``**kwargs``; none for a
+    builder function, :obj:`cls` ``None``), as Lightning's
+    ``load_from_checkpoint`` passes them."""
+    if cls is None:
+        return {}
+    params = inspect.signature(cls.__init__).parameters.values()
+    named = {p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
+    takes_any = any(p.kind == p.VAR_KEYWORD for p in params)
+    sections = {f.name for f in fields(ModuleSections)} - {"extra"}
+    return {k: v for k, v in hparams.items()
+            if k not in sections and (takes_any or k in named)}
+
+
 def class_builder(cls: type) -> Builder:
-    """The builder of a class with the autoencoder constructor."""
+    """The builder of a class with the autoencoder constructor (and the
+    subclass's own arguments, :attr:`ModuleSections.extra`)."""
     def build(sections: ModuleSections):
-        return cls(**sections.kwargs())
+        return cls(**sections.kwargs(), **sections.extra)
     build.__name__ = build.__qualname__ = f"build_{cls.__name__}"
     return build
 
@@ -289,4 +310,4 @@ def build_registered(name: str, sections: ModuleSections):
 __all__ = ["ModuleSections", "ModuleEntry", "Builder", "PLUGINS", "PLUGIN_VARIABLE",
            "import_user_plugins", "register_module",
            "unregister_module", "module_entry", "module_class", "registered_names",
-           "build_registered", "class_builder"]
+           "build_registered", "class_arguments", "class_builder"]

@@ -19,7 +19,8 @@ from torch import Tensor
 from satagraph.experiment.config import expand_path
 # module_class and register_module: re-exported, the registry's face here
 from satagraph.experiment.registry import (ModuleSections, build_registered,  # noqa: F401
-                                           module_class, module_entry, register_module)
+                                           class_arguments, module_class, module_entry,
+                                           register_module)
 from satagraph.experiment.schema import (LoggerConfig, TrainerExtras, check_keys, fill,
                                          resolve_config, resolve_trainer)
 from satagraph.data.datamodule import MotionDataModule
@@ -627,7 +628,9 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
 
     Returns:
         LightningModule: The module of the class its hyperparameters name
-        (``meta.module``: :func:`~satagraph.experiment.registry.module_entry`).
+        (``meta.module``: :func:`~satagraph.experiment.registry.module_entry`),
+        a subclass's own constructor arguments included
+        (:func:`~satagraph.experiment.registry.class_arguments`).
 
     Raises:
         CheckpointError: The file is not a satagraph model checkpoint or
@@ -641,14 +644,15 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
                               "hyperparameters)")
     check_finite_weights(data, ckpt)
     name = (hparams.get("meta") or {}).get("module", "vae")
-    sections = ModuleSections(**{k: hparams[k] for k in ("model", "loss", "optim", "fps",
-                                                         "meta") if hparams.get(k) is not None})
     try:
         entry = module_entry(name)
     except ValueError as err:  # a subclass registered in code this process has not run
         raise CheckpointError(f"{ckpt}: a {name!r} model, which is not registered here: "
                               "import the code that registers it (register_module) first "
                               f"({' '.join(str(err).split())[:160]})") from None
+    sections = ModuleSections(**{k: hparams[k] for k in ("model", "loss", "optim", "fps",
+                                                         "meta") if hparams.get(k) is not None},
+                              extra=class_arguments(entry.cls, hparams))
     module = entry.build(sections)
     module.on_load_checkpoint(data)
     try:

@@ -188,3 +188,32 @@ def test_the_command_line_finds_modules_named_in_the_plugin_variable(
     monkeypatch.setenv("SATAGRAPH_PLUGINS", "no_such_module_here")
     with pytest.raises(ValueError, match="SATAGRAPH_PLUGINS: cannot import 'no_such_module_here'"):
         module_entry("another_unknown")
+
+
+def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
+    """A subclass with a constructor argument of its own came back from
+    ``load_module`` (what ``eval``, ``reconstruct``, ``retarget`` and
+    ``sweep`` read) with its default, silently: only the five sections were
+    passed on."""
+    import lightning as L
+    from satagraph.experiment.train import build_module, load_module
+    from satagraph.lightning import SATAVAEModule
+
+    @register_module("test_extra")
+    class Weighted(SATAVAEModule):
+        def __init__(self, model, loss=None, optim=None, fps=30.0, meta=None,
+                     z_weight: float = 0.1) -> None:
+            super().__init__(model, loss, optim, fps, meta)
+            self.z_weight = z_weight
+
+    names.append("test_extra")
+    built = build_module(load_config("tiny", ["module=test_extra", "model.semantic_channels=0"]))
+    module = Weighted(**{k: built.hparams[k] for k in ("model", "loss", "optim", "fps",
+                                                       "meta")}, z_weight=0.7)
+    module.normalizer.fitted.fill_(True)
+    path = tmp_path / "weighted.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
+                "pytorch-lightning_version": L.__version__}, path)
+    loaded = load_module(str(path))
+    assert type(loaded) is Weighted
+    assert loaded.z_weight == 0.7 and loaded.hparams["z_weight"] == 0.7
