@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import copy
+import warnings
 from typing import Any, Dict, List, Optional
 
 import lightning as L
@@ -147,9 +148,17 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
 
     # --------------------------------------------------- normalisation
     def setup(self, stage: str) -> None:
+        """Take the data module's fitted normaliser (any data module with a
+        ``normalizer``); warn before training with none fitted."""
         dm = getattr(self.trainer, "datamodule", None) if self._trainer else None
-        if not bool(self.normalizer.fitted) and dm is not None:
-            self.normalizer.load_state_dict(dm.normalizer.state_dict())
+        theirs = getattr(dm, "normalizer", None)
+        if not bool(self.normalizer.fitted) and theirs is not None:
+            self.normalizer.load_state_dict(theirs.state_dict())
+        if stage == "fit" and not bool(self.normalizer.fitted):
+            warnings.warn(f"{type(self).__name__}: training with an unfitted feature "
+                          "normaliser (mean 0, std 1, saved so in the checkpoint): train on a "
+                          "MotionDataModule, give your data module a fitted `normalizer`, or "
+                          "call module.normalizer.fit(training_features) first", stacklevel=2)
         if dm is not None and hasattr(dm, "pair_partners"):
             # partners for the retarget term are collated with the batch
             dm.pair_partners = self._retarget_weight() > 0

@@ -29,6 +29,27 @@ def _normalizer_state(module: L.LightningModule) -> Dict[str, torch.Tensor]:
     return {k: v.clone() for k, v in module.normalizer.state_dict().items()}
 
 
+# -------------------------------------------------------------- normaliser
+def test_a_data_module_of_ones_own_trains_and_an_unfitted_normaliser_warns(
+        build_tiny_module: Callable, datamodule) -> None:
+    """A LightningDataModule without a ``normalizer`` failed in the set-up
+    of a module without fitted statistics (AttributeError: 'Windows' object
+    has no attribute 'normalizer'); plain loaders trained such a module on
+    mean 0, std 1 without a word."""
+    class Windows(L.LightningDataModule):
+        def train_dataloader(self) -> DataLoader:
+            return datamodule._loader("train", False)
+
+    module = build_tiny_module()
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message=".*unfitted feature normaliser")
+        _quiet_trainer(max_steps=1, limit_val_batches=0).fit(module, datamodule=Windows())
+    module = build_tiny_module()
+    module.normalizer.fitted.fill_(False)
+    with pytest.warns(UserWarning, match="unfitted feature normaliser"):
+        _quiet_trainer(max_steps=1, limit_val_batches=0).fit(module, datamodule=Windows())
+
+
 # ---------------------------------------------------------------- checkpoints
 @pytest.mark.parametrize("name,cls", [("vae", SATAVAEModule), ("rvq", SATARVQModule)])
 def test_checkpoint_round_trip(name: str, cls: type, build_tiny_module: Callable,
