@@ -186,14 +186,17 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
 
     def normalize_batch(self, batch):
         """A shallow copy of :obj:`batch` with normalised features (lengths
-        in each clip's heights when the normaliser is body-relative)."""
+        in each clip's heights when the normaliser is body-relative), in the
+        module's floating type (a float64 batch is read as float32 by a
+        float32 module)."""
         out = copy.copy(batch)
         norm = self.normalizer
-        out.x = norm.normalize(batch.x, "dynamic", batch.heights("node"))
+        dtype = norm.dynamic_mean.dtype
+        out.x = norm.normalize(batch.x, "dynamic", batch.heights("node")).to(dtype)
         out.root = norm.normalize(batch.root, "root", batch.heights("frame"),
-                                  batch.legs("frame"))
+                                  batch.legs("frame")).to(dtype)
         out.joint_static = norm.normalize(batch.joint_static, "static",
-                                          batch.heights("stream"))
+                                          batch.heights("stream")).to(dtype)
         return out
 
     def denormalize_output(self, out: Dict[str, Tensor], target) -> Dict[str, Tensor]:

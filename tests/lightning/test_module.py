@@ -386,3 +386,20 @@ def test_latent_smooth_is_applied_once(build_tiny_module: Callable, train_batch)
         fed = plain.denormalize_output(plain.decode(gaussian_smooth(z, frames, 1.5), target),
                                        train_batch)["q"]
     torch.testing.assert_close(direct, fed, atol=1e-5, rtol=1e-5)
+
+
+def test_a_float64_batch_reads_as_float32(build_tiny_module: Callable,
+                                          train_batch: FrameBatch) -> None:
+    """Features built in float64 (numpy's default) failed deep in the
+    encoder: "mat1 and mat2 must have the same dtype, but got Double and
+    Float"."""
+    module = build_tiny_module().eval()
+    wide = copy.copy(train_batch)
+    wide.x, wide.root = train_batch.x.double(), train_batch.root.double()
+    wide.joint_static = train_batch.joint_static.double()
+    with torch.no_grad():
+        out, ref = module(wide), module(train_batch)
+        losses = module.compute_losses(out, wide)
+    assert out["q"].dtype == torch.float32
+    torch.testing.assert_close(out["q"], ref["q"])
+    assert torch.isfinite(losses["loss"])
