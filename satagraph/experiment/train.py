@@ -644,6 +644,10 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
                               "hyperparameters)")
     check_finite_weights(data, ckpt)
     name = (hparams.get("meta") or {}).get("module", "vae")
+    if "module" not in (hparams.get("meta") or {}):
+        warnings.warn(f"{ckpt}: its hyperparameters name no module (meta.module): read as "
+                      "the built-in 'vae' (a module of your own: build it with "
+                      "meta={'module': NAME, ...}, as build_module does)", stacklevel=2)
     try:
         entry = module_entry(name)
     except ValueError as err:  # a subclass registered in code this process has not run
@@ -658,7 +662,14 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     try:
         module.load_state_dict(data["state_dict"])
     except RuntimeError as err:
-        first = str(err).strip().splitlines()[0]
-        raise CheckpointError(f"{ckpt}: weights do not fit the {name!r} model its "
-                              f"hyperparameters describe ({first})") from None
+        lines = [line.strip() for line in str(err).strip().splitlines()]
+        detail = " ".join(lines[:2])[:200]
+        if "module" in (hparams.get("meta") or {}):
+            raise CheckpointError(f"{ckpt}: weights do not fit the {name!r} model its "
+                                  f"hyperparameters describe ({detail})") from None
+        raise CheckpointError(f"{ckpt}: its hyperparameters name no module (meta.module), "
+                              f"so it was read as {name!r}, whose weights do not fit: build "
+                              "a registered module with meta={'module': NAME, ...} (as "
+                              f"build_module does), or load it with its own class ({detail})"
+                              ) from None
     return module.to(map_location).eval()

@@ -217,3 +217,41 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     loaded = load_module(str(path))
     assert type(loaded) is Weighted
     assert loaded.z_weight == 0.7 and loaded.hparams["z_weight"] == 0.7
+
+
+def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
+    """A module of one's own built without ``meta.module`` (by its
+    constructor, trained with one's own Trainer) was read as the built-in
+    'vae': refused as 'weights do not fit the 'vae' model its
+    hyperparameters describe (Error(s) in loading state_dict for
+    SATAVAEModule:)', though they describe none, or, where its weights fit,
+    loaded as a SATAVAEModule without a word."""
+    import lightning as L
+    from satagraph.experiment.train import load_module
+    from satagraph.io.checkpoint import CheckpointError
+    from satagraph.lightning import MotionAutoencoderModule, SATAVAEModule
+    from satagraph.nn import SATA
+
+    @register_module("test_own_rvq")
+    class OwnRVQ(MotionAutoencoderModule):
+        def build_model(self, **kwargs):
+            return SATA(**dict(kwargs, bottleneck="rvq"))
+
+    names.append("test_own_rvq")
+    module = OwnRVQ(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
+                         latent_channels=8, semantic_channels=0, codebook_size=8,
+                         num_quantizers=2), meta={"window": 32})
+    module.normalizer.fitted.fill_(True)
+    path = tmp_path / "own.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
+                "pytorch-lightning_version": L.__version__}, path)
+    with pytest.raises(CheckpointError, match=r"name no module \(meta.module\).*Missing key"):
+        load_module(str(path))
+    # a VAE of one's own fits the built-in 'vae': it loads as one, no longer unsaid
+    module = SATAVAEModule(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
+                                latent_channels=8, semantic_channels=0), meta={"window": 32})
+    module.normalizer.fitted.fill_(True)
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
+                "pytorch-lightning_version": L.__version__}, path)
+    with pytest.warns(UserWarning, match="name no module .*read as the built-in 'vae'"):
+        assert type(load_module(str(path))) is SATAVAEModule
