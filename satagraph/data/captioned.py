@@ -45,7 +45,7 @@ from satagraph.transforms.augment import mirror as mirror_motion, reverse_time
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, _frames, shown_as,
-                                    feature_options, window_starts)
+                                    feature_options, skeleton_id, window_starts)
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.datasets.sources import MotionFile
@@ -257,6 +257,9 @@ class FileCaptionWindows(CaptionWindows):
                 self.captions.append(list(caps))
             else:
                 self.uncaptioned.append(f.path)
+        #: :func:`~satagraph.data.dataset.skeleton_id` of every file.
+        self.skeletons = [skeleton_id(f, feats.skeleton)
+                          for f, feats in zip(self.files, self.features)]
         self.window, self.stride = int(window), int(stride)
         self.index = [(i, s) for i, feats in enumerate(self.features)
                       for s in window_starts(feats.num_frames, self.window, self.stride)
@@ -272,16 +275,17 @@ class FileCaptionWindows(CaptionWindows):
         return len(self.index)
 
     def group(self, idx: int) -> str:
-        """``dataset/skeleton`` of a window (balanced sampling)."""
-        f = self.files[self.index[idx][0]]
-        return f"{f.dataset}/{f.skeleton}"
+        """``dataset/skeleton`` of a window (balanced sampling; a group per
+        rig where the source names no skeleton)."""
+        i = self.index[idx][0]
+        return f"{self.files[i].dataset}/{self.skeletons[i]}"
 
     def __getitem__(self, key: WindowKey) -> MotionClip:
         epoch, idx = self.split_key(key)
         i, start = self.index[idx]
         feats, f = self.features[i], self.files[i]
         stop = min(start + self.window, feats.num_frames)
-        meta = {"path": f.path, "dataset": f.dataset, "skeleton": f.skeleton}
+        meta = {"path": f.path, "dataset": f.dataset, "skeleton": self.skeletons[i]}
         return self.make_clip(feats, start, stop, self.window_captions(i, start),
                               self.rng(epoch, idx), meta)
 

@@ -1,6 +1,7 @@
 """Windows of motion features from many files and skeletons."""
 from __future__ import annotations
 
+import hashlib
 import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -381,6 +382,9 @@ class MotionDataset(Dataset):
         self._limbs: Dict[Tuple, Tuple[int, ...]] = {}
         self._evidence: Dict[int, JointEvidence] = {}
         self.semantic_fn = semantic
+        #: :func:`skeleton_id` of every file.
+        self.skeletons = [skeleton_id(f, feats.skeleton)
+                          for f, feats in zip(self.files, self.features)]
         self.index: List[Tuple[int, int]] = [
             (i, s) for i, f in enumerate(self.features)
             for s in window_starts(f.num_frames, window, stride)]
@@ -412,15 +416,17 @@ class MotionDataset(Dataset):
                              evidence)
 
     def group(self, idx: int) -> str:
-        """(dataset, skeleton) group of a window, for balanced sampling."""
-        f = self.files[self.index[idx][0]]
-        return f"{f.dataset}/{f.skeleton}"
+        """(dataset, skeleton) group of a window, for balanced sampling
+        (:func:`skeleton_id`: a group per rig where the source names no
+        skeleton)."""
+        i = self.index[idx][0]
+        return f"{self.files[i].dataset}/{self.skeletons[i]}"
 
     def __getitem__(self, key: WindowKey) -> MotionClip:
         epoch, idx = key if isinstance(key, tuple) else (None, key)
         i, start = self.index[idx]
         feats, f = self.features[i], self.files[i]
-        meta = {"path": f.path, "dataset": f.dataset, "skeleton": f.skeleton}
+        meta = {"path": f.path, "dataset": f.dataset, "skeleton": self.skeletons[i]}
         evidence = self.evidence(i)
         if self.augment is None or epoch is None:
             meta["limb_ends"] = self.limb_ends(feats, evidence)
@@ -459,6 +465,19 @@ def _semantic_once(cache: Dict[Tuple, Any], semantic_fn: Optional[Callable],
     return _per_skeleton(
         cache, skeleton,
         lambda skel: call_semantic(semantic_fn, skel, evidence).float(), evidence)
+
+
+def skeleton_id(f: MotionFile, skeleton: Skeleton) -> str:
+    """The skeleton id of a file's windows (their ``meta["skeleton"]`` and
+    balanced-sampling group): its source's, or, where the source names
+    none (:attr:`~satagraph.datasets.sources.MotionFile.skeleton_named`),
+    the dataset's name with the rig's joint count and a digest of its
+    joint names and parents (``mixed:31j-1a2b3c4d``), so that a folder of
+    several rigs has a group per rig."""
+    if f.skeleton_named:
+        return f.skeleton
+    digest = hashlib.sha1(repr(_skeleton_key(skeleton)[:2]).encode()).hexdigest()[:8]
+    return f"{f.skeleton}:{skeleton.num_joints}j-{digest}"
 
 
 def _skeleton_key(skeleton: Skeleton) -> Tuple:

@@ -29,7 +29,11 @@ class MotionFile:
     its rig where that is known (a manifest's ``up_axis`` and ``scale``
     columns, or a ``data.sources`` entry's ``up_axis`` and ``units`` /
     ``scale`` keys): these override detection (see
-    :class:`~satagraph.motion.RigSettings`)."""
+    :class:`~satagraph.motion.RigSettings`). :attr:`skeleton_named` says
+    whether the source names the skeleton id (a manifest's ``skeleton``
+    column); where it does not, the id is the dataset's name, and the
+    windows of every rig it holds are told apart by their rig
+    (:func:`~satagraph.data.dataset.skeleton_id`)."""
 
     path: str
     dataset: str
@@ -37,6 +41,7 @@ class MotionFile:
     split: str
     up_axis: Optional[str] = None
     scale: Optional[float] = None
+    skeleton_named: bool = True
 
     def read(self):
         """The motion, with this file's rig settings attached."""
@@ -96,7 +101,8 @@ def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) 
             odd[row["split"]] += 1
         out.append(MotionFile(str(path.parent / row["path"]), name,
                               row.get("skeleton") or name, row["split"],
-                              **_row_settings(row, f"{path}:{line}")))
+                              **_row_settings(row, f"{path}:{line}"),
+                              skeleton_named=bool(row.get("skeleton"))))
     if odd:
         warnings.warn(f"{path}: rows of splits other than {', '.join(SPLITS)} are not used: "
                       + ", ".join(f"{k!r} ({n})" for k, n in odd.most_common()), stacklevel=2)
@@ -118,7 +124,8 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
     name = dataset or path.name
-    return [MotionFile(str(f), name, name, _hash_split(f.name)) for f in files]
+    return [MotionFile(str(f), name, name, _hash_split(f.name), skeleton_named=False)
+            for f in files]
 
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:

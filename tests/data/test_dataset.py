@@ -273,3 +273,27 @@ def test_a_file_limit_is_said(tmp_path):
         dm.setup("fit")
     skeletons = {f.skeleton for f in dm.datasets["train"].files}
     assert len(skeletons) == 2
+
+
+def test_a_folder_of_two_rigs_is_sampled_per_rig(tmp_path, tiny_motion) -> None:
+    """A folder without a manifest named every file's skeleton after the
+    folder: two rigs in it were one balanced-sampling group, drawn as
+    often as their windows are (65 of 69 Bandai windows to 4 CMU ones)."""
+    from satagraph.data.dataset import MotionDataset
+    from satagraph.data.examples import example_motion
+    from satagraph.data.features import motion_to_features
+    from satagraph.datasets.sources import MotionFile
+    from satagraph.io import write_bvh
+    from satagraph.transforms import canonicalize
+    write_bvh(example_motion(), tmp_path / "walk.bvh")
+    write_bvh(tiny_motion, tmp_path / "tiny.bvh")
+    files = scan_folder(tmp_path)
+    feats = [motion_to_features(canonicalize(f.read(), unit_scale=1.0)) for f in files]
+    ds = MotionDataset(files, feats, window=4, stride=4)
+    groups = {ds.group(i) for i in range(len(ds))}
+    assert len(groups) == 2 and all(g.startswith(f"{tmp_path.name}/") for g in groups)
+    assert {ds[i].meta["skeleton"] for i in range(len(ds))} == {g.split("/")[1] for g in groups}
+    # a skeleton id a manifest names is kept as it is
+    from satagraph.data.dataset import skeleton_id
+    named = MotionFile("a.bvh", "d", "crab", "train")
+    assert skeleton_id(named, feats[0].skeleton) == "crab"
