@@ -61,8 +61,9 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
             :mod:`satagraph.experiment.schema`) and ``frozen``: parts not
             trained (:meth:`frozen_parts`).
         fps (float): Frame rate the module was trained at (what inference
-            resamples motion to); losses and metrics use each batch's own
-            (:attr:`~satagraph.data.FrameBatch.fps`).
+            resamples motion to; :meth:`setup` refuses a data module whose
+            ``preprocessing`` says another); losses and metrics use each
+            batch's own (:attr:`~satagraph.data.FrameBatch.fps`).
         meta (dict, optional): What inference needs to know about the data
             (``semantic_encoder``, ``window``, ``module``), kept in the
             checkpoint.
@@ -164,6 +165,23 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
             dm.pair_partners = self._retarget_weight() > 0
         if dm is not None:
             self._check_semantic_width(dm)
+            self._check_fps(dm)
+
+    def _check_fps(self, dm: Any) -> None:
+        """Refuse data at another frame rate than :attr:`fps`, the rate
+        inference resamples motion to (a module built by hand kept the
+        default 30 while it trained on 60 fps windows, silently)."""
+        from satagraph.data.dataset import DEFAULT_PREPROCESSING
+        preprocessing = getattr(dm, "preprocessing", None)
+        if not isinstance(preprocessing, dict):
+            return
+        rate = float(dict(DEFAULT_PREPROCESSING, **preprocessing)["fps"])
+        if abs(rate - float(self.fps)) > 1e-6:
+            raise ValueError(f"the data's windows are at {rate:g} fps "
+                             f"(data.preprocessing.fps) but the module's fps is "
+                             f"{float(self.fps):g}, the rate inference resamples motion to: "
+                             f"build the module with fps={rate:g} "
+                             "(build_module(cfg, datamodule) sets it)")
 
     def _check_semantic_width(self, dm: Any) -> None:
         """Refuse data whose semantic features the network would not read

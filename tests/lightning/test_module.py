@@ -403,3 +403,19 @@ def test_a_float64_batch_reads_as_float32(build_tiny_module: Callable,
     assert out["q"].dtype == torch.float32
     torch.testing.assert_close(out["q"], ref["q"])
     assert torch.isfinite(losses["loss"])
+
+
+def test_setup_refuses_data_at_another_frame_rate(build_tiny_module: Callable,
+                                                   datamodule) -> None:
+    """A module built by hand (fps 30, the default) trained on 60 fps
+    windows without a word, and inference then fed it 30 fps motion."""
+    class Faster(L.LightningDataModule):
+        preprocessing = dict(datamodule.preprocessing, fps=60.0)
+
+        def train_dataloader(self) -> DataLoader:
+            return datamodule._loader("train", False)
+
+    module = build_tiny_module()
+    assert module.fps == 30.0
+    with pytest.raises(ValueError, match="at 60 fps .* module's fps is 30"):
+        _quiet_trainer(max_steps=1, limit_val_batches=0).fit(module, datamodule=Faster())
