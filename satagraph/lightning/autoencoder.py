@@ -165,7 +165,28 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
             dm.pair_partners = self._retarget_weight() > 0
         if dm is not None:
             self._check_semantic_width(dm)
+        if dm is not None and stage == "fit":
             self._check_fps(dm)
+            self._adopt_data_meta(dm)
+
+    def _adopt_data_meta(self, dm: Any) -> None:
+        """``meta["window"]`` and ``meta["semantic_encoder"]`` (what
+        inference and :meth:`embed` read) from the data module where the
+        module was built without them, in the checkpoint too; refuse ones
+        that differ (a hand-built module decoded 64-frame windows and
+        embedded joints with the offline encoder whatever it trained on)."""
+        theirs = {key: getattr(dm, key) for key in ("window", "semantic_encoder")
+                  if hasattr(dm, key)}
+        for key, value in theirs.items():
+            if key not in self.meta:
+                self.meta[key] = value
+                self.__dict__.pop("_embedder", None)  # built from the default encoder
+            elif self.meta[key] != value:
+                raise ValueError(f"the data's {key} is {value!r} (data.{key}) but the "
+                                 f"module's meta says {self.meta[key]!r}: build the module "
+                                 f"with meta['{key}']={value!r} "
+                                 "(build_module(cfg, datamodule) sets it)")
+        self.hparams["meta"] = self.meta
 
     def _check_fps(self, dm: Any) -> None:
         """Refuse data at another frame rate than :attr:`fps`, the rate

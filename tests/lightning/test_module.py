@@ -13,7 +13,7 @@ from torch.utils.data import DataLoader
 
 from satagraph.data.collate import FrameBatch, collate_clips
 from satagraph.lightning import SATARVQModule, SATAVAEModule, lr_factor
-from satagraph.experiment.train import init_weights, load_module
+from satagraph.experiment.train import build_module, init_weights, load_module
 
 METRICS = ("JR", "RT", "RT_h", "JP", "JP_h", "FS", "GP", "RE")
 
@@ -419,3 +419,24 @@ def test_setup_refuses_data_at_another_frame_rate(build_tiny_module: Callable,
     assert module.fps == 30.0
     with pytest.raises(ValueError, match="at 60 fps .* module's fps is 30"):
         _quiet_trainer(max_steps=1, limit_val_batches=0).fit(module, datamodule=Faster())
+
+
+def test_a_module_built_without_meta_takes_the_data_s_window_and_encoder(
+        tiny_config: Dict[str, Any], datamodule, tmp_path: Path) -> None:
+    """Built by hand with ``meta={}``, a module trained on 16-frame windows
+    was read by inference in 64-frame ones (``default_windows``); one that
+    says another window is refused."""
+    hparams = build_module(tiny_config, datamodule).hparams
+    sections = {k: hparams[k] for k in ("model", "loss", "optim", "fps")}
+    module = SATAVAEModule(**sections, meta={})
+    module.normalizer.load_state_dict(datamodule.normalizer.state_dict())
+    trainer = _quiet_trainer(max_steps=1, limit_val_batches=0)
+    trainer.fit(module, datamodule=datamodule)
+    path = tmp_path / "model.ckpt"
+    trainer.save_checkpoint(path)
+    meta = torch.load(path, weights_only=True)["hyper_parameters"]["meta"]
+    assert meta["window"] == datamodule.window == 16
+    assert meta["semantic_encoder"] == datamodule.semantic_encoder == "offline"
+    other = SATAVAEModule(**sections, meta={"window": 64})
+    with pytest.raises(ValueError, match="the data's window is 16 .* meta says 64"):
+        _quiet_trainer(max_steps=1, limit_val_batches=0).fit(other, datamodule=datamodule)
