@@ -187,10 +187,29 @@ class MotionDataModule(WindowDataModule):
         #: :class:`~satagraph.data.pairing.PartnerCollate`); a module with an
         #: unpaired retargeting term switches it on in its ``setup``.
         self.pair_partners = False
+        self._normalizer_fitted = False
 
     def setup(self, stage: Optional[str] = None) -> None:
-        if self.datasets:
-            return
+        """Read the splits once; fit the normaliser on the training split
+        at the first ``"fit"`` (or ``None``) stage, also when another stage
+        (``trainer.validate`` before ``trainer.fit``) read the splits first."""
+        if not self.datasets:
+            self._train, self._zoos = self._read_splits()
+        if stage not in (None, "fit") or self._normalizer_fitted:
+            return  # scoring a trained model: its own statistics
+        if not len(self.datasets["train"]):
+            raise ValueError(f"no training windows in {self.sources!r}")
+        if not len(self.datasets["val"]):
+            warnings.warn(f"no validation windows in {self.sources!r}: no file is in the "
+                          "'val' split (a manifest's split column; a folder without one is "
+                          "split 80/10/10 by file name), so nothing is validated and the "
+                          "checkpoints are the last epoch's", stacklevel=2)
+        self._fit_normalizer(self._train, self._zoos)
+        self._normalizer_fitted = True
+
+    def _read_splits(self) -> tuple:
+        """Build every split's dataset; the training files' ``(files,
+        features)`` and the zoo sources, for the normaliser."""
         sources = self.sources if isinstance(self.sources, (list, tuple)) \
             else [self.sources]
         if not [s for s in sources if s]:
@@ -207,13 +226,13 @@ class MotionDataModule(WindowDataModule):
             errors += [f"{split}: {e}" for e in bad]
             total += len(chosen)
         if limited:
-            warnings.warn(limit_warning(self.max_files, limited), stacklevel=2)
+            warnings.warn(limit_warning(self.max_files, limited), stacklevel=3)
         if errors and self.on_error == "raise":
             raise dataset_error(errors, total)
         if errors:
             self.skipped = errors
             warnings.warn(f"data.on_error=skip: left out {len(errors)} of {total} motion "
-                          "files:\n" + "\n".join(f"  {e}" for e in errors), stacklevel=2)
+                          "files:\n" + "\n".join(f"  {e}" for e in errors), stacklevel=3)
         for split, (kept, feats) in loaded.items():
             stride = self.stride if split == "train" else self.eval_stride
             augment = self.augment if split == "train" else None
@@ -223,16 +242,7 @@ class MotionDataModule(WindowDataModule):
                 self.datasets[split] = MixedDataset([self.datasets[split]] + [
                     d for z in zoos for d in zoo_datasets(
                         z, split, self.window, embed, self.preprocessing, self.seed)])
-        if stage not in (None, "fit"):  # scoring a trained model: its own statistics
-            return
-        if not len(self.datasets["train"]):
-            raise ValueError(f"no training windows in {self.sources!r}")
-        if not len(self.datasets["val"]):
-            warnings.warn(f"no validation windows in {self.sources!r}: no file is in the "
-                          "'val' split (a manifest's split column; a folder without one is "
-                          "split 80/10/10 by file name), so nothing is validated and the "
-                          "checkpoints are the last epoch's", stacklevel=2)
-        self._fit_normalizer(loaded["train"], zoos)
+        return loaded["train"], zoos
 
     def _fit_normalizer(self, train, zoos) -> None:
         """Statistics of the training files and of ``fit_windows`` windows
@@ -251,7 +261,14 @@ class MotionDataModule(WindowDataModule):
 
     @property
     def semantic_channels(self) -> int:
-        """Width of the semantic embedding (0 without one)."""
+        """Width of the semantic embedding (0 without one).
+
+        Raises:
+            RuntimeError: The splits are not read yet (:meth:`setup` first).
+        """
+        if "train" not in self.datasets:
+            raise RuntimeError(f"{type(self).__name__}.semantic_channels: the data is not "
+                               "read yet: call datamodule.setup('fit') first")
         ds = self.datasets["train"]
         return ds[0].semantic.shape[1]
 
