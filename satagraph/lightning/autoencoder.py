@@ -344,7 +344,9 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
 
     @torch.no_grad()
     def metrics(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
-        """Per-clip metrics of a (physical) prediction against the batch."""
+        """Per-clip metrics of a (physical) prediction against the batch: a
+        dict of ``[num_clips]`` tensors (a subclass's too), logged as
+        ``{stage}/{name}`` (their clip-weighted means) and per dataset."""
         q_true = batch.x[:, DYNAMIC_LAYOUT["q"]]
         local_t, _, pos_t = batch_global_motion(q_true, batch.root, batch)
         local_p, _, pos_p = batch_global_motion(out["q"], out["r"], batch)
