@@ -53,6 +53,10 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
                    choices=["csv", "tensorboard", "wandb", "none", "config"],
                    help="training logger (default csv; wandb: online, for a wandb "
                    "sweep agent; config: each config's own)")
+    p.add_argument("--resume", action="store_true",
+                   help="go on with a sweep stopped in --output (the same configs, "
+                   "overrides and budget): its finished rows are kept, a config it "
+                   "stopped in goes on from its last.ckpt with the rest of its budget")
     p.add_argument("--max-batches", type=int, default=None,
                    help="evaluation batches per config (default: all; the table says so)")
     p.set_defaults(func=run_sweep_command)
@@ -69,7 +73,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         raise ValueError(f"sweep: --budget must be positive, got {args.budget}")
     logger = None if args.logger == "config" else args.logger
     rows = run_sweep(configs, args.budget, args.output, overrides, retarget=args.retarget,
-                     max_batches=args.max_batches, logger=logger)
+                     max_batches=args.max_batches, logger=logger, resume=args.resume)
     print((Path(args.output) / "sweep.md").read_text())
     return 2 if any(r.error for r in rows) else 0
 

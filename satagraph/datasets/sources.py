@@ -33,7 +33,10 @@ class MotionFile:
     whether the source names the skeleton id (a manifest's ``skeleton``
     column); where it does not, the id is the dataset's name, and the
     windows of every rig it holds are told apart by their rig
-    (:func:`~satagraph.data.dataset.skeleton_id`)."""
+    (:func:`~satagraph.data.dataset.skeleton_id`). :attr:`dataset_named`
+    says whether the source names the dataset (a ``data.sources`` entry's
+    ``dataset`` key or a manifest's ``dataset`` column); where it does not,
+    the dataset is named after a folder (:func:`refuse_shared_names`)."""
 
     path: str
     dataset: str
@@ -42,6 +45,7 @@ class MotionFile:
     up_axis: Optional[str] = None
     scale: Optional[float] = None
     skeleton_named: bool = True
+    dataset_named: bool = True
 
     def read(self):
         """The motion, with this file's rig settings attached."""
@@ -102,7 +106,8 @@ def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) 
         out.append(MotionFile(str(path.parent / row["path"]), name,
                               row.get("skeleton") or name, row["split"],
                               **_row_settings(row, f"{path}:{line}"),
-                              skeleton_named=bool(row.get("skeleton"))))
+                              skeleton_named=bool(row.get("skeleton")),
+                              dataset_named=bool(row.get("dataset") or dataset)))
     if odd:
         warnings.warn(f"{path}: rows of splits other than {', '.join(SPLITS)} are not used: "
                       + ", ".join(f"{k!r} ({n})" for k, n in odd.most_common()), stacklevel=2)
@@ -119,13 +124,15 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
             rows = [r for r in read_manifest(manifest)
                     if Path(r.path).resolve().is_relative_to(path.resolve())]
             if rows:
-                return [replace(r, dataset=dataset or r.dataset) for r in rows]
+                return [replace(r, dataset=dataset or r.dataset,
+                                dataset_named=r.dataset_named or dataset is not None)
+                        for r in rows]
     files = bvh_files(path)
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
     name = dataset or path.name
-    return [MotionFile(str(f), name, name, _hash_split(f.name), skeleton_named=False)
-            for f in files]
+    return [MotionFile(str(f), name, name, _hash_split(f.name), skeleton_named=False,
+                       dataset_named=dataset is not None) for f in files]
 
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
@@ -136,10 +143,12 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
     its shell patterns (e.g. ``["[0-9][0-9]_[0-9][0-9].bvh"]``: only the
     clips whose licence allows a use); ``up_axis`` and ``units`` (or
     ``scale``) apply to every file of the entry that has no setting of its
-    own in its manifest."""
+    own in its manifest. Two sources whose files a folder's name names
+    alike are refused (:func:`refuse_shared_names`)."""
     if isinstance(sources, (str, os.PathLike)) or isinstance(sources, dict):
         sources = [sources]
     files: List[MotionFile] = []
+    homes: Dict[str, Tuple[Path, str]] = {}
     for src in sources:
         spec = dict(src) if isinstance(src, dict) else {"path": str(src)}
         path = Path(os.path.expanduser(str(spec["path"])))
@@ -153,10 +162,48 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         exclude = set(spec.get("exclude") or ())
         include = _patterns(spec.get("include"))
         settings = _row_settings(spec, f"data.sources entry {spec['path']}")
-        files += [_with_defaults(f, settings) for f in found
-                  if f.dataset not in exclude and f.split not in UNUSED_SPLITS
-                  and (include is None or _included(f.path, include))]
+        kept = [_with_defaults(f, settings) for f in found
+                if f.dataset not in exclude and f.split not in UNUSED_SPLITS
+                and (include is None or _included(f.path, include))]
+        refuse_shared_names(kept, path, homes)
+        files += kept
     return files
+
+
+def refuse_shared_names(files: Sequence[MotionFile], path: Path,
+                        homes: Dict[str, Tuple[Path, str]]) -> None:
+    r"""Refuse a source whose dataset shares its name with another
+    folder's, where either name is a folder's (two folders ``a/mocap`` and
+    ``b/mocap``): their per-dataset figures, balanced-sampling groups and
+    skeleton ids would merge unsaid. A name that both sources give
+    (``dataset`` keys or manifest columns) merges them, as asked.
+
+    Args:
+        files (list[MotionFile]): The files of the source at :obj:`path`.
+        path (Path): The source as given.
+        homes (dict): ``{dataset: (folder, source)}`` of the sources before,
+            updated: the folder a name was taken from (``None`` where a
+            source gives it).
+
+    Raises:
+        ValueError: One line naming both sources and how to name them.
+    """
+    for name, named in {(f.dataset, f.dataset_named): None for f in files}:
+        folder = None if named else _named_after(path, name)
+        other = homes.setdefault(name, (folder, str(path)))
+        if other[1] == str(path) or folder == other[0] or (folder is other[0] is None):
+            continue
+        raise ValueError(f"data.sources: {other[1]} and {path} are both dataset {name!r} "
+                         "(named after their folder), so their per-dataset figures, "
+                         "balanced groups and skeleton ids would merge: name them, e.g. "
+                         f"{{path: {path}, dataset: {name}_2}} (the same dataset on both "
+                         "merges them)")
+
+
+def _named_after(path: Path, name: str) -> Path:
+    """The folder at or above :obj:`path` whose name a dataset took."""
+    path = path.resolve()
+    return next((p for p in (path, *path.parents) if p.name == name), path)
 
 
 def _missing_source(path: Path) -> str:

@@ -64,9 +64,10 @@ class ModuleSections:
         meta (dict): What inference needs to know about the data
             (``module``, ``semantic_encoder``, ``window``, ``data``).
         extra (dict): A subclass's own constructor arguments beyond these
-            five (``z_weight`` of ``__init__(self, model, ..., z_weight=0.1)``),
-            as its checkpoint saved them (:func:`class_arguments`); a class's
-            builder passes them on.
+            five (``z_weight`` of ``__init__(self, model, ..., z_weight=0.1)``):
+            a config's ``module_args`` section, or what its checkpoint saved
+            (:func:`class_arguments`); a class's builder passes them on, a
+            builder function reads them here.
     """
 
     model: Dict[str, Any] = field(default_factory=dict)
@@ -123,6 +124,8 @@ class ModuleEntry:
             self._try_build(sections)
         if self.optim_keys is not None:
             check_keys("optim", sections.optim, set(self.optim_keys) | set(TRAINER_OPTIM))
+        if self.cls is not None:
+            check_arguments(self.cls, sections.extra)
 
     def _try_build(self, sections: ModuleSections) -> None:
         """Build the class once: a ``model`` key its network does not take
@@ -201,6 +204,27 @@ def _inherited_keys(cls: type) -> tuple:
     return model_keys, None if own_optimizer else optim_keys
 
 
+def own_arguments(cls: type) -> tuple:
+    """``(names, takes_any)``: the constructor arguments of :obj:`cls`
+    beyond the five sections, and whether it takes ``**kwargs``."""
+    params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+    sections = {f.name for f in fields(ModuleSections)} - {"extra"}
+    named = {p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
+    return named - sections, any(p.kind == p.VAR_KEYWORD for p in params)
+
+
+def check_arguments(cls: type, extra: Dict[str, Any]) -> None:
+    """Raise one line for a ``module_args`` key :obj:`cls`'s constructor
+    does not take (any, where it takes ``**kwargs``)."""
+    named, takes_any = own_arguments(cls)
+    if takes_any or not extra:
+        return
+    if not named:
+        raise ValueError(f"module_args.{next(iter(extra))}: {cls.__name__} takes no "
+                         "arguments beyond its model, loss, optim, fps and meta sections")
+    check_keys("module_args", extra, named)
+
+
 def class_arguments(cls: Optional[type], hparams: Dict[str, Any]) -> Dict[str, Any]:
     """The hyperparameters beyond the five sections that :obj:`cls`'s
     constructor takes (all of them when it takes ``**kwargs``; none for a
@@ -208,9 +232,7 @@ def class_arguments(cls: Optional[type], hparams: Dict[str, Any]) -> Dict[str, A
     ``load_from_checkpoint`` passes them."""
     if cls is None:
         return {}
-    params = inspect.signature(cls.__init__).parameters.values()
-    named = {p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
-    takes_any = any(p.kind == p.VAR_KEYWORD for p in params)
+    named, takes_any = own_arguments(cls)
     sections = {f.name for f in fields(ModuleSections)} - {"extra"}
     return {k: v for k, v in hparams.items()
             if k not in sections and (takes_any or k in named)}
@@ -310,4 +332,5 @@ def build_registered(name: str, sections: ModuleSections):
 __all__ = ["ModuleSections", "ModuleEntry", "Builder", "PLUGINS", "PLUGIN_VARIABLE",
            "import_user_plugins", "register_module",
            "unregister_module", "module_entry", "module_class", "registered_names",
-           "build_registered", "class_arguments", "class_builder"]
+           "build_registered", "class_arguments", "class_builder", "own_arguments",
+           "check_arguments"]

@@ -7,7 +7,10 @@ top-level keys of :class:`ExperimentConfig` and these sections:
   ``data.augment`` takes the keys of
   :class:`~satagraph.transforms.augment.AugmentConfig`.
 - ``model``, ``loss``, ``optim``: the module's own sections, checked by the
-  module's builder (see :mod:`satagraph.experiment.registry`); the
+  module's builder (see :mod:`satagraph.experiment.registry`); ``module_args``:
+  the registered class's own constructor arguments beyond these (a
+  subclass's ``z_weight``), or what a builder function reads from
+  :attr:`~satagraph.experiment.registry.ModuleSections.extra`; the
   autoencoders take the network's arguments, the
   :class:`~satagraph.losses.MotionLoss` weights and ``lr``,
   ``warmup_epochs``, ``decay``, ``floor``, ``frozen`` (parts not trained,
@@ -107,6 +110,9 @@ class ExperimentConfig:
         output_dir (str, optional): Run folder (default ``runs/<name>``).
         loss_log (bool): Append every step's loss to ``<run>/losses.tsv``.
         nonfinite (str): ``stop`` or ``skip`` on a non-finite loss.
+        module_args (dict): The module's own constructor arguments beyond
+            its sections (:attr:`~satagraph.experiment.registry.
+            ModuleSections.extra`), e.g. ``{z_weight: 0.5}``.
     """
 
     name: str = ""
@@ -116,6 +122,7 @@ class ExperimentConfig:
     output_dir: Optional[str] = None
     loss_log: bool = False
     nonfinite: str = "stop"
+    module_args: Dict[str, Any] = field(default_factory=dict)
     model: Dict[str, Any] = field(default_factory=dict)
     loss: Dict[str, Any] = field(default_factory=dict)
     optim: Dict[str, Any] = field(default_factory=dict)
@@ -286,8 +293,8 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
     The ``data`` section is checked against the module's data schema
     (:class:`DataConfig` unless it registered another); the module's own
-    sections (``model``, ``loss``, ``optim`` but :data:`TRAINER_OPTIM`) are
-    checked when it is built.
+    sections (``model``, ``loss``, ``optim`` but :data:`TRAINER_OPTIM`) and
+    ``module_args`` are checked when it is built.
 
     Raises:
         ValueError: An unknown key (one line: the key, the known ones and
@@ -303,6 +310,10 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
     out["optim"].setdefault("grad_clip", GRAD_CLIP)
     out["optim"].setdefault("ema", EMA)
     out["model"], out["loss"] = dict(out["model"] or {}), dict(out["loss"] or {})
+    if not isinstance(out["module_args"] or {}, Mapping):
+        raise ValueError(f"module_args={out['module_args']!r}: a mapping of the module's "
+                         "own constructor arguments is expected (module_args.NAME=VALUE)")
+    out["module_args"] = dict(out["module_args"] or {})
     return out
 
 

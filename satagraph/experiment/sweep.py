@@ -18,6 +18,7 @@ scoring_data`: each skeleton in the rest pose ``reconstruct`` shows it;
 """
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
 import math
@@ -189,8 +190,9 @@ def _label(name: str, extra: Sequence[str], taken: Sequence[str]) -> str:
 
 
 # ---------------------------------------------------------- training
-def train_budgeted(cfg: Dict[str, Any]):
-    r"""Train one budgeted config (see :func:`budget_config`).
+def train_budgeted(cfg: Dict[str, Any], resume: bool = False):
+    r"""Train one budgeted config (see :func:`budget_config`); :obj:`resume`:
+    go on from its ``last.ckpt`` with the rest of its budget.
 
     Returns:
         The module, the data module, the trainer, the wall time and the mean
@@ -200,15 +202,29 @@ def train_budgeted(cfg: Dict[str, Any]):
     from satagraph.experiment.train import train
     trailing = TrailingLoss(TRAILING_STEPS)
     start = time.perf_counter()
-    module, dm, trainer, _ = train(cfg, callbacks=[trailing])
+    module, dm, trainer, _ = train(cfg, resume=resume, callbacks=[trailing])
     return module, dm, trainer, time.perf_counter() - start, trailing.value
 
 
+@contextlib.contextmanager
+def threads_kept():
+    """torch's intra-op thread count back as it was after a row: a config's
+    ``threads`` (``torch.set_num_threads``) ran every later row of the
+    sweep with its count, which their budget and settings did not say."""
+    threads = torch.get_num_threads()
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
+@threads_kept()
 def run_config(run: SweepRun, eval_split: str = "test",
                extra_loaders: Optional[Dict[str, Any]] = None,
                retarget_files: Optional[Dict[str, Sequence]] = None,
-               max_batches: Optional[int] = None) -> SweepRow:
-    r"""Train one budgeted config and evaluate it.
+               max_batches: Optional[int] = None, resume: bool = False) -> SweepRow:
+    r"""Train one budgeted config and evaluate it (torch's thread count
+    kept: :func:`threads_kept`).
 
     Args:
         run (SweepRun): A config from :func:`sweep_configs`.
@@ -220,11 +236,13 @@ def run_config(run: SweepRun, eval_split: str = "test",
             :func:`~satagraph.pipelines.evaluation.retarget_errors`; ``"split"`` as the
             value's key takes the evaluation split's files.
         max_batches (int, optional): Evaluation batches per loader.
+        resume (bool): Go on from the run folder's ``last.ckpt`` (a stopped
+            sweep's), with the rest of the budget.
     """
     from satagraph.pipelines.evaluation import evaluate, split_loader
     from satagraph.lightning.autoencoder import count_parameters
     cfg = run.cfg
-    module, dm, trainer, seconds, train_loss = train_budgeted(cfg)
+    module, dm, trainer, seconds, train_loss = train_budgeted(cfg, resume)
     row = SweepRow(name=cfg["name"], config=run.source,
                    params=count_parameters(module), steps=int(trainer.global_step),
                    epochs=int(trainer.current_epoch), seconds=seconds,
@@ -320,7 +338,8 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
               output: str = "sweeps/latest", overrides: Sequence[str] = (),
               variants: Optional[Sequence[Sequence[str]]] = None,
               retarget: bool = False, max_batches: Optional[int] = None,
-              logger: Optional[str] = "csv", log=print) -> List[SweepRow]:
+              logger: Optional[str] = "csv", log=print,
+              resume: bool = False) -> List[SweepRow]:
     r"""Train every config for :obj:`budget_minutes` on the same data,
     evaluate each on the test split and write ``sweep.md`` and
     ``sweep.json`` into :obj:`output`.
@@ -335,18 +354,26 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         max_batches (int, optional): Evaluation batches (default: all).
         logger (str, optional): Training logger (see :func:`budget_config`).
         log (callable): Progress lines.
+        resume (bool): Go on with a sweep stopped in :obj:`output`: the rows
+            it finished are kept, a config it stopped in goes on from its
+            ``last.ckpt`` with the rest of its budget (:func:`finished_rows`).
     """
     if max_batches is not None and max_batches < 1:
         raise ValueError(f"sweep: --max-batches must be at least 1, got {max_batches}")
     cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
                          logger=logger)
-    check_runs(cfgs)
+    started = check_runs(cfgs, resume)
+    done = finished_rows([r for r in cfgs if r.cfg["name"] in started], Path(output))
     rows = []
     for i, run in enumerate(cfgs):
+        if run.cfg["name"] in done:
+            log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: kept (finished before)")
+            rows.append(done[run.cfg["name"]])
+            continue
         log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for {budget_minutes:g} min")
         try:
             row = run_config(run, retarget_files={"test": "split"} if retarget else None,
-                             max_batches=max_batches)
+                             max_batches=max_batches, resume=run.cfg["name"] in started)
         except (ValueError, RuntimeError, OSError) as err:  # the other rows go on
             message = str(err).splitlines()[0] if str(err) else type(err).__name__
             log(f"    failed: {message}")
@@ -376,47 +403,97 @@ def _write_so_far(rows: Sequence[SweepRow], cfgs: Sequence[SweepRun], output: st
                   planned=len(cfgs))
 
 
-def check_runs(runs: Sequence[SweepRun]) -> None:
+def check_runs(runs: Sequence[SweepRun], resume: bool = False) -> set:
     """Every config of a sweep checked before any trains: its keys and
-    values, its model built, and a run folder that holds no trained run.
+    values, its model built, and a run folder that holds no trained run,
+    or, with :obj:`resume`, one trained with the same settings
+    (:func:`refuse_other_settings`).
+
+    Returns:
+        set: The names of the configs whose folder holds a trained run.
 
     Raises:
         ValueError: One line naming the config.
     """
     from satagraph.experiment.train import build_module, check_config, refuse_trained_folder
+    started = set()
     for run in runs:
         folder = Path(run.cfg["output_dir"])
         try:
             refuse_trained_folder(folder)
-        except ValueError:  # train's advice (--resume) is no sweep option
-            raise ValueError(f"sweep: config {run.cfg['name']} ({run.source}): {folder} "
-                             "holds a trained run (a sweep stopped before: its sweep.md "
-                             "lists the configs it finished); another --output runs the "
-                             "sweep again, or delete the folder") from None
+        except ValueError:  # train's advice names train's options
+            if not resume:
+                raise ValueError(f"sweep: config {run.cfg['name']} ({run.source}): {folder} "
+                                 "holds a trained run (a sweep stopped before: its sweep.md "
+                                 "lists the configs it finished); --resume goes on with it, "
+                                 "another --output runs the sweep again") from None
+            started.add(run.cfg["name"])
         try:
-            build_module(check_config(run.cfg))
+            cfg = check_config(run.cfg)
+            build_module(cfg)
         except (ValueError, KeyError, TypeError) as err:
             raise ValueError(f"sweep: config {run.cfg['name']} ({run.source}): "
                              f"{str(err).splitlines()[0]}") from None
+        if run.cfg["name"] in started:
+            refuse_other_settings(run, cfg)
+    return started
+
+
+def refuse_other_settings(run: SweepRun, cfg: Dict[str, Any]) -> None:
+    """Refuse to go on with a run folder trained with other settings than
+    :obj:`run`'s (resolved: :obj:`cfg`): another budget, override or
+    config, whose row would sit in one table with the others unsaid.
+
+    Raises:
+        ValueError: One line naming the config and the first setting.
+    """
+    from omegaconf import OmegaConf
+    path = Path(run.cfg["output_dir"]) / "config.yaml"
+    before = (_flat(OmegaConf.to_container(OmegaConf.load(path)), "", {})
+              if path.is_file() else {})
+    now = _flat(OmegaConf.to_container(OmegaConf.create(cfg)), "", {})
+    differ = [k for k in sorted(set(before) | set(now)) if before.get(k) != now.get(k)]
+    if differ:
+        key = differ[0]
+        raise ValueError(f"sweep --resume: config {run.cfg['name']} ({run.source}): "
+                         f"{path.parent} was trained with {key}={before.get(key)} (here "
+                         f"{now.get(key)}): resume with the stopped sweep's configs, overrides "
+                         "and --budget, or run this one with another --output")
+
+
+def finished_rows(runs: Sequence[SweepRun], output: Path) -> Dict[str, SweepRow]:
+    """The rows of :obj:`output`'s ``sweep.json`` (a stopped sweep's) that
+    finished a config of :obj:`runs` (those whose folder holds a run
+    trained with their settings, :func:`check_runs`) in its run folder, by
+    name (rows that failed train again)."""
+    path = output / "sweep.json"
+    if not path.is_file():
+        return {}
+    folders = {run.cfg["name"]: str(run.cfg["output_dir"]) for run in runs}
+    rows = [SweepRow(**row) for row in json.loads(path.read_text()).get("rows", [])]
+    return {r.name: r for r in rows if not r.error and folders.get(r.name) == r.run_dir}
 
 
 #: Config sections whose settings a sweep's rows may differ in (``data`` is
 #: the first config's for every row; names, folders and loggers are a row's
 #: own).
-COMPARED = ("module", "seed", "threads", "model", "loss", "optim", "trainer")
+COMPARED = ("module", "module_args", "seed", "threads", "model", "loss", "optim", "trainer")
+
+
+def _flat(value: Any, key: str, out: Dict[str, Any]) -> Dict[str, Any]:
+    """:obj:`value`'s settings by dotted key, into :obj:`out`."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flat(v, f"{key}.{k}" if key else str(k), out)
+    else:
+        out[key] = value
+    return out
 
 
 def config_differences(runs: Sequence[SweepRun]) -> Dict[str, List[Any]]:
     """Every setting (dotted key) in which the rows' configs differ, with
     each row's value (``None``: not set): what a row's name does not say."""
-    def flat(value: Any, key: str, out: Dict[str, Any]) -> Dict[str, Any]:
-        if isinstance(value, dict):
-            for k, v in value.items():
-                flat(v, f"{key}.{k}" if key else str(k), out)
-        else:
-            out[key] = value
-        return out
-    tables = [flat({k: run.cfg.get(k) for k in COMPARED}, "", {}) for run in runs]
+    tables = [_flat({k: run.cfg.get(k) for k in COMPARED}, "", {}) for run in runs]
     keys = sorted(set().union(*tables)) if tables else []
     return {k: [t.get(k) for t in tables] for k in keys
             if len({json.dumps(t.get(k), sort_keys=True, default=str) for t in tables}) > 1}
@@ -426,6 +503,13 @@ def config_differences(runs: Sequence[SweepRun]) -> Dict[str, List[Any]]:
 def _metric(row: SweepRow, group: str, name: str, factor: float) -> str:
     value = (row.metrics.get(group) or {}).get(name)
     return "-" if value is None else f"{value * factor:.4f}"
+
+
+def _train_loss(row: SweepRow) -> str:
+    """A row's train loss; one of a run shorter than :data:`TRAILING_STEPS`
+    steps says so: its mean starts at the first step (see :func:`_legend`)."""
+    short = 0 < row.steps < TRAILING_STEPS
+    return f"{row.train_loss:.4f}" + (f" (all {row.steps})" if short else "")
 
 
 def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
@@ -438,7 +522,7 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
         if r.error:
             lines.append(f"| {r.name} | failed: {r.error} |" + " |" * (len(head) - 2))
             continue
-        cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), f"{r.train_loss:.4f}"]
+        cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), _train_loss(r)]
         cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
         for setting in settings:
             value = r.retarget.get(setting, {}).get("test" if group == "all" else f"test:{group}")
@@ -468,7 +552,7 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
     done = (f"{len(rows)} of {planned} configs so far" if planned and planned > len(rows)
             else f"{len(rows)} configs")
     text = (f"# Sweep: {done}, {budget_minutes:g} min of training each\n\n"
-            f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data, max_batches)}\n"
+            f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data, max_batches, differences)}\n"
             f"{_differences(rows, differences)}")
     atomic_write_text(output / "sweep.md", text)
     payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
@@ -495,14 +579,28 @@ def _differences(rows: Sequence[SweepRow], differences: Optional[Dict[str, List[
     return "\n".join(lines) + "\n"
 
 
+#: Settings whose difference makes the rows' train losses different sums
+#: (:func:`_legend`).
+LOSS_SETTINGS = ("module", "module_args", "loss")
+
+
 def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
-            max_batches: Optional[int] = None) -> str:
+            max_batches: Optional[int] = None,
+            differences: Optional[Dict[str, List[Any]]] = None) -> str:
     scope = ("every window" if max_batches is None
              else f"the first {max_batches} batch(es) of windows")
     lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
              f"final weights over {scope} of the test split (all datasets; sweep.json has "
              "each dataset's), each skeleton read in the rest pose `reconstruct` shows it "
              "(as `satagraph eval` reads it); RT, JP, FS, GP in cm."]
+    if any(0 < r.steps < TRAILING_STEPS and not r.error for r in rows):
+        lines.append(f"(all N): the run trained N < {TRAILING_STEPS} steps, so its train "
+                     "loss is the mean of every step from the first: higher for that alone, "
+                     "not comparable with the others (a longer --budget is).")
+    differ = sorted({k.split(".")[0] for k in differences or {}} & set(LOSS_SETTINGS))
+    if differ:
+        lines.append(f"The rows differ in {', '.join(differ)}: their train losses are "
+                     "different sums, not comparable; the metrics are.")
     if any(r.retarget for r in rows):
         lines.append("Retarget: 1000 x mean squared joint error / H^2 over the test files; "
                      "int.: onto bone-scaled copies of each source skeleton; cross: onto "
@@ -516,6 +614,7 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
 
 
 __all__ = ["SweepRow", "SweepRun", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
-           "train_budgeted", "run_config", "retarget_table", "held_out_loader",
-           "run_sweep", "check_runs", "config_differences", "format_sweep",
+           "train_budgeted", "threads_kept", "run_config", "retarget_table", "held_out_loader",
+           "run_sweep", "check_runs", "refuse_other_settings", "finished_rows",
+           "config_differences", "format_sweep",
            "write_results"]

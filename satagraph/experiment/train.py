@@ -49,8 +49,9 @@ def build_datamodule(cfg: Dict[str, Any]):
 
 
 def module_sections(cfg: Dict[str, Any], dm: Optional[Any] = None) -> ModuleSections:
-    """The module's own sections of a resolved config; the semantic width
-    comes from the data module :obj:`dm` when it is not set."""
+    """The module's own sections of a resolved config (``module_args`` as
+    :attr:`~ModuleSections.extra`); the semantic width comes from the data
+    module :obj:`dm` when it is not set."""
     model, data = dict(cfg["model"]), data_section(cfg)
     if dm is not None and model.get("semantic_channels") is None \
             and hasattr(dm, "semantic_channels"):
@@ -59,7 +60,8 @@ def module_sections(cfg: Dict[str, Any], dm: Optional[Any] = None) -> ModuleSect
     meta = {"module": cfg["module"], "semantic_encoder": data.get("semantic_encoder"),
             "window": int(data["window"]), "data": data}
     return ModuleSections(model=model, loss=cfg["loss"], optim=cfg["optim"],
-                          fps=float(preprocessing["fps"]), meta=meta)
+                          fps=float(preprocessing["fps"]), meta=meta,
+                          extra=dict(cfg.get("module_args") or {}))
 
 
 def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:

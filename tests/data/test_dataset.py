@@ -297,3 +297,22 @@ def test_a_folder_of_two_rigs_is_sampled_per_rig(tmp_path, tiny_motion) -> None:
     from satagraph.data.dataset import skeleton_id
     named = MotionFile("a.bvh", "d", "crab", "train")
     assert skeleton_id(named, feats[0].skeleton) == "crab"
+
+
+def test_two_folders_of_one_name_are_refused_not_merged(tmp_path):
+    """``--data a/mocap --data b/mocap`` named both datasets ``mocap``: their
+    per-dataset figures, balanced groups and skeleton ids merged unsaid."""
+    for parent in ("a", "b"):
+        (tmp_path / parent / "mocap").mkdir(parents=True)
+        (tmp_path / parent / "mocap" / f"{parent}.bvh").write_text("")
+    a, b = str(tmp_path / "a" / "mocap"), str(tmp_path / "b" / "mocap")
+    with pytest.raises(ValueError, match=f"{a} and {b} are both dataset 'mocap'"):
+        resolve_sources([a, b])
+    with pytest.raises(ValueError, match="both dataset 'mocap'"):
+        resolve_sources([{"path": a, "dataset": "mocap"}, b])
+    # named by the user: merged as asked, or told apart; one folder twice is one dataset
+    merged = resolve_sources([{"path": a, "dataset": "m"}, {"path": b, "dataset": "m"}])
+    assert {f.dataset for f in merged} == {"m"}
+    apart = resolve_sources([a, {"path": b, "dataset": "mocap_b"}])
+    assert [f.dataset for f in apart] == ["mocap", "mocap_b"]
+    assert len(resolve_sources([a, str(tmp_path / "a" / ".." / "a" / "mocap")])) == 2

@@ -255,3 +255,42 @@ def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
                 "pytorch-lightning_version": L.__version__}, path)
     with pytest.warns(UserWarning, match="name no module .*read as the built-in 'vae'"):
         assert type(load_module(str(path))) is SATAVAEModule
+
+
+def test_a_subclass_s_own_argument_is_a_config_setting(names, tmp_path):
+    """A subclass's own constructor argument (a loss weight) could be set
+    by a builder function only: ``z_weight=0.5`` and ``model.z_weight=0.5``
+    were unknown keys, and a ``train`` or ``sweep`` of it trained with the
+    default. ``module_args`` sets it, from YAML and dotted overrides, into
+    the checkpoint that ``load_module`` reads."""
+    import lightning as L
+    from satagraph.experiment.sweep import check_runs, config_differences, sweep_configs
+    from satagraph.experiment.train import build_module, check_config, load_module
+    from satagraph.lightning import SATAVAEModule
+
+    @register_module("test_args")
+    class Weighted(SATAVAEModule):
+        def __init__(self, model, loss=None, optim=None, fps=30.0, meta=None,
+                     z_weight: float = 0.1) -> None:
+            super().__init__(model, loss, optim, fps, meta)
+            self.z_weight = z_weight
+
+    names.append("test_args")
+    path = tmp_path / "weighted.yaml"
+    path.write_text("defaults: [tiny]\nmodule: test_args\nmodule_args: {z_weight: 0.25}\n")
+    assert build_module(load_config(str(path), ["model.semantic_channels=0"])).z_weight == 0.25
+    module = build_module(load_config(str(path), ["module_args.z_weight=0.7",
+                                                  "model.semantic_channels=0"]))
+    assert module.z_weight == 0.7 and module.hparams["z_weight"] == 0.7
+    module.normalizer.fitted.fill_(True)
+    ckpt = tmp_path / "weighted.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
+                "pytorch-lightning_version": L.__version__}, ckpt)
+    assert load_module(str(ckpt)).z_weight == 0.7
+    with pytest.raises(ValueError, match=r"module_args.z_weigth' \(did you mean 'z_weight'"):
+        check_config(load_config(str(path), ["module_args.z_weigth=0.7"]))
+    with pytest.raises(ValueError, match="module_args.z_weight: SATAVAEModule takes no"):
+        check_config(load_config("tiny", ["module_args.z_weight=0.7"]))
+    runs = sweep_configs(["tiny", str(path)], output=str(tmp_path / "sweep"))
+    check_runs(runs)
+    assert config_differences(runs)["module_args.z_weight"] == [None, 0.25]

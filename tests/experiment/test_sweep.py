@@ -156,8 +156,44 @@ def test_a_config_that_fails_while_training_is_a_row_and_the_others_go_on(tmp_pa
         return SweepRow(run.cfg["name"], run.source, params=5, steps=3, train_loss=1.0,
                         metrics={"all": {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}})
     monkeypatch.setattr(sweep_mod, "run_config", run_config)
-    monkeypatch.setattr(sweep_mod, "check_runs", lambda runs: None)
+    monkeypatch.setattr(sweep_mod, "check_runs", lambda runs, resume=False: set())
     rows = sweep_mod.run_sweep(["tiny", "tiny"], 0.01, str(tmp_path), log=lambda *a: None)
     assert [r.error for r in rows] == ["out of memory", ""]
     table = (tmp_path / "sweep.md").read_text()
     assert "| tiny | failed: out of memory |" in table and "| tiny_2 | 5e-06 |" in table
+
+
+def test_the_table_says_which_train_losses_do_not_compare(tmp_path):
+    """A 0.25-minute sweep trained gnn_gin 63 steps and gnn_gat 44: the
+    table called both "mean over the last 50 steps", though gnn_gat's was
+    the mean from its first step (757 against 724); and a module of one's
+    own that adds a loss term was compared by its train loss unsaid."""
+    from satagraph.experiment.sweep import write_results
+    metrics = {"all": {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}}
+    rows = [SweepRow("gnn_gin", "gnn_gin", params=10, steps=63, train_loss=723.5, metrics=metrics),
+            SweepRow("gnn_gat", "gnn_gat", params=10, steps=44, train_loss=757.1, metrics=metrics)]
+    text = write_results(rows, tmp_path, 0.25, differences={"model.local_conv": ["gin", "gat"]})
+    assert "| gnn_gin | 1e-05 | 63 | 723.5000 |" in text
+    assert "| gnn_gat | 1e-05 | 44 | 757.1000 (all 44) |" in text
+    assert "(all N): the run trained N < 50 steps" in text and "different sums" not in text
+    text = write_results(rows[:1], tmp_path, 0.25,
+                         differences={"module": ["vae", "mine"], "module_args.w": [None, 1]})
+    assert "(all N)" not in text
+    assert "The rows differ in module, module_args: their train losses are different sums" in text
+
+
+def test_a_config_s_threads_do_not_run_the_rows_after_it(tmp_path, monkeypatch):
+    """A config with ``threads: 2`` (``torch.set_num_threads``) left every
+    later row of the sweep on 2 threads, whatever their own setting (the
+    table said they set none), and so trained them more or fewer steps."""
+    import torch
+    before = torch.get_num_threads()
+
+    def train_budgeted(cfg, resume=False):
+        torch.set_num_threads(int(cfg["threads"]))
+        raise RuntimeError("stopped after setting the threads")
+    monkeypatch.setattr(sweep_mod, "train_budgeted", train_budgeted)
+    run = sweep_configs(["tiny"], [f"threads={before + 1}"], output=str(tmp_path))[0]
+    with pytest.raises(RuntimeError, match="stopped after"):
+        sweep_mod.run_config(run)
+    assert torch.get_num_threads() == before
