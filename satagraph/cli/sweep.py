@@ -33,7 +33,8 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
         "sweep", help="train configs for the same time budget and tabulate",
         description="Train each CONFIG for the same wall-clock budget "
         "(trainer.max_time) on the first config's data, evaluate each on the "
-        "test split and write sweep.md and sweep.json (one row per config) "
+        "test split (--split val: the validation split, to choose among them) and write "
+        "sweep.md and sweep.json (one row per config) "
         "into --output. key=value items override every config. Each config keeps its "
         "own model, losses, optimiser and trainer settings: the table lists every "
         "setting the rows differ in. Every config is checked before any trains; one "
@@ -57,6 +58,9 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
                    help="go on with a sweep stopped in --output (the same configs, "
                    "overrides and budget): its finished rows are kept, a config it "
                    "stopped in goes on from its last.ckpt with the rest of its budget")
+    p.add_argument("--split", choices=("val", "test"), default="test",
+                   help="the split every row is scored on (default test, to report rows "
+                   "chosen; val to choose among them, leaving the test split untouched)")
     p.add_argument("--max-batches", type=int, default=None,
                    help="evaluation batches per config (default: all; the table says so)")
     p.set_defaults(func=run_sweep_command)
@@ -73,7 +77,8 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         raise ValueError(f"sweep: --budget must be positive, got {args.budget}")
     logger = None if args.logger == "config" else args.logger
     rows = run_sweep(configs, args.budget, args.output, overrides, retarget=args.retarget,
-                     max_batches=args.max_batches, logger=logger, resume=args.resume)
+                     max_batches=args.max_batches, logger=logger, resume=args.resume,
+                     split=args.split)
     print((Path(args.output) / "sweep.md").read_text())
     return 2 if any(r.error for r in rows) else 0
 

@@ -37,6 +37,10 @@ from satagraph.utils.files import atomic_write_text
 #: Steps the "train loss" column averages (see :class:`TrailingLoss`).
 TRAILING_STEPS = 50
 
+#: Splits a sweep scores its rows on (``--split``): ``val`` to choose among
+#: them, ``test`` to report the ones chosen.
+SPLITS = ("val", "test")
+
 #: Retargeting columns of the table (setting: header), as the SATA paper's Table 4.
 RETARGET_HEADERS = {"internal": "retarget int.", "cross": "retarget cross"}
 
@@ -67,6 +71,7 @@ class SweepRow:
         run_dir (str): The run folder (checkpoints, CSV logs).
         error (str): Why the config failed (empty when it did not); its
             row is kept, the others go on.
+        split (str): The split :attr:`metrics` and :attr:`retarget` read.
     """
 
     name: str
@@ -80,6 +85,7 @@ class SweepRow:
     retarget: Dict[str, Dict[str, float]] = field(default_factory=dict)
     run_dir: str = ""
     error: str = ""
+    split: str = "test"
 
 
 # ----------------------------------------------------------- configs
@@ -246,7 +252,7 @@ def run_config(run: SweepRun, eval_split: str = "test",
     row = SweepRow(name=cfg["name"], config=run.source,
                    params=count_parameters(module), steps=int(trainer.global_step),
                    epochs=int(trainer.current_epoch), seconds=seconds,
-                   train_loss=train_loss, run_dir=cfg["output_dir"])
+                   train_loss=train_loss, run_dir=cfg["output_dir"], split=eval_split)
     scored = _scored(cfg, dm)
     row.metrics = evaluate(module, split_loader(scored, eval_split), max_batches)
     for label, make_loader in (extra_loaders or {}).items():
@@ -339,9 +345,9 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
               variants: Optional[Sequence[Sequence[str]]] = None,
               retarget: bool = False, max_batches: Optional[int] = None,
               logger: Optional[str] = "csv", log=print,
-              resume: bool = False) -> List[SweepRow]:
+              resume: bool = False, split: str = "test") -> List[SweepRow]:
     r"""Train every config for :obj:`budget_minutes` on the same data,
-    evaluate each on the test split and write ``sweep.md`` and
+    evaluate each on :obj:`split` and write ``sweep.md`` and
     ``sweep.json`` into :obj:`output`.
 
     Args:
@@ -350,20 +356,25 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         output (str): Output folder.
         overrides (list[str]): Overrides for every config.
         variants (list[list[str]], optional): Extra overrides per config.
-        retarget (bool): Also the retarget error on the test files.
+        retarget (bool): Also the retarget error on the split's files.
         max_batches (int, optional): Evaluation batches (default: all).
         logger (str, optional): Training logger (see :func:`budget_config`).
         log (callable): Progress lines.
         resume (bool): Go on with a sweep stopped in :obj:`output`: the rows
             it finished are kept, a config it stopped in goes on from its
             ``last.ckpt`` with the rest of its budget (:func:`finished_rows`).
+        split (str): :data:`SPLITS`: ``"val"`` to choose among the rows
+            (a choice made on the test split is no test result), ``"test"``
+            to report the rows chosen.
     """
     if max_batches is not None and max_batches < 1:
         raise ValueError(f"sweep: --max-batches must be at least 1, got {max_batches}")
+    if split not in SPLITS:
+        raise ValueError(f"sweep: --split must be one of {SPLITS}, got {split!r}")
     cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
                          logger=logger)
     started = check_runs(cfgs, resume)
-    done = finished_rows([r for r in cfgs if r.cfg["name"] in started], Path(output))
+    done = finished_rows([r for r in cfgs if r.cfg["name"] in started], Path(output), split)
     rows = []
     for i, run in enumerate(cfgs):
         if run.cfg["name"] in done:
@@ -372,13 +383,14 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
             continue
         log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for {budget_minutes:g} min")
         try:
-            row = run_config(run, retarget_files={"test": "split"} if retarget else None,
+            row = run_config(run, eval_split=split,
+                             retarget_files={split: "split"} if retarget else None,
                              max_batches=max_batches, resume=run.cfg["name"] in started)
         except (ValueError, RuntimeError, OSError) as err:  # the other rows go on
             message = str(err).splitlines()[0] if str(err) else type(err).__name__
             log(f"    failed: {message}")
             rows.append(SweepRow(name=run.cfg["name"], config=run.source,
-                                 run_dir=run.cfg["output_dir"], error=message))
+                                 run_dir=run.cfg["output_dir"], error=message, split=split))
             continue
         log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
             f"{row.train_loss:.4f}")
@@ -390,6 +402,7 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
                   data=cfgs[0].cfg["data"]["sources"] if cfgs else None,
                   differences=config_differences(cfgs), max_batches=max_batches)
     return rows
+
 
 
 def _write_so_far(rows: Sequence[SweepRow], cfgs: Sequence[SweepRun], output: str,
@@ -461,17 +474,20 @@ def refuse_other_settings(run: SweepRun, cfg: Dict[str, Any]) -> None:
                          "and --budget, or run this one with another --output")
 
 
-def finished_rows(runs: Sequence[SweepRun], output: Path) -> Dict[str, SweepRow]:
+def finished_rows(runs: Sequence[SweepRun], output: Path,
+                  split: str = "test") -> Dict[str, SweepRow]:
     """The rows of :obj:`output`'s ``sweep.json`` (a stopped sweep's) that
     finished a config of :obj:`runs` (those whose folder holds a run
     trained with their settings, :func:`check_runs`) in its run folder, by
-    name (rows that failed train again)."""
+    name, scored on :obj:`split` (rows that failed train again; rows of
+    another split are scored again)."""
     path = output / "sweep.json"
     if not path.is_file():
         return {}
     folders = {run.cfg["name"]: str(run.cfg["output_dir"]) for run in runs}
     rows = [SweepRow(**row) for row in json.loads(path.read_text()).get("rows", [])]
-    return {r.name: r for r in rows if not r.error and folders.get(r.name) == r.run_dir}
+    return {r.name: r for r in rows
+            if not r.error and folders.get(r.name) == r.run_dir and r.split == split}
 
 
 #: Config sections whose settings a sweep's rows may differ in (``data`` is
@@ -513,7 +529,8 @@ def _train_loss(row: SweepRow) -> str:
 
 
 def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
-    """Table 4 layout: one row per config; metrics of :obj:`group`."""
+    """Table 4 layout: one row per config; metrics of :obj:`group` on each
+    row's split."""
     settings = [s for s in RETARGET_HEADERS if any(s in r.retarget for r in rows)]
     head = ["config", "params (M)", "steps", "train loss"] + [h for _, _, h in COLUMNS]
     head += [RETARGET_HEADERS[s] for s in settings]
@@ -525,7 +542,8 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
         cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), _train_loss(r)]
         cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
         for setting in settings:
-            value = r.retarget.get(setting, {}).get("test" if group == "all" else f"test:{group}")
+            label = r.split if group == "all" else f"{r.split}:{group}"
+            value = r.retarget.get(setting, {}).get(label)
             cells.append("-" if value is None else f"{value:.3f}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -589,10 +607,14 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
             differences: Optional[Dict[str, List[Any]]] = None) -> str:
     scope = ("every window" if max_batches is None
              else f"the first {max_batches} batch(es) of windows")
+    split = next((r.split for r in rows), "test")
     lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
-             f"final weights over {scope} of the test split (all datasets; sweep.json has "
+             f"final weights over {scope} of the {split} split (all datasets; sweep.json has "
              "each dataset's), each skeleton read in the rest pose `reconstruct` shows it "
              "(as `satagraph eval` reads it); RT, JP, FS, GP in cm."]
+    if split == "test":
+        lines.append("Choose among the rows on a sweep with --split val: a choice made on "
+                     "these test figures leaves no test result for it.")
     if any(0 < r.steps < TRAILING_STEPS and not r.error for r in rows):
         lines.append(f"(all N): the run trained N < {TRAILING_STEPS} steps, so its train "
                      "loss is the mean of every step from the first: higher for that alone, "
@@ -602,7 +624,7 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
         lines.append(f"The rows differ in {', '.join(differ)}: their train losses are "
                      "different sums, not comparable; the metrics are.")
     if any(r.retarget for r in rows):
-        lines.append("Retarget: 1000 x mean squared joint error / H^2 over the test files; "
+        lines.append(f"Retarget: 1000 x mean squared joint error / H^2 over the {split} files; "
                      "int.: onto bone-scaled copies of each source skeleton; cross: onto "
                      "copies with a leaf chain dropped, a bone split and bones scaled "
                      "(paired ground truth from the augmentation).")
@@ -613,7 +635,8 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
     return "\n".join(lines)
 
 
-__all__ = ["SweepRow", "SweepRun", "TRAILING_STEPS", "split_arguments", "budget_config", "sweep_configs",
+__all__ = ["SweepRow", "SweepRun", "SPLITS", "TRAILING_STEPS", "split_arguments",
+           "budget_config", "sweep_configs",
            "train_budgeted", "threads_kept", "run_config", "retarget_table", "held_out_loader",
            "run_sweep", "check_runs", "refuse_other_settings", "finished_rows",
            "config_differences", "format_sweep",

@@ -197,3 +197,34 @@ def test_a_config_s_threads_do_not_run_the_rows_after_it(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="stopped after"):
         sweep_mod.run_config(run)
     assert torch.get_num_threads() == before
+
+
+def test_split_val_scores_the_rows_for_choosing_and_test_says_so(tmp_path, monkeypatch):
+    """``--split val`` scores every row (and its retarget files) on the
+    validation split, which the table names; the default test table says to
+    choose among rows on --split val (a sweep could only score on the test
+    split: choosing an ablation from it left no test result); a stopped
+    sweep's rows of another split are scored again, not kept."""
+    metrics = {"all": {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}}
+    asked = []
+
+    def run_config(run, eval_split="test", retarget_files=None, **kw):
+        asked.append((eval_split, retarget_files))
+        return SweepRow(run.cfg["name"], run.source, params=5, steps=60, train_loss=1.0,
+                        metrics=metrics, split=eval_split, run_dir=run.cfg["output_dir"])
+    monkeypatch.setattr(sweep_mod, "run_config", run_config)
+    monkeypatch.setattr(sweep_mod, "check_runs", lambda runs, resume=False: set())
+    sweep_mod.run_sweep(["tiny"], 0.01, str(tmp_path), log=lambda *a: None, split="val",
+                        retarget=True)
+    assert asked == [("val", {"val": "split"})]
+    text = (tmp_path / "sweep.md").read_text()
+    assert "of the val split" in text and "Choose among the rows" not in text
+    runs = sweep_configs(["tiny"], output=str(tmp_path))
+    assert sweep_mod.finished_rows(runs, tmp_path, "val")
+    assert not sweep_mod.finished_rows(runs, tmp_path, "test")
+    sweep_mod.run_sweep(["tiny"], 0.01, str(tmp_path / "t"), log=lambda *a: None)
+    text = (tmp_path / "t" / "sweep.md").read_text()
+    assert asked[-1][0] == "test" and "of the test split" in text
+    assert "Choose among the rows on a sweep with --split val" in text
+    with pytest.raises(ValueError, match="--split must be one of"):
+        sweep_mod.run_sweep(["tiny"], 0.01, str(tmp_path / "x"), split="train")
