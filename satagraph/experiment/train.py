@@ -518,6 +518,9 @@ def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
     differ += [f"optim.{k}={theirs_optim[k]} (here {ours_optim[k]}: a resume keeps the "
                "optimiser's own state)" for k in sorted(theirs_optim)
                if k in ours_optim and ours_optim[k] != theirs_optim[k]]
+    differ += [f"module_args.{k}={hp[k]} (here {v})"
+               for k, v in sorted((cfg.get("module_args") or {}).items())
+               if k in hp and hp[k] != v]
     before = ((hp.get("meta") or {}).get("data") or {}).get("sources")
     now = data_section(cfg).get("sources")
     if before is not None and before != now:

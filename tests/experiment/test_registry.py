@@ -287,6 +287,10 @@ def test_a_subclass_s_own_argument_is_a_config_setting(names, tmp_path):
     torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
                 "pytorch-lightning_version": L.__version__}, ckpt)
     assert load_module(str(ckpt)).z_weight == 0.7
+    from satagraph.experiment.train import check_resumable
+    check_resumable(ckpt, check_config(load_config(str(path), ["module_args.z_weight=0.7"])))
+    with pytest.raises(ValueError, match=r"module_args.z_weight=0.7 \(here 0.25\)"):
+        check_resumable(ckpt, check_config(load_config(str(path))))
     with pytest.raises(ValueError, match=r"module_args.z_weigth' \(did you mean 'z_weight'"):
         check_config(load_config(str(path), ["module_args.z_weigth=0.7"]))
     with pytest.raises(ValueError, match="module_args.z_weight: SATAVAEModule takes no"):
