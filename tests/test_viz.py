@@ -126,6 +126,42 @@ def test_render_blits_instead_of_redrawing(tmp_path, monkeypatch):
     assert Image.open(tmp_path / "fast.gif").n_frames == count
 
 
+@pytest.mark.parametrize("ext", [".gif", ".mp4"])
+def test_a_long_clip_is_written_frame_by_frame(tmp_path, monkeypatch, ext):
+    """Frames are written as they are drawn: at most three are alive at any
+    time however long the clip (every frame was held, then handed to
+    Pillow, which held them again: 3 GB for a 3,200-frame clip), and the
+    GIF still has one frame per time step, each of the same picture."""
+    import weakref
+    if ext == ".mp4":
+        pytest.importorskip("imageio_ffmpeg")
+    from satagraph.viz.render import _Scene
+    alive, drawn = [], []
+    real_draw = _Scene.draw
+
+    def counting_draw(self, frame):
+        image = real_draw(self, frame)
+        alive.append(sum(ref() is not None for ref in drawn) + 1)
+        drawn.append(weakref.ref(image))
+        return image
+
+    monkeypatch.setattr(_Scene, "draw", counting_draw)
+    clip = example_motion(num_frames=40)
+    path = tmp_path / f"long{ext}"
+    count = render(clip, path, fps=25, panel_px=96)
+    assert count == len(alive) == 33 and max(alive) <= 3
+    if ext == ".gif":
+        monkeypatch.setattr(_Scene, "draw", real_draw)
+        picks = [0, 17, 32]
+        expected = list(render_frames(on_clock([clip], 25.0), panel_px=96, frames=picks))
+        with Image.open(path) as gif:
+            assert gif.n_frames == 33 and gif.info["duration"] == 40
+            for index, want in zip(picks, expected):
+                gif.seek(index)
+                got = np.asarray(gif.convert("RGB")).astype(int)
+                assert np.abs(got - want).mean() < 2.0
+
+
 def test_a_missing_optional_package_is_one_line_before_any_work(tmp_path, capsys,
                                                                 monkeypatch):
     """Without the viz extra an MP4 was a traceback after every frame was
@@ -211,13 +247,21 @@ def _outside(motion, zoom=None) -> int:
         low, high = module._limits(scene.tracks, 1)
         ax.set_box_aspect((1, 1, (high[1] - low[1]) / (high[0] - low[0])), zoom=zoom)
         scene.canvas.draw()
+    return int((~_inside(scene, 0, 0)[0]).sum())
+
+
+def _inside(scene, panel: int, frame: int):
+    """Which of a panel's joints at ``frame`` project inside the panel, and
+    the figure's projected height in pixels."""
+    from mpl_toolkits.mplot3d import proj3d
+    ax = scene.artists[panel][0]
     box = ax.get_window_extent()
-    pos = scene.tracks[0].positions[0]
+    pos = scene.shown(panel, frame)
     x, y, _ = proj3d.proj_transform(pos[:, 0], pos[:, 2], pos[:, 1], ax.get_proj())
     px = ax.transData.transform(np.stack([x, y], axis=1))
     inside = ((px[:, 0] >= box.x0) & (px[:, 0] <= box.x1)
               & (px[:, 1] >= box.y0) & (px[:, 1] <= box.y1))
-    return int((~inside).sum())
+    return inside, float(np.ptp(px[:, 1]))
 
 
 def test_a_figure_standing_still_keeps_its_head_and_feet_in_the_panel():
@@ -234,6 +278,30 @@ def test_a_figure_standing_still_keeps_its_head_and_feet_in_the_panel():
     assert 1.4 > panel_zoom(0.8) > panel_zoom(1.8) > panel_zoom(3.0) >= 0.75
 
 
+def test_a_figure_that_travels_is_followed_large_and_in_the_panel():
+    """A biped running 10 m in 5 s, beside one standing: the panels framed
+    the whole run, which drew both figures at a fifth of the panel's height;
+    each panel now follows its figure (the run's aim moves smoothly, the
+    idle's not at all), one scale for both, every joint in the panel."""
+    import importlib
+    module = importlib.import_module("satagraph.viz.render")
+    rig = [r for r in zoo_rigs(seed=0) if r.species == "biped"][0]
+    run = generate_clip(rig, "run", frames=150, seed=0)
+    idle = generate_clip(rig, "idle", frames=150, seed=0)
+    scene = module._Scene(module._tracks([run, idle], None), 150, 320, 15.0, -60.0)
+    for panel in range(2):
+        seen = [_inside(scene, panel, t) for t in range(0, 150, 10)]
+        assert all(inside.all() for inside, _ in seen)
+        assert min(height for _, height in seen) > 0.45 * 320
+    step = np.diff(scene.aims[0], axis=0)
+    assert np.ptp(scene.aims[0][:, 2]) > 8.0  # it follows the run
+    assert np.abs(np.diff(step, axis=0)).max() < 0.05 * np.linalg.norm(step, axis=1).max()
+    assert np.ptp(scene.aims[1], axis=0).max() == 0.0  # a still camera
+    grid = module._ground(*scene.limits[0], scene.aims[0][40])
+    later = module._ground(*scene.limits[0], scene.aims[0][41])
+    assert grid.shape != later.shape or not np.allclose(grid, later, equal_nan=True)
+
+
 def test_fit_scales_each_panel_to_its_own_figure():
     """A figure beside its copy at a tenth of the size: one shared scale
     draws the copy ten times smaller; ``fit`` draws both alike."""
@@ -245,14 +313,7 @@ def test_fit_scales_each_panel_to_its_own_figure():
 
     def heights(fit: bool):
         scene = module._Scene(module._tracks([walk, small], None), 1, 200, 15.0, -60.0, fit)
-        out = []
-        for (ax, *_), track in zip(scene.artists, scene.tracks):
-            from mpl_toolkits.mplot3d import proj3d
-            pos = track.positions[0]
-            x, y, _ = proj3d.proj_transform(pos[:, 0], pos[:, 2], pos[:, 1], ax.get_proj())
-            px = ax.transData.transform(np.stack([x, y], axis=1))
-            out.append(np.ptp(px[:, 1]))
-        return out
+        return [_inside(scene, i, 0)[1] for i in range(2)]
 
     shared, fitted = heights(False), heights(True)
     assert shared[1] == pytest.approx(0.1 * shared[0], rel=0.05)
@@ -278,3 +339,39 @@ def test_panels_of_unknown_units_are_each_scaled_to_their_own_figure(shared_data
     assert main(["render", str(dog), out]) == 0
     assert "units unknown" not in capsys.readouterr().err
     assert seen == [True, False, False]
+
+
+def test_left_and_right_bones_are_drawn_apart():
+    """A biped's left bones are drawn in one colour and its right ones in
+    another (one colour for all could not tell a left step from a right
+    one), its middle in a third; a legend names the two sides."""
+    from matplotlib.colors import to_rgb
+    from satagraph.sides import side_of
+    from satagraph.viz.render import SIDE_COLORS
+    clip = example_motion(num_frames=2)
+    sides = [side_of(name) for name in clip.skeleton.names]
+    assert sides.count("left") >= 3 and sides.count("left") == sides.count("right")
+    image = next(render_frames([clip], panel_px=320)).astype(int)
+
+    def pixels(side) -> int:
+        color = np.array(to_rgb(SIDE_COLORS[side])) * 255
+        return int((np.abs(image - color).max(axis=2) < 12).sum())
+
+    assert pixels("left") > 50 and pixels("right") > 50 and pixels(None) > 50
+
+
+def test_panels_to_their_own_scales_say_so_on_the_picture():
+    """Panels each scaled to its own figure (``fit``) compare no sizes: the
+    picture says so under them (only a line on stderr did); one scale for
+    all, or one panel, says nothing."""
+    import importlib
+    module = importlib.import_module("satagraph.viz.render")
+    walk = example_motion(num_frames=2)
+
+    def label(motions, fit: bool) -> str:
+        scene = module._Scene(module._tracks(motions, None), 2, 160, 15.0, -60.0, fit)
+        scene.draw(1)
+        return scene.label.get_text()
+
+    assert label([walk, walk], True) == "frame 2/2   each panel to its own scale"
+    assert label([walk, walk], False) == "frame 2/2" == label([walk], True)

@@ -1,9 +1,12 @@
 r"""3D stick-figure rendering of motions with matplotlib (Agg, no display).
 
-Several motions are drawn side by side in panels that share their axes
-limits and camera, on a ground grid at y = 0, with joints in ground contact
-marked. Frames come out as RGB arrays (:func:`render_frames`), and are
-written as a GIF (Pillow), an MP4 (imageio-ffmpeg, which bundles ffmpeg) or
+Several motions are drawn side by side in panels that share their scale
+and camera angle, on a ground grid at y = 0, with joints in ground contact
+marked. A figure that travels further than its own size is followed: its
+panel is centred on the figure, smoothed over a second, and the
+grid, fixed to the ground, scrolls under it (a dog trotting 10 m was a dot
+in a panel that framed its whole path). Frames come out as RGB arrays
+(:func:`render_frames`), and are written as a GIF (Pillow), an MP4 (imageio-ffmpeg, which bundles ffmpeg) or
 a still PNG contact sheet.
 
 Example::
@@ -16,19 +19,25 @@ Motions are expected +Y up (canonicalise them first); units are free.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from dataclasses import dataclass
-from typing import Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from satagraph.utils.files import atomic_path
 from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion, ground_contacts
+from satagraph.sides import side_of
 
 PathLike = Union[str, "os.PathLike[str]"]
 
 _BONE_COLOR, _JOINT_COLOR, _CONTACT_COLOR = "#1f4e8c", "#333333", "#e4572e"
+#: Bone colours of the body's middle, its left and its right side (a bone
+#: takes its child joint's side, :func:`satagraph.sides.side_of`): one
+#: colour for all could not tell a left step from a right one.
+SIDE_COLORS = {None: _BONE_COLOR, "left": "#2a9d8f", "right": "#b5179e"}
 
 
 @dataclass
@@ -39,6 +48,8 @@ class _Track:
     positions: np.ndarray  # (T, J, 3), +Y up
     contacts: np.ndarray  # (T, J) bool
     parents: np.ndarray
+    fps: float
+    sides: List[Optional[str]]  # per joint: "left", "right" or None
 
 
 def contacts(motion: Motion, positions: Optional[np.ndarray] = None,
@@ -68,21 +79,65 @@ def _tracks(motions: Sequence[Motion], titles: Optional[Sequence[str]]
         if motion.num_frames == 0:
             raise ValueError(f"render: {title} has no frames")
         pos = motion.global_positions()
-        out.append(_Track(title, pos, contacts(motion, pos),
-                          motion.skeleton.parents))
+        out.append(_Track(title, pos, contacts(motion, pos), motion.skeleton.parents,
+                          float(motion.fps), [side_of(n) for n in motion.skeleton.names]))
     return out
 
 
+#: A panel follows its figure when the whole path is wider than this many
+#: times the box that follows it.
+FOLLOW_RATIO = 1.5
+
+
+def follow_path(positions: np.ndarray, fps: float, seconds: float = 1.0) -> np.ndarray:
+    r"""The figure's path on the ground (the middle of its joints, whose
+    root can be far from it, at a dog's hips), averaged twice over
+    :obj:`seconds` (a camera that follows it does not jitter with each
+    step or arm swing); y is 0.
+
+    Shapes:
+        - **positions**: :math:`(T, J, 3)`
+        - **output**: :math:`(T, 3)`
+    """
+    path = 0.5 * (positions.min(axis=1) + positions.max(axis=1))[:, [0, 2]]
+    width = max(1, int(round(seconds * fps)))
+    kernel = np.full(width, 1.0 / width)
+    for _ in range(2):
+        padded = np.pad(path, ((width // 2, width - 1 - width // 2), (0, 0)),
+                        mode="reflect", reflect_type="odd")  # no lag at the ends
+        path = np.stack([np.convolve(padded[:, k], kernel, mode="valid") for k in (0, 1)], 1)
+    return np.stack([path[:, 0], np.zeros(len(path)), path[:, 1]], axis=1)
+
+
+def _aim(track: _Track, frames: int) -> Tuple[np.ndarray, float]:
+    """Where a panel looks on the ground, per frame, and the half width
+    around it that holds the figure: the clip's centre (still), or the
+    figure's smoothed path (:func:`follow_path`) when the whole clip is wider
+    than :data:`FOLLOW_RATIO` times the box that follows it.
+
+    Shapes:
+        - **output**: :math:`(T, 3)` and a float
+    """
+    pos = track.positions[:frames]
+    low, high = pos.reshape(-1, 3).min(axis=0), pos.reshape(-1, 3).max(axis=0)
+    still = 0.5 * max(high[0] - low[0], high[2] - low[2], 1e-3)
+    path = follow_path(track.positions, track.fps)
+    reach = np.abs(pos - path[:frames, None]).max(axis=(0, 1))
+    near = max(reach[0], reach[2], 1e-3)
+    if still <= FOLLOW_RATIO * near:
+        centre = 0.5 * (low + high) * np.array([1.0, 0.0, 1.0])
+        return np.broadcast_to(centre, path.shape).copy(), still
+    return path, near
+
+
 def _limits(tracks: Sequence[_Track], frames: int) -> Tuple[np.ndarray, np.ndarray]:
-    """Shared (low, high) corners over all panels, square on the ground."""
-    pts = np.concatenate([t.positions[:frames].reshape(-1, 3) for t in tracks])
-    low, high = pts.min(axis=0), pts.max(axis=0)
-    low[1] = min(low[1], 0.0)
-    centre = 0.5 * (low + high)
-    half = 0.5 * max(high[0] - low[0], high[2] - low[2], 1e-3) * 1.05
-    top = max(high[1], low[1] + 0.25 * half)
-    return (np.array([centre[0] - half, low[1], centre[2] - half]),
-            np.array([centre[0] + half, top, centre[2] + half]))
+    """Shared (low, high) corners over all panels, around each panel's aim
+    (:func:`_aim`: x and z are relative to it), square on the ground."""
+    half = 1.05 * max(_aim(t, frames)[1] for t in tracks)
+    ys = np.concatenate([t.positions[:frames, :, 1].ravel() for t in tracks])
+    low, high = min(float(ys.min()), 0.0), float(ys.max())
+    top = max(high, low + 0.25 * half)
+    return np.array([-half, low, -half]), np.array([half, top, half])
 
 
 #: Box height over ground width (:func:`panel_zoom`'s knots) and the zoom
@@ -107,6 +162,8 @@ class _Scene:
         from matplotlib.figure import Figure
 
         self.tracks, self.frames = tracks, frames
+        # panels of different scales say so on the picture, not only on stderr
+        self.note = "   each panel to its own scale" if fit and len(tracks) > 1 else ""
         dpi = 80
         width = 16 * round(panel_px * len(tracks) / 16)
         height = 16 * round(panel_px / 16)
@@ -114,6 +171,8 @@ class _Scene:
         self.canvas = FigureCanvasAgg(self.figure)
         limits = ([_limits([t], frames) for t in tracks] if fit
                   else [_limits(tracks, frames)] * len(tracks))
+        self.limits = limits
+        self.aims = [_aim(t, frames)[0] for t in tracks]
         self.artists = [self._panel(i, t, low, high, elev, azim)
                         for i, (t, (low, high)) in enumerate(zip(tracks, limits))]
         self.label = self.figure.text(0.01, 0.01, "", fontsize=8,
@@ -122,8 +181,19 @@ class _Scene:
         for i, track in enumerate(tracks):
             self.figure.text((i + 0.5) / len(tracks), 0.97, track.title,
                              ha="center", va="top", fontsize=9)
+        if any(side is not None for track in tracks for side in track.sides):
+            self._legend()
         self.canvas.draw()  # the static background, once
         self.background = self.canvas.copy_from_bbox(self.figure.bbox)
+
+    def _legend(self) -> None:
+        """"left" and "right" in their bone colours, bottom right."""
+        from matplotlib.transforms import offset_copy
+        right = self.figure.text(0.99, 0.01, "right", ha="right", fontsize=8,
+                                 color=SIDE_COLORS["right"])
+        self.figure.text(0.99, 0.01, "left", ha="right", fontsize=8, color=SIDE_COLORS["left"],
+                         transform=offset_copy(right.get_transform(), fig=self.figure,
+                                               x=-28, units="points"))
 
     def _panel(self, i: int, track: _Track, low: np.ndarray, high: np.ndarray,
                elev: float, azim: float) -> tuple:
@@ -136,51 +206,95 @@ class _Scene:
         ax.set_box_aspect((1, 1, tall), zoom=panel_zoom(tall))
         ax.view_init(elev=elev, azim=azim)
         ax.set_axis_off()
-        _ground(ax, low, high)
-        bones, = ax.plot([], [], [], color=_BONE_COLOR, lw=2, animated=True)
+        floor, = ax.plot([], [], [], color="#bbbbbb", lw=0.6, animated=True)
+        bones = {side: ax.plot([], [], [], color=color, lw=2, animated=True)[0]
+                 for side, color in SIDE_COLORS.items()}
         joints, = ax.plot([], [], [], ls="", marker="o", ms=2.5,
                           color=_JOINT_COLOR, animated=True)
         touch, = ax.plot([], [], [], ls="", marker="o", ms=6,
                          color=_CONTACT_COLOR, animated=True)
-        return ax, bones, joints, touch
+        return ax, floor, bones, joints, touch
 
     def draw(self, frame: int) -> np.ndarray:
         """Update every panel to :obj:`frame` and return the RGB image
         (blitting the moving artists over the static background)."""
         self.canvas.restore_region(self.background)
-        for track, (ax, bones, joints, touch) in zip(self.tracks, self.artists):
+        for i, (track, (ax, floor, bones, joints, touch)) in enumerate(
+                zip(self.tracks, self.artists)):
             t = min(frame, len(track.positions) - 1)
-            pos = track.positions[t]
-            seg = _segments(pos, track.parents)
-            bones.set_data_3d(seg[:, 0], seg[:, 2], seg[:, 1])
+            pos = self.shown(i, t)
+            grid = _ground(*self.limits[i], self.aims[i][t])
+            floor.set_data_3d(grid[:, 0], grid[:, 2], grid[:, 1])
+            for side, artist in bones.items():
+                seg = _segments(pos, track.parents, [s == side for s in track.sides])
+                artist.set_data_3d(seg[:, 0], seg[:, 2], seg[:, 1])
             joints.set_data_3d(pos[:, 0], pos[:, 2], pos[:, 1])
             hit = pos[track.contacts[t]]
             touch.set_data_3d(hit[:, 0], hit[:, 2], hit[:, 1])
-            for artist in (bones, joints, touch):
+            for artist in (floor, *bones.values(), joints, touch):
                 ax.draw_artist(artist)
-        self.label.set_text(f"frame {frame + 1}/{self.frames}")
+        self.label.set_text(f"frame {frame + 1}/{self.frames}{self.note}")
         self.figure.draw_artist(self.label)
         return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()
 
+    def shown(self, panel: int, frame: int) -> np.ndarray:
+        """Panel :obj:`panel`'s joints at :obj:`frame` (held at its last),
+        relative to where the panel looks then.
 
-def _ground(ax, low: np.ndarray, high: np.ndarray, lines: int = 9) -> None:
-    """A grid on y = 0, as one polyline (drawn once)."""
-    xs, zs = np.linspace(low[0], high[0], lines), np.linspace(low[2], high[2], lines)
-    seg = [(v, low[2], v, high[2]) for v in xs] + [(low[0], v, high[0], v) for v in zs]
-    pts = np.array([(a, b, c, d, np.nan, np.nan) for a, b, c, d in seg])
-    x = pts[:, [0, 2, 4]].ravel()
-    z = pts[:, [1, 3, 5]].ravel()
-    ax.plot(x, z, np.where(np.isnan(x), np.nan, 0.0), color="#bbbbbb", lw=0.6)
+        Shapes:
+            - **output**: :math:`(J, 3)`
+        """
+        track = self.tracks[panel]
+        t = min(frame, len(track.positions) - 1)
+        return track.positions[t] - self.aims[panel][t]
 
 
-def _segments(pos: np.ndarray, parents: np.ndarray) -> np.ndarray:
-    """Bones as one polyline: (parent, child, NaN) per bone.
+def grid_step(width: float, lines: int = 8) -> float:
+    """A round spacing (1, 2 or 5 times a power of ten) that puts about
+    :obj:`lines` grid lines across :obj:`width`."""
+    raw = max(width / lines, 1e-9)
+    power = 10.0 ** math.floor(math.log10(raw))
+    return next(power * k for k in (1.0, 2.0, 5.0, 10.0) if power * k >= raw * 0.999)
+
+
+def _ground(low: np.ndarray, high: np.ndarray, aim: np.ndarray) -> np.ndarray:
+    """The floor seen around :obj:`aim`: its border and grid lines fixed to
+    the ground (:func:`grid_step` apart), which scroll as the panel follows
+    its figure, as one polyline on y = 0 relative to the aim.
+
+    Shapes:
+        - **aim**: :math:`(3,)`
+        - **output**: :math:`(3L, 3)`, NaN between lines
+    """
+    step = grid_step(high[0] - low[0])
+    lines = []
+    for axis, other in ((0, 2), (2, 0)):
+        first = math.ceil((aim[axis] + low[axis]) / step)
+        last = math.floor((aim[axis] + high[axis]) / step)
+        inner = [k * step - aim[axis] for k in range(first, last + 1)]
+        cuts = [low[axis], high[axis]] + [v for v in inner  # none doubling the border
+                                          if min(v - low[axis], high[axis] - v) > 0.35 * step]
+        for v in cuts:
+            a, b = np.zeros(3), np.zeros(3)
+            a[axis] = b[axis] = v
+            a[other], b[other] = low[other], high[other]
+            lines += [a, b, np.full(3, np.nan)]
+    return np.array(lines)
+
+
+def _segments(pos: np.ndarray, parents: np.ndarray,
+              chosen: Optional[Sequence[bool]] = None) -> np.ndarray:
+    """Bones as one polyline: (parent, child, NaN) per bone, of every
+    child joint or of those :obj:`chosen`.
 
     Shapes:
         - **pos**: :math:`(J, 3)`
-        - **output**: :math:`(3(J-1), 3)`
+        - **chosen**: :math:`(J,)` bool, optional
+        - **output**: :math:`(3B, 3)` for :math:`B` bones
     """
     child = np.arange(1, len(parents))
+    if chosen is not None:
+        child = child[np.asarray(chosen, dtype=bool)[1:]]
     seg = np.full((len(child), 3, 3), np.nan)
     seg[:, 0], seg[:, 1] = pos[parents[child]], pos[child]
     return seg.reshape(-1, 3)
@@ -223,23 +337,63 @@ def frame_count(motions: Sequence[Motion], max_frames: Optional[int] = None) -> 
     return count if max_frames is None else max(1, min(count, int(max_frames)))
 
 
-def save_gif(frames: Sequence[np.ndarray], path: PathLike, fps: float) -> None:
-    """Write RGB frames as a looping GIF (Pillow), atomically."""
-    from PIL import Image
+def save_gif(frames: Iterable[np.ndarray], path: PathLike, fps: float) -> None:
+    """Write RGB frames as a looping GIF, atomically, one frame at a time:
+    memory stays bounded however long the clip (Pillow's ``save_all`` held
+    every frame: 3 GB for a 3,200-frame clip). Each frame after the first
+    is the box that changed, with its own palette."""
+    from PIL import GifImagePlugin, Image
 
-    images = [Image.fromarray(f) for f in frames]
     duration = 10 * gif_hundredths(fps)
-    _atomic(path, lambda tmp: images[0].save(
-        tmp, format="GIF", save_all=True, append_images=images[1:],
-        duration=duration, loop=0, optimize=False))
+
+    def write(tmp: str) -> None:
+        previous = None
+        with open(tmp, "wb") as fp:
+            for frame in frames:
+                box = _changed_box(previous, frame)
+                patch = Image.fromarray(np.ascontiguousarray(
+                    frame[box[1]:box[3], box[0]:box[2]])).convert(
+                    "P", palette=Image.Palette.ADAPTIVE)
+                if previous is None:
+                    header, _ = GifImagePlugin.getheader(patch, info={"loop": 0})
+                    fp.write(b"".join(header))
+                fp.write(b"".join(GifImagePlugin.getdata(
+                    patch, offset=box[:2], duration=duration, include_color_table=True)))
+                previous = frame
+            if previous is None:
+                raise ValueError("render: no frames to write")
+            fp.write(b";")
+
+    _atomic(path, write)
 
 
-def save_mp4(frames: Sequence[np.ndarray], path: PathLike, fps: float) -> None:
+def _changed_box(previous: Optional[np.ndarray], frame: np.ndarray) -> Tuple[int, int, int, int]:
+    """The (left, top, right, bottom) pixel box in which :obj:`frame`
+    differs from :obj:`previous` (the whole frame for the first; one pixel
+    where none differs, so that every time step is a frame).
+
+    Shapes:
+        - **frame**: :math:`(H, W, 3)`
+    """
+    h, w = frame.shape[:2]
+    if previous is None:
+        return 0, 0, w, h
+    rows, cols = np.nonzero((previous != frame).any(axis=2))
+    if len(rows) == 0:
+        return 0, 0, 1, 1
+    return int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1
+
+
+def save_mp4(frames: Iterable[np.ndarray], path: PathLike, fps: float) -> None:
     """Write RGB frames as an H.264 MP4 with the ffmpeg bundled by
-    ``imageio-ffmpeg``, atomically."""
+    ``imageio-ffmpeg``, atomically, one frame at a time."""
     import imageio_ffmpeg
 
-    height, width = frames[0].shape[:2]
+    frames = iter(frames)
+    first = next(frames)
+    height, width = first.shape[:2]
+    frames = itertools.chain([first], frames)
+    del first  # the chain lets go of it once it is sent
 
     def write(tmp: str) -> None:
         writer = imageio_ffmpeg.write_frames(
@@ -371,9 +525,8 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
     count = frame_count(motions, max_frames)
     kwargs = dict(titles=titles, max_frames=max_frames, panel_px=panel_px,
                   elev=elev, azim=azim, fit=fit)
-    if path is not None:
-        frames = list(render_frames(motions, **kwargs))
-        (save_gif if ext == ".gif" else save_mp4)(frames, path, fps)
+    if path is not None:  # frames drawn as they are written, never all held
+        (save_gif if ext == ".gif" else save_mp4)(render_frames(motions, **kwargs), path, fps)
     if sheet is not None:
         picks = sheet_frames(count)
         save_sheet(list(render_frames(motions, frames=picks, **kwargs)), sheet,
