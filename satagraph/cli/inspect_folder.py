@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from collections import Counter
 from pathlib import Path
-from typing import Any, Callable, Dict, List
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from satagraph.cli.folders import each_kept, failure_line, input_files
 
@@ -41,13 +42,30 @@ def folder_summary(infos: List[Dict[str, Any]], failed: int) -> str:
             f"{failed} unreadable")
 
 
-def run_inspect_folder(args: argparse.Namespace, describe_file: Callable[[str], Dict]) -> int:
+def manifest_rigs(folder: str) -> Dict[str, Tuple[Optional[str], Optional[float]]]:
+    """The up axis and units that the manifest of a folder (the nearest at
+    or above it, :func:`~satagraph.datasets.sources.scan_folder`) sets, per
+    file by its absolute path: what training reads the files with."""
+    from satagraph.datasets.sources import scan_folder
+    return {os.path.abspath(f.path): (f.up_axis, f.scale) for f in scan_folder(folder)
+            if f.up_axis is not None or f.scale is not None}
+
+
+def run_inspect_folder(args: argparse.Namespace,
+                       describe_file: Callable[[str, Optional[str], Optional[float]], Dict]
+                       ) -> int:
     """Describe every BVH file below ``args.file`` (:obj:`describe_file`:
-    a path to :func:`~satagraph.cli.describe`'s summary) as a table or, with
-    ``--json``, a list; a file that does not read is said in one line and
-    the others go on (exit code 2 if any failed)."""
-    infos, bad = each_kept(input_files(args.file), lambda path: describe_file(str(path)),
-                           failure_line, args.traceback)
+    a path, with the up axis and units its folder's manifest sets, to
+    :func:`~satagraph.cli.describe`'s summary; a manifest's ``up_axis`` and
+    ``scale`` columns were not read, so the files whose units training reads
+    from them showed as undecided) as a table or, with ``--json``, a list; a
+    file that does not read is said in one line and the others go on (exit
+    code 2 if any failed)."""
+    files = input_files(args.file)
+    rigs = manifest_rigs(args.file)
+    infos, bad = each_kept(files, lambda path: describe_file(
+        str(path), *rigs.get(os.path.abspath(path), (None, None))),
+        failure_line, args.traceback)
     failed = len(bad)
     rows = [folder_row(info, Path(info["file"]).relative_to(args.file).as_posix())
             for info in infos]
@@ -70,4 +88,4 @@ def _table(rows: List[List[str]]) -> str:
     return "\n".join([line(COLUMNS)] + [line(r) for r in rows])
 
 
-__all__ = ["COLUMNS", "folder_row", "folder_summary", "run_inspect_folder"]
+__all__ = ["COLUMNS", "folder_row", "folder_summary", "manifest_rigs", "run_inspect_folder"]

@@ -495,7 +495,7 @@ def run_eval(args) -> int:
         raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
     dm = scoring_data(module.meta.get("data") or {}, args.rest, args.data, args.up_axis,
-                      args.units)
+                      args.units, args.split)
     if not len(dm.datasets[args.split]):
         raise ValueError(f"no windows in the {args.split!r} split of {dm.sources} (a "
                          "manifest's split column; a folder without one is split 80/10/10 "

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import warnings
 from collections import Counter
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
+from typing import (Any, Callable, Dict, List, Mapping, Optional, Sequence, Set, Tuple,
+                    Union)
 
 import lightning as L
 import torch
@@ -65,6 +66,30 @@ def window_loader(ds, batch_size: int, seed: int, shuffle: bool, balanced: bool,
     return DataLoader(ds, batch_size=batch_size, sampler=sampler, collate_fn=collate,
                       num_workers=num_workers, persistent_workers=num_workers > 0,
                       generator=gen)
+
+
+def dataset_names(ds) -> Optional[Set[str]]:
+    """The datasets of a split's windows (their ``meta["dataset"]``): its
+    files' and its endless zoos' (the parts of a
+    :class:`~satagraph.data.endless.MixedDataset`); ``None`` where a part
+    tells neither (a data module of one's own)."""
+    names: Set[str] = set()
+    for part in getattr(ds, "parts", [ds]):
+        own = getattr(part, "dataset", None)
+        if not isinstance(own, str) and not hasattr(part, "files"):
+            return None
+        names |= {own} if isinstance(own, str) else {f.dataset for f in part.files}
+    return names
+
+
+def _warn_unvalidated(train, val) -> None:
+    """Say which datasets have training windows and no validation window:
+    no ``val/<dataset>/...`` figure is logged for them."""
+    missing = sorted(dataset_names(train) - (dataset_names(val) or set()))
+    if missing:
+        warnings.warn(f"no validation windows of {', '.join(map(repr, missing))}: none of "
+                      "its files is in the 'val' split, so no val/<dataset>/... figures are "
+                      "logged for it", stacklevel=3)
 
 
 class WindowDataModule(L.LightningDataModule):
@@ -187,6 +212,10 @@ class MotionDataModule(WindowDataModule):
         #: :class:`~satagraph.data.pairing.PartnerCollate`); a module with an
         #: unpaired retargeting term switches it on in its ``setup``.
         self.pair_partners = False
+        #: The splits :meth:`setup` reads (scoring one split reads it alone,
+        #: :func:`~satagraph.pipelines.evaluation.scoring_data`: a bad file of
+        #: another split then stops nothing).
+        self.splits: Tuple[str, ...] = SPLITS
         self._normalizer_fitted = False
 
     def setup(self, stage: Optional[str] = None) -> None:
@@ -204,6 +233,8 @@ class MotionDataModule(WindowDataModule):
                           "'val' split (a manifest's split column; a folder without one is "
                           "split 80/10/10 by file name), so nothing is validated and the "
                           "checkpoints are the last epoch's", stacklevel=2)
+        else:
+            _warn_unvalidated(self.datasets["train"], self.datasets["val"])
         self._fit_normalizer(self._train, self._zoos)
         self._normalizer_fitted = True
 
@@ -218,7 +249,7 @@ class MotionDataModule(WindowDataModule):
         files = resolve_sources([s for s in sources if not is_zoo_entry(s)])
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
         loaded, errors, total, limited = {}, [], 0, []
-        for split in SPLITS:
+        for split in self.splits:
             chosen, note = limit_files(files, split, self.max_files)
             limited += note
             kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
@@ -242,7 +273,7 @@ class MotionDataModule(WindowDataModule):
                 self.datasets[split] = MixedDataset([self.datasets[split]] + [
                     d for z in zoos for d in zoo_datasets(
                         z, split, self.window, embed, self.preprocessing, self.seed)])
-        return loaded["train"], zoos
+        return loaded.get("train", ([], [])), zoos
 
     def _fit_normalizer(self, train, zoos) -> None:
         """Statistics of the training files and of ``fit_windows`` windows

@@ -115,24 +115,35 @@ def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) 
 
 
 def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
-    r"""BVH files under a folder. A ``manifest.tsv`` in the folder (or in a
-    parent folder that lists this one) gives the splits; otherwise files are
-    split 80/10/10 by a hash of their name."""
+    r"""BVH files under a folder. The nearest ``manifest.tsv`` in the folder
+    or above it gives the splits of the files it lists below the folder
+    (``satagraph zoo``'s is two folders above its files:
+    ``zoo/biped/Zup-in``); otherwise files are split 80/10/10 by a hash of
+    their name."""
     path = Path(path)
-    for manifest in (path / "manifest.tsv", path.parent / "manifest.tsv"):
-        if manifest.is_file():
-            rows = [r for r in read_manifest(manifest)
-                    if Path(r.path).resolve().is_relative_to(path.resolve())]
-            if rows:
-                return [replace(r, dataset=dataset or r.dataset,
-                                dataset_named=r.dataset_named or dataset is not None)
-                        for r in rows]
+    manifest = next((d / "manifest.tsv" for d in (path, *path.parents)
+                     if (d / "manifest.tsv").is_file()), None)
+    if manifest is not None:
+        rows = [r for r in read_manifest(manifest) if _listed_below(r.path, path)]
+        if rows:
+            return [replace(r, dataset=dataset or r.dataset,
+                            dataset_named=r.dataset_named or dataset is not None)
+                    for r in rows]
     files = bvh_files(path)
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
     name = dataset or path.name
     return [MotionFile(str(f), name, name, _hash_split(f.name), skeleton_named=False,
                        dataset_named=dataset is not None) for f in files]
+
+
+def _listed_below(file: str, folder: Path) -> bool:
+    """Whether a manifest's :obj:`file` lies below :obj:`folder`, by its path
+    as listed (a link to a file kept elsewhere is the folder's file: checked
+    resolved alone, a folder of links never read its own manifest) or with
+    every link resolved."""
+    listed = Path(os.path.abspath(file)).is_relative_to(os.path.abspath(folder))
+    return listed or Path(file).resolve().is_relative_to(folder.resolve())
 
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:

@@ -252,6 +252,7 @@ def resolve_data(data: Optional[Mapping[str, Any]],
         if _is_number(value) and value < least:
             raise ValueError(f"data.{key}={value}: at least {least} is expected")
     check_keys("data.preprocessing", out.get("preprocessing") or {}, DEFAULT_PREPROCESSING)
+    check_frame_rate(dict(DEFAULT_PREPROCESSING, **(out.get("preprocessing") or {}))["fps"])
     augment = out.get("augment")
     if isinstance(augment, Mapping):
         check_keys("data.augment", augment, (f.name for f in fields(AugmentConfig)))
@@ -259,6 +260,22 @@ def resolve_data(data: Optional[Mapping[str, Any]],
         raise ValueError(f"data.augment must be null, true, false or a mapping, "
                          f"got {augment!r}")
     return out
+
+
+def check_frame_rate(fps: Any) -> None:
+    """``data.preprocessing.fps``, the rate every clip is resampled to: a
+    number above 0. ``null`` failed as a ``TypeError`` traceback, ``0`` kept
+    each file's own rate until a batch mixed 30 and 60 fps clips, and ``-5``
+    left out every file (``no training windows``).
+
+    Raises:
+        ValueError: One line naming the key.
+    """
+    if not (_is_number(fps) and fps > 0):
+        shown = "null" if fps is None else repr(fps)
+        raise ValueError(f"data.preprocessing.fps={shown}: a frame rate above 0 is expected "
+                         "(every clip is resampled to it, so that files of 30, 60 and "
+                         "120 fps train together)")
 
 
 #: Trainer arguments that a run sets itself, and the config keys that set
@@ -319,6 +336,7 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
            "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config",
-           "resolve_data", "fill", "check_keys", "check_types", "check_value", "unknown_key_error",
+           "resolve_data", "check_frame_rate", "fill", "check_keys", "check_types",
+           "check_value", "unknown_key_error",
            "defaults", "DATA_AT_LEAST",
            "signature_schema"]

@@ -23,7 +23,7 @@ from satagraph.experiment.registry import (ModuleSections, build_registered,  # 
                                            register_module)
 from satagraph.experiment.schema import (LoggerConfig, TrainerExtras, check_keys, fill,
                                          resolve_config, resolve_trainer)
-from satagraph.data.datamodule import MotionDataModule
+from satagraph.data.datamodule import MotionDataModule, dataset_names
 from satagraph.data.dataset import DEFAULT_PREPROCESSING
 from satagraph.io.checkpoint import CheckpointError, check_finite_weights
 from satagraph.io.weights import NORMALIZER_PREFIX, load_weights_or_checkpoint
@@ -475,13 +475,15 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         L.seed_everything(int(cfg["seed"]), workers=True)
         dm = build_datamodule(cfg)
         dm.setup("fit")
+        if _no_validation(dm):  # said by the data module; nothing to validate
+            trainer_overrides = dict(trainer_overrides, monitor=None, limit_val_batches=0)
+        else:
+            check_monitor(trainer_overrides.get("monitor", cfg["trainer"].get("monitor")), dm)
         _record_skipped(dm, run_dir)
         module = build_module(cfg, dm)
         if init_from:
             init_weights(module, init_from, init_normalizer)
         _record_config(cfg, run_dir)  # once nothing refuses the run
-        if _no_validation(dm):  # said by the data module; nothing to validate
-            trainer_overrides = dict(trainer_overrides, monitor=None, limit_val_batches=0)
         trainer = build_trainer(cfg, run_dir, resume=last is not None, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
         # set up (its datasets hold the semantic embedder, a closure); each worker
@@ -492,6 +494,25 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
             _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
+
+
+def check_monitor(monitor: Optional[str], dm) -> None:
+    """Refuse, before any step, a ``trainer.monitor`` of one dataset's
+    figures (``val/<dataset>/<name>``) that no validation window is of: the
+    run trained a whole epoch, then stopped in a traceback naming every
+    logged key.
+
+    Raises:
+        ValueError: One line naming the monitor and the validation datasets.
+    """
+    val = (getattr(dm, "datasets", None) or {}).get("val")
+    if not monitor or not monitor.startswith("val/") or monitor.count("/") < 2 \
+            or val is None:
+        return
+    dataset, names = monitor[len("val/"):monitor.rindex("/")], dataset_names(val)
+    if names is not None and dataset not in names:
+        raise ValueError(f"trainer.monitor={monitor}: no validation window is of dataset "
+                         f"{dataset!r} (validation datasets: {', '.join(sorted(names))})")
 
 
 def _no_validation(dm) -> bool:

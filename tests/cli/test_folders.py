@@ -190,3 +190,22 @@ def test_inspect_a_folder_whose_every_file_is_unreadable(tmp_path: Path, capsys)
     assert printed.out.rstrip().endswith("1 unreadable")
     assert printed.err.splitlines() == [printed.err.splitlines()[0]]
     assert "half.bvh:3:" in printed.err and "Traceback" not in printed.err
+
+
+def test_inspect_a_folder_reads_its_manifest_s_rig_settings(tmp_path: Path, capsys) -> None:
+    """A folder whose ``manifest.tsv`` gives each file's ``up_axis`` and
+    ``scale`` (as ``satagraph zoo`` writes it, and as training reads them):
+    ``inspect`` guessed instead (bipeds 28 units tall read as humans in CMU
+    units, 1.5 m, where the manifest says 1.66-1.87 m)."""
+    from satagraph.datasets.zoo.dialects import Dialect
+    write_zoo(tmp_path, species=["biped"], clips=1, frames=8,
+              dialects=[Dialect(up_axis="+Z", unit=28.0)])
+    (folder,) = {p.parent for p in tmp_path.rglob("*.bvh")}
+    truth = {Path(f.path).name: f.scale for f in scan_folder(tmp_path)}
+    assert main(["inspect", str(folder), "--json"]) == 0
+    infos = json.loads(capsys.readouterr().out)
+    assert len(infos) == len(truth) == 4
+    for info in infos:
+        rig = info["rig"]
+        assert (rig["up_axis"], rig["up_axis_how"], rig["units_how"]) == ("+Z", "given", "given")
+        assert rig["scale"] == pytest.approx(truth[Path(info["file"]).name])

@@ -1,5 +1,6 @@
 """Sources, processed-feature cache, windows and the normaliser."""
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -233,6 +234,44 @@ def test_a_manifest_row_of_an_unknown_split_is_said(tmp_path):
     with pytest.warns(UserWarning, match=r"not used: 'trian' \(2\)"):
         files = resolve_sources(str(tmp_path / "manifest.tsv"))
     assert [f.split for f in files] == ["train", "trian", "trian"]
+
+
+def test_a_folder_of_links_reads_its_own_manifest(tmp_path):
+    """A folder of symbolic links to files kept elsewhere, with a
+    ``manifest.tsv`` of its own: its rows were checked with the links
+    resolved, so none was the folder's, and the manifest was dropped unsaid
+    (splits by file name, test files trained on, no units, up axis or
+    skeleton)."""
+    store, mine = tmp_path / "store", tmp_path / "mine"
+    store.mkdir(), mine.mkdir()
+    for name in ("a.bvh", "b.bvh"):
+        (store / name).write_text("HIERARCHY\n")
+        (mine / name).symlink_to(store / name)
+    (mine / "manifest.tsv").write_text("path\tsplit\tskeleton\tup_axis\tscale\n"
+                                       "a.bvh\ttest\tdog21\t+Z\tcm\n"
+                                       "b.bvh\tval\tdog21\t+Z\tcm\n")
+    files = scan_folder(mine)
+    assert [(Path(f.path).name, f.split, f.skeleton, f.up_axis, f.scale) for f in files] \
+        == [("a.bvh", "test", "dog21", "+Z", 0.01), ("b.bvh", "val", "dog21", "+Z", 0.01)]
+
+
+def test_a_zoo_folder_of_files_reads_the_manifest_two_folders_up(tmp_path):
+    """``--data zoo/biped/Zup-in``, the folder ``satagraph zoo`` wrote the
+    +Z-up inch files to: its manifest (two folders up) was not looked for,
+    so the files were split by name (held-out rigs trained on), read in
+    inches as metres and named ``Zup-in``."""
+    from satagraph.datasets.zoo import write_zoo
+    from satagraph.datasets.zoo.dialects import Dialect
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=8,
+              dialects=[Dialect(up_axis="+Z", unit="in")])
+    (folder,) = {p.parent for p in (tmp_path / "zoo").rglob("*.bvh")}
+    assert folder.parent.parent == tmp_path / "zoo"
+    files = scan_folder(folder)
+    truth = {Path(f.path).name: f for f in resolve_sources(str(tmp_path / "zoo"))}
+    assert len(files) == len(truth) and {f.dataset for f in files} == {"zoo"}
+    assert all((f.split, f.skeleton, f.up_axis, f.scale)
+               == (truth[Path(f.path).name].split, truth[Path(f.path).name].skeleton,
+                   "+Z", 0.0254) for f in files)
 
 
 def test_special_files_among_sources_are_refused_not_read(tmp_path):

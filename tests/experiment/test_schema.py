@@ -29,6 +29,17 @@ def test_unknown_key_is_one_line_with_the_closest(override, message):
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.parametrize("fps", ["null", "0", "-5", "abc"])
+def test_a_frame_rate_that_is_none_is_one_line(fps):
+    """``data.preprocessing.fps=null`` (keep each file's rate) failed as a
+    ``TypeError`` traceback, ``0`` kept 30 and 60 fps clips apart until a
+    batch mixed them, and ``-5`` left out every file."""
+    from satagraph.experiment.train import check_config
+    with pytest.raises(ValueError, match=rf"^data.preprocessing.fps='?{fps}'?: a frame rate "
+                                         "above 0 is expected"):
+        check_config(load_config("tiny", [f"data.preprocessing.fps={fps}"]))
+
+
 def test_known_keys_are_listed():
     with pytest.raises(ValueError) as err:
         load_config("tiny", ["outputdir=x"])

@@ -226,6 +226,49 @@ def test_eval_scores_a_manifest_of_test_files_only(config_overrides: List[str],
     assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
 
 
+def test_eval_of_one_split_is_not_stopped_by_a_bad_file_of_another(
+        config_overrides: List[str], small_manifest: Path, tmp_path: Path,
+        capsys: pytest.CaptureFixture) -> None:
+    """``eval --split test`` read every split: a broken training file failed
+    it in one line that said to set ``data.on_error=skip``, which ``eval``
+    cannot set."""
+    run = tmp_path / "run"
+    assert main(_train_args(config_overrides, run)) == 0
+    broken = tmp_path / "broken.bvh"
+    broken.write_text("HIERARCHY\nROOT Hips\n{\n")
+    rows = small_manifest.read_text().splitlines()
+    mended = [rows[0]] + [f"{broken}\t" + r.split("\t", 1)[1] if r.endswith("\ttrain") else r
+                          for r in rows[1:]]
+    (tmp_path / "bad_train.tsv").write_text("\n".join(mended) + "\n")
+    capsys.readouterr()
+    assert main(["eval", "--ckpt", str(run), "--data", str(tmp_path / "bad_train.tsv"),
+                 "--split", "test"]) == 0
+    assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
+
+
+def test_a_monitor_of_a_dataset_without_validation_windows_is_refused_first(
+        config_overrides: List[str], small_manifest: Path, tmp_path: Path,
+        capsys: pytest.CaptureFixture) -> None:
+    """``trainer.monitor=val/dog/JP_h`` where no dog file is in the 'val'
+    split: the run trained a whole epoch, then stopped in a traceback naming
+    every logged key; now one line before any step, after a warning that
+    says which dataset goes unvalidated."""
+    rows = small_manifest.read_text().splitlines()
+    no_dog_val = tmp_path / "no_dog_val.tsv"
+    no_dog_val.write_text("\n".join(r[:-len("val")] + "train" if "\tdog\t" in r
+                                    and r.endswith("\tval") else r for r in rows) + "\n")
+    overrides = [o for o in config_overrides if not o.startswith("data.sources")]
+    run = tmp_path / "run"
+    with pytest.warns(UserWarning, match="no validation windows of 'dog'"):
+        assert main(_train_args(overrides + [f"data.sources=[{no_dog_val}]"], run,
+                                "trainer.monitor=val/dog/JP_h")[1:]) == 2  # no --traceback
+    err = capsys.readouterr().err
+    assert err.strip().splitlines()[-1] == (
+        "satagraph: error: trainer.monitor=val/dog/JP_h: no validation window is of "
+        "dataset 'dog' (validation datasets: bandai)")
+    assert not (run / "checkpoints").exists()
+
+
 def test_train_data_names_the_folders_to_train_on(config_overrides: List[str],
                                                   small_manifest: Path, tmp_path: Path,
                                                   capsys: pytest.CaptureFixture) -> None:
