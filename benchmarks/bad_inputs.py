@@ -161,7 +161,7 @@ BVH_ERRORS: Dict[str, object] = {
     "truncated mid-number": _lines(lambda x: x[:-1] + ["2 90 2 0 0 0 3"]).rstrip("\n"),
     "binary garbage": bytes(range(256)) * 8,
     "null bytes": b"HIERARCHY\n\x00\x00\x00ROOT\x00\n",
-    "UTF-16 text": _lines(lambda x: x).encode("utf-16"),
+    "UTF-16 without its byte order mark": _lines(lambda x: x).encode("utf-16-le"),
     "a zip archive": b"PK\x03\x04" + b"\x00" * 64,
     "a JSON file": '{"HIERARCHY": []}\n',
 }
@@ -169,6 +169,7 @@ BVH_ERRORS: Dict[str, object] = {
 #: name -> (text or bytes, check of the inspect JSON output) for odd but valid files.
 BVH_HANDLED: Dict[str, object] = {
     "UTF-8 BOM": b"\xef\xbb\xbf" + _lines(lambda x: x).encode(),
+    "UTF-16 text (with its byte order mark)": _lines(lambda x: x).encode("utf-16"),
     "CR-only line endings": _lines(lambda x: x).replace("\n", "\r").encode(),
     "CRLF line endings": _lines(lambda x: x).replace("\n", "\r\n").encode(),
     "mixed line endings": _lines(lambda x: x).replace("\n", "\r", 7).encode(),

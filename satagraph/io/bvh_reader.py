@@ -486,9 +486,11 @@ def read_bvh(path: PathLike) -> Motion:
         Motion: skeleton, local rotations and translations, frame rate, and
         the raw channel values (so that writing it back is exact).
 
-    Text is UTF-8 (a byte order mark is skipped); a file that is not UTF-8
-    is read as Latin-1 with a :class:`BVHWarning`. Lines may end with
-    ``\n``, ``\r\n`` or ``\r``.
+    Text is UTF-8 (a byte order mark is skipped) or UTF-16 with its byte
+    order mark; a file that is not UTF-8 is read as Latin-1 with a
+    :class:`BVHWarning`; a binary file (a NUL byte: a checkpoint, an image,
+    a compressed file) is refused in one line saying what it looks like.
+    Lines may end with ``\n``, ``\r\n`` or ``\r``.
 
     Raises:
         BVHError: naming the file, the line and the problem, for any
@@ -559,11 +561,46 @@ def _read_bytes(path: str) -> bytes:
         raise BVHError(path, 0, message) from None
     except OSError as err:
         raise BVHError(path, 0, f"cannot read file: {err.strerror or err}") from None
+    raw = _from_utf16(path, raw)
     if raw.startswith(_BOM):
         raw = raw[len(_BOM):]
+    _refuse_binary(path, raw)
     if b"\r" in raw and _LONE_CR.search(raw):
         raw = _LONE_CR.sub(b"\n", raw)
     return raw
+
+
+_UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
+
+#: What a binary file's first bytes say it is (:func:`_refuse_binary`).
+_MAGIC = ((b"PK\x03\x04", "a zip archive (a PyTorch checkpoint? it goes to --ckpt)"),
+          (b"\x1f\x8b", "gzip-compressed (decompress it first)"),
+          (b"\x80", "a Python pickle"),
+          (b"\x89PNG", "a PNG image"), (b"GIF8", "a GIF image"), (b"\xff\xd8\xff", "a JPEG image"))
+
+
+def _from_utf16(path: str, raw: bytes) -> bytes:
+    """UTF-16 text with a byte order mark (as some Windows tools save
+    text) as UTF-8 bytes; other bytes as they are."""
+    if not raw.startswith(_UTF16_BOMS):
+        return raw
+    try:
+        return raw.decode("utf-16").encode("utf-8")
+    except UnicodeDecodeError as err:
+        raise BVHError(path, 0, f"a UTF-16 byte order mark, but not UTF-16 text "
+                       f"(byte {err.start})") from None
+
+
+def _refuse_binary(path: str, raw: bytes) -> None:
+    """Refuse bytes with a NUL, which no BVH text holds, saying what they
+    look like (:data:`_MAGIC`): a checkpoint given as a motion read as
+    Latin-1 and failed on a line of escaped bytes."""
+    nul = raw.find(b"\x00")
+    if nul < 0:
+        return
+    kind = next((what for magic, what in _MAGIC if raw.startswith(magic)), None)
+    what = f"{kind}, not BVH text" if kind else "binary data (a NUL byte), not BVH text"
+    raise BVHError(path, 0 if kind else raw.count(b"\n", 0, nul) + 1, what)
 
 
 def _decode(path: str, raw: bytes) -> str:

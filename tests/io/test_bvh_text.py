@@ -37,6 +37,37 @@ def test_bom_and_cr_only_line_endings(tmp_path: Path) -> None:
         np.testing.assert_array_equal(motion.raw_channels, ref.raw_channels)
 
 
+def test_utf16_text_with_its_byte_order_mark_is_read(tmp_path: Path) -> None:
+    """A Windows tool's UTF-16 save read as Latin-1 and failed on line 1
+    ('expected HIERARCHY, found ÿþH\\x00I...'); both byte orders read as the
+    UTF-8 file, CRLF line endings too."""
+    ref = read_bvh(_write(tmp_path / "ref.bvh", _text().encode()))
+    for name, encoding in (("le.bvh", "utf-16"), ("be.bvh", "utf-16-be")):
+        data = _text().replace("\n", "\r\n").encode(encoding)
+        data = data if name == "le.bvh" else b"\xfe\xff" + data
+        motion = read_bvh(_write(tmp_path / name, data))
+        assert motion.skeleton.names == ref.skeleton.names, name
+        np.testing.assert_array_equal(motion.raw_channels, ref.raw_channels)
+    with pytest.raises(BVHError, match="bad.bvh: a UTF-16 byte order mark, but not UTF-16"):
+        read_bvh(_write(tmp_path / "bad.bvh", b"\xff\xfeH\x00\x00\xdc"))
+
+
+@pytest.mark.parametrize("data, said", [
+    (b"PK\x03\x04" + b"\x00" * 32 + b"archive/data.pkl", r"x.bvh: a zip archive \(a PyTorch "
+     r"checkpoint\? it goes to --ckpt\), not BVH text$"),
+    (b"\x1f\x8b\x08\x00" + b"\x00" * 16, r"x.bvh: gzip-compressed \(decompress it first\)"),
+    (b"\x89PNG\r\n\x1a\n\x00\x00", r"x.bvh: a PNG image, not BVH text$"),
+    (b"HIERARCHY\nROOT Hips\n\x00\x00", r"x.bvh:3: binary data \(a NUL byte\), not BVH text$")])
+def test_a_binary_file_is_said_to_be_one(tmp_path: Path, data: bytes, said: str) -> None:
+    """A checkpoint given as a motion warned "read as Latin-1", then failed on
+    a line of escaped bytes; now one line says what the file looks like."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no Latin-1 warning before the refusal
+        with pytest.raises(BVHError, match=said):
+            read_bvh(_write(tmp_path / "x.bvh", data))
+
+
 def test_latin1_names_are_kept_distinct_with_a_warning(tmp_path: Path) -> None:
     data = _text("B\xedceps", "B\xecceps").encode("latin-1")
     with pytest.warns(BVHWarning, match=r"latin.bvh:6: not UTF-8"):
