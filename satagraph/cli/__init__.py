@@ -349,7 +349,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--data", nargs="+", default=None, metavar="PATH",
                         help="train on these BVH folders / manifests instead "
                         "of the zoo (a folder without a manifest.tsv is split "
-                        "80/10/10 by file name)")
+                        "80/10/10 by file name; NAME=PATH names its dataset)")
     parser.add_argument("--config", default="demo",
                         help="training config (default: demo)")
     parser.add_argument("--from-scratch", action="store_true",

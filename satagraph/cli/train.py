@@ -74,7 +74,8 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--data", action="append", metavar="PATH", default=None,
                    help="a BVH folder or manifest to train on, in place of the config's "
                    "data.sources; repeat it for several (a folder without a manifest.tsv "
-                   "is split 80/10/10 by file name)")
+                   "is split 80/10/10 by file name; NAME=PATH names its dataset, else the "
+                   "folder's name does)")
     _data_rig(p)
     p.set_defaults(func=run_train)
 
@@ -194,8 +195,8 @@ def add_train_parsers(sub) -> None:
                    "captioned clip learns what the others do (default 0)")
     p.add_argument("--data", action="append", metavar="PATH", default=None,
                    help="a captioned BVH folder or manifest to draw from, in place of the "
-                   "config's data.sources (repeat it for several); train on the bank with "
-                   "the same --data")
+                   "config's data.sources (repeat it for several; NAME=PATH names its "
+                   "dataset); train on the bank with the same --data")
     p.set_defaults(func=run_code_bank)
 
 

@@ -5,6 +5,7 @@ import csv
 import fnmatch
 import hashlib
 import os
+import re
 import warnings
 from collections import Counter
 from dataclasses import dataclass, replace
@@ -147,8 +148,9 @@ def _listed_below(file: str, folder: Path) -> bool:
 
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
-    r"""Files from one or several sources: a folder, a manifest path, or a
-    dict ``{"path": ..., "dataset": ..., "exclude": [...], "include": [...],
+    r"""Files from one or several sources: a folder, a manifest path,
+    ``NAME=PATH`` (:func:`source_spec`: the dataset named), or a dict
+    ``{"path": ..., "dataset": ..., "exclude": [...], "include": [...],
     "up_axis": ..., "units": ...}``. A manifest with a ``dataset`` key keeps
     only that dataset; ``include`` keeps only files whose name matches one of
     its shell patterns (e.g. ``["[0-9][0-9]_[0-9][0-9].bvh"]``: only the
@@ -161,7 +163,7 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
     files: List[MotionFile] = []
     homes: Dict[str, Tuple[Path, str]] = {}
     for src in sources:
-        spec = dict(src) if isinstance(src, dict) else {"path": str(src)}
+        spec = dict(src) if isinstance(src, dict) else source_spec(str(src))
         path = Path(os.path.expanduser(str(spec["path"])))
         if not path.exists():
             raise FileNotFoundError(_missing_source(path))
@@ -179,6 +181,20 @@ def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
         refuse_shared_names(kept, path, homes)
         files += kept
     return files
+
+
+_NAMED = re.compile(r"([A-Za-z0-9_.-]+)=(.+)")
+
+
+def source_spec(text: str) -> Dict[str, str]:
+    """A source given as text: ``NAME=PATH`` names its dataset
+    (``--data dogs=path/to/bvh``, as ``{path: ..., dataset: dogs}`` in
+    ``data.sources``), unless a file or folder of that whole name exists;
+    any other text is a path."""
+    named = _NAMED.fullmatch(text)
+    if named is None or os.path.exists(os.path.expanduser(text)):
+        return {"path": text}
+    return {"path": named.group(2), "dataset": named.group(1)}
 
 
 def refuse_shared_names(files: Sequence[MotionFile], path: Path,
@@ -207,8 +223,8 @@ def refuse_shared_names(files: Sequence[MotionFile], path: Path,
         raise ValueError(f"data.sources: {other[1]} and {path} are both dataset {name!r} "
                          "(named after their folder), so their per-dataset figures, "
                          "balanced groups and skeleton ids would merge: name them, e.g. "
-                         f"{{path: {path}, dataset: {name}_2}} (the same dataset on both "
-                         "merges them)")
+                         f"--data {name}_2={path} or {{path: {path}, dataset: {name}_2}} in "
+                         "data.sources (the same dataset on both merges them)")
 
 
 def _named_after(path: Path, name: str) -> Path:

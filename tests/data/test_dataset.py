@@ -355,3 +355,13 @@ def test_two_folders_of_one_name_are_refused_not_merged(tmp_path):
     apart = resolve_sources([a, {"path": b, "dataset": "mocap_b"}])
     assert [f.dataset for f in apart] == ["mocap", "mocap_b"]
     assert len(resolve_sources([a, str(tmp_path / "a" / ".." / "a" / "mocap")])) == 2
+    # --data NAME=PATH names it as the refusal says (only a data.sources dict could)
+    with pytest.raises(ValueError, match=f"--data mocap_2={b}"):
+        resolve_sources([a, b])
+    named = resolve_sources([a, f"mocap_b={b}"])
+    assert [f.dataset for f in named] == ["mocap", "mocap_b"]
+    odd = tmp_path / "x=y"  # a folder whose own name looks like one stays a path
+    (odd / "mocap").mkdir(parents=True)
+    (odd / "mocap" / "c.bvh").write_text("")
+    assert [f.dataset for f in resolve_sources([str(odd / "mocap")])] == ["mocap"]
+    assert [f.dataset for f in resolve_sources([str(odd)])] == ["x=y"]
