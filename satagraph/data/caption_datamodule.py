@@ -182,6 +182,9 @@ class CaptionDataModule(WindowDataModule):
                           f"captions and are left out ({windows.uncaptioned[0]}, ...): a "
                           "file's captions are a sidecar beside it, NAME.txt (HumanML3D "
                           "lines caption#tokens#from#to) or NAME.json", stacklevel=2)
+        if windows.outside:
+            warnings.warn(f"{split}: {len(windows.outside)} captions lie past their clip's "
+                          f"end and are left out ({windows.outside[0]}, ...)", stacklevel=2)
         parts: List[Dataset] = [windows]
         for spec in zoos:
             parts += zoo_caption_datasets(spec, split, self.window, self.min_frames,

@@ -129,6 +129,21 @@ def overlapping(captions: Sequence[Caption], fps: float, num_frames: int, start:
     return out
 
 
+def outside_captions(path: str, captions: Sequence[Caption], fps: float,
+                     num_frames: int) -> List[str]:
+    """The captions of a clip that cover none of its frames (their range
+    starts at or past its end), one line each naming the file, the text and
+    the range: no window ever takes them."""
+    lines = []
+    for caption in captions:
+        part = caption.frames(fps, num_frames)
+        if part.stop <= part.start:
+            end = "end" if caption.end is None else f"{caption.end:g}"
+            lines.append(f"{path}: {caption.text[:40]!r} at {caption.start:g}-{end} s "
+                         f"of a {num_frames / fps:.2f} s clip")
+    return lines
+
+
 class CaptionWindows(Dataset):
     r"""Base of the captioned window datasets: seeded mirroring, caption
     choice and the ``meta`` every item carries.
@@ -251,7 +266,10 @@ class FileCaptionWindows(CaptionWindows):
         self.files, self.features, self.captions = [], [], []
         #: Paths of the files left out for having no caption.
         self.uncaptioned: List[str] = []
+        #: Captions left out for lying past their clip's end, one line each.
+        self.outside: List[str] = []
         for f, feats, caps in zip(files, features, captions):
+            self.outside += outside_captions(f.path, caps, feats.fps, feats.num_frames)
             if caps:
                 self.files.append(f), self.features.append(feats)
                 self.captions.append(list(caps))
@@ -375,6 +393,7 @@ def batch_censored(batch) -> torch.Tensor:
 
 
 __all__ = ["CaptionWindows", "FileCaptionWindows", "ZooCaptionWindows", "mirror_features",
+           "outside_captions",
            "reverse_features", "reversible",
            "overlapping", "choose_caption", "batch_texts", "batch_seconds",
            "batch_censored"]

@@ -72,8 +72,8 @@ def read_sidecar(path: PathLike) -> List[Caption]:
     """
     path = Path(path)
     try:
-        content = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as err:
+        content = _utf8(path, path.read_bytes())
+    except OSError as err:
         raise CaptionError(f"{path}: cannot read captions: {err}") from None
     if path.suffix.lower() == ".txt":
         return parse_humanml3d(content, str(path))
@@ -81,6 +81,18 @@ def read_sidecar(path: PathLike) -> List[Caption]:
         return parse_caption_json(content, str(path))
     raise CaptionError(f"{path}: captions must be in a .txt (HumanML3D) or .json "
                        "file")
+
+
+def _utf8(path: Path, raw: bytes) -> str:
+    """The text of a sidecar's bytes (UTF-8, with or without a byte order
+    mark); another encoding is refused naming the line of its first bad
+    byte (a Latin-1 "fatiguée" said only "position 44")."""
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = raw.count(b"\n", 0, err.start) + 1
+        raise CaptionError(f"{path}:{line}: not UTF-8 text ({err.reason} at byte "
+                           f"{err.start}); save the captions as UTF-8") from None
 
 
 def _seconds(text: str, where: str, what: str) -> float:

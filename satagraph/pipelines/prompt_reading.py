@@ -50,6 +50,7 @@ SUBJECT_NOUNS: Dict[str, str] = {
 }
 _WORD = re.compile(r"[A-Za-z0-9]+(?:-[A-Za-z0-9]+)*")
 _PLAIN = re.compile(r"[a-z0-9]+")
+_WRITTEN = re.compile(r"[^\W_]+")  # a word as written, in any script
 
 
 @dataclass(frozen=True)
@@ -141,9 +142,21 @@ def read_prompt(text: str, vocabulary: Optional[FrozenSet[str]],
             _with_article(tokens, i, subject)
             replaced.append((token, subject))
     out = "".join(tokens)
-    unknown = tuple(dict.fromkeys(w for w in _PLAIN.findall(out.lower()) if w not in vocabulary))
-    return PromptReading(out, tuple(replaced), unknown)
+    return PromptReading(out, tuple(replaced), unknown_words(out, vocabulary))
+
+
+def unknown_words(text: str, vocabulary: FrozenSet[str]) -> Tuple[str, ...]:
+    """The words of :obj:`text`, as written (lower case), that a model which
+    saw :obj:`vocabulary` never saw: those with a piece the offline text
+    encoder reads ("très": "tr", "s") outside it, or with none at all
+    ("人が歩く"), so the note names the user's words, not their pieces."""
+    unknown = []
+    for word in _WRITTEN.findall(text.lower()):
+        pieces = set(_PLAIN.findall(word))
+        if not pieces or not pieces <= vocabulary:
+            unknown.append(word)
+    return tuple(dict.fromkeys(unknown))
 
 
 __all__ = ["VOCABULARY_KEY", "SUBJECT_NOUNS", "PromptReading", "words_of", "vocabulary_of",
-           "article", "read_prompt"]
+           "article", "read_prompt", "unknown_words"]

@@ -39,6 +39,20 @@ def test_malformed_txt_names_file_and_line(tmp_path, line, message):
     assert "\n" not in str(err.value) and str(path) in str(err.value)
 
 
+@pytest.mark.parametrize("suffix", [".txt", ".json"])
+def test_a_sidecar_not_in_utf8_names_its_line(tmp_path, suffix):
+    """A Latin-1 sidecar was refused with Python's 'position 44', no line."""
+    path = tmp_path / f"clip{suffix}"
+    text = ("fine#t#0.0#0.0\nune personne fatigu\xe9e#t#0.0#0.0\n" if suffix == ".txt"
+            else '[{"text": "fine"},\n {"text": "fatigu\xe9e"}]')
+    path.write_bytes(text.encode("latin-1"))
+    with pytest.raises(CaptionError, match=rf"clip\{suffix}:2: not UTF-8 text") as err:
+        read_sidecar(path)
+    assert "\n" not in str(err.value) and str(path) in str(err.value)
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode("utf-8"))  # UTF-8 with its BOM: read
+    assert read_sidecar(path)[-1].text.startswith(("une personne fatigu\xe9e", "fatigu\xe9e"))
+
+
 def test_json_sidecar(tmp_path):
     path = tmp_path / "clip.json"
     path.write_text(json.dumps([{"text": "a person jumps", "start": 0.5, "end": 1.25},

@@ -230,6 +230,28 @@ def test_files_without_captions_are_said_when_left_out(tmp_path):
         dm.setup("fit")
 
 
+def test_captions_past_a_clips_end_are_said_when_left_out(tmp_path):
+    """A sidecar line whose range starts past its clip's end (a 1.3-s take
+    captioned at 5-9 s) described no frame and was dropped without a word."""
+    from satagraph.io import write_bvh
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    for name in ("walk", "third", "fourth", "fifth"):
+        write_bvh(example_motion(num_frames=40), folder / f"{name}.bvh")
+        (folder / f"{name}.txt").write_text("a person walks forward#a/DET#0.0#0.0\n"
+                                           "a person stands still#a/DET#5.0#9.0\n")
+    f = MotionFile(str(folder / "walk.bvh"), "mine", "example", "train")
+    feats = motion_to_features(canonicalize(f.read(), fps=30.0))
+    windows = FileCaptionWindows([f], [feats], window=16, stride=16)
+    assert len(windows.outside) == 1 and "'a person stands still' at 5-9 s" in windows.outside[0]
+    assert all(windows.window_captions(0, s) for _, s in windows.index)
+    dm = CaptionDataModule([str(folder)], window=16, stride=16, batch_size=2,
+                           semantic_encoder=None, cache_dir=str(tmp_path / "cache"))
+    said = r"train: 4 captions lie past their clip's end and are left out .*stands"
+    with pytest.warns(UserWarning, match=said):
+        dm.setup("fit")
+
+
 def test_a_file_limit_of_captioned_files_is_said(tmp_path):
     """``data.max_files`` spread a caption data module's files as the
     motion data module's, but said nothing of what it left out."""

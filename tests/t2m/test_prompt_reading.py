@@ -41,6 +41,16 @@ def test_words_still_unknown_are_named_in_order():
     assert read_prompt("a person walks", WORDS).note() is None
 
 
+def test_unknown_words_are_named_as_written_in_any_script():
+    """The note named the pieces the offline encoder cuts a non-ASCII word
+    into ("très" was "tr", "s") and said nothing of a prompt in another
+    script, read as no words at all."""
+    assert read_prompt("a person walks très vite", WORDS).unknown == ("très", "vite")
+    assert read_prompt("人が歩く", WORDS).unknown == ("人が歩く",)
+    # a word whose pieces the model saw stays known, as the encoder reads it
+    assert read_prompt("a person wälks", WORDS | {"w", "lks"}).unknown == ()
+
+
 def test_known_nouns_and_unknown_subjects_are_left_alone():
     # a model that saw "dog" keeps it
     assert read_prompt("a dog walks", WORDS | {"dog"}).text == "a dog walks"
