@@ -1,10 +1,9 @@
-"""Processed-feature cache: one ``.npz`` per (file, preprocessing config),
-written atomically, loaded without pickle."""
+"""Processed-feature cache: one ``.npz`` per (file content, preprocessing
+config), written atomically, loaded without pickle."""
 from __future__ import annotations
 
 import hashlib
 import json
-import os
 import warnings
 from pathlib import Path
 from typing import Dict, Optional
@@ -55,11 +54,12 @@ def content_digest(path: str, chunk: int = 1 << 20) -> str:
 
 
 def cache_key(path: str, config: Dict) -> str:
-    """Key from the file (its path and its content: an edit that keeps the
-    size and the modification time, as ``cp -p`` or ``rsync -t`` make, is
-    another key) and the config."""
-    blob = json.dumps([os.path.abspath(path), content_digest(path), config,
-                       FEATURE_VERSION], sort_keys=True)
+    """Key from the file's content (an edit that keeps the size and the
+    modification time, as ``cp -p`` or ``rsync -t`` make, is another key)
+    and the config, not from where the file lies: features depend on its
+    bytes alone, so a folder moved, renamed or linked in twice is read from
+    the entries it already has."""
+    blob = json.dumps([content_digest(path), config, FEATURE_VERSION], sort_keys=True)
     return hashlib.sha1(blob.encode()).hexdigest()
 
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import hashlib
 import warnings
+from collections import Counter
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import (Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence,
@@ -17,6 +18,7 @@ from satagraph.transforms.augment import mirror as mirror_motion
 from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
 from satagraph.transforms.canonical import canonicalize
 from satagraph.transforms.rest import REST_MODES, shown_rest
+from satagraph.transforms.rig_reading import RigReadingWarning, UnitsWarning
 from satagraph.data.clip import MotionClip
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import (JointEvidence, call_semantic,
@@ -135,22 +137,62 @@ def try_load_features(files: Sequence[MotionFile], config: Optional[Dict] = None
     folder: Optional[Path] = Path(cache_dir or default_cache_dir()) / "processed"
     kept, out, errors = [], [], []
     iterator = progress(files) if progress else files
-    for f in iterator:
-        try:
-            own = file_config(f, config)
-            key = cache_key(f.path, own)
-            feats = _cache_read(folder, key)
-            if feats is None:
-                feats = preprocess_file(f.path, own)
-                folder = _cache_write(folder, key, feats)
-            else:
-                check_features(feats, f.path)
-        except (BVHError, OSError, ValueError, MemoryError) as err:
-            errors.append(_error_text(f.path, err))
-            continue
-        kept.append(f)
-        out.append(feats)
+    said: List[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as said:
+            for f in iterator:
+                folder = _load_one(f, config, folder, kept, out, errors)
+    finally:
+        _rewarn_capped(said)
     return kept, out, errors
+
+
+def _load_one(f: MotionFile, config: Dict, folder: Optional[Path], kept: List[MotionFile],
+              out: List[MotionFeatures], errors: List[str]) -> Optional[Path]:
+    """Features of one file into :obj:`kept` and :obj:`out`, or its error
+    into :obj:`errors`; the cache folder to go on with."""
+    try:
+        own = file_config(f, config)
+        key = cache_key(f.path, own)
+        feats = _cache_read(folder, key)
+        if feats is None:
+            feats = preprocess_file(f.path, own)
+            folder = _cache_write(folder, key, feats)
+        else:
+            check_features(feats, f.path)
+    except (BVHError, OSError, ValueError, MemoryError) as err:
+        errors.append(_error_text(f.path, err))
+        return folder
+    kept.append(f)
+    out.append(feats)
+    return folder
+
+
+#: Rig-reading warnings of each kind (up axis, units) shown while a set of
+#: files is processed; the rest are counted in one line.
+RIG_WARNINGS_SHOWN = 3
+
+
+def _rewarn_capped(said: Sequence[warnings.WarningMessage],
+                   shown: int = RIG_WARNINGS_SHOWN) -> None:
+    """Issue again the warnings recorded while files were processed: the
+    first :obj:`shown` rig-reading warnings of each kind, then one line
+    counting the others (a folder of a thousand rigs that tell no units
+    warned a line per file), and any other warning as it was."""
+    seen, left = Counter(), Counter()
+    for w in said:
+        if issubclass(w.category, RigReadingWarning):
+            seen[w.category] += 1
+            if seen[w.category] > shown:
+                left[w.category] += 1
+                continue
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    for kind, count in left.items():
+        what, flag = (("units", "--units") if issubclass(kind, UnitsWarning)
+                      else ("up axis", "--up-axis"))
+        warnings.warn(f"{count} more {what} warnings like those above are not shown "
+                      f"(`satagraph inspect FOLDER` reads every file's rig); pass {flag} "
+                      "to set them", kind, stacklevel=3)
 
 
 def _cache_failed(folder: Path, err: OSError) -> None:

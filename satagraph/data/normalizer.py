@@ -109,18 +109,29 @@ class FeatureNormalizer(nn.Module):
         feats = list(features)
         if not feats:
             raise ValueError("FeatureNormalizer.fit: no training features")
-        parts = {"dynamic": [self._relative(f.dynamic.reshape(-1, DYNAMIC_CHANNELS),
-                                            "dynamic", f.height) for f in feats],
-                 "root": [self._relative(f.r, "root", f.height, self._leg(f))
-                          for f in feats],
-                 "static": [self._relative(f.static, "static", f.height)
-                            for f in feats]}
         stats = {}
-        for name, values in parts.items():
-            stats[name] = _stats(np.concatenate(values))
-            _check_stats(name, stats[name], values, names)
+        for name in ("dynamic", "root", "static"):
+            moments = _Moments()
+            for f in feats:  # one file's values at a time: no copy of the whole split
+                moments.add(self._fit_values(f, name))
+            stats[name] = moments.stats()
+            _check_stats(name, stats[name],
+                         (_extreme(self._fit_values(f, name)) for f in feats), names)
         self.set_stats(stats)
         return self
+
+    def _fit_values(self, feats: MotionFeatures, name: str) -> np.ndarray:
+        """The rows of group :obj:`name` of one file that :meth:`fit` pools.
+
+        Shapes:
+            - **return**: :math:`(R, C)`
+        """
+        if name == "dynamic":
+            return self._relative(feats.dynamic.reshape(-1, DYNAMIC_CHANNELS), name,
+                                  feats.height)
+        if name == "root":
+            return self._relative(feats.r, name, feats.height, self._leg(feats))
+        return self._relative(feats.static, name, feats.height)
 
     @torch.no_grad()
     def set_stats(self, stats: Dict[str, tuple]) -> None:
@@ -210,20 +221,61 @@ class FeatureNormalizer(nn.Module):
         return out if scale is None else out * scale
 
 
-def _stats(values: np.ndarray) -> tuple:
-    with np.errstate(all="ignore"):
-        return values.mean(0), values.std(0)
+class _Moments:
+    r"""Per-channel row count, mean and summed squared deviations, merged
+    one block of rows at a time (Chan, Golub and LeVeque's pairwise update,
+    in float64): the mean and standard deviation of a whole training split
+    without holding all of it at once."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.mean: Optional[np.ndarray] = None
+        self.m2: Optional[np.ndarray] = None
+
+    def add(self, values: np.ndarray) -> None:
+        """Merge a block of rows.
+
+        Shapes:
+            - **values**: :math:`(R, C)`
+        """
+        values = np.asarray(values, dtype=np.float64)
+        count = len(values)
+        with np.errstate(all="ignore"):
+            mean = values.mean(0) if count else np.zeros(values.shape[-1])
+            m2 = np.square(values - mean).sum(0)
+            if self.mean is None:
+                self.count, self.mean, self.m2 = count, mean, m2
+                return
+            total = self.count + count
+            delta = mean - self.mean
+            share = count / total if total else 0.0
+            self.mean = self.mean + delta * share
+            self.m2 = self.m2 + m2 + np.square(delta) * self.count * share
+            self.count = total
+
+    def stats(self) -> tuple:
+        """``(mean, std)`` of every row merged (NaN for none)."""
+        with np.errstate(all="ignore"):
+            if not self.count:
+                return self.mean * np.nan, self.m2 * np.nan
+            return self.mean, np.sqrt(self.m2 / self.count)
 
 
-def _check_stats(name: str, stats: tuple, values: List[np.ndarray],
+def _extreme(values: np.ndarray) -> float:
+    """The largest ``|value|`` of a block (NaN as infinite; 0 when empty)."""
+    return float(np.nan_to_num(np.abs(values), nan=np.inf).max()) if values.size else 0.0
+
+
+def _check_stats(name: str, stats: tuple, extremes: Iterable[float],
                  names: Optional[Sequence[str]]) -> None:
-    """Raise :class:`NormalizerError` for non-finite or absurd statistics."""
+    """Raise :class:`NormalizerError` for non-finite or absurd statistics;
+    :obj:`extremes` is each file's largest ``|value|`` (:func:`_extreme`),
+    read only then."""
     mean, std = stats
     worst = float(np.nan_to_num(np.maximum(np.abs(mean), std), nan=np.inf).max())
     if worst <= MAX_STAT:
         return
-    extreme = [float(np.nan_to_num(np.abs(v), nan=np.inf).max()) if v.size else 0.0
-               for v in values]
+    extreme = list(extremes)
     k = int(np.argmax(extreme))
     where = names[k] if names is not None else f"training file #{k}"
     raise NormalizerError(

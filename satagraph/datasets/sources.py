@@ -81,11 +81,28 @@ def bvh_files(folder: Union[str, os.PathLike]) -> List[Path]:
     """Every ``.bvh`` entry (any case: ``.BVH``, ``.Bvh``) below :obj:`folder`
     but folders, sorted: special files and broken links too, which the reader
     refuses in one line rather than the listing leaving them out unsaid.
+    Linked folders are followed (a folder of links to datasets kept
+    elsewhere), but not one that links back to a folder above it or to one
+    the walk came through (a loop, also across two folders).
     Temporary files of satagraph's atomic writes (``.walk.bvh.<host>-<pid>.
     <random>.tmp.bvh``: a write in progress, or the start of one that
     ``kill -9`` cut short) are no motion files and are left out."""
-    return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() == ".bvh"
-                  and not is_temp_file(p.name) and not p.is_dir())
+    found, top = [], Path(folder)
+    for root, folders, names in os.walk(folder, followlinks=True):
+        here = Path(root)
+        came = {top.resolve()} | {Path(top, *here.relative_to(top).parts[:i + 1]).resolve()
+                                  for i in range(len(here.relative_to(top).parts))}
+        folders[:] = [d for d in folders if not _loops(here / d, here.resolve(), came)]
+        found += [here / n for n in names
+                  if Path(n).suffix.lower() == ".bvh" and not is_temp_file(n)]
+    return sorted(found)
+
+
+def _loops(link: Path, here: Path, came: set) -> bool:
+    """Whether following :obj:`link` goes round: to a folder above
+    :obj:`here` or one the walk came through (:obj:`came`, resolved)."""
+    target = link.resolve()
+    return here.is_relative_to(target) or target in came
 
 
 def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:
