@@ -72,7 +72,8 @@ def table(commands: List[List[str]], best: List[List[float]],
 
 
 def main(argv: Optional[List[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--file", default=None,
                         help="BVH file for inspect (default: the example walk)")
     parser.add_argument("--repeat", type=int, default=5,
@@ -91,8 +92,9 @@ def main(argv: Optional[List[str]] = None) -> None:
             + (f"; baseline: {args.baseline}" if args.baseline else "") + ".\n\n"
             + table(commands, best, args.baseline))
     print(text)
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(text + "\n")
+    sys.path.insert(0, str(ROOT))  # this tree's satagraph, imported at the end alone
+    from satagraph.utils.files import atomic_write_text
+    atomic_write_text(OUT, text + "\n", create_parent=True)
 
 
 if __name__ == "__main__":

@@ -1,20 +1,20 @@
 """Collating a batch of clips of mixed skeletons into frame graphs.
 
 Usage: ``python benchmarks/collate.py [--data ../shared/data] [--clips 32]
-[--frames 64] [--repeat 50]``.
+[--frames 64] [--repeat 50] [--out benchmarks/results/collate]``.
 
 Builds real clips from the dog (MANN, 21 joints without end sites) and
 ccbase (100 joints without end sites) files, half of each, interleaved, and
 times :func:`satagraph.data.collate_clips` on them, with one torch thread
 (as in :class:`~torch.utils.data.DataLoader` workers, which set it so) and
 with torch's default thread count (as with ``num_workers=0``). Prints a
-markdown table and writes it to ``benchmarks/results/collate.md`` (and
-``.json``).
+markdown table and writes it to ``--out`` with ``.md`` (and ``.json``), once
+the run is over; a quick run (``--repeat 1``) can leave the committed table
+alone with ``--out /tmp/collate``.
 """
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import time
 from pathlib import Path
@@ -26,7 +26,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
 from satagraph.memory import retain_freed_memory
-from results_io import data_folder  # noqa: E402
+from results_io import data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = ("dog", "ccbase")
@@ -79,12 +79,16 @@ def time_rows(clips: List[MotionClip], repeat: int, thread_counts: List[int],
 
 
 def main(argv: Optional[List[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder,
                         default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--clips", type=int, default=32)
     parser.add_argument("--frames", type=int, default=64)
     parser.add_argument("--repeat", type=int, default=50)
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "collate",
+                        help="results path without suffix (default "
+                             "benchmarks/results/collate)")
     args = parser.parse_args(argv)
     clips = build_clips(Path(args.data), args.clips, args.frames)
     batch = collate_clips(clips)
@@ -108,12 +112,10 @@ def main(argv: Optional[List[str]] = None) -> None:
               "page-fault on every call."]
     table = "\n".join(lines)
     print(table)
-    out = ROOT / "benchmarks" / "results"
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "collate.md").write_text(table + "\n")
     result = {"clips": len(clips), "frames": args.frames, "joints": joints,
               "nodes": batch.num_nodes, "rows": rows}
-    (out / "collate.json").write_text(json.dumps(result, indent=2) + "\n")
+    write_results(args.out, "Collating mixed skeletons (benchmarks/collate.py)",
+                  table + "\n", result)
 
 
 if __name__ == "__main__":

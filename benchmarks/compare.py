@@ -174,7 +174,8 @@ skeleton (satagraph.transforms.augment). {args.retarget_files} test files per da
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--minutes", type=float, default=5.0,
                         help="training minutes per model (default 5)")
     parser.add_argument("--paper-sizes", action="store_true",

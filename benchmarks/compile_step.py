@@ -133,7 +133,8 @@ def table(rows: List[Dict]) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=lambda t: Path(data_folder(t)), default=str(DATA))
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--config", default="sata_vae")

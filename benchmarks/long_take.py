@@ -95,7 +95,8 @@ def table(rows: List[dict]) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder,
                         default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--frames", type=int, nargs="+", default=[5000, 20000, 60000])

@@ -182,7 +182,8 @@ def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", nargs="+", default=list(RULE),
                         help="checkpoints, .safetensors weights files or built-in names")
     add_zoo_clips_argument(parser, ZOO_CLIPS)

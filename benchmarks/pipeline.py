@@ -2,16 +2,15 @@
 and the frame parser (:mod:`satagraph.io._floats`) against numpy's parsers.
 
 Usage: ``python benchmarks/pipeline.py [--data ../shared/data] [--repeat 3]
-[--threads N]``.
-Prints a markdown table and writes it to ``benchmarks/results/pipeline.md``
-(and ``.json``). pybvh is a benchmark-only dependency (``pip install
+[--threads N] [--out benchmarks/results/pipeline]``.
+Prints a markdown table and writes it to ``--out`` with ``.md`` (and
+``.json``), once the run is over. pybvh is a benchmark-only dependency (``pip install
 satagraph[bench]``); without it the comparison rows are left out.
 """
 from __future__ import annotations
 
 import argparse
 import io
-import json
 import re
 import time
 import warnings
@@ -25,7 +24,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.io import read_bvh
 from satagraph.io._floats import parse_decimal_table
-from results_io import data_folder  # noqa: E402
+from results_io import data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -140,7 +139,8 @@ def _time_interleaved(fns: List[Callable], files: list,
 
 
 def main(argv: List[str] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder,
                         default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--repeat", type=int, default=3,
@@ -148,6 +148,9 @@ def main(argv: List[str] = None) -> None:
     parser.add_argument("--threads", type=int, default=None,
                         help="torch threads (default: torch's own count); the "
                              "parse+FK rows use numpy only")
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "pipeline",
+                        help="results path without suffix (default "
+                             "benchmarks/results/pipeline)")
     args = parser.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -190,10 +193,7 @@ def main(argv: List[str] = None) -> None:
     lines += parse_lines
     table = "\n".join(lines)
     print(table)
-    out = ROOT / "benchmarks" / "results"
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "pipeline.md").write_text(table + "\n")
-    (out / "pipeline.json").write_text(json.dumps(result, indent=2) + "\n")
+    write_results(args.out, "Reading pipeline (benchmarks/pipeline.py)", table + "\n", result)
 
 
 if __name__ == "__main__":

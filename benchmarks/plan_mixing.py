@@ -96,7 +96,8 @@ def run(plans: List[str], rigs: int, steps: int, lr: float, seed: int) -> List[s
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--plans", default="biped",
                         help="comma-separated training body plans")
     parser.add_argument("--rigs", type=int, default=8, help="training rigs")

@@ -377,7 +377,8 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", default=AUTO,
                         help="auto (the default, as the commands': the built-in model "
                              "chosen by the rigs; rows it reads with builtin-wide say so), "

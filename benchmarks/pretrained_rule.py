@@ -131,7 +131,8 @@ def verdict(results: Dict, base: str = "builtin", paired: bool = False,
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("results", type=Path, help="pretrained_val.py's JSON")
     parser.add_argument("--base", default="builtin", help="the column to beat")
     parser.add_argument("--paired", action="store_true",

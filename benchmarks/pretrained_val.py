@@ -360,7 +360,8 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", nargs="+", default=["builtin"],
                         help="checkpoints, .safetensors weights files or builtin")
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")

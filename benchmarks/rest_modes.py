@@ -35,6 +35,7 @@ from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import (is_line_rest, needs_rest,  # noqa: E402
                                            reconstruct_canonical)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 #: The body plans of the built-in model's training (stage 1).
 SPECIES = ("biped", "quadruped", "bird", "fowl")
@@ -95,7 +96,8 @@ def table(rows: List[Dict]) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", default="builtin")
     parser.add_argument("--per-rest", type=int, default=10)
     parser.add_argument("--out", type=Path, default=None)
@@ -110,9 +112,8 @@ def main(argv=None) -> int:
             + table(rows) + "\n")
     print(text)
     if args.out:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "rest_modes.md").write_text(text)
-        (args.out / "rest_modes.json").write_text(json.dumps(rows, indent=1))
+        atomic_write_text(args.out / "rest_modes.md", text, create_parent=True)
+        atomic_write_text(args.out / "rest_modes.json", json.dumps(rows, indent=1))
     return 0
 
 

@@ -78,7 +78,8 @@ def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", nargs="+", default=list(GROUPS),
                         help="built-in names (each reads its groups) or checkpoints (every group)")
     mirror_val.add_zoo_clips_argument(parser, ZOO_CLIPS)

@@ -120,7 +120,8 @@ def _detail(reference: Dict[int, float], resumed: Dict[int, float], saved: int) 
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--kills", type=int, default=3, help="random kill points")
     parser.add_argument("--at", type=int, nargs="*", help="kill after these steps")
     parser.add_argument("--every", type=int, default=5)

@@ -55,6 +55,7 @@ from satagraph.pipelines.inference import retarget_motion  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.pipelines.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
@@ -180,7 +181,8 @@ def _row(name: str, source: Path, target: Path, steps: Dict[str, float],
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", required=True)
     parser.add_argument("--source", nargs="*", type=Path, default=None,
                         help="source clips (default: the dog test split's first three)")
@@ -191,13 +193,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="frames of each source clip (its most active window)")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
+    if not (args.source and args.target) and not (DATA / "manifest.tsv").is_file():
+        print(f"retarget_sanity.py: {DATA} not found: the default clips need "
+              "../shared/data; pass --source and --target", file=sys.stderr)
+        return 2
     sources = args.source or _default_sources()
     targets = args.target or [DATA / "cmu" / "01_01.bvh",
                               DATA / "bandai" / "dataset-1_walk_normal_001.bvh"]
     table = run(args.ckpt, sources, targets, args.frames)
     print(table)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text("# Retarget sanity check\n\n" + table)
+    atomic_write_text(args.out, "# Retarget sanity check\n\n" + table, create_parent=True)
     return 0
 
 

@@ -28,6 +28,10 @@ excepted), or a look-alike read as anything but the unit it looks like.
 Usage::
 
     .venv/bin/python benchmarks/rig_reading.py [--seeds 0 1 2 3] [--data DIR]
+        [--out benchmarks/results/rig_reading]
+
+Where ``../shared/data`` is absent the table says its rows are left out (a
+``--data`` folder without a ``manifest.tsv`` is refused).
 """
 from __future__ import annotations
 
@@ -46,7 +50,7 @@ from satagraph.datasets.zoo import apply_dialect, dialect_variants, generate_cli
 from satagraph.io import read_bvh, write_bvh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from results_io import write_results  # noqa: E402
+from results_io import data_folder, write_results  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "rig_reading"
@@ -151,16 +155,27 @@ def _table(rows: List[List]) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     parser.add_argument("--frames", type=int, default=90)
-    parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data")
+    parser.add_argument("--data", type=lambda t: Path(data_folder(t)), default=None,
+                        help="the real files (default ../shared/data, left out "
+                             "where it is absent)")
+    parser.add_argument("--out", type=Path, default=RESULTS,
+                        help="results path without suffix (default "
+                             "benchmarks/results/rig_reading)")
     args = parser.parse_args(argv)
+    data = args.data or REPO.parent / "shared" / "data"
+    missing = "" if (data / "manifest.tsv").is_file() else (
+        f"{data}: no manifest.tsv there: the real files' rows are left out.")
+    if missing:
+        print(f"rig_reading.py: {missing}", file=sys.stderr)
     warnings.simplefilter("ignore")
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         zoo = [r for s in args.seeds for r in zoo_rows(s, args.frames, Path(tmp))]
-    shared = shared_rows(args.data) if (args.data / "manifest.tsv").is_file() else []
+    shared = [] if missing else shared_rows(data)
     text = (f"Zoo dialect variants (seeds {args.seeds}, {args.frames} frames each), "
             "written to BVH and read back without a manifest:\n\n"
             + _table(_summary(zoo, "species"))
@@ -175,9 +190,11 @@ def main(argv=None) -> int:
         text += ("\nEvery file of `../shared/data` (expected units: bandai cm, "
                  "cmu CMU units, ccbase cm, dog kept (undecidable: 45 units tall), "
                  "fixtures m / cm / cm):\n\n" + _table(_summary(shared, "species")))
+    else:
+        text += f"\n{missing}\n"
     text += f"\n{len(zoo) + len(shared)} files in {time.perf_counter() - start:.0f} s.\n"
     print(text)
-    write_results(RESULTS, "Rig reading: up axis and units", text,
+    write_results(args.out, "Rig reading: up axis and units", text,
                   {"zoo": zoo, "shared": shared})
     return 0
 

@@ -214,7 +214,8 @@ def notes(args) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder, default=str(DATA))
     parser.add_argument("--joints", default="20,40,70,100,150")
     parser.add_argument("--frames", type=int, default=16)

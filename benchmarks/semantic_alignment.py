@@ -60,6 +60,7 @@ from satagraph.semantics.rules import describe_structure
 from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
 from satagraph.sides import swap_side
+from satagraph.utils.files import atomic_write_text
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "semantic_alignment.md"
@@ -410,7 +411,8 @@ def time_all(skeletons: Sequence, cache_dir: Path) -> Tuple[float, float, int]:
 
 
 def _parse_args(argv: Sequence[str] = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path,
                         default=REPO.parent / "shared" / "data",
                         help="shared BVH data folder (default ../shared/data)")
@@ -549,8 +551,7 @@ def main(argv: Sequence[str] = None) -> int:
     lines += [f"- {n}" for n in notes] + timing
     text = "\n".join(lines)
     print(text)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text)
+    atomic_write_text(args.out, text, create_parent=True)
     return 0
 
 

@@ -120,7 +120,8 @@ def peak_memory(device: torch.device) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--widths", default="64,256")
     parser.add_argument("--batches", default="8,16")
     parser.add_argument("--windows", default="32,64")

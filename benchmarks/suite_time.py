@@ -15,6 +15,7 @@ import argparse
 import os
 import re
 import subprocess
+import sys
 import time
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
@@ -48,7 +49,8 @@ def _label(tree: Path) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--baseline", type=Path, default=None)
     args = parser.parse_args(argv)
@@ -67,8 +69,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     text = (f"`make test`, {args.repeat} runs a tree, the trees alternating, "
             f"{os.cpu_count()} CPUs.\n\n" + "\n".join(rows) + "\n")
     print(text)
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text("# Test suite time (benchmarks/suite_time.py)\n\n" + text)
+    sys.path.insert(0, str(ROOT))  # this tree's satagraph, imported at the end alone
+    from satagraph.utils.files import atomic_write_text
+    atomic_write_text(OUT, "# Test suite time (benchmarks/suite_time.py)\n\n" + text,
+                      create_parent=True)
     return 0
 
 

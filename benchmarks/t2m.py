@@ -90,6 +90,7 @@ from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.semantics.limbs import limb_end_index  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.transforms.rest import REST_MODES  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
@@ -872,7 +873,8 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", default=None, help="a t2m checkpoint (generator + RVQ)")
     parser.add_argument("--quick", action="store_true", help="zoo only, seconds")
     parser.add_argument("--seed", type=int, default=0)
@@ -940,6 +942,9 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.bandai_val and args.prompts != "val":
         parser.error("--bandai-val goes with --prompts val")
+    if not args.quick and not MANIFEST.is_file():
+        parser.error(f"{MANIFEST.parent}: no manifest.tsv there: the real files' groups and "
+                     "probes need ../shared/data (--quick scores the zoo alone)")
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
@@ -964,8 +969,8 @@ def main(argv=None) -> int:
                  "| skeleton | subject | probes |\n|---|---|---|\n" + "\n".join(
                      f"| {r['skeleton']} | {r['subject']} | {probe_cell(r['probes'])} |"
                      for r in run["skeletons"]) + "\n")
-    (out / f"{name}.md").write_text(text)
-    (out / f"{name}.json").write_text(json.dumps({"facts": run["facts"], "rows": rows,
+    atomic_write_text(out / f"{name}.md", text)
+    atomic_write_text(out / f"{name}.json", json.dumps({"facts": run["facts"], "rows": rows,
                                                   "skeletons": run["skeletons"]},
                                                  indent=1, default=str))
     print(text)

@@ -41,6 +41,7 @@ from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # noqa: E402
                                           load_generator)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 #: Sampling name -> :class:`GenerationSettings` overrides: ``logits``,
 #: both transformers drawing from their guided logits (the default before
@@ -96,7 +97,8 @@ def _row(row: Dict) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", default="builtin", help="a generator (default: built-in)")
     parser.add_argument("--split", choices=("val", "test"), default="val")
     parser.add_argument("--rigs", nargs="*", default=None, help="BVH files (default: the split's)")
@@ -127,7 +129,7 @@ def main(argv=None) -> None:
     print("|---|---|" + "---:|" * len(PROMPTS))
     rows = table(load_generator(args.ckpt), rigs, args.sampling, args.seeds, overrides)
     if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=1))
+        atomic_write_text(args.json, json.dumps(rows, indent=1))
 
 
 if __name__ == "__main__":

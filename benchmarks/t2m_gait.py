@@ -53,6 +53,7 @@ from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
 from satagraph.pipelines.motion_descriptor import froude_speed  # noqa: E402
 from satagraph.pipelines.quality import cadence, heading_gap, stride  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 #: Subject of the walking prompt per body plan (the zoo captions' wording).
 SUBJECTS = {"biped": "a person", "quadruped": "a four-legged animal", "bird": "a bird",
@@ -151,7 +152,8 @@ def infill_table(rows: Dict[str, Dict[str, List[float]]], plans: Sequence[str]) 
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", nargs="+", default=["shipped=builtin"],
                         help="NAME=CKPT (a checkpoint, a weights file or builtin)")
     parser.add_argument("--plans", nargs="+", default=["biped", "quadruped", "bird"],
@@ -183,7 +185,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
         print()
         print(infill_table(result["infill"], plans))
     if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=1))
+        atomic_write_text(args.json, json.dumps(result, indent=1))
 
 
 if __name__ == "__main__":

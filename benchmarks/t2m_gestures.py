@@ -58,6 +58,7 @@ from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.generate import generate_on, load_generator  # noqa: E402
 from satagraph.pipelines.quality import joint_raise, trunk_bend  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 #: Prompts and the action each asks for.
 PROMPTS: Tuple[Tuple[str, str], ...] = (
@@ -140,7 +141,8 @@ def table(rows: Dict[str, Dict[str, Dict[str, float]]]) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", action="append", help="generator bundles (default: builtin)")
     parser.add_argument("--split", default="val", choices=("val", "test"))
     parser.add_argument("--seeds", type=int, default=3)
@@ -167,7 +169,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
           f"({time.time() - start:.0f} s; rigs: {names}; {args.seeds} seeds each)\n")
     print(table(rows))
     if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=1))
+        atomic_write_text(args.json, json.dumps(rows, indent=1))
 
 
 if __name__ == "__main__":

@@ -164,7 +164,8 @@ def table(results: Dict[str, Dict[str, object]], seconds: float) -> str:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", nargs="+", default=["builtin"],
                         help="generators to read (default: builtin)")
     parser.add_argument("--out", type=Path, default=OUT, help="results path, no suffix")

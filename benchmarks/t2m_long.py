@@ -46,6 +46,7 @@ from satagraph.pipelines.generate import (GenerationSettings, generate_on,  # no
                                           load_generator)
 from satagraph.transforms.rig_reading import RigReadingWarning  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 #: Prompts whose motion is the same all along (a long clip should be more of it).
 STEADY = ("walk", "run", "dash", "trot", "walk-back", "walk-left", "walk-right", "idle")
@@ -118,6 +119,7 @@ def evaluate(args: argparse.Namespace) -> Dict:
         "prompts": args.prompts, "seed": args.seed, "seconds": args.seconds,
         "ckpt": args.ckpt, "quick": args.quick, "items": len(test),
         "labels": {l: sum(it.label == l for it in test) for l in STEADY},
+        "stretch_seconds": [min(it.seconds for it in test), max(it.seconds for it in test)],
         "trained_window_frames": window, "evaluator_steps": steps,
         "seconds_total": round(time.perf_counter() - start, 1)}}
 
@@ -129,12 +131,14 @@ def cell(value, digits: int = 3) -> str:
 
 def table(result: Dict) -> str:
     facts = result["facts"]
+    stretch = facts["stretch_seconds"]
     lines = [f"# Clips longer than the trained window ({facts['seconds']:g} s; "
              f"{facts['prompts']} prompts, seed {facts['seed']})", "",
              f"{facts['items']} steady zoo prompts ({', '.join(f'{k} {v}' for k, v in facts['labels'].items() if v)}), "
              f"each on its own rig; the generator `{facts['ckpt']}` learnt windows of "
              f"{facts['trained_window_frames']} frames. Stretches are the prompt's own length "
-             f"(1.1-3.2 s). Pace: median Froude speed over the own-length clip's (moving prompts).",
+             f"({stretch[0]:.1f}-{stretch[1]:.1f} s). Pace: median Froude speed over the "
+             "own-length clip's (moving prompts).",
              "", "| motions | R@3 | FID | action | direction | pace |", "|---|---|---|---|---|---|"]
     for r in result["rows"]:
         direction = r["direction"]
@@ -147,7 +151,8 @@ def table(result: Dict) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--prompts", choices=("test", "val"), default="test")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--seconds", type=float, default=12.0)
@@ -161,8 +166,8 @@ def main(argv=None) -> int:
     stem = args.out or ("t2m_long_quick" if args.quick else "t2m_long")
     RESULTS.mkdir(parents=True, exist_ok=True)
     text = table(result)
-    (RESULTS / f"{stem}.md").write_text(text)
-    (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1, default=str))
+    atomic_write_text(RESULTS / f"{stem}.md", text)
+    atomic_write_text(RESULTS / f"{stem}.json", json.dumps(result, indent=1, default=str))
     print(text)
     return 0
 

@@ -134,7 +134,8 @@ def table(pairs: Sequence[Tuple[int, Dict, Dict]], cells: Sequence[str]) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--baseline", nargs="+", required=True, metavar="JSON",
                         help="t2m.py JSON files of the baseline, one per seed")
     parser.add_argument("--candidate", nargs="+", required=True, metavar="JSON",
@@ -148,7 +149,9 @@ def main(argv=None) -> int:
             f"(prompts: {pairs[0][1]['facts'].get('prompts')})\n\n"
             + table(pairs, args.cell or CELLS) + "\n")
     if args.out:
-        Path(args.out).write_text(text)
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's
+        from satagraph.utils.files import atomic_write_text
+        atomic_write_text(args.out, text)
     print(text)
     return 0
 

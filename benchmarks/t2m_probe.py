@@ -85,7 +85,8 @@ def probe(module, subject: str, target: Motion, seconds: float,
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", required=True)
     parser.add_argument("--skeleton", nargs="+", required=True, metavar="PLAN=FILE")
     parser.add_argument("--seconds", type=float, default=4.0)

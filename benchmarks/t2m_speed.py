@@ -75,7 +75,8 @@ def time_generation(module, target, threads: int, reps: int,
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--reps", type=int, default=5)
     parser.add_argument("--plant", action="store_true",
                         help="plant the feet of each generated motion (generate --plant)")

@@ -102,7 +102,8 @@ def run_stats(seqs: List[torch.Tensor], layer: int, fps: float) -> Dict[str, flo
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", required=True)
     parser.add_argument("--data", nargs="*", default=["../shared/data/manifest.tsv"])
     parser.add_argument("--split", default="test")

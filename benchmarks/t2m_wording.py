@@ -50,6 +50,7 @@ from satagraph.pipelines.generate import generate_on, load_generator  # noqa: E4
 from satagraph.pipelines.prompt_reading import article, read_prompt, vocabulary_of  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
+from satagraph.utils.files import atomic_write_text  # noqa: E402
 
 #: A user's nouns per body plan.
 NOUNS = {"biped": ("man", "woman", "child"), "quadruped": ("dog", "horse", "cat"),
@@ -141,7 +142,8 @@ def table(rows: Dict[str, Dict[str, Dict[str, float]]]) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", default="builtin")
     parser.add_argument("--split", default="val", choices=("val", "test"))
     parser.add_argument("--seeds", type=int, default=2)
@@ -160,7 +162,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
           f"--seeds {args.seeds}` ({time.time() - start:.0f} s)\n")
     print(table(rows))
     if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=1))
+        atomic_write_text(args.json, json.dumps(rows, indent=1))
 
 
 if __name__ == "__main__":

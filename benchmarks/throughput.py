@@ -319,7 +319,8 @@ def notes(steps: int) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder, default=str(DATA))
     parser.add_argument("--steps", type=int, default=5, help="timed training steps")
     parser.add_argument("--models", default=",".join(m for m, _ in MODELS),

@@ -63,7 +63,8 @@ def table(results: Dict[str, Dict[str, Dict[str, List[float]]]], seconds: float)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     mirror_val.add_zoo_clips_argument(parser, ZOO_CLIPS)
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     args = parser.parse_args(argv)

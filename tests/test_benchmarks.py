@@ -453,3 +453,83 @@ def test_unmirrored_val_gives_section_40s_verdict_from_its_stored_table():
     assert not ok and sorted(failures) == ["zoo hexapod: 1.001 > 1.0",
                                            "zoo hexapod: a mirrored reading changed",
                                            "zoo spider: 0.970 > 0.95"]
+
+
+def test_pipeline_writes_its_tables_to_out_and_leaves_the_committed_ones(tmp_path,
+                                                                         shared_data):
+    # a quick run (--repeat 1, one file) overwrote benchmarks/results/pipeline.md
+    # with no way to send it elsewhere (no --out), the .md and .json written
+    # one after the other in place
+    import pipeline
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "manifest.tsv").write_text("path\n")
+    (data / "walk.bvh").symlink_to(shared_data / "bandai" / "dataset-1_walk_normal_002.bvh")
+    committed = Path(pipeline.ROOT) / "benchmarks" / "results" / "pipeline.md"
+    before = committed.read_bytes()
+    pipeline.main(["--data", str(data), "--repeat", "1", "--out", str(tmp_path / "p")])
+    assert "| satagraph parse+FK | 1 |" in (tmp_path / "p.md").read_text()
+    assert (tmp_path / "p.json").is_file()
+    assert committed.read_bytes() == before
+
+
+def test_collate_writes_its_tables_to_out_and_leaves_the_committed_ones(tmp_path,
+                                                                        shared_data,
+                                                                        monkeypatch):
+    import collate
+    monkeypatch.setattr(collate, "retain_freed_memory", lambda: False)  # process-wide
+    committed = Path(collate.ROOT) / "benchmarks" / "results" / "collate.md"
+    before = committed.read_bytes()
+    collate.main(["--data", str(shared_data), "--clips", "2", "--frames", "8",
+                  "--repeat", "1", "--out", str(tmp_path / "c")])
+    assert "2 clips x 8 frames" in (tmp_path / "c.md").read_text()
+    assert (tmp_path / "c.json").is_file()
+    assert committed.read_bytes() == before
+
+
+def test_rig_reading_says_where_the_real_files_are_left_out(tmp_path, monkeypatch):
+    # without ../shared (a clone of its own) the run wrote a zoo-only table
+    # over benchmarks/results/rig_reading.md, saying nothing of the real files
+    import rig_reading
+    monkeypatch.setattr(rig_reading, "REPO", tmp_path / "clone")  # no ../shared beside it
+    row = {"species": "biped", "up_true": "+Y", "up_read": "+Y", "flagged": False,
+           "decidable": True, "looks_like": None, "units_how": "height",
+           "units_ok": True, "within_20": True}
+    monkeypatch.setattr(rig_reading, "zoo_rows", lambda seed, frames, tmp: [row])
+    committed = rig_reading.RESULTS.with_suffix(".md")
+    before = committed.read_bytes()
+    assert rig_reading.main(["--seeds", "0", "--out", str(tmp_path / "r")]) == 0
+    text = (tmp_path / "r.md").read_text()
+    assert f"{tmp_path / 'shared' / 'data'}: no manifest.tsv there" in text
+    assert committed.read_bytes() == before
+    with pytest.raises(SystemExit):  # a --data folder without the files: refused
+        rig_reading.main(["--data", str(tmp_path), "--out", str(tmp_path / "r")])
+
+
+BENCHMARKS = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "benchmarks")
+                    .glob("*.py") if p.stem != "results_io")
+
+
+@pytest.mark.parametrize("name", BENCHMARKS)
+def test_benchmark_help_shows_its_whole_docstring(name, monkeypatch, capsys):
+    # --help showed the docstring's first line alone, often cut mid-sentence
+    # ("Wall time of ``satagraph --help`` and ``satagraph inspect FILE``, each
+    # in a"), without the usage, the default output path or the run's length
+    import importlib
+    module = importlib.import_module(name)
+    monkeypatch.setattr(sys, "argv", [f"{name}.py", "--help"])
+    with pytest.raises(SystemExit) as exit_:
+        module.main()
+    assert exit_.value.code == 0
+    assert " ".join(module.__doc__.split()) in " ".join(capsys.readouterr().out.split())
+
+
+def test_retarget_sanity_without_the_shared_data_says_so_in_one_line(tmp_path, monkeypatch,
+                                                                    capsys):
+    # a clone without ../shared: a FileNotFoundError traceback on manifest.tsv
+    import retarget_sanity as rs
+    monkeypatch.setattr(rs, "DATA", tmp_path / "shared" / "data")
+    assert rs.main(["--ckpt", "builtin", "--out", str(tmp_path / "r.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not found" in err and "--source and --target" in err
+    assert not (tmp_path / "r.md").exists()

@@ -160,3 +160,19 @@ def test_bandai_validation_takes_are_neither_learnt_nor_test_prompts(shared_data
     assert {f.dataset for f in split["fit"]} == {"bandai", "cmu", "ccbase"}
     with pytest.raises(SystemExit):
         t2m.main(["--bandai-val"])  # with the test prompts: refused before any work
+
+
+def test_a_full_run_without_the_real_files_is_refused_before_any_work(tmp_path, monkeypatch,
+                                                                      capsys):
+    # a clone without ../shared ran the full evaluation on the zoo alone and
+    # wrote t2m.md without its Bandai groups and real-rig probes, saying nothing
+    monkeypatch.setattr(t2m, "MANIFEST", tmp_path / "shared" / "data" / "manifest.tsv")
+
+    def evaluate(*args, **kwargs):
+        raise AssertionError("evaluated without the real files")
+    monkeypatch.setattr(t2m, "evaluate", evaluate)
+    with pytest.raises(SystemExit) as exit_:
+        t2m.main(["--out", str(tmp_path), "--save", str(tmp_path)])
+    assert exit_.value.code == 2
+    assert f"{tmp_path / 'shared' / 'data'}: no manifest.tsv there" in capsys.readouterr().err
+    assert not list(tmp_path.glob("t2m*"))

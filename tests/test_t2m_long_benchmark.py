@@ -42,3 +42,15 @@ def test_stretches_are_the_prompts_length_at_either_end_of_the_long_clip():
         expected = t2m.measure(_frames(full, part), item.captions, "walk", "zoo", item.skeleton)
         np.testing.assert_allclose(parts[name].desc, expected.desc)
     assert not np.allclose(parts["first"].desc, parts["last"].desc)
+
+
+def test_table_gives_the_stretches_lengths_this_run_measured():
+    # the table printed "(1.1-3.2 s)" whatever prompts the run scored
+    facts = {"seconds": 12.0, "prompts": "val", "seed": 3, "items": 2,
+             "labels": {"walk": 1, "idle": 1}, "ckpt": "builtin",
+             "trained_window_frames": 120, "stretch_seconds": [1.3, 2.5],
+             "seconds_total": 5.0}
+    rows = [{"row": "real", "R@3": None, "fid": None, "action": None,
+             "direction": (1.0, 1), "pace": 1.0}]
+    text = t2m_long.table({"facts": facts, "rows": rows})
+    assert "the prompt's own length (1.3-2.5 s)" in text

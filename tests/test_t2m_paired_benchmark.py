@@ -79,3 +79,18 @@ def test_action_of_one_asked_label_is_a_cell():
     assert t2m_paired.cell_value(run, "zoo|reconstruction (SATA-RVQ)|action") == 0.5
     with pytest.raises(SystemExit, match="r.json: no cell 'zoo|reconstruction"):
         t2m_paired.cell_value(run, "zoo|reconstruction (SATA-RVQ)|action:idle")
+
+
+def test_a_failed_write_leaves_the_previous_table(tmp_path, file_size_limit):
+    # --out was written in place: a full disk left half a table (the
+    # previous one gone); every benchmark now writes through atomic_write
+    base = [_run(tmp_path / f"b{s}.json", s, 0.80, 0.22, 0.4) for s in (1, 2)]
+    cand = [_run(tmp_path / f"c{s}.json", s, 0.81, 0.20, 0.4) for s in (1, 2)]
+    out = tmp_path / "t.md"
+    args = ["--baseline", *base, "--candidate", *cand, "--out", str(out),
+            "--cell", "zoo|generator (GT length)|fid"]
+    assert t2m_paired.main(args) == 0
+    before = out.read_text()
+    with file_size_limit(len(before) // 2), pytest.raises(OSError):
+        t2m_paired.main(args + ["--cell", "zoo|generator (GT length)|R@3"])
+    assert out.read_text() == before
