@@ -599,6 +599,9 @@ def _refuse_binary(path: str, raw: bytes) -> None:
     if nul < 0:
         return
     kind = next((what for magic, what in _MAGIC if raw.startswith(magic)), None)
+    head = raw[:64]
+    if kind is None and len(head) >= 8 and (not any(head[1::2]) or not any(head[0::2])):
+        kind = "UTF-16 text without a byte order mark (save it as UTF-8)"
     what = f"{kind}, not BVH text" if kind else "binary data (a NUL byte), not BVH text"
     raise BVHError(path, 0 if kind else raw.count(b"\n", 0, nul) + 1, what)
 

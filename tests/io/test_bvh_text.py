@@ -57,7 +57,9 @@ def test_utf16_text_with_its_byte_order_mark_is_read(tmp_path: Path) -> None:
      r"checkpoint\? it goes to --ckpt\), not BVH text$"),
     (b"\x1f\x8b\x08\x00" + b"\x00" * 16, r"x.bvh: gzip-compressed \(decompress it first\)"),
     (b"\x89PNG\r\n\x1a\n\x00\x00", r"x.bvh: a PNG image, not BVH text$"),
-    (b"HIERARCHY\nROOT Hips\n\x00\x00", r"x.bvh:3: binary data \(a NUL byte\), not BVH text$")])
+    (b"HIERARCHY\nROOT Hips\n\x00\x00", r"x.bvh:3: binary data \(a NUL byte\), not BVH text$"),
+    ("HIERARCHY\nROOT Hips\n".encode("utf-16-be"), r"x.bvh: UTF-16 text without a byte order "
+     r"mark \(save it as UTF-8\), not BVH text$")])
 def test_a_binary_file_is_said_to_be_one(tmp_path: Path, data: bytes, said: str) -> None:
     """A checkpoint given as a motion warned "read as Latin-1", then failed on
     a line of escaped bytes; now one line says what the file looks like."""
