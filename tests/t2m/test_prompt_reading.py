@@ -124,3 +124,9 @@ def test_generate_says_how_it_read_the_prompt(zoo_skeletons, tmp_path, capsys):
     assert main(base + ["--literal", "--text", "a dog walks forward",
                         str(tmp_path / "literal.bvh")]) == 0
     assert 'never saw "dog"' in capsys.readouterr().err
+    # a prompt of no words is drawn without text, and said (it was drawn from noise unsaid)
+    for text, name in (("!!!", "marks.bvh"), ("", "none.bvh")):
+        assert main(base + ["--seed", "4", "--text", text, str(tmp_path / name)]) == 0
+    assert "has no words: the motion is drawn without text" in capsys.readouterr().err
+    assert (read_bvh(tmp_path / "marks.bvh").rotations ==
+            read_bvh(tmp_path / "none.bvh").rotations).all()
