@@ -293,3 +293,28 @@ def test_captured_human_rigs_swap_skeletons_and_nothing_else_moves():
     assert swap_skeletons(bank, share=0.0) is bank
     with pytest.raises(ValueError, match="share"):
         swap_skeletons(bank, share=1.5)
+
+
+def test_progress_is_a_line_in_place_on_a_terminal_and_lines_in_a_log():
+    """``code-bank``'s count was redrawn with carriage returns everywhere, so
+    a log file read it as one run-on line (``16 windows, 0 s22 windows, 0
+    s...``): a log now gets a line of its own every 30 s, a terminal keeps
+    the line redrawn in place."""
+    import io
+    from satagraph.cli.train import ProgressLine
+    now = [0.0]
+    log = io.StringIO()
+    line = ProgressLine(log, "windows", every=30.0, clock=lambda: now[0])
+    for count, t in ((16, 5.0), (22, 31.0), (40, 40.0), (64, 62.0)):
+        now[0] = t
+        line(count)
+    line.end()
+    assert log.getvalue() == "22 windows, 31 s\n64 windows, 62 s\n"
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+    term = Terminal()
+    line = ProgressLine(term, "windows", clock=lambda: 0.0)
+    line(16), line(22), line.end()
+    assert term.getvalue() == "\r16 windows, 0 s\r22 windows, 0 s\n"
