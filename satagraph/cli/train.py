@@ -122,6 +122,10 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
     p.add_argument("--max-batches", type=int, default=None,
                    help="evaluate at most this many batches (default: the whole split)")
+    p.add_argument("--on-error", choices=["raise", "skip"], default=None,
+                   help="a file of the split that cannot be read: stop, naming every such "
+                   "file (raise), or score the others with a warning naming them (skip; "
+                   "default: the checkpoint's data.on_error)")
     _rest(p, "As reconstruct and retarget show it; file: as the checkpoint's data "
           "section may read it for training")
     p.add_argument("--retarget", action="store_true",
@@ -524,7 +528,7 @@ def run_eval(args) -> int:
         raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
     module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
     dm = scoring_data(module.meta.get("data") or {}, args.rest, args.data, args.up_axis,
-                      args.units, args.split)
+                      args.units, args.split, args.on_error)
     if not len(dm.datasets[args.split]):
         raise ValueError(f"no windows in the {args.split!r} split of {dm.sources} (a "
                          "manifest's split column; a folder without one is split 80/10/10 "

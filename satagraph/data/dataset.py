@@ -230,7 +230,7 @@ def dataset_error(errors: Sequence[str], total: int) -> MotionDatasetError:
     """The error listing every bad file (lines ``split: path: reason``)."""
     return MotionDatasetError(
         f"{len(errors)} of {total} motion files could not be processed (set "
-        "data.on_error=skip to train on the others):\n"
+        "data.on_error=skip, or eval --on-error skip, to go on with the others):\n"
         + "\n".join(f"  {e}" for e in errors))
 
 

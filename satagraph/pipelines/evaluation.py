@@ -29,7 +29,7 @@ SCORING_REST = "auto"
 
 def scoring_data(data: Mapping[str, Any], rest: str = SCORING_REST, sources: Any = None,
                  up_axis: Optional[str] = None, scale: Any = None,
-                 split: Optional[str] = None):
+                 split: Optional[str] = None, on_error: Optional[str] = None):
     r"""The data a trained model is scored on, the one rule of ``eval`` and
     of sweeps: its data section (:obj:`sources` in place of its sources),
     every file of each split whatever ``data.max_files`` training read, each
@@ -37,7 +37,8 @@ def scoring_data(data: Mapping[str, Any], rest: str = SCORING_REST, sources: Any
     and :obj:`scale` where given; set up for testing (no training file is
     needed: the model has its own statistics). With :obj:`split`, only that
     split's files are read (a bad training file stopped ``eval --split
-    test``, which could not set ``data.on_error``).
+    test``); :obj:`on_error` (``"raise"`` or ``"skip"``) replaces the data
+    section's ``on_error`` where given (``eval --on-error``).
 
     Returns:
         MotionDataModule: Its ``datasets[split]`` and :func:`split_loader`.
@@ -53,6 +54,8 @@ def scoring_data(data: Mapping[str, Any], rest: str = SCORING_REST, sources: Any
         raise ValueError("the checkpoint does not name its data: pass --data")
     prep = dict(data.get("preprocessing") or {}, rest=rest)
     prep.update({k: v for k, v in (("up_axis", up_axis), ("scale", scale)) if v is not None})
+    if on_error is not None:
+        data["on_error"] = on_error
     dm = MotionDataModule(**dict(data, preprocessing=prep))
     if split is not None:
         dm.splits = (split,)

@@ -244,6 +244,17 @@ def test_eval_of_one_split_is_not_stopped_by_a_bad_file_of_another(
     assert main(["eval", "--ckpt", str(run), "--data", str(tmp_path / "bad_train.tsv"),
                  "--split", "test"]) == 0
     assert list(_table_rows(capsys.readouterr().out)) == ["bandai", "dog", "all"]
+    # scoring the split that holds it: stopped, saying how to go on; --on-error skip goes on
+    first = next(i for i, r in enumerate(rows) if r.endswith("\ttrain"))
+    one_bad = rows[:first] + [f"{broken}\t" + rows[first].split("\t", 1)[1]] + rows[first + 1:]
+    (tmp_path / "one_bad.tsv").write_text("\n".join(one_bad) + "\n")
+    args = ["eval", "--ckpt", str(run), "--data", str(tmp_path / "one_bad.tsv"),
+            "--split", "train"]
+    assert main(args) == 2
+    assert "eval --on-error skip" in capsys.readouterr().err
+    with pytest.warns(UserWarning, match=r"(?s)data.on_error=skip: left out 1 of 4 .*broken.bvh"):
+        assert main(args + ["--on-error", "skip"]) == 0
+    assert "all" in _table_rows(capsys.readouterr().out)
 
 
 def test_a_monitor_of_a_dataset_without_validation_windows_is_refused_first(
