@@ -26,7 +26,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
 from satagraph.memory import retain_freed_memory
-from results_io import data_folder, write_results  # noqa: E402
+from results_io import SHARED_DATA, data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = ("dog", "ccbase")
@@ -82,7 +82,7 @@ def main(argv: Optional[List[str]] = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder,
-                        default=str(ROOT.parent / "shared" / "data"))
+                        default=str(SHARED_DATA))
     parser.add_argument("--clips", type=int, default=32)
     parser.add_argument("--frames", type=int, default=64)
     parser.add_argument("--repeat", type=int, default=50)

@@ -36,13 +36,13 @@ from typing import Dict, List, Optional, Sequence
 
 import torch
 
-from results_io import data_folder, write_results
+from results_io import SHARED_DATA, data_folder, write_results
 from satagraph.datasets.sources import MotionFile, resolve_sources, select
 from satagraph.experiment.sweep import (COLUMNS, RETARGET_HEADERS, TRAILING_STEPS, SweepRow,
                                         held_out_loader, run_config, sweep_configs)
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
+DATA = SHARED_DATA
 #: (label, config).
 MODELS = [("SATA-VAE", "sata_vae"), ("SATA-RVQ", "sata_rvq"),
           ("SAME-wide", "same_wide"), ("padded RVQ", "padded_rvq")]

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
 
-from results_io import data_folder, write_results  # noqa: E402
+from results_io import SHARED_DATA, data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCE = "bandai/dataset-1_walk_normal_001.bvh"  # 195 frames at 30 fps
@@ -98,7 +98,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder,
-                        default=str(ROOT.parent / "shared" / "data"))
+                        default=str(SHARED_DATA))
     parser.add_argument("--frames", type=int, nargs="+", default=[5000, 20000, 60000])
     parser.add_argument("--commands", nargs="+", default=["retarget", "reconstruct"],
                         choices=["retarget", "reconstruct"])

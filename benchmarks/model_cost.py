@@ -33,7 +33,7 @@ import torch
 from torch import nn
 from torch.utils.flop_counter import FlopCounterMode, flop_registry, sdpa_flop_count
 
-from results_io import data_folder, write_results
+from results_io import SHARED_DATA, data_folder, write_results
 from satagraph.experiment.config import load_config
 from satagraph.data import collate_clips
 from satagraph.data.dataset import DEFAULT_PREPROCESSING, preprocess_file
@@ -170,7 +170,7 @@ NOTES = f"""Notes:
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", type=data_folder, default=str(ROOT.parent / "shared" / "data"))
+    parser.add_argument("--data", type=data_folder, default=str(SHARED_DATA))
     parser.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "model_cost"))
     args = parser.parse_args()
     torch.backends.mha.set_fastpath_enabled(False)

@@ -24,7 +24,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import motion_to_features
 from satagraph.io import read_bvh
 from satagraph.io._floats import parse_decimal_table
-from results_io import data_folder, write_results  # noqa: E402
+from results_io import SHARED_DATA, data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -142,7 +142,7 @@ def main(argv: List[str] = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=data_folder,
-                        default=str(ROOT.parent / "shared" / "data"))
+                        default=str(SHARED_DATA))
     parser.add_argument("--repeat", type=int, default=3,
                         help="best of this many runs per row")
     parser.add_argument("--threads", type=int, default=None,

@@ -81,7 +81,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from results_io import write_results  # noqa: E402
+from results_io import SHARED_DATA, write_results  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.pipelines.inference import (REST_MODES, reconstruct_canonical,  # noqa: E402
@@ -95,7 +95,7 @@ from satagraph.pipelines.quality import (contact, most_active, retarget_quality,
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.pipelines.builtin_choice import AUTO, choose_builtin  # noqa: E402
 
-DATA = ROOT.parent / "shared" / "data"
+DATA = SHARED_DATA
 OUT = ROOT / "benchmarks" / "results" / "pretrained"
 #: Frames of each zoo clip (4 s at 30 fps) and of each real clip's most
 #: active window (at its own rate, 10 s).

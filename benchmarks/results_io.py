@@ -3,10 +3,17 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
 from typing import Any
 
 from satagraph.utils.files import atomic_write_text
+
+#: The real BVH files every benchmark reads by default: ``SATAGRAPH_DATA``
+#: where set (as the tests read it), else ``../shared/data`` beside the
+#: checkout.
+SHARED_DATA = Path(os.environ.get("SATAGRAPH_DATA")
+                   or Path(__file__).resolve().parents[2] / "shared" / "data")
 
 
 def write_results(out: Path, title: str, text: str, data: Any) -> None:

@@ -56,8 +56,9 @@ from satagraph.io import read_bvh  # noqa: E402
 from satagraph.pipelines.quality import LAG, correlate, limb_tracks, most_active  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.utils.files import atomic_write_text  # noqa: E402
+from results_io import SHARED_DATA  # noqa: E402
 
-DATA = ROOT.parent / "shared" / "data"
+DATA = SHARED_DATA
 RESULTS = ROOT / "benchmarks" / "results" / "retarget_sanity.md"
 
 

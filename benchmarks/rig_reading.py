@@ -50,7 +50,7 @@ from satagraph.datasets.zoo import apply_dialect, dialect_variants, generate_cli
 from satagraph.io import read_bvh, write_bvh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from results_io import data_folder, write_results  # noqa: E402
+from results_io import SHARED_DATA, data_folder, write_results  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "rig_reading"
@@ -166,7 +166,7 @@ def main(argv=None) -> int:
                         help="results path without suffix (default "
                              "benchmarks/results/rig_reading)")
     args = parser.parse_args(argv)
-    data = args.data or REPO.parent / "shared" / "data"
+    data = args.data or SHARED_DATA
     missing = "" if (data / "manifest.tsv").is_file() else (
         f"{data}: no manifest.tsv there: the real files' rows are left out.")
     if missing:

@@ -61,6 +61,7 @@ from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_ri
 from satagraph.io import read_bvh, write_bvh
 from satagraph.sides import swap_side
 from satagraph.utils.files import atomic_write_text
+from results_io import SHARED_DATA
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "semantic_alignment.md"
@@ -414,7 +415,7 @@ def _parse_args(argv: Sequence[str] = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path,
-                        default=REPO.parent / "shared" / "data",
+                        default=SHARED_DATA,
                         help="shared BVH data folder (default ../shared/data)")
     parser.add_argument("--t5", type=Path, default=None,
                         help="local T5 folder (optional)")

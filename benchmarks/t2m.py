@@ -91,8 +91,9 @@ from satagraph.semantics.limbs import limb_end_index  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.transforms.rest import REST_MODES  # noqa: E402
 from satagraph.utils.files import atomic_write_text  # noqa: E402
+from results_io import SHARED_DATA  # noqa: E402
 
-MANIFEST = ROOT.parent / "shared" / "data" / "manifest.tsv"
+MANIFEST = SHARED_DATA / "manifest.tsv"
 SPECIES = ["biped", "quadruped", "bird", "hexapod"]
 FPS = 30.0
 

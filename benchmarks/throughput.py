@@ -57,10 +57,10 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from model_cost import MISSED  # noqa: E402
-from results_io import data_folder, write_results  # noqa: E402
+from results_io import SHARED_DATA, data_folder, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
+DATA = SHARED_DATA
 #: (label, config).
 MODELS = [("SATA-VAE", "sata_vae"), ("SATA-RVQ", "sata_rvq"),
           ("SAME-wide", "same_wide"), ("padded RVQ", "padded_rvq")]

@@ -2,6 +2,7 @@
 training or timing runs)."""
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -487,11 +488,24 @@ def test_collate_writes_its_tables_to_out_and_leaves_the_committed_ones(tmp_path
     assert committed.read_bytes() == before
 
 
+def test_benchmarks_read_the_data_satagraph_data_names(tmp_path):
+    """Every benchmark read ../shared/data beside the checkout, whatever
+    SATAGRAPH_DATA (the tests' data) named."""
+    import subprocess
+    code = "import results_io; print(results_io.SHARED_DATA)"
+    folder = Path(__file__).resolve().parents[1] / "benchmarks"
+    env = dict(os.environ, SATAGRAPH_DATA=str(tmp_path / "mine"))
+    out = subprocess.run([sys.executable, "-c", code], cwd=folder, env=env, text=True,
+                         capture_output=True, check=True).stdout.strip()
+    assert out == str(tmp_path / "mine")
+
+
 def test_rig_reading_says_where_the_real_files_are_left_out(tmp_path, monkeypatch):
     # without ../shared (a clone of its own) the run wrote a zoo-only table
     # over benchmarks/results/rig_reading.md, saying nothing of the real files
     import rig_reading
-    monkeypatch.setattr(rig_reading, "REPO", tmp_path / "clone")  # no ../shared beside it
+    missing = tmp_path / "shared" / "data"  # a clone of its own: no ../shared beside it
+    monkeypatch.setattr(rig_reading, "SHARED_DATA", missing)
     row = {"species": "biped", "up_true": "+Y", "up_read": "+Y", "flagged": False,
            "decidable": True, "looks_like": None, "units_how": "height",
            "units_ok": True, "within_20": True}
@@ -500,7 +514,7 @@ def test_rig_reading_says_where_the_real_files_are_left_out(tmp_path, monkeypatc
     before = committed.read_bytes()
     assert rig_reading.main(["--seeds", "0", "--out", str(tmp_path / "r")]) == 0
     text = (tmp_path / "r.md").read_text()
-    assert f"{tmp_path / 'shared' / 'data'}: no manifest.tsv there" in text
+    assert f"{missing}: no manifest.tsv there" in text
     assert committed.read_bytes() == before
     with pytest.raises(SystemExit):  # a --data folder without the files: refused
         rig_reading.main(["--data", str(tmp_path), "--out", str(tmp_path / "r")])
