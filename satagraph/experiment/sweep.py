@@ -584,8 +584,9 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
 
 def _differences(rows: Sequence[SweepRow], differences: Optional[Dict[str, List[Any]]]
                  ) -> str:
-    """The settings the rows differ in, a column per row (``sweep.md``)."""
-    if differences is None:
+    """The settings the rows differ in, a column per row (``sweep.md``);
+    nothing for one row (a stopped sweep's first: it differs from none)."""
+    if differences is None or len(rows) < 2:
         return ""
     if not differences:
         return "\nThe configs differ in no setting but their names.\n"

@@ -179,6 +179,9 @@ def test_the_table_says_which_train_losses_do_not_compare(tmp_path):
     text = write_results(rows[:1], tmp_path, 0.25,
                          differences={"module": ["vae", "mine"], "module_args.w": [None, 1]})
     assert "(all N)" not in text
+    # a stopped sweep's one finished row said "The configs differ in no setting but their names"
+    alone = write_results(rows[:1], tmp_path, 0.25, differences={}, planned=3)
+    assert "1 of 3 configs so far" in alone and "differ in no setting" not in alone
     assert "The rows differ in module, module_args: their train losses are different sums" in text
 
 
