@@ -2,7 +2,7 @@
 fresh Python process, optionally against a baseline checkout in the same run.
 
 Usage: ``python benchmarks/cli_start.py [--file X.bvh] [--repeat 5]
-[--baseline DIR]`` where DIR holds another copy of the ``satagraph`` package
+[--baseline DIR] [--out FILE.md]`` where DIR holds another copy of the ``satagraph`` package
 (e.g. ``git archive REV satagraph | tar -x -C DIR``). The runs of the two
 trees alternate, so both see the same load on a shared machine. Prints a
 markdown table and writes it to ``benchmarks/results/cli_start.md``.
@@ -78,6 +78,8 @@ def main(argv: Optional[List[str]] = None) -> None:
                         help="BVH file for inspect (default: the example walk)")
     parser.add_argument("--repeat", type=int, default=5,
                         help="best of this many runs per cell")
+    parser.add_argument("--out", type=Path, default=OUT,
+                        help="the table's path (default benchmarks/results/cli_start.md)")
     parser.add_argument("--baseline", type=Path, default=None,
                         help="folder holding a baseline satagraph package")
     args = parser.parse_args(argv)
@@ -94,7 +96,7 @@ def main(argv: Optional[List[str]] = None) -> None:
     print(text)
     sys.path.insert(0, str(ROOT))  # this tree's satagraph, imported at the end alone
     from satagraph.utils.files import atomic_write_text
-    atomic_write_text(OUT, text + "\n", create_parent=True)
+    atomic_write_text(args.out, text + "\n", create_parent=True)
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ the model (about 0.55 GB) are in every row. What grows with the take is
 the difference between rows.
 
 Usage: ``python benchmarks/long_take.py [--data ../shared/data]
-[--frames 5000 20000 60000] [--commands retarget reconstruct] [--keep DIR]``.
+[--frames 5000 20000 60000] [--commands retarget reconstruct] [--keep DIR] [--out PATH]``.
 Prints a markdown table and writes it to ``benchmarks/results/long_take.md``
 (and ``.json``).
 """
@@ -103,11 +103,14 @@ def main() -> None:
     parser.add_argument("--commands", nargs="+", default=["retarget", "reconstruct"],
                         choices=["retarget", "reconstruct"])
     parser.add_argument("--keep", help="a folder to keep the takes and the outputs in")
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "long_take",
+                        help="results path without suffix (default "
+                        "benchmarks/results/long_take)")
     args = parser.parse_args()
     rows = measure(Path(args.data), args.frames, args.commands, args.keep)
     text = table(rows)
     print(text)
-    write_results(ROOT / "benchmarks" / "results" / "long_take", "Long takes: peak memory "
+    write_results(args.out, "Long takes: peak memory "
                   "and wall time of retarget and reconstruct", text, rows)
 
 

@@ -1,7 +1,7 @@
 """Wall time of ``make test`` (the README's test command), optionally against
 a baseline checkout in the same run.
 
-Usage: ``python benchmarks/suite_time.py [--repeat 2] [--baseline DIR]``
+Usage: ``python benchmarks/suite_time.py [--repeat 2] [--baseline DIR] [--out FILE.md]``
 where DIR is another checkout of the repository (e.g. ``git worktree add DIR
 REV``); it runs with this tree's virtual environment. The runs of the two
 trees alternate, so both see the same load on a shared machine; the first
@@ -53,6 +53,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--baseline", type=Path, default=None)
+    parser.add_argument("--out", type=Path, default=OUT,
+                        help="the table's path (default benchmarks/results/suite_time.md)")
     args = parser.parse_args(argv)
     trees = [ROOT] + ([args.baseline.resolve()] if args.baseline else [])
     runs: List[List[Tuple[float, float, str]]] = [[] for _ in trees]
@@ -71,7 +73,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     print(text)
     sys.path.insert(0, str(ROOT))  # this tree's satagraph, imported at the end alone
     from satagraph.utils.files import atomic_write_text
-    atomic_write_text(OUT, "# Test suite time (benchmarks/suite_time.py)\n\n" + text,
+    atomic_write_text(args.out, "# Test suite time (benchmarks/suite_time.py)\n\n" + text,
                       create_parent=True)
     return 0
 

@@ -547,3 +547,12 @@ def test_retarget_sanity_without_the_shared_data_says_so_in_one_line(tmp_path, m
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "not found" in err and "--source and --target" in err
     assert not (tmp_path / "r.md").exists()
+
+
+def test_cli_start_writes_its_table_to_out_and_leaves_the_committed_one(tmp_path):
+    # a quick check (--repeat 1) overwrote benchmarks/results/cli_start.md
+    import cli_start
+    before = cli_start.OUT.read_bytes()
+    cli_start.main(["--repeat", "1", "--out", str(tmp_path / "c.md")])
+    assert "satagraph --help" in (tmp_path / "c.md").read_text()
+    assert cli_start.OUT.read_bytes() == before
