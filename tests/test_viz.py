@@ -244,7 +244,7 @@ def _outside(motion, zoom=None) -> int:
     scene = module._Scene(module._tracks([motion], None), 1, 320, 15.0, -60.0)
     ax = scene.artists[0][0]
     if zoom is not None:
-        low, high = module._limits(scene.tracks, 1)
+        low, high = scene.limits[0]
         ax.set_box_aspect((1, 1, (high[1] - low[1]) / (high[0] - low[0])), zoom=zoom)
         scene.canvas.draw()
     return int((~_inside(scene, 0, 0)[0]).sum())

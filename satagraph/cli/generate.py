@@ -175,8 +175,8 @@ def _prompt(module, text: str, literal: bool, where: str = ""):
     """The prompt the model is given (``None``: unconditional), with a
     note on stderr where it was read in the model's words or holds words
     the model never saw (:obj:`where`: which prompt of a ``--prompts`` file)."""
-    from satagraph.pipelines.prompt_reading import read_prompt, vocabulary_of
-    if text and not re.search(r"[^\W_]", text):  # "!!!": the encoder would read noise
+    from satagraph.pipelines.prompt_reading import has_words, read_prompt, vocabulary_of
+    if text and not has_words(text):  # "!!!": the encoder would read noise
         print(f"satagraph: {where}the prompt {text!r} has no words: the motion is drawn "
               "without text, as --text '' draws it", file=sys.stderr)
         return None

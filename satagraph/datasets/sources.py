@@ -87,22 +87,20 @@ def bvh_files(folder: Union[str, os.PathLike]) -> List[Path]:
     Temporary files of satagraph's atomic writes (``.walk.bvh.<host>-<pid>.
     <random>.tmp.bvh``: a write in progress, or the start of one that
     ``kill -9`` cut short) are no motion files and are left out."""
-    found, top = [], Path(folder)
+    found: List[Path] = []
+    came = {os.fspath(folder): frozenset({Path(folder).resolve()})}  # resolved, per folder
     for root, folders, names in os.walk(folder, followlinks=True):
-        here = Path(root)
-        came = {top.resolve()} | {Path(top, *here.relative_to(top).parts[:i + 1]).resolve()
-                                  for i in range(len(here.relative_to(top).parts))}
-        folders[:] = [d for d in folders if not _loops(here / d, here.resolve(), came)]
-        found += [here / n for n in names
+        here, through = Path(root).resolve(), came.pop(root)
+        kept = []
+        for name in folders:
+            target = Path(root, name).resolve()
+            if not (here.is_relative_to(target) or target in through):  # no loop
+                kept.append(name)
+                came[os.path.join(root, name)] = through | {target}
+        folders[:] = kept
+        found += [Path(root, n) for n in names
                   if Path(n).suffix.lower() == ".bvh" and not is_temp_file(n)]
     return sorted(found)
-
-
-def _loops(link: Path, here: Path, came: set) -> bool:
-    """Whether following :obj:`link` goes round: to a folder above
-    :obj:`here` or one the walk came through (:obj:`came`, resolved)."""
-    target = link.resolve()
-    return here.is_relative_to(target) or target in came
 
 
 def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) -> List[MotionFile]:

@@ -163,6 +163,17 @@ def _check_number(before: Mapping[str, Any], after: Mapping[str, Any], key: str,
                          f"{old!r})")
 
 
+def dotted_settings(value: Any, key: str = "") -> Dict[str, Any]:
+    """A config section's settings by dotted name, as an override names them
+    (``{"masked": {"heads": 4}}`` under ``"model"``: ``model.masked.heads``)."""
+    if not isinstance(value, dict):
+        return {key: value}
+    flat: Dict[str, Any] = {}
+    for k, v in value.items():
+        flat.update(dotted_settings(v, f"{key}.{k}" if key else str(k)))
+    return flat
+
+
 def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
     r"""Load a YAML config (with ``defaults: [base, ...]`` inheritance from
     the same folder), apply ``key.sub=value`` overrides

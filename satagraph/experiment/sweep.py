@@ -30,7 +30,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import torch
 from torch.utils.data import DataLoader
 
-from satagraph.experiment.config import load_config
+from satagraph.experiment.config import dotted_settings, load_config
 from satagraph.experiment.schema import resolve_data
 from satagraph.utils.files import atomic_write_text
 
@@ -462,9 +462,9 @@ def refuse_other_settings(run: SweepRun, cfg: Dict[str, Any]) -> None:
     """
     from omegaconf import OmegaConf
     path = Path(run.cfg["output_dir"]) / "config.yaml"
-    before = (_flat(OmegaConf.to_container(OmegaConf.load(path)), "", {})
+    before = (dotted_settings(OmegaConf.to_container(OmegaConf.load(path)))
               if path.is_file() else {})
-    now = _flat(OmegaConf.to_container(OmegaConf.create(cfg)), "", {})
+    now = dotted_settings(OmegaConf.to_container(OmegaConf.create(cfg)))
     differ = [k for k in sorted(set(before) | set(now)) if before.get(k) != now.get(k)]
     if differ:
         key = differ[0]
@@ -496,20 +496,10 @@ def finished_rows(runs: Sequence[SweepRun], output: Path,
 COMPARED = ("module", "module_args", "seed", "threads", "model", "loss", "optim", "trainer")
 
 
-def _flat(value: Any, key: str, out: Dict[str, Any]) -> Dict[str, Any]:
-    """:obj:`value`'s settings by dotted key, into :obj:`out`."""
-    if isinstance(value, dict):
-        for k, v in value.items():
-            _flat(v, f"{key}.{k}" if key else str(k), out)
-    else:
-        out[key] = value
-    return out
-
-
 def config_differences(runs: Sequence[SweepRun]) -> Dict[str, List[Any]]:
     """Every setting (dotted key) in which the rows' configs differ, with
     each row's value (``None``: not set): what a row's name does not say."""
-    tables = [_flat({k: run.cfg.get(k) for k in COMPARED}, "", {}) for run in runs]
+    tables = [dotted_settings({k: run.cfg.get(k) for k in COMPARED}) for run in runs]
     keys = sorted(set().union(*tables)) if tables else []
     return {k: [t.get(k) for t in tables] for k in keys
             if len({json.dumps(t.get(k), sort_keys=True, default=str) for t in tables}) > 1}

@@ -16,7 +16,7 @@ import lightning as L
 import torch
 from torch import Tensor
 
-from satagraph.experiment.config import expand_path
+from satagraph.experiment.config import dotted_settings, expand_path
 # module_class and register_module: re-exported, the registry's face here
 from satagraph.experiment.registry import (ModuleSections, build_registered,  # noqa: F401
                                            class_arguments, module_class, module_entry,
@@ -379,8 +379,8 @@ def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.Lig
     filled = sum(k in state for k in wanted)
     if not wanted or filled >= MIN_INIT_FRACTION * len(wanted):
         return
-    theirs = _settings((payload.get("hyper_parameters") or {}).get("model") or {})
-    ours = _settings(dict(getattr(module, "hparams", {}).get("model") or {}))
+    theirs = dotted_settings((payload.get("hyper_parameters") or {}).get("model") or {}, "model")
+    ours = dotted_settings(dict(getattr(module, "hparams", {}).get("model") or {}), "model")
     skip = ("model.semantic_channels",) + tuple(f"model.{k}" for k in keep)
     differ = [f"{k}={v}" for k, v in sorted(theirs.items())
               if k in ours and ours[k] != v and not k.startswith(skip)]
@@ -391,18 +391,6 @@ def _refuse_other_architecture(ckpt: str, payload: Dict[str, Any], module: L.Lig
                      + (f"; for the built-in model: satagraph train "
                         f"{BUILTIN_FINETUNES[builtin_kind(module)]} --init-from builtin "
                         "--data FOLDER" if str(ckpt).startswith("builtin") else ""))
-
-
-def _settings(section: Dict[str, Any], prefix: str = "model.") -> Dict[str, Any]:
-    """A config section's settings by dotted name (``model.masked.heads``),
-    as an override names them."""
-    flat: Dict[str, Any] = {}
-    for key, value in section.items():
-        if isinstance(value, dict):
-            flat.update(_settings(value, f"{prefix}{key}."))
-        else:
-            flat[f"{prefix}{key}"] = value
-    return flat
 
 
 def _spawns_workers(trainer: L.Trainer) -> bool:

@@ -102,9 +102,10 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     of a trained generator (built empty: the generator's own weights fill
     it). Returns the module and the stored form."""
     from satagraph.experiment.train import load_module, module_class
+    weights = None
     if isinstance(spec, str) and is_builtin(spec, BUILTIN_KIND):
-        module, stored = builtin_autoencoder()
-    elif isinstance(spec, str):
+        spec, weights = builtin_autoencoder()
+    if isinstance(spec, str):
         if not os.path.isfile(spec):
             raise CheckpointError(f"{spec}: no such autoencoder checkpoint (model.autoencoder;"
                                   " train one with `satagraph train t2m_rvq_tiny`)")
@@ -119,6 +120,8 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     else:
         raise ValueError("model.autoencoder: a SATA-RVQ checkpoint path (or builtin) is "
                          "needed")
+    if weights is not None:
+        module.load_state_dict(weights)
     if not hasattr(module, "codes"):
         raise CheckpointError(f"{stored['checkpoint']}: a {module.meta.get('module')!r} "
                               "model has no codes: text-to-motion needs a SATA-RVQ "
@@ -127,23 +130,20 @@ def load_autoencoder(spec: Any) -> Tuple[nn.Module, Dict[str, Any]]:
     return module.eval(), stored
 
 
-def builtin_autoencoder() -> Tuple[nn.Module, Dict[str, Any]]:
+def builtin_autoencoder() -> Tuple[Dict[str, Any], Dict[str, Tensor]]:
     """The SATA-RVQ the built-in generator was trained over, from the
     generator's own weights file (``model.autoencoder: builtin``): a
     fine-tune of the built-in generator (``--init-from builtin``) then
-    reads the codes its weights learnt. Returns the module and the stored
-    form (``checkpoint`` is ``"builtin"``)."""
-    from satagraph.experiment.train import module_class
+    reads the codes its weights learnt. Returns its stored form
+    (``checkpoint`` is ``"builtin"``), which :func:`load_autoencoder`
+    builds, and its weights."""
     payload = load_weights_or_checkpoint(BUILTIN, require=("state_dict", "hyper_parameters"),
                                          kind=BUILTIN_KIND)
     stored = copy.deepcopy(payload["hyper_parameters"]["model"]["autoencoder"])
     stored["checkpoint"] = BUILTIN
-    hparams = stored["hparams"]
-    module = module_class(hparams["meta"].get("module", "rvq"))(**hparams)
     prefix = "autoencoder."
-    module.load_state_dict({k[len(prefix):]: v for k, v in payload["state_dict"].items()
-                            if k.startswith(prefix)})
-    return module, stored
+    return stored, {k[len(prefix):]: v for k, v in payload["state_dict"].items()
+                    if k.startswith(prefix)}
 
 
 def check_shared(own: nn.Module, theirs: Dict[str, Tensor], prefix: str, ckpt: str,

@@ -145,6 +145,11 @@ def read_prompt(text: str, vocabulary: Optional[FrozenSet[str]],
     return PromptReading(out, tuple(replaced), unknown_words(out, vocabulary))
 
 
+def has_words(text: str) -> bool:
+    """Whether :obj:`text` holds a word, in any script (``"!!!"`` holds none)."""
+    return _WRITTEN.search(text) is not None
+
+
 def unknown_words(text: str, vocabulary: FrozenSet[str]) -> Tuple[str, ...]:
     """The words of :obj:`text`, as written (lower case), that a model which
     saw :obj:`vocabulary` never saw: those with a piece the offline text
@@ -159,4 +164,4 @@ def unknown_words(text: str, vocabulary: FrozenSet[str]) -> Tuple[str, ...]:
 
 
 __all__ = ["VOCABULARY_KEY", "SUBJECT_NOUNS", "PromptReading", "words_of", "vocabulary_of",
-           "article", "read_prompt", "unknown_words"]
+           "article", "read_prompt", "has_words", "unknown_words"]

@@ -130,10 +130,12 @@ def _aim(track: _Track, frames: int) -> Tuple[np.ndarray, float]:
     return path, near
 
 
-def _limits(tracks: Sequence[_Track], frames: int) -> Tuple[np.ndarray, np.ndarray]:
+def _limits(tracks: Sequence[_Track], frames: int,
+            halves: Sequence[float]) -> Tuple[np.ndarray, np.ndarray]:
     """Shared (low, high) corners over all panels, around each panel's aim
-    (:func:`_aim`: x and z are relative to it), square on the ground."""
-    half = 1.05 * max(_aim(t, frames)[1] for t in tracks)
+    (:func:`_aim`: x and z are relative to it, :obj:`halves` the half
+    widths it gives the tracks), square on the ground."""
+    half = 1.05 * max(halves)
     ys = np.concatenate([t.positions[:frames, :, 1].ravel() for t in tracks])
     low, high = min(float(ys.min()), 0.0), float(ys.max())
     top = max(high, low + 0.25 * half)
@@ -169,10 +171,11 @@ class _Scene:
         height = 16 * round(panel_px / 16)
         self.figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
         self.canvas = FigureCanvasAgg(self.figure)
-        limits = ([_limits([t], frames) for t in tracks] if fit
-                  else [_limits(tracks, frames)] * len(tracks))
+        aims = [_aim(t, frames) for t in tracks]
+        self.aims = [aim for aim, _ in aims]
+        limits = ([_limits([t], frames, [half]) for t, (_, half) in zip(tracks, aims)] if fit
+                  else [_limits(tracks, frames, [half for _, half in aims])] * len(tracks))
         self.limits = limits
-        self.aims = [_aim(t, frames)[0] for t in tracks]
         self.artists = [self._panel(i, t, low, high, elev, azim)
                         for i, (t, (low, high)) in enumerate(zip(tracks, limits))]
         self.label = self.figure.text(0.01, 0.01, "", fontsize=8,
