@@ -287,7 +287,8 @@ def vae_to_rvq(state: Dict[str, Tensor], own: Dict[str, Tensor]) -> Dict[str, Te
 INIT_NORMALIZERS = ("data", "checkpoint")
 
 
-def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data") -> None:
+def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data",
+                 payload: Optional[Dict[str, Any]] = None) -> None:
     """Load another run's weights into :obj:`module` for fine-tuning.
 
     The module keeps its own normaliser (fitted on the new data) when
@@ -306,7 +307,8 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
     text-to-motion module keeps the words its weights learnt).
     Warns about weights the checkpoint lacks, has in excess (e.g. another
     bottleneck) or has in another shape (e.g. another codebook size), which
-    keep their initialisation."""
+    keep their initialisation. :obj:`payload`: :obj:`ckpt` already read
+    (:func:`load_weights_or_checkpoint`), not read again."""
     frozen = getattr(module, "frozen_parts", lambda: [])()
     if normalizer not in INIT_NORMALIZERS:
         raise ValueError(f"--init-normalizer must be one of {INIT_NORMALIZERS}, got "
@@ -314,7 +316,8 @@ def init_weights(module: L.LightningModule, ckpt: str, normalizer: str = "data")
     refit = not frozen and normalizer == "data"
     keep = ((NORMALIZER_PREFIX,) if refit else ()) + tuple(getattr(module, "init_keeps", ()))
     own = module.state_dict()
-    payload = load_weights_or_checkpoint(ckpt, kind=builtin_kind(module))
+    if payload is None:
+        payload = load_weights_or_checkpoint(ckpt, kind=builtin_kind(module))
     if hasattr(module, "init_meta"):
         module.init_meta((payload.get("hyper_parameters") or {}).get("meta") or {})
     state = payload["state_dict"]
@@ -470,7 +473,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         _record_skipped(dm, run_dir)
         module = build_module(cfg, dm)
         if init_from:
-            init_weights(module, init_from, init_normalizer)
+            init_weights(module, init_from, init_normalizer, payload)
         _record_config(cfg, run_dir)  # once nothing refuses the run
         trainer = build_trainer(cfg, run_dir, resume=last is not None, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not

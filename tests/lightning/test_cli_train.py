@@ -45,7 +45,8 @@ def _table_rows(text: str) -> Dict[str, List[str]]:
 
 @pytest.mark.slow
 def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: Path,
-                                         capsys: pytest.CaptureFixture) -> None:
+                                         capsys: pytest.CaptureFixture,
+                                         monkeypatch: pytest.MonkeyPatch) -> None:
     run = tmp_path / "run"
     last = run / "checkpoints" / "last.ckpt"
     assert main(_train_args(config_overrides, run)) == 0
@@ -63,10 +64,17 @@ def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: 
     resumed = _checkpoint(last)
     assert resumed["global_step"] == 4 and resumed["epoch"] > first["epoch"]
 
-    # --init-from loads the weights; with lr = 0 they stay exactly as loaded.
+    # --init-from loads the weights (reading the file once); with lr = 0 they
+    # stay exactly as loaded.
+    from satagraph.experiment import train as train_module
+    reads = []
+    read = train_module.load_weights_or_checkpoint
+    monkeypatch.setattr(train_module, "load_weights_or_checkpoint",
+                        lambda *a, **k: reads.append(a[0]) or read(*a, **k))
     other = tmp_path / "finetune"
     args = _train_args(config_overrides, other, "optim.lr=0.0", "--init-from", str(last))
     assert main(args) == 0
+    assert reads == [str(last)]
     capsys.readouterr()
     tuned = _model_weights(_checkpoint(other / "checkpoints" / "last.ckpt"))
     source = _model_weights(resumed)
