@@ -43,6 +43,7 @@ OPTIONAL_COMMANDS: Tuple[Tuple[str, str], ...] = (
     ("satagraph.cli.render", "add_render_parser"),
     ("satagraph.cli.sweep", "add_sweep_parser"),
     ("satagraph.cli.generate", "add_generate_parser"),
+    ("satagraph.cli.cache", "add_cache_parser"),
 )
 
 Subparsers = argparse._SubParsersAction  # what add_subparsers() returns

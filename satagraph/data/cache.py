@@ -1,12 +1,19 @@
 """Processed-feature cache: one ``.npz`` per (file content, preprocessing
-config), written atomically, loaded without pickle."""
+config), written atomically, loaded without pickle. Reading an entry marks
+it used (its modification time), so that :func:`prune_cache` can remove the
+entries no run has read for a while (``satagraph cache``)."""
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import os
+import re
+import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -14,7 +21,7 @@ from satagraph.data.features import MotionFeatures
 from satagraph.motion import CanonicalTransform
 from satagraph.skeleton import Skeleton
 from satagraph.utils.cache import cache_root
-from satagraph.utils.files import atomic_write, check_input_file
+from satagraph.utils.files import atomic_write, check_input_file, sweep_stale_temps
 
 #: Bump when the feature definition changes: old cache entries are ignored.
 #: 2: files are checked (satagraph.data.validate) before they are cached.
@@ -39,6 +46,12 @@ def default_cache_dir() -> Path:
     """The cache root (:func:`satagraph.utils.cache.cache_root`):
     ``$SATAGRAPH_CACHE`` or ``~/.cache/satagraph``."""
     return cache_root()
+
+
+def feature_cache_dir(cache_dir: Optional[str] = None) -> Path:
+    """The folder of the feature entries: ``processed/`` under
+    :obj:`cache_dir` (a config's ``data.cache_dir``) or the cache root."""
+    return Path(cache_dir or default_cache_dir()) / "processed"
 
 
 def content_digest(path: str, chunk: int = 1 << 20) -> str:
@@ -132,11 +145,14 @@ def load_cached(cache_dir: Path, key: str) -> Optional[MotionFeatures]:
         return None
     try:
         with np.load(path, allow_pickle=False) as data:
-            return _unpack(data)
+            feats = _unpack(data)
     except Exception as err:  # corrupt or from an incompatible version
         warnings.warn(f"ignoring unreadable cache entry {path}: {err}")
         path.unlink(missing_ok=True)
         return None
+    with contextlib.suppress(OSError):  # a read-only cache is read all the same
+        os.utime(path)  # used now: what prune_cache keeps
+    return feats
 
 
 def store_cached(cache_dir: Path, key: str, feats: MotionFeatures) -> None:
@@ -145,3 +161,76 @@ def store_cached(cache_dir: Path, key: str, feats: MotionFeatures) -> None:
     cache_dir.mkdir(parents=True, exist_ok=True)
     atomic_write(cache_dir / f"{key}.npz", lambda f: np.savez(f, **_pack(feats)),
                  binary=True, durable=False)
+
+
+# ---------------------------------------------------------------- upkeep
+#: A feature entry's file name: the key of :func:`cache_key` (nothing
+#: else in a folder is counted or removed).
+ENTRY = re.compile(r"^[0-9a-f]{40}\.npz$")
+
+
+@dataclass
+class CacheUsage:
+    r"""What a feature cache folder holds.
+
+    Args:
+        folder (Path): The folder (:func:`feature_cache_dir`).
+        entries (int): Feature entries.
+        bytes (int): Their size on disk.
+        oldest (float, optional): The earliest last use of an entry (seconds
+            since the epoch), ``None`` without entries.
+        newest (float, optional): The latest last use.
+    """
+
+    folder: Path
+    entries: int = 0
+    bytes: int = 0
+    oldest: Optional[float] = None
+    newest: Optional[float] = None
+
+
+def _entries(folder: Path) -> List[Tuple[str, os.stat_result]]:
+    """``(path, stat)`` of every feature entry of :obj:`folder`."""
+    try:
+        listed = list(os.scandir(folder))
+    except FileNotFoundError:
+        return []
+    out = []
+    for entry in listed:
+        if ENTRY.match(entry.name):
+            with contextlib.suppress(OSError):  # removed meanwhile
+                out.append((entry.path, entry.stat(follow_symlinks=False)))
+    return out
+
+
+def cache_usage(folder: Path) -> CacheUsage:
+    """The entries of a feature cache folder, their size and last uses."""
+    stats = [st for _, st in _entries(folder)]
+    used = [st.st_mtime for st in stats]
+    return CacheUsage(Path(folder), len(stats), sum(st.st_size for st in stats),
+                      min(used, default=None), max(used, default=None))
+
+
+def prune_cache(folder: Path, unused_days: Optional[float] = None,
+                now: Optional[float] = None) -> Tuple[int, int]:
+    """Remove the entries of :obj:`folder` that no run has read or written
+    for :obj:`unused_days` days (every entry when ``None``); a run that
+    needs one again computes it again. Only feature entries (:data:`ENTRY`)
+    and temporary files of writers that no longer run are removed.
+
+    Returns:
+        The entries removed and the bytes they took.
+    """
+    if unused_days is not None and unused_days < 0:
+        raise ValueError(f"cache: days unused must be 0 or more, got {unused_days:g}")
+    cutoff = None if unused_days is None else (now or time.time()) - 86400.0 * unused_days
+    removed = freed = 0
+    for path, st in _entries(folder):
+        if cutoff is not None and st.st_mtime >= cutoff:
+            continue
+        with contextlib.suppress(FileNotFoundError):  # another prune's
+            os.unlink(path)
+            removed, freed = removed + 1, freed + st.st_size
+    sweep_stale_temps(folder)
+    return removed, freed
+

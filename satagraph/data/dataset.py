@@ -15,7 +15,7 @@ from torch.utils.data import Dataset, Sampler
 
 from satagraph.transforms.augment import AUGMENT, SkeletonAugment
 from satagraph.transforms.augment import mirror as mirror_motion
-from satagraph.data.cache import cache_key, default_cache_dir, load_cached, store_cached
+from satagraph.data.cache import cache_key, feature_cache_dir, load_cached, store_cached
 from satagraph.transforms.canonical import canonicalize
 from satagraph.transforms.rest import REST_MODES, shown_rest
 from satagraph.transforms.rig_reading import RigReadingWarning, UnitsWarning
@@ -134,7 +134,7 @@ def try_load_features(files: Sequence[MotionFile], config: Optional[Dict] = None
         The good files, their features, and the errors of the others.
     """
     config = dict(DEFAULT_PREPROCESSING, **(config or {}))
-    folder: Optional[Path] = Path(cache_dir or default_cache_dir()) / "processed"
+    folder: Optional[Path] = feature_cache_dir(cache_dir)
     kept, out, errors = [], [], []
     iterator = progress(files) if progress else files
     said: List[warnings.WarningMessage] = []

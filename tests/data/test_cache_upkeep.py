@@ -1,0 +1,77 @@
+"""Upkeep of the processed-feature cache: reads mark entries used,
+``satagraph cache`` shows, prunes and clears them, and touches nothing else."""
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from satagraph.cli import main
+from satagraph.data.cache import cache_usage, feature_cache_dir, prune_cache
+from satagraph.data.dataset import load_features
+from satagraph.datasets.sources import scan_folder
+
+DAY = 86400.0
+
+
+@pytest.fixture
+def cached(tmp_path: Path):
+    """Two zoo files read once into a cache of their own; their entries."""
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=2, frames=8)
+    files = scan_folder(tmp_path / "zoo")[:2]
+    root = tmp_path / "cache"
+    load_features(files, cache_dir=str(root))
+    entries = sorted(feature_cache_dir(str(root)).glob("*.npz"))
+    assert len(entries) == 2
+    return files, root, entries
+
+
+def _age(path: Path, days: float) -> None:
+    then = time.time() - days * DAY
+    os.utime(path, (then, then))
+
+
+def test_a_read_marks_the_entry_used(cached) -> None:
+    files, root, entries = cached
+    for path in entries:
+        _age(path, 40)
+    load_features(files[:1], cache_dir=str(root))  # served from the cache
+    ages = sorted((time.time() - p.stat().st_mtime) / DAY for p in entries)
+    assert ages[0] < 1 and ages[1] > 39
+
+
+def test_prune_removes_the_unread_entries_only(cached) -> None:
+    _, root, entries = cached
+    folder = feature_cache_dir(str(root))
+    _age(entries[0], 40)
+    other = folder / "notes.txt"  # not the cache's: never removed
+    other.write_text("mine")
+    _age(other, 400)
+    size = entries[0].stat().st_size
+    assert prune_cache(folder, unused_days=30) == (1, size)
+    assert not entries[0].exists() and entries[1].exists() and other.exists()
+    assert cache_usage(folder).entries == 1
+    size = entries[1].stat().st_size
+    assert prune_cache(folder) == (1, size)
+    assert cache_usage(folder).entries == 0 and other.read_text() == "mine"
+    with pytest.raises(ValueError, match="days unused must be 0 or more"):
+        prune_cache(folder, unused_days=-1)
+
+
+def test_the_cache_command_shows_prunes_and_clears(cached, capsys) -> None:
+    _, root, entries = cached
+    folder = feature_cache_dir(str(root))
+    _age(entries[0], 40)
+    assert main(["cache", "--dir", str(root)]) == 0
+    shown = capsys.readouterr().out
+    assert f"{folder}: 2 feature entries" in shown and "least recently 40 days ago" in shown
+    assert main(["cache", "--dir", str(root), "--prune", "30"]) == 0
+    shown = capsys.readouterr().out
+    assert "removed 1 entry" in shown and f"{folder}: 1 feature entry," in shown
+    assert main(["cache", "--dir", str(root), "--clear"]) == 0
+    assert f"{folder}: no feature entries" in capsys.readouterr().out
+    assert main(["cache", "--dir", str(tmp := root / "none")]) == 0
+    assert f"{tmp / 'processed'}: no feature entries" in capsys.readouterr().out
