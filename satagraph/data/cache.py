@@ -86,7 +86,9 @@ def _pack(feats: MotionFeatures) -> Dict[str, np.ndarray]:
     out.update(names=np.array(skel.names), parents=skel.parents, offsets=skel.offsets,
                channels=np.array([" ".join(c) for c in skel.channels]),
                end_site=skel.end_site, fps=np.array(feats.fps),
-               height=np.array(feats.height))
+               height=np.array(feats.height),
+               rig_warnings=np.array([list(w) for w in feats.rig_warnings], dtype=str
+                                     ).reshape(-1, 2))
     tf = feats.transform
     if tf is not None:
         out.update(tf_up_axis=np.array(tf.up_axis), tf_up_rotation=tf.up_rotation,
@@ -132,8 +134,10 @@ def _unpack(data) -> MotionFeatures:
             yaw=float(data["tf_yaw"]), translation=data["tf_translation"],
             scale=float(data["tf_scale"]), source_fps=float(data["tf_source_fps"]),
             removed_root=removed)
+    said = data["rig_warnings"] if "rig_warnings" in data else ()  # none before
     return MotionFeatures(skeleton=skel, fps=float(data["fps"]),
                           height=float(data["height"]), transform=transform,
+                          rig_warnings=tuple((str(k), str(t)) for k, t in said),
                           **{k: data[k] for k in _ARRAYS})
 
 

@@ -110,11 +110,30 @@ def preprocess_file(path: str, config: Dict) -> MotionFeatures:
     scale = None if config.get("scale") is None else parse_units(config["scale"])
     motion = read_bvh(path)
     check_motion(motion, path, fps=config["fps"])
-    motion = canonicalize(motion, fps=config["fps"], up_axis=config["up_axis"],
-                          unit_scale=scale, floor=config["floor"])
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        motion = canonicalize(motion, fps=config["fps"], up_axis=config["up_axis"],
+                              unit_scale=scale, floor=config["floor"])
+    for w in said:  # as they were, and kept with the features
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     feats = motion_to_features(shown_as(motion, config), **feature_options(config))
     check_features(feats, path)
-    return feats
+    return replace(feats, rig_warnings=tuple(
+        (RIG_WARNING_KINDS[w.category], str(w.message)) for w in said
+        if w.category in RIG_WARNING_KINDS))
+
+
+#: The rig-reading warnings kept with a file's features (:func:`preprocess_file`),
+#: by their kind's name there.
+RIG_WARNING_KINDS = {RigReadingWarning: "up_axis", UnitsWarning: "units"}
+
+
+def warn_rig_again(feats: MotionFeatures) -> None:
+    """Say again what reading a cached file's rig doubted (a run served
+    from the cache said nothing of a dog whose units no file tells)."""
+    kinds = {kind: category for category, kind in RIG_WARNING_KINDS.items()}
+    for kind, line in feats.rig_warnings:
+        warnings.warn(line, kinds.get(kind, RigReadingWarning), stacklevel=2)
 
 
 def _error_text(path: str, err: Exception) -> str:
@@ -160,6 +179,7 @@ def _load_one(f: MotionFile, config: Dict, folder: Optional[Path], kept: List[Mo
             folder = _cache_write(folder, key, feats)
         else:
             check_features(feats, f.path)
+            warn_rig_again(feats)
     except (BVHError, OSError, ValueError, MemoryError) as err:
         errors.append(_error_text(f.path, err))
         return folder

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property, partial
-from typing import Callable, Dict, Optional
+from typing import Callable, Dict, Optional, Tuple
 
 import numpy as np
 import torch
@@ -50,6 +50,10 @@ class MotionFeatures:
         - **r**: :math:`(T, 4)`
         - **c**: :math:`(T, J)`
         - **facing_axis**: :math:`(3,)`
+
+    :attr:`rig_warnings`: what reading the file's rig doubted, as
+    ``(kind, line)`` with kind ``"up_axis"`` or ``"units"``, kept with the
+    features so that a run served from the cache says it again.
     """
 
     skeleton: Skeleton
@@ -67,6 +71,7 @@ class MotionFeatures:
     c: np.ndarray
     facing_axis: np.ndarray
     transform: Optional[CanonicalTransform] = None
+    rig_warnings: Tuple[Tuple[str, str], ...] = ()
 
     @property
     def num_frames(self) -> int:

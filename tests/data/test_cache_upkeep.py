@@ -75,3 +75,22 @@ def test_the_cache_command_shows_prunes_and_clears(cached, capsys) -> None:
     assert f"{folder}: no feature entries" in capsys.readouterr().out
     assert main(["cache", "--dir", str(tmp := root / "none")]) == 0
     assert f"{tmp / 'processed'}: no feature entries" in capsys.readouterr().out
+
+
+def test_a_run_served_from_the_cache_says_the_rig_warnings_again(tmp_path: Path) -> None:
+    """A quadruped in centimetres that no manifest or file tells: the first
+    run warned that its units are unknown, a second run from the cache said
+    nothing."""
+    from satagraph.datasets.zoo import Dialect, write_zoo
+    from satagraph.transforms.rig_reading import UnitsWarning
+    write_zoo(tmp_path / "zoo", species=["quadruped"], clips=1, frames=8,
+              dialects=[Dialect(unit="cm")])
+    (tmp_path / "zoo" / "manifest.tsv").unlink()
+    files = scan_folder(tmp_path / "zoo")[:1]
+    said = []
+    for _ in range(2):
+        with pytest.warns(UnitsWarning) as caught:
+            load_features(files, cache_dir=str(tmp_path / "cache"))
+        said.append([str(w.message) for w in caught if w.category is UnitsWarning])
+    assert len(said[0]) == 1 and f"{files[0].path}: units unknown" in said[0][0]
+    assert said[1] == said[0]
