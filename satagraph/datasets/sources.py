@@ -135,22 +135,59 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
     or above it gives the splits of the files it lists below the folder
     (``satagraph zoo``'s is two folders above its files:
     ``zoo/biped/Zup-in``); otherwise files are split 80/10/10 by a hash of
-    their name."""
+    their name. Said in a warning: files a manifest leaves out (not read),
+    and manifests in folders below that are not read (each such folder is
+    a source of its own)."""
     path = Path(path)
     manifest = next((d / "manifest.tsv" for d in (path, *path.parents)
                      if (d / "manifest.tsv").is_file()), None)
+    files = bvh_files(path)
     if manifest is not None:
         rows = [r for r in read_manifest(manifest) if _listed_below(r.path, path)]
         if rows:
+            _warn_unlisted(files, rows, manifest)
             return [replace(r, dataset=dataset or r.dataset,
                             dataset_named=r.dataset_named or dataset is not None)
                     for r in rows]
-    files = bvh_files(path)
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
+    _warn_manifests_below(files, path)
     name = dataset or path.name
     return [MotionFile(str(f), name, name, _hash_split(f.name), skeleton_named=False,
                        dataset_named=dataset is not None) for f in files]
+
+
+def _some(paths: Sequence[Path], shown: int = 3) -> str:
+    """The first :obj:`shown` of :obj:`paths`, and how many more."""
+    more = f", ... ({len(paths) - shown} more)" if len(paths) > shown else ""
+    return ", ".join(str(p) for p in paths[:shown]) + more
+
+
+def _warn_unlisted(files: Sequence[Path], rows: Sequence[MotionFile], manifest: Path) -> None:
+    """Warn of the .bvh files below a folder that its manifest does not list
+    (added after it was written): they are not read."""
+    listed = {os.path.abspath(r.path) for r in rows} | {os.path.realpath(r.path) for r in rows}
+    left = [f for f in files if os.path.abspath(f) not in listed
+            and os.path.realpath(f) not in listed]
+    if left:
+        warnings.warn(f"{manifest}: {len(left)} .bvh file(s) below it are not in it and are "
+                      f"not read: {_some(left)} (add rows for them, or remove the manifest "
+                      "to split every file by name)", stacklevel=3)
+
+
+def _warn_manifests_below(files: Sequence[Path], folder: Path) -> None:
+    """Warn of the ``manifest.tsv`` files in folders below :obj:`folder`
+    that hold its files: a folder is read with the nearest manifest at or
+    above it, so theirs (splits, up axes, units) are not read."""
+    top = os.path.abspath(folder)
+    dirs = {os.path.abspath(d) for f in files for d in f.parents
+            if os.path.abspath(d) != top and Path(os.path.abspath(d)).is_relative_to(top)}
+    below = sorted(Path(d, "manifest.tsv") for d in dirs if Path(d, "manifest.tsv").is_file())
+    if below:
+        warnings.warn(f"{folder}: its files are split by name, and the {len(below)} "
+                      f"manifest(s) below it are not read: {_some(below)}; pass each "
+                      "manifest's folder as a source of its own (--data FOLDER once per "
+                      "folder) for their splits and rig settings", stacklevel=3)
 
 
 def _listed_below(file: str, folder: Path) -> bool:

@@ -365,3 +365,22 @@ def test_two_folders_of_one_name_are_refused_not_merged(tmp_path):
     (odd / "mocap" / "c.bvh").write_text("")
     assert [f.dataset for f in resolve_sources([str(odd / "mocap")])] == ["mocap"]
     assert [f.dataset for f in resolve_sources([str(odd)])] == ["x=y"]
+
+
+def test_manifests_below_a_folder_and_files_a_manifest_lacks_are_said(tmp_path):
+    """A folder of two zoo folders is split by name: the zoos' manifests
+    (their splits, units and up axes) were left unread without a word; a
+    file added beside a manifest that does not list it was left out unsaid."""
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "top" / "a", species=["biped"], clips=1, frames=8)
+    write_zoo(tmp_path / "top" / "b", species=["quadruped"], clips=1, frames=8)
+    with pytest.warns(UserWarning, match=r"top: its files are split by name, and the 2 "
+                      r"manifest\(s\) below it are not read: .*a/manifest.tsv, .*b/manifest"):
+        assert len(scan_folder(tmp_path / "top")) == 8
+    listed = scan_folder(tmp_path / "top" / "a")
+    extra = tmp_path / "top" / "a" / "extra.bvh"
+    extra.write_bytes(Path(listed[0].path).read_bytes())
+    with pytest.warns(UserWarning, match=r"a/manifest.tsv: 1 .bvh file\(s\) below it are not "
+                      r"in it and are not read: .*extra.bvh"):
+        assert [f.path for f in scan_folder(tmp_path / "top" / "a")] == \
+            [f.path for f in listed]
