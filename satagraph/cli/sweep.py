@@ -1,10 +1,11 @@
 """``satagraph sweep``: train several configs for the same wall-clock budget
-and compare them in one table.
+(or the same number of steps) and compare them in one table.
 
 Example::
 
     satagraph sweep --budget 30 --output sweeps/gnn \\
         sata_vae ablation_no_gnn gnn_gin trainer.accelerator=cpu data.batch_size=16
+    satagraph sweep --steps 2000 --output sweeps/gnn_steps sata_vae gnn_gin
 
 Options go before the configs and overrides (argparse does not take
 positional items on both sides of an option). ``config=NAME`` names a
@@ -16,6 +17,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 from typing import List
+
+
+#: Training minutes per config without --budget or --steps.
+DEFAULT_BUDGET = 5.0
 
 
 def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentParser:
@@ -32,7 +37,9 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
     p = sub.add_parser(
         "sweep", help="train configs for the same time budget and tabulate",
         description="Train each CONFIG for the same wall-clock budget "
-        "(trainer.max_time) on the first config's data, evaluate each on the "
+        "(trainer.max_time), or the same number of steps (--steps: equal work, the "
+        "table's train (min) column comparing their speed), on the first config's data, "
+        "evaluate each on the "
         "test split (--split val: the validation split, to choose among them) and write "
         "sweep.md and sweep.json (one row per config) "
         "into --output. key=value items override every config. Each config keeps its "
@@ -43,8 +50,12 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
         "ablation_no_gnn data.batch_size=8")
     p.add_argument("items", nargs="+", metavar="CONFIG|key=value",
                    help="config names or paths, and dotted overrides for all")
-    p.add_argument("--budget", type=float, default=5.0, metavar="MINUTES",
-                   help="training minutes per config (default 5)")
+    budget = p.add_mutually_exclusive_group()
+    budget.add_argument("--budget", type=float, default=None, metavar="MINUTES",
+                        help="training minutes per config (default 5)")
+    budget.add_argument("--steps", type=int, default=None, metavar="N",
+                        help="train each config N optimizer steps instead (equal work "
+                        "rather than equal time)")
     p.add_argument("--output", default="sweeps/latest", metavar="DIR",
                    help="output folder (default sweeps/latest)")
     p.add_argument("--retarget", action="store_true",
@@ -73,12 +84,13 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     configs, overrides = split_arguments(args.items)
     if not configs:
         raise ValueError("sweep: name at least one config")
-    if not args.budget > 0:
-        raise ValueError(f"sweep: --budget must be positive, got {args.budget}")
+    budget = DEFAULT_BUDGET if args.budget is None else args.budget
+    if not budget > 0:
+        raise ValueError(f"sweep: --budget must be positive, got {budget}")
     logger = None if args.logger == "config" else args.logger
-    rows = run_sweep(configs, args.budget, args.output, overrides, retarget=args.retarget,
+    rows = run_sweep(configs, budget, args.output, overrides, retarget=args.retarget,
                      max_batches=args.max_batches, logger=logger, resume=args.resume,
-                     split=args.split)
+                     split=args.split, steps=args.steps)
     print((Path(args.output) / "sweep.md").read_text())
     return 2 if any(r.error for r in rows) else 0
 

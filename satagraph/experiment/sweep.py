@@ -1,6 +1,6 @@
-r"""Equal-budget sweeps: train several configs for the same wall-clock time on
-the same data, evaluate each on the same split, and tabulate (the SATA
-paper's Table 4 layout: one row per config).
+r"""Equal-budget sweeps: train several configs for the same wall-clock time
+(or the same number of steps) on the same data, evaluate each on the same
+split, and tabulate (the SATA paper's Table 4 layout: one row per config).
 
 Example::
 
@@ -9,8 +9,8 @@ Example::
                      variants=[[], ["model.local_conv=gin"]])
 
 Every config gets the data section of the first one (``same_data``), a CSV
-logger, no progress bar, ``trainer.max_time`` set to the budget and no
-epoch limit, and its own run folder under the output folder. The metrics
+logger, no progress bar, ``trainer.max_time`` set to the budget (or
+``trainer.max_steps`` to the steps) and no other limit, and its own run folder under the output folder. The metrics
 are those of the final weights (not the best checkpoint) on the test split,
 read as ``satagraph eval`` reads it (:func:`~satagraph.pipelines.evaluation.
 scoring_data`: each skeleton in the rest pose ``reconstruct`` shows it;
@@ -109,9 +109,12 @@ BUDGET_KEYS = ("trainer.max_steps", "trainer.max_epochs", "trainer.max_time",
 
 def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
                   data: Optional[Dict[str, Any]] = None,
-                  logger: Optional[str] = "csv") -> Dict[str, Any]:
+                  logger: Optional[str] = "csv",
+                  steps: Optional[int] = None) -> Dict[str, Any]:
     r"""A copy of :obj:`cfg` bound by :obj:`budget_minutes` of training
-    (``trainer.max_time: {seconds: ...}``, no epoch or step limit), writing into
+    (``trainer.max_time: {seconds: ...}``, no epoch or step limit), or by
+    :obj:`steps` optimizer steps where given (``trainer.max_steps``, no time
+    or epoch limit: equal work, :obj:`budget_minutes` unused), writing into
     :obj:`run_dir`, on :obj:`data` when given. :obj:`logger`: ``"csv"``,
     ``"tensorboard"``, ``"none"``, ``"wandb"`` (online, e.g. under a wandb
     sweep agent) or ``None`` (the config's own logger)."""
@@ -122,8 +125,9 @@ def budget_config(cfg: Dict[str, Any], budget_minutes: float, run_dir: Path,
     for key in BUDGET_KEYS:  # a config's own limits: the budget alone ends a run
         trainer.pop(key.split(".", 1)[1], None)
     trainer.update(max_epochs=-1, progress=False, enable_model_summary=False,
-                   enable_progress_bar=False,
-                   max_time={"seconds": 60.0 * float(budget_minutes)})
+                   enable_progress_bar=False)
+    trainer.update({"max_steps": int(steps)} if steps is not None
+                   else {"max_time": {"seconds": 60.0 * float(budget_minutes)}})
     trainer.setdefault("log_every_n_steps", 10)
     cfg["trainer"] = trainer
     if logger is not None:
@@ -150,7 +154,8 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
                   variants: Optional[Sequence[Sequence[str]]] = None,
                   budget_minutes: float = 5.0, output: str = "sweeps/latest",
                   same_data: bool = True,
-                  logger: Optional[str] = "csv") -> List[SweepRun]:
+                  logger: Optional[str] = "csv",
+                  steps: Optional[int] = None) -> List[SweepRun]:
     r"""Loaded, budgeted configs of a sweep.
 
     Args:
@@ -162,6 +167,8 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
             ``output/<i>_<name>``.
         same_data (bool): Give every config the first one's data section.
         logger (str, optional): See :func:`budget_config`.
+        steps (int, optional): Train each config this many steps instead
+            (:func:`budget_config`).
     """
     variants = list(variants or [[] for _ in configs])
     if len(variants) != len(configs):
@@ -170,8 +177,8 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
         key = item.split("=", 1)[0].lstrip("+~")
         if key in BUDGET_KEYS:
             raise ValueError(f"sweep: {item}: every config trains for the budget "
-                             f"(--budget minutes, budget_minutes here) and no other limit, "
-                             "so that its rows compare at equal time: drop it")
+                             "(--budget minutes or --steps) and no other limit, "
+                             "so that its rows compare at equal time or work: drop it")
     loaded = [load_config(c, list(overrides) + list(v)) for c, v in zip(configs, variants)]
     data = loaded[0]["data"] if same_data and loaded else None
     out, names = [], []
@@ -179,7 +186,7 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
         label = _label(cfg["name"], variants[i], names)
         names.append(label)
         cfg = budget_config(cfg, budget_minutes, Path(output) / f"{i}_{label}", data,
-                            logger)
+                            logger, steps)
         cfg["name"] = label
         out.append(SweepRun(cfg, spec))
     return out
@@ -345,8 +352,9 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
               variants: Optional[Sequence[Sequence[str]]] = None,
               retarget: bool = False, max_batches: Optional[int] = None,
               logger: Optional[str] = "csv", log=print,
-              resume: bool = False, split: str = "test") -> List[SweepRow]:
-    r"""Train every config for :obj:`budget_minutes` on the same data,
+              resume: bool = False, split: str = "test",
+              steps: Optional[int] = None) -> List[SweepRow]:
+    r"""Train every config for :obj:`budget_minutes` (or :obj:`steps`) on the same data,
     evaluate each on :obj:`split` and write ``sweep.md`` and
     ``sweep.json`` into :obj:`output`.
 
@@ -366,13 +374,18 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
         split (str): :data:`SPLITS`: ``"val"`` to choose among the rows
             (a choice made on the test split is no test result), ``"test"``
             to report the rows chosen.
+        steps (int, optional): Train every config this many optimizer steps
+            instead of :obj:`budget_minutes` (equal work; the table's ``train
+            (min)`` column then compares their speed).
     """
+    if steps is not None and steps < 1:
+        raise ValueError(f"sweep: --steps must be at least 1, got {steps}")
     if max_batches is not None and max_batches < 1:
         raise ValueError(f"sweep: --max-batches must be at least 1, got {max_batches}")
     if split not in SPLITS:
         raise ValueError(f"sweep: --split must be one of {SPLITS}, got {split!r}")
     cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
-                         logger=logger)
+                         logger=logger, steps=steps)
     started = check_runs(cfgs, resume)
     done = finished_rows([r for r in cfgs if r.cfg["name"] in started], Path(output), split)
     rows = []
@@ -381,7 +394,8 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
             log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: kept (finished before)")
             rows.append(done[run.cfg["name"]])
             continue
-        log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for {budget_minutes:g} min")
+        log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for "
+            f"{budget_words(budget_minutes, steps)}")
         try:
             row = run_config(run, eval_split=split,
                              retarget_files={split: "split"} if retarget else None,
@@ -396,24 +410,24 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
             f"{row.train_loss:.4f}")
         rows.append(row)
         if len(rows) < len(cfgs):  # a sweep stopped later (Ctrl-C) keeps these rows
-            _write_so_far(rows, cfgs, output, budget_minutes, overrides, max_batches)
+            _write_so_far(rows, cfgs, output, budget_minutes, overrides, max_batches, steps)
     # all share the first's data
     write_results(rows, Path(output), budget_minutes, overrides,
                   data=cfgs[0].cfg["data"]["sources"] if cfgs else None,
-                  differences=config_differences(cfgs), max_batches=max_batches)
+                  differences=config_differences(cfgs), max_batches=max_batches, steps=steps)
     return rows
 
 
 
 def _write_so_far(rows: Sequence[SweepRow], cfgs: Sequence[SweepRun], output: str,
                   budget_minutes: float, overrides: Sequence[str],
-                  max_batches: Optional[int]) -> None:
+                  max_batches: Optional[int], steps: Optional[int] = None) -> None:
     """``sweep.md`` and ``sweep.json`` of the configs done so far, said to
     be a part (the whole sweep's replace them)."""
     write_results(rows, Path(output), budget_minutes, overrides,
                   data=cfgs[0].cfg["data"]["sources"],
                   differences=config_differences(cfgs[:len(rows)]), max_batches=max_batches,
-                  planned=len(cfgs))
+                  planned=len(cfgs), steps=steps)
 
 
 def check_runs(runs: Sequence[SweepRun], resume: bool = False) -> set:
@@ -471,7 +485,7 @@ def refuse_other_settings(run: SweepRun, cfg: Dict[str, Any]) -> None:
         raise ValueError(f"sweep --resume: config {run.cfg['name']} ({run.source}): "
                          f"{path.parent} was trained with {key}={before.get(key)} (here "
                          f"{now.get(key)}): resume with the stopped sweep's configs, overrides "
-                         "and --budget, or run this one with another --output")
+                         "and --budget or --steps, or run this one with another --output")
 
 
 def finished_rows(runs: Sequence[SweepRun], output: Path,
@@ -506,6 +520,11 @@ def config_differences(runs: Sequence[SweepRun]) -> Dict[str, List[Any]]:
 
 
 # ------------------------------------------------------------- table
+def budget_words(budget_minutes: float, steps: Optional[int] = None) -> str:
+    """A sweep's budget in words: ``"10 min"`` or ``"500 steps"``."""
+    return f"{steps} steps" if steps is not None else f"{budget_minutes:g} min"
+
+
 def _metric(row: SweepRow, group: str, name: str, factor: float) -> str:
     value = (row.metrics.get(group) or {}).get(name)
     return "-" if value is None else f"{value * factor:.4f}"
@@ -522,14 +541,16 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
     """Table 4 layout: one row per config; metrics of :obj:`group` on each
     row's split."""
     settings = [s for s in RETARGET_HEADERS if any(s in r.retarget for r in rows)]
-    head = ["config", "params (M)", "steps", "train loss"] + [h for _, _, h in COLUMNS]
+    head = ["config", "params (M)", "steps", "train (min)", "train loss"]
+    head += [h for _, _, h in COLUMNS]
     head += [RETARGET_HEADERS[s] for s in settings]
     lines = ["| " + " | ".join(head) + " |", "|---" + "|---:" * (len(head) - 1) + "|"]
     for r in rows:
         if r.error:
             lines.append(f"| {r.name} | failed: {r.error} |" + " |" * (len(head) - 2))
             continue
-        cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), _train_loss(r)]
+        cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), f"{r.seconds / 60:.2f}",
+                 _train_loss(r)]
         cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
         for setting in settings:
             label = r.split if group == "all" else f"{r.split}:{group}"
@@ -542,7 +563,8 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
 def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
                   overrides: Sequence[str] = (), data: Any = None,
                   differences: Optional[Dict[str, List[Any]]] = None,
-                  max_batches: Optional[int] = None, planned: Optional[int] = None) -> str:
+                  max_batches: Optional[int] = None, planned: Optional[int] = None,
+                  steps: Optional[int] = None) -> str:
     """Write ``sweep.md`` and ``sweep.json``; returns the markdown.
 
     Args:
@@ -555,15 +577,18 @@ def write_results(rows: Sequence[SweepRow], output: Path, budget_minutes: float,
         max_batches (int, optional): Evaluation batches each row was scored on.
         planned (int, optional): The sweep's configs, where :obj:`rows` are
             those done so far.
+        steps (int, optional): Steps each config trained instead of
+            :obj:`budget_minutes`.
     """
     output.mkdir(parents=True, exist_ok=True)
     done = (f"{len(rows)} of {planned} configs so far" if planned and planned > len(rows)
             else f"{len(rows)} configs")
-    text = (f"# Sweep: {done}, {budget_minutes:g} min of training each\n\n"
+    text = (f"# Sweep: {done}, {budget_words(budget_minutes, steps)} of training each\n\n"
             f"{format_sweep(rows)}\n\n{_legend(rows, overrides, data, max_batches, differences)}\n"
             f"{_differences(rows, differences)}")
     atomic_write_text(output / "sweep.md", text)
-    payload = {"budget_minutes": budget_minutes, "torch": torch.__version__,
+    payload = {"budget_minutes": None if steps else budget_minutes, "steps": steps,
+               "torch": torch.__version__,
                "configs": planned or len(rows),
                "overrides": list(overrides), "data": data, "max_batches": max_batches,
                "differences": differences or {},
@@ -599,7 +624,9 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
     scope = ("every window" if max_batches is None
              else f"the first {max_batches} batch(es) of windows")
     split = next((r.split for r in rows), "test")
-    lines = [f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
+    lines = ["train (min): wall time of the training, set-up included, one row at a time "
+             "on this machine.",
+             f"train loss: mean over the last {TRAILING_STEPS} steps. Metrics of the "
              f"final weights over {scope} of the {split} split (all datasets; sweep.json has "
              "each dataset's), each skeleton read in the rest pose `reconstruct` shows it "
              "(as `satagraph eval` reads it); RT, JP, FS, GP in cm."]
@@ -609,7 +636,7 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
     if any(0 < r.steps < TRAILING_STEPS and not r.error for r in rows):
         lines.append(f"(all N): the run trained N < {TRAILING_STEPS} steps, so its train "
                      "loss is the mean of every step from the first: higher for that alone, "
-                     "not comparable with the others (a longer --budget is).")
+                     "not comparable with the others (a longer --budget or --steps is).")
     differ = sorted({k.split(".")[0] for k in differences or {}} & set(LOSS_SETTINGS))
     if differ:
         lines.append(f"The rows differ in {', '.join(differ)}: their train losses are "
@@ -627,7 +654,7 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
 
 
 __all__ = ["SweepRow", "SweepRun", "SPLITS", "TRAILING_STEPS", "split_arguments",
-           "budget_config", "sweep_configs",
+           "budget_config", "budget_words", "sweep_configs",
            "train_budgeted", "threads_kept", "run_config", "retarget_table", "held_out_loader",
            "run_sweep", "check_runs", "refuse_other_settings", "finished_rows",
            "config_differences", "format_sweep",

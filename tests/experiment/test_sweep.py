@@ -46,6 +46,40 @@ def test_sweep_configs_share_data_and_unique_names(tmp_path):
     assert cfgs[0]["output_dir"] != cfgs[1]["output_dir"]
 
 
+def test_a_steps_budget_binds_steps_only(tmp_path):
+    cfg = load_config("tiny", ["trainer.max_time=00:00:10:00", "trainer.max_epochs=3"])
+    trainer = budget_config(cfg, 0.5, tmp_path, steps=40)["trainer"]
+    assert trainer["max_steps"] == 40 and trainer["max_epochs"] == -1
+    assert "max_time" not in trainer
+
+
+def test_a_sweep_of_equal_steps_says_so_and_times_each_row(tmp_path, monkeypatch):
+    """Equal time is not equal work: a GNN twice as slow trains half the
+    steps. ``--steps N`` trains every config N steps, and the table's
+    ``train (min)`` column gives each row's time."""
+    metrics = {"all": {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}}
+    limits = []
+
+    def run_config(run, **kw):
+        limits.append(run.cfg["trainer"])
+        return SweepRow(run.cfg["name"], run.source, params=5, steps=40, seconds=93.0,
+                        train_loss=1.0, metrics=metrics, run_dir=run.cfg["output_dir"])
+    monkeypatch.setattr(sweep_mod, "run_config", run_config)
+    monkeypatch.setattr(sweep_mod, "check_runs", lambda runs, resume=False: set())
+    sweep_mod.run_sweep(["tiny"], 0.01, str(tmp_path), log=lambda *a: None, steps=40)
+    assert limits[0]["max_steps"] == 40 and "max_time" not in limits[0]
+    text = (tmp_path / "sweep.md").read_text()
+    assert text.startswith("# Sweep: 1 configs, 40 steps of training each")
+    assert "| config | params (M) | steps | train (min) | train loss |" in text
+    assert "| tiny | 5e-06 | 40 | 1.55 | 1.0000 (all 40) |" in text
+    payload = json.loads((tmp_path / "sweep.json").read_text())
+    assert payload["steps"] == 40 and payload["budget_minutes"] is None
+    with pytest.raises(ValueError, match="--steps must be at least 1"):
+        sweep_mod.run_sweep(["tiny"], 0.01, str(tmp_path / "x"), steps=0)
+    with pytest.raises(SystemExit):
+        main(["sweep", "--budget", "1", "--steps", "5", "tiny"])
+
+
 def test_a_config_s_own_limits_give_way_to_the_budget(tmp_path):
     """A config's trainer.min_steps trained one row 60 steps for 21 s
     beside another's 4."""
@@ -173,8 +207,8 @@ def test_the_table_says_which_train_losses_do_not_compare(tmp_path):
     rows = [SweepRow("gnn_gin", "gnn_gin", params=10, steps=63, train_loss=723.5, metrics=metrics),
             SweepRow("gnn_gat", "gnn_gat", params=10, steps=44, train_loss=757.1, metrics=metrics)]
     text = write_results(rows, tmp_path, 0.25, differences={"model.local_conv": ["gin", "gat"]})
-    assert "| gnn_gin | 1e-05 | 63 | 723.5000 |" in text
-    assert "| gnn_gat | 1e-05 | 44 | 757.1000 (all 44) |" in text
+    assert "| gnn_gin | 1e-05 | 63 | 0.00 | 723.5000 |" in text
+    assert "| gnn_gat | 1e-05 | 44 | 0.00 | 757.1000 (all 44) |" in text
     assert "(all N): the run trained N < 50 steps" in text and "different sums" not in text
     text = write_results(rows[:1], tmp_path, 0.25,
                          differences={"module": ["vae", "mine"], "module_args.w": [None, 1]})
