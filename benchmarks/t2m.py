@@ -37,6 +37,19 @@ skeleton (one rig a body plan, real rigs too), every probe prompt with
     python benchmarks/t2m.py [--ckpt runs/t2m_tiny/checkpoints/last.ckpt] [--quick]
         [--reference builtin] [--prompts val] [--guidance G] [--temperature T]
 
+    python benchmarks/t2m.py --data FOLDER --ckpt C [--split test] [--pool-size N]
+
+``--data`` scores your own captioned folder (a generator fine-tuned with
+``satagraph train finetune_t2m_builtin --data FOLDER``) instead of the
+project's data: its held-out split's captioned windows (``--split``, as
+``satagraph train`` splits it: a manifest's split column, else 80/10/10 by
+file name) are the only test prompts, and the evaluator learns from the
+zoo's training clips and the folder's ``train`` split. The table says which
+data and pool size it used (``--pool-size``, 32 by default; R@k needs as
+many held-out windows); a split without captions, with fewer windows than
+the pool or a file the evaluator cannot read (no limb on its rig) is
+refused in one line. It writes ``t2m_data.*`` (``t2m_quick_data.*``).
+
 ``--prompts val`` scores the zoo's validation seeds instead of the test
 prompts (no Bandai groups): choose sampling settings there and report them
 on the test prompts. ``--reference`` adds a row of the test motion through
@@ -70,7 +83,7 @@ from satagraph.data.captioned import FileCaptionWindows  # noqa: E402
 from satagraph.data.features import (MotionFeatures, features_to_motion,  # noqa: E402
                                      integrate_root, motion_to_features)
 from satagraph.datasets.captions import captions_for  # noqa: E402
-from satagraph.datasets.sources import read_manifest, select  # noqa: E402
+from satagraph.datasets.sources import read_manifest, resolve_sources, select  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.datasets.zoo_captions import ZooClip, dashes  # noqa: E402
 from satagraph.metrics.generation import (POOL_SIZE, diversity, fid, kid,  # noqa: E402
@@ -190,20 +203,32 @@ def bandai_parts(path: str) -> Tuple[str, str]:
     return parts[1], parts[2]
 
 
-def file_items(files, group: Callable[[object], str], window: int = 96, stride: int = 48,
-               keep: bool = False) -> List[Item]:
+#: Frames of the captioned windows cut from files, and between their starts.
+WINDOW, STRIDE = 96, 48
+
+
+def file_items(files, group: Callable[[object], str], window: int = WINDOW,
+               stride: int = STRIDE, keep: bool = False) -> List[Item]:
     """Captioned windows of manifest files (see :class:`FileCaptionWindows`)."""
     kept, feats, errors = try_load_features(files, {"fps": FPS})
     for err in errors:
         print("skipped:", err, file=sys.stderr)
-    windows = FileCaptionWindows(kept, feats, window, stride)
+    return window_items(FileCaptionWindows(kept, feats, window, stride), group, keep)
+
+
+def window_items(windows: FileCaptionWindows, group: Callable[[object], str],
+                 keep: bool = False) -> List[Item]:
+    """An :class:`Item` of every captioned window (labelled with the Bandai
+    action, else the dataset; the skeleton id of
+    :func:`~satagraph.data.dataset.skeleton_id`: a rig of its own in a
+    folder that names none)."""
     out = []
     for i, start in windows.index:
         f, full = windows.files[i], windows.features[i]
-        part = _frames(full, slice(start, min(start + window, full.num_frames)))
+        part = _frames(full, slice(start, min(start + windows.window, full.num_frames)))
         caps = [c.text for c in windows.window_captions(i, start)]
         label = bandai_parts(f.path)[0] if f.dataset == "bandai" else f.dataset
-        out.append(measure(part, caps, label, group(f), f.skeleton, keep))
+        out.append(measure(part, caps, label, group(f), windows.skeletons[i], keep))
     return out
 
 
@@ -249,6 +274,76 @@ def real_items(quick: bool, seed: int, prompts: str = "test") -> Tuple[List[Item
     test_items = (zoo_test + file_items(split["seen"], lambda f: "bandai seen-style", keep=True)
                   + file_items(split["test"], lambda f: "bandai unseen-style", keep=True))
     return train_items, test_items
+
+
+@dataclass
+class Folder:
+    """A user's captioned folders (``--data``): the captioned windows of
+    their training split (the evaluator learns from them, beside the zoo's)
+    and of the held-out split scored, with what the table states of them."""
+
+    fit: List[Item]
+    test: List[Item]
+    facts: Dict[str, object]
+
+
+def folder_items(sources: Sequence[str], split: str, pool_size: int) -> Folder:
+    """The captioned windows of :obj:`sources` (folders or manifests, split
+    as ``satagraph train --data`` splits them) for :func:`evaluate`.
+
+    Raises:
+        ValueError: One line naming the source or file: no file in
+            :obj:`split`, a file that cannot be read or whose rig shows the
+            evaluator no limb, no caption sidecar in :obj:`split`, or fewer
+            captioned windows there than :obj:`pool_size`.
+    """
+    files = resolve_sources(list(sources))
+    where = ", ".join(sources)
+    held = [f for f in files if f.split == split]
+    if not held:
+        raise ValueError(f"{where}: no file in the {split!r} split to score (a manifest's "
+                         "split column; a folder without one is split 80/10/10 by file "
+                         "name: try another --split)")
+    test = readable_windows(held)
+    if not test.index:
+        raise ValueError(f"{where}: none of the {len(held)} files of the {split!r} split has "
+                         "a caption (a sidecar CLIP.txt of HumanML3D lines "
+                         "caption#tokens#from#to, or CLIP.json, beside CLIP.bvh)")
+    if len(test.index) < pool_size:
+        smaller = (f" or pass --pool-size {len(test.index)} or less" if len(test.index) >= 4
+                   else " (4 windows at least)")
+        raise ValueError(f"{where}: {len(test.index)} captioned windows of {WINDOW} frames in "
+                         f"the {split!r} split ({len(test.files)} files), fewer than the pool "
+                         f"size {pool_size} R-precision ranks each caption in: hold out more "
+                         f"clips{smaller}")
+    fit = readable_windows([f for f in files if f.split == "train"])
+    fit_items = window_items(fit, lambda f: f.dataset, keep=True)
+    test_items = window_items(test, lambda f: f"{f.dataset} ({split})", keep=True)
+    facts = {"data": list(sources), "split": split, "window": WINDOW,
+             "test_files": len(test.files), "test_uncaptioned": len(test.uncaptioned),
+             "fit_files": len(fit.files), "fit_windows": len(fit_items)}
+    return Folder(fit_items, test_items, facts)
+
+
+def readable_windows(files) -> FileCaptionWindows:
+    """The captioned windows of :obj:`files`, each of which must load and
+    show the evaluator a limb (:func:`measure` reads motion by the limbs'
+    ends).
+
+    Raises:
+        ValueError: One line naming the first file that does not.
+    """
+    kept, feats, errors = try_load_features(files, {"fps": FPS})
+    if errors:
+        more = f"; and {len(errors) - 1} more files" if len(errors) > 1 else ""
+        raise ValueError(f"{errors[0]} (the evaluator reads every file{more})")
+    for f, full in zip(kept, feats):
+        if max(limb_end_index(full.skeleton)) < 0:
+            raise ValueError(f"{f.path}: the evaluator finds no limb on its rig "
+                             f"({full.skeleton.num_joints} joints; it reads motion by the "
+                             "ends of the legs and arms its joint names show, see satagraph "
+                             "tags), so it cannot score it: leave it out or name its joints")
+    return FileCaptionWindows(kept, feats, WINDOW, STRIDE)
 
 
 class Evaluator(nn.Module):
@@ -399,15 +494,16 @@ def embed(model: Evaluator, encode: Callable, captions: Sequence[str],
 
 
 def score(model: Evaluator, encode: Callable, captions: List[str], descs: List[np.ndarray],
-          reference: np.ndarray, reps: int, groups: Optional[List[np.ndarray]] = None
-          ) -> Dict[str, object]:
-    """Every metric of one row (``reference``: the real motions' embeddings)."""
+          reference: np.ndarray, reps: int, groups: Optional[List[np.ndarray]] = None,
+          pool_size: int = POOL_SIZE) -> Dict[str, object]:
+    """Every metric of one row (``reference``: the real motions' embeddings;
+    R@k in pools of :obj:`pool_size`)."""
     text, motion = embed(model, encode, captions, descs)
     row: Dict[str, object] = {"n": len(captions)}
-    if len(captions) >= POOL_SIZE:
+    if len(captions) >= pool_size:
         for k in range(3):
             row[f"R@{k + 1}"] = replicate(
-                lambda rng: float(r_precision(text, motion, 3, POOL_SIZE, rng)[k]), reps)
+                lambda rng: float(r_precision(text, motion, 3, pool_size, rng)[k]), reps)
     row["matching"] = matching_score(text, motion)
     row.update(fid_kid(motion, reference, reps))
     row["diversity"] = diversity(motion, 300)
@@ -614,11 +710,13 @@ SUBJECTS = {"biped": "a person", "quadruped": "a quadruped", "bird": "a bird",
 
 def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, Motion]]:
     """One target per skeleton: the first zoo test rig of every body plan,
-    the first bandai test rig, and cmu 01_01 and a dog clip from the
-    manifest (name -> (subject, canonical motion))."""
+    the first bandai test rig, the first of every other rig (``--data``), and
+    cmu 01_01 and a dog clip from the manifest (name -> (subject, canonical
+    motion))."""
     out: Dict[str, Tuple[str, Motion]] = {}
     for it in test:
-        key = f"zoo {it.skeleton}" if it.group == "zoo" else "bandai"
+        key = (f"zoo {it.skeleton}" if it.group == "zoo"
+               else "bandai" if it.group.startswith("bandai") else it.skeleton)
         if it.motion is not None and key not in out:
             out[key] = (SUBJECTS.get(it.skeleton, "a person"), it.motion)
     if quick or not MANIFEST.is_file():
@@ -670,12 +768,12 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
 def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                recogniser: Recogniser, encode: Callable, reps: int,
                extra: Dict[str, List[List[Item]]], seed: int,
-               module=None, settings: Optional[GenerationSettings] = None
-               ) -> List[Dict[str, object]]:
+               module=None, settings: Optional[GenerationSettings] = None,
+               pool_size: int = POOL_SIZE) -> List[Dict[str, object]]:
     """The rows of one group of test prompts: real, shuffled captions,
     retrieval (on its own rig; retargeted onto the test rig when a
     generator's :obj:`module` is given) and the extra sets
-    (reconstruction, generator seeds)."""
+    (reconstruction, generator seeds); R@k in pools of :obj:`pool_size`."""
     caps = [it.captions[0] for it in test]
     _, reference = embed(model, encode, caps, [it.desc for it in test])
     perm = np.random.default_rng(seed).permutation(len(test))
@@ -692,7 +790,7 @@ def group_rows(name: str, test: List[Item], train: List[Item], model: Evaluator,
                   if len(seeds) > 1 else None)
         same = kind in ("real", "shuffled captions")  # the test motions themselves
         row = score(model, encode, caps, [it.desc for it in items],
-                    None if same else reference, reps, groups)
+                    None if same else reference, reps, groups, pool_size)
         row.update(slide=float(np.mean([it.contact[0] for it in items])),
                    hover=float(np.mean([it.contact[1] for it in items])))
         descs, labels = [it.desc for it in items], [it.label for it in test]
@@ -795,7 +893,8 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
              reference: Optional[str] = None, prompts: str = "test",
              settings: Optional[GenerationSettings] = None,
              probe_seeds: Optional[int] = None,
-             bandai_val: bool = False) -> Tuple[List[Dict], Dict]:
+             bandai_val: bool = False, folder: Optional[Folder] = None,
+             pool_size: int = POOL_SIZE) -> Tuple[List[Dict], Dict]:
     """Train the evaluator and score every group; rows and run facts
     (:obj:`reference`: an autoencoder checkpoint, ``builtin`` or a weights
     file, whose reconstruction is one more row per group; :obj:`prompts`:
@@ -804,16 +903,25 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
     :obj:`probe_seeds`: seeds of every per-skeleton probe prompt, by
     default :data:`PROBE_SEEDS`, 2 when :obj:`quick`; :obj:`bandai_val`: with
     validation prompts, Bandai's validation takes too, scored by an evaluator
-    trained as the test table's, see :func:`bandai_val_items`)."""
+    trained as the test table's, see :func:`bandai_val_items`; :obj:`folder`:
+    a user's captioned folders, whose held-out windows are the only test
+    prompts, the evaluator learning from the zoo's training clips and the
+    folders' training split, see :func:`folder_items`; :obj:`pool_size`:
+    R-precision's)."""
     settings = settings or GenerationSettings()
     probe_seeds = probe_seeds or (2 if quick else PROBE_SEEDS)
     start = time.perf_counter()
     encode = cached_encoder()
-    train, test = real_items(quick, seed, prompts)
+    if folder is None:
+        train, test = real_items(quick, seed, prompts)
+        labelled = train
+    else:  # a folder's captions are no action labels: the recogniser learns the zoo's
+        labelled = zoo_items("train", 128 if quick else 1200, seed, keep=True)
+        train, test = labelled + folder.fit, folder.test
     loaded = time.perf_counter()
     steps = steps or (150 if quick else 3000)
     model = train_evaluator(train, encode, steps, seed)
-    recogniser = train_recogniser(train, steps, seed)
+    recogniser = train_recogniser(labelled, steps, seed)
     module = None
     if ckpt:
         module = load_generator(ckpt)
@@ -840,21 +948,37 @@ def evaluate(quick: bool, ckpt: Optional[str], seed: int = 0, steps: Optional[in
                 extra["generator (GT length)"] = generated_items(module, items, gen_seeds,
                                                                  settings)
             rows += group_rows(name, items, train_of, model_of, recogniser_of, encode,
-                               reps or (3 if quick else 20), extra, seed, module, settings)
+                               reps or (3 if quick else 20), extra, seed, module, settings,
+                               pool_size)
     if module is not None:
-        run_extra = skeleton_probes(module, skeleton_targets(test, quick or prompts != "test"),
-                                    probe_seeds, settings=settings)
+        targets = skeleton_targets(test, quick or prompts != "test" or folder is not None)
+        run_extra = skeleton_probes(module, targets, probe_seeds, settings=settings)
     else:
         run_extra = []
     facts = {"train_items": len(train), "test_items": len(test), "evaluator_steps": steps,
-             "seed": seed, "pool_size": POOL_SIZE, "ckpt": ckpt, "reference": reference,
+             "seed": seed, "pool_size": pool_size, "ckpt": ckpt, "reference": reference,
              "quick": quick, "prompts": prompts, "bandai_val": bandai_val,
              "probe_seeds": probe_seeds,
              "settings": vars(settings),
              "seconds_data": round(loaded - start, 1),
              "seconds_total": round(time.perf_counter() - start, 1)}
+    if folder is not None:
+        facts.update(folder.facts)
     return rows, {"facts": facts, "model": model, "recogniser": recogniser,
                   "skeletons": run_extra}
+
+
+def data_line(facts: Dict[str, object]) -> str:
+    """What a ``--data`` table scored, in words: the folders, split, files
+    and windows, what the evaluator learnt from and the pool size."""
+    zoo = facts["train_items"] - facts["fit_windows"]
+    return (f"Scored on {', '.join(facts['data'])}, split {facts['split']!r}: "
+            f"{facts['test_items']} captioned windows of at most {facts['window']} frames "
+            f"from {facts['test_files']} files ({facts['test_uncaptioned']} more without a "
+            f"caption left out); the evaluator learnt from {zoo} zoo training clips and "
+            f"{facts['fit_windows']} windows of {facts['fit_files']} captioned files of the "
+            f"'train' split; R@1-3 in pools of {facts['pool_size']}; no action accuracy "
+            "(a folder's captions are no action labels).\n\n")
 
 
 def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
@@ -936,6 +1060,16 @@ def main(argv=None) -> int:
     parser.add_argument("--probe-seeds", type=int, default=None,
                         help=f"seeds of every per-skeleton probe prompt (default {PROBE_SEEDS}, "
                              "2 with --quick)")
+    parser.add_argument("--data", action="append", default=None, metavar="PATH",
+                        help="score your own captioned BVH folder (or manifest; repeat for "
+                        "several) instead of the project's data: its --split windows are the "
+                        "test prompts, its 'train' split joins the zoo's training clips the "
+                        "evaluator learns from (split as satagraph train --data splits it)")
+    parser.add_argument("--split", choices=("val", "test"), default="test",
+                        help="with --data, the held-out split scored (default: test)")
+    parser.add_argument("--pool-size", type=int, default=POOL_SIZE,
+                        help=f"texts per R-precision pool (default {POOL_SIZE}; at least 4; "
+                        "a held-out split needs as many captioned windows)")
     parser.add_argument("--reference", default=None, metavar="AUTOENCODER",
                         help="also a row of test motion through this autoencoder on its own "
                              "rig (builtin, a checkpoint or weights file): the ceiling of "
@@ -943,16 +1077,27 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.bandai_val and args.prompts != "val":
         parser.error("--bandai-val goes with --prompts val")
-    if not args.quick and not MANIFEST.is_file():
+    if args.data and (args.prompts != "test" or args.bandai_val):
+        parser.error("--data scores its own --split; --prompts val and --bandai-val are the "
+                     "project's")
+    if args.pool_size < 4:
+        parser.error(f"--pool-size must be at least 4 (R@3 in a smaller pool says nothing), "
+                     f"got {args.pool_size}")
+    if not (args.quick or args.data) and not MANIFEST.is_file():
         parser.error(f"{MANIFEST.parent}: no manifest.tsv there: the real files' groups and "
                      "probes need ../shared/data (--quick scores the zoo alone)")
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
+    try:
+        folder = folder_items(args.data, args.split, args.pool_size) if args.data else None
+    except (OSError, ValueError) as err:
+        parser.error(str(err))
     rows, run = evaluate(args.quick, args.ckpt, args.seed, args.steps,
                          reference=args.reference, prompts=args.prompts,
                          settings=sampling(args), probe_seeds=args.probe_seeds,
-                         bandai_val=args.bandai_val)
-    name = ("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
+                         bandai_val=args.bandai_val, folder=folder, pool_size=args.pool_size)
+    name = (("t2m_quick" if args.quick else "t2m") + ("_val" if args.prompts == "val" else "")
+            + ("_data" if args.data else ""))
     command = "python benchmarks/t2m.py " + " ".join(argv if argv is not None else sys.argv[1:])
     save = Path(args.save)
     save.mkdir(parents=True, exist_ok=True)
@@ -963,7 +1108,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     text = (f"# Text-to-motion evaluation\n\n`{command}`\n\n{json.dumps(run['facts'])}\n\n"
-            f"{table(rows)}\n")
+            + (data_line(run["facts"]) if args.data else "") + f"{table(rows)}\n")
     text += action_table(rows)
     if run["skeletons"]:
         text += ("\nGenerator probes per skeleton (4 s, prompts of bandai's wording):\n\n"

@@ -176,3 +176,101 @@ def test_a_full_run_without_the_real_files_is_refused_before_any_work(tmp_path, 
     assert exit_.value.code == 2
     assert f"{tmp_path / 'shared' / 'data'}: no manifest.tsv there" in capsys.readouterr().err
     assert not list(tmp_path.glob("t2m*"))
+
+
+def _captioned_folder(root: Path, splits: dict, captions: bool = True) -> Path:
+    """A folder of 60-frame zoo biped walks (one 96-frame window each) with a
+    manifest of :obj:`splits` (file stem -> split) and, with
+    :obj:`captions`, a HumanML3D sidecar beside each."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io import write_bvh
+    rig = [r for r in zoo_rigs(seed=1) if r.species == "biped"][0]
+    folder = root / "mine"
+    folder.mkdir(parents=True)
+    for i, stem in enumerate(splits):
+        write_bvh(generate_clip(rig, "walk", frames=60, seed=i), folder / f"{stem}.bvh")
+        if captions:
+            (folder / f"{stem}.txt").write_text(f"a person walks {stem}#x#0.0#0.0\n")
+    (folder / "manifest.tsv").write_text(
+        "path\tsplit\n" + "".join(f"{s}.bvh\t{v}\n" for s, v in splits.items()))
+    return folder
+
+
+def _refused(tmp_path, monkeypatch, capsys, argv) -> str:
+    """The one error line of a --data run refused before any evaluation."""
+    def evaluate(*args, **kwargs):
+        raise AssertionError("evaluated a folder it should refuse")
+    monkeypatch.setattr(t2m, "evaluate", evaluate)
+    with pytest.raises(SystemExit) as exit_:
+        t2m.main(argv + ["--out", str(tmp_path), "--save", str(tmp_path)])
+    assert exit_.value.code == 2 and not list(tmp_path.glob("t2m*"))
+    return capsys.readouterr().err.strip().splitlines()[-1]
+
+
+SPLITS = {"a": "train", "b": "train", "c": "test", "d": "test", "e": "test", "f": "test"}
+
+
+def test_data_scores_a_users_held_out_clips_with_the_pool_size_stated(tmp_path, monkeypatch):
+    # a user who fine-tuned on their own captioned folder had no way to score
+    # it: t2m.py took no --data ("unrecognized arguments: --data")
+    folder = _captioned_folder(tmp_path, SPLITS)
+    zoo_items = t2m.zoo_items
+    monkeypatch.setattr(t2m, "zoo_items", lambda stream, count, seed=0, keep=False:
+                        zoo_items(stream, 16, seed, keep))
+    out = tmp_path / "out"
+    assert t2m.main(["--quick", "--data", str(folder), "--pool-size", "4", "--steps", "5",
+                     "--out", str(out), "--save", str(out)]) == 0
+    result = json.loads((out / "t2m_quick_data.json").read_text())
+    facts = result["facts"]
+    assert (facts["pool_size"], facts["split"], facts["test_items"]) == (4, "test", 4)
+    assert (facts["fit_files"], facts["fit_windows"], facts["train_items"]) == (2, 2, 18)
+    assert {r["group"] for r in result["rows"]} == {"mine (test)"}  # no zoo group
+    real = next(r for r in result["rows"] if r["row"] == "real")
+    assert real["n"] == 4 and "R@3" in real and real["action"] is None
+    text = (out / "t2m_quick_data.md").read_text()
+    assert (f"Scored on {folder}, split 'test': 4 captioned windows of at most 96 frames "
+            "from 4 files (0 more without a caption left out); the evaluator learnt from 16 "
+            "zoo training clips and 2 windows of 2 captioned files of the 'train' split; "
+            "R@1-3 in pools of 4;") in text
+    assert not (out / "t2m_quick.md").exists()  # the project's quick table is left alone
+
+
+def test_data_refuses_a_split_without_captions(tmp_path, monkeypatch, capsys):
+    folder = _captioned_folder(tmp_path, SPLITS, captions=False)
+    line = _refused(tmp_path, monkeypatch, capsys, ["--data", str(folder), "--pool-size", "4"])
+    assert line.endswith(f"error: {folder}: none of the 4 files of the 'test' split has a "
+                         "caption (a sidecar CLIP.txt of HumanML3D lines caption#tokens#from#to, "
+                         "or CLIP.json, beside CLIP.bvh)")
+
+
+def test_data_refuses_fewer_held_out_windows_than_the_pool(tmp_path, monkeypatch, capsys):
+    folder = _captioned_folder(tmp_path, SPLITS)
+    line = _refused(tmp_path, monkeypatch, capsys, ["--data", str(folder)])
+    assert line.endswith(f"error: {folder}: 4 captioned windows of 96 frames in the 'test' "
+                         "split (4 files), fewer than the pool size 32 R-precision ranks each "
+                         "caption in: hold out more clips or pass --pool-size 4 or less")
+    two = _captioned_folder(tmp_path / "two", {"a": "train", "c": "test", "d": "test"})
+    line = _refused(tmp_path, monkeypatch, capsys, ["--data", str(two), "--pool-size", "4"])
+    assert line.endswith("fewer than the pool size 4 R-precision ranks each caption in: hold "
+                         "out more clips (4 windows at least)")  # not --pool-size 2 or less
+
+
+def test_data_refuses_a_rig_the_evaluator_cannot_read(tmp_path, monkeypatch, capsys):
+    """A rope of three joints has no limb the descriptor reads: scored, every
+    motion of it would look alike to the evaluator."""
+    folder = _captioned_folder(tmp_path, SPLITS)
+    rope = "".join(f"JOINT j{i}\n{{\nOFFSET 0 10 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n"
+                   for i in range(2))
+    frames = "".join(f"{i * 0.5} 90 0 {i} 0 0 0 {i} 0 0 0 {i}\n" for i in range(40))
+    (folder / "rope.bvh").write_text(
+        "HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 6 Xposition Yposition Zposition "
+        "Zrotation Xrotation Yrotation\n" + rope + "End Site\n{\nOFFSET 0 10 0\n}\n"
+        + "}\n" * 3 + f"MOTION\nFrames: 40\nFrame Time: 0.0333333\n{frames}")
+    (folder / "rope.txt").write_text("a rope swings#x#0.0#0.0\n")
+    with open(folder / "manifest.tsv", "a") as f:
+        f.write("rope.bvh\ttest\n")
+    line = _refused(tmp_path, monkeypatch, capsys, ["--data", str(folder), "--pool-size", "4"])
+    assert line.endswith(f"error: {folder / 'rope.bvh'}: the evaluator finds no limb on its "
+                         "rig (3 joints; it reads motion by the ends of the legs and arms its "
+                         "joint names show, see satagraph tags), so it cannot score it: leave "
+                         "it out or name its joints")
