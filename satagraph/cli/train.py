@@ -419,13 +419,16 @@ def _check_device(device: str) -> None:
         raise ValueError(f"--device {device}: no MPS device on this machine")
 
 
-def motion_autoencoder(module, name: str):
+def motion_autoencoder(module, name: str, scored: bool = False):
     """:obj:`module`, refused (one line) where it is a text-to-motion model:
-    ``retarget``, ``reconstruct`` and ``eval`` need a motion autoencoder."""
+    ``retarget``, ``reconstruct`` and ``eval`` (:obj:`scored`: where it says
+    what scores one) need a motion autoencoder."""
     if not hasattr(module, "embed"):
+        where = ("; the repository's benchmarks/t2m.py --ckpt C --data FOLDER scores a "
+                 "text-to-motion model on your captioned clips" if scored else "")
         raise ValueError(f"{name}: a text-to-motion model; this command needs a motion "
                          "autoencoder (builtin, builtin-wide, or a run of satagraph train "
-                         "with a SATA, SAME or padded model)")
+                         f"with a SATA, SAME or padded model){where}")
     return module
 
 
@@ -526,7 +529,7 @@ def run_eval(args) -> int:
         check_output_path(args.json)
     if args.max_batches is not None and args.max_batches < 1:
         raise ValueError(f"--max-batches must be at least 1, got {args.max_batches}")
-    module = motion_autoencoder(load_module(args.ckpt), args.ckpt)
+    module = motion_autoencoder(load_module(args.ckpt), args.ckpt, scored=True)
     dm = scoring_data(module.meta.get("data") or {}, args.rest, args.data, args.up_axis,
                       args.units, args.split, args.on_error)
     if not len(dm.datasets[args.split]):

@@ -496,6 +496,8 @@ def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
      "a folder without checkpoints/last.ckpt"),
     (["reconstruct", "{zoo}", "{tmp}/r.bvh", "--ckpt", "{t2m}"],
      "a text-to-motion model; this command needs a motion autoencoder"),
+    (["eval", "--ckpt", "{t2m}", "--data", "{tmp}/clips"],
+     "padded model); the repository's benchmarks/t2m.py --ckpt C --data FOLDER scores"),
     (["eval", "--ckpt", "builtin", "--data", "{tmp}/clips"], "no windows in the 'test' split"),
     (["eval", "--ckpt", "builtin", "--data", "{zoo}"], "not one .bvh file: put it in a folder"),
 ])
