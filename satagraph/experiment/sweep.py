@@ -62,6 +62,9 @@ class SweepRow:
         seconds (float): Wall time of the training (set-up included).
         train_loss (float): Mean training loss over the last
             :obj:`TRAILING_STEPS` steps (``nan`` if none).
+        loss_steps (int): The steps :attr:`train_loss` averages: fewer than
+            :obj:`TRAILING_STEPS` in a short run, or in one resumed near its
+            end (the steps after the resume); 0 in rows of older sweeps.
         metrics (dict): ``{dataset: {metric: value, "clips": n}}`` on the
             evaluation split (and extra loaders).
         retarget (dict): Retarget error ``{setting: {group: value}}``, setting
@@ -81,6 +84,7 @@ class SweepRow:
     epochs: int = 0
     seconds: float = 0.0
     train_loss: float = math.nan
+    loss_steps: int = 0
     metrics: Dict[str, Dict[str, float]] = field(default_factory=dict)
     retarget: Dict[str, Dict[str, float]] = field(default_factory=dict)
     run_dir: str = ""
@@ -208,15 +212,16 @@ def train_budgeted(cfg: Dict[str, Any], resume: bool = False):
     go on from its ``last.ckpt`` with the rest of its budget.
 
     Returns:
-        The module, the data module, the trainer, the wall time and the mean
-        training loss over the last :obj:`TRAILING_STEPS` steps.
+        The module, the data module, the trainer, the wall time and the
+        :class:`~satagraph.lightning.trailing_loss.TrailingLoss` of the last
+        :obj:`TRAILING_STEPS` steps.
     """
     from satagraph.lightning.trailing_loss import TrailingLoss
     from satagraph.experiment.train import train
     trailing = TrailingLoss(TRAILING_STEPS)
     start = time.perf_counter()
     module, dm, trainer, _ = train(cfg, resume=resume, callbacks=[trailing])
-    return module, dm, trainer, time.perf_counter() - start, trailing.value
+    return module, dm, trainer, time.perf_counter() - start, trailing
 
 
 @contextlib.contextmanager
@@ -255,11 +260,12 @@ def run_config(run: SweepRun, eval_split: str = "test",
     from satagraph.pipelines.evaluation import evaluate, split_loader
     from satagraph.lightning.autoencoder import count_parameters
     cfg = run.cfg
-    module, dm, trainer, seconds, train_loss = train_budgeted(cfg, resume)
+    module, dm, trainer, seconds, trailing = train_budgeted(cfg, resume)
     row = SweepRow(name=cfg["name"], config=run.source,
                    params=count_parameters(module), steps=int(trainer.global_step),
                    epochs=int(trainer.current_epoch), seconds=seconds,
-                   train_loss=train_loss, run_dir=cfg["output_dir"], split=eval_split)
+                   train_loss=trailing.value, loss_steps=len(trailing.losses),
+                   run_dir=cfg["output_dir"], split=eval_split)
     scored = _scored(cfg, dm)
     row.metrics = evaluate(module, split_loader(scored, eval_split), max_batches)
     for label, make_loader in (extra_loaders or {}).items():
@@ -530,11 +536,21 @@ def _metric(row: SweepRow, group: str, name: str, factor: float) -> str:
     return "-" if value is None else f"{value * factor:.4f}"
 
 
+def _averaged(row: SweepRow) -> str:
+    """What a row's train loss averages where it is not the last
+    :data:`TRAILING_STEPS` steps: ``"all N"`` (a run of N steps) or ``"last
+    N"`` (the N steps after a resume); empty otherwise."""
+    n = row.loss_steps or row.steps  # older rows keep no count
+    if not 0 < n < TRAILING_STEPS or row.error:
+        return ""
+    return f"all {n}" if n >= row.steps else f"last {n}"
+
+
 def _train_loss(row: SweepRow) -> str:
-    """A row's train loss; one of a run shorter than :data:`TRAILING_STEPS`
-    steps says so: its mean starts at the first step (see :func:`_legend`)."""
-    short = 0 < row.steps < TRAILING_STEPS
-    return f"{row.train_loss:.4f}" + (f" (all {row.steps})" if short else "")
+    """A row's train loss, saying what it averages where that is fewer than
+    :data:`TRAILING_STEPS` steps (see :func:`_legend`)."""
+    averaged = _averaged(row)
+    return f"{row.train_loss:.4f}" + (f" ({averaged})" if averaged else "")
 
 
 def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
@@ -633,10 +649,14 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
     if split == "test":
         lines.append("Choose among the rows on a sweep with --split val: a choice made on "
                      "these test figures leaves no test result for it.")
-    if any(0 < r.steps < TRAILING_STEPS and not r.error for r in rows):
+    averaged = {_averaged(r).split()[0] for r in rows if _averaged(r)}
+    if "all" in averaged:
         lines.append(f"(all N): the run trained N < {TRAILING_STEPS} steps, so its train "
                      "loss is the mean of every step from the first: higher for that alone, "
                      "not comparable with the others (a longer --budget or --steps is).")
+    if "last" in averaged:
+        lines.append(f"(last N): a run resumed (--resume) trained N < {TRAILING_STEPS} steps "
+                     "after it, whose mean its train loss is: a noisier figure.")
     differ = sorted({k.split(".")[0] for k in differences or {}} & set(LOSS_SETTINGS))
     if differ:
         lines.append(f"The rows differ in {', '.join(differ)}: their train losses are "

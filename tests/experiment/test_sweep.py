@@ -219,6 +219,23 @@ def test_the_table_says_which_train_losses_do_not_compare(tmp_path):
     assert "The rows differ in module, module_args: their train losses are different sums" in text
 
 
+def test_a_row_resumed_near_its_end_says_its_loss_averages_fewer_steps(tmp_path):
+    """A sweep resumed 20 steps before a row's budget ran out averaged those
+    20 steps and called them "the last 50"."""
+    from satagraph.experiment.sweep import write_results
+    metrics = {"all": {n: 0.1 for n in ("JR", "RT", "JP", "FS", "GP")}}
+    rows = [SweepRow("a", "a", params=10, steps=320, loss_steps=20, train_loss=2.0,
+                     metrics=metrics),
+            SweepRow("b", "b", params=10, steps=300, loss_steps=50, train_loss=2.5,
+                     metrics=metrics),
+            SweepRow("c", "c", params=10, steps=30, train_loss=3.0, metrics=metrics)]
+    text = write_results(rows, tmp_path, 0.25)
+    assert "| a | 1e-05 | 320 | 0.00 | 2.0000 (last 20) |" in text
+    assert "| b | 1e-05 | 300 | 0.00 | 2.5000 |" in text
+    assert "| c | 1e-05 | 30 | 0.00 | 3.0000 (all 30) |" in text  # an older row: no count
+    assert "(last N): a run resumed" in text and "(all N): the run trained" in text
+
+
 def test_a_config_s_threads_do_not_run_the_rows_after_it(tmp_path, monkeypatch):
     """A config with ``threads: 2`` (``torch.set_num_threads``) left every
     later row of the sweep on 2 threads, whatever their own setting (the
