@@ -189,9 +189,13 @@ def check_writable(motion: Motion, path: Optional[str] = None) -> None:
     """
     skel = motion.skeleton
     if skel.num_joints and not skel.channels[0]:
+        built = "" if path or motion.source else (
+            " (a Skeleton built in code: give it channels, e.g. ('Xposition', 'Yposition', "
+            "'Zposition', 'Zrotation', 'Xrotation', 'Yrotation') for the root and the "
+            "three rotations for every other joint)")
         raise _error(path or motion.source or "<motion>",
                      f"its root joint {skel.names[0]!r} has no CHANNELS, so no motion can be "
-                     "written onto this rig")
+                     f"written onto this rig{built}")
 
 
 def check_features(feats, path: str) -> None:

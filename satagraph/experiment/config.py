@@ -79,10 +79,21 @@ def _load(path: Path, files: List[Path]):
 
 
 def _base(path: Path, name: str) -> Path:
-    """A ``defaults`` entry of :obj:`path`: the file of that name beside
-    it, else the named config (``defaults: [tiny]`` in one's own folder)."""
-    beside = path.parent / f"{name}.yaml"
-    return beside if beside.is_file() or Path(name).suffix else config_path(name)
+    """A ``defaults`` entry of :obj:`path`: the file of that name, or of
+    that name and ``.yaml``, relative to :obj:`path`'s folder
+    (``[base]``, ``[base.yaml]``, ``[../common/base.yaml]``), else the named
+    config (``defaults: [tiny]`` or ``[tiny.yaml]`` in one's own folder).
+
+    Raises:
+        FileNotFoundError: None of them (one line naming :obj:`path`).
+    """
+    for beside in (path.parent / name, path.parent / f"{name}.yaml"):
+        if beside.is_file():
+            return beside
+    try:
+        return config_path(name)
+    except FileNotFoundError as err:
+        raise FileNotFoundError(f"{path}: defaults: {err}") from None
 
 
 def _stamp(path: Path) -> Tuple[str, int, int]:

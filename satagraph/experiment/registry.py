@@ -132,6 +132,8 @@ class ModuleEntry:
         is one line before any data is read, not a traceback after."""
         try:
             self.build(sections)
+        except NotImplementedError as err:  # a hook left out: one line, not a traceback
+            raise ValueError(f"module {self.name!r}: {err}") from None
         except TypeError as err:
             bad = re.search(r"unexpected keyword argument '(\w+)'", str(err))
             if bad is None or bad.group(1) not in sections.model:

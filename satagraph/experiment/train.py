@@ -120,6 +120,30 @@ def check_local_conv(name: Any) -> None:
                          "for the command line") from None
 
 
+def check_registered_conv(name: Any, ckpt: str) -> None:
+    """A checkpoint's ``model.local_conv`` that this process has not
+    registered (:func:`~satagraph.nn.register_local_conv`) is one line
+    naming the file, after the :data:`~satagraph.experiment.registry.PLUGIN_VARIABLE`
+    plugins are imported (it was the registry's bare line, naming no file).
+
+    Raises:
+        CheckpointError: The layer is not registered here.
+    """
+    from satagraph.experiment.registry import import_user_plugins
+    from satagraph.nn.layers.local_conv import check_local_conv as known
+    try:
+        known(name)
+        return
+    except ValueError:
+        import_user_plugins()
+    try:
+        known(name)
+    except ValueError:
+        raise CheckpointError(f"{ckpt}: its model.local_conv {name!r} is not registered here: "
+                              "import the code that registers it (register_local_conv) first, "
+                              "or name it in SATAGRAPH_PLUGINS for the command line") from None
+
+
 def check_wandb_login(logger: Dict[str, Any]) -> None:
     """Online W&B logging needs a login (``WANDB_API_KEY``, or the
     ``~/.netrc`` entry ``wandb login`` writes); without one it failed with a
@@ -651,8 +675,10 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
 
     Raises:
         CheckpointError: The file is not a satagraph model checkpoint or
-            weights file, is damaged, or holds non-finite weights; or
-            ``"builtin"`` and none ship (one line naming it).
+            weights file, is damaged, or holds non-finite weights; its
+            ``model.local_conv`` is not registered here
+            (:func:`check_registered_conv`); or ``"builtin"`` and none ship
+            (one line naming it).
     """
     data = load_weights_or_checkpoint(ckpt, require=("state_dict", "hyper_parameters"))
     hparams = dict(data["hyper_parameters"])
@@ -660,6 +686,7 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
         raise CheckpointError(f"{ckpt}: not a satagraph model checkpoint (no model "
                               "hyperparameters)")
     check_finite_weights(data, ckpt)
+    check_registered_conv(hparams["model"].get("local_conv"), ckpt)
     name = (hparams.get("meta") or {}).get("module", "vae")
     if "module" not in (hparams.get("meta") or {}):
         warnings.warn(f"{ckpt}: its hyperparameters name no module (meta.module): read as "

@@ -122,8 +122,16 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
 
     # ------------------------------------------------------------ hooks
     def build_model(self, **kwargs: Any) -> nn.Module:
-        """The network; subclasses override."""
-        raise NotImplementedError
+        """The network; subclasses override.
+
+        Raises:
+            NotImplementedError: A subclass that does not (one line saying
+                what to do).
+        """
+        raise NotImplementedError(
+            f"{type(self).__name__} builds no network: MotionAutoencoderModule's subclasses "
+            "override build_model(**model_section) (or derive from SATAVAEModule or "
+            "SATARVQModule, the built-in 'vae' and 'rvq')")
 
     def build_loss(self, **weights: float) -> nn.Module:
         """The loss; weights from the config."""

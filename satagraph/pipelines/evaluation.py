@@ -156,14 +156,27 @@ def _paired_error(module, source: MotionFeatures, truth: Motion,
     return float(1000 * err / target.height ** 2)
 
 
+#: The paper's figures of :func:`~satagraph.metrics.motion_metrics`: name,
+#: column header, factor to the unit shown.
+TABLE_COLUMNS = (("JR", "JR (rad)", 1.0), ("RT", "RT (cm)", 100.0), ("JP", "JP (cm)", 100.0),
+                 ("RT_h", "RT/H", 1.0), ("JP_h", "JP/H", 1.0), ("FS", "FS (cm)", 100.0),
+                 ("GP", "GP (cm)", 100.0), ("RE", "RE", 1.0))
+
+
 def format_table(results: Dict[str, Dict[str, float]]) -> str:
-    """Markdown table: one row per dataset (RT, JP, FS, GP in cm)."""
-    cols = ["JR", "RT", "JP", "RT_h", "JP_h", "FS", "GP", "RE"]
-    lines = ["| dataset | clips | JR (rad) | RT (cm) | JP (cm) | RT/H | JP/H | FS (cm) "
-             "| GP (cm) | RE |", "|---" * 10 + "|"]
+    """Markdown table: one row per dataset, a column per figure of
+    :func:`evaluate`: the paper's that the module's ``metrics`` gives (RT,
+    JP, FS, GP in cm), then a subclass's own by name (it had none, and a
+    module without the paper's was a ``KeyError``)."""
+    names = {n for r in results.values() for n in r if n != "clips"}
+    known = {key for key, _, _ in TABLE_COLUMNS}
+    cols = [c for c in TABLE_COLUMNS if c[0] in names] + [(n, n, 1.0)
+                                                          for n in sorted(names - known)]
+    lines = ["| dataset | clips | " + " | ".join(h for _, h, _ in cols) + " |",
+             "|---" * (len(cols) + 2) + "|"]
     for name in sorted(results, key=lambda g: (g == "all", g)):
         r = results[name]
-        vals = [r[c] * (100 if c in ("RT", "JP", "FS", "GP") else 1) for c in cols]
-        lines.append(f"| {name} | {r['clips']} | " + " | ".join(f"{v:.4f}" for v in vals) + " |")
+        vals = [f"{r[k] * f:.4f}" if k in r else "-" for k, _, f in cols]
+        lines.append(f"| {name} | {r['clips']} | " + " | ".join(vals) + " |")
     return "\n".join(lines)
 

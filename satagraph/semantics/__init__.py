@@ -61,7 +61,7 @@ if TYPE_CHECKING:
 # that reading a rig (describe_joints, evidence, limbs) stays numpy-only.
 _ENCODERS = ("TextEncoder", "OfflineTextEncoder", "T5TextEncoder")
 _FACTORY = ("TextEncoderMismatch", "build_text_encoder", "check_text_encoder",
-            "check_text_encoder_state", "text_encoder_state")
+            "check_text_encoder_state", "text_encoder_state", "register_text_encoder")
 __getattr__, __dir__ = lazy_exports(__name__, {
     **dict.fromkeys(_ENCODERS, "satagraph.semantics.encoders"),
     **dict.fromkeys(_FACTORY, "satagraph.semantics.factory"),
@@ -184,7 +184,7 @@ __all__ = [
     "TextEncoder", "OfflineTextEncoder", "T5TextEncoder", "SentenceEncoder",
     "GloVeEncoder", "build_text_encoder", "check_text_encoder",
     "check_text_encoder_state", "text_encoder_state", "TextEncoderMismatch",
-    "EmbeddingCache",
+    "register_text_encoder", "EmbeddingCache",
     "default_cache_dir", "clear_memory", "build_prompt", "parse_answer",
     "import_answer", "load_reference_vocab", "load_dictionary",
     "validate_dictionary", "normalize_anchors", "parse_anchor",

@@ -6,7 +6,8 @@ Specs (:func:`build_text_encoder`):
 * ``offline`` (or ``offline:D``): :class:`~.encoders.OfflineTextEncoder`;
 * ``t5:PATH``: :class:`~.encoders.T5TextEncoder`;
 * ``sentence:PATH`` or ``minilm:PATH``: :class:`~.sentence.SentenceEncoder`;
-* ``glove:PATH``: :class:`~.glove.GloVeEncoder`.
+* ``glove:PATH``: :class:`~.glove.GloVeEncoder`;
+* ``NAME:ARG``: an encoder of one's own, by :func:`register_text_encoder`.
 
 A checkpoint stores :func:`text_encoder_state` (the encoder's :attr:`id`
 and width); :func:`check_text_encoder` compares it with the encoder a user
@@ -21,15 +22,62 @@ from satagraph.semantics.encoders import (OfflineTextEncoder, T5TextEncoder,
 from satagraph.semantics.glove import GloVeEncoder
 from satagraph.semantics.sentence import SentenceEncoder
 
-#: Spec prefix -> encoder class built from the rest of the spec (a path).
+#: Spec prefix -> encoder class built from the rest of the spec (a path):
+#: the built-in ones and those :func:`register_text_encoder` adds.
 TEXT_ENCODERS: Dict[str, Callable[[str], TextEncoder]] = {
     "t5": T5TextEncoder,
     "sentence": SentenceEncoder,
     "minilm": SentenceEncoder,
     "glove": GloVeEncoder,
 }
+#: The built-in prefixes.
+BUILTIN_PREFIXES = tuple(TEXT_ENCODERS)
 SPEC_HELP = ("use 'offline', 'offline:D', 't5:PATH', 'sentence:PATH' (or "
              "'minilm:PATH') or 'glove:PATH'")
+
+
+def register_text_encoder(prefix: str, builder: Callable[[str], TextEncoder]) -> None:
+    r"""Make ``prefix:ARG`` a text encoder spec (``model.text_encoder``,
+    ``data.semantic_encoder``) that :obj:`builder` builds from ``ARG``.
+
+    A checkpoint keeps the spec and the encoder's :attr:`~.encoders.TextEncoder.id`
+    and width (:func:`text_encoder_state`), so the code that registers it
+    must run before such a checkpoint is loaded: import it first, or name
+    its file in ``SATAGRAPH_PLUGINS`` for the command line.
+
+    Example::
+
+        from satagraph.semantics import TextEncoder, register_text_encoder
+
+        class BagEncoder(TextEncoder):
+            def __init__(self, arg: str) -> None:
+                self._id, self._dim = f"bag:{arg}", 48
+            def encode(self, texts):   # list[str] -> float32 [N, 48]
+                ...
+
+        register_text_encoder("bag", BagEncoder)   # model.text_encoder: bag:v1
+
+    Args:
+        prefix (str): The spec's name before ``:`` (not a built-in one).
+        builder (callable): ``ARG`` -> :class:`~.encoders.TextEncoder`.
+
+    Raises:
+        ValueError: The prefix is taken, empty, or holds ``:``.
+    """
+    key = str(prefix).strip()
+    if not key or ":" in key:
+        raise ValueError(f"text encoder prefix {prefix!r}: a name without ':' is expected")
+    if key == "offline" or key in TEXT_ENCODERS:
+        raise ValueError(f"text encoder {key!r} is registered already; pick another name")
+    TEXT_ENCODERS[key] = builder
+
+
+def spec_help() -> str:
+    """What :func:`build_text_encoder` takes, registered prefixes included."""
+    own = [f"'{k}:ARG'" for k in TEXT_ENCODERS if k not in BUILTIN_PREFIXES]
+    return (SPEC_HELP + (f"; registered: {', '.join(own)}" if own else "")
+            + " (register_text_encoder adds one, in a file SATAGRAPH_PLUGINS names for "
+            "the command line)")
 
 
 class TextEncoderMismatch(ValueError):
@@ -46,7 +94,8 @@ def build_text_encoder(spec: Union[str, TextEncoder]) -> TextEncoder:
         TextEncoder: The encoder (models load lazily, on first use).
 
     Raises:
-        ValueError: An unknown spec.
+        ValueError: An unknown spec (one line: the known ones, and how to
+            register one).
         FileNotFoundError: A path that holds no model (message names it).
     """
     if isinstance(spec, TextEncoder):
@@ -62,7 +111,7 @@ def build_text_encoder(spec: Union[str, TextEncoder]) -> TextEncoder:
         return OfflineTextEncoder(int(rest))
     if sep and kind in TEXT_ENCODERS and rest:
         return TEXT_ENCODERS[kind](rest)
-    raise ValueError(f"unknown text encoder {text!r}: {SPEC_HELP}")
+    raise ValueError(f"unknown text encoder {text!r}: {spec_help()}")
 
 
 def text_encoder_state(encoder: TextEncoder) -> Dict[str, object]:
@@ -106,4 +155,5 @@ def check_text_encoder_state(state: Mapping[str, object], encoder: TextEncoder) 
 
 
 __all__ = ["TEXT_ENCODERS", "TextEncoderMismatch", "build_text_encoder",
+           "register_text_encoder", "spec_help",
            "text_encoder_state", "check_text_encoder", "check_text_encoder_state"]

@@ -220,3 +220,34 @@ def test_check_text_encoder(glove_file):
         check_text_encoder(glove.id, 4, OfflineTextEncoder(4))
     offline = OfflineTextEncoder()
     check_text_encoder_state(text_encoder_state(offline), build_text_encoder("offline"))
+
+
+def test_an_encoder_of_one_s_own_is_a_spec_once_registered(monkeypatch):
+    """A text encoder of one's own (``encode(list[str]) -> [N, D]`` and an
+    id) had no hook: only writing into the factory's private table made
+    ``model.text_encoder: bag:v1`` a spec, and the refusal named the
+    built-in specs alone."""
+    from satagraph.semantics import TextEncoder, register_text_encoder
+    from satagraph.semantics import factory
+    monkeypatch.setattr(factory, "TEXT_ENCODERS", dict(factory.TEXT_ENCODERS))
+
+    class Bag(TextEncoder):
+        def __init__(self, arg: str) -> None:
+            self._id, self._dim = f"bag:{arg}", 5
+
+        def encode(self, texts):
+            return torch.tensor([[float(len(t.split()))] * 5 for t in texts])
+
+    with pytest.raises(ValueError, match=r"unknown text encoder 'bag_t:v1'.*"
+                       "register_text_encoder adds one"):
+        build_text_encoder("bag_t:v1")
+    register_text_encoder("bag_t", Bag)
+    enc = build_text_encoder("bag_t:v1")
+    assert isinstance(enc, Bag) and enc.id == "bag:v1"
+    assert enc.encode(["a person walks", "a dog"])[:, 0].tolist() == [3.0, 2.0]
+    check_text_encoder_state(text_encoder_state(enc), build_text_encoder("bag_t:v1"))
+    with pytest.raises(ValueError, match="registered: 'bag_t:ARG'"):
+        build_text_encoder("clip:/x")
+    for taken in ("bag_t", "glove", "offline", "a:b", " "):
+        with pytest.raises(ValueError, match="text encoder"):
+            register_text_encoder(taken, Bag)

@@ -121,6 +121,23 @@ def test_one_s_own_config_inherits_a_named_one(tmp_path):
     assert cfg["name"] == "mine" and cfg["data"] == load_config("tiny")["data"]
 
 
+def test_a_defaults_entry_may_be_a_file_name_or_a_relative_path(tmp_path):
+    """``defaults: [tiny.yaml]`` or ``[../base.yaml]`` was read as
+    ``tiny.yaml.yaml`` ('not a valid YAML config ([Errno 2] No such file
+    ...)'); a base found nowhere names the file whose defaults list it."""
+    (tmp_path / "base.yaml").write_text("defaults: [tiny.yaml]\nseed: 11\n")
+    (tmp_path / "sub").mkdir()
+    top = tmp_path / "sub" / "top.yaml"
+    top.write_text("defaults: [../base.yaml]\noptim: {lr: 2.0e-3}\n")
+    cfg = load_config(str(top))
+    assert cfg["seed"] == 11 and cfg["optim"]["lr"] == 2.0e-3
+    assert cfg["data"] == load_config("tiny")["data"]
+    lost = tmp_path / "sub" / "lost.yaml"
+    lost.write_text("defaults: [base]\n")  # base.yaml is a folder up
+    with pytest.raises(FileNotFoundError, match=rf"{lost}: defaults: config 'base' not found"):
+        load_config(str(lost))
+
+
 @pytest.mark.slow
 def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
     """The data files of ``setup.cfg`` cover every config, and each loads

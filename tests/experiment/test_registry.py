@@ -172,6 +172,23 @@ def test_a_subclass_has_its_keys_checked_as_its_base_class(names):
     _check("own_optim", ["optim.momentum=0.9"])  # its optimiser reads what it likes
 
 
+def test_a_subclass_without_a_network_is_one_line(names):
+    """A subclass of the base module that does not override
+    ``build_model`` (the README lists it among the hooks) was a bare
+    ``NotImplementedError`` and a 20-line traceback from ``satagraph
+    train``; the check before any data is read now says what to do."""
+    from satagraph.lightning import MotionAutoencoderModule
+
+    class NoNetwork(MotionAutoencoderModule):
+        pass
+
+    register_module("no_network", NoNetwork)
+    names.append("no_network")
+    with pytest.raises(ValueError, match=r"module 'no_network': NoNetwork builds no network: "
+                       r".*override build_model.*SATAVAEModule"):
+        _check("no_network", [])
+
+
 def test_the_command_line_finds_modules_named_in_the_plugin_variable(
         names, tmp_path, monkeypatch):
     from satagraph.experiment import registry
@@ -298,3 +315,44 @@ def test_a_subclass_s_own_argument_is_a_config_setting(names, tmp_path):
     runs = sweep_configs(["tiny", str(path)], output=str(tmp_path / "sweep"))
     check_runs(runs)
     assert config_differences(runs)["module_args.z_weight"] == [None, 0.25]
+
+
+def test_load_module_names_the_file_whose_local_conv_is_not_registered(tmp_path, monkeypatch):
+    """A checkpoint trained with a layer of one's own
+    (``register_local_conv``), loaded where nothing registered it, was the
+    registry's bare 'unknown local conv' line, naming no file; the plugin
+    variable that registers it is now read first, as for a module."""
+    import lightning as L
+    from torch_geometric.nn import GraphConv
+    from satagraph.experiment import registry
+    from satagraph.experiment.train import load_module
+    from satagraph.io.checkpoint import CheckpointError
+    from satagraph.lightning import SATAVAEModule
+    from satagraph.nn import register_local_conv
+    from satagraph.nn.layers import local_conv
+    builtin = dict(local_conv._BUILDERS)
+    monkeypatch.setattr(local_conv, "_BUILDERS", dict(builtin))
+    register_local_conv("graph_ckpt_t", lambda channels, heads, edge_dim, act:
+                        GraphConv(channels, channels))
+    torch.manual_seed(0)
+    module = SATAVAEModule(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
+                                latent_channels=8, semantic_channels=0,
+                                local_conv="graph_ckpt_t"), meta={"window": 32, "module": "vae"})
+    module.normalizer.fitted.fill_(True)
+    path = tmp_path / "own_conv.ckpt"
+    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
+                "pytorch-lightning_version": L.__version__}, path)
+    monkeypatch.setattr(local_conv, "_BUILDERS", dict(builtin))  # a fresh process
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    monkeypatch.delenv("SATAGRAPH_PLUGINS", raising=False)
+    with pytest.raises(CheckpointError, match=rf"{path.name}: its model.local_conv "
+                       r"'graph_ckpt_t' is not registered here.*SATAGRAPH_PLUGINS"):
+        load_module(str(path))
+    plugin = tmp_path / "my_layers.py"
+    plugin.write_text("from torch_geometric.nn import GraphConv\n"
+                      "from satagraph.nn import register_local_conv\n"
+                      "register_local_conv('graph_ckpt_t', lambda channels, heads, edge_dim, "
+                      "act: GraphConv(channels, channels))\n")
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", str(plugin))
+    loaded = load_module(str(path))
+    assert any(isinstance(m, GraphConv) for m in loaded.modules())

@@ -37,6 +37,22 @@ def test_retarget_and_reconstruct_check_their_inputs_as_the_cli_does(walk) -> No
         retarget_motion(module, walk, one_joint)
 
 
+def test_a_rig_built_in_code_without_channels_is_told_how_to_give_them(walk) -> None:
+    """A Skeleton built from names, parents and offsets (its channels are
+    optional) was refused by ``reconstruct_motion`` as a rig 'no motion can
+    be written onto', with nothing written and no word of what to add."""
+    from satagraph.data.validate import MotionValidationError
+    from satagraph.motion import Motion
+    from satagraph.pipelines.inference import reconstruct_motion
+    from satagraph.skeleton import Skeleton
+    skel = walk.skeleton
+    bare = Skeleton(list(skel.names), skel.parents, skel.offsets)
+    motion = Motion(bare, walk.rotations, walk.translations, fps=walk.fps)
+    with pytest.raises(MotionValidationError, match=r"<motion>: its root joint 'Hips' has no "
+                       r"CHANNELS.*a Skeleton built in code: give it channels"):
+        reconstruct_motion(load_module("builtin"), motion)
+
+
 @pytest.mark.parametrize("seconds", [-1.0, 0.0, 1000.0, float("nan")])
 def test_generate_on_refuses_a_duration_generate_refuses(walk, seconds: float) -> None:
     from satagraph.pipelines.generate import generate_on, load_generator
