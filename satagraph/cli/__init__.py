@@ -13,6 +13,8 @@ stderr, no traceback (``--traceback`` shows it).
 from __future__ import annotations
 
 import argparse
+import codecs
+import contextlib
 import importlib
 import json
 import os
@@ -22,7 +24,7 @@ import tempfile
 import warnings
 from collections import Counter
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from satagraph import __version__
 from satagraph.cli.arguments import (add_rig_arguments, positive_float, positive_int,
@@ -473,6 +475,41 @@ def parse_args(parser: argparse.ArgumentParser,
     return args
 
 
+def _is_utf8(stream: Any) -> bool:
+    try:
+        return codecs.lookup(getattr(stream, "encoding", None) or "utf-8").name == "utf-8"
+    except LookupError:
+        return False
+
+
+def _escape(err: UnicodeEncodeError) -> Tuple[Any, int]:
+    """Error handler: a file name's undecodable bytes as they were
+    (``surrogateescape``), any other character as an escape."""
+    try:
+        return codecs.lookup_error("surrogateescape")(err)
+    except UnicodeEncodeError:
+        return codecs.backslashreplace_errors(err)
+
+
+codecs.register_error("satagraph.escape", _escape)
+
+
+@contextlib.contextmanager
+def _escaped_output() -> Iterator[None]:
+    r"""Write what the output's encoding lacks as escapes (``\u30bb``): a
+    joint name or path printed to a cp1252 console or file (Windows) or
+    in a C locale failed the command (``'charmap' codec can't encode``)."""
+    changed = [(s, s.errors) for s in (sys.stdout, sys.stderr)
+               if not _is_utf8(s) and hasattr(s, "reconfigure")]
+    for stream, _ in changed:
+        stream.reconfigure(errors="satagraph.escape")
+    try:
+        yield
+    finally:
+        for stream, errors in changed:
+            stream.reconfigure(errors=errors)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the ``satagraph`` command; returns the exit code.
 
@@ -487,7 +524,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.formatwarning = _format_warning
     warnings.showwarning = _once(shown)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _escaped_output():
             if getattr(args, "scale_free", False):
                 from satagraph.transforms.rig_reading import UnitsWarning
                 warnings.simplefilter("ignore", UnitsWarning)

@@ -91,7 +91,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     rows = run_sweep(configs, budget, args.output, overrides, retarget=args.retarget,
                      max_batches=args.max_batches, logger=logger, resume=args.resume,
                      split=args.split, steps=args.steps)
-    print((Path(args.output) / "sweep.md").read_text())
+    print((Path(args.output) / "sweep.md").read_text(encoding="utf-8"))
     return 2 if any(r.error for r in rows) else 0
 
 

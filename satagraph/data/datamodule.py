@@ -22,9 +22,32 @@ from satagraph.datasets.sources import (SOURCES_HINT, SPLITS, limit_files, limit
                                         resolve_sources)
 
 
+class SemanticEmbedder:
+    r"""A picklable function ``(skeleton, evidence=None) -> [J, D_t]``: a
+    dataset holds one, and DataLoader workers started by ``spawn`` (the
+    default on macOS and Windows) receive it pickled, which a closure
+    cannot be.
+
+    Args:
+        encoder (TextEncoder): The text encoder.
+        cache_dir (str, optional): Embedding cache directory.
+        dictionary (str, optional): Raw name -> description overrides.
+    """
+
+    def __init__(self, encoder: Any, cache_dir: Optional[str] = None,
+                 dictionary: Optional[str] = None) -> None:
+        self.encoder, self.cache_dir, self.dictionary = encoder, cache_dir, dictionary
+
+    def __call__(self, skeleton: Any, evidence: Any = None) -> torch.Tensor:
+        from satagraph.semantics import embed_skeleton
+        kwargs = {"dictionary": self.dictionary} if self.dictionary else {}
+        return embed_skeleton(skeleton, encoder=self.encoder, cache_dir=self.cache_dir,
+                              evidence=evidence, **kwargs)
+
+
 def semantic_embedder(encoder: Optional[str] = "offline",
                       cache_dir: Optional[str] = None,
-                      dictionary: Optional[str] = None) -> Optional[Callable]:
+                      dictionary: Optional[str] = None) -> Optional[SemanticEmbedder]:
     r"""A function ``(skeleton, evidence=None) -> [J, D_t]`` from the
     semantic tag pipeline: ``"offline"`` (default, no weights),
     ``"t5:/path/to/t5"`` for a local T5, any other spec of
@@ -35,14 +58,8 @@ def semantic_embedder(encoder: Optional[str] = "offline",
     read legs, wings and leg pairs from what the body does."""
     if encoder in (None, "none", ""):
         return None
-    from satagraph.semantics import build_text_encoder, embed_skeleton
-    text_encoder = build_text_encoder(encoder)
-    kwargs = {"dictionary": dictionary} if dictionary else {}
-
-    def embed(skeleton, evidence=None):
-        return embed_skeleton(skeleton, encoder=text_encoder, cache_dir=cache_dir,
-                              evidence=evidence, **kwargs)
-    return embed
+    from satagraph.semantics import build_text_encoder
+    return SemanticEmbedder(build_text_encoder(encoder), cache_dir, dictionary)
 
 
 def window_loader(ds, batch_size: int, seed: int, shuffle: bool, balanced: bool,

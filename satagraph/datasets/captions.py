@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Dict, List, Mapping, Optional, Union
 
-from satagraph.datasets.sources import MotionFile
+from satagraph.datasets.sources import MANIFEST_ENCODING, MotionFile
 from satagraph.datasets.zoo import ClipFacts
 from satagraph.datasets.zoo.endless import ZooSample
 from satagraph.datasets.caption import Caption, CaptionError, choose
@@ -179,7 +179,7 @@ def captions_for(clip: ClipLike, dataset: Optional[str] = None,
 def read_manifest_rows(manifest: PathLike) -> List[Dict[str, str]]:
     """The rows of a manifest TSV (``path`` and ``split`` columns needed)."""
     path = Path(manifest)
-    with open(path, newline="") as f:
+    with open(path, newline="", encoding=MANIFEST_ENCODING) as f:
         rows = list(csv.DictReader(f, delimiter="\t"))
     if rows and ("path" not in rows[0] or "split" not in rows[0]):
         raise CaptionError(f"{path}: a manifest needs 'path' and 'split' columns")

@@ -15,6 +15,9 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple, Union
 from satagraph.utils.files import is_temp_file
 
 SPLITS = ("train", "val", "test")
+#: Encoding of manifest TSVs whatever the system's (Windows reads cp1252
+#: otherwise); a byte order mark (Excel, Notepad) is skipped.
+MANIFEST_ENCODING = "utf-8-sig"
 #: Splits a manifest may hold that no run reads (the shared data's reader tests).
 UNUSED_SPLITS = ("parser_test",)
 #: How to give a run its data, said when its ``data.sources`` has none to read
@@ -108,7 +111,7 @@ def read_manifest(path: Union[str, os.PathLike], dataset: Optional[str] = None) 
     to the manifest's folder) and ``split``; ``dataset`` and ``skeleton``
     are used when present."""
     path = Path(path)
-    with open(path, newline="") as f:
+    with open(path, newline="", encoding=MANIFEST_ENCODING) as f:
         rows = list(csv.DictReader(f, delimiter="\t"))
     if not rows or "path" not in rows[0] or "split" not in rows[0]:
         raise ValueError(f"{path}: a manifest needs 'path' and 'split' columns")

@@ -445,6 +445,23 @@ def check_init_features(payload: Dict[str, Any], cfg: Dict[str, Any], name: str)
                          f"data.preprocessing.facing_smooth={theirs:g}")
 
 
+def _refuse_spawned_import() -> None:
+    """Refuse a run started while a worker process imports the script that
+    called :func:`train`: ``data.num_workers`` > 0 starts workers by
+    ``spawn`` on macOS and Windows, which run the script again, and a
+    script without a main guard started a second run in each worker (a
+    lock error there, "DataLoader worker exited unexpectedly" here)."""
+    frame = inspect.currentframe()
+    while frame is not None and not (frame.f_code.co_name == "<module>"
+                                     and frame.f_globals.get("__name__") == "__mp_main__"):
+        frame = frame.f_back
+    if frame is not None:
+        raise RuntimeError("train(): called while a worker process imports your script "
+                           "(workers start by 'spawn' on macOS and Windows and run it "
+                           "again): put the training code under "
+                           "'if __name__ == \"__main__\":'")
+
+
 def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = None,
           init_normalizer: str = "data",
           **trainer_overrides: Any) -> Tuple[Any, MotionDataModule, L.Trainer, Path]:
@@ -467,6 +484,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     Returns:
         The trained module, the data module, the trainer and the run folder.
     """
+    _refuse_spawned_import()
     cfg = check_config(cfg)
     run_dir = Path(expand_path(cfg["output_dir"] or f"runs/{cfg['name']}"))
     if run_dir.exists() and not run_dir.is_dir():

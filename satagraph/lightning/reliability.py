@@ -18,7 +18,7 @@ r"""Training that cannot end green with a broken model, and exact resume.
 from __future__ import annotations
 
 import contextlib
-import fcntl
+import errno
 import os
 import random
 import re
@@ -431,7 +431,7 @@ def resume_checkpoint(checkpoints: Path) -> Path:
             continue
         if reasons:
             damaged = checkpoints / DAMAGED
-            candidates[0].rename(damaged)  # never rotated over the good one
+            candidates[0].replace(damaged)  # never rotated over the good one
             warnings.warn(f"--resume: {reasons[0]} (moved to {damaged}); resuming "
                           f"from the previous checkpoint {path}", stacklevel=2)
         return path
@@ -491,10 +491,41 @@ def _holder(lock: Path) -> str:
     return "unknown"
 
 
+#: The byte of ``.lock`` that Windows locks: past the holder's line, which
+#: another process reads to name it (Windows locks are not advisory).
+_LOCKED_BYTE = 1 << 20
+
+
+def _lock(fd: int, take: bool = True) -> bool:
+    """Take (without waiting) or release the run lock on :obj:`fd`: an
+    advisory ``flock`` on POSIX, a one-byte ``msvcrt`` lock on Windows (no
+    ``fcntl`` there); the system releases either when the process ends,
+    even by ``kill -9``. Returns ``False`` where another holds it."""
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+        os.lseek(fd, _LOCKED_BYTE, os.SEEK_SET)
+        try:
+            msvcrt.locking(fd, msvcrt.LK_NBLCK if take else msvcrt.LK_UNLCK, 1)
+        except OSError as err:
+            if err.errno not in (errno.EACCES, errno.EDEADLOCK):
+                raise
+            return False
+        finally:
+            os.lseek(fd, 0, os.SEEK_SET)
+        return True
+    try:
+        fcntl.flock(fd, (fcntl.LOCK_EX | fcntl.LOCK_NB) if take else fcntl.LOCK_UN)
+    except BlockingIOError:
+        return False
+    return True
+
+
 @contextlib.contextmanager
 def run_lock(run_dir: Path) -> Iterator[Path]:
-    """Hold ``<run_dir>/.lock`` (an advisory ``flock``: released by the
-    system when the process ends, even by ``kill -9``) while training.
+    """Hold ``<run_dir>/.lock`` (see :func:`_lock`: released by the system
+    when the process ends, even by ``kill -9``) while training.
 
     Raises:
         RunLockedError: Another live process holds it.
@@ -505,9 +536,7 @@ def run_lock(run_dir: Path) -> Iterator[Path]:
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     held = False
     try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
+        if not _lock(fd):
             raise RunLockedError(
                 f"{run_dir}: output_dir is in use by another live run ({_holder(lock)}); "
                 "wait for it or choose another output_dir") from None
@@ -518,6 +547,8 @@ def run_lock(run_dir: Path) -> Iterator[Path]:
     finally:
         if held and made:
             _drop_if_empty(made, lock)
+        if held:
+            _lock(fd, take=False)
         os.close(fd)
 
 

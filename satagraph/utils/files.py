@@ -147,9 +147,35 @@ def is_temp_file(name: str) -> bool:
     return _TEMP.match(os.path.basename(name)) is not None
 
 
+#: Windows, where ``os.kill(pid, 0)`` ends the process (``TerminateProcess``)
+#: instead of asking whether it runs.
+_WINDOWS = os.name == "nt"
+#: ``OpenProcess`` access, its error for a process that is gone, and the
+#: exit code of one that runs.
+_QUERY_LIMITED_INFORMATION, _ERROR_INVALID_PARAMETER, _STILL_ACTIVE = 0x1000, 87, 259
+
+
+def _windows_pid_alive(pid: int) -> bool:
+    """Whether process :obj:`pid` runs, asked of Windows; a process it
+    will not tell about (access denied) counts as alive."""
+    import ctypes
+    kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)
+    handle = kernel32.OpenProcess(_QUERY_LIMITED_INFORMATION, False, pid)
+    if not handle:
+        return ctypes.get_last_error() != _ERROR_INVALID_PARAMETER
+    try:
+        code = ctypes.c_ulong()
+        return (not kernel32.GetExitCodeProcess(handle, ctypes.byref(code))
+                or code.value == _STILL_ACTIVE)
+    finally:
+        kernel32.CloseHandle(handle)
+
+
 def _pid_alive(pid: int) -> bool:
     if pid == os.getpid():
         return True
+    if _WINDOWS:
+        return _windows_pid_alive(pid)
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

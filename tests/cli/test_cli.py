@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import importlib.util
+import io
 import json
 import re
 import runpy
@@ -584,3 +585,18 @@ def test_traceback_may_follow_the_command(tmp_path) -> None:
     """``satagraph inspect missing.bvh --traceback`` raises instead of one line."""
     with pytest.raises(BVHError):
         cli.main(["inspect", str(tmp_path / "missing.bvh"), "--traceback"])
+
+
+def test_inspect_prints_on_a_cp1252_output(tiny_file, monkeypatch):
+    """A joint name that cp1252 lacks (a Windows console's or file's
+    encoding) failed ``inspect``: "satagraph: error: 'charmap' codec can't
+    encode characters in position 41-44"; it is printed as escapes."""
+    text = tiny_file.read_text()
+    root = re.search(r"ROOT (\S+)", text)[1]
+    tiny_file.write_text(text.replace(f"ROOT {root}", "ROOT センター"), encoding="utf-8")
+    out = io.TextIOWrapper(io.BytesIO(), encoding="cp1252")
+    monkeypatch.setattr(sys, "stdout", out)
+    assert main(["inspect", str(tiny_file)]) == 0
+    out.flush()
+    assert "\\u30bb\\u30f3\\u30bf\\u30fc" in out.buffer.getvalue().decode("cp1252")
+    assert out.errors == "strict"  # as it was after the command

@@ -1,6 +1,7 @@
 """Equal-budget sweeps: ``satagraph sweep`` end to end on two tiny configs."""
 from __future__ import annotations
 
+import io
 import json
 import math
 from pathlib import Path
@@ -129,6 +130,20 @@ def test_sweep_table_has_internal_and_cross_retarget_columns():
     assert lines[2].endswith("| 1.500 | 2.500 |") and lines[3].endswith("| - | - |")
     assert format_sweep(rows, "dog").splitlines()[2].endswith("| 1.000 | 2.000 |")
     assert "retarget" not in format_sweep(rows[1:])
+
+
+def test_the_sweep_command_prints_its_utf8_table_on_windows(tmp_path, monkeypatch, capsys):
+    """The table (UTF-8) was printed as read in the system's encoding:
+    a config ``marché`` showed as ``marchÃ©`` where that is cp1252."""
+    def run_sweep(configs, budget, output, *args, **kwargs):
+        Path(output).mkdir(parents=True)
+        (Path(output) / "sweep.md").write_text("| marché |\n", encoding="utf-8")
+        return []
+    monkeypatch.setattr(sweep_mod, "run_sweep", run_sweep)
+    monkeypatch.setattr(io, "text_encoding",  # pathlib's default, as on Windows
+                        lambda encoding, stacklevel=2: encoding or "cp1252")
+    assert main(["sweep", "--budget", "1", "--output", str(tmp_path / "s"), "marché"]) == 0
+    assert "| marché |" in capsys.readouterr().out
 
 
 @pytest.mark.slow

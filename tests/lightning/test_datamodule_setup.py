@@ -2,13 +2,15 @@
 training split whichever stage reads the splits first."""
 from __future__ import annotations
 
+import pickle
+from pathlib import Path
 from typing import Any, Dict
 
 import pytest
 import torch
 
 from satagraph.data.datamodule import MotionDataModule
-from satagraph.experiment.train import build_datamodule, build_module
+from satagraph.experiment.train import build_datamodule, build_module, train
 
 
 def test_fit_after_validate_still_fits_the_normalizer(_base_config: Dict[str, Any],
@@ -30,3 +32,25 @@ def test_semantic_channels_before_setup_says_what_to_do(_base_config: Dict[str, 
     dm = build_datamodule(_base_config)
     with pytest.raises(RuntimeError, match=r"not read yet: call datamodule.setup\('fit'\)"):
         build_module(_base_config, dm)
+
+
+def test_spawned_loader_workers_get_picklable_windows(datamodule: MotionDataModule) -> None:
+    """DataLoader workers started by ``spawn`` (macOS and Windows) get the
+    dataset pickled: ``data.num_workers=2`` failed there with ``Can't
+    pickle local object 'semantic_embedder.<locals>.embed'``."""
+    dataset = datamodule._loader("train", True).dataset
+    copy = pickle.loads(pickle.dumps(dataset))
+    assert torch.equal(copy[0].semantic, dataset[0].semantic)
+    assert copy[0].semantic.abs().sum() > 0
+
+
+def test_a_script_without_a_main_guard_is_told_in_a_spawned_worker(
+        tiny_config: Dict[str, Any]) -> None:
+    """A spawned worker runs the calling script again as ``__mp_main__``:
+    its ``train(cfg)`` started a second run there ("output_dir is in use by
+    another live run"), and the first said only "DataLoader worker exited
+    unexpectedly"."""
+    script = compile("train(cfg)", "my_training.py", "exec")
+    with pytest.raises(RuntimeError, match="if __name__ == \"__main__\""):
+        exec(script, {"__name__": "__mp_main__", "train": train, "cfg": tiny_config})
+    assert not Path(tiny_config["output_dir"]).exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import errno
 import os
 import pickle
 import random
@@ -196,6 +197,24 @@ def test_resume_falls_back_from_a_truncated_last_checkpoint(
         resume_checkpoint(folder)
 
 
+def test_a_second_damaged_last_checkpoint_replaces_the_first(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Windows renames onto no existing file: the second resume from a
+    damaged ``last.ckpt`` failed there with ``FileExistsError``."""
+    def windows_rename(self: Path, target: Any) -> Path:
+        if Path(target).exists():
+            raise FileExistsError(183, "Cannot create a file when that file already "
+                                  "exists", str(self), None, str(target))
+        return os.rename(self, target) or Path(target)
+    monkeypatch.setattr(Path, "rename", windows_rename)
+    torch.save({"state_dict": {}, "loops": {}, "optimizer_states": []}, tmp_path / PREVIOUS)
+    (tmp_path / "last.damaged.ckpt").write_bytes(b"PK first")
+    (tmp_path / LAST).write_bytes(b"PK second")
+    with pytest.warns(UserWarning, match="resuming from the previous"):
+        assert resume_checkpoint(tmp_path) == tmp_path / PREVIOUS
+    assert (tmp_path / "last.damaged.ckpt").read_bytes() == b"PK second"
+
+
 @pytest.mark.slow
 def test_epoch_end_checkpoint_knows_that_epochs_best(tiny_config: Dict[str, Any]) -> None:
     """``last.ckpt`` is written after the best checkpoint at an epoch's
@@ -250,6 +269,40 @@ def test_a_live_run_holds_its_output_dir(tmp_path: Path) -> None:
             with run_lock(tmp_path):
                 pass
     with run_lock(tmp_path):  # released: free again
+        pass
+
+
+class _FakeMsvcrt:
+    """``msvcrt.locking`` as Windows does it: a byte range of a file, held
+    by one descriptor; another one's non-blocking lock fails with EACCES."""
+    LK_UNLCK, LK_NBLCK = 0, 2
+
+    def __init__(self) -> None:
+        self.held: Dict[Any, int] = {}
+
+    def locking(self, fd: int, mode: int, nbytes: int) -> None:
+        key = (os.fstat(fd).st_ino, os.lseek(fd, 0, os.SEEK_CUR), nbytes)
+        if mode == self.LK_UNLCK:
+            assert self.held.pop(key) == fd
+        elif self.held.setdefault(key, fd) != fd:
+            raise OSError(errno.EACCES, "Permission denied")
+
+
+def test_the_run_lock_works_without_fcntl(tmp_path: Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """Windows has no ``fcntl``: ``satagraph train`` failed there with
+    "needs the Python package 'fcntl', which is not installed"."""
+    monkeypatch.setitem(sys.modules, "fcntl", None)  # import fcntl: ImportError
+    fake = _FakeMsvcrt()
+    monkeypatch.setitem(sys.modules, "msvcrt", fake)
+    with run_lock(tmp_path) as lock:
+        assert fake.held
+        with pytest.raises(RunLockedError, match=f"pid {os.getpid()}"):
+            with run_lock(tmp_path):
+                pass
+        assert lock.read_text().startswith(f"pid {os.getpid()} ")
+    assert not fake.held  # released
+    with run_lock(tmp_path):
         pass
 
 

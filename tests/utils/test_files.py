@@ -78,6 +78,30 @@ def test_stale_temps_of_dead_processes_are_swept(tmp_path: Path) -> None:
     assert sweep_stale_temps(tmp_path) == 0
 
 
+def test_sweeping_on_windows_never_signals(tmp_path: Path,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """``os.kill(pid, 0)`` on Windows ends a live process and raises
+    ``OSError`` (EINVAL) for a gone one: the sweep of a folder ended
+    another writer there, or failed the write."""
+    from satagraph.utils import files
+    killed = []
+
+    def windows_kill(pid: int, sig: int) -> None:  # what os.kill does there
+        if pid != 4242:
+            raise OSError(22, "Invalid argument")
+        killed.append(pid)
+    monkeypatch.setattr(files, "_WINDOWS", True, raising=False)
+    monkeypatch.setattr(files.os, "kill", windows_kill)
+    monkeypatch.setattr(files, "_windows_pid_alive", lambda pid: pid == 4242,
+                        raising=False)
+    alive = tmp_path / f".a.bvh.{files.HOST}-4242.0123abcd.tmp.bvh"
+    gone = tmp_path / f".b.bvh.{files.HOST}-4343.0123abcd.tmp.bvh"
+    for p in (alive, gone):
+        p.write_text("x")
+    assert sweep_stale_temps(tmp_path) == 1
+    assert alive.exists() and not gone.exists() and not killed
+
+
 def test_check_input_file_refuses_special_files(tmp_path: Path) -> None:
     fifo = tmp_path / "pipe.bvh"
     os.mkfifo(fifo)
