@@ -1,9 +1,12 @@
-"""Wall time of ``satagraph --help`` and ``satagraph inspect FILE``, each in a
-fresh Python process, optionally against a baseline checkout in the same run.
+"""Wall time of ``satagraph --help`` and ``satagraph inspect FILE``, and of
+each ``--command`` given, each in a fresh Python process, optionally against a
+baseline checkout in the same run.
 
 Usage: ``python benchmarks/cli_start.py [--file X.bvh] [--repeat 5]
-[--baseline DIR] [--out FILE.md]`` where DIR holds another copy of the ``satagraph`` package
-(e.g. ``git archive REV satagraph | tar -x -C DIR``). The runs of the two
+[--command "retarget --help" ...] [--baseline DIR] [--out FILE.md]`` where a
+command is a ``satagraph`` command line that exits with 0 (absolute paths: it
+runs in the tree's folder) and DIR holds another copy of the ``satagraph``
+package (e.g. ``git archive REV satagraph | tar -x -C DIR``). The runs of the two
 trees alternate, so both see the same load on a shared machine. Prints a
 markdown table and writes it to ``benchmarks/results/cli_start.md``.
 """
@@ -11,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import subprocess
 import sys
 import time
@@ -82,11 +86,14 @@ def main(argv: Optional[List[str]] = None) -> None:
                         help="the table's path (default benchmarks/results/cli_start.md)")
     parser.add_argument("--baseline", type=Path, default=None,
                         help="folder holding a baseline satagraph package")
+    parser.add_argument("--command", action="append", default=[], metavar="ARGS",
+                        help="another satagraph command line to time, quoted (e.g. "
+                        "\"retarget --help\"); repeat it for several")
     args = parser.parse_args(argv)
     import tempfile
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(args.file) if args.file else _example_file(Path(tmp))
-        commands = [["--help"], ["inspect", str(path)]]
+        commands = [["--help"], ["inspect", str(path)]] + [shlex.split(c) for c in args.command]
         trees = [ROOT] + ([args.baseline.resolve()] if args.baseline else [])
         best = measure(trees, commands, args.repeat)
     text = (f"Fresh process per run, best of {args.repeat}, OMP_NUM_THREADS=1, "

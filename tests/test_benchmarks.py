@@ -553,6 +553,8 @@ def test_cli_start_writes_its_table_to_out_and_leaves_the_committed_one(tmp_path
     # a quick check (--repeat 1) overwrote benchmarks/results/cli_start.md
     import cli_start
     before = cli_start.OUT.read_bytes()
-    cli_start.main(["--repeat", "1", "--out", str(tmp_path / "c.md")])
+    cli_start.main(["--repeat", "1", "--out", str(tmp_path / "c.md"),
+                    "--command", "retarget --help"])
     assert "satagraph --help" in (tmp_path / "c.md").read_text()
+    assert "| satagraph retarget --help |" in (tmp_path / "c.md").read_text()
     assert cli_start.OUT.read_bytes() == before

@@ -20,7 +20,7 @@ def _number(text: str) -> float:
 
 
 def _seconds(text: str) -> float:
-    from satagraph.pipelines.generate import SECONDS_RANGE
+    from satagraph.pipelines.generate_inputs import SECONDS_RANGE
     value = _number(text)
     if not SECONDS_RANGE[0] <= value <= SECONDS_RANGE[1]:
         raise argparse.ArgumentTypeError(f"must be between {SECONDS_RANGE[0]:g} and "
@@ -217,33 +217,41 @@ def prompt_stem(index: int, text: str) -> str:
     return f"{index:03d}_{slug or 'prompt'}"
 
 
-def run_generate(args) -> int:
-    from satagraph.pipelines.generate import (GenerationSettings, generate_on, load_generator,
-                                    output_paths, write_all)
-    from satagraph.utils.files import check_output_path
-    from satagraph.io.weights import BUILTIN, builtin_notice
+def _settings(args):
+    """The :class:`~satagraph.pipelines.generate.GenerationSettings` of the
+    options (a ``--guide`` / ``--residual-guide`` it does not know refused),
+    with torch on ``--threads`` threads."""
     import torch
+    from satagraph.nn.generators.sampling import check_guide
+    from satagraph.pipelines.generate import GenerationSettings
+    for guide in (args.guide, args.residual_guide):
+        check_guide(guide)
+    torch.set_num_threads(args.threads)
+    return GenerationSettings(steps=args.steps, guidance=args.guidance,
+                              ground=args.ground, plant=args.plant,
+                              residual_window=args.residual_window, window=args.window,
+                              guide=args.guide, draw_guidance=args.draw_guidance,
+                              residual_guide=args.residual_guide)
+
+
+def run_generate(args) -> int:
+    from satagraph.pipelines.generate_inputs import output_paths
+    from satagraph.utils.files import check_output_path
     _split_output(args)
     prompts = read_prompts(args.prompts) if args.prompts is not None else None
     if prompts is not None:
         _prompt_folder(args.output)
     if args.threads < 1:
         raise ValueError(f"--threads must be at least 1, got {args.threads}")
-    from satagraph.nn.generators.sampling import check_guide
-    for guide in (args.guide, args.residual_guide):
-        check_guide(guide)
-    settings = GenerationSettings(steps=args.steps, guidance=args.guidance,
-                                  ground=args.ground, plant=args.plant,
-                                  residual_window=args.residual_window, window=args.window,
-                                  guide=args.guide, draw_guidance=args.draw_guidance,
-                                  residual_guide=args.residual_guide)
-    torch.set_num_threads(args.threads)
     paths = [] if prompts is not None else output_paths(args.output, args.skeleton)
     for path in paths + ([args.render] if args.render else []):
         check_output_path(path)
     _spare_inputs(paths, args.skeleton)
     _check_render(args)
     targets = _targets(args)
+    settings = _settings(args)  # torch and the model code: after the files are checked
+    from satagraph.pipelines.generate import generate_on, load_generator, write_all
+    from satagraph.io.weights import BUILTIN, builtin_notice
     module = load_generator(args.ckpt)
     if args.ckpt == BUILTIN:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)

@@ -437,8 +437,7 @@ def _load(args, motions: Sequence, paths: Sequence[str], cache: Optional[dict] =
     :obj:`motions`, :mod:`~satagraph.pipelines.builtin_choice`), saying on
     stderr which built-in model is used and why; with :obj:`cache` (a dict
     kept across the files of a folder), each model is loaded and named once."""
-    from satagraph.experiment.train import load_module
-    from satagraph.io.weights import builtin_notice, is_builtin
+    from satagraph.io.weights import builtin_notice, check_weights, is_builtin
     from satagraph.pipelines.builtin_choice import AUTO, choose_builtin
     name, why = args.ckpt, ""
     if name == AUTO:
@@ -446,6 +445,8 @@ def _load(args, motions: Sequence, paths: Sequence[str], cache: Optional[dict] =
         why = f"--ckpt auto ({reason}): "
     if cache is not None and name in cache:
         return cache[name], cache[name].embed
+    check_weights(name)  # a missing file said before Lightning and the model code load
+    from satagraph.experiment.train import load_module
     module = motion_autoencoder(load_module(name), name)
     if is_builtin(name):
         print(f"satagraph: {why}{builtin_notice(name=name)}", file=sys.stderr)
@@ -473,14 +474,23 @@ def run_reconstruct(args) -> int:
     return 0
 
 
+def _check_windows(args) -> None:
+    """Refuse ``--window`` / ``--overlap`` before the model loads where
+    ``--window`` is given (else the window is the model's)."""
+    from satagraph.data.validate import check_windows, default_windows
+    if args.window is not None:
+        check_windows(*default_windows(None, args.window, args.overlap))
+
+
 def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
     from satagraph.cli.arguments import read_with_rig
-    from satagraph.pipelines.inference import reconstruct_motion
-    from satagraph.io import write_bvh
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     motion = read_with_rig(source, args)
+    _check_windows(args)
     module, embed = _load(args, [motion], [source], models)
+    from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
+    from satagraph.pipelines.inference import reconstruct_motion
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
                              args.ground, args.settle, args.mirror, args.two_rests)
     write_bvh(out, output)
@@ -505,12 +515,13 @@ def run_retarget(args) -> int:
 
 def _retarget_file(args, source_path: str, target, output: str, models: dict) -> str:
     from satagraph.cli.arguments import read_with_rig
-    from satagraph.pipelines.inference import retarget_motion
-    from satagraph.io import write_bvh
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     source = read_with_rig(source_path, args)
+    _check_windows(args)
     module, embed = _load(args, [source, target], [source_path, args.target], models)
+    from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
+    from satagraph.pipelines.inference import retarget_motion
     out = retarget_motion(module, source, target, embed, args.window, args.overlap,
                          rest=args.rest, ground=args.ground, plant=args.plant,
                          settle=args.settle, still=args.still, mirror=args.mirror,

@@ -10,7 +10,7 @@ resampling; :func:`check_features` is the last check on the features.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
+from typing import Optional, Tuple
 
 import numpy as np
 
@@ -51,6 +51,25 @@ class MotionLimits:
 
 
 DEFAULT_LIMITS = MotionLimits()
+
+
+def default_windows(module, window: Optional[int] = None,
+                    overlap: Optional[int] = None) -> Tuple[int, int]:
+    """The window the module was trained on (``meta["window"]``, else 64)
+    and a quarter of it as overlap, unless given (:obj:`module` is not read
+    where :obj:`window` is given)."""
+    if window is None:
+        window = int((getattr(module, "meta", None) or {}).get("window", 64))
+    return window, window // 4 if overlap is None else overlap
+
+
+def check_windows(window: int, overlap: int) -> None:
+    """Refuse windows of :obj:`window` frames sharing :obj:`overlap` that
+    plan nothing (one line): a window needs at least 1 frame and its overlap
+    0 to ``window - 1``."""
+    if window < 1 or not 0 <= overlap < window:
+        raise ValueError(f"windows of {window} frames sharing {overlap}: a window needs at "
+                         f"least 1 frame and its overlap 0 to window - 1 frames")
 
 
 def skeleton_size(motion: Motion) -> float:
@@ -217,4 +236,4 @@ def check_features(feats, path: str) -> None:
 __all__ = ["MotionValidationError", "MotionLimits", "DEFAULT_LIMITS", "check_motion",
            "check_writable",
            "check_timing", "check_resample", "check_skeleton", "check_values", "check_features",
-           "skeleton_size"]
+           "skeleton_size", "default_windows", "check_windows"]

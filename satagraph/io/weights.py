@@ -353,6 +353,17 @@ def read_weights_metadata(path: PathLike) -> Dict[str, Any]:
     return _metadata(_header(head + body, path), path)
 
 
+def check_weights(name: PathLike, kind: str = "autoencoder") -> str:
+    """The path :obj:`name` gives (:func:`resolve_weights`), refused where
+    it is not a readable file: what a command checks before it loads the
+    model's code.
+
+    Raises:
+        CheckpointError: Missing, unreadable or too large (one line naming it).
+    """
+    return _checked(resolve_weights(name, kind))
+
+
 def _checked(path: str) -> str:
     try:
         check_input_file(path, "checkpoint or weights file", max_bytes=_MAX_READ_BYTES)
@@ -396,7 +407,7 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",),
     weights file, by content; ``"builtin"`` names the package's weights of
     :obj:`kind` (:data:`BUILTIN_FILES`)."""
     from satagraph.io.checkpoint import load_checkpoint
-    path = _checked(resolve_weights(path, kind))
+    path = check_weights(path, kind)
     if is_weights_file(path):
         return load_weights(path)
     return load_checkpoint(path, require=require)
@@ -406,4 +417,5 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "BUILTIN_
            "BUILTIN_VARIANTS", "NO_BUILTIN", "WeightsSizeError", "builtin_path",
            "builtin_names", "is_builtin", "builtin_notice", "resolve_weights", "is_weights_file",
            "module_hyper_parameters", "weights_payload", "save_weights",
-           "read_weights_metadata", "load_weights", "load_weights_or_checkpoint"]
+           "read_weights_metadata", "load_weights", "load_weights_or_checkpoint",
+           "check_weights"]

@@ -38,6 +38,7 @@ from satagraph.ops.smoothing import gaussian_smooth
 from satagraph.transforms.canonical import canonicalize, decanonicalize
 from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.ground import ground_at, lift_above_floor
+from satagraph.pipelines.generate_inputs import SECONDS_RANGE, check_seconds, output_paths
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
@@ -249,18 +250,6 @@ def rig_inputs(module, target: Motion, rest: str = "auto") -> RigInputs:
     return RigInputs(canon, shown, feats, sem, undo)
 
 
-#: Durations a generation may ask for, seconds (``generate --seconds``).
-SECONDS_RANGE = (0.1, 60.0)
-
-
-def check_seconds(seconds: float) -> float:
-    """:obj:`seconds`, refused (one line) outside :data:`SECONDS_RANGE`."""
-    if not SECONDS_RANGE[0] <= seconds <= SECONDS_RANGE[1]:  # also NaN
-        raise ValueError(f"a duration must be between {SECONDS_RANGE[0]:g} and "
-                         f"{SECONDS_RANGE[1]:g} seconds, got {seconds!r}")
-    return float(seconds)
-
-
 def _frames(module, text_emb, skel_emb, seconds: Optional[float],
             generator: torch.Generator) -> int:
     """Frames to generate: the user's duration (:func:`check_seconds`), else
@@ -450,25 +439,6 @@ def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float,
     frames = torch.tensor([r.size(0)])
     q = gaussian_smooth(q.reshape(r.size(0), -1), frames, sigma).reshape(-1, 6)
     return q, gaussian_smooth(r, frames, sigma if root_sigma is None else root_sigma)
-
-
-def output_paths(output: str, skeletons: Sequence[str]) -> List[str]:
-    """Where each skeleton's motion goes: :obj:`output` for one skeleton;
-    for several, ``<output stem>_<skeleton stem>.bvh`` beside :obj:`output`
-    (or ``<skeleton stem>.bvh`` inside it when it is a folder), numbered
-    where stems repeat."""
-    if len(skeletons) == 1 and not os.path.isdir(output):
-        return [output]
-    out, seen = [], {}
-    folder = os.path.isdir(output)
-    base = Path(output)
-    for path in skeletons:
-        stem = Path(path).stem
-        seen[stem] = seen.get(stem, 0) + 1
-        name = stem if seen[stem] == 1 else f"{stem}-{seen[stem]}"
-        out.append(str(base / f"{name}.bvh") if folder
-                   else str(base.with_name(f"{base.stem}_{name}.bvh")))
-    return out
 
 
 def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:

@@ -27,7 +27,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
-from satagraph.data.validate import check_features
+from satagraph.data.validate import check_features, check_windows, default_windows
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion, require_motion
 
@@ -38,9 +38,7 @@ def window_plan(num_frames: int, window: int = 64, overlap: int = 16) -> List[Tu
     stride ``window - overlap``), where each window's frames before the
     previous window's stop are cropped (``keep_from`` is the first frame of
     the window that is kept). A clip shorter than a window is one window."""
-    if window < 1 or not 0 <= overlap < window:
-        raise ValueError(f"windows of {window} frames sharing {overlap}: a window needs at "
-                         f"least 1 frame and its overlap 0 to window - 1 frames")
+    check_windows(window, overlap)
     starts = window_starts(num_frames, window, window - overlap)
     keep = [0] + [start + window for start in starts[:-1]]
     return [(start, min(start + window, num_frames), k) for start, k in zip(starts, keep)]
@@ -117,15 +115,6 @@ def decoding_target(feats: MotionFeatures) -> MotionFeatures:
     none = {key: getattr(feats, key)[:0].copy()  # a copy: a view would keep the take's
             for key in ("q", "x_rel", "v_q", "v_x", "r")}
     return replace(feats, **none)
-
-
-def default_windows(module, window: Optional[int] = None,
-                    overlap: Optional[int] = None) -> Tuple[int, int]:
-    """The window the module was trained on (``meta["window"]``, else 64)
-    and a quarter of it as overlap, unless given."""
-    if window is None:
-        window = int((getattr(module, "meta", None) or {}).get("window", 64))
-    return window, window // 4 if overlap is None else overlap
 
 
 @torch.no_grad()

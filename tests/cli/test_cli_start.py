@@ -13,7 +13,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 HEAVY = ("torch", "torch_geometric", "lightning", "roma", "transformers")
-HELP_COMMANDS = ("inspect", "convert", "demo", "tags", "train", "zoo", "render", "sweep")
+HELP_COMMANDS = ("inspect", "convert", "demo", "tags", "train", "zoo", "render", "sweep",
+                 "retarget", "reconstruct", "eval", "export-weights", "code-bank", "generate")
 
 # Imports the CLI, then runs each command line of argv[1] (JSON) in-process
 # and prints the heavy top-level modules loaded. Each runs in a child forked
@@ -50,10 +51,16 @@ for i, argv in enumerate(argvs):
 """
 
 
-def _heavy_modules_of(argvs: Sequence[Sequence[str]]) -> List[List[str]]:
-    """The heavy modules each command line loads (each must exit with 0)."""
+def _heavy_modules_of(argvs: Sequence[Sequence[str]], code: int = 0) -> List[List[str]]:
+    """The heavy modules each command line loads (each must exit with :obj:`code`)."""
+    return _probe(argvs, code)[0]
+
+
+def _probe(argvs: Sequence[Sequence[str]], code: int = 0) -> Tuple[List[List[str]], str]:
+    """:func:`_heavy_modules_of` and what the command lines wrote to stderr."""
     if len(argvs) > 1 and not hasattr(os, "fork"):
-        return [_heavy_modules_of([argv])[0] for argv in argvs]
+        runs = [_probe([argv], code) for argv in argvs]
+        return [heavy[0] for heavy, _ in runs], "".join(err for _, err in runs)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
     proc = subprocess.run([sys.executable, "-c", PROBE.format(heavy=HEAVY),
                            json.dumps([list(argv) for argv in argvs])],
@@ -66,8 +73,8 @@ def _heavy_modules_of(argvs: Sequence[Sequence[str]]) -> List[List[str]]:
             results[int(key[len("RESULT"):])] = json.loads(value)
     assert sorted(results) == list(range(len(argvs))), proc.stdout + proc.stderr
     for i, argv in enumerate(argvs):
-        assert results[i][0] == 0, (argv, results[i][0], proc.stderr)
-    return [results[i][1] for i in range(len(argvs))]
+        assert results[i][0] == code, (argv, results[i][0], proc.stderr)
+    return [results[i][1] for i in range(len(argvs))], proc.stderr
 
 
 def _heavy_modules(*args: str) -> list:
@@ -97,6 +104,35 @@ def test_inspect_is_light(tmp_path):
     path = tmp_path / "walk.bvh"
     write_bvh(example_motion(), path)
     assert _heavy_modules("inspect", str(path), "--json") == []
+
+
+def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
+    """A missing input, an unwritable output or a bad window or duration is
+    said (exit code 2) before torch, PyG or Lightning load; a missing
+    ``--ckpt`` before PyG and Lightning."""
+    from satagraph.data.examples import example_motion
+    from satagraph.io import write_bvh
+    rig, out, gone = tmp_path / "walk.bvh", str(tmp_path / "out.bvh"), str(tmp_path / "no.bvh")
+    write_bvh(example_motion(), rig)
+    rig, unwritable = str(rig), str(tmp_path / "no_folder" / "out.bvh")
+    argvs = [("retarget", gone, "--target", rig, out),
+             ("retarget", rig, "--target", rig, unwritable),
+             ("retarget", rig, "--target", rig, out, "--window", "-3"),
+             ("reconstruct", gone, out),
+             ("reconstruct", rig, out, "--window", "8", "--overlap", "8"),
+             ("generate", "--text", "a walk", "--skeleton", gone, out, "--seconds", "2"),
+             ("generate", "--text", "a walk", "--skeleton", rig, unwritable),
+             ("generate", "--text", "a walk", "--skeleton", rig, out, "--seconds", "100"),
+             ("retarget", rig, "--target", rig, out, "--ckpt", gone)]
+    heavy, stderr = _probe(argvs, code=2)
+    assert heavy[:-1] == [[]] * (len(argvs) - 1)
+    assert heavy[-1] == ["torch"]  # the weights file's reader, not the model's code
+    said = [line for line in stderr.splitlines() if "error:" in line]
+    assert [line.split("error: ")[1].split(":")[0] for line in said] == [
+        gone, f"cannot write {unwritable}", "windows of -3 frames sharing -1", gone,
+        "windows of 8 frames sharing 8", gone, f"cannot write {unwritable}",
+        "argument --seconds", gone]
+    assert not Path(out).exists()
 
 
 def test_lazy_exports_still_work():
