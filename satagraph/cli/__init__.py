@@ -19,8 +19,10 @@ import importlib
 import json
 import os
 import re
+import signal
 import sys
 import tempfile
+import threading
 import warnings
 from collections import Counter
 from pathlib import Path
@@ -524,7 +526,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.formatwarning = _format_warning
     warnings.showwarning = _once(shown)
     try:
-        with warnings.catch_warnings(), _escaped_output():
+        with warnings.catch_warnings(), _escaped_output(), terminate_as_interrupt():
             if getattr(args, "scale_free", False):
                 from satagraph.transforms.rig_reading import UnitsWarning
                 warnings.simplefilter("ignore", UnitsWarning)
@@ -559,6 +561,29 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 #: Optional packages and the extra of ``setup.cfg`` that installs each.
 EXTRAS = {"imageio_ffmpeg": "viz", "torch_scatter": "scatter", "sentencepiece": "dev",
           "pybvh": "bench"}
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM (what a cluster sends before it kills a job, and ``kill`` and
+    ``timeout`` send) stops a command as Ctrl-C does: the write under way is
+    taken back, one line says so, exit code 130; by default it ended the
+    process at once, without a line, the temporary file of that write left
+    behind. Training stops at the end of its batch instead, saving
+    ``last.ckpt`` (:func:`~satagraph.experiment.train.train`). The main
+    thread's only; the handler before is put back."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    before = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if before is None else before)
 
 
 def _missing_module(err: ModuleNotFoundError) -> str:

@@ -629,18 +629,26 @@ def _fit_interruptibly(trainer: L.Trainer, module: L.LightningModule, datamodule
     and leaves Ctrl-C ignored), so that the command says how to resume and
     exits 130, and a notebook keeps its Ctrl-C; its argument is the step of
     the ``last.ckpt`` the interrupt wrote, where it wrote one
-    (:meth:`ResumeCheckpoint.on_exception`)."""
+    (:meth:`ResumeCheckpoint.on_exception`). While it trains, a SIGTERM is
+    Lightning's alone (it stops at the end of the batch, which
+    :class:`ResumeCheckpoint` saves), not the command's handler's
+    (:func:`~satagraph.cli.terminate_as_interrupt`: at once, in any step)."""
     handler = signal.getsignal(signal.SIGINT)
+    main = threading.current_thread() is threading.main_thread()
+    term = signal.signal(signal.SIGTERM, signal.SIG_DFL) if main else None
     try:
         trainer.fit(module, datamodule=datamodule, ckpt_path=str(last) if last else None)
     except SystemExit:
         if not trainer.interrupted:
             raise
-        if threading.current_thread() is threading.main_thread():
+        if main:
             signal.signal(signal.SIGINT, handler)
         saved = [c.interrupted_step for c in trainer.callbacks
                  if isinstance(c, ResumeCheckpoint) and c.interrupted_step is not None]
         raise KeyboardInterrupt(*saved[:1]) from None
+    finally:
+        if main and term is not None:
+            signal.signal(signal.SIGTERM, term)
 
 
 def _lock(run_dir: Path):

@@ -4,10 +4,11 @@ r"""Training that cannot end green with a broken model, and exact resume.
   gradients before the optimizer step: a non-finite value stops the run
   (:class:`TrainingStopped`, naming the batch's files; the weights are not
   updated, so the last checkpoint stays good) or, with ``mode="skip"``,
-  drops that batch's update and counts it.
+  drops that batch's update and counts it, and stops the run where an
+  epoch's worth of batches in a row is non-finite (a diverged model).
 - :class:`ResumeCheckpoint` writes ``last.ckpt`` every N steps and/or M
-  minutes, at every epoch end and at a Ctrl-C, keeping the previous one as
-  ``last.prev.ckpt``; the checkpoint carries every random state (torch,
+  minutes, at every epoch end and at a Ctrl-C or SIGTERM, keeping the previous
+  one as ``last.prev.ckpt``; the checkpoint carries every random state (torch,
   CUDA, numpy, Python), restored just before the first resumed step, while
   the loop state in it gives the sampler's position
   (:class:`~satagraph.data.sampler.ResumableSampler`).
@@ -33,14 +34,18 @@ import numpy as np
 import torch
 from lightning.fabric.plugins.io.torch_io import TorchCheckpointIO
 from lightning.pytorch.callbacks import Checkpoint
+from lightning.pytorch.utilities.exceptions import SIGTERMException
 
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
-from satagraph.utils.files import is_temp_file, keep_copy
+from satagraph.utils.files import append_whole, is_temp_file, keep_copy
 
 #: Names of the resume checkpoints in ``<run>/checkpoints``.
 LAST, PREVIOUS, DAMAGED = "last.ckpt", "last.prev.ckpt", "last.damaged.ckpt"
 #: ``nonfinite`` config values.
 NONFINITE_MODES = ("stop", "skip")
+#: Most batches in a row that ``nonfinite=skip`` skips before it stops the
+#: run (fewer where an epoch has fewer batches, never fewer than 2).
+MAX_SKIPPED_IN_A_ROW = 100
 
 
 class TrainingStopped(RuntimeError):
@@ -80,7 +85,11 @@ class NonFiniteGuard(L.Callback):
         mode (str): ``"stop"`` raises :class:`TrainingStopped` before the
             weights change; ``"skip"`` clears the gradients of that batch
             (the optimizer leaves the weights as they are) and counts it in
-            :attr:`skipped`.
+            :attr:`skipped`, and raises :class:`TrainingStopped` where as
+            many batches in a row as an epoch has (2 to
+            :data:`MAX_SKIPPED_IN_A_ROW`) were skipped: a model that gives
+            no finite loss any more has diverged, and skipping on ended the
+            run green.
         last_checkpoint (str, optional): Named in the error message.
     """
 
@@ -89,6 +98,7 @@ class NonFiniteGuard(L.Callback):
             raise ValueError(f"nonfinite must be one of {NONFINITE_MODES}, got {mode!r}")
         self.mode, self.last_checkpoint = mode, last_checkpoint
         self.skipped = 0
+        self._in_a_row = 0
         self._files: List[str] = []
         self._bad_loss: Optional[float] = None
 
@@ -110,12 +120,16 @@ class NonFiniteGuard(L.Callback):
         finite = self._bad_loss is None and (not params or bool(torch.isfinite(
             torch.stack([p.grad.detach().float().sum() for p in params])).all()))
         if finite:
+            self._in_a_row = 0
             return
         if self.mode == "stop":
             raise self._error(trainer, "non-finite gradient")
         for p in params:
             p.grad = None
         self.skipped += 1
+        self._in_a_row += 1
+        if self._in_a_row >= _skip_limit(trainer):
+            raise self._diverged(trainer)
 
     def _error(self, trainer: L.Trainer, what: str) -> TrainingStopped:
         files = ", ".join(dict.fromkeys(self._files)) or "?"
@@ -127,10 +141,30 @@ class NonFiniteGuard(L.Callback):
             f"{files}; the weights were not updated{keep} (nonfinite=skip skips such "
             "batches)")
 
+    def _diverged(self, trainer: L.Trainer) -> TrainingStopped:
+        last = self.last_checkpoint
+        keep = (f"; last checkpoint: {last}" if last and os.path.isfile(last)
+                else "; no checkpoint was written yet")
+        return TrainingStopped(
+            f"training stopped at step {trainer.global_step}: {self._in_a_row} batches in a "
+            "row had a non-finite loss or gradient (nonfinite=skip skipped them), the last on "
+            f"the batch of {', '.join(dict.fromkeys(self._files)) or '?'}: the model has "
+            f"diverged{keep} "
+            "(a lower optim.lr may keep it finite)")
+
     def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if self.skipped:
             warnings.warn(f"nonfinite=skip: skipped {self.skipped} batch(es) with a "
                           "non-finite loss or gradient", stacklevel=2)
+
+
+def _skip_limit(trainer: L.Trainer) -> int:
+    """Batches in a row :class:`NonFiniteGuard` skips before it stops: an
+    epoch's, from 2 to :data:`MAX_SKIPPED_IN_A_ROW`."""
+    per_epoch = trainer.num_training_batches
+    if not per_epoch or per_epoch == float("inf"):
+        return MAX_SKIPPED_IN_A_ROW
+    return max(2, min(int(per_epoch), MAX_SKIPPED_IN_A_ROW))
 
 
 # ------------------------------------------------------------ random states
@@ -179,9 +213,9 @@ class ResumeCheckpoint(Checkpoint):
     bounded by ``max_steps`` goes on past an epoch's end: the losses are
     those of a run never stopped, where Lightning 2.6 alone would count the
     cut epoch as finished or skip the next one
-    (:meth:`on_load_checkpoint`). A Ctrl-C writes ``last.ckpt`` at the last
-    training step that ended (:meth:`on_exception`), so that ``--resume``
-    goes on from there.
+    (:meth:`on_load_checkpoint`). A Ctrl-C or SIGTERM writes ``last.ckpt``
+    at the last training step that ended (:meth:`on_exception`), so that
+    ``--resume`` goes on from there.
 
     Args:
         dirpath (str): The checkpoint folder.
@@ -298,9 +332,11 @@ class ResumeCheckpoint(Checkpoint):
 
     def on_exception(self, trainer: L.Trainer, pl_module: L.LightningModule,
                      exception: BaseException) -> None:
-        """Ctrl-C: write ``last.ckpt`` at the last training step that ended,
-        as an every-N-steps save there would have (its random states, its
-        loop counts), so that ``--resume`` goes on from it. Nothing is
+        """Ctrl-C or SIGTERM (what a cluster sends before it kills a job;
+        Lightning stops at the end of the batch it falls in): write
+        ``last.ckpt`` at the last training step that ended, as an
+        every-N-steps save there would have (its random states, its loop
+        counts), so that ``--resume`` goes on from it. Nothing is
         written where that checkpoint is already ``last.ckpt``, or where the
         stop fell in validation or between an optimizer step and the end of
         its batch (the weights may be half updated), or in a distributed
@@ -308,7 +344,8 @@ class ResumeCheckpoint(Checkpoint):
         errors (a non-finite loss keeps the last good checkpoint). A save
         that fails is a warning: the interrupt goes on, and ``last.ckpt``
         stays the one before (writes are atomic)."""
-        if (not isinstance(exception, KeyboardInterrupt) or not self._unsaved
+        if (not isinstance(exception, (KeyboardInterrupt, SIGTERMException))
+                or not self._unsaved
                 or self._stepping or not trainer.training or trainer.world_size > 1):
             return
         self._interrupting = True
@@ -400,28 +437,23 @@ def epoch_checkpoints(checkpoints: Path) -> List[Path]:
 
 def resume_checkpoint(checkpoints: Path) -> Path:
     """The checkpoint ``--resume`` starts from: ``last.ckpt``, or
-    ``last.prev.ckpt`` when the last one is damaged (with a warning), or,
-    where the run stopped before its first ``last.ckpt`` was whole, its
-    newest epoch checkpoint (with a warning).
+    ``last.prev.ckpt`` when the last one is damaged, or the newest epoch
+    checkpoint where neither is whole (the run stopped before its first
+    ``last.ckpt`` was written whole, or both are damaged), with a warning
+    for either fallback; a damaged ``last.ckpt`` is moved aside to
+    ``last.damaged.ckpt``.
 
     Raises:
-        FileNotFoundError: Neither exists.
-        CheckpointError: Neither can be loaded (both reasons given).
+        FileNotFoundError: None exists.
+        CheckpointError: None can be loaded (every reason given).
     """
-    candidates = [checkpoints / LAST, checkpoints / PREVIOUS]
-    present = [c for c in candidates if c.exists()]
-    if not present:
-        kept = epoch_checkpoints(checkpoints)
-        if not kept:
-            raise FileNotFoundError(f"--resume: no checkpoint at {candidates[0]}")
-        # stopped (kill -9, a full disk) after the epoch's best checkpoint was
-        # written and before the first last.ckpt was whole: that one resumes
-        warnings.warn(f"--resume: no {LAST} in {checkpoints} (the run stopped before its "
-                      f"first was written whole); resuming from its newest epoch "
-                      f"checkpoint {kept[0]}", stacklevel=2)
-        present = kept[:1]
+    last = checkpoints / LAST
+    present = [c for c in (last, checkpoints / PREVIOUS) if c.exists()]
+    newest = epoch_checkpoints(checkpoints)[:1]
+    if not present and not newest:
+        raise FileNotFoundError(f"--resume: no checkpoint at {last}")
     reasons = []
-    for path in present:
+    for path in present + newest:
         try:
             ckpt = load_checkpoint(path, require=("state_dict", "loops", "optimizer_states"),
                                    what="resumable training checkpoint")
@@ -429,20 +461,36 @@ def resume_checkpoint(checkpoints: Path) -> Path:
         except CheckpointError as err:
             reasons.append(str(err))
             continue
-        if reasons:
-            damaged = checkpoints / DAMAGED
-            candidates[0].replace(damaged)  # never rotated over the good one
-            warnings.warn(f"--resume: {reasons[0]} (moved to {damaged}); resuming "
-                          f"from the previous checkpoint {path}", stacklevel=2)
+        if path not in newest and not reasons:
+            return path
+        moved = bool(reasons) and last.exists()
+        if moved:
+            last.replace(checkpoints / DAMAGED)  # never rotated over a good one (replace:
+            # Windows renames onto no existing file)
+        warnings.warn(_fallback_note(checkpoints, path, reasons, moved), stacklevel=2)
         return path
     raise CheckpointError("--resume: no usable checkpoint: " + "; ".join(reasons))
 
 
+def _fallback_note(checkpoints: Path, path: Path, reasons: List[str], moved: bool) -> str:
+    """The warning of a resume from other than ``last.ckpt``: why (the
+    damaged files, and whether ``last.ckpt`` was :obj:`moved` aside), and
+    which checkpoint it goes on from."""
+    if not reasons:  # stopped (kill -9, a full disk) before the first last.ckpt was whole
+        why = f"no {LAST} in {checkpoints} (the run stopped before its first was written whole)"
+    else:
+        why = "; ".join(reasons) + (f" (moved to {checkpoints / DAMAGED})" if moved else "")
+    which = "the previous checkpoint" if path.name == PREVIOUS else "its newest epoch checkpoint"
+    return f"--resume: {why}; resuming from {which} {path}"
+
+
 class LossLog(L.Callback):
     r"""Append ``step<TAB>loss<TAB>time`` (the exact float, then the wall
-    clock in Unix seconds) to a file after every training step, flushed at
-    once: a record that survives ``kill -9``, and the time axis of a run's
-    learning curve (:func:`read_loss_times`). A resumed run appends the
+    clock in Unix seconds) to a file after every training step, written at
+    once and whole (:func:`~satagraph.utils.files.append_whole`: a line a
+    full disk cut short is taken back, where the resumed run's first line
+    ran on from it): a record that survives ``kill -9``, and the time axis
+    of a run's learning curve (:func:`read_loss_times`). A resumed run appends the
     steps it replays; the last line of a step counts (:func:`read_loss_log`).
 
     Args:
@@ -457,9 +505,8 @@ class LossLog(L.Callback):
         loss = outputs.get("loss") if isinstance(outputs, dict) else outputs
         if loss is None or not trainer.is_global_zero:
             return
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.path, "a") as f:
-            f.write(f"{trainer.global_step}\t{float(loss)!r}\t{time.time():.1f}\n")
+        append_whole(self.path, f"{trainer.global_step}\t{float(loss)!r}\t"
+                     f"{time.time():.1f}\n".encode(), create_parent=True)
 
 
 def read_loss_log(path: Path) -> Dict[int, float]:

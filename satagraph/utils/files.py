@@ -8,6 +8,7 @@ r"""Safe file handling shared by every reader and writer.
   destination (never the temporary file), and temporary files left by a
   killed process (``kill -9``) are swept by the first write of a process in
   that folder (:func:`sweep_stale_temps`; those of this machine only).
+- :func:`append_whole` appends a record to a log whole or not at all.
 - :func:`check_output_path` checks an output path before any work is done.
 - :func:`check_input_file` refuses what is not a regular file (FIFOs,
   devices, sockets, directories: reading them hangs or never ends) and
@@ -314,6 +315,33 @@ def atomic_write_bytes(path: PathLike, data: bytes, create_parent: bool = False)
     atomic_write(path, lambda f: f.write(data), binary=True, create_parent=create_parent)
 
 
+def append_whole(path: PathLike, data: bytes, create_parent: bool = False) -> None:
+    """Append :obj:`data` (a record of a log) to :obj:`path` whole or not at
+    all: an append that fails part way (a full disk) is cut back off, so
+    that the next one does not run on from half a record.
+
+    Raises:
+        OSError: naming :obj:`path`; the file is left as it was.
+    """
+    path = os.fspath(path)
+    if create_parent:
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+    except OSError as err:
+        raise _renamed(err, path) from None
+    try:
+        size, view = os.fstat(fd).st_size, memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    except OSError as err:
+        with contextlib.suppress(OSError):
+            os.ftruncate(fd, size)
+        raise _renamed(err, path) from None
+    finally:
+        os.close(fd)
+
+
 __all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
            "check_output_path", "atomic_write", "atomic_write_text", "atomic_write_bytes",
-           "atomic_path", "keep_copy", "sweep_stale_temps", "is_temp_file"]
+           "atomic_path", "keep_copy", "append_whole", "sweep_stale_temps", "is_temp_file"]

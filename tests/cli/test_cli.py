@@ -4,6 +4,7 @@ from __future__ import annotations
 import importlib.util
 import io
 import json
+import os
 import re
 import runpy
 import sys
@@ -467,6 +468,44 @@ def test_each_warning_line_is_shown_once_per_command():
                  "a.bvh: units unknown"):
         once(UserWarning(text), UserWarning, "f.py", 1)
     assert shown == ["a.bvh: units unknown", "b.bvh: up axis guessed"]
+
+
+def test_sigterm_stops_a_command_as_ctrl_c_does(tmp_path, monkeypatch, capsys) -> None:
+    """SIGTERM (a cluster's, ``kill``'s) during a folder's writes: the write
+    under way is taken back, one line, exit 130, the handler before put
+    back. It ended the process at once (here: the test's own handler's
+    exception, which no command catches), without a line, the temporary
+    file of that write left behind."""
+    import signal
+
+    from satagraph.utils.files import is_temp_file
+
+    class Killed(BaseException):
+        pass
+
+    def killed(signum, frame):
+        raise Killed
+
+    real_fsync, synced = os.fsync, []
+
+    def fsync_then_term(fd: int) -> None:
+        synced.append(fd)
+        if len(synced) == 3:  # the third file's write
+            os.kill(os.getpid(), signal.SIGTERM)
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync_then_term)
+    before = signal.signal(signal.SIGTERM, killed)
+    try:
+        code = main(["zoo", str(tmp_path / "zoo"), "--species", "biped", "--clips", "4",
+                     "--frames", "8"])
+    finally:
+        assert signal.signal(signal.SIGTERM, before) is killed
+    assert code == 130
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "satagraph: interrupted (outputs are written whole or not at all)"]
+    written = [p for p in (tmp_path / "zoo").rglob("*") if p.is_file()]
+    assert len(written) == 2 and not any(is_temp_file(p.name) for p in written)
 
 
 def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys) -> None:

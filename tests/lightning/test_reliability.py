@@ -141,9 +141,11 @@ def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
     from satagraph.lightning.autoencoder import MotionAutoencoderModule
     original = MotionAutoencoderModule.compute_losses
 
+    poison = {"from": 2}
+
     def poisoned(self, out, batch):
         losses = original(self, out, batch)
-        if self.global_step >= 2:
+        if self.global_step >= poison["from"] or self.global_step in poison.get("at", ()):
             losses["loss"] = losses["loss"] * float("nan")
         return losses
 
@@ -158,12 +160,38 @@ def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
     assert all(torch.isfinite(v).all() for v in ckpt["state_dict"].values()
                if v.is_floating_point())
 
-    # skip: the bad batches are counted, the weights stay finite
+    # skip: the bad batches (not an epoch's in a row) are counted, the weights stay finite
+    poison.update({"from": 99, "at": (1, 3)})
     cfg = dict(copy.deepcopy(tiny_config), nonfinite="skip")
     cfg["output_dir"] += "-skip"
     with pytest.warns(UserWarning, match="skipped 2 batch"):
         module, _, trainer, _ = train(cfg, max_steps=4)
     assert all(torch.isfinite(p).all() for p in module.parameters())
+
+
+def test_skip_stops_a_run_that_gives_no_finite_loss_any_more(
+        tiny_config: Dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+    """``nonfinite=skip`` on a diverged model (every loss non-finite from
+    step 1: an absurd learning rate) stops where an epoch's worth of
+    batches in a row (here 2) was skipped; it skipped every batch to the
+    end and said 'trained ... for N epochs', exit 0."""
+    from satagraph.lightning.autoencoder import MotionAutoencoderModule
+    original = MotionAutoencoderModule.compute_losses
+
+    def diverged(self, out, batch):
+        losses = original(self, out, batch)
+        if self.global_step >= 1:
+            losses["loss"] = losses["loss"] * float("nan")
+        return losses
+
+    monkeypatch.setattr(MotionAutoencoderModule, "compute_losses", diverged)
+    cfg = dict(tiny_config, nonfinite="skip")
+    cfg["trainer"] = dict(cfg["trainer"], max_epochs=5)
+    with pytest.raises(TrainingStopped, match=r"step 2: 2 batches in a row had a non-finite "
+                       r"loss.*\.bvh: the model has diverged; last checkpoint: .*last\.ckpt"):
+        train(cfg)
+    ckpt = load_checkpoint(Path(cfg["output_dir"]) / "checkpoints" / LAST)
+    assert ckpt["global_step"] == 2
 
 
 def test_cli_train_exit_code_when_stopped(tiny_config: Dict[str, Any], tmp_path: Path,
@@ -193,6 +221,10 @@ def test_resume_falls_back_from_a_truncated_last_checkpoint(
     assert (folder / "last.damaged.ckpt").is_file() and not (folder / LAST).exists()
     (folder / LAST).write_bytes(b"")
     (folder / PREVIOUS).write_bytes(b"")
+    [best] = folder.glob("epoch=*.ckpt")
+    with pytest.warns(UserWarning, match="resuming from its newest epoch checkpoint"):
+        assert resume_checkpoint(folder) == best
+    best.write_bytes(b"")
     with pytest.raises(CheckpointError, match="no usable checkpoint"):
         resume_checkpoint(folder)
 
@@ -213,6 +245,28 @@ def test_a_second_damaged_last_checkpoint_replaces_the_first(
     with pytest.warns(UserWarning, match="resuming from the previous"):
         assert resume_checkpoint(tmp_path) == tmp_path / PREVIOUS
     assert (tmp_path / "last.damaged.ckpt").read_bytes() == b"PK second"
+
+
+def test_resume_after_a_truncated_first_last_checkpoint_goes_on_from_the_epoch_one(
+        tiny_config: Dict[str, Any]) -> None:
+    """The first epoch's ``last.ckpt`` truncated (a crash; no
+    ``last.prev.ckpt`` yet): ``--resume`` goes on from that epoch's own
+    checkpoint, the damaged file moved aside (it said 'no usable
+    checkpoint', the epoch checkpoint beside it unused)."""
+    cfg = copy.deepcopy(tiny_config)
+    cfg["trainer"]["max_epochs"] = 1
+    train(cfg)
+    folder = Path(cfg["output_dir"]) / "checkpoints"
+    [best] = folder.glob("epoch=*.ckpt")
+    assert not (folder / PREVIOUS).exists()
+    data = (folder / LAST).read_bytes()
+    (folder / LAST).write_bytes(data[: len(data) // 3])
+    cfg["trainer"]["max_epochs"] = 2
+    with pytest.warns(UserWarning, match=f"resuming from its newest epoch checkpoint {best}"):
+        _, _, trainer, _ = train(cfg, resume=True)
+    assert trainer.current_epoch == 2 and trainer.global_step == 4
+    assert (folder / "last.damaged.ckpt").read_bytes() == data[: len(data) // 3]
+    assert load_checkpoint(folder / LAST)["global_step"] == 4
 
 
 @pytest.mark.slow
@@ -399,6 +453,36 @@ def test_loss_log_keeps_the_wall_clock_and_reads_old_files(tmp_path: Path) -> No
     assert read_loss_log(path) == {1: 2.5, 2: 1.25, 3: 0.5}
     times = read_loss_times(path)
     assert sorted(times) == [2, 3] and before - 1 <= times[2] <= times[3] <= time.time() + 1
+
+
+def test_a_loss_line_a_full_disk_cuts_short_is_taken_back(tmp_path: Path) -> None:
+    """The file system refusing a ``losses.tsv`` line half-way (a full disk;
+    here the file size limit): the error names the file (it said ``[Errno
+    28] No space left on device`` alone), and the half line is taken back,
+    so the resumed run's replay of that step is a line of its own (it ran
+    on from the half line: a cut loss, or a loss read as the time)."""
+    import resource
+    from types import SimpleNamespace
+    from satagraph.lightning.reliability import LossLog
+    path = tmp_path / "losses.tsv"
+    log = LossLog(str(path))
+    trainer = SimpleNamespace(global_step=1, is_global_zero=True)
+    log.on_train_batch_end(trainer, None, torch.tensor(2.5), None, 0)
+    first = path.read_text()
+    trainer.global_step = 2
+    limits = resource.getrlimit(resource.RLIMIT_FSIZE)
+    handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    try:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (len(first) + 6, limits[1]))
+        with pytest.raises(OSError) as err:
+            log.on_train_batch_end(trainer, None, torch.tensor(1.0 / 3.0), None, 1)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, limits)
+        signal.signal(signal.SIGXFSZ, handler)
+    assert path.read_text() == first
+    assert err.value.filename == str(path)
+    log.on_train_batch_end(trainer, None, torch.tensor(1.0 / 3.0), None, 1)  # the replay
+    assert read_loss_log(path) == {1: 2.5, 2: float(torch.tensor(1.0 / 3.0))}
 
 
 @pytest.mark.slow
@@ -593,6 +677,39 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
         [float(step)]
     assert load_checkpoint(folder / PREVIOUS)["global_step"] == 2
     assert resume_checkpoint(folder) == folder / LAST
+    _, _, trainer, _ = train(cfg, resume=True)
+    assert trainer.global_step == 6
+    assert read_loss_log(Path(cfg["output_dir"]) / "losses.tsv") == full
+
+
+class _TerminateAt(L.Callback):
+    """A real SIGTERM to this process as the batch after step :obj:`step`
+    starts (what a cluster sends before it kills a job)."""
+
+    def __init__(self, step: int) -> None:
+        self.step = step
+
+    def on_train_batch_start(self, trainer: L.Trainer, *args: Any) -> None:
+        if trainer.global_step == self.step:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+
+def test_sigterm_saves_where_it_stopped_and_resume_goes_on_from_there(
+        tiny_config: Dict[str, Any], tmp_path: Path) -> None:
+    """SIGTERM in step 3 (Lightning stops at that batch's end) writes
+    ``last.ckpt`` at step 3, as Ctrl-C does: it kept the epoch-end one of
+    step 2, so the steps since were trained again; ``--resume`` goes on
+    with the losses of a run never stopped."""
+    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
+    train(reference)
+    full = read_loss_log(tmp_path / "a" / "losses.tsv")
+    cfg = _interruptible(tiny_config)
+    folder = Path(cfg["output_dir"]) / "checkpoints"
+    with pytest.raises(KeyboardInterrupt) as stop:
+        train(cfg, callbacks=[_TerminateAt(2)])
+    assert stop.value.args == (3,)
+    assert load_checkpoint(folder / LAST)["global_step"] == 3
+    assert load_checkpoint(folder / PREVIOUS)["global_step"] == 2
     _, _, trainer, _ = train(cfg, resume=True)
     assert trainer.global_step == 6
     assert read_loss_log(Path(cfg["output_dir"]) / "losses.tsv") == full
