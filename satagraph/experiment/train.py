@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import json
 import os
 import re
 import signal
@@ -575,14 +576,31 @@ def check_resumable(path: Path, cfg: Dict[str, Any]) -> None:
     differ += [f"module_args.{k}={hp[k]} (here {v})"
                for k, v in sorted((cfg.get("module_args") or {}).items())
                if k in hp and hp[k] != v]
-    before = ((hp.get("meta") or {}).get("data") or {}).get("sources")
-    now = data_section(cfg).get("sources")
-    if before is not None and before != now:
-        differ.append(f"data.sources={before} (here {now})")
+    differ += _data_differences((hp.get("meta") or {}).get("data"), data_section(cfg))
     if differ:
         raise ValueError(f"--resume {path}: the run was trained with {'; '.join(differ[:4])}; "
                          "resume with its own settings, or start from its weights in another "
                          "output_dir with --init-from")
+
+
+#: ``data`` settings a resume may change: where and how fast the same
+#: windows are read, not which.
+RESUME_MAY_CHANGE = ("num_workers", "cache_dir", "on_error")
+
+
+def _data_differences(before: Optional[Dict[str, Any]], now: Dict[str, Any]) -> list:
+    """The ``data`` settings a run recorded that a resume would change (the
+    sources, windows, batch size, augmentation, preprocessing, ...: the
+    run went on silently on other windows, and its config recorded
+    only the new ones), but those of :data:`RESUME_MAY_CHANGE`."""
+    if before is None:  # a run of before meta.data
+        return []
+    flat_before, flat_now = (dotted_settings({"data": d}) for d in (before, now))
+    free = tuple(f"data.{k}" for k in RESUME_MAY_CHANGE)
+    return [f"{k}={_short(flat_before[k])} (here {_short(flat_now[k])})"
+            for k in sorted(set(flat_before) & set(flat_now))  # a key newer than the run: its default
+            if not k.startswith(free) and json.dumps(flat_before[k], sort_keys=True, default=str)
+            != json.dumps(flat_now[k], sort_keys=True, default=str)]
 
 
 def _same_setting(ours: Any, theirs: Any) -> bool:
