@@ -47,7 +47,16 @@ def _refused(path: str, err: Exception) -> CheckpointError:
     if "weights_only" in first:
         first = type(err).__name__
     return CheckpointError(f"{path}: not a readable checkpoint (truncated or another "
-                           f"format: {first[:120]})")
+                           f"format: {_clipped(first)})")
+
+
+def _clipped(text: str, limit: int = 120) -> str:
+    """:obj:`text` cut to about :obj:`limit` characters at a word's end,
+    with an ellipsis where it was cut (a cut mid-word read "If yo")."""
+    if len(text) <= limit:
+        return text
+    cut = text[:limit].rsplit(" ", 1)[0] if " " in text[:limit] else text[:limit]
+    return cut.rstrip(" ,;:") + " ..."
 
 
 def _looks_like_torch_file(path: str) -> bool:
@@ -96,6 +105,11 @@ def load_checkpoint(path: PathLike, map_location: Any = "cpu",
         raise CheckpointError(f"{path}: not a {what} (it holds a "
                               f"{type(ckpt).__name__}, not a dictionary)")
     missing = [k for k in require if k not in ckpt]
+    if missing and ckpt and all(isinstance(v, torch.Tensor) for v in ckpt.values()):
+        raise CheckpointError(
+            f"{path}: a bare state dict ({len(ckpt)} tensors, e.g. {next(iter(ckpt))!r}), not "
+            f"a {what}: it holds no settings to build a model from (save the run's Lightning "
+            "checkpoint, or satagraph export-weights RUN OUT.safetensors)")
     if missing:
         raise CheckpointError(f"{path}: not a {what} (no {', '.join(missing)})")
     return ckpt

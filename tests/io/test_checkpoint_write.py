@@ -24,3 +24,24 @@ def test_a_failed_checkpoint_write_names_the_file_and_keeps_the_previous(
     kept = load_checkpoint(path)["state_dict"]["w"]
     assert torch.equal(kept, small["state_dict"]["w"])
     assert sorted(p.name for p in path.parent.iterdir()) == ["last.ckpt"]  # no temporary file
+
+
+def test_a_bare_state_dict_is_named_as_one(tmp_path) -> None:
+    """``torch.save(model.state_dict(), path)`` given as a checkpoint was
+    refused as having "no state_dict"."""
+    from satagraph.io.checkpoint import CheckpointError, load_checkpoint
+    path = tmp_path / "weights.pt"
+    torch.save({"encoder.weight": torch.zeros(2, 2), "encoder.bias": torch.zeros(2)}, path)
+    with pytest.raises(CheckpointError, match=r"weights.pt: a bare state dict \(2 tensors, "
+                       r"e.g. 'encoder.weight'\), not a satagraph checkpoint: it holds no "
+                       r"settings"):
+        load_checkpoint(path)
+
+
+def test_a_long_reason_is_cut_at_a_word(tmp_path) -> None:
+    """The reason of an unreadable checkpoint was cut at 120 characters
+    mid-word ("... If yo")."""
+    from satagraph.io.checkpoint import _clipped
+    text = "word " * 40
+    assert _clipped(text) == ("word " * 24).rstrip() + " ..."
+    assert _clipped("short reason") == "short reason"
