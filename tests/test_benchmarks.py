@@ -558,3 +558,19 @@ def test_cli_start_writes_its_table_to_out_and_leaves_the_committed_one(tmp_path
     assert "satagraph --help" in (tmp_path / "c.md").read_text()
     assert "| satagraph retarget --help |" in (tmp_path / "c.md").read_text()
     assert cli_start.OUT.read_bytes() == before
+
+
+def test_stitch_val_seam_reads_a_jump_where_a_window_begins():
+    """``seam`` is about 1 on a smooth take and far above where the pose
+    jumps at a window's first kept frame (what the cut rule left)."""
+    from dataclasses import replace
+    import stitch_val
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.pipelines.inference import window_plan
+    walk = generate_clip(zoo_rigs(["biped"])[0], "walk", frames=90, seed=1)
+    smooth = stitch_val.seam(walk, 32, 8)
+    trans = walk.translations.copy()
+    cut = window_plan(90, 32, 8)[0][1]  # the first window's stop: where the cut rule cut
+    trans[cut:, 0, 0] += 0.05 * walk.height()
+    jumped = replace(walk, translations=trans)
+    assert 0.5 < smooth < 2.0 and stitch_val.seam(jumped, 32, 8) > 3 * smooth

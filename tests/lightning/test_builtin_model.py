@@ -140,8 +140,9 @@ def test_retarget_plant_holds_the_stance_feet_and_keeps_the_rest(tmp_path: Path)
                                atol=1e-3 * plain.height())
     feet = [ends[limb] for limb in ("left hind", "right hind")]
     speed = [np.linalg.norm(np.diff(p[:, feet][..., [0, 2]], axis=0), axis=-1) for p in (a, b)]
-    low = np.quantile(speed[0], 0.3)  # the slowest frames of the plain feet: their stances
-    assert speed[1][speed[0] < low].mean() < 0.7 * speed[0][speed[0] < low].mean()
+    stance = speed[0] < np.quantile(speed[0], 0.3)  # the slowest frames of the plain feet
+    # medians: a few of those frames are a swing's turn, where a planted foot moves on
+    assert np.median(speed[1][stance]) < 0.5 * np.median(speed[0][stance])
     assert stride(planted) > stride(plain)
 
 

@@ -94,8 +94,11 @@ def test_window_longer_than_clip_is_one_pass(build_tiny_module: Callable, dog_fe
     assert ((c >= 0) & (c <= 1)).all()
 
 
-def test_sliding_windows_keep_each_window_after_its_overlap(
+def test_sliding_windows_cross_fade_where_they_overlap(
         build_tiny_module: Callable, dog_features, embed: Callable) -> None:
+    """Frames one window alone decodes are its single pass's; frames two
+    windows share move linearly from the earlier window's reading to the
+    later's (cut at the seam, the pose jumped there)."""
     module = build_tiny_module("vae").eval()
     num, joints = dog_features.num_frames, dog_features.skeleton.num_joints
     window, overlap = 16, 4
@@ -105,14 +108,23 @@ def test_sliding_windows_keep_each_window_after_its_overlap(
     q, r, _ = transfer(module, dog_features, dog_features, embed, window, overlap,
                        batch_size=2)
     assert q.shape == (num, joints, 6) and np.isfinite(q).all()
-    for start, stop, keep in plan:
+    refs = []
+    for start, stop, _ in plan:
         ref = _single_pass(module, dog_features, embed, start, stop)
-        kept = slice(keep - start, stop - start)
-        np.testing.assert_allclose(
-            q[keep:stop], ref["q"].view(-1, joints, 6)[kept].double().numpy(),
-            rtol=1e-4, atol=1e-5)
-        np.testing.assert_allclose(r[keep:stop], ref["r"][kept].double().numpy(),
-                                   rtol=1e-4, atol=1e-5)
+        refs.append((ref["q"].view(-1, joints, 6).double().numpy(), ref["r"].double().numpy()))
+    for i, (start, stop, keep) in enumerate(plan):
+        alone = slice(keep, plan[i + 1][0] if i + 1 < len(plan) else stop)
+        for got, ref in zip((q, r), refs[i]):
+            np.testing.assert_allclose(got[alone], ref[alone.start - start:alone.stop - start],
+                                       rtol=1e-4, atol=1e-5)
+        if i == 0:
+            continue
+        before = plan[i - 1][0]
+        fade = np.arange(1, keep - start + 1) / (keep - start + 1)
+        for got, earlier, later in zip((q, r), refs[i - 1], refs[i]):
+            w = fade.reshape((-1,) + (1,) * (later.ndim - 1))
+            blend = (1 - w) * earlier[start - before:keep - before] + w * later[:keep - start]
+            np.testing.assert_allclose(got[start:keep], blend, rtol=1e-4, atol=1e-5)
 
 
 def test_transfer_restores_training_mode(build_tiny_module: Callable, dog_features,
