@@ -61,7 +61,7 @@ def test_readme_snippets_run(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(local_conv, "_BUILDERS", dict(local_conv._BUILDERS))  # its "graph"
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("SATAGRAPH_CACHE", str(tmp_path / "cache"))
-    scope: dict = {"__name__": "readme"}
+    scope: dict = {"__name__": "__main__"}  # as a script runs: its main guard too
     for number, (lang, code) in enumerate(blocks()):
         if lang == "python":
             exec(compile(code, f"README.md block {number}", "exec"), scope)

@@ -12,7 +12,9 @@ _EXPORTS = {**dict.fromkeys(_FEATURES, "satagraph.data.features"),
             "FeatureNormalizer": "satagraph.data.normalizer",
             "MotionDataset": "satagraph.data.dataset",
             "MotionDataModule": "satagraph.data.datamodule",
-            "CaptionDataModule": "satagraph.data.caption_datamodule"}
+            "CaptionDataModule": "satagraph.data.caption_datamodule",
+            "register_window_transform": "satagraph.data.window_transform"}
 __all__ = ["MotionClip", "FrameGraph", "FrameBatch", "collate_clips", "FeatureNormalizer",
-           "MotionDataset", "MotionDataModule", "CaptionDataModule", *_FEATURES]
+           "MotionDataset", "MotionDataModule", "CaptionDataModule", "register_window_transform",
+           *_FEATURES]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

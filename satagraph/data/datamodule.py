@@ -18,6 +18,7 @@ from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_data
 from satagraph.data.sampler import ResumableSampler
 from satagraph.data.normalizer import ROOT_UNITS, FeatureNormalizer
 from satagraph.data.pairing import PartnerCollate
+from satagraph.data.window_transform import TransformedCollate, window_transform
 from satagraph.datasets.sources import (SOURCES_HINT, SPLITS, limit_files, limit_warning,
                                         resolve_sources)
 
@@ -196,6 +197,11 @@ class MotionDataModule(WindowDataModule):
             when :obj:`body_relative`: ``"height"`` (default) or ``"leg"``
             (leg lengths, the unit in which travel compares across body
             plans), see :class:`~satagraph.data.FeatureNormalizer`.
+        train_transform (str or callable, optional): A transform of one's
+            own on every training window, after :obj:`augment`: a function
+            ``MotionClip -> MotionClip`` or the name it was registered
+            under (:mod:`~satagraph.data.window_transform`; a config's
+            ``data.train_transform``).
     """
 
     def __init__(self, sources: Union[str, Sequence], window: int = 64, stride: int = 32,
@@ -206,11 +212,13 @@ class MotionDataModule(WindowDataModule):
                  max_files: Optional[int] = None, seed: int = 0,
                  augment: Union[None, bool, Mapping[str, Any]] = None,
                  on_error: str = "raise", body_relative: bool = True,
-                 root_unit: str = "height") -> None:
+                 root_unit: str = "height",
+                 train_transform: Union[None, str, Callable] = None) -> None:
         super().__init__()
         if on_error not in ON_ERROR:
             raise ValueError(f"data.on_error must be one of {ON_ERROR}, got {on_error!r}")
         self.on_error = on_error
+        self.train_transform = train_transform
         if root_unit not in ROOT_UNITS:
             raise ValueError(f"data.root_unit must be one of {ROOT_UNITS}, got {root_unit!r}")
         #: ``(split, error line)`` of every file left out (``on_error="skip"``).
@@ -323,6 +331,9 @@ class MotionDataModule(WindowDataModule):
     def _loader(self, split: str, shuffle: bool) -> DataLoader:
         collate = (PartnerCollate(self.seed) if self.pair_partners and split == "train"
                    else collate_clips)
+        transform = window_transform(self.train_transform) if split == "train" else None
+        if transform is not None:
+            collate = TransformedCollate(collate, transform)
         return window_loader(self.datasets[split], self.batch_size, self.seed, shuffle,
                              self.balanced, self.num_workers, collate, self._resume)
 

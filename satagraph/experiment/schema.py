@@ -63,6 +63,7 @@ class DataConfig:
     on_error: str = "raise"
     body_relative: bool = True
     root_unit: str = "height"
+    train_transform: Optional[str] = None
 
 
 @dataclass

@@ -72,6 +72,9 @@ def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
     cfg = resolve_config(cfg)
     module_entry(cfg["module"]).check(module_sections(cfg))
     check_local_conv(cfg["model"].get("local_conv"))
+    if (cfg.get("data") or {}).get("train_transform"):
+        from satagraph.data.window_transform import window_transform
+        window_transform(cfg["data"]["train_transform"])  # registered, before any data is read
     check_keys("trainer", cfg["trainer"], trainer_keys())
     check_logger(cfg["logger"])
     check_wandb_login(cfg["logger"])
