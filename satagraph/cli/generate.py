@@ -306,12 +306,16 @@ def _render(motions, args) -> None:
 def _generate_prompts(args, module, targets, prompts: List[str], settings) -> int:
     """``--prompts``: every prompt on every skeleton into the folder
     ``args.output``, prompt i with seed ``args.seed + i``; a prompt that
-    fails is said in one line and the others go on (exit code 2)."""
+    fails is said in one line and the others go on (exit code 2).
+    ``prompts.tsv`` lists what is written as it is written (an interrupt
+    left none, or an earlier run's)."""
     from satagraph.pipelines.generate import generate_on, output_paths, write_all
     from satagraph.utils.files import atomic_write_text
     from satagraph.cli.folders import each_kept
     start = time.time()
     Path(args.output).mkdir(parents=True, exist_ok=True)
+    table, listed = Path(args.output) / "prompts.tsv", ["path\tprompt\tskeleton\tseconds\tseed"]
+    atomic_write_text(table, listed[0] + "\n")
 
     def one(item) -> List[str]:
         i, prompt = item
@@ -321,15 +325,15 @@ def _generate_prompts(args, module, targets, prompts: List[str], settings) -> in
         motions = [generate_on(module, text, t, args.seconds, args.seed + i, settings)
                    for t in targets]
         write_all(motions, paths)
-        return ["\t".join([Path(path).name, " ".join(prompt.split()), source,
-                           f"{motion.duration:.2f}", str(args.seed + i)])
-                for motion, path, source in zip(motions, paths, args.skeleton)]
+        listed.extend("\t".join([Path(path).name, " ".join(prompt.split()), source,
+                                 f"{motion.duration:.2f}", str(args.seed + i)])
+                      for motion, path, source in zip(motions, paths, args.skeleton))
+        atomic_write_text(table, "\n".join(listed) + "\n")
+        return paths
 
     done, failed = each_kept(list(enumerate(prompts)), one, lambda item, err: (
         f"{args.prompts}: prompt {item[0] + 1} ({item[1]!r}): {err}"), args.traceback)
-    rows = ["path\tprompt\tskeleton\tseconds\tseed"] + [row for rows in done for row in rows]
-    atomic_write_text(Path(args.output) / "prompts.tsv", "\n".join(rows) + "\n")
-    print(f"generated {len(rows) - 1} motions of {len(done)} of {len(prompts)} "
+    print(f"generated {len(listed) - 1} motions of {len(done)} of {len(prompts)} "
           f"prompts into {args.output} in {time.time() - start:.1f} s (listed in prompts.tsv)")
     return 2 if failed else 0
 

@@ -68,3 +68,32 @@ def test_prompts_refuse_what_cannot_be_done(tmp_path: Path, capsys, case: str) -
                  str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and ("no prompts" if case == "empty" else "not a folder") in err
+
+
+@pytest.mark.skipif(not builtin_path("text-to-motion").is_file(),
+                    reason="no built-in text-to-motion weights ship in this checkout")
+def test_an_interrupted_prompts_run_lists_what_it_wrote(tmp_path: Path, monkeypatch,
+                                                        capsys) -> None:
+    """Ctrl-C after the first prompt left no prompts.tsv (or an earlier
+    run's, listing files of other prompts)."""
+    import satagraph.pipelines.generate as generate
+    write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=20, seed=4)
+    rig = str(sorted((tmp_path / "zoo" / "biped").glob("*.bvh"))[0])
+    prompts = tmp_path / "p.txt"
+    prompts.write_text("a person walks forward\na person runs forward\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "prompts.tsv").write_text("path\tprompt\tskeleton\tseconds\tseed\nold.bvh\told\n")
+    real, calls = generate.generate_on, []
+
+    def stopped_at_the_second(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+    monkeypatch.setattr(generate, "generate_on", stopped_at_the_second)
+    assert main(["generate", "--prompts", str(prompts), "--skeleton", rig, str(out),
+                 "--seconds", "1.0"]) == 130
+    rows = (out / "prompts.tsv").read_text().splitlines()
+    assert len(rows) == 2 and rows[1].startswith("000_a-person-walks-forward.bvh\t")
+    assert (out / rows[1].split("\t")[0]).is_file()
