@@ -455,13 +455,13 @@ def test_loss_log_keeps_the_wall_clock_and_reads_old_files(tmp_path: Path) -> No
     assert sorted(times) == [2, 3] and before - 1 <= times[2] <= times[3] <= time.time() + 1
 
 
-def test_a_loss_line_a_full_disk_cuts_short_is_taken_back(tmp_path: Path) -> None:
+def test_a_loss_line_a_full_disk_cuts_short_is_taken_back(tmp_path: Path,
+                                                         file_size_limit) -> None:
     """The file system refusing a ``losses.tsv`` line half-way (a full disk;
     here the file size limit): the error names the file (it said ``[Errno
     28] No space left on device`` alone), and the half line is taken back,
     so the resumed run's replay of that step is a line of its own (it ran
     on from the half line: a cut loss, or a loss read as the time)."""
-    import resource
     from types import SimpleNamespace
     from satagraph.lightning.reliability import LossLog
     path = tmp_path / "losses.tsv"
@@ -470,15 +470,8 @@ def test_a_loss_line_a_full_disk_cuts_short_is_taken_back(tmp_path: Path) -> Non
     log.on_train_batch_end(trainer, None, torch.tensor(2.5), None, 0)
     first = path.read_text()
     trainer.global_step = 2
-    limits = resource.getrlimit(resource.RLIMIT_FSIZE)
-    handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-    try:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (len(first) + 6, limits[1]))
-        with pytest.raises(OSError) as err:
-            log.on_train_batch_end(trainer, None, torch.tensor(1.0 / 3.0), None, 1)
-    finally:
-        resource.setrlimit(resource.RLIMIT_FSIZE, limits)
-        signal.signal(signal.SIGXFSZ, handler)
+    with file_size_limit(len(first) + 6), pytest.raises(OSError) as err:
+        log.on_train_batch_end(trainer, None, torch.tensor(1.0 / 3.0), None, 1)
     assert path.read_text() == first
     assert err.value.filename == str(path)
     log.on_train_batch_end(trainer, None, torch.tensor(1.0 / 3.0), None, 1)  # the replay
