@@ -249,6 +249,9 @@ def run_generate(args) -> int:
     _spare_inputs(paths, args.skeleton)
     _check_render(args)
     targets = _targets(args)
+    from satagraph.io.weights import BUILTIN_VARIANTS, check_weights
+    if args.ckpt not in BUILTIN_VARIANTS:  # load_generator says what those are
+        check_weights(args.ckpt, kind="text-to-motion")  # a missing file, before the model code
     settings = _settings(args)  # torch and the model code: after the files are checked
     from satagraph.pipelines.generate import generate_on, load_generator, write_all
     from satagraph.io.weights import BUILTIN, builtin_notice

@@ -123,15 +123,16 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
              ("generate", "--text", "a walk", "--skeleton", gone, out, "--seconds", "2"),
              ("generate", "--text", "a walk", "--skeleton", rig, unwritable),
              ("generate", "--text", "a walk", "--skeleton", rig, out, "--seconds", "100"),
-             ("retarget", rig, "--target", rig, out, "--ckpt", gone)]
+             ("retarget", rig, "--target", rig, out, "--ckpt", gone),
+             ("generate", "--text", "a walk", "--skeleton", rig, out, "--ckpt", gone)]
     heavy, stderr = _probe(argvs, code=2)
-    assert heavy[:-1] == [[]] * (len(argvs) - 1)
-    assert heavy[-1] == ["torch"]  # the weights file's reader, not the model's code
+    assert heavy[:-2] == [[]] * (len(argvs) - 2)
+    assert heavy[-2:] == [["torch"]] * 2  # the weights file's reader, not the model's code
     said = [line for line in stderr.splitlines() if "error:" in line]
     assert [line.split("error: ")[1].split(":")[0] for line in said] == [
         gone, f"cannot write {unwritable}", "windows of -3 frames sharing -1", gone,
         "windows of 8 frames sharing 8", gone, f"cannot write {unwritable}",
-        "argument --seconds", gone]
+        "argument --seconds", gone, gone]
     assert not Path(out).exists()
 
 
