@@ -44,21 +44,23 @@ def _limb(family: str, ranks: Tuple[int, ...], default: int) -> LimbWord:
 LIMB_WORDS: Dict[str, LimbWord] = {
     **{w: _limb("arm", (0,), 0) for w in (
         "clavicle", "clav", "collar", "collarbone", "scapula", "shoulderblade")},
-    "shoulder": _limb("arm", (0, 1), 0),
+    **{w: _limb("arm", (0, 1), 0) for w in ("shoulder", "shldr")},
     **{w: _limb("arm", (1,), 1) for w in (
         "upperarm", "uparm", "arm", "humerus", "bicep", "biceps")},
     **{w: _limb("arm", (2,), 2) for w in (
-        "elbow", "forearm", "lowerarm", "loarm", "radius", "ulna")},
+        "elbow", "forearm", "lowerarm", "loarm", "radius", "ulna",
+        "foretwist")},  # 3ds Max biped's "Bip01 L ForeTwist"
     "wrist": _limb("arm", (3,), 3),
     "hand": _limb("arm", (3, 4), 3),
     "palm": _limb("arm", (3, 4), 3),
-    "metacarpal": _limb("arm", (3, 4), 3),
+    **{w: _limb("arm", (3, 4), 3) for w in ("metacarpal", "carpal")},  # Daz "lCarpal1"
     **{w: _limb("arm", (4,), 4) for w in (
         "finger", "fingers", "fingerbase", "thumb", "index", "ring", "pinky",
         "pinkie", "little")},
     "hip": _limb("leg", (0, 1), 1),
     "hipjoint": _limb("leg", (0, 1), 0),
     "pelvis": _limb("leg", (0,), 0),
+    "coxa": _limb("leg", (0,), 0),  # an arthropod leg's first segment
     **{w: _limb("leg", (1,), 1) for w in (
         "thigh", "upleg", "upperleg", "femur")},
     "leg": _limb("leg", (1, 2), 1),
@@ -67,7 +69,7 @@ LIMB_WORDS: Dict[str, LimbWord] = {
         "crus", "gaskin")},
     **{w: _limb("leg", (3,), 3) for w in ("ankle", "hock", "tarsus", "heel")},
     **{w: _limb("leg", (3,), 3) for w in DIGITIGRADE_WORDS},
-    "foot": _limb("leg", (3, 4), 3),
+    **{w: _limb("leg", (3, 4), 3) for w in ("foot", "metatarsal")},  # Daz "lMetatarsals"
     "feet": _limb("leg", (3, 4), 3),
     "paw": _limb("leg", (3,), 3),
     "hoof": _limb("leg", (3,), 3),
@@ -79,6 +81,11 @@ LIMB_WORDS: Dict[str, LimbWord] = {
     **{w: _limb("claw", (3,), 3) for w in ("pincer", "pincers", "chela",
                                            "nipper", "nippers")},
 }
+
+#: Limb words that also name a whole limb: in a name with another limb word
+#: (``HindLeg_Hip_L``, ``Arm_L_Clavicle``) they say which limb, not which
+#: segment.
+WHOLE_LIMB_WORDS = frozenset({"leg", "arm"})
 
 # Digit words -> ordinal, neutral across hands, feet and paws.
 DIGIT_WORDS: Dict[str, str] = {
@@ -131,7 +138,7 @@ PART_WORDS: Dict[str, str] = {
 
 TAIL_WORDS = frozenset({"tail", "tailbone"})
 HELPER_WORDS: Dict[str, str] = {
-    **{w: "twist" for w in ("twist", "roll")},
+    **{w: "twist" for w in ("twist", "roll", "foretwist")},
     **{w: "ik" for w in ("ik", "pole", "target")},
     **{w: "helper" for w in (
         "share", "sharebone", "helper", "help", "corrective", "corr", "adjust",
@@ -170,7 +177,7 @@ COMPOUNDS: Dict[Tuple[str, str], str] = {
     ("jaw", "root"): "jawroot", ("tail", "bone"): "tailbone",
     ("center", "of"): "center", ("of", "mass"): "com",
     ("horse", "link"): "horselink", ("eye", "stalk"): "eyestalk",
-    ("tarso", "metatarsus"): "tarsometatarsus",
+    ("tarso", "metatarsus"): "tarsometatarsus", ("fore", "twist"): "foretwist",
 }
 
 _PREFIX = re.compile(
@@ -449,8 +456,13 @@ def _expand_combined_sides(words: List[str]) -> List[str]:
 
 
 def _pick_limb(words: Tuple[str, ...]) -> Optional[LimbWord]:
-    """The most distal limb word (highest smallest rank) of the name."""
-    found = [LIMB_WORDS[w] for w in words if w in LIMB_WORDS]
+    """The most distal limb word (highest smallest rank) of the name; a
+    word that names the whole limb (:data:`WHOLE_LIMB_WORDS`) only where no
+    other limb word says which segment (``FrontLeg_Scapula_L``: the
+    shoulder blade, not the leg's upper segment)."""
+    named = [w for w in words if w in LIMB_WORDS]
+    named = [w for w in named if w not in WHOLE_LIMB_WORDS] or named
+    found = [LIMB_WORDS[w] for w in named]
     return max(found, key=lambda lw: (min(lw[1]), lw[2])) if found else None
 
 
@@ -511,8 +523,8 @@ def _trunk(words: Tuple[str, ...], side: Optional[str], has_limb: bool,
         if word in ("hip", "hipjoint", "pelvis") and side is None \
                 and not _has_limb_besides(words, word):
             return "pelvis"
-        if word == "back" and not has_limb:
-            return "spine"
+        if word == "back" and not has_limb and side is None:
+            return "spine"  # "LowerBack"; a sided "back" is no spine (VRoid's "J_Sec_L_SkirtBack")
     return None
 
 
@@ -547,9 +559,9 @@ def _digit(words: Tuple[str, ...], limb: Optional[LimbWord]) -> Optional[str]:
 
 
 _FOOT_DIGIT_WORDS = frozenset({"toe", "toes", "toebase", "bigtoe", "foot", "feet",
-                               "ball", "hoof"})
+                               "ball", "hoof", "metatarsal"})
 _HAND_DIGIT_WORDS = frozenset({"hand", "finger", "fingers", "fingerbase",
-                               "thumb", "palm", "metacarpal"})
+                               "thumb", "palm", "metacarpal", "carpal"})
 
 
 def _digit_family(words: Tuple[str, ...], limb: LimbWord) -> str:

@@ -338,7 +338,8 @@ DIALECT_HUMAN_HEIGHT = (0.8, 3.0)
 #: The units a human body plan may be read in: a file in an arbitrary unit
 #: that makes it :data:`HUMAN_HEIGHT` tall in one of them reads as that unit.
 STANDARD_UNITS = ("m", "cm", "mm", "in", "cmu")
-_NOT_HUMAN = re.compile(r"tail|wing|beak|snout|muzzle|paw|hoof|antenn|claw|"
+#: Names no human has (a ponytail is hair: 3ds Max biped's ``Bip01 Ponytail1``).
+_NOT_HUMAN = re.compile(r"(?<!pony)tail|wing|beak|snout|muzzle|paw|hoof|antenn|claw|"
                         r"pincer|fin(?![a-z])|horn|mane|feather|tentacle", re.I)
 
 

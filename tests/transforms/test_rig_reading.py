@@ -60,6 +60,16 @@ def test_units_of_a_human_from_its_body_plan() -> None:
         assert units.how in ("human", "magnitude") and units.scale == scale
 
 
+def test_a_human_with_a_ponytail_is_a_human() -> None:
+    """3ds Max biped's ``Bip01 Ponytail1`` made a human "not a human" (its
+    "tail"): a 1.6 m character in cm kept 160 file units as metres."""
+    clip = _clip("biped")
+    names = ["Bip01 Ponytail1" if n == "Head_end" else n for n in clip.skeleton.names]
+    clip = clip.with_(skeleton=clip.skeleton.replace(names=names))
+    units = read_rig(apply_dialect(clip, Dialect(unit="cm"))[0]).units
+    assert (units.how, units.scale) == ("human", 0.01), units.summary()
+
+
 def test_units_of_an_animal_are_kept_and_reported_not_humanised() -> None:
     bird = _clip("fowl")  # 28 units tall: a chicken in cm, not a 1.56 m human
     motion, _ = apply_dialect(bird, Dialect(unit=28.0))
