@@ -30,7 +30,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tupl
 
 from satagraph import __version__
 from satagraph.cli.arguments import (add_rig_arguments, positive_float, positive_int,
-                                     read_with_rig)
+                                     read_with_rig, seed)
 from satagraph.io import BVHError
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
@@ -368,7 +368,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         help="zoo clips per skeleton (default: 4)")
     parser.add_argument("--frames", type=positive_int, default=120,
                         help="frames per zoo clip (default: 120)")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--seed", type=seed, default=0,
                         help="zoo and bone-scaling seed (default: 0)")
     parser.add_argument("--json", action="store_true",
                         help="print the summary as JSON")

@@ -141,6 +141,22 @@ def positive_int(text: str) -> int:
     return value
 
 
+def seed(text: str) -> int:
+    """A ``--seed``: a whole number from 0 to
+    :data:`~satagraph.experiment.schema.MAX_SEED`, the range of a config's
+    ``seed`` (``zoo --seed -1`` failed as ``expected non-negative integer``,
+    ``generate --seed 1e20``'s digits as ``Overflow when unpacking long
+    long`` once the model had loaded)."""
+    from satagraph.experiment.schema import MAX_SEED
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"a seed from 0 to {MAX_SEED} is expected: {text!r}")
+    return value
+
+
 class ListThenFolder(argparse.Action):
     """A list option (``nargs="+"``) that hands a trailing value it cannot
     read to the command's positional :obj:`folder`, where that is not
@@ -200,7 +216,7 @@ def one_of(choices, what: str = "value"):
 
 __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
            "check_per_input", "read_with_rig", "ListThenFolder", "Folder",
-           "one_of"]
+           "one_of", "seed"]
 
 
 def add_plant_argument(parser: argparse.ArgumentParser, default: bool = False) -> None:

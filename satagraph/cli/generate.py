@@ -40,7 +40,7 @@ def _window(text: str) -> float:
 
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
-    from satagraph.cli.arguments import add_plant_argument, add_rig_arguments
+    from satagraph.cli.arguments import add_plant_argument, add_rig_arguments, seed
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
@@ -72,7 +72,7 @@ def add_generate_parser(sub) -> None:
     p.add_argument("--seconds", type=_seconds, default=None,
                    help="duration (default: drawn from the model's length model; longer than "
                    "the model's training window, generated in windows, see --window)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     p.add_argument("--guidance", type=float, default=4.0,
                    help="classifier-free guidance scale of the masked transformer "
                    "(default 4; 1: none; the text is dropped, never the skeleton)")

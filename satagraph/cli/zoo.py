@@ -18,7 +18,7 @@ import itertools
 import time
 from typing import List
 
-from satagraph.cli.arguments import Folder, ListThenFolder, one_of, positive_int
+from satagraph.cli.arguments import Folder, ListThenFolder, one_of, positive_int, seed
 from satagraph.datasets.zoo import (ALL_KINDS, CLIP_KINDS, GESTURE_KINDS, NOISE_STYLES,
                                     REST_POSES, SPECIES, UNITS, UP_AXES, Dialect,
                                     dialect_variants, unit_scale, write_dialect_zoo, write_zoo)
@@ -96,7 +96,7 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
                    f"{', '.join(SPECIES)})")
     p.add_argument("--clips", type=positive_int, default=4,
                    help="clips per skeleton (default: 4)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    p.add_argument("--seed", type=seed, default=0, help="random seed (default: 0)")
     p.add_argument("--frames", type=positive_int, default=120,
                    help="frames per clip, at least 2 (default: 120)")
     p.add_argument("--fps", type=float, default=30.0,

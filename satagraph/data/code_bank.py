@@ -178,8 +178,7 @@ class CodeBank(Dataset):
                 naming :obj:`path` (safetensors' own writer raises a
                 ``SafetensorError`` that names neither).
         """
-        from safetensors.torch import save
-
+        from satagraph.io.weights import safetensors_bytes
         from satagraph.utils.files import atomic_write_bytes
         tensors = {"codes": self.codes.to(torch.int16).contiguous(),
                    "num_frames": self.num_frames, "x": self.x.half().contiguous(),
@@ -189,7 +188,7 @@ class CodeBank(Dataset):
                 "texts": json.dumps(self.texts)}
         if self.data is not None:
             meta["data"] = json.dumps(self.data)
-        atomic_write_bytes(path, save(tensors, metadata=meta), create_parent=True)
+        atomic_write_bytes(path, safetensors_bytes(tensors, meta), create_parent=True)
 
     @classmethod
     def load(cls, path: PathLike) -> "CodeBank":

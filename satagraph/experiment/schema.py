@@ -215,6 +215,24 @@ def check_value(name: str, value: Any, kind: str) -> None:
                          f"{' (or null)' if optional else ''}")
 
 
+#: Largest seed: ``seed`` and ``data.seed`` seed Lightning's
+#: ``seed_everything`` and numpy's generators, which take 0 to 2**32 - 1
+#: (``data.seed=-1`` trained until its first augmented or zoo window, then
+#: failed as ``expected non-negative integer``).
+MAX_SEED = 2 ** 32 - 1
+
+
+def check_seed(name: str, value: Any) -> None:
+    """A seed (``seed``, ``data.seed``, a zoo entry's ``seed``; ``None``
+    passes where the schema allows it): a whole number from 0 to :data:`MAX_SEED`.
+
+    Raises:
+        ValueError: One line naming :obj:`name`.
+    """
+    if _is_int(value) and not 0 <= value <= MAX_SEED:
+        raise ValueError(f"{name}={value}: a seed from 0 to {MAX_SEED} is expected")
+
+
 def fill(where: str, schema: type, values: Optional[Mapping[str, Any]]) -> Dict[str, Any]:
     """:obj:`values` checked against the fields of :obj:`schema` (their
     names and simple types, :func:`check_types`), with the defaults of the
@@ -248,6 +266,11 @@ def resolve_data(data: Optional[Mapping[str, Any]],
     from satagraph.data.dataset import DEFAULT_PREPROCESSING
     from satagraph.transforms.augment import AugmentConfig
     out = fill("data", schema, data)
+    check_seed("data.seed", out.get("seed"))
+    sources = out.get("sources")
+    for i, source in enumerate(sources if isinstance(sources, (list, tuple)) else [sources]):
+        if isinstance(source, Mapping):  # a zoo entry's own seed
+            check_seed(f"data.sources[{i}].seed", source.get("seed"))
     for key, least in DATA_AT_LEAST.items():
         value = out.get(key)
         if _is_number(value) and value < least:
@@ -320,6 +343,7 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
     """
     from satagraph.experiment.registry import module_entry
     out = fill("", ExperimentConfig, cfg)
+    check_seed("seed", out["seed"])
     out["data"] = resolve_data(out["data"], module_entry(out["module"]).data)
     out["trainer"] = resolve_trainer(out["trainer"])
     out["logger"] = fill("logger", LoggerConfig, out["logger"])
@@ -338,6 +362,6 @@ def resolve_config(cfg: Mapping[str, Any]) -> Dict[str, Any]:
 __all__ = ["ExperimentConfig", "DataConfig", "LoggerConfig", "CheckpointConfig",
            "TrainerExtras", "GRAD_CLIP", "EMA", "TRAINER_OPTIM", "resolve_config",
            "resolve_data", "check_frame_rate", "fill", "check_keys", "check_types",
-           "check_value", "unknown_key_error",
+           "check_value", "check_seed", "MAX_SEED", "unknown_key_error",
            "defaults", "DATA_AT_LEAST",
            "signature_schema"]

@@ -278,6 +278,22 @@ def weights_payload(module: torch.nn.Module, half: bool = False,
     return tensors, {k: json.dumps(v, sort_keys=True) for k, v in metadata.items()}
 
 
+def safetensors_bytes(tensors: Mapping[str, Tensor], metadata: Mapping[str, str]) -> bytes:
+    """The bytes of a safetensors file of :obj:`tensors` and
+    :obj:`metadata`, its header's keys in sorted order: the same tensors
+    and metadata give the same bytes (``safetensors.torch.save`` writes the
+    metadata in a hash map's order, which changes from one call to the next:
+    two exports of one checkpoint, or two code banks of one seed, differed)."""
+    from safetensors.torch import save
+    data = save(dict(tensors), metadata=dict(metadata))
+    size = int.from_bytes(data[:8], "little")
+    header = json.loads(data[8:8 + size])
+    text = json.dumps(header, sort_keys=True, ensure_ascii=False,
+                      separators=(",", ":")).encode("utf-8")
+    text += b" " * (-len(text) % 8)  # safetensors' own alignment of the data
+    return len(text).to_bytes(8, "little") + text + data[8 + size:]
+
+
 def save_weights(module: torch.nn.Module, path: PathLike, half: bool = False,
                  training_data: Any = None, provenance: Optional[Mapping[str, Any]] = None,
                  force: bool = False, max_bytes: int = MAX_WEIGHTS_BYTES) -> int:
@@ -290,9 +306,8 @@ def save_weights(module: torch.nn.Module, path: PathLike, half: bool = False,
         WeightsSizeError: Larger than :obj:`max_bytes` and not :obj:`force`
             (nothing is written).
     """
-    from safetensors.torch import save
     tensors, metadata = weights_payload(module, half, training_data, provenance)
-    data = save(tensors, metadata=metadata)
+    data = safetensors_bytes(tensors, metadata)
     if len(data) > max_bytes and not force:
         raise WeightsSizeError(
             f"{os.fspath(path)}: the weights take {len(data) / 2**20:.2f} MB, over the "
@@ -416,6 +431,6 @@ def load_weights_or_checkpoint(path: PathLike, require=("state_dict",),
 __all__ = ["FORMAT", "FORMAT_VERSION", "MAX_WEIGHTS_BYTES", "BUILTIN", "BUILTIN_FILES",
            "BUILTIN_VARIANTS", "NO_BUILTIN", "WeightsSizeError", "builtin_path",
            "builtin_names", "is_builtin", "builtin_notice", "resolve_weights", "is_weights_file",
-           "module_hyper_parameters", "weights_payload", "save_weights",
+           "module_hyper_parameters", "weights_payload", "safetensors_bytes", "save_weights",
            "read_weights_metadata", "load_weights", "load_weights_or_checkpoint",
            "check_weights"]

@@ -639,3 +639,23 @@ def test_inspect_prints_on_a_cp1252_output(tiny_file, monkeypatch):
     out.flush()
     assert "\\u30bb\\u30f3\\u30bf\\u30fc" in out.buffer.getvalue().decode("cp1252")
     assert out.errors == "strict"  # as it was after the command
+
+
+@pytest.mark.parametrize("command, seed", [("zoo", "-1"), ("demo", "-1"),
+                                           ("generate", "99999999999999999999")])
+def test_a_seed_out_of_range_is_refused_as_an_argument(capsys, tiny_file, tmp_path,
+                                                      command, seed):
+    """``zoo --seed -1`` and ``demo --seed -1`` failed as ``expected
+    non-negative integer`` (naming no option), ``generate --seed 1e20``'s
+    digits as ``Overflow when unpacking long long`` after the model loaded:
+    each is refused up front, with a config's seed range."""
+    out = str(tmp_path / "out")
+    argv = {"zoo": ["zoo", out], "demo": ["demo", "--output", out],
+            "generate": ["generate", "--text", "a walk", "--skeleton", str(tiny_file),
+                         out + ".bvh"]}[command]
+    with pytest.raises(SystemExit) as info:
+        main([*argv, "--seed", seed])
+    assert info.value.code == 2
+    assert f"argument --seed: a seed from 0 to 4294967295 is expected: '{seed}'" in \
+        capsys.readouterr().err
+    assert not list(tmp_path.glob("out*"))

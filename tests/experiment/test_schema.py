@@ -219,3 +219,25 @@ def test_heads_must_divide_the_width():
     with pytest.raises(ValueError, match="hidden_channels=33 must be a multiple of "
                                          "model.heads=4"):
         SpatioTemporalBlock(33, heads=4)
+
+
+@pytest.mark.parametrize("override, module", [
+    ("seed=-1", "vae"), ("data.seed=-1", "vae"), ("seed=4294967296", "vae"),
+    ("data.seed=-1", "t2m")])
+def test_a_seed_out_of_range_is_one_line_before_training(override, module):
+    """``data.seed=-1`` trained until the first augmented or zoo window and
+    then failed as ``expected non-negative integer``; ``seed=-1`` failed in
+    Lightning without naming the key. Both are one line naming it."""
+    with pytest.raises(ValueError, match=rf"^{re.escape(override)}: a seed from 0 to "
+                                         "4294967295 is expected$"):
+        load_config("tiny", [f"module={module}", override])
+    assert load_config("tiny", ["seed=4294967295", "data.seed=0"])["data"]["seed"] == 0
+
+
+def test_a_zoo_entry_seed_out_of_range_is_one_line_before_training():
+    """A zoo entry's ``seed: -1`` trained until its first zoo window and
+    then failed as ``expected non-negative integer``."""
+    with pytest.raises(ValueError, match=r"^data.sources\[1\].seed=-1: a seed from 0 to "):
+        load_config("t2m_rvq_tiny", ["data.sources=[/data, {zoo: endless, seed: -1}]"])
+    cfg = load_config("t2m_rvq_tiny", ["data.sources=[{zoo: endless, seed: 7}]"])
+    assert cfg["data"]["sources"][0]["seed"] == 7

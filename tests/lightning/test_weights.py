@@ -116,6 +116,23 @@ def test_size_limit(build_tiny_module: Callable, tmp_path: Path) -> None:
     assert save_weights(build_tiny_module(), path, max_bytes=1000, force=True) > 1000
 
 
+def test_the_same_weights_are_the_same_bytes(build_tiny_module: Callable,
+                                             tmp_path: Path) -> None:
+    """``safetensors.torch.save`` wrote the metadata in a hash map's order,
+    new at every call: two exports of one checkpoint differed in their
+    bytes (not their content), so a release could not be checked against a
+    rebuild. Five saves of one module are one file, which reads back."""
+    torch.manual_seed(0)
+    module = build_tiny_module()
+    paths = [tmp_path / f"w{i}.safetensors" for i in range(5)]
+    for path in paths:
+        save_weights(module, path, training_data="zoo", provenance={"command": "c", "é": 1})
+    assert len({path.read_bytes() for path in paths}) == 1
+    assert read_weights_metadata(paths[0])["training_data"] == "zoo"
+    state = load_weights(paths[0])["state_dict"]
+    assert all(torch.equal(state[k], v) for k, v in module.state_dict().items() if k in state)
+
+
 def test_builtin_resolves_to_package_data(build_tiny_module: Callable, zoo_clip: Motion,
                                           tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                           capsys: pytest.CaptureFixture) -> None:

@@ -30,3 +30,16 @@ def test_a_bank_that_cannot_be_written_names_its_file(tmp_path: Path, file_size_
     assert path.read_bytes() == before  # the previous bank is kept
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bank.safetensors"]
     assert len(CodeBank.load(path)) == 2
+
+
+def test_a_bank_is_the_same_bytes_every_time(tmp_path: Path) -> None:
+    """The metadata (format, fingerprint, texts, data) was written in a hash
+    map's order, new at every save: two banks of one seed differed."""
+    paths = [tmp_path / f"bank{i}.safetensors" for i in range(5)]
+    bank = _bank(3)
+    bank.data = {"sources": ["zoo"], "window": 8}
+    for path in paths:
+        bank.save(path)
+    assert len({path.read_bytes() for path in paths}) == 1
+    loaded = CodeBank.load(paths[0])
+    assert torch.equal(loaded.codes, bank.codes) and loaded.texts == bank.texts
