@@ -185,7 +185,9 @@ class MotionDataModule(WindowDataModule):
             a dict of some of its keys, e.g. ``{"scale": 0.5, "mirror":
             0.5, "drop": 0.1, "low": 0.8, "high": 1.2}``. Every window is
             drawn on a new skeleton per epoch, deterministically given the
-            seed (see :class:`~satagraph.data.dataset.WindowAugment`).
+            seed (see :class:`~satagraph.data.dataset.WindowAugment`). It
+            augments the windows of files: an endless zoo's are drawn on a
+            new rig, proportions and rest pose already.
         on_error (str): What to do with files that cannot be processed
             (malformed, or failing :mod:`~satagraph.data.validate`): every
             bad file of every split is found first; ``"raise"`` (default)
@@ -272,6 +274,10 @@ class MotionDataModule(WindowDataModule):
             raise ValueError(f"data.sources is empty: {SOURCES_HINT}")
         zoos = [zoo_entry(s) for s in sources if is_zoo_entry(s)]
         files = resolve_sources([s for s in sources if not is_zoo_entry(s)])
+        if self.augment is not None and not files:
+            warnings.warn("data.augment changes no window here: it augments the windows of "
+                          "files, and the endless zoo draws a new rig, proportions and rest "
+                          "pose for each of its windows already", stacklevel=3)
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
         loaded, errors, total, limited = {}, [], 0, []
         for split in self.splits:

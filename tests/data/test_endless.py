@@ -140,3 +140,12 @@ def test_resume_on_the_endless_zoo_gives_the_same_losses(tmp_path: Path) -> None
     train(cfg, max_steps=4)
     train(cfg, resume=True)
     assert read_loss_log(tmp_path / "b" / "losses.tsv") == full
+
+
+def test_augmenting_a_zoo_alone_is_said_to_change_nothing(tmp_path: Path) -> None:
+    """``data.augment`` on zoo sources alone trained bit for bit as without
+    it (the zoo's windows are drawn on new rigs already), unsaid."""
+    dm = MotionDataModule([_entry()], window=16, batch_size=4, cache_dir=str(tmp_path),
+                          augment=True)
+    with pytest.warns(UserWarning, match="data.augment changes no window here"):
+        dm.setup("fit")
