@@ -294,12 +294,23 @@ def run_train(args) -> int:
               "its limit stops it (raise trainer.max_steps, max_epochs or max_time to go "
               f"on); checkpoints in {run_dir / 'checkpoints'}")
         return 0
-    done = (f"from step {resumed[0]} to {trainer.global_step} (epoch {trainer.current_epoch})"
-            if resumed else f"for {trainer.current_epoch} epochs")
+    done = (f"from step {resumed[0]} to {trainer.global_step} ({_epochs_done(trainer)})"
+            if resumed else f"for {trainer.global_step} steps ({_epochs_done(trainer)})")
     print(f"trained {cfg['name']} {done} in "
           f"{time.time() - start:.0f} s; checkpoints in {run_dir / 'checkpoints'} "
           f"(best: {best or 'n/a'}, last: {last_checkpoint(trainer)}){skipped}")
     return 0
+
+
+def _epochs_done(trainer) -> str:
+    """The epochs a run has trained, a fraction where a limit of time or
+    steps stopped it inside one (``trainer.current_epoch`` said 2 after 1.6)."""
+    per_epoch = trainer.num_training_batches / max(trainer.accumulate_grad_batches, 1)
+    if not per_epoch or per_epoch == float("inf"):
+        return f"epoch {trainer.current_epoch}"
+    epochs = trainer.global_step / per_epoch
+    return (f"{epochs:.0f} epoch{'s' * (round(epochs) != 1)}" if abs(epochs - round(epochs)) < 0.05
+            else f"{epochs:.1f} epochs")
 
 
 def _interrupted(run_dir: Path, saved_step: Optional[int] = None) -> str:

@@ -50,14 +50,14 @@ def test_train_resume_init_from_and_eval(config_overrides: List[str], tmp_path: 
     run = tmp_path / "run"
     last = run / "checkpoints" / "last.ckpt"
     assert main(_train_args(config_overrides, run)) == 0
-    assert "trained tiny for 1 epochs" in capsys.readouterr().out
+    assert "trained tiny for 2 steps (1 epoch)" in capsys.readouterr().out
     first = _checkpoint(last)
     assert first["global_step"] == 2
     assert first["hyper_parameters"]["meta"]["data"]["max_files"] == 2
 
     # --resume continues from last.ckpt: two more steps, not a restart.
     assert main(_train_args(config_overrides, run, "trainer.max_epochs=2", "--resume")) == 0
-    assert "trained tiny from step 2 to 4 (epoch 2)" in capsys.readouterr().out
+    assert "trained tiny from step 2 to 4 (2 epochs)" in capsys.readouterr().out
     # resumed where its limit stops it: it says so instead of "trained"
     assert main(_train_args(config_overrides, run, "trainer.max_epochs=2", "--resume")) == 0
     assert "nothing to train: tiny stood at step 4" in capsys.readouterr().out
@@ -299,3 +299,17 @@ def test_train_data_names_the_folders_to_train_on(config_overrides: List[str],
     assert main(args[:3] + ["--data", str(small_manifest)] + args[3:]) == 0
     ckpt = torch.load(run / "checkpoints" / "last.ckpt", weights_only=True)
     assert ckpt["hyper_parameters"]["meta"]["data"]["sources"] == [str(small_manifest)]
+
+
+def test_the_epochs_a_run_trained_are_counted_from_its_steps() -> None:
+    """A run that ``trainer.max_time`` stopped 0.6 of the way into its second
+    epoch was said to have trained "for 2 epochs"."""
+    from types import SimpleNamespace
+    from satagraph.cli.train import _epochs_done
+    run = SimpleNamespace(num_training_batches=23, accumulate_grad_batches=1,
+                          global_step=37, current_epoch=2)
+    assert _epochs_done(run) == "1.6 epochs"
+    assert _epochs_done(SimpleNamespace(**dict(vars(run), global_step=23))) == "1 epoch"
+    assert _epochs_done(SimpleNamespace(**dict(vars(run), global_step=46))) == "2 epochs"
+    assert _epochs_done(SimpleNamespace(**dict(vars(run), num_training_batches=float("inf")))) \
+        == "epoch 2"
