@@ -73,7 +73,7 @@ def checkpoint_step(path: Path) -> int:
 
 
 def run(root: Path, kills: Optional[List[int]], count: int, every: int,
-        epochs: int) -> str:
+        epochs: int, seed: Optional[int] = None) -> str:
     write_zoo(root / "zoo", species=["biped", "quadruped"], clips=3, frames=48)
     base = overrides(root, every, epochs)
     start = time.monotonic()
@@ -81,7 +81,9 @@ def run(root: Path, kills: Optional[List[int]], count: int, every: int,
                    capture_output=True)
     reference = read_loss_log(root / "ref" / "losses.tsv")
     steps = len(reference)
-    kills = kills or sorted(random.Random().sample(range(every + 1, steps - 1), count))
+    drawn = not kills
+    seed = random.randrange(2 ** 32) if seed is None else seed  # said, to repeat a run
+    kills = kills or sorted(random.Random(seed).sample(range(every + 1, steps - 1), count))
     rows, detail = [], ""
     for k, kill in enumerate(kills):
         out = root / f"run{k}"
@@ -103,7 +105,8 @@ def run(root: Path, kills: Optional[List[int]], count: int, every: int,
             f"{steps // epochs}), a checkpoint every {every} steps and at every epoch end; "
             "`threads=1 trainer.deterministic=true`, `OMP_NUM_THREADS=1`. Each run is "
             "killed with SIGKILL once it has logged the step, then continued with "
-            "`satagraph train ... --resume`.\n\n"
+            "`satagraph train ... --resume`"
+            + (f" (kill points drawn with --seed {seed})" if drawn else "") + ".\n\n"
             "| killed after step | resumed from step | steps lost | steps compared "
             "| max abs loss difference | every step identical |\n|---|---|---|---|---|---|\n"
             + "\n".join(rows) + f"\n\nFirst kill, step by step:\n\n{detail}\n"
@@ -123,6 +126,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--kills", type=int, default=3, help="random kill points")
+    parser.add_argument("--seed", type=int, default=None,
+                        help="seed of the kill points (default: a new one, said in the table)")
     parser.add_argument("--at", type=int, nargs="*", help="kill after these steps")
     parser.add_argument("--every", type=int, default=5)
     parser.add_argument("--epochs", type=int, default=4)
@@ -130,7 +135,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         "resume.md")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="satagraph-resume-") as tmp:
-        text = run(Path(tmp), args.at, args.kills, args.every, args.epochs)
+        text = run(Path(tmp), args.at, args.kills, args.every, args.epochs, args.seed)
     atomic_write_text(args.out, "# Exact resume after kill -9\n\n" + text)
     print(text)
     return 0 if "| NO |" not in text else 1
