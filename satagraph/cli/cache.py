@@ -27,7 +27,7 @@ def _size(n: int) -> str:
     return ""
 
 
-def _entries(n: int, kind: str = "") -> str:
+def _count(n: int, kind: str = "") -> str:
     return f"{n} {kind}entr{'y' if n == 1 else 'ies'}"
 
 
@@ -66,12 +66,12 @@ def run_cache(args: argparse.Namespace) -> int:
     folder = feature_cache_dir(args.dir)
     if args.prune is not None or args.clear:
         removed, freed = prune_cache(folder, None if args.clear else args.prune)
-        print(f"removed {_entries(removed)} ({_size(freed)}) from {folder}")
+        print(f"removed {_count(removed)} ({_size(freed)}) from {folder}")
     usage, now = cache_usage(folder), time.time()
     if not usage.entries:
         print(f"{folder}: no feature entries")
         return 0
-    print(f"{folder}: {_entries(usage.entries, 'feature ')}, {_size(usage.bytes)}; last read "
+    print(f"{folder}: {_count(usage.entries, 'feature ')}, {_size(usage.bytes)}; last read "
           f"{_ago(usage.newest, now)}, least recently {_ago(usage.oldest, now)} "
           "(satagraph cache --prune DAYS removes the entries unread for DAYS days)")
     return 0
