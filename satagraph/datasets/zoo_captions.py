@@ -45,8 +45,9 @@ What each kind does (:mod:`satagraph.datasets.zoo.motions`):
 * ``side``: walks facing forward while travelling 30-90 degrees to one side
   (the sign of ``travel``: positive left), told as diagonally forward
   below :data:`SIDESTEP` degrees and as sidestepping above (legged plans).
-* ``run``: the gait at 1.8-2.5 times its walking speed (legged plans),
-  told as dashing from :data:`DASH` times it.
+* ``run``: the gait at 1.8-2.5 times its walking speed (legged plans;
+  quadrupeds gallop, at that multiple of the gallop's speed), told as
+  dashing from :data:`DASH` times that speed.
 """
 from __future__ import annotations
 
@@ -56,6 +57,7 @@ from pathlib import PurePath
 from typing import Dict, List, Mapping, Optional, Tuple
 
 from satagraph.datasets.zoo import ALL_KINDS, GAITS, SPECIES, ClipFacts
+from satagraph.datasets.zoo.motions import gait_of
 
 #: Body plan -> subjects.
 ZOO_SUBJECTS: Dict[str, Tuple[str, ...]] = {
@@ -79,8 +81,8 @@ DRIFT_TURN = 30.0
 #: ``side`` clips travelling at least this many degrees off the facing
 #: direction are told as sidestepping, the others as walking diagonally.
 SIDESTEP = 60.0
-#: ``run`` clips at least this many times their gait's walking speed are
-#: told as dashing, the others as running.
+#: ``run`` clips at least this many times the speed of the gait they run
+#: in (:func:`run_speed`) are told as dashing, the others as running.
 DASH = 2.15
 _KIND_IN_NAME = re.compile(
     r"_(?P<kind>%s)(?:_\d+)?$" % "|".join(sorted(set().union(*ALL_KINDS.values()))))
@@ -204,11 +206,19 @@ def _travel_verbs(clip: ZooClip, drift: str) -> List[str]:
     return [f"steps sideways to the {side}", f"sidesteps to the {side}"]
 
 
+def run_speed(species: str) -> float:
+    """Speed (leg lengths per second) of the gait a species' ``run`` clips
+    move in, which they run at 1.8-2.5 times: a quadruped's gallop, every
+    other plan's own gait."""
+    return GAITS[gait_of(species, "run")][3]
+
+
 def dashes(clip: ZooClip) -> bool:
     """Whether a ``run`` clip is told as dashing: from :data:`DASH` times
-    its gait's walking speed."""
+    :func:`run_speed` (a quadruped's gallop, not its walk: against the walk
+    every gallop read as a dash)."""
     return (clip.kind == "run" and clip.speed_start is not None
-            and clip.speed_start >= DASH * GAITS[clip.species][3])
+            and clip.speed_start >= DASH * run_speed(clip.species))
 
 
 def _drift(clip: ZooClip) -> str:
@@ -233,4 +243,4 @@ def zoo_phrasings(clip: ZooClip) -> List[str]:
             for subject in ZOO_SUBJECTS[clip.species]]
 
 
-__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "DASH", "ZooClip", "dashes", "zoo_clip_of_row", "zoo_phrasings"]
+__all__ = ["ZOO_SUBJECTS", "TURN_WORDS", "UNTOLD_TURN", "DRIFT_TURN", "SIDESTEP", "DASH", "ZooClip", "dashes", "run_speed", "zoo_clip_of_row", "zoo_phrasings"]

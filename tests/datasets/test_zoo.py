@@ -360,7 +360,28 @@ def test_back_and_side_captions_say_the_way():
     assert "walks backward" in said[180.0]
     assert "forward and to the left" in said[40.0] and "right" not in said[40.0]
     assert "sideways to the right" in said[-80.0] and "left" not in said[-80.0]
-    run = zoo_phrasings(ZooClip.of(ClipFacts("quadruped", "run", 3.0, 2.0, 2.0, 0.0)))
-    dash = zoo_phrasings(ZooClip.of(ClipFacts("quadruped", "run", 3.0, 2.4, 2.4, 0.0)))
+    run = zoo_phrasings(ZooClip.of(ClipFacts("biped", "run", 3.0, 3.0, 3.0, 0.0)))
+    dash = zoo_phrasings(ZooClip.of(ClipFacts("biped", "run", 3.0, 3.4, 3.4, 0.0)))
     assert all("runs" in text or "jogs" in text for text in run)
     assert all("dashes" in text or "sprints" in text for text in dash)
+
+
+def test_galloping_quadrupeds_run_and_dash_by_the_gallops_speed():
+    """A quadruped's run gallops at 1.8-2.5 times the gallop's speed (4-6
+    leg lengths a second); read against its walk, every one was told as
+    dashing and none as running."""
+    from satagraph.datasets.zoo import generate_clip_with_facts
+    from satagraph.datasets.zoo_captions import ZooClip, dashes, zoo_phrasings
+
+    rig = zoo_rigs(["quadruped"])[0]
+    clips = [generate_clip_with_facts(rig, "run", frames=30, seed=seed) for seed in range(8)]
+    told = {}
+    for motion, facts in clips:
+        words = " | ".join(zoo_phrasings(ZooClip.of(facts)))
+        assert ("dashes" in words) == dashes(ZooClip.of(facts))
+        assert ("runs" in words) != dashes(ZooClip.of(facts))
+        pos = motion.global_positions()[:, 0, [0, 2]]
+        told.setdefault(dashes(ZooClip.of(facts)), []).append(
+            np.linalg.norm(pos[-1] - pos[0]) / rig.leg_length)
+    assert sorted(told) == [False, True], told  # both words, as for every other plan
+    assert max(told[False]) < min(told[True])  # and the dashes the faster runs

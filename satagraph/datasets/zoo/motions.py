@@ -590,7 +590,7 @@ def _smooth_min(x: np.ndarray, width: int) -> np.ndarray:
     return np.convolve(low, kernel, mode="valid")
 
 
-def _gait(species: str, kind: str) -> str:
+def gait_of(species: str, kind: str) -> str:
     """The :data:`GAITS` entry a clip kind of a species moves in."""
     if kind == "trot":
         return "trot"
@@ -604,7 +604,7 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
             ) -> Tuple[np.ndarray, np.ndarray, int, ClipFacts]:
     """Global rotations and positions of a legged clip (extended grid),
     and its facts."""
-    gait = GAITS[_gait(rig.species, kind)]
+    gait = GAITS[gait_of(rig.species, kind)]
     _, _, stride, speed, _ = gait
     length = rig.leg_length
     clip = _profile(kind, frames, fps, speed * length, rng, length)
