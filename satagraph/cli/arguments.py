@@ -274,3 +274,37 @@ def add_still_argument(parser: argparse.ArgumentParser) -> None:
                         help="keep the output's root still wherever the source's root "
                         "stands still (a decoder can glide a body whose source stands "
                         "away; --no-still keeps the decoded path; default: on)")
+
+
+def add_device_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--device``: where :obj:`what` runs (:func:`check_device` refuses one
+    this machine lacks)."""
+    parser.add_argument("--device", default="cpu",
+                        help=f"where to run {what}: cpu, cuda, cuda:1, ... (default: cpu)")
+
+
+def check_device(device: str) -> None:
+    """Refuse a ``--device`` torch cannot name, satagraph does not run on or
+    this machine lacks (one line, before any file is read).
+
+    Raises:
+        ValueError: What is wrong with it.
+    """
+    if device == "cpu":  # the default: no torch import before the files are checked
+        return
+    import torch
+    try:
+        where = torch.device(device)
+    except RuntimeError:
+        raise ValueError(f"--device {device}: not a device (cpu, cuda, cuda:1, mps)") from None
+    count = {"cpu": 1, "cuda": torch.cuda.device_count() if torch.cuda.is_available() else 0,
+             "mps": int(torch.backends.mps.is_available())}.get(where.type)
+    if count is None:
+        raise ValueError(f"--device {device}: not a device satagraph runs on "
+                         "(cpu, cuda, cuda:1, mps)")
+    kind = where.type.upper()
+    if count == 0:
+        raise ValueError(f"--device {device}: no {kind} device on this machine")
+    if (where.index or 0) >= count:
+        raise ValueError(f"--device {device}: this machine has {count} {kind} device(s), "
+                         f"{where.type}:0 to {where.type}:{count - 1}")

@@ -40,7 +40,8 @@ def _window(text: str) -> float:
 
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
-    from satagraph.cli.arguments import add_plant_argument, add_rig_arguments, seed
+    from satagraph.cli.arguments import (add_device_argument, add_plant_argument,
+                                         add_rig_arguments, seed)
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
@@ -109,6 +110,7 @@ def add_generate_parser(sub) -> None:
                    "joint at the floor, then each frame that would sink raised onto it "
                    "(--no-ground keeps the decoder's root height; default: on)")
     add_plant_argument(p, default=True)
+    add_device_argument(p, "the generator")
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "
                    "threads make a busy machine many times slower)")
@@ -237,6 +239,8 @@ def _settings(args):
 def run_generate(args) -> int:
     from satagraph.pipelines.generate_inputs import output_paths
     from satagraph.utils.files import check_output_path
+    from satagraph.cli.arguments import check_device
+    check_device(args.device)  # before any file is read
     _split_output(args)
     prompts = read_prompts(args.prompts) if args.prompts is not None else None
     if prompts is not None:
@@ -255,7 +259,7 @@ def run_generate(args) -> int:
     settings = _settings(args)  # torch and the model code: after the files are checked
     from satagraph.pipelines.generate import generate_on, load_generator, write_all
     from satagraph.io.weights import BUILTIN, builtin_notice
-    module = load_generator(args.ckpt)
+    module = load_generator(args.ckpt).to(args.device)
     if args.ckpt == BUILTIN:
         print(f"satagraph: {builtin_notice('text-to-motion')}", file=sys.stderr)
     if args.prompts is not None:

@@ -9,7 +9,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable, List, Optional, Sequence
 
-from satagraph.cli.arguments import positive_float, positive_int
+from satagraph.cli.arguments import (add_device_argument, check_device, positive_float,
+                                     positive_int)
 from satagraph.cli.folders import run_over_folder
 from satagraph.transforms.rest import REST_MODES
 
@@ -190,8 +191,7 @@ def add_train_parsers(sub) -> None:
     p.add_argument("--max-minutes", type=positive_float, default=None,
                    help="stop drawing after this long and write the windows drawn "
                    "(default: no limit; Ctrl-C writes them too, exit code 130)")
-    p.add_argument("--device", default="cpu",
-                   help="where to run the autoencoder: cpu, cuda, cuda:1, ... (default: cpu)")
+    add_device_argument(p, "the autoencoder")
     p.add_argument("--swap-rigs", type=float, default=0.0, metavar="SHARE",
                    help="show this share of the captured human rigs' windows (CMU's, "
                    "CC_Base's: rigs of 20 windows or more, never the zoo's) on another "
@@ -216,6 +216,7 @@ def _common(p) -> None:
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
                    help="frames shared by consecutive windows (default: window / 4)")
+    add_device_argument(p, "the model")
     _rest(p, "The output keeps the target file's rest pose either way")
 
 
@@ -343,7 +344,7 @@ def run_code_bank(args) -> int:
     from satagraph.experiment.train import build_datamodule, build_module, check_config
     from satagraph.utils.files import check_output_path
     check_swap_share(args.swap_rigs)
-    _check_device(args.device)
+    check_device(args.device)
     cfg = load_config(args.config, list(args.overrides))
     if args.data:
         cfg["data"]["sources"] = list(args.data)
@@ -417,19 +418,6 @@ class ProgressLine:
             self.drawn = False
 
 
-def _check_device(device: str) -> None:
-    """Refuse a ``--device`` torch cannot name or this machine lacks."""
-    import torch
-    try:
-        kind = torch.device(device).type
-    except RuntimeError:
-        raise ValueError(f"--device {device}: not a device (cpu, cuda, cuda:1, mps)") from None
-    if kind == "cuda" and not torch.cuda.is_available():
-        raise ValueError(f"--device {device}: no CUDA device on this machine")
-    if kind == "mps" and not torch.backends.mps.is_available():
-        raise ValueError(f"--device {device}: no MPS device on this machine")
-
-
 def motion_autoencoder(module, name: str, scored: bool = False):
     """:obj:`module`, refused (one line) where it is a text-to-motion model:
     ``retarget``, ``reconstruct`` and ``eval`` (:obj:`scored`: where it says
@@ -458,7 +446,7 @@ def _load(args, motions: Sequence, paths: Sequence[str], cache: Optional[dict] =
         return cache[name], cache[name].embed
     check_weights(name)  # a missing file said before Lightning and the model code load
     from satagraph.experiment.train import load_module
-    module = motion_autoencoder(load_module(name), name)
+    module = motion_autoencoder(load_module(name, map_location=args.device), name)
     if is_builtin(name):
         print(f"satagraph: {why}{builtin_notice(name=name)}", file=sys.stderr)
     if cache is not None:
@@ -476,6 +464,7 @@ def _read(args, key: str):
 def run_reconstruct(args) -> int:
     """Reconstruct a file, or every BVH file of a folder (:mod:`satagraph.cli.folders`)."""
     models: dict = {}
+    check_device(args.device)  # before any file is read
     if Path(args.input).is_dir():
         return run_over_folder(args.input, args.output,
                                lambda src, out: _reconstruct_file(args, src, out, models),
@@ -513,6 +502,7 @@ def run_retarget(args) -> int:
     onto ``--target``."""
     from satagraph.data.validate import check_skeleton
     models: dict = {}
+    check_device(args.device)  # before any file is read
     target = _read(args, "target")
     check_skeleton(target, args.target)  # once, also for a folder of sources
     if Path(args.source).is_dir():

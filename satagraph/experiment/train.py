@@ -76,9 +76,34 @@ def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
         from satagraph.data.window_transform import window_transform
         window_transform(cfg["data"]["train_transform"])  # registered, before any data is read
     check_keys("trainer", cfg["trainer"], trainer_keys())
+    check_accelerator(cfg["trainer"])
     check_logger(cfg["logger"])
     check_wandb_login(cfg["logger"])
     return cfg
+
+
+def check_accelerator(trainer: Dict[str, Any]) -> None:
+    """A ``trainer.accelerator`` this machine lacks (``gpu`` or ``cuda``
+    without CUDA, ``mps`` without MPS) or more GPUs in ``trainer.devices``
+    than it has is one line before any data is read (it was Lightning's
+    traceback after the data was read).
+
+    Raises:
+        ValueError: What the trainer needs and what runs here.
+    """
+    import torch
+    kind = str(trainer.get("accelerator") or "auto").lower()
+    if kind in ("gpu", "cuda"):
+        have = torch.cuda.device_count() if torch.cuda.is_available() else 0
+        devices = trainer.get("devices")
+        wanted = devices if isinstance(devices, int) and devices > 0 else 1
+        if have < wanted:
+            raise ValueError(f"trainer.accelerator={kind}: needs {wanted} CUDA GPU(s), this "
+                             f"machine has {have}; trainer.accelerator=auto runs on what "
+                             "there is")
+    if kind == "mps" and not torch.backends.mps.is_available():
+        raise ValueError("trainer.accelerator=mps: no MPS device on this machine; "
+                         "trainer.accelerator=auto runs on what there is")
 
 
 #: The loggers ``logger.name`` takes.

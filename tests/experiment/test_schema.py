@@ -241,3 +241,35 @@ def test_a_zoo_entry_seed_out_of_range_is_one_line_before_training():
         load_config("t2m_rvq_tiny", ["data.sources=[/data, {zoo: endless, seed: -1}]"])
     cfg = load_config("t2m_rvq_tiny", ["data.sources=[{zoo: endless, seed: 7}]"])
     assert cfg["data"]["sources"][0]["seed"] == 7
+
+
+@pytest.mark.parametrize("config, overrides, says", [
+    ("tiny", ["trainer.accelerator=gpu"],
+     "trainer.accelerator=gpu: needs 1 CUDA GPU(s), this machine has 0; "
+     "trainer.accelerator=auto runs on what there is"),
+    ("pretrain_zoo_gpu", ["trainer.accelerator=cuda", "trainer.devices=2"],
+     "trainer.accelerator=cuda: needs 2 CUDA GPU(s), this machine has 0"),
+])
+def test_a_gpu_this_machine_lacks_is_one_line_before_the_data(monkeypatch, config,
+                                                              overrides, says):
+    """``trainer.accelerator=gpu`` without a GPU was Lightning's traceback
+    ('No supported gpu backend found!') once the data had been read."""
+    import torch
+    from satagraph.experiment.train import check_config
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    with pytest.raises(ValueError, match=re.escape(says)):
+        check_config(load_config(config, overrides))
+
+
+def test_the_gpu_configs_pass_where_a_gpu_is(monkeypatch):
+    """``accelerator: auto`` (the GPU configs) passes anywhere; ``gpu`` where
+    CUDA is."""
+    import torch
+    from satagraph.experiment.train import check_config
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    monkeypatch.setattr(torch.cuda, "device_count", lambda: 1)
+    for name in ("pretrain_zoo_gpu", "pretrain_zoo_wide_gpu"):
+        check_config(load_config(name, ["trainer.accelerator=gpu"]))
+        monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+        assert check_config(load_config(name))["trainer"]["accelerator"] == "auto"
+        monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
