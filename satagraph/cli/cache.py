@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 from typing import Optional
 
 from satagraph.cli.arguments import positive_float
@@ -64,6 +65,9 @@ def run_cache(args: argparse.Namespace) -> int:
     """Print the cache's usage, after pruning or clearing it when asked."""
     from satagraph.data.cache import cache_usage, feature_cache_dir, prune_cache
     folder = feature_cache_dir(args.dir)
+    if args.dir and not folder.is_dir() and cache_usage(Path(args.dir)).entries:
+        raise ValueError(f"cache --dir {args.dir}: the feature folder itself; --dir takes the "
+                         f"cache root that holds it: --dir {Path(args.dir).parent}")
     if args.prune is not None or args.clear:
         removed, freed = prune_cache(folder, None if args.clear else args.prune)
         print(f"removed {_count(removed)} ({_size(freed)}) from {folder}")

@@ -35,7 +35,7 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
         :func:`run_sweep_command`).
     """
     p = sub.add_parser(
-        "sweep", help="train configs for the same time budget and tabulate",
+        "sweep", help="train configs for the same time or steps and tabulate",
         description="Train each CONFIG for the same wall-clock budget "
         "(trainer.max_time), or the same number of steps (--steps: equal work, the "
         "table's train (min) column comparing their speed), on the first config's data, "

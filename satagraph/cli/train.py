@@ -215,7 +215,8 @@ def _common(p) -> None:
     p.add_argument("--window", type=int, default=None,
                    help="frames per window (default: the training window)")
     p.add_argument("--overlap", type=int, default=None,
-                   help="frames shared by consecutive windows (default: window / 4)")
+                   help="frames shared by consecutive windows, cross-faded from one "
+                        "into the next (default: window / 4)")
     add_device_argument(p, "the model")
     _rest(p, "The output keeps the target file's rest pose either way")
 

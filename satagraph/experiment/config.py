@@ -12,7 +12,7 @@ import sysconfig
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
-from omegaconf import OmegaConf
+from omegaconf import ListConfig, OmegaConf
 
 from satagraph.experiment.schema import resolve_config
 
@@ -65,9 +65,19 @@ def config_path(name: str) -> Path:
     raise FileNotFoundError(f"config {name!r} not found (a path, or one of: {known})")
 
 
-def _load(path: Path, files: List[Path]):
+def _load(path: Path, files: List[Path], chain: Tuple[Path, ...] = ()):
     """The config of :obj:`path` merged onto its ``defaults``; every file
-    read is appended to :obj:`files`."""
+    read is appended to :obj:`files`; :obj:`chain` holds the files that
+    include it.
+
+    Raises:
+        ValueError: A file includes itself, or ``defaults`` is not a list
+            (one line naming the file).
+    """
+    chain = chain + (path,)
+    if any(path.resolve() == p.resolve() for p in chain[:-1]):
+        raise ValueError(f"{chain[0]}: defaults include themselves: "
+                         + " -> ".join(map(str, chain)))
     files.append(path)
     try:
         cfg = OmegaConf.load(path)
@@ -75,7 +85,10 @@ def _load(path: Path, files: List[Path]):
         detail = " ".join(str(err).split())[:200]
         raise ValueError(f"{path}: not a valid YAML config ({detail})") from None
     bases = cfg.pop("defaults", []) or []
-    return OmegaConf.merge(*[_load(_base(path, str(b)), files) for b in bases], cfg)
+    if not isinstance(bases, (list, ListConfig)):
+        raise ValueError(f"{path}: defaults: a list of configs is expected, e.g. "
+                         f"defaults: [{bases}] (got {bases!r})")
+    return OmegaConf.merge(*[_load(_base(path, str(b)), files, chain) for b in bases], cfg)
 
 
 def _base(path: Path, name: str) -> Path:

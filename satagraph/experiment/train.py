@@ -83,16 +83,21 @@ def check_config(cfg: Dict[str, Any]) -> Dict[str, Any]:
 
 
 def check_accelerator(trainer: Dict[str, Any]) -> None:
-    """A ``trainer.accelerator`` this machine lacks (``gpu`` or ``cuda``
-    without CUDA, ``mps`` without MPS) or more GPUs in ``trainer.devices``
-    than it has is one line before any data is read (it was Lightning's
-    traceback after the data was read).
+    """A ``trainer.accelerator`` Lightning does not know, one this machine
+    lacks (``gpu`` or ``cuda`` without CUDA, ``mps`` without MPS) or more
+    GPUs in ``trainer.devices`` than it has is one line before any data is
+    read (it was Lightning's error after the data was read).
 
     Raises:
         ValueError: What the trainer needs and what runs here.
     """
     import torch
-    kind = str(trainer.get("accelerator") or "auto").lower()
+    from lightning.pytorch.accelerators import AcceleratorRegistry
+    given = trainer.get("accelerator") or "auto"
+    known = sorted(set(AcceleratorRegistry.available_accelerators()) | {"auto", "gpu"})
+    if isinstance(given, str) and given not in known:
+        raise ValueError(f"trainer.accelerator={given}: not an accelerator ({', '.join(known)})")
+    kind = str(given).lower()
     if kind in ("gpu", "cuda"):
         have = torch.cuda.device_count() if torch.cuda.is_available() else 0
         devices = trainer.get("devices")

@@ -52,7 +52,7 @@ def register_text_encoder(prefix: str, builder: Callable[[str], TextEncoder]) ->
         class BagEncoder(TextEncoder):
             def __init__(self, arg: str) -> None:
                 self._id, self._dim = f"bag:{arg}", 48
-            def encode(self, texts):   # list[str] -> float32 [N, 48]
+            def encode(self, texts):   # list[str] -> float32 tensor [N, 48]
                 ...
 
         register_text_encoder("bag", BagEncoder)   # model.text_encoder: bag:v1

@@ -77,6 +77,19 @@ def test_the_cache_command_shows_prunes_and_clears(cached, capsys) -> None:
     assert f"{tmp / 'processed'}: no feature entries" in capsys.readouterr().out
 
 
+def test_the_cache_command_refuses_the_feature_folder_as_its_root(cached, capsys) -> None:
+    """``--dir`` given the folder the command prints (``ROOT/processed``)
+    looked in ``ROOT/processed/processed``: 'no feature entries', and
+    ``--clear`` removed nothing, without a word."""
+    _, root, entries = cached
+    folder = feature_cache_dir(str(root))
+    assert main(["cache", "--dir", str(folder), "--clear"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"satagraph: error: cache --dir {folder}: the feature folder itself; --dir takes "
+        f"the cache root that holds it: --dir {root}")
+    assert all(p.exists() for p in entries)
+
+
 def test_a_run_served_from_the_cache_says_the_rig_warnings_again(tmp_path: Path) -> None:
     """A quadruped in centimetres that no manifest or file tells: the first
     run warned that its units are unknown, a second run from the cache said

@@ -138,6 +138,22 @@ def test_a_defaults_entry_may_be_a_file_name_or_a_relative_path(tmp_path):
         load_config(str(lost))
 
 
+def test_defaults_that_include_themselves_or_are_no_list_are_one_line(tmp_path):
+    """A config whose defaults come back to it was 'not a valid YAML config
+    (maximum recursion depth exceeded ...)'; ``defaults: tiny`` (no list)
+    was read letter by letter ('config 't' not found')."""
+    (tmp_path / "a.yaml").write_text("defaults: [b]\n")
+    (tmp_path / "b.yaml").write_text("defaults: [a.yaml]\n")
+    a, b = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    with pytest.raises(ValueError, match=rf"^{a}: defaults include themselves: "
+                                         rf"{a} -> {b} -> {a}$"):
+        load_config(str(a))
+    (tmp_path / "bare.yaml").write_text("defaults: tiny\n")
+    with pytest.raises(ValueError, match=r"bare.yaml: defaults: a list of configs is "
+                                         r"expected, e.g. defaults: \[tiny\] \(got 'tiny'\)$"):
+        load_config(str(tmp_path / "bare.yaml"))
+
+
 @pytest.mark.slow
 def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
     """The data files of ``setup.cfg`` cover every config, and each loads

@@ -261,6 +261,18 @@ def test_a_gpu_this_machine_lacks_is_one_line_before_the_data(monkeypatch, confi
         check_config(load_config(config, overrides))
 
 
+def test_an_unknown_accelerator_is_one_line_before_the_data():
+    """``trainer.accelerator=gpus`` (a typo) read the data, wrote the run's
+    config.yaml and then failed in Lightning ('You selected an invalid
+    accelerator name')."""
+    from satagraph.experiment.train import check_config
+    for typo in ("gpus", "CPU"):   # Lightning's names are lower case
+        with pytest.raises(ValueError, match=rf"^trainer.accelerator={typo}: not an "
+                                             r"accelerator \(auto, cpu, cuda, gpu, mps, tpu\)$"):
+            check_config(load_config("tiny", [f"trainer.accelerator={typo}"]))
+    assert check_config(load_config("tiny", ["trainer.accelerator=cpu"]))
+
+
 def test_the_gpu_configs_pass_where_a_gpu_is(monkeypatch):
     """``accelerator: auto`` (the GPU configs) passes anywhere; ``gpu`` where
     CUDA is."""
