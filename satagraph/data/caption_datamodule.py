@@ -28,7 +28,8 @@ import torch
 from torch.utils.data import DataLoader, Dataset
 
 from satagraph.data.code_bank import CodeBank, concat_banks
-from satagraph.data.dataset import DEFAULT_PREPROCESSING, try_load_features
+from satagraph.data.dataset import (DEFAULT_PREPROCESSING, rig_warnings_capped,
+                                    try_load_features)
 from satagraph.data.datamodule import WindowDataModule, semantic_embedder, window_loader
 from satagraph.data.endless import MixedDataset, endless_zoo, is_zoo_entry, zoo_entry
 from satagraph.datasets.sources import SPLITS, limit_files, limit_warning, resolve_sources
@@ -140,10 +141,11 @@ class CaptionDataModule(WindowDataModule):
         files = resolve_sources([s for s in self.sources if not is_zoo_entry(s)])
         zoos = [s for s in self.sources if is_zoo_entry(s)]
         limited: List[str] = []
-        for split in SPLITS:
-            chosen, note = limit_files(files, split, self.max_files)
-            limited += note
-            self.datasets[split] = self._split(split, chosen, zoos, embed)
+        with rig_warnings_capped():  # a rig's doubts capped over all splits
+            for split in SPLITS:
+                chosen, note = limit_files(files, split, self.max_files)
+                limited += note
+                self.datasets[split] = self._split(split, chosen, zoos, embed)
         if limited:
             warnings.warn(limit_warning(self.max_files, limited), stacklevel=2)
         if not len(self.datasets["train"]):

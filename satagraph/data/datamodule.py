@@ -12,7 +12,7 @@ from torch.utils.data import DataLoader
 
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import (ON_ERROR, MotionDataset, WindowAugment, dataset_error,
-                                    try_load_features)
+                                    rig_warnings_capped, try_load_features)
 from satagraph.data.endless import (MixedDataset, _keyed, is_zoo_entry, zoo_datasets,
                                     zoo_entry)
 from satagraph.data.sampler import ResumableSampler
@@ -280,13 +280,14 @@ class MotionDataModule(WindowDataModule):
                           "pose for each of its windows already", stacklevel=3)
         embed = semantic_embedder(self.semantic_encoder, self.cache_dir)
         loaded, errors, total, limited = {}, [], 0, []
-        for split in self.splits:
-            chosen, note = limit_files(files, split, self.max_files)
-            limited += note
-            kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
-            loaded[split] = (kept, feats)
-            errors += [f"{split}: {e}" for e in bad]
-            total += len(chosen)
+        with rig_warnings_capped():  # a rig's doubts capped over all splits
+            for split in self.splits:
+                chosen, note = limit_files(files, split, self.max_files)
+                limited += note
+                kept, feats, bad = try_load_features(chosen, self.preprocessing, self.cache_dir)
+                loaded[split] = (kept, feats)
+                errors += [f"{split}: {e}" for e in bad]
+                total += len(chosen)
         if limited:
             warnings.warn(limit_warning(self.max_files, limited), stacklevel=3)
         if errors and self.on_error == "raise":

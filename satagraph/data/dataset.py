@@ -1,6 +1,7 @@
 """Windows of motion features from many files and skeletons."""
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import warnings
 from collections import Counter
@@ -155,14 +156,9 @@ def try_load_features(files: Sequence[MotionFile], config: Optional[Dict] = None
     config = dict(DEFAULT_PREPROCESSING, **(config or {}))
     folder: Optional[Path] = feature_cache_dir(cache_dir)
     kept, out, errors = [], [], []
-    iterator = progress(files) if progress else files
-    said: List[warnings.WarningMessage] = []
-    try:
-        with warnings.catch_warnings(record=True) as said:
-            for f in iterator:
-                folder = _load_one(f, config, folder, kept, out, errors)
-    finally:
-        _rewarn_capped(said)
+    with rig_warnings_capped():
+        for f in progress(files) if progress else files:
+            folder = _load_one(f, config, folder, kept, out, errors)
     return kept, out, errors
 
 
@@ -191,6 +187,28 @@ def _load_one(f: MotionFile, config: Dict, folder: Optional[Path], kept: List[Mo
 #: Rig-reading warnings of each kind (up axis, units) shown while a set of
 #: files is processed; the rest are counted in one line.
 RIG_WARNINGS_SHOWN = 3
+
+
+_capping = False
+
+
+@contextlib.contextmanager
+def rig_warnings_capped() -> Iterator[None]:
+    """Record the warnings of the files read inside, and issue them again
+    capped (:func:`_rewarn_capped`) at the end; inside an outer one, the
+    outer caps them all (a data module's three splits said three first
+    warnings and three counts)."""
+    global _capping
+    if _capping:
+        yield
+        return
+    _capping, said = True, []
+    try:
+        with warnings.catch_warnings(record=True) as said:
+            yield
+    finally:
+        _capping = False
+        _rewarn_capped(said)
 
 
 def _rewarn_capped(said: Sequence[warnings.WarningMessage],

@@ -107,3 +107,24 @@ def test_a_run_served_from_the_cache_says_the_rig_warnings_again(tmp_path: Path)
         said.append([str(w.message) for w in caught if w.category is UnitsWarning])
     assert len(said[0]) == 1 and f"{files[0].path}: units unknown" in said[0][0]
     assert said[1] == said[0]
+
+
+def test_a_data_module_caps_its_rig_warnings_over_all_splits(tmp_path: Path) -> None:
+    """Each split capped its own: a folder of quadrupeds whose units no file
+    tells said three warnings and a count per split ("1 more units warnings
+    like those above", then six more)."""
+    from satagraph.data.datamodule import MotionDataModule
+    from satagraph.datasets.zoo import Dialect, write_zoo
+    from satagraph.transforms.rig_reading import UnitsWarning
+    write_zoo(tmp_path / "zoo", species=["quadruped"], clips=3, frames=20,
+              dialects=[Dialect(unit="cm")])
+    (tmp_path / "zoo" / "manifest.tsv").unlink()
+    files = scan_folder(tmp_path / "zoo")
+    splits = {f.split for f in files}
+    assert len(files) > 4 and len(splits) >= 2
+    dm = MotionDataModule(str(tmp_path / "zoo"), window=8, stride=8, batch_size=2,
+                          cache_dir=str(tmp_path / "cache"))
+    with pytest.warns(UnitsWarning) as caught:
+        dm._read_splits()
+    said = [str(w.message) for w in caught if w.category is UnitsWarning]
+    assert len(said) == 4 and said[-1].startswith(f"{len(files) - 3} more units warnings")
