@@ -139,8 +139,9 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
     (``satagraph zoo``'s is two folders above its files:
     ``zoo/biped/Zup-in``); otherwise files are split 80/10/10 by a hash of
     their name. Said in a warning: files a manifest leaves out (not read),
-    and manifests in folders below that are not read (each such folder is
-    a source of its own)."""
+    a manifest above that lists none of the folder's files, and manifests
+    in folders below that are not read (each such folder is a source of
+    its own)."""
     path = Path(path)
     manifest = next((d / "manifest.tsv" for d in (path, *path.parents)
                      if (d / "manifest.tsv").is_file()), None)
@@ -154,6 +155,10 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
                     for r in rows]
     if not files:
         raise FileNotFoundError(f"{path}: no .bvh files found")
+    if manifest is not None:  # one above that lists none of these files
+        warnings.warn(f"{path}: {manifest} above it lists none of its {len(files)} .bvh "
+                      "file(s): they are split by name (80/10/10), with no rig settings of "
+                      "that manifest", stacklevel=2)
     _warn_manifests_below(files, path)
     name = dataset or path.name
     return [MotionFile(str(f), name, name, _hash_split(f.name), skeleton_named=False,

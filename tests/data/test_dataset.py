@@ -384,3 +384,18 @@ def test_manifests_below_a_folder_and_files_a_manifest_lacks_are_said(tmp_path):
                       r"in it and are not read: .*extra.bvh"):
         assert [f.path for f in scan_folder(tmp_path / "top" / "a")] == \
             [f.path for f in listed]
+
+
+def test_a_folder_a_manifest_above_does_not_list_is_said(tmp_path):
+    """A folder of new files under a folder whose manifest lists none of
+    them was split by name without a word."""
+    from satagraph.datasets.zoo import write_zoo
+    write_zoo(tmp_path / "top", species=["biped"], clips=1, frames=8)
+    new = tmp_path / "top" / "new"
+    new.mkdir()
+    source = scan_folder(tmp_path / "top")[0].path
+    (new / "a.bvh").write_bytes(Path(source).read_bytes())
+    with pytest.warns(UserWarning, match=r"new: .*top/manifest.tsv above it lists none of its "
+                      r"1 .bvh file\(s\): they are split by name"):
+        assert len(scan_folder(new)) == 1
+
