@@ -476,11 +476,19 @@ def run_reconstruct(args) -> int:
 
 
 def _check_windows(args) -> None:
-    """Refuse ``--window`` / ``--overlap`` before the model loads where
-    ``--window`` is given (else the window is the model's)."""
+    """Refuse ``--window`` / ``--overlap`` before the model loads, naming
+    the options: a negative overlap always, the pair where ``--window`` is
+    given (else the window is the model's)."""
     from satagraph.data.validate import check_windows, default_windows
-    if args.window is not None:
-        check_windows(*default_windows(None, args.window, args.overlap))
+    given = " ".join(f"--{k} {v}" for k, v in (("window", args.window),
+                                               ("overlap", args.overlap)) if v is not None)
+    try:
+        if args.overlap is not None and args.overlap < 0:
+            raise ValueError("an overlap is 0 frames or more")
+        if args.window is not None:
+            check_windows(*default_windows(None, args.window, args.overlap))
+    except ValueError as err:
+        raise ValueError(f"{given}: {err}") from None
 
 
 def _reconstruct_file(args, source: str, output: str, models: dict) -> str:

@@ -123,6 +123,7 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
              ("generate", "--text", "a walk", "--skeleton", gone, out, "--seconds", "2"),
              ("generate", "--text", "a walk", "--skeleton", rig, unwritable),
              ("generate", "--text", "a walk", "--skeleton", rig, out, "--seconds", "100"),
+             ("retarget", rig, "--target", rig, out, "--overlap", "-1"),
              ("retarget", rig, "--target", rig, out, "--ckpt", gone),
              ("generate", "--text", "a walk", "--skeleton", rig, out, "--ckpt", gone)]
     heavy, stderr = _probe(argvs, code=2)
@@ -130,9 +131,9 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
     assert heavy[-2:] == [["torch"]] * 2  # the weights file's reader, not the model's code
     said = [line for line in stderr.splitlines() if "error:" in line]
     assert [line.split("error: ")[1].split(":")[0] for line in said] == [
-        gone, f"cannot write {unwritable}", "windows of -3 frames sharing -1", gone,
-        "windows of 8 frames sharing 8", gone, f"cannot write {unwritable}",
-        "argument --seconds", gone, gone]
+        gone, f"cannot write {unwritable}", "--window -3", gone,
+        "--window 8 --overlap 8", gone, f"cannot write {unwritable}",
+        "argument --seconds", "--overlap -1", gone, gone]
     assert not Path(out).exists()
 
 
