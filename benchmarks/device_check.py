@@ -36,16 +36,16 @@ ZOO = ("data.sources=[{zoo: endless, species: [biped, quadruped], windows_per_ep
 
 
 def missing_device(device: str) -> Optional[str]:
-    """One line saying why :obj:`device` cannot run here, else ``None``."""
+    """One line saying why :obj:`device` cannot run here (the commands'
+    own :func:`~satagraph.cli.arguments.check_device`), else ``None``."""
+    from satagraph.cli.arguments import check_device
     try:
-        kind = torch.device(device).type
-    except RuntimeError:
-        return f"device_check: --device {device}: not a device (cuda, cuda:1, cpu)"
-    if kind == "cuda" and not torch.cuda.is_available():
-        return (f"device_check: --device {device}: no CUDA device on this machine "
-                "(torch.cuda.is_available() is False); run it where a GPU is, or "
-                "--device cpu for a dry run")
-    if kind not in ("cuda", "cpu"):
+        check_device(device)
+    except ValueError as err:
+        hint = (" (torch.cuda.is_available() is False); run it where a GPU is, or --device "
+                "cpu for a dry run" if "no CUDA device" in str(err) else "")
+        return f"device_check: {err}{hint}"
+    if torch.device(device).type not in ("cuda", "cpu"):
         return f"device_check: --device {device}: only cuda and cpu are checked"
     return None
 

@@ -149,13 +149,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from satagraph.experiment.train import load_module
     module = load_module("builtin")
     pairs, clips = val.retarget_pairs(), recon_clips()
-    start, results, kept = time.perf_counter(), {}, inference.cross_fade
+    start, results = time.perf_counter(), {}
     try:
         for rule, stitch in RULES.items():
             inference.cross_fade = stitch
             results[rule] = measure(module, pairs, clips)
     finally:
-        inference.cross_fade = kept
+        inference.cross_fade = _FADE
     text = table(results, time.perf_counter() - start)
     print(text)
     write_results(args.out, "Stitching decoded windows, validation material "

@@ -331,3 +331,17 @@ def _seed() -> None:
     import torch
     np.random.seed(0)
     torch.default_generator.manual_seed(0)
+
+
+def save_module_checkpoint(module, path: Path) -> Path:
+    """What a trainer stores of a module: weights, hyperparameters and the
+    module's own :meth:`on_save_checkpoint` entries (a checkpoint without
+    training one)."""
+    import lightning as L
+    import torch
+    ckpt = {"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
+            "pytorch-lightning_version": L.__version__}
+    module.on_save_checkpoint(ckpt)
+    torch.save(ckpt, path)
+    return path
+

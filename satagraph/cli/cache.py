@@ -12,6 +12,7 @@ Examples::
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from pathlib import Path
 from typing import Optional
@@ -21,11 +22,10 @@ from satagraph.cli.arguments import positive_float
 
 def _size(n: int) -> str:
     """Bytes in words: ``3.2 GB``."""
-    for unit in ("B", "KB", "MB", "GB"):
-        if n < 1000 or unit == "GB":
-            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
-        n /= 1000.0
-    return ""
+    if n < 1000:
+        return f"{n} B"
+    power = min(3, int(math.log10(n) // 3))
+    return f"{n / 1000 ** power:.1f} {('KB', 'MB', 'GB')[power - 1]}"
 
 
 def _count(n: int, kind: str = "") -> str:

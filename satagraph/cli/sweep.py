@@ -52,7 +52,7 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
                    help="config names or paths, and dotted overrides for all")
     budget = p.add_mutually_exclusive_group()
     budget.add_argument("--budget", type=float, default=None, metavar="MINUTES",
-                        help="training minutes per config (default 5)")
+                        help=f"training minutes per config (default {DEFAULT_BUDGET:g})")
     budget.add_argument("--steps", type=int, default=None, metavar="N",
                         help="train each config N optimizer steps instead (equal work "
                         "rather than equal time)")

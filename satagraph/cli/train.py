@@ -466,6 +466,7 @@ def run_reconstruct(args) -> int:
     """Reconstruct a file, or every BVH file of a folder (:mod:`satagraph.cli.folders`)."""
     models: dict = {}
     check_device(args.device)  # before any file is read
+    _check_windows(args)  # once, also for a folder of sources
     if Path(args.input).is_dir():
         return run_over_folder(args.input, args.output,
                                lambda src, out: _reconstruct_file(args, src, out, models),
@@ -496,7 +497,6 @@ def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     motion = read_with_rig(source, args)
-    _check_windows(args)
     module, embed = _load(args, [motion], [source], models)
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
     from satagraph.pipelines.inference import reconstruct_motion
@@ -512,6 +512,7 @@ def run_retarget(args) -> int:
     from satagraph.data.validate import check_skeleton
     models: dict = {}
     check_device(args.device)  # before any file is read
+    _check_windows(args)  # once, also for a folder of sources
     target = _read(args, "target")
     check_skeleton(target, args.target)  # once, also for a folder of sources
     if Path(args.source).is_dir():
@@ -528,7 +529,6 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict) ->
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     source = read_with_rig(source_path, args)
-    _check_windows(args)
     module, embed = _load(args, [source, target], [source_path, args.target], models)
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
     from satagraph.pipelines.inference import retarget_motion

@@ -103,7 +103,10 @@ def dataset_names(ds) -> Optional[Set[str]]:
 def _warn_unvalidated(train, val) -> None:
     """Say which datasets have training windows and no validation window:
     no ``val/<dataset>/...`` figure is logged for them."""
-    missing = sorted(dataset_names(train) - (dataset_names(val) or set()))
+    names = dataset_names(train)
+    if names is None:  # a data module of one's own: its datasets tell no names
+        return
+    missing = sorted(names - (dataset_names(val) or set()))
     if missing:
         warnings.warn(f"no validation windows of {', '.join(map(repr, missing))}: none of "
                       "its files is in the 'val' split, so no val/<dataset>/... figures are "

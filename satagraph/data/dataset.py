@@ -127,14 +127,14 @@ def preprocess_file(path: str, config: Dict) -> MotionFeatures:
 #: The rig-reading warnings kept with a file's features (:func:`preprocess_file`),
 #: by their kind's name there.
 RIG_WARNING_KINDS = {RigReadingWarning: "up_axis", UnitsWarning: "units"}
+_RIG_WARNING_CATEGORIES = {kind: category for category, kind in RIG_WARNING_KINDS.items()}
 
 
 def warn_rig_again(feats: MotionFeatures) -> None:
     """Say again what reading a cached file's rig doubted (a run served
     from the cache said nothing of a dog whose units no file tells)."""
-    kinds = {kind: category for category, kind in RIG_WARNING_KINDS.items()}
     for kind, line in feats.rig_warnings:
-        warnings.warn(line, kinds.get(kind, RigReadingWarning), stacklevel=2)
+        warnings.warn(line, _RIG_WARNING_CATEGORIES.get(kind, RigReadingWarning), stacklevel=2)
 
 
 def _error_text(path: str, err: Exception) -> str:

@@ -147,7 +147,8 @@ def scan_folder(path: Union[str, os.PathLike], dataset: Optional[str] = None) ->
                      if (d / "manifest.tsv").is_file()), None)
     files = bvh_files(path)
     if manifest is not None:
-        rows = [r for r in read_manifest(manifest) if _listed_below(r.path, path)]
+        top, real = os.path.abspath(path), path.resolve()  # once, not per row
+        rows = [r for r in read_manifest(manifest) if _listed_below(r.path, top, real)]
         if rows:
             _warn_unlisted(files, rows, manifest)
             return [replace(r, dataset=dataset or r.dataset,
@@ -187,10 +188,10 @@ def _warn_manifests_below(files: Sequence[Path], folder: Path) -> None:
     """Warn of the ``manifest.tsv`` files in folders below :obj:`folder`
     that hold its files: a folder is read with the nearest manifest at or
     above it, so theirs (splits, up axes, units) are not read."""
-    top = os.path.abspath(folder)
-    dirs = {os.path.abspath(d) for f in files for d in f.parents
-            if os.path.abspath(d) != top and Path(os.path.abspath(d)).is_relative_to(top)}
-    below = sorted(Path(d, "manifest.tsv") for d in dirs if Path(d, "manifest.tsv").is_file())
+    top = Path(os.path.abspath(folder))
+    dirs = {d for f in files for d in Path(os.path.abspath(f)).parents
+            if d != top and d.is_relative_to(top)}
+    below = sorted(d / "manifest.tsv" for d in dirs if (d / "manifest.tsv").is_file())
     if below:
         warnings.warn(f"{folder}: its files are split by name, and the {len(below)} "
                       f"manifest(s) below it are not read: {_some(below)}; pass each "
@@ -198,13 +199,14 @@ def _warn_manifests_below(files: Sequence[Path], folder: Path) -> None:
                       "folder) for their splits and rig settings", stacklevel=3)
 
 
-def _listed_below(file: str, folder: Path) -> bool:
-    """Whether a manifest's :obj:`file` lies below :obj:`folder`, by its path
+def _listed_below(file: str, folder: str, resolved: Path) -> bool:
+    """Whether a manifest's :obj:`file` lies below the folder (absolute
+    :obj:`folder`, :obj:`resolved` with its links resolved), by its path
     as listed (a link to a file kept elsewhere is the folder's file: checked
     resolved alone, a folder of links never read its own manifest) or with
     every link resolved."""
-    listed = Path(os.path.abspath(file)).is_relative_to(os.path.abspath(folder))
-    return listed or Path(file).resolve().is_relative_to(folder.resolve())
+    return (Path(os.path.abspath(file)).is_relative_to(folder)
+            or Path(file).resolve().is_relative_to(resolved))
 
 
 def resolve_sources(sources: Union[str, Sequence]) -> List[MotionFile]:
@@ -278,7 +280,7 @@ def refuse_shared_names(files: Sequence[MotionFile], path: Path,
     for name, named in {(f.dataset, f.dataset_named): None for f in files}:
         folder = None if named else _named_after(path, name)
         other = homes.setdefault(name, (folder, str(path)))
-        if other[1] == str(path) or folder == other[0] or (folder is other[0] is None):
+        if other[1] == str(path) or folder == other[0]:
             continue
         raise ValueError(f"data.sources: {other[1]} and {path} are both dataset {name!r} "
                          "(named after their folder), so their per-dataset figures, "

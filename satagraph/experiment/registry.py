@@ -118,14 +118,14 @@ class ModuleEntry:
         """Raise one line for a ``model`` or ``optim`` key the builder does
         not take (a class whose ``model`` keys are not known is built once to
         find out)."""
+        if self.cls is not None:  # before a build, which a bad one fails unsaid
+            check_arguments(self.cls, sections.extra)
         if self.model_keys is not None:
             check_keys("model", sections.model, self.model_keys())
         elif self.cls is not None:
             self._try_build(sections)
         if self.optim_keys is not None:
             check_keys("optim", sections.optim, set(self.optim_keys) | set(TRAINER_OPTIM))
-        if self.cls is not None:
-            check_arguments(self.cls, sections.extra)
 
     def _try_build(self, sections: ModuleSections) -> None:
         """Build the class once: a ``model`` key its network does not take
@@ -206,13 +206,17 @@ def _inherited_keys(cls: type) -> tuple:
     return model_keys, None if own_optimizer else optim_keys
 
 
+#: The sections every module takes (``model``, ``loss``, ``optim``, ``fps``,
+#: ``meta``): a constructor's own arguments are the others.
+SECTION_NAMES = frozenset(f.name for f in fields(ModuleSections)) - {"extra"}
+
+
 def own_arguments(cls: type) -> tuple:
     """``(names, takes_any)``: the constructor arguments of :obj:`cls`
     beyond the five sections, and whether it takes ``**kwargs``."""
     params = list(inspect.signature(cls.__init__).parameters.values())[1:]
-    sections = {f.name for f in fields(ModuleSections)} - {"extra"}
     named = {p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
-    return named - sections, any(p.kind == p.VAR_KEYWORD for p in params)
+    return named - SECTION_NAMES, any(p.kind == p.VAR_KEYWORD for p in params)
 
 
 def check_arguments(cls: type, extra: Dict[str, Any]) -> None:
@@ -235,9 +239,8 @@ def class_arguments(cls: Optional[type], hparams: Dict[str, Any]) -> Dict[str, A
     if cls is None:
         return {}
     named, takes_any = own_arguments(cls)
-    sections = {f.name for f in fields(ModuleSections)} - {"extra"}
     return {k: v for k, v in hparams.items()
-            if k not in sections and (takes_any or k in named)}
+            if k not in SECTION_NAMES and (takes_any or k in named)}
 
 
 def class_builder(cls: type) -> Builder:

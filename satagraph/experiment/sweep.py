@@ -266,7 +266,7 @@ def run_config(run: SweepRun, eval_split: str = "test",
                    epochs=int(trainer.current_epoch), seconds=seconds,
                    train_loss=trailing.value, loss_steps=len(trailing.losses),
                    run_dir=cfg["output_dir"], split=eval_split)
-    scored = _scored(cfg, dm)
+    scored = _scored(cfg, dm, eval_split)
     row.metrics = evaluate(module, split_loader(scored, eval_split), max_batches)
     for label, make_loader in (extra_loaders or {}).items():
         for group, values in evaluate(module, make_loader(module), max_batches).items():
@@ -295,15 +295,15 @@ def close_logger(trainer, metrics: Dict[str, float]) -> None:
         experiment.finish()
 
 
-def _scored(cfg: Dict[str, Any], dm):
-    """The data a row is scored on: as ``satagraph eval`` reads it
+def _scored(cfg: Dict[str, Any], dm, split: str):
+    """The data a row is scored on (its :obj:`split` alone): as ``satagraph eval`` reads it
     (:func:`~satagraph.pipelines.evaluation.scoring_data`: each skeleton in
     the rest pose ``reconstruct`` shows it), for the motion data module;
     another module's own data module as it trained."""
     from satagraph.data.datamodule import MotionDataModule
     from satagraph.experiment.train import data_section
     from satagraph.pipelines.evaluation import scoring_data
-    return scoring_data(data_section(cfg)) if type(dm) is MotionDataModule else dm
+    return scoring_data(data_section(cfg), split=split) if type(dm) is MotionDataModule else dm
 
 
 def retarget_table(module, dm, files: Dict[str, Sequence], split: str,
@@ -649,7 +649,7 @@ def _legend(rows: Sequence[SweepRow], overrides: Sequence[str], data: Any,
     if split == "test":
         lines.append("Choose among the rows on a sweep with --split val: a choice made on "
                      "these test figures leaves no test result for it.")
-    averaged = {_averaged(r).split()[0] for r in rows if _averaged(r)}
+    averaged = {a.split()[0] for a in map(_averaged, rows) if a}
     if "all" in averaged:
         lines.append(f"(all N): the run trained N < {TRAILING_STEPS} steps, so its train "
                      "loss is the mean of every step from the first: higher for that alone, "

@@ -91,7 +91,6 @@ def check_accelerator(trainer: Dict[str, Any]) -> None:
     Raises:
         ValueError: What the trainer needs and what runs here.
     """
-    import torch
     from lightning.pytorch.accelerators import AcceleratorRegistry
     given = trainer.get("accelerator") or "auto"
     known = sorted(set(AcceleratorRegistry.available_accelerators()) | {"auto", "gpu"})
@@ -631,7 +630,7 @@ def _data_differences(before: Optional[Dict[str, Any]], now: Dict[str, Any]) -> 
     flat_before, flat_now = (dotted_settings({"data": d}) for d in (before, now))
     free = tuple(f"data.{k}" for k in RESUME_MAY_CHANGE)
     return [f"{k}={_short(flat_before[k])} (here {_short(flat_now[k])})"
-            for k in sorted(set(flat_before) & set(flat_now))  # a key newer than the run: its default
+            for k in sorted(set(flat_before) & set(flat_now))  # a newer key: its default
             if not k.startswith(free) and json.dumps(flat_before[k], sort_keys=True, default=str)
             != json.dumps(flat_now[k], sort_keys=True, default=str)]
 
@@ -764,8 +763,9 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
                               "hyperparameters)")
     check_finite_weights(data, ckpt)
     check_registered_conv(hparams["model"].get("local_conv"), ckpt)
-    name = (hparams.get("meta") or {}).get("module", "vae")
-    if "module" not in (hparams.get("meta") or {}):
+    meta = hparams.get("meta") or {}
+    named, name = "module" in meta, meta.get("module", "vae")
+    if not named:
         warnings.warn(f"{ckpt}: its hyperparameters name no module (meta.module): read as "
                       "the built-in 'vae' (a module of your own: build it with "
                       "meta={'module': NAME, ...}, as build_module does)", stacklevel=2)
@@ -785,7 +785,7 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     except RuntimeError as err:
         lines = [line.strip() for line in str(err).strip().splitlines()]
         detail = " ".join(lines[:2])[:200]
-        if "module" in (hparams.get("meta") or {}):
+        if named:
             raise CheckpointError(f"{ckpt}: weights do not fit the {name!r} model its "
                                   f"hyperparameters describe ({detail})") from None
         raise CheckpointError(f"{ckpt}: its hyperparameters name no module (meta.module), "

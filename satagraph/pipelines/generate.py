@@ -401,8 +401,9 @@ def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,
                    smooth: float = 0.0) -> Tuple[torch.Tensor, torch.Tensor]:
     r"""Physical ``q`` and ``r`` of per-frame codes decoded onto :obj:`rig`
     in the autoencoder's training windows, a quarter of each shared with
-    the next and cropped as :func:`~satagraph.pipelines.inference.transfer`
-    does (:func:`~satagraph.pipelines.inference.window_plan`). The temporal
+    the next and cropped at each window's ``keep``
+    (:func:`~satagraph.pipelines.inference.window_plan`; ``transfer``
+    cross-fades the shared frames instead). The temporal
     layers' sinusoidal positions were learnt on that many frames; decoded
     whole, a 4-second walk lost its pace after the 64 frames the shipped
     RVQ was trained on (root speed falling to a third of the source's).

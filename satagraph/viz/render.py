@@ -164,6 +164,10 @@ class _Scene:
         from matplotlib.figure import Figure
 
         self.tracks, self.frames = tracks, frames
+        # each side's bones, by their child joints: fixed for a track, drawn every frame
+        self.children = [{side: np.array([j for j in range(1, len(t.parents))
+                                          if t.sides[j] == side], dtype=int)
+                          for side in SIDE_COLORS} for t in tracks]
         # panels of different scales say so on the picture, not only on stderr
         self.note = "   each panel to its own scale" if fit and len(tracks) > 1 else ""
         dpi = 80
@@ -229,7 +233,7 @@ class _Scene:
             grid = _ground(*self.limits[i], self.aims[i][t])
             floor.set_data_3d(grid[:, 0], grid[:, 2], grid[:, 1])
             for side, artist in bones.items():
-                seg = _segments(pos, track.parents, [s == side for s in track.sides])
+                seg = _segments(pos, track.parents, self.children[i][side])
                 artist.set_data_3d(seg[:, 0], seg[:, 2], seg[:, 1])
             joints.set_data_3d(pos[:, 0], pos[:, 2], pos[:, 1])
             hit = pos[track.contacts[t]]
@@ -285,19 +289,15 @@ def _ground(low: np.ndarray, high: np.ndarray, aim: np.ndarray) -> np.ndarray:
     return np.array(lines)
 
 
-def _segments(pos: np.ndarray, parents: np.ndarray,
-              chosen: Optional[Sequence[bool]] = None) -> np.ndarray:
-    """Bones as one polyline: (parent, child, NaN) per bone, of every
-    child joint or of those :obj:`chosen`.
+def _segments(pos: np.ndarray, parents: np.ndarray, child: np.ndarray) -> np.ndarray:
+    """Bones as one polyline: (parent, child, NaN) per bone of the
+    :obj:`child` joints.
 
     Shapes:
         - **pos**: :math:`(J, 3)`
-        - **chosen**: :math:`(J,)` bool, optional
+        - **child**: :math:`(B,)` joint indices (none is the root)
         - **output**: :math:`(3B, 3)` for :math:`B` bones
     """
-    child = np.arange(1, len(parents))
-    if chosen is not None:
-        child = child[np.asarray(chosen, dtype=bool)[1:]]
     seg = np.full((len(child), 3, 3), np.nan)
     seg[:, 0], seg[:, 1] = pos[parents[child]], pos[child]
     return seg.reshape(-1, 3)

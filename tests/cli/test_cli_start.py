@@ -51,9 +51,9 @@ for i, argv in enumerate(argvs):
 """
 
 
-def _heavy_modules_of(argvs: Sequence[Sequence[str]], code: int = 0) -> List[List[str]]:
-    """The heavy modules each command line loads (each must exit with :obj:`code`)."""
-    return _probe(argvs, code)[0]
+def _heavy_modules_of(argvs: Sequence[Sequence[str]]) -> List[List[str]]:
+    """The heavy modules each command line loads (each must exit with 0)."""
+    return _probe(argvs)[0]
 
 
 def _probe(argvs: Sequence[Sequence[str]], code: int = 0) -> Tuple[List[List[str]], str]:

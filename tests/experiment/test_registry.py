@@ -9,6 +9,7 @@ import pytest
 import torch
 
 from satagraph.experiment.config import load_config
+from tests.conftest import save_module_checkpoint
 from satagraph.experiment.registry import (ModuleSections, module_class, module_entry,
                                            register_module, registered_names,
                                            unregister_module)
@@ -212,7 +213,6 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     ``load_module`` (what ``eval``, ``reconstruct``, ``retarget`` and
     ``sweep`` read) with its default, silently: only the five sections were
     passed on."""
-    import lightning as L
     from satagraph.experiment.train import build_module, load_module
     from satagraph.lightning import SATAVAEModule
 
@@ -229,8 +229,7 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
                                                        "meta")}, z_weight=0.7)
     module.normalizer.fitted.fill_(True)
     path = tmp_path / "weighted.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-                "pytorch-lightning_version": L.__version__}, path)
+    save_module_checkpoint(module, path)
     loaded = load_module(str(path))
     assert type(loaded) is Weighted
     assert loaded.z_weight == 0.7 and loaded.hparams["z_weight"] == 0.7
@@ -243,7 +242,6 @@ def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
     hyperparameters describe (Error(s) in loading state_dict for
     SATAVAEModule:)', though they describe none, or, where its weights fit,
     loaded as a SATAVAEModule without a word."""
-    import lightning as L
     from satagraph.experiment.train import load_module
     from satagraph.io.checkpoint import CheckpointError
     from satagraph.lightning import MotionAutoencoderModule, SATAVAEModule
@@ -260,16 +258,14 @@ def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
                          num_quantizers=2), meta={"window": 32})
     module.normalizer.fitted.fill_(True)
     path = tmp_path / "own.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-                "pytorch-lightning_version": L.__version__}, path)
+    save_module_checkpoint(module, path)
     with pytest.raises(CheckpointError, match=r"name no module \(meta.module\).*Missing key"):
         load_module(str(path))
     # a VAE of one's own fits the built-in 'vae': it loads as one, no longer unsaid
     module = SATAVAEModule(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
                                 latent_channels=8, semantic_channels=0), meta={"window": 32})
     module.normalizer.fitted.fill_(True)
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-                "pytorch-lightning_version": L.__version__}, path)
+    save_module_checkpoint(module, path)
     with pytest.warns(UserWarning, match="name no module .*read as the built-in 'vae'"):
         assert type(load_module(str(path))) is SATAVAEModule
 
@@ -280,7 +276,6 @@ def test_a_subclass_s_own_argument_is_a_config_setting(names, tmp_path):
     were unknown keys, and a ``train`` or ``sweep`` of it trained with the
     default. ``module_args`` sets it, from YAML and dotted overrides, into
     the checkpoint that ``load_module`` reads."""
-    import lightning as L
     from satagraph.experiment.sweep import check_runs, config_differences, sweep_configs
     from satagraph.experiment.train import build_module, check_config, load_module
     from satagraph.lightning import SATAVAEModule
@@ -301,8 +296,7 @@ def test_a_subclass_s_own_argument_is_a_config_setting(names, tmp_path):
     assert module.z_weight == 0.7 and module.hparams["z_weight"] == 0.7
     module.normalizer.fitted.fill_(True)
     ckpt = tmp_path / "weighted.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-                "pytorch-lightning_version": L.__version__}, ckpt)
+    save_module_checkpoint(module, ckpt)
     assert load_module(str(ckpt)).z_weight == 0.7
     from satagraph.experiment.train import check_resumable
     check_resumable(ckpt, check_config(load_config(str(path), ["module_args.z_weight=0.7"])))
@@ -322,7 +316,6 @@ def test_load_module_names_the_file_whose_local_conv_is_not_registered(tmp_path,
     (``register_local_conv``), loaded where nothing registered it, was the
     registry's bare 'unknown local conv' line, naming no file; the plugin
     variable that registers it is now read first, as for a module."""
-    import lightning as L
     from torch_geometric.nn import GraphConv
     from satagraph.experiment import registry
     from satagraph.experiment.train import load_module
@@ -340,8 +333,7 @@ def test_load_module_names_the_file_whose_local_conv_is_not_registered(tmp_path,
                                 local_conv="graph_ckpt_t"), meta={"window": 32, "module": "vae"})
     module.normalizer.fitted.fill_(True)
     path = tmp_path / "own_conv.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-                "pytorch-lightning_version": L.__version__}, path)
+    save_module_checkpoint(module, path)
     monkeypatch.setattr(local_conv, "_BUILDERS", dict(builtin))  # a fresh process
     monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
     monkeypatch.delenv("SATAGRAPH_PLUGINS", raising=False)

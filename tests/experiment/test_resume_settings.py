@@ -3,11 +3,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import lightning as L
 import pytest
-import torch
 
 from satagraph.experiment.config import load_config
+from tests.conftest import save_module_checkpoint
 from satagraph.experiment.train import build_module, check_config, check_resumable
 
 
@@ -16,8 +15,7 @@ def tiny_ckpt(tmp_path: Path) -> Path:
     """A checkpoint of the tiny config (as trained: its hyperparameters)."""
     module = build_module(load_config("tiny", ["model.semantic_channels=0"]))
     path = tmp_path / "last.ckpt"
-    torch.save({"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-                "pytorch-lightning_version": L.__version__}, path)
+    save_module_checkpoint(module, path)
     return path
 
 

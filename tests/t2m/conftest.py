@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import lightning as L
 import pytest
 import torch
 
@@ -18,6 +17,7 @@ from satagraph.data.captioned import ZooCaptionWindows
 from satagraph.io import write_bvh
 from satagraph.lightning import SATARVQModule
 from satagraph.lightning.text_to_motion import TextToMotionModule
+from tests.conftest import save_module_checkpoint
 
 #: Sizes of the tiny autoencoder and generators.
 AE_MODEL = {"hidden_channels": 16, "heads": 2, "ff_channels": 32, "num_blocks": 1,
@@ -41,14 +41,7 @@ def zoo_windows(count: int = 8, mirror: float = 0.0, seed: int = 0,
                              scale=scale)
 
 
-def save_checkpoint(module: L.LightningModule, path: Path) -> Path:
-    """What a trainer stores of a module: weights, hyperparameters and the
-    module's own :meth:`on_save_checkpoint` entries."""
-    ckpt = {"state_dict": module.state_dict(), "hyper_parameters": dict(module.hparams),
-            "pytorch-lightning_version": L.__version__}
-    module.on_save_checkpoint(ckpt)
-    torch.save(ckpt, path)
-    return path
+save_checkpoint = save_module_checkpoint  # the name this folder's tests import
 
 
 @pytest.fixture(scope="session")
