@@ -169,9 +169,8 @@ def run_inspect(args: argparse.Namespace) -> int:
     (:mod:`satagraph.cli.inspect_folder`)."""
     if Path(args.file).is_dir():
         from satagraph.cli.inspect_folder import run_inspect_folder
-        from satagraph.transforms.rig_reading import with_rig
         return run_inspect_folder(args, lambda path, up_axis, scale: describe(
-            with_rig(read_with_rig(path, args), up_axis, scale), path))
+            read_with_rig(path, args, manifest=(up_axis, scale)), path))
     info = describe(read_with_rig(args.file, args), str(args.file))
     print(json.dumps(info, indent=2) if args.json else format_table(info))
     return 0

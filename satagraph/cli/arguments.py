@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from typing import Optional
+from typing import Optional, Tuple
 
 import numpy as np
 
@@ -112,16 +112,18 @@ def check_per_input(args: argparse.Namespace, count: int, prefix: str = "") -> N
 
 
 def read_with_rig(path: str, args: argparse.Namespace, prefix: str = "",
-                  index: int = 0) -> Motion:
+                  index: int = 0, manifest: Tuple[Optional[str], Optional[float]] = (None, None)
+                  ) -> Motion:
     """Read a BVH file and attach the ``--up-axis`` / ``--units`` of
-    :func:`add_rig_arguments` (the file's own declaration otherwise);
+    :func:`add_rig_arguments` (a :obj:`manifest`'s up axis and scale
+    where a flag is not given, the file's own declaration otherwise);
     :obj:`index` is the file's place among the inputs where the options
     give one value per file."""
     from satagraph.transforms.rig_reading import with_rig
     key = f"{prefix}_" if prefix else ""
     up, scale = (_pick(getattr(args, f"{key}{flag}", None), index)
                  for flag in ("up_axis", "units"))
-    return with_rig(read_bvh(path), up, scale)
+    return with_rig(with_rig(read_bvh(path), *manifest), up, scale)
 
 
 def _pick(value, index: int):

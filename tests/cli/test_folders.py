@@ -209,3 +209,19 @@ def test_inspect_a_folder_reads_its_manifest_s_rig_settings(tmp_path: Path, caps
         rig = info["rig"]
         assert (rig["up_axis"], rig["up_axis_how"], rig["units_how"]) == ("+Z", "given", "given")
         assert rig["scale"] == pytest.approx(truth[Path(info["file"]).name])
+
+
+def test_inspect_a_folder_s_flags_win_over_its_manifest(tmp_path: Path, capsys) -> None:
+    """``--up-axis`` and ``--units`` given to ``inspect FOLDER`` are read over
+    the manifest's columns, as for one file (the manifest's won, so a user
+    checking another reading of a folder saw the manifest's again)."""
+    from satagraph.datasets.zoo.dialects import Dialect
+    write_zoo(tmp_path, species=["biped"], clips=1, frames=8,
+              dialects=[Dialect(up_axis="+Z", unit=28.0)])
+    (folder,) = {p.parent for p in tmp_path.rglob("*.bvh")}
+    assert main(["inspect", str(folder), "--json", "--up-axis", "+Y", "--units", "0.5"]) == 0
+    for info in json.loads(capsys.readouterr().out):
+        assert (info["rig"]["up_axis"], info["rig"]["scale"]) == ("+Y", pytest.approx(0.5))
+    assert main(["inspect", str(folder), "--json", "--units", "0.5"]) == 0
+    for info in json.loads(capsys.readouterr().out):  # the manifest's axis where no flag
+        assert (info["rig"]["up_axis"], info["rig"]["scale"]) == ("+Z", pytest.approx(0.5))
