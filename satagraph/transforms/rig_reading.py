@@ -443,7 +443,7 @@ def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
     if legs:
         return UnitGuess(1.0, 0.0, "kept", f"{height:.4g} units tall, {legs} legs: "
                          "an arthropod may be a millimetre or a metre across, so "
-                         "no size tells its units; pass --units to set them", height)
+                         "no size tells its units; " + SET_UNITS, height)
     size = _size(motion)
     if 0.02 <= size <= 3.5:
         return UnitGuess(1.0, 0.7, "magnitude", f"{size:.3g} units across: "
@@ -451,10 +451,16 @@ def guess_units(motion: Motion, up_axis: str) -> UnitGuess:
                          "legs or fewer", height)
     return UnitGuess(1.0, 0.0, "kept", f"{height:.4g} units tall, not a human "
                      "and no known exporter: cm, inches or another unit all "
-                     "fit; pass --units to set them", height)
+                     "fit; " + SET_UNITS, height)
 
 
 # ------------------------------------------------------------------- reading
+#: How a user sets what was guessed, on the command line and in Python
+#: (:func:`with_rig`; training: a manifest's ``up_axis`` / ``scale`` columns).
+SET_UP_AXIS = "pass --up-axis (Python: with_rig(motion, up_axis=...)) to set it"
+SET_UNITS = "pass --units (Python: with_rig(motion, scale=...)) to set them"
+
+
 class RigReadingWarning(UserWarning):
     """A rig's up axis or units were guessed with low confidence, or its
     units could not be decided (the file's own are kept)."""
@@ -497,7 +503,7 @@ class RigReading:
         if not self.up.low_confidence:
             return []
         return [f"up axis {self.up.axis} is a low-confidence guess "
-                f"({self.up.confidence:.2f}); pass --up-axis to set it"]
+                f"({self.up.confidence:.2f}); {SET_UP_AXIS}"]
 
     @property
     def unit_warnings(self) -> List[str]:
@@ -506,7 +512,7 @@ class RigReading:
             return [f"units unknown: {self.units.reason}"]
         if self.units.low_confidence:
             return [f"units {unit_name(self.units.scale)} are a "
-                    f"low-confidence guess; pass --units to set them"]
+                    f"low-confidence guess; {SET_UNITS}"]
         return []
 
     def to_dict(self) -> dict:

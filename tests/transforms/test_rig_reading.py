@@ -101,6 +101,21 @@ def test_a_human_in_an_arbitrary_unit_is_kept_unless_it_looks_standard() -> None
     assert (alike.how, alike.scale) == ("human", 0.01) and " m in cm" in alike.reason
 
 
+def test_a_reading_s_warning_says_how_to_set_it_in_python_too() -> None:
+    """The warnings named only the command-line flags; a Python user is
+    told the call that sets the reading, and that call silences them."""
+    spider = generate_clip(zoo_rigs(["spider"], seed=0)[1], "walk", frames=60, seed=5)
+    motion = apply_dialect(spider, Dialect(unit="cm"))[0]
+    (line,) = read_rig(motion).unit_warnings
+    assert "--units" in line and "with_rig(motion, scale=...)" in line
+    assert read_rig(rr.with_rig(motion, scale=0.01)).warnings == []
+    still = _clip("biped", kind="idle")
+    for axis in ("+Y", "-Z"):
+        assert read_rig(rr.with_rig(apply_dialect(still, Dialect(up_axis=axis))[0],
+                                    up_axis=axis)).up_warnings == []
+    assert "with_rig(motion, up_axis=...)" in rr.SET_UP_AXIS
+
+
 @pytest.mark.parametrize("unit, scale, how", [("cm", 0.01, "dialect"), ("m", 1.0, "human"),
                                                ("in", 0.0254, "human")])
 def test_an_exporters_units_give_way_to_a_human_height_they_contradict(
