@@ -28,7 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import pretrained_val as val  # noqa: E402
-from results_io import write_results  # noqa: E402
+from results_io import missing_data, write_results  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 
@@ -72,11 +72,10 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace,
     where ``../shared/data`` is missing."""
     if not 1 <= args.zoo_clips[0] <= args.zoo_clips[1]:
         parser.error(f"--zoo-clips: need 1 <= FIRST <= LAST, got {args.zoo_clips}")
-    if not (val.DATA / "manifest.tsv").is_file():
-        print(f"{script}: {val.DATA} not found: the real clips need ../shared/data",
-              file=sys.stderr)
-        return False
-    return True
+    missing = missing_data(script, val.DATA, "the real clips")
+    if missing:
+        print(missing, file=sys.stderr)
+    return missing is None
 
 
 def read_clips(ckpts: Sequence[str], clips: List[Tuple[str, str, Motion]],

@@ -81,7 +81,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from results_io import SHARED_DATA, write_results  # noqa: E402
+from results_io import SHARED_DATA, missing_data, write_results  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
 from satagraph.pipelines.inference import (REST_MODES, reconstruct_canonical,  # noqa: E402
@@ -392,9 +392,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              "with -file or -first-frame for the other --rest modes)")
     args = parser.parse_args(argv)
     out = args.out or (OUT if args.rest == "auto" else OUT.with_name(f"{OUT.name}-{args.rest}"))
-    if not (DATA / "manifest.tsv").is_file():
-        print(f"pretrained.py: {DATA} not found: the real rows need ../shared/data",
-              file=sys.stderr)
+    missing = missing_data("pretrained.py", DATA)
+    if missing:
+        print(missing, file=sys.stderr)
         return 2
     start = time.perf_counter()
     pick = model_picker(args.ckpt)

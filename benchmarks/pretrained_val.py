@@ -54,7 +54,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from pretrained import (DATA, HOLDOUT, TRAIN_SPECIES, RECON_FRAMES, joint_error,  # noqa: E402
                         real_clip, recon_window)
 from pretrained_rule import STILL  # noqa: E402
-from results_io import write_results  # noqa: E402
+from results_io import missing_data, write_results  # noqa: E402
 from satagraph.datasets.sources import read_manifest  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo, ZooSample  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
@@ -383,9 +383,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              "(retarget_canonical's mirror); both: each checkpoint twice, "
                              "the second column named '+mirror'")
     args = parser.parse_args(argv)
-    if not (DATA / "manifest.tsv").is_file():
-        print(f"pretrained_val.py: {DATA} not found: the real groups need ../shared/data",
-              file=sys.stderr)
+    missing = missing_data("pretrained_val.py", DATA, "the real groups")
+    if missing:
+        print(missing, file=sys.stderr)
         return 2
     start = time.perf_counter()
     if args.zoo_per_plan < 1:

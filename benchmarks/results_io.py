@@ -5,7 +5,7 @@ import argparse
 import json
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 from satagraph.utils.files import atomic_write_text
 
@@ -22,6 +22,17 @@ def write_results(out: Path, title: str, text: str, data: Any) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out.with_suffix(".md"), f"# {title}\n\n{text}")
     atomic_write_text(out.with_suffix(".json"), json.dumps(data, indent=1, default=float))
+
+
+def missing_data(script: str, folder: Path = SHARED_DATA, what: str = "the real rows"
+                 ) -> Optional[str]:
+    """The one line a benchmark that reads the real files prints before it
+    stops where :obj:`folder` holds no ``manifest.tsv``; ``None`` where it
+    does (one check for every such benchmark)."""
+    if (Path(folder) / "manifest.tsv").is_file():
+        return None
+    return (f"{script}: {folder}: no manifest.tsv there: {what} need the real BVH files of "
+            "../shared/data (or $SATAGRAPH_DATA)")
 
 
 def data_folder(text: str) -> str:

@@ -43,7 +43,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import pretrained_val as val  # noqa: E402
 from pretrained import joint_error  # noqa: E402
-from results_io import SHARED_DATA, write_results  # noqa: E402
+from results_io import missing_data, write_results  # noqa: E402
 import satagraph.pipelines.inference as inference  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.quality import contact, retarget_quality  # noqa: E402
@@ -142,9 +142,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--out", type=Path, default=OUT,
                         help=f"results path without suffix (default {OUT.relative_to(val.ROOT)})")
     args = parser.parse_args(argv)
-    if not (SHARED_DATA / "manifest.tsv").is_file():
-        parser.error(f"{SHARED_DATA}: no manifest.tsv there: the validation clips are the real "
-                     "files of ../shared/data (or $SATAGRAPH_DATA)")
+    missing = missing_data("stitch_val.py", what="the validation clips")
+    if missing:
+        parser.error(missing)
     warnings.simplefilter("ignore")
     from satagraph.experiment.train import load_module
     module = load_module("builtin")

@@ -574,3 +574,36 @@ def test_stitch_val_seam_reads_a_jump_where_a_window_begins():
     trans[cut:, 0, 0] += 0.05 * walk.height()
     jumped = replace(walk, translations=trans)
     assert 0.5 < smooth < 2.0 and stitch_val.seam(jumped, 32, 8) > 3 * smooth
+
+
+def test_benchmarks_of_the_real_files_stop_in_one_line_without_them(tmp_path, monkeypatch,
+                                                                     capsys):
+    """pretrained, pretrained_val, mirror_val and stitch_val each said it
+    in their own words; one check now, naming the script and the folder,
+    before any model loads."""
+    import mirror_val
+    import pretrained
+    import pretrained_val
+    import stitch_val
+    from results_io import missing_data
+    missing = tmp_path / "shared" / "data"
+    assert missing_data("x.py", tmp_path) == (
+        f"x.py: {tmp_path}: no manifest.tsv there: the real rows need the real BVH files of "
+        "../shared/data (or $SATAGRAPH_DATA)")
+    (tmp_path / "manifest.tsv").write_text("")
+    assert missing_data("x.py", tmp_path) is None
+    for module in (pretrained, pretrained_val):
+        monkeypatch.setattr(module, "DATA", missing)
+    monkeypatch.setattr(mirror_val.val, "DATA", missing)
+    monkeypatch.setattr(stitch_val, "missing_data", lambda script, what: missing_data(
+        script, missing, what))
+    out = tmp_path / "out"
+    assert pretrained.main(["--out", str(out)]) == 2
+    assert pretrained_val.main(["--out", str(out)]) == 2
+    with pytest.raises(SystemExit):
+        stitch_val.main(["--out", str(out)])
+    assert mirror_val.main(["--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    for script in ("pretrained.py", "pretrained_val.py", "stitch_val.py", "mirror_val.py"):
+        assert f"{script}: {missing}: no manifest.tsv there" in err, script
+    assert not out.exists()
