@@ -170,7 +170,7 @@ def retarget_cases() -> List[Tuple[str, str, Callable[[], Tuple[Motion, str, Mot
 
 
 def recon_cases() -> List[Tuple[str, str, Callable[[], Motion]]]:
-    zoo = [(f"held-out zoo", name, (lambda s=s, h=h: zoo_clip(s, k, h)[0]))
+    zoo = [("held-out zoo", name, (lambda s=s, k=k, h=h: zoo_clip(s, k, h)[0]))
            for name, s, k, h in [("biped walk", "biped", "walk", False),
                                  ("quadruped trot", "quadruped", "trot", False),
                                  ("bird walk", "bird", "walk", False),

@@ -263,6 +263,24 @@ def test_pretrained_pose_error_leaves_out_the_root_path(tiny_motion):
     assert "| 58.0 | 41.0 | - | +0.50 | - |" in text
 
 
+def test_pretrained_reconstruction_rows_load_the_kind_they_name(monkeypatch):
+    """Each held-out zoo row reads a clip of the species, kind and plan it
+    names: the loaders' lambdas bound the kind late, and "quadruped trot"
+    reconstructed a quadruped walk."""
+    import pretrained
+    asked = []
+    monkeypatch.setattr(pretrained, "zoo_clip",
+                        lambda *args: asked.append(args) or (None, ""))
+    for group, case, load in pretrained.recon_cases():
+        if group == "held-out zoo":
+            load()
+            species, kind, holdout = asked[-1]
+            named, kind_named = case.split()[:2]
+            assert (named.split("/")[0], kind_named) == (species, kind), case
+            assert holdout == case.endswith("(unseen plan)"), (case, asked[-1])
+    assert ("quadruped", "trot", False) in asked
+
+
 def test_pretrained_heading_free_pose_error_leaves_out_the_facing_drift(tiny_motion):
     """``joint_error(..., heading=True)``: an output whose whole body turns
     about +Y by a growing angle (a drifting decoded facing) has a root-
