@@ -71,8 +71,8 @@ def _load(path: Path, files: List[Path], chain: Tuple[Path, ...] = ()):
     include it.
 
     Raises:
-        ValueError: A file includes itself, or ``defaults`` is not a list
-            (one line naming the file).
+        ValueError: A file includes itself, is no mapping of sections, or
+            ``defaults`` is not a list (one line naming the file).
     """
     chain = chain + (path,)
     if any(path.resolve() == p.resolve() for p in chain[:-1]):
@@ -84,6 +84,9 @@ def _load(path: Path, files: List[Path], chain: Tuple[Path, ...] = ()):
     except Exception as err:  # yaml or omegaconf errors: one line naming the file
         detail = " ".join(str(err).split())[:200]
         raise ValueError(f"{path}: not a valid YAML config ({detail})") from None
+    if isinstance(cfg, ListConfig):
+        raise ValueError(f"{path}: a config is a mapping of sections (model:, data:, "
+                         "trainer:, ...), not a list")
     bases = cfg.pop("defaults", []) or []
     if not isinstance(bases, (list, ListConfig)):
         raise ValueError(f"{path}: defaults: a list of configs is expected, e.g. "

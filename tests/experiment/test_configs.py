@@ -154,6 +154,20 @@ def test_defaults_that_include_themselves_or_are_no_list_are_one_line(tmp_path):
         load_config(str(tmp_path / "bare.yaml"))
 
 
+def test_a_config_that_is_a_list_is_one_line(tmp_path):
+    """A YAML file holding a list, given or named by ``defaults``, was a
+    traceback (``TypeError: ListConfig.pop() takes from 1 to 2 positional
+    arguments but 3 were given``)."""
+    listed = tmp_path / "listed.yaml"
+    listed.write_text("- tiny\n- seed: 3\n")
+    (tmp_path / "top.yaml").write_text("defaults: [listed]\n")
+    for name in ("listed.yaml", "top.yaml"):
+        with pytest.raises(ValueError, match=rf"^{listed}: a config is a mapping of "
+                                             r"sections \(model:, data:, trainer:, ...\), "
+                                             r"not a list$"):
+            load_config(str(tmp_path / name))
+
+
 @pytest.mark.slow
 def test_every_config_loads_from_the_shipped_copy(tmp_path, monkeypatch):
     """The data files of ``setup.cfg`` cover every config, and each loads
