@@ -385,3 +385,14 @@ def test_galloping_quadrupeds_run_and_dash_by_the_gallops_speed():
             np.linalg.norm(pos[-1] - pos[0]) / rig.leg_length)
     assert sorted(told) == [False, True], told  # both words, as for every other plan
     assert max(told[False]) < min(told[True])  # and the dashes the faster runs
+
+
+def test_zoo_writers_type_hints_resolve():
+    """``typing.get_type_hints`` (what documentation and argument checkers
+    read) resolves the writers' path type: it named ``os.PathLike`` in a
+    module that never imported ``os`` (``NameError``)."""
+    import os
+    import typing
+    from satagraph.datasets.zoo import writer
+    for func in (writer.write_zoo, writer.write_dialect_zoo):
+        assert os.PathLike[str] in typing.get_args(typing.get_type_hints(func)["out_dir"])

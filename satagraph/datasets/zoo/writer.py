@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import os
 import zlib
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Union
