@@ -22,7 +22,6 @@ import argparse
 import time
 from typing import List, Optional, Sequence
 
-import numpy as np
 import torch
 
 from satagraph.data import motion_to_features

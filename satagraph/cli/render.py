@@ -16,7 +16,6 @@ import sys
 import time
 from typing import List, Sequence
 
-from satagraph.io import read_bvh
 from satagraph.motion import Motion
 
 OUTPUTS = (".gif", ".mp4")

@@ -24,7 +24,6 @@ import warnings
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
-import torch
 from torch.utils.data import DataLoader, Dataset
 
 from satagraph.data.code_bank import CodeBank, concat_banks

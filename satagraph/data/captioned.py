@@ -52,7 +52,6 @@ from satagraph.datasets.sources import MotionFile
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.datasets.caption import Caption
 from satagraph.datasets.captions import captions_for
-from satagraph.datasets.mirror import mirror_text
 
 #: A window key: an index (evaluation), or ``(epoch, index)`` (training).
 WindowKey = Union[int, Tuple[int, int]]

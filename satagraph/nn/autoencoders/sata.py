@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Dict, Optional
 
-from torch import Tensor, nn
+from torch import Tensor
 
 from satagraph.nn.autoencoders.base import MotionAutoencoder
 from satagraph.nn.bottlenecks.rvq import RVQBottleneck
