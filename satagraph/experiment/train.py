@@ -118,7 +118,8 @@ _BAD_PROJECT = re.compile(r"[/\\#?%:]")
 def check_logger(logger: Dict[str, Any]) -> None:
     """A logger that cannot log is one line before any data is read: an
     unknown name, TensorBoard without its package (a message naming no
-    package, after loading), a W&B project name W&B refuses (a 50-line
+    package, after loading), W&B missing or failing to import (a traceback
+    once the data was read), a W&B project name W&B refuses (a 50-line
     traceback) or an empty one (the run went into ``lightning_logs``).
 
     Raises:
@@ -132,10 +133,27 @@ def check_logger(logger: Dict[str, Any]) -> None:
                                          for m in ("tensorboard", "tensorboardX")):
         raise ValueError("logger.name=tensorboard needs the tensorboard package, which is "
                          "not installed: pip install tensorboard (or logger.name=csv)")
+    if name == "wandb":
+        check_wandb_imports()
     project = str(logger.get("project") or "")
     if name == "wandb" and (not project.strip() or _BAD_PROJECT.search(project)):
         raise ValueError(f"logger.project={project!r}: W&B needs a non-empty name without "
                          "/ \\ # ? % : (default satagraph)")
+
+
+def check_wandb_imports() -> None:
+    """The W&B package imports (a broken install raises on import, past
+    Lightning's check of its version).
+
+    Raises:
+        ValueError: One line naming the import error and the ways on.
+    """
+    try:
+        import wandb  # noqa: F401
+    except ImportError as err:
+        detail = " ".join(str(err).split())[:160]
+        raise ValueError(f"logger.name=wandb: the wandb package does not import ({detail}): "
+                         "pip install wandb, or logger.name=csv") from None
 
 
 def check_local_conv(name: Any) -> None:

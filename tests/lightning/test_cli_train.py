@@ -218,6 +218,21 @@ def test_online_wandb_without_a_login_is_one_line_before_any_data(tmp_path, monk
     assert "W&B needs a login" in err[-1] and not (tmp_path / "run").exists()
 
 
+def test_wandb_that_does_not_import_is_one_line_before_any_data(tmp_path, monkeypatch,
+                                                                 capsys) -> None:
+    """A broken W&B install (its import raises) was a traceback once the
+    data had loaded."""
+    import sys
+    monkeypatch.setitem(sys.modules, "wandb", None)  # `import wandb` raises ImportError
+    assert main(["train", "tiny", "logger.name=wandb", "data.sources=[nowhere]",
+                 f"output_dir={tmp_path / 'run'}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("satagraph: error: logger.name=wandb: the "
+                                               "wandb package does not import (")
+    assert err[0].endswith("pip install wandb, or logger.name=csv")
+    assert not (tmp_path / "run").exists()
+
+
 def test_eval_scores_a_manifest_of_test_files_only(config_overrides: List[str],
                                                    small_manifest: Path, tmp_path: Path,
                                                    capsys: pytest.CaptureFixture) -> None:
