@@ -232,9 +232,9 @@ def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
 
 
 def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
-    """``logger.name``: ``wandb`` (offline by default), ``csv``,
-    ``tensorboard`` or ``none``; resuming, a W&B run goes on under the run
-    folder's last run id (it started a new run)."""
+    """``logger.name``: ``wandb`` (offline by default: :func:`wandb_mode`),
+    ``csv``, ``tensorboard`` or ``none``; resuming, a W&B run goes on under
+    the run folder's last run id (it started a new run)."""
     spec = fill("logger", LoggerConfig, cfg.get("logger"))
     name = spec.pop("name")
     if name == "none":
@@ -247,8 +247,21 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
         from lightning.pytorch.loggers import WandbLogger
         previous = _last_wandb_id(run_dir) if resume else None
         extra = {"id": previous, "resume": "allow"} if previous else {}
-        return WandbLogger(name=cfg["name"], save_dir=str(run_dir), **spec, **extra)
+        return WandbLogger(name=cfg["name"], save_dir=str(run_dir),
+                           mode=wandb_mode(spec.pop("offline")), **spec, **extra)
     raise ValueError(f"unknown logger {name!r}: use {', '.join(LOGGERS)}")
+
+
+def wandb_mode(offline: bool) -> Optional[str]:
+    """The ``mode`` of a W&B run: ``disabled`` where ``WANDB_MODE`` says so,
+    else ``offline`` for :obj:`offline`, else ``WANDB_MODE``'s (online by
+    default). Lightning's own ``offline=True`` set ``WANDB_MODE`` for the
+    whole process: ``WANDB_MODE=disabled`` was overridden, and a later online
+    run of the same process (a sweep's, a notebook's) went offline without
+    a word."""
+    if os.environ.get("WANDB_MODE") == "disabled":
+        return "disabled"
+    return "offline" if offline else None
 
 
 def _last_wandb_id(run_dir: Path) -> Optional[str]:

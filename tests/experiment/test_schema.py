@@ -3,8 +3,10 @@ for an unknown key (naming it, the known keys and the closest)."""
 from __future__ import annotations
 
 import inspect
+import os
 import re
 from dataclasses import asdict, fields
+from types import SimpleNamespace
 
 import pytest
 
@@ -152,6 +154,37 @@ def test_a_resumed_run_logs_into_its_own_w_and_b_run(tmp_path):
     from satagraph.experiment.train import build_trainer
     assert build_trainer(cfg, tmp_path).logger._wandb_init.get("id") is None
     assert build_trainer(cfg, tmp_path, resume=True).logger._wandb_init["id"] == "bbb"
+
+
+@pytest.fixture
+def wandb_starts(monkeypatch):
+    """``wandb.init`` replaced by a recorder: ``(kwargs, WANDB_MODE then)``
+    of every W&B run a logger starts (nothing written, no network)."""
+    wandb = pytest.importorskip("wandb")
+    started = []
+    monkeypatch.setattr(wandb, "init", lambda **kwargs: started.append(
+        (kwargs, os.environ.get("WANDB_MODE"))) or SimpleNamespace())
+    monkeypatch.setenv("WANDB_MODE", "online")  # put back however a logger changes it
+    return started
+
+
+def test_a_w_and_b_run_s_mode_is_its_own_not_the_process_s(tmp_path, monkeypatch,
+                                                             wandb_starts):
+    """An offline logger set ``WANDB_MODE`` for the whole process: an online
+    run started after it in the same process (a sweep's next config, a
+    notebook's next run) went offline, and ``WANDB_MODE=disabled`` logged
+    offline into the run folder."""
+    from satagraph.experiment.train import build_logger
+    offline = load_config("tiny", ["logger.name=wandb"])
+    online = load_config("tiny", ["logger.name=wandb", "logger.offline=false"])
+    assert build_logger(offline, tmp_path).experiment is not None
+    assert build_logger(online, tmp_path).experiment is not None
+    assert [(kwargs.get("mode"), env) for kwargs, env in wandb_starts] == [
+        ("offline", "online"), (None, "online")]
+    monkeypatch.setenv("WANDB_MODE", "disabled")
+    for cfg in (offline, online):
+        assert build_logger(cfg, tmp_path).experiment is not None
+    assert [kwargs.get("mode") for kwargs, _ in wandb_starts[2:]] == ["disabled", "disabled"]
 
 
 def test_tensorboard_without_its_package_is_said(monkeypatch):
