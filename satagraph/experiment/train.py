@@ -234,7 +234,10 @@ def build_module(cfg: Dict[str, Any], dm: Optional[Any] = None):
 def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
     """``logger.name``: ``wandb`` (offline by default: :func:`wandb_mode`),
     ``csv``, ``tensorboard`` or ``none``; resuming, a W&B run goes on under
-    the run folder's last run id (it started a new run)."""
+    the run folder's last run id (it started a new run). A W&B run's config
+    is the run's whole config, ``output_dir`` the run folder's absolute path
+    (it held the module's sections alone: no seed, trainer or run folder to
+    find the checkpoints by)."""
     spec = fill("logger", LoggerConfig, cfg.get("logger"))
     name = spec.pop("name")
     if name == "none":
@@ -248,7 +251,8 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
         previous = _last_wandb_id(run_dir) if resume else None
         extra = {"id": previous, "resume": "allow"} if previous else {}
         return WandbLogger(name=cfg["name"], save_dir=str(run_dir),
-                           mode=wandb_mode(spec.pop("offline")), **spec, **extra)
+                           mode=wandb_mode(spec.pop("offline")),
+                           config=dict(cfg, output_dir=str(run_dir.absolute())), **spec, **extra)
     raise ValueError(f"unknown logger {name!r}: use {', '.join(LOGGERS)}")
 
 

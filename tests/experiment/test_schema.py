@@ -3,9 +3,11 @@ for an unknown key (naming it, the known keys and the closest)."""
 from __future__ import annotations
 
 import inspect
+import json
 import os
 import re
 from dataclasses import asdict, fields
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -185,6 +187,21 @@ def test_a_w_and_b_run_s_mode_is_its_own_not_the_process_s(tmp_path, monkeypatch
     for cfg in (offline, online):
         assert build_logger(cfg, tmp_path).experiment is not None
     assert [kwargs.get("mode") for kwargs, _ in wandb_starts[2:]] == ["disabled", "disabled"]
+
+
+def test_a_w_and_b_run_holds_the_whole_config_and_its_folder(tmp_path, monkeypatch,
+                                                               wandb_starts):
+    """The W&B config held the module's hyperparameters alone: no seed, no
+    trainer, no run folder to find the checkpoints by."""
+    from satagraph.experiment.schema import resolve_config
+    from satagraph.experiment.train import build_logger
+    monkeypatch.chdir(tmp_path)
+    cfg = resolve_config(load_config("tiny", ["logger.name=wandb", "seed=7"]))
+    assert build_logger(cfg, Path("runs/tiny")).experiment is not None
+    logged = wandb_starts[-1][0]["config"]
+    assert logged == dict(cfg, output_dir=str(tmp_path / "runs" / "tiny"))
+    assert logged["seed"] == 7 and logged["trainer"]["max_epochs"] == 2
+    assert json.loads(json.dumps(logged)) == logged  # plain values, no object's repr
 
 
 def test_tensorboard_without_its_package_is_said(monkeypatch):
