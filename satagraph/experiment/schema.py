@@ -69,11 +69,13 @@ class DataConfig:
 @dataclass
 class LoggerConfig:
     r"""``logger``: :obj:`name` is ``wandb``, ``csv``, ``tensorboard`` or
-    ``none``; :obj:`offline` and :obj:`project` are wandb's."""
+    ``none``; :obj:`offline`, :obj:`project` and :obj:`group` (runs shown
+    together: a sweep's, named after its output folder) are wandb's."""
 
     name: str = "wandb"
     offline: bool = True
     project: str = "satagraph"
+    group: Optional[str] = None
 
 
 @dataclass

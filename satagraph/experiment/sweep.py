@@ -168,7 +168,8 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
         variants (list[list[str]], optional): Extra overrides per config.
         budget_minutes (float): Training budget of each config.
         output (str): Output folder; config :math:`i` runs in
-            ``output/<i>_<name>``.
+            ``output/<i>_<name>``, its W&B run in the group named after the
+            folder (unless ``logger.group`` names one).
         same_data (bool): Give every config the first one's data section.
         logger (str, optional): See :func:`budget_config`.
         steps (int, optional): Train each config this many steps instead
@@ -192,6 +193,9 @@ def sweep_configs(configs: Sequence[str], overrides: Sequence[str] = (),
         cfg = budget_config(cfg, budget_minutes, Path(output) / f"{i}_{label}", data,
                             logger, steps)
         cfg["name"] = label
+        # a W&B project holds the rows of every sweep and run: one group per sweep
+        cfg["logger"] = dict(cfg["logger"], group=cfg["logger"].get("group")
+                             or Path(output).resolve().name)
         out.append(SweepRun(cfg, spec))
     return out
 

@@ -47,6 +47,20 @@ def test_sweep_configs_share_data_and_unique_names(tmp_path):
     assert cfgs[0]["output_dir"] != cfgs[1]["output_dir"]
 
 
+def test_a_sweep_s_w_and_b_runs_share_a_group_named_after_its_folder(tmp_path):
+    """A sweep's W&B runs were named after their configs alone, among every
+    other run of the project: nothing told one sweep's rows from another's."""
+    from satagraph.experiment.train import build_logger
+    runs = sweep_configs(["tiny", "tiny"], variants=[[], ["data.window=16"]],
+                         output=str(tmp_path / "gnn"), logger="wandb")
+    loggers = [build_logger(r.cfg, Path(r.cfg["output_dir"])) for r in runs]
+    assert [lg._wandb_init["group"] for lg in loggers] == ["gnn", "gnn"]
+    assert [lg._wandb_init["name"] for lg in loggers] == ["tiny", "tiny+window=16"]
+    own = sweep_configs(["tiny"], ["logger.group=mine"], output=str(tmp_path / "gnn"),
+                        logger=None)
+    assert own[0].cfg["logger"]["group"] == "mine"  # a group set is kept
+
+
 def test_a_steps_budget_binds_steps_only(tmp_path):
     cfg = load_config("tiny", ["trainer.max_time=00:00:10:00", "trainer.max_epochs=3"])
     trainer = budget_config(cfg, 0.5, tmp_path, steps=40)["trainer"]
