@@ -9,6 +9,7 @@ import re
 import signal
 import threading
 import warnings
+import weakref
 from dataclasses import fields
 from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
@@ -248,12 +249,35 @@ def build_logger(cfg: Dict[str, Any], run_dir: Path, resume: bool = False):
         return L.pytorch.loggers.TensorBoardLogger(str(run_dir), name="logs")
     if name == "wandb":
         from lightning.pytorch.loggers import WandbLogger
+        finish_started_wandb_runs()
         previous = _last_wandb_id(run_dir) if resume else None
         extra = {"id": previous, "resume": "allow"} if previous else {}
-        return WandbLogger(name=cfg["name"], save_dir=str(run_dir),
-                           mode=wandb_mode(spec.pop("offline")),
-                           config=dict(cfg, output_dir=str(run_dir.absolute())), **spec, **extra)
+        logger = WandbLogger(name=cfg["name"], save_dir=str(run_dir),
+                             mode=wandb_mode(spec.pop("offline")),
+                             config=dict(cfg, output_dir=str(run_dir.absolute())), **spec,
+                             **extra)
+        _WANDB_LOGGERS.add(logger)
+        return logger
     raise ValueError(f"unknown logger {name!r}: use {', '.join(LOGGERS)}")
+
+
+#: The W&B loggers :func:`build_logger` made (held weakly).
+_WANDB_LOGGERS: "weakref.WeakSet" = weakref.WeakSet()
+
+
+def finish_started_wandb_runs() -> None:
+    """Finish the W&B run an earlier :func:`build_logger` of this process
+    started, where nothing finished it (a script's or notebook's earlier
+    :func:`train`): Lightning logs into a run in progress, so the next run
+    logged into that one (under its name and config, its steps starting
+    over), a resume too. A run of one's own (``wandb.init()`` before
+    training) is still the one logged into."""
+    import wandb
+    for logger in list(_WANDB_LOGGERS):
+        run = getattr(logger, "_experiment", None)
+        if run is not None and run is wandb.run:
+            run.finish()
+    _WANDB_LOGGERS.clear()
 
 
 def wandb_mode(offline: bool) -> Optional[str]:

@@ -204,6 +204,29 @@ def test_a_w_and_b_run_holds_the_whole_config_and_its_folder(tmp_path, monkeypat
     assert json.loads(json.dumps(logged)) == logged  # plain values, no object's repr
 
 
+def test_a_second_run_of_one_process_is_a_w_and_b_run_of_its_own(tmp_path, monkeypatch):
+    """Lightning logs into a W&B run in progress: a script's second
+    ``train()`` (or an in-process resume) logged into the first's run, under
+    its name and config; a run of one's own is still logged into."""
+    wandb = pytest.importorskip("wandb")
+    from satagraph.experiment.train import build_logger
+    monkeypatch.setattr(wandb, "run", None)
+
+    def start(name: str) -> SimpleNamespace:
+        wandb.run = SimpleNamespace(name=name, finish=lambda: setattr(wandb, "run", None))
+        return wandb.run
+
+    monkeypatch.setattr(wandb, "init", lambda **kwargs: start(kwargs["name"]))
+    first = build_logger(load_config("tiny", ["logger.name=wandb", "name=first"]), tmp_path)
+    assert first.experiment.name == "first"
+    second = build_logger(load_config("tiny", ["logger.name=wandb", "name=second"]), tmp_path)
+    assert second.experiment.name == "second" and wandb.run is second.experiment
+    own = start("own")  # wandb.init() by the user, before training
+    with pytest.warns(UserWarning, match="already in progress"):
+        assert build_logger(load_config("tiny", ["logger.name=wandb"]), tmp_path
+                            ).experiment is own
+
+
 def test_tensorboard_without_its_package_is_said(monkeypatch):
     import importlib.util
     from satagraph.experiment.train import check_logger
