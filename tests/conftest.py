@@ -9,6 +9,7 @@ import contextlib
 import csv
 import os
 import signal
+import socket
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, ContextManager, Dict, Iterator, List, Optional
 
@@ -320,6 +321,26 @@ def file_size_limit() -> Callable[[int], ContextManager[None]]:
     """``with file_size_limit(n):`` makes writes past ``n`` bytes fail, as
     on a full disk."""
     return _file_size_limit
+
+
+@pytest.fixture
+def no_internet(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No connection leaves the machine: a socket may reach a local one
+    (``AF_UNIX``: W&B's own service process), no address of a network."""
+    def refuse(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError(f"network access: {args[1:] or args}")
+
+    def local_only(real: Callable) -> Callable:
+        def connect(sock: socket.socket, address: Any) -> Any:
+            if sock.family != socket.AF_UNIX:
+                refuse(sock, address)
+            return real(sock, address)
+        return connect
+
+    for name in ("connect", "connect_ex"):
+        monkeypatch.setattr(socket.socket, name, local_only(getattr(socket.socket, name)))
+    monkeypatch.setattr(socket, "create_connection", refuse)
+    monkeypatch.setattr(socket, "getaddrinfo", refuse)
 
 
 @pytest.fixture(autouse=True)

@@ -158,7 +158,10 @@ def test_retarget_and_reconstruct_commands(config_overrides: List[str], shared_d
 @pytest.mark.slow
 def test_default_wandb_logger_is_offline_under_run_dir(tiny_config: Dict[str, Any],
                                                        tmp_path: Path,
-                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+                                                       monkeypatch: pytest.MonkeyPatch,
+                                                       no_internet: None) -> None:
+    """The default logger trains and resumes in one W&B run in the run
+    folder, without a connection beyond the machine."""
     wandb = pytest.importorskip("wandb")
     env_dir = tmp_path / "wandb_env"
     for name, value in (("WANDB_MODE", "offline"), ("WANDB_DIR", env_dir),
@@ -176,6 +179,10 @@ def test_default_wandb_logger_is_offline_under_run_dir(tiny_config: Dict[str, An
         runs = list((run_dir / "wandb").glob("offline-run-*"))
         assert len(runs) == 1, sorted(p.name for p in run_dir.rglob("*"))[:20]
         assert list(runs[0].glob("run-*.wandb"))
+        train(cfg, resume=True, max_steps=2, limit_train_batches=2, limit_val_batches=0)
+        resumed = sorted(p.name for p in (run_dir / "wandb").glob("offline-run-*"))
+        assert len(resumed) == 2 and {p.rsplit("-", 1)[1] for p in resumed} == {
+            runs[0].name.rsplit("-", 1)[1]}
     finally:
         wandb.finish()
     assert not env_dir.exists() or not any(env_dir.rglob("offline-run-*"))
