@@ -480,6 +480,8 @@ def refuse_other_settings(run: SweepRun, cfg: Dict[str, Any]) -> None:
     """Refuse to go on with a run folder trained with other settings than
     :obj:`run`'s (resolved: :obj:`cfg`): another budget, override or
     config, whose row would sit in one table with the others unsaid.
+    Where a run logs (``logger.*``: a W&B group or project, csv) changes
+    no row and is not compared.
 
     Raises:
         ValueError: One line naming the config and the first setting.
@@ -489,7 +491,8 @@ def refuse_other_settings(run: SweepRun, cfg: Dict[str, Any]) -> None:
     before = (dotted_settings(OmegaConf.to_container(OmegaConf.load(path)))
               if path.is_file() else {})
     now = dotted_settings(OmegaConf.to_container(OmegaConf.create(cfg)))
-    differ = [k for k in sorted(set(before) | set(now)) if before.get(k) != now.get(k)]
+    differ = [k for k in sorted(set(before) | set(now))
+              if before.get(k) != now.get(k) and not k.startswith("logger.")]
     if differ:
         key = differ[0]
         raise ValueError(f"sweep --resume: config {run.cfg['name']} ({run.source}): "

@@ -63,6 +63,14 @@ def test_a_resumed_sweep_keeps_its_rows_and_goes_on_where_it_stopped(tmp_path: P
     with pytest.raises(ValueError, match=r"sweep --resume: config tiny \(tiny\): .* was "
                                          r"trained with trainer.max_time.seconds=0.6 \(here 1.2\)"):
         sweep_mod.run_sweep(["tiny", "tiny", "tiny"], 0.02, str(tmp_path), resume=True, **quiet)
+    # where a run logs is no setting of its row: a folder recorded before
+    # logger.group existed (or with another) goes on
+    from omegaconf import OmegaConf
+    recorded = tmp_path / "1_tiny_2" / "config.yaml"
+    before = OmegaConf.load(recorded)
+    before.logger.pop("group", None)
+    before.logger.name = "csv"
+    OmegaConf.save(before, recorded)
     calls.clear()
     rows = sweep_mod.run_sweep(["tiny", "tiny", "tiny"], 0.01, str(tmp_path), resume=True,
                                **quiet)
