@@ -5,18 +5,24 @@ import executed):
   ``pipelines/`` imports ``satagraph.nn``, ``satagraph.losses`` or
   ``satagraph.metrics``, at module level or inside a function;
 - the module-level imports between the top-level parts of ``satagraph``
-  (subpackages and top-level modules) form no cycle.
+  (subpackages and top-level modules) form no cycle;
+- every ``satagraph.*`` target of a docstring role (``:func:``,
+  ``:class:``, ``:mod:`` ...) and every ``satagraph.*`` name README.md
+  quotes is a module, or a name one defines (a renamed module left
+  ``satagraph.quality`` behind).
 """
 from __future__ import annotations
 
 import ast
 import gc
+import re
 from collections import defaultdict
 from functools import lru_cache
 from pathlib import Path
 from typing import Dict, Iterator, List, Set, Tuple
 
 PACKAGE = Path(__file__).resolve().parents[1] / "satagraph"
+README = PACKAGE.parent / "README.md"
 #: Parts that describe and move motion; they know nothing of models.
 LOWER = ("data", "datasets", "transforms", "semantics", "pipelines")
 #: What they must not import.
@@ -160,3 +166,97 @@ def test_models_and_losses_read_layouts_from_typing_not_data():
                 if name.startswith("satagraph.data"):
                     bad.append(f"{module}:{node.lineno} imports {name}")
     assert not bad, "\n".join(bad)
+
+
+#: A docstring role's absolute target (``~`` and a call's ``()`` dropped).
+ROLE_TARGET = re.compile(r":(?:func|class|meth|data|mod|attr|exc):`~?(satagraph(?:\.\w+)+)(?:\(\))?`")
+
+
+def _members(body: List[ast.stmt]) -> Dict[str, ast.AST]:
+    """The names a module or class body defines (in ``if`` / ``try`` blocks
+    too)."""
+    out: Dict[str, ast.AST] = {}
+    for node in body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out[node.name] = node
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            out.update({n.id: node for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)})
+        elif isinstance(node, ast.If):
+            out.update(_members(node.body + node.orelse))
+        elif isinstance(node, ast.Try):
+            out.update(_members(node.body + node.orelse + [s for h in node.handlers for s in h.body]))
+    return out
+
+
+@lru_cache(maxsize=None)
+def _aliases(module: str) -> Dict[str, str]:
+    """Names a module imports (-> what they name), and a lazy package's
+    exports (:mod:`satagraph._lazy`: names it lists that a submodule
+    defines)."""
+    tree = dict(_modules())[module]
+    out: Dict[str, str] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            names = _imported(node, module)
+            out.update({a.asname or a.name: full for a, full in zip(node.names, names[1:])})
+        elif isinstance(node, ast.Import):
+            out.update({a.asname or a.name.split(".")[0]: a.asname and a.name or a.name.split(".")[0]
+                        for a in node.names})
+    if "lazy_exports" in ast.unparse(tree):
+        listed = {n.value for n in ast.walk(tree)
+                  if isinstance(n, ast.Constant) and isinstance(n.value, str)}
+        for sub, subtree in _modules():
+            if sub.startswith(module + "."):
+                for name in listed & set(_members(subtree.body)):
+                    out.setdefault(name, f"{sub}.{name}")
+    return out
+
+
+def _resolves(dotted: str, hops: int = 0) -> bool:
+    """Whether ``satagraph.x.y.Name.attr`` is a module of the package or a
+    name defined there (imports and lazy exports followed; a class's
+    attributes are its body's, ``self.attr`` assignments, or inherited
+    where it has bases)."""
+    trees = dict(_modules())
+    parts = dotted.split(".")
+    cut = next((i for i in range(len(parts), 0, -1) if ".".join(parts[:i]) in trees), 0)
+    if not cut:
+        return False
+    module, rest = ".".join(parts[:cut]), parts[cut:]
+    if not rest:
+        return True
+    node = _members(trees[module].body).get(rest[0])
+    if node is None:
+        alias = _aliases(module).get(rest[0])
+        if alias is None or hops > 8:
+            return False
+        return not alias.startswith("satagraph") or _resolves(".".join([alias] + rest[1:]), hops + 1)
+    for attr in rest[1:]:
+        if not isinstance(node, ast.ClassDef):
+            return False
+        inner = _members(node.body)
+        if attr not in inner:
+            return bool(re.search(rf"\bself\.{attr}\b", ast.unparse(node)) or node.bases)
+        node = inner[attr]
+    return True
+
+
+def test_docstring_targets_resolve():
+    bad = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        bad += [f"{path.relative_to(PACKAGE.parent)}:{text.count(chr(10), 0, m.start()) + 1}: "
+                f"{m.group(0)}" for m in ROLE_TARGET.finditer(text) if not _resolves(m.group(1))]
+    readme = README.read_text(encoding="utf-8")
+    names = {n for quoted in re.findall(r"`([^`\n]+)`", readme)
+             for n in re.findall(r"\bsatagraph(?:\.\w+)+", quoted)}
+    bad += [f"README.md: {name}" for name in sorted(names) if not _resolves(name)]
+    assert not bad, "\n".join(bad)
+
+
+def test_target_check_finds_a_missing_name():
+    assert _resolves("satagraph.pipelines.quality.retarget_quality")
+    assert _resolves("satagraph.data.FrameBatch")  # a lazy export
+    assert not _resolves("satagraph.quality.retarget_quality")
+    assert not _resolves("satagraph.pipelines.quality.no_such_function")

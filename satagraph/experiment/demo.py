@@ -5,7 +5,7 @@ network.
 2. retarget a biped walk onto a quadruped, onto a bird and onto a
    differently proportioned human (:func:`satagraph.transforms.augment.scale_bones`,
    whose ground truth gives a retargeting error) with the built-in model,
-   and score each retarget (:mod:`satagraph.quality`: limbs in step with
+   and score each retarget (:mod:`satagraph.pipelines.quality`: limbs in step with
    the source, root travel against the source's);
 3. render the four side by side (GIF and PNG contact sheet);
 4. fine-tune the built-in model on the zoo for a few minutes
@@ -249,7 +249,7 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
         The panels (source first), the ground truth file, the mean joint
         position error of the rescaled human against it, relative to the
         height (see :func:`pose_error`), and per target the
-        :func:`~satagraph.quality.retarget_quality` of its retarget, its
+        :func:`~satagraph.pipelines.quality.retarget_quality` of its retarget, its
         stride included (with the source's own root travel,
         ``source_travel``, in leg lengths).
     """

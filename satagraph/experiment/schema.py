@@ -114,8 +114,8 @@ class ExperimentConfig:
         loss_log (bool): Append every step's loss to ``<run>/losses.tsv``.
         nonfinite (str): ``stop`` or ``skip`` on a non-finite loss.
         module_args (dict): The module's own constructor arguments beyond
-            its sections (:attr:`~satagraph.experiment.registry.
-            ModuleSections.extra`), e.g. ``{z_weight: 0.5}``.
+            its sections
+            (:attr:`~satagraph.experiment.registry.ModuleSections.extra`), e.g. ``{z_weight: 0.5}``.
     """
 
     name: str = ""

@@ -12,8 +12,8 @@ Every config gets the data section of the first one (``same_data``), a CSV
 logger, no progress bar, ``trainer.max_time`` set to the budget (or
 ``trainer.max_steps`` to the steps) and no other limit, and its own run folder under the output folder. The metrics
 are those of the final weights (not the best checkpoint) on the test split,
-read as ``satagraph eval`` reads it (:func:`~satagraph.pipelines.evaluation.
-scoring_data`: each skeleton in the rest pose ``reconstruct`` shows it;
+read as ``satagraph eval`` reads it
+(:func:`~satagraph.pipelines.evaluation.scoring_data`: each skeleton in the rest pose ``reconstruct`` shows it;
 :func:`~satagraph.pipelines.evaluation.evaluate`).
 """
 from __future__ import annotations
@@ -34,7 +34,7 @@ from satagraph.experiment.config import dotted_settings, load_config
 from satagraph.experiment.schema import resolve_data
 from satagraph.utils.files import atomic_write_text
 
-#: Steps the "train loss" column averages (see :class:`TrailingLoss`).
+#: Steps the "train loss" column averages (see :class:`~satagraph.lightning.TrailingLoss`).
 TRAILING_STEPS = 50
 
 #: Splits a sweep scores its rows on (``--split``): ``val`` to choose among

@@ -354,7 +354,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     its retarget, whose :attr:`~Motion.transform` is the target's (what
     :func:`~satagraph.transforms.canonical.decanonicalize` undoes), the
     source turned about +Y where :func:`source_features` turns it. What
-    :mod:`satagraph.quality` measures. With :obj:`mirror` and
+    :mod:`satagraph.pipelines.quality` measures. With :obj:`mirror` and
     :obj:`two_rests`, the decoding is averaged with that of both rigs'
     mirror images and of both rigs in a second rest pose
     (:func:`averaged_reading`)."""
