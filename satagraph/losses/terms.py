@@ -50,6 +50,8 @@ def limb_velocity_loss(pos_source: Tensor, pos_target: Tensor, pairing,
         pos_target (Tensor): The same for the motion decoded on the partner
             skeletons (:func:`facing_positions`).
         pairing (Pairing): From :func:`satagraph.data.pairing.partner_batch`.
+        scale (float, optional): Units per character height
+            (:data:`~satagraph.losses.POSITION_SCALE`).
 
     Shapes:
         - **pos_source**: :math:`(N, 3)`, **pos_target**: :math:`(N', 3)`

@@ -388,6 +388,8 @@ def retarget_quality(source: Motion, output: Motion,
         source (Motion): The source, canonical.
         output (Motion): Its retarget, canonical, same frame rate and frames.
         keys: Which numbers.
+        target (Motion, optional): The target rig's own clip, canonical
+            (for ``posture``).
 
     Returns:
         dict: ``steps`` (:func:`step_correlation`), ``travel`` (the output's
