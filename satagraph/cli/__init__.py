@@ -238,7 +238,8 @@ def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "layout. Without options the channel values are kept exactly. "
         "--fps resamples (slerp for rotations); --canonical brings the "
         "motion to +Y up, facing +Z, root at the origin, metres (and "
-        "removes a motionless extra root joint) and the output declares "
+        "folds an extra root joint above the hips into them, still or "
+        "travelling) and the output declares "
         "itself canonical on a last comment line, so that satagraph never "
         "re-guesses its up axis or units. The output is replaced "
         "atomically, so IN and OUT may be the same file.",

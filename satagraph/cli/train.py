@@ -1,4 +1,4 @@
-"""``satagraph train | reconstruct | retarget | eval`` subcommands."""
+"""``satagraph train | reconstruct | retarget | eval | export-weights | code-bank`` subcommands."""
 from __future__ import annotations
 
 import argparse
