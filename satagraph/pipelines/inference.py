@@ -256,7 +256,10 @@ def retarget_motion(module, source: Motion, target: Motion,
             only the skeletons whose rest is no designed pose (:func:`needs_rest`):
             a line (:func:`is_line_rest`: every bone along its joint's +X,
             as Bandai's and the dog's) or a pose whose left and right sides
-            bend differently (a captured frame, an arbitrary pose).
+            bend differently (a captured frame, an arbitrary pose);
+            ``"standing"`` re-rests every skeleton so, and ``"alternate"``
+            shows each in the pose ``"auto"`` does not choose
+            (:data:`~satagraph.transforms.rest.REST_MODES`).
         ground (bool): Move the output up or down by one constant so that
             it stands as the target character does in :obj:`target`'s
             frames (its median lowest joint, in its heights), as the source
