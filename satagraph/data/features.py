@@ -318,6 +318,22 @@ def features_to_motion(
     per-frame translations are recovered from ``x`` when
     :obj:`use_positions` is set (this makes the round trip lossless).
 
+    Args:
+        features (MotionFeatures): The features (and their skeleton, frame
+            rate and canonical transform).
+        q (np.ndarray, optional): 6D local rotations (default: the
+            features' own).
+        r (np.ndarray, optional): Root features (default: the features' own).
+        skeleton (Skeleton, optional): The skeleton to rebuild on (default:
+            the features').
+        use_positions (bool, optional): Recover the translations of joints
+            with position channels from ``x`` (only where :obj:`q` is the
+            features' own).
+
+    Returns:
+        Motion: The motion, in the canonical frame the features were
+        computed in.
+
     Shapes:
         - **q**: :math:`(T, J, 6)`, optional
         - **r**: :math:`(T, 4)`, optional

@@ -31,6 +31,11 @@ _TRANSFORMS: Dict[str, WindowTransform] = {}
 def register_window_transform(name: str, transform: WindowTransform) -> None:
     """Make :obj:`transform` the one ``data.train_transform=name`` names.
 
+    Args:
+        name (str): The name a config gives.
+        transform (callable): :class:`~satagraph.data.MotionClip` ->
+            :class:`~satagraph.data.MotionClip`, run on every training window.
+
     Raises:
         ValueError: The name is taken or empty.
     """

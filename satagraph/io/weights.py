@@ -299,6 +299,13 @@ def save_weights(module: torch.nn.Module, path: PathLike, half: bool = False,
                  force: bool = False, max_bytes: int = MAX_WEIGHTS_BYTES) -> int:
     """Write a module's weights file atomically (see :func:`weights_payload`).
 
+    Args:
+        module: A trained satagraph module.
+        path (str or PathLike): The ``.safetensors`` file to write.
+        half, training_data, provenance: See :func:`weights_payload`.
+        force (bool, optional): Write a file over :obj:`max_bytes` too.
+        max_bytes (int, optional): The size limit (:data:`MAX_WEIGHTS_BYTES`).
+
     Returns:
         int: The file's size in bytes.
 
@@ -356,6 +363,9 @@ def _metadata(header: Dict[str, Any], path: str) -> Dict[str, Any]:
 
 def read_weights_metadata(path: PathLike) -> Dict[str, Any]:
     """The decoded metadata of a satagraph weights file (no tensors read).
+
+    Args:
+        path (str or PathLike): The ``.safetensors`` file.
 
     Raises:
         CheckpointError: Not a satagraph weights file (one line naming it).
