@@ -328,7 +328,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "OUTPUT/zoo; (2) retarget a biped walk onto a quadruped, a bird and a "
         "differently proportioned human with the built-in model "
         "(OUTPUT/retarget/*.bvh), scoring each (limbs in step with the source, "
-        "root travel against the source's); (3) render them side by side "
+        "root travel and stride against the source's); (3) render them side by side "
         "(OUTPUT/demo.gif, OUTPUT/demo_sheet.png); (4) fine-tune the built-in "
         "model on the zoo (the named config demo, 4 minutes; --minutes changes "
         "it) into OUTPUT/run and score the same retargets with it "

@@ -6,7 +6,7 @@ network.
    differently proportioned human (:func:`satagraph.transforms.augment.scale_bones`,
    whose ground truth gives a retargeting error) with the built-in model,
    and score each retarget (:mod:`satagraph.pipelines.quality`: limbs in step with
-   the source, root travel against the source's);
+   the source, root travel and stride against the source's);
 3. render the four side by side (GIF and PNG contact sheet);
 4. fine-tune the built-in model on the zoo for a few minutes
    (``experiments/demo.yaml``; or train from scratch, ``--from-scratch``,
