@@ -202,8 +202,9 @@ def dotted_settings(value: Any, key: str = "") -> Dict[str, Any]:
 
 
 def load_config(name: str, overrides: Sequence[str] = ()) -> Dict[str, Any]:
-    r"""Load a YAML config (with ``defaults: [base, ...]`` inheritance from
-    the same folder), apply ``key.sub=value`` overrides
+    r"""Load a YAML config (with ``defaults: [base, ...]`` inheritance: a
+    file relative to the config's folder, else a named config of
+    ``experiments/``), apply ``key.sub=value`` overrides
     (:func:`merge_overrides`) and check it against the schema, every default
     filled (:func:`~satagraph.experiment.schema.resolve_config`); ``name``
     defaults to the file's stem.
