@@ -143,28 +143,38 @@ def _read(path: Path) -> Dict[str, Any]:
 def merge_overrides(cfg: Mapping[str, Any], overrides: Sequence[str] = (),
                     where: str = "the config") -> Dict[str, Any]:
     r"""The one override merger: :obj:`cfg` with ``key.sub=value``
-    overrides applied (omegaconf's dot-list: nested keys, YAML values such
-    as ``[a, b]``, ``{k: v}``, ``null``, numbers), as plain containers with
-    interpolations resolved.
+    overrides applied in order (omegaconf's dot-list: nested keys, an item
+    of a list by its index as in ``data.sources.0.scale=0.01``, YAML values
+    such as ``[a, b]``, ``{k: v}``, ``null``, numbers), as plain containers
+    with interpolations resolved.
 
     Raises:
         ValueError: An item is not ``key=value``, or omegaconf cannot apply
-            it (one line naming :obj:`where`).
+            it (one line naming :obj:`where` and the override).
     """
     for item in overrides:
         if "=" not in item:
             raise ValueError(f"override {item!r} is not of the form key=value")
+    merged = OmegaConf.create(dict(cfg))
+    for item in overrides:
+        try:
+            merged.merge_with_dotlist([item])
+        except Exception as err:  # omegaconf: an index out of range, a key into a number
+            raise ValueError(f"{where}: override {item}: cannot be applied "
+                             f"({_one_line(err)})") from None
     try:
-        merged = OmegaConf.merge(OmegaConf.create(dict(cfg)),
-                                 OmegaConf.from_dotlist(list(overrides)))
         out = OmegaConf.to_container(merged, resolve=True)
-    except Exception as err:  # omegaconf: bad override or interpolation
-        detail = " ".join(str(err).split())[:200]
+    except Exception as err:  # omegaconf: an interpolation
         raise ValueError(f"{where}: cannot apply the config and its overrides "
-                         f"({detail})") from None
+                         f"({_one_line(err)})") from None
     for item in overrides:
         _check_number(cfg, out, item.split("=", 1)[0].strip(), where)
     return out
+
+
+def _one_line(err: Exception) -> str:
+    """An omegaconf error's text on one line, cut at 200 characters."""
+    return " ".join(str(err).split())[:200]
 
 
 #: Config sections whose numbers take no text (:func:`_check_number`).

@@ -32,6 +32,19 @@ def test_bad_overrides_are_one_line():
     assert "\n" not in str(err.value)
 
 
+def test_an_item_of_a_list_is_set_by_its_index():
+    """``data.sources.0.scale=0.01`` failed as 'Cannot merge incompatible
+    container types', naming no override; a list's item is set in place."""
+    base = {"data": {"sources": [{"path": "a", "scale": 1.0}, "b"]}, "d": 1}
+    out = merge_overrides(base, ["data.sources.0.scale=0.01", "d=2"])
+    assert out == {"data": {"sources": [{"path": "a", "scale": 0.01}, "b"]}, "d": 2}
+    assert base["data"]["sources"][0]["scale"] == 1.0
+    with pytest.raises(ValueError, match=r"^where: override data.sources.5.scale=2: cannot be "
+                       r"applied \(.*index out of range") as err:
+        merge_overrides(base, ["d=3", "data.sources.5.scale=2"], where="where")
+    assert "\n" not in str(err.value)
+
+
 def test_text_where_a_number_stands_is_one_line():
     """``optim.lr=abc`` failed as a TypeError deep in the optimiser."""
     with pytest.raises(ValueError, match=r"optim.lr=abc: a number is expected \(the config "
