@@ -7,7 +7,8 @@ r"""Safe file handling shared by every reader and writer.
   file untouched and removes its temporary file, errors name the
   destination (never the temporary file), and temporary files left by a
   killed process (``kill -9``) are swept by the first write of a process in
-  that folder (:func:`sweep_stale_temps`; those of this machine only).
+  that folder (:func:`sweep_stale_temps`; those of this machine and
+  process-id namespace only).
 - :func:`append_whole` appends a record to a log whole or not at all.
 - :func:`check_output_path` checks an output path before any work is done.
 - :func:`check_input_file` refuses what is not a regular file (FIFOs,
@@ -36,10 +37,24 @@ MAX_INPUT_BYTES = 4 << 30
 #: (``<host>``: :data:`HOST`; files of versions before it have none).
 _TEMP = re.compile(r"^\.(?P<name>.+)\.(?:(?P<host>[0-9a-f]{6})-)?(?P<pid>\d+)\.[0-9a-f]{8}"
                    r"\.tmp(?:\.[^.]+)?$")
+
+
+def _machine() -> str:
+    """This machine's host name and, on Linux, its process-id namespace: a
+    container that shares the host name (``docker run --network host``,
+    the containers of one pod) numbers its processes afresh."""
+    try:
+        space = os.readlink("/proc/self/ns/pid")
+    except OSError:  # no /proc: not Linux
+        space = ""
+    return f"{socket.gethostname()} {space}".rstrip()
+
+
 #: This machine (or container) in temporary file names: a process id means
 #: something only where it was given, so a folder shared between machines
-#: (a cache in a network home) is swept of this machine's leftovers alone.
-HOST = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:6]
+#: or containers (a cache in a network home, a volume mounted in two) is
+#: swept of this machine's leftovers alone.
+HOST = hashlib.sha1(_machine().encode()).hexdigest()[:6]
 
 
 class InputFileError(ValueError):

@@ -78,6 +78,32 @@ def test_stale_temps_of_dead_processes_are_swept(tmp_path: Path) -> None:
     assert sweep_stale_temps(tmp_path) == 0
 
 
+def _in_new_pid_namespace(code: str) -> subprocess.CompletedProcess:
+    """Run Python :obj:`code` as a container that shares this machine's
+    host name does: in a process-id namespace of its own."""
+    return subprocess.run(["unshare", "--user", "--map-root-user", "--pid", "--fork",
+                           "--mount-proc", sys.executable, "-c", code],
+                          capture_output=True, text=True, timeout=60,
+                          cwd=Path(__file__).resolve().parents[2])
+
+
+def test_a_container_of_the_same_host_name_leaves_live_writes(tmp_path: Path) -> None:
+    """A write in progress here is no leftover to a process of another
+    process-id namespace (``docker run --network host`` on a shared
+    volume, ``satagraph cache --clear`` there): this pid is dead there,
+    and its sweep deleted the temporary file, failing the write."""
+    probe = _in_new_pid_namespace("import os; print(os.getpid())")
+    if probe.returncode != 0 or probe.stdout.strip() == str(os.getpid()):
+        pytest.skip(f"no process-id namespace can be made here: {probe.stderr.strip()}")
+    with atomic_path(tmp_path / "out.bvh") as tmp:
+        Path(tmp).write_text("half")
+        swept = _in_new_pid_namespace("from satagraph.utils.files import sweep_stale_temps; "
+                                      f"print(sweep_stale_temps({str(tmp_path)!r}))")
+        assert swept.stdout.strip() == "0", swept.stderr
+        Path(tmp).write_text("whole")
+    assert (tmp_path / "out.bvh").read_text() == "whole"
+
+
 def test_sweeping_on_windows_never_signals(tmp_path: Path,
                                            monkeypatch: pytest.MonkeyPatch) -> None:
     """``os.kill(pid, 0)`` on Windows ends a live process and raises
