@@ -15,6 +15,7 @@ config too, which is how a wandb sweep agent passes it
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import List
 
@@ -79,8 +80,10 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
 
 
 def run_sweep_command(args: argparse.Namespace) -> int:
-    """Run a sweep from parsed arguments and print its table."""
+    """Run a sweep from parsed arguments and print its table; exit code 1
+    (one line on stderr) when another live sweep holds the output folder."""
     from satagraph.experiment.sweep import run_sweep, split_arguments
+    from satagraph.lightning.reliability import RunLockedError
     configs, overrides = split_arguments(args.items)
     if not configs:
         raise ValueError("sweep: name at least one config")
@@ -88,9 +91,13 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     if not budget > 0:
         raise ValueError(f"sweep: --budget must be positive, got {budget}")
     logger = None if args.logger == "config" else args.logger
-    rows = run_sweep(configs, budget, args.output, overrides, retarget=args.retarget,
-                     max_batches=args.max_batches, logger=logger, resume=args.resume,
-                     split=args.split, steps=args.steps)
+    try:
+        rows = run_sweep(configs, budget, args.output, overrides, retarget=args.retarget,
+                         max_batches=args.max_batches, logger=logger, resume=args.resume,
+                         split=args.split, steps=args.steps)
+    except RunLockedError as err:  # another sweep writes there
+        print(f"satagraph: error: {err}", file=sys.stderr)
+        return 1
     print((Path(args.output) / "sweep.md").read_text(encoding="utf-8"))
     return 2 if any(r.error for r in rows) else 0
 

@@ -397,34 +397,36 @@ def run_sweep(configs: Sequence[str], budget_minutes: float = 5.0,
     cfgs = sweep_configs(configs, overrides, variants, budget_minutes, output,
                          logger=logger, steps=steps)
     started = check_runs(cfgs, resume)
-    done = finished_rows([r for r in cfgs if r.cfg["name"] in started], Path(output), split)
-    rows = []
-    for i, run in enumerate(cfgs):
-        if run.cfg["name"] in done:
-            log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: kept (finished before)")
-            rows.append(done[run.cfg["name"]])
-            continue
-        log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for "
-            f"{budget_words(budget_minutes, steps)}")
-        try:
-            row = run_config(run, eval_split=split,
-                             retarget_files={split: "split"} if retarget else None,
-                             max_batches=max_batches, resume=run.cfg["name"] in started)
-        except (ValueError, RuntimeError, OSError) as err:  # the other rows go on
-            message = str(err).splitlines()[0] if str(err) else type(err).__name__
-            log(f"    failed: {message}")
-            rows.append(SweepRow(name=run.cfg["name"], config=run.source,
-                                 run_dir=run.cfg["output_dir"], error=message, split=split))
-            continue
-        log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
-            f"{row.train_loss:.4f}")
-        rows.append(row)
-        if len(rows) < len(cfgs):  # a sweep stopped later (Ctrl-C) keeps these rows
-            _write_so_far(rows, cfgs, output, budget_minutes, overrides, max_batches, steps)
-    # all share the first's data
-    write_results(rows, Path(output), budget_minutes, overrides,
-                  data=cfgs[0].cfg["data"]["sources"] if cfgs else None,
-                  differences=config_differences(cfgs), max_batches=max_batches, steps=steps)
+    from satagraph.lightning.reliability import run_lock
+    with run_lock(Path(output), "--output"):  # two sweeps there mixed their rows
+        done = finished_rows([r for r in cfgs if r.cfg["name"] in started], Path(output), split)
+        rows = []
+        for i, run in enumerate(cfgs):
+            if run.cfg["name"] in done:
+                log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: kept (finished before)")
+                rows.append(done[run.cfg["name"]])
+                continue
+            log(f"[{i + 1}/{len(cfgs)}] {run.cfg['name']}: training for "
+                f"{budget_words(budget_minutes, steps)}")
+            try:
+                row = run_config(run, eval_split=split,
+                                 retarget_files={split: "split"} if retarget else None,
+                                 max_batches=max_batches, resume=run.cfg["name"] in started)
+            except (ValueError, RuntimeError, OSError) as err:  # the other rows go on
+                message = str(err).splitlines()[0] if str(err) else type(err).__name__
+                log(f"    failed: {message}")
+                rows.append(SweepRow(name=run.cfg["name"], config=run.source,
+                                     run_dir=run.cfg["output_dir"], error=message, split=split))
+                continue
+            log(f"    {row.steps} steps, train loss (last {TRAILING_STEPS} steps) "
+                f"{row.train_loss:.4f}")
+            rows.append(row)
+            if len(rows) < len(cfgs):  # a sweep stopped later (Ctrl-C) keeps these rows
+                _write_so_far(rows, cfgs, output, budget_minutes, overrides, max_batches, steps)
+        # all share the first's data
+        write_results(rows, Path(output), budget_minutes, overrides,
+                      data=cfgs[0].cfg["data"]["sources"] if cfgs else None,
+                      differences=config_differences(cfgs), max_batches=max_batches, steps=steps)
     return rows
 
 

@@ -570,9 +570,10 @@ def _lock(fd: int, take: bool = True) -> bool:
 
 
 @contextlib.contextmanager
-def run_lock(run_dir: Path) -> Iterator[Path]:
+def run_lock(run_dir: Path, flag: str = "output_dir") -> Iterator[Path]:
     """Hold ``<run_dir>/.lock`` (see :func:`_lock`: released by the system
-    when the process ends, even by ``kill -9``) while training.
+    when the process ends, even by ``kill -9``) while training (a sweep:
+    while it trains its configs; :obj:`flag` names the folder's setting).
 
     Raises:
         RunLockedError: Another live process holds it.
@@ -585,8 +586,8 @@ def run_lock(run_dir: Path) -> Iterator[Path]:
     try:
         if not _lock(fd):
             raise RunLockedError(
-                f"{run_dir}: output_dir is in use by another live run ({_holder(lock)}); "
-                "wait for it or choose another output_dir") from None
+                f"{run_dir}: {flag} is in use by another live run ({_holder(lock)}); "
+                f"wait for it or choose another {flag}") from None
         held = True
         os.ftruncate(fd, 0)
         os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())

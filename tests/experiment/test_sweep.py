@@ -4,6 +4,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 from pathlib import Path
 
 import pytest
@@ -311,3 +312,21 @@ def test_split_val_scores_the_rows_for_choosing_and_test_says_so(tmp_path, monke
     assert "Choose among the rows on a sweep with --split val" in text
     with pytest.raises(ValueError, match="--split must be one of"):
         sweep_mod.run_sweep(["tiny"], 0.01, str(tmp_path / "x"), split="train")
+
+
+def test_a_second_sweep_on_one_output_is_refused_before_it_trains(tmp_path, monkeypatch,
+                                                                  capsys):
+    """Two sweeps on one --output trained by turns, each refused in the
+    folder the other held: both tables listed half the rows as failed."""
+    from satagraph.lightning.reliability import run_lock
+    trained = []
+    monkeypatch.setattr(sweep_mod, "run_config", lambda run, **kw: trained.append(run))
+    monkeypatch.setattr(sweep_mod, "check_runs", lambda runs, resume=False: set())
+    with run_lock(tmp_path):  # the first sweep, still training
+        code = main(["sweep", "--steps", "5", "--output", str(tmp_path), "tiny", "tiny"])
+    assert code == 1 and trained == []
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"satagraph: error: {tmp_path}: --output is in use by another "
+                          f"live run (pid {os.getpid()} on ")
+    assert "choose another --output" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "sweep.md").exists()
