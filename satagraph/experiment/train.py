@@ -584,8 +584,6 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     if resume and not (run_dir / "checkpoints").is_dir():
         raise FileNotFoundError(f"--resume: no checkpoint at "
                                 f"{run_dir / 'checkpoints' / 'last.ckpt'}")
-    if not resume:
-        refuse_trained_folder(run_dir)
     if init_from:  # a bad file, or one of other features, fails before any work
         payload = load_weights_or_checkpoint(init_from,
                                              kind=builtin_kind(module_class(cfg["module"])))
@@ -593,6 +591,8 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
     if cfg["threads"]:
         torch.set_num_threads(int(cfg["threads"]))
     with _lock(run_dir):
+        if not resume:  # under the lock: a run that ended meanwhile is seen
+            refuse_trained_folder(run_dir)
         last = resume_checkpoint(run_dir / "checkpoints") if resume else None
         if last is not None:
             check_resumable(last, cfg)

@@ -552,6 +552,24 @@ def test_a_new_run_never_replaces_a_trained_one(tiny_config: Dict[str, Any]) -> 
     assert (last.read_bytes(), (run_dir / "losses.tsv").read_text()) == before
 
 
+def test_a_run_that_ends_while_another_starts_is_not_replaced(
+        tiny_config: Dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two ``train`` on one folder: the second looked for a trained run
+    before it took the lock, so a first that saved its checkpoint and ended
+    in between (while ``--init-from`` loaded) was trained over."""
+    run_dir = Path(tiny_config["output_dir"])
+    taken = train_mod._lock
+
+    def first_run_ends_meanwhile(folder: Path):
+        (folder / "checkpoints").mkdir(parents=True)
+        (folder / "checkpoints" / LAST).write_bytes(b"the first run's")
+        return taken(folder)
+    monkeypatch.setattr(train_mod, "_lock", first_run_ends_meanwhile)
+    with pytest.raises(ValueError, match="holds a trained run .*--resume continues it"):
+        train(copy.deepcopy(tiny_config))
+    assert (run_dir / "checkpoints" / LAST).read_bytes() == b"the first run's"
+
+
 @pytest.mark.parametrize("change, said", [
     ({"model": {"hidden_channels": 48}}, "model.hidden_channels=32 (here 48)"),
     ({"data": {"sources": ["elsewhere"]}}, "data.sources="),
