@@ -299,17 +299,23 @@ def run_quick_demo(args: argparse.Namespace) -> int:
 
 def run_demo(args: argparse.Namespace) -> int:
     """The whole pipeline on the procedural zoo (see :mod:`satagraph.experiment.demo`),
-    or the built-in example with ``--quick``."""
+    or the built-in example with ``--quick``; exit code 1 (one line on stderr)
+    when another live demo writes to the same output folder."""
     if args.quick:
         return run_quick_demo(args)
     from satagraph.experiment.demo import DemoOptions, format_summary
     from satagraph.experiment.demo import run_demo as run_full_demo
+    from satagraph.lightning.reliability import RunLockedError
 
     options = DemoOptions(
         output=args.output or "demo_output", minutes=args.minutes, data=args.data,
         species=args.species, clips=args.clips, frames=args.frames, seed=args.seed,
         config=args.config, overrides=list(args.overrides), from_scratch=args.from_scratch)
-    result = run_full_demo(options)
+    try:
+        result = run_full_demo(options)
+    except RunLockedError as err:  # another demo writes there
+        print(f"{PROG}: error: {err}", file=sys.stderr)
+        return 1
     print(json.dumps(result.to_dict(), indent=2) if args.json
           else format_summary(result))
     return 0

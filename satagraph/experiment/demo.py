@@ -327,7 +327,18 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     Args:
         options (DemoOptions): What to do.
         stream (TextIO): Where the status lines go.
+
+    Raises:
+        RunLockedError: Another live demo writes to the same output folder
+            (it held the run whose checkpoints a second one removed).
     """
+    from satagraph.lightning.reliability import run_lock
+    with run_lock(Path(options.output), "--output"):
+        return _run_demo(options, stream)
+
+
+def _run_demo(options: DemoOptions, stream: TextIO) -> DemoResult:
+    """:func:`run_demo`'s steps, under its lock."""
     out = Path(options.output)
     result = DemoResult(str(out))
     builtin = None if options.from_scratch or options.data else builtin_module()

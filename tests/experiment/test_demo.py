@@ -146,6 +146,22 @@ def test_quick_demo_still_available(capsys, tmp_path):
     assert read_bvh(tmp_path / "example_walk.bvh").num_frames == 60
 
 
+def test_a_second_demo_into_one_folder_is_refused_before_any_step(capsys, tmp_path):
+    """A second ``satagraph demo`` in the same folder (the default
+    ``demo_output``) removed the first's checkpoints while it trained, then
+    failed on its run lock with a traceback."""
+    from satagraph.lightning.reliability import run_lock
+    kept = tmp_path / "run" / "checkpoints" / "last.ckpt"
+    kept.parent.mkdir(parents=True)
+    kept.write_bytes(b"the first demo's")
+    with run_lock(tmp_path):  # the first demo, still running
+        code = main(["demo", "--output", str(tmp_path), *TINY, "--from-scratch", *SMALL])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and kept.read_bytes() == b"the first demo's"
+    assert err.startswith(f"satagraph: error: {tmp_path}: --output is in use by another live ")
+    assert len(err.splitlines()) == 1 and not (tmp_path / "zoo").exists()
+
+
 def test_builtin_fine_tune_keeps_the_builtin_facing_features(demo_weights, tmp_path):
     """The fine-tune featurises the zoo as the built-in weights were
     trained (``data.preprocessing.facing_smooth``), so ``--init-from``
