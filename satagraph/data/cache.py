@@ -143,13 +143,16 @@ def _unpack(data) -> MotionFeatures:
 
 def load_cached(cache_dir: Path, key: str) -> Optional[MotionFeatures]:
     """Cached features, or ``None`` (a corrupt entry is removed with a
-    warning)."""
+    warning; one that ``satagraph cache --clear`` removed meanwhile is a
+    miss, said nothing of)."""
     path = Path(cache_dir) / f"{key}.npz"
     if not path.is_file():
         return None
     try:
         with np.load(path, allow_pickle=False) as data:
             feats = _unpack(data)
+    except FileNotFoundError:
+        return None
     except Exception as err:  # corrupt or from an incompatible version
         warnings.warn(f"ignoring unreadable cache entry {path}: {err}")
         path.unlink(missing_ok=True)

@@ -128,3 +128,23 @@ def test_a_data_module_caps_its_rig_warnings_over_all_splits(tmp_path: Path) -> 
         dm._read_splits()
     said = [str(w.message) for w in caught if w.category is UnitsWarning]
     assert len(said) == 4 and said[-1].startswith(f"{len(files) - 3} more units warnings")
+
+
+def test_a_clear_while_a_run_reads_is_a_miss_said_nothing_of(cached, monkeypatch) -> None:
+    """``satagraph cache --clear`` between a run's look for an entry and its
+    read of it: the run warned of an "unreadable cache entry" (No such
+    file or directory); it computes the features again, silently."""
+    import warnings
+    from satagraph.data import cache as cache_mod
+    files, root, entries = cached
+    before = load_features(files, cache_dir=str(root))
+    load = cache_mod.np.load
+
+    def cleared_meanwhile(path, **kwargs):
+        prune_cache(feature_cache_dir(str(root)))  # the other process's --clear
+        return load(path, **kwargs)
+    monkeypatch.setattr(cache_mod.np, "load", cleared_meanwhile)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = load_features(files, cache_dir=str(root))
+    assert [f.x_local.tobytes() for f in again] == [f.x_local.tobytes() for f in before]
