@@ -625,3 +625,18 @@ def test_benchmarks_of_the_real_files_stop_in_one_line_without_them(tmp_path, mo
     for script in ("pretrained.py", "pretrained_val.py", "stitch_val.py", "mirror_val.py"):
         assert f"{script}: {missing}: no manifest.tsv there" in err, script
     assert not out.exists()
+
+
+def test_inference_stages_counts_each_stage_s_own_time(tmp_path, capsys):
+    """A stage called inside another counts for itself only; without the
+    real files the benchmark says so in one line."""
+    import time
+    import inference_stages
+    clock = inference_stages.StageClock()
+    inner = clock.timed("model", lambda: time.sleep(0.02))
+    outer = clock.timed("post", lambda: (time.sleep(0.01), inner()))
+    outer()
+    assert 0.02 <= clock.totals["model"] < 0.2 and 0.01 <= clock.totals["post"] < 0.02 + 0.1
+    assert not clock.stack
+    assert inference_stages.main(["--data", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.count("\n") == 1
