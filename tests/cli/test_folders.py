@@ -84,6 +84,30 @@ def test_reconstruct_a_folder_keeps_each_rig(folder: Path, tmp_path: Path, capsy
         assert result.num_frames == source.num_frames
 
 
+@pytest.mark.slow  # four retargets by the built-in model: 11 s
+def test_a_folder_retarget_writes_what_each_file_s_retarget_writes(
+        folder: Path, tmp_path: Path, monkeypatch) -> None:
+    """The target is canonicalised once for the folder (it was once per
+    file), and every output is the file a retarget of that file alone
+    writes, to the byte."""
+    from satagraph.pipelines import inference
+    good, target = tmp_path / "good", folder / "target.bvh"
+    for sub in ("good/deep", "alone/deep"):
+        (tmp_path / sub).mkdir(parents=True)
+    for rel in ("walk.bvh", "deep/Trot.BVH"):
+        (good / rel).write_bytes((folder / rel).read_bytes())
+    for rel in ("walk.bvh", "deep/Trot.BVH"):
+        assert main(["retarget", str(good / rel), "--target", str(target),
+                     str(tmp_path / "alone" / rel)]) == 0
+    seen, canonicalize = [], inference.canonicalize
+    monkeypatch.setattr(inference, "canonicalize",
+                        lambda m, **kw: seen.append(m.source) or canonicalize(m, **kw))
+    assert main(["retarget", str(good), "--target", str(target), str(tmp_path / "out")]) == 0
+    assert seen.count(str(target)) == 1 and len(seen) == 3
+    for rel in ("walk.bvh", "deep/Trot.BVH"):
+        assert (tmp_path / "out" / rel).read_bytes() == (tmp_path / "alone" / rel).read_bytes()
+
+
 def test_skip_existing_goes_on_with_a_stopped_folder_run(folder: Path, tmp_path: Path,
                                                         capsys) -> None:
     """A folder run stopped with one result whole, one write killed (its
