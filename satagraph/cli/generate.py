@@ -316,10 +316,11 @@ def _generate_prompts(args, module, targets, prompts: List[str], settings) -> in
     fails is said in one line and the others go on (exit code 2).
     ``prompts.tsv`` lists what is written as it is written (an interrupt
     left none, or an earlier run's)."""
-    from satagraph.pipelines.generate import generate_on, output_paths, write_all
+    from satagraph.pipelines.generate import generate_on, output_paths, rig_inputs, write_all
     from satagraph.utils.files import atomic_write_text
     from satagraph.cli.folders import each_kept
     start = time.time()
+    rigs = [rig_inputs(module, t, settings.rest) for t in targets]  # once, not per prompt
     Path(args.output).mkdir(parents=True, exist_ok=True)
     table, listed = Path(args.output) / "prompts.tsv", ["path\tprompt\tskeleton\tseconds\tseed"]
     atomic_write_text(table, listed[0] + "\n")
@@ -329,8 +330,8 @@ def _generate_prompts(args, module, targets, prompts: List[str], settings) -> in
         paths = output_paths(str(Path(args.output) / f"{prompt_stem(i, prompt)}.bvh"),
                              args.skeleton)
         text = _prompt(module, prompt, args.literal, f"prompt {i + 1} ({prompt!r}): ")
-        motions = [generate_on(module, text, t, args.seconds, args.seed + i, settings)
-                   for t in targets]
+        motions = [generate_on(module, text, rig, args.seconds, args.seed + i, settings)
+                   for rig in rigs]
         write_all(motions, paths)
         listed.extend("\t".join([Path(path).name, " ".join(prompt.split()), source,
                                  f"{motion.duration:.2f}", str(args.seed + i)])

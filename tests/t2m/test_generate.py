@@ -619,3 +619,19 @@ def test_rerank_keeps_the_draw_the_text_explains_best(t2m_ckpt, zoo_skeletons, m
     assert torch.equal(seen[2][:, 0], drawn[2][best, :seen[2].size(0)])
     G.generate_on(module, None, target, 1.0, 0, G.GenerationSettings(rerank=4))
     assert drawn[3].size(0) == 1 and len(scores) == 1
+
+
+def test_a_rig_s_inputs_made_once_generate_what_its_motion_generates(t2m_ckpt, zoo_skeletons):
+    """``generate --prompts`` makes each skeleton's :func:`rig_inputs` once
+    for every prompt: what
+    ``generate_on`` gives from them is what it gives from the motion."""
+    from satagraph.pipelines import generate as G
+    module = G.load_generator(str(t2m_ckpt))
+    target = read_bvh(str(zoo_skeletons["quadruped"]))
+    settings = GenerationSettings()
+    rig = G.rig_inputs(module, target, settings.rest)
+    for seed in (0, 1):
+        alone = G.generate_on(module, TEXT, target, 1.0, seed, settings)
+        kept = G.generate_on(module, TEXT, rig, 1.0, seed, settings)
+        np.testing.assert_array_equal(kept.rotations, alone.rotations)
+        np.testing.assert_array_equal(kept.translations, alone.translations)

@@ -35,14 +35,21 @@ def test_prompt_stems_are_numbered_file_names() -> None:
 
 @pytest.mark.skipif(not builtin_path("text-to-motion").is_file(),
                     reason="no built-in text-to-motion weights ship in this checkout")
-def test_every_prompt_is_the_motion_text_gives_with_its_seed(tmp_path: Path, capsys) -> None:
+def test_every_prompt_is_the_motion_text_gives_with_its_seed(tmp_path: Path, capsys,
+                                                             monkeypatch) -> None:
+    """Each prompt's file is what ``--text`` gives with its seed; each
+    skeleton is made the model's inputs once, not once per prompt."""
+    from satagraph.pipelines import generate as G
     write_zoo(tmp_path / "zoo", species=["biped"], clips=1, frames=20, seed=4)
     rig = str(sorted((tmp_path / "zoo" / "biped").glob("*.bvh"))[0])
     prompts = tmp_path / "p.txt"
     prompts.write_text("a dog walks forward\na person runs forward\n")
     out = tmp_path / "out"
+    made, rig_inputs = [], G.rig_inputs
+    monkeypatch.setattr(G, "rig_inputs", lambda *a: made.append(a) or rig_inputs(*a))
     assert main(["generate", "--prompts", str(prompts), "--skeleton", rig, str(out),
                  "--seconds", "1.5", "--seed", "5"]) == 0
+    assert len(made) == 1
     said = capsys.readouterr()
     assert "generated 2 motions of 2 of 2 prompts" in said.out
     # a note on how a prompt was read says which prompt it is
