@@ -36,7 +36,7 @@ import warnings
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
-from results_io import SHARED_DATA, write_results  # noqa: E402
+from results_io import SHARED_DATA, missing_data, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = "bandai/dataset-1_bow_active_001.bvh"  # 128 frames at 30 fps
@@ -253,9 +253,10 @@ def main(argv: Optional[List[str]] = None) -> int:
                         default=ROOT / "benchmarks" / "results" / "inference_stages",
                         help="results path without suffix")
     args = parser.parse_args(argv)
-    if not (args.data / "manifest.tsv").is_file():
-        print(f"skipped: {args.data} holds no real BVH files (manifest.tsv); pass --data DIR")
-        return 0
+    missing = missing_data("inference_stages.py", args.data, "the clips timed")
+    if missing:
+        print(f"{missing}; pass --data DIR", file=sys.stderr)
+        return 2
     import torch
     torch.set_num_threads(args.threads)
     for name in IMPORTS:

@@ -638,5 +638,7 @@ def test_inference_stages_counts_each_stage_s_own_time(tmp_path, capsys):
     outer()
     assert 0.02 <= clock.totals["model"] < 0.2 and 0.01 <= clock.totals["post"] < 0.02 + 0.1
     assert not clock.stack
-    assert inference_stages.main(["--data", str(tmp_path)]) == 0
-    assert capsys.readouterr().out.count("\n") == 1
+    assert inference_stages.main(["--data", str(tmp_path)]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == "" and printed.err.count("\n") == 1
+    assert printed.err.startswith(f"inference_stages.py: {tmp_path}: no manifest.tsv there")
