@@ -42,9 +42,9 @@ from satagraph.pipelines.generate_inputs import SECONDS_RANGE, check_seconds, ou
 from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
-from satagraph.pipelines.inference import (default_windows, restore_rest, shown_rest,
-                                           static_features, target_clip, window_codes,
-                                           window_plan)
+from satagraph.pipelines.inference import (cross_fade, default_windows, restore_rest,
+                                           shown_rest, static_features, target_clip,
+                                           window_codes, window_plan)
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion, require_motion
 
@@ -405,26 +405,31 @@ def decode_windows(autoencoder, codes: torch.Tensor, rig: RigInputs,
                    smooth: float = 0.0) -> Tuple[torch.Tensor, torch.Tensor]:
     r"""Physical ``q`` and ``r`` of per-frame codes decoded onto :obj:`rig`
     in the autoencoder's training windows, a quarter of each shared with
-    the next and cropped at each window's ``keep``
-    (:func:`~satagraph.pipelines.inference.window_plan`; ``transfer``
-    cross-fades the shared frames instead). The temporal
+    the next and cross-faded there, as ``retarget`` stitches them
+    (:func:`~satagraph.pipelines.inference.window_plan`,
+    :func:`~satagraph.pipelines.inference.cross_fade`; cut at each
+    window's ``keep``, the pose jumped at every seam). The temporal
     layers' sinusoidal positions were learnt on that many frames; decoded
     whole, a 4-second walk lost its pace after the 64 frames the shipped
     RVQ was trained on (root speed falling to a third of the source's).
 
     Shapes:
         - **codes**: :math:`(T, Q)`
-        - **output**: :math:`(T \cdot J, 6)` and :math:`(T, 4)`
+        - **output**: :math:`(T \cdot J, 6)` and :math:`(T, 4)`, of the decoder's
+          dtype on the codes' device
     """
     window, overlap = default_windows(autoencoder)
-    num = rig.feats.skeleton.num_joints
-    qs, rs = [], []
-    for start, stop, keep in window_plan(codes.size(0), window, overlap):
+    frames, num = codes.size(0), rig.feats.skeleton.num_joints
+    q, r = np.empty((frames, num, 6)), np.empty((frames, 4))
+    done, dtype = 0, None
+    for start, stop, _ in window_plan(frames, window, overlap):
         target = collate_clips([target_clip(rig.feats, stop - start, rig.semantic)])
         out = autoencoder.decode_codes(codes[start:stop], target.to(codes.device), smooth)
-        qs.append(out["q"].view(stop - start, num, 6)[keep - start:].reshape(-1, 6))
-        rs.append(out["r"][keep - start:])
-    return torch.cat(qs), torch.cat(rs)
+        cross_fade(q, out["q"].view(stop - start, num, 6).cpu().double().numpy(), start, done)
+        cross_fade(r, out["r"].cpu().double().numpy(), start, done)
+        done, dtype = stop, out["q"].dtype
+    return tuple(torch.from_numpy(x).to(codes.device, dtype)
+                 for x in (q.reshape(-1, 6), r))
 
 
 def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float,
