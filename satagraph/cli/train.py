@@ -112,8 +112,10 @@ def add_train_parsers(sub) -> None:
     p.set_defaults(func=run_retarget)
 
     p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
-                       description="Evaluate JR, RT, JP, FS, GP per dataset on a split, "
-                       "each skeleton read in the rest pose reconstruct shows it (--rest).")
+                       description="Evaluate JR, RT, JP, FS, GP per dataset on a split "
+                       "(with RT and JP over the clip's height, RT_h and JP_h, and SAME's "
+                       "retarget error RE), each skeleton read in the rest pose reconstruct "
+                       "shows it (--rest).")
     p.add_argument("--ckpt", required=True,
                    help="a checkpoint, a weights file, a run folder (its "
                    "checkpoints/last.ckpt), builtin or builtin-wide")
