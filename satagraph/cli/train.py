@@ -113,7 +113,7 @@ def add_train_parsers(sub) -> None:
 
     p = sub.add_parser("eval", help="metrics of a checkpoint on a split, per dataset",
                        description="Evaluate JR, RT, JP, FS, GP per dataset on a split "
-                       "(with RT and JP over the clip's height, RT_h and JP_h, and SAME's "
+                       "(with RT and JP over the clip's height, RT/H and JP/H, and SAME's "
                        "retarget error RE), each skeleton read in the rest pose reconstruct "
                        "shows it (--rest).")
     p.add_argument("--ckpt", required=True,
