@@ -45,7 +45,8 @@ from satagraph.transforms.augment import mirror as mirror_motion, reverse_time
 from satagraph.transforms.canonical import canonicalize
 from satagraph.data.clip import MotionClip
 from satagraph.data.dataset import (DEFAULT_PREPROCESSING, WindowAugment, _frames, shown_as,
-                                    feature_options, skeleton_id, window_starts)
+                                    feature_options, skeleton_id, window_height,
+                                    window_starts)
 from satagraph.data.features import MotionFeatures, features_to_motion, motion_to_features
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.datasets.sources import MotionFile
@@ -80,7 +81,8 @@ def mirror_features(feats: MotionFeatures, start: int, stop: int,
     except ValueError:
         return None
     axis = feats.facing_axis * np.array([-1.0, 1.0, 1.0])  # the root turns with it
-    return motion_to_features(mirrored, **options, facing_axis=axis), lead
+    return motion_to_features(mirrored, **options, facing_axis=axis,
+                              height=window_height(feats, motion, mirrored)), lead
 
 
 def reverse_features(feats: MotionFeatures, start: int, stop: int,
@@ -95,8 +97,10 @@ def reverse_features(feats: MotionFeatures, start: int, stop: int,
         reversed window's first) in them.
     """
     lead = 1 if stop < feats.num_frames else 0
-    motion = reverse_time(features_to_motion(_frames(feats, slice(start, stop + lead))))
-    return motion_to_features(motion, **options, facing_axis=feats.facing_axis), lead
+    window = features_to_motion(_frames(feats, slice(start, stop + lead)))
+    motion = reverse_time(window)
+    return motion_to_features(motion, **options, facing_axis=feats.facing_axis,
+                              height=window_height(feats, window, motion)), lead
 
 
 def reversible(captions: Sequence[Caption]) -> List[Caption]:

@@ -307,6 +307,22 @@ def _frames(feats: MotionFeatures, frames: slice) -> MotionFeatures:
                    v_x=feats.v_x[frames], r=feats.r[frames], c=feats.c[frames])
 
 
+def window_height(feats: MotionFeatures, source: Motion, augmented: Motion) -> float:
+    r"""The character height of an augmented window of a clip: the clip's
+    (:obj:`feats`), times the change the augmentation made to the window's
+    own (:meth:`~satagraph.motion.Motion.height`). A window's own height is
+    a median over its frames alone (1.41 times its clip's in a window of
+    ``dog/D1_009_KAN01_002``), so the heights and contacts of a mirrored
+    or reversed window would not be those of the window as it is.
+
+    Args:
+        feats (MotionFeatures): Features of the whole clip.
+        source (Motion): The window before augmentation.
+        augmented (Motion): The window after it.
+    """
+    return feats.height * augmented.height() / max(source.height(), 1e-12)
+
+
 class WindowAugment:
     r"""On-the-fly skeleton augmentation of feature windows.
 
@@ -406,7 +422,8 @@ class WindowAugment:
         augmented = shown_rest(augment(motion), self.show_rest)[0]
         # a new rest pose turns the root's local frame: turn its facing axis too
         axis = augmented.rotations[0, 0].T @ motion.rotations[0, 0] @ axis
-        out = motion_to_features(augmented, **self.options, facing_axis=axis)
+        out = motion_to_features(augmented, **self.options, facing_axis=axis,
+                                 height=window_height(feats, motion, augmented))
         source = _frames(feats, slice(start - lead, stop))
         if not _plausible_root(out, source):
             # a guard, not a fix: bone scaling of ccbase/007_01 (a moving

@@ -195,6 +195,7 @@ def motion_to_features(
     facing_axis: Optional[np.ndarray] = None,
     facing_smooth: float = 0.0,
     chunk: int = FEATURE_CHUNK,
+    height: Optional[float] = None,
 ) -> MotionFeatures:
     r"""Compute the features of a (canonical) motion.
 
@@ -218,6 +219,11 @@ def motion_to_features(
             at once (:data:`FEATURE_CHUNK`): the temporaries are those of a
             chunk, not of the whole take; the features are the same to the
             bit for any chunk.
+        height (float, optional): The character height the contacts are
+            measured in and the features carry (default: the motion's,
+            :func:`~satagraph.motion.character_height`); a window of a
+            clip passes the clip's (see
+            :func:`~satagraph.data.dataset.window_height`).
     """
     if chunk < 1:
         raise ValueError(f"chunk must be at least 1 frame, got {chunk}")
@@ -229,7 +235,7 @@ def motion_to_features(
                        if motion.num_frames else np.array([0.0, 0.0, 1.0]))
     theta = smooth_yaw(_facing(root_rot, facing_axis), facing_smooth * fps)
     origin = pos[:, 0] * np.array([1.0, 0.0, 1.0])
-    height = character_height(skel, pos)
+    height = character_height(skel, pos) if height is None else float(height)
     contacts = partial(ground_contacts, fps=fps, size=height, height=contact_height,
                        speed=contact_speed)
     frames = _empty_frame_features(motion.num_frames, motion.num_joints)

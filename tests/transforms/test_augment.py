@@ -320,3 +320,28 @@ def test_window_augment_shows_windows_as_inference_shows_rigs(shared_data):
                                features_to_motion(plain).global_positions(), atol=1e-6)
     with pytest.raises(ValueError, match="data.preprocessing.rest must be one of"):
         WindowAugment(show_rest="mean")
+
+
+def test_augmented_windows_keep_their_clips_height_and_contacts(shared_data):
+    """A window of a dog clip that lies down at first measures 1.41 times
+    its clip's height on its own: mirrored, reversed or left as it is, an
+    augmented window keeps its clip's height, so its contacts are the
+    clip's (mirrored: exchanged left/right; reversed: the height test of
+    the same frames)."""
+    from satagraph.data.captioned import mirror_features, reverse_features
+    from satagraph.data.dataset import feature_options
+    feats = motion_to_features(canonicalize(
+        read_bvh(shared_data / "dog" / "D1_009_KAN01_002.bvh"), fps=30, replace_bind=False))
+    start, stop, options = 32, 96, feature_options()
+    pair = mirror_pairs(feats.skeleton)
+    plain, lead = WindowAugment(scale=0, mirror=0)(feats, start, stop, 0, 0)
+    mirrored, _ = WindowAugment(scale=0, mirror=1)(feats, start, stop, 0, 0)
+    by_text, _ = mirror_features(feats, start, stop, options)
+    backwards, first = reverse_features(feats, start, stop, options)
+    for out in (plain, mirrored, by_text, backwards):
+        assert out.height == pytest.approx(feats.height, rel=1e-9)
+    np.testing.assert_array_equal(plain.c[lead:], feats.c[start:stop])
+    np.testing.assert_array_equal(mirrored.c[lead:], feats.c[start:stop, pair])
+    np.testing.assert_array_equal(by_text.c[lead:], feats.c[start:stop, pair])
+    low = feats.x[start:stop, :, 1] < options["contact_height"] * feats.height
+    np.testing.assert_array_equal(backwards.c[first:] <= low[::-1], True)
