@@ -9,8 +9,9 @@ directions. Whole words only (``"leftover"`` stays), case kept
 (``"Left"`` -> ``"Right"``, ``"LEFT"`` -> ``"RIGHT"``).
 
 :func:`mirror_text` is an involution on texts written with the canonical
-spellings; the spellings ``anticlockwise``, ``anti-clockwise`` and
-``counter-clockwise`` become ``clockwise``, whose mirror image is
+spellings; the spellings ``anticlockwise``, ``anti-clockwise``,
+``counter-clockwise`` and ``counter clockwise`` (a space, as HumanML3D
+writes it) become ``clockwise``, whose mirror image is
 ``counterclockwise``. ``right`` in the sense of "correct" or "just"
 (``"right after"``) is swapped as well: telling it apart would break the
 involution.
@@ -30,9 +31,10 @@ MIRROR_WORDS: Dict[str, str] = {
     "leftmost": "rightmost", "rightmost": "leftmost",
     "clockwise": "counterclockwise", "counterclockwise": "clockwise",
     "counter-clockwise": "clockwise", "anticlockwise": "clockwise",
-    "anti-clockwise": "clockwise",
+    "anti-clockwise": "clockwise", "counter clockwise": "clockwise",
+    "anti clockwise": "clockwise",
 }
-# Longest first, so that "counter-clockwise" wins over its "clockwise".
+# Longest first, so that "counter clockwise" wins over its "clockwise".
 _PATTERN = re.compile(
     r"(?<!\w)(" + "|".join(re.escape(w) for w in sorted(
         MIRROR_WORDS, key=len, reverse=True)) + r")(?![\w])",

@@ -35,9 +35,13 @@ def test_mirror_swaps_whole_words_keeping_case():
 
 
 def test_other_spellings_of_counterclockwise():
-    for text in ("anticlockwise", "anti-clockwise", "counter-clockwise"):
+    for text in ("anticlockwise", "anti-clockwise", "counter-clockwise",
+                 "counter clockwise", "anti clockwise"):
         assert mirror_text(f"turns {text}") == "turns clockwise"
     assert mirror_text("Turns Anti-Clockwise") == "Turns Clockwise"
+    # HumanML3D's spelling, once "counter counterclockwise"
+    assert mirror_text("walks a Counter Clockwise circle then clockwise") == \
+        "walks a Clockwise circle then counterclockwise"
 
 
 def test_caption_words_follow_the_joint_name_rule():
