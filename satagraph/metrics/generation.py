@@ -40,7 +40,13 @@ def r_precision(text: np.ndarray, motion: np.ndarray, top_k: int = 3,
                 pool_size: int = POOL_SIZE, rng: np.random.Generator = None) -> np.ndarray:
     r"""Share of motions whose own text ranks within the first
     1..:obj:`top_k` among a pool of :obj:`pool_size` texts (the pairs are
-    shuffled, cut into pools; a last incomplete pool is left out).
+    shuffled, cut into pools; a last incomplete pool is left out). Texts
+    exactly as near as the motion's own (a caption repeated in the pool)
+    rank in a random order among themselves, counted by its expectation:
+    an own text tied with :math:`m` others after :math:`c` closer ones
+    adds :math:`\mathrm{clip}((k - c) / (m + 1), 0, 1)` to R@k, so that
+    embeddings that tell no text apart score chance (:math:`k` / pool_size),
+    not 1.
 
     Args:
         text: Text embeddings, row i paired with motion i.
@@ -61,8 +67,12 @@ def r_precision(text: np.ndarray, motion: np.ndarray, top_k: int = 3,
     for p in range(pools):
         idx = order[p * pool_size:(p + 1) * pool_size]
         dist = pairwise_distances(motion[idx], text[idx])
-        rank = (dist < np.diag(dist)[:, None]).sum(1)  # texts closer than its own
-        hits += np.array([(rank < k).sum() for k in range(1, top_k + 1)])
+        own = np.diag(dist)[:, None]
+        tie = np.isclose(dist, own, rtol=1e-9, atol=1e-12)
+        closer = ((dist < own) & ~tie).sum(1)
+        ties = tie.sum(1)  # the own text and those as near
+        hits += np.array([np.clip((k - closer) / ties, 0.0, 1.0).sum()
+                          for k in range(1, top_k + 1)])
     return hits / (pools * pool_size)
 
 

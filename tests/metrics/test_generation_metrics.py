@@ -28,6 +28,25 @@ def test_r_precision_counts_ranks():
         r_precision(text[:10], motion[:10])
 
 
+def test_r_precision_ties_rank_in_random_order():
+    """A caption repeated in the pool ties with the motion's own: R@1 counts
+    the expected 1/2 (it was 1); text embeddings that tell no text apart
+    score chance k / 32 (they scored 1.0 at every k)."""
+    text = np.array([[0.0], [0.0]] + [[10.0 + i] for i in range(30)])
+    out = r_precision(text, text.copy(), top_k=3)
+    # motions 0 and 1: own text tied with one other, none closer -> 1/2, 1, 1
+    np.testing.assert_allclose(out, [31 / 32, 1.0, 1.0])
+    motion = np.random.default_rng(0).normal(size=(64, 4))
+    np.testing.assert_allclose(r_precision(np.ones((64, 4)), motion), [1 / 32, 2 / 32, 3 / 32])
+    # texts 1 and 2 are one caption; motion 1 lies nearer text 0 (0.9) than
+    # its own (1.1): c = 1, m = 1 -> 0, 1/2, 1; motion 2: c = 0, m = 1 ->
+    # 1/2, 1, 1; the other 30 motions rank their own text first
+    text = np.array([[0.0], [2.0], [2.0]] + [[10.0 + i] for i in range(29)])
+    motion = text.copy()
+    motion[1] = [0.9]
+    np.testing.assert_allclose(r_precision(text, motion, top_k=3) * 32, [30.5, 31.5, 32.0])
+
+
 def test_matching_score_and_diversity():
     text = np.zeros((4, 2))
     motion = np.array([[3.0, 4.0]] * 4)
