@@ -150,7 +150,12 @@ def quaternion_slerp(q0: Tensor, q1: Tensor, weight: Tensor) -> Tensor:
 
 
 def geodesic_angle(matrix_a: Tensor, matrix_b: Tensor) -> Tensor:
-    r"""Angle (radians) of the relative rotation between two sets of matrices.
+    r"""Angle (radians) of the relative rotation between two sets of matrices:
+    :math:`\operatorname{atan2}(\lVert w \rVert, \mathrm{tr} R - 1)` with
+    :math:`w` the axis vector of :math:`R - R^\top` (:math:`2 \sin\theta`
+    and :math:`2 \cos\theta`), exact at 0 and accurate near it, where the
+    arc cosine of the trace loses half the digits (its clamp made equal
+    rotations 4.9e-4 rad apart in float32); the gradient stays finite.
 
     Shapes:
         - **matrix_a**, **matrix_b**: :math:`(*, 3, 3)`
@@ -158,8 +163,9 @@ def geodesic_angle(matrix_a: Tensor, matrix_b: Tensor) -> Tensor:
     """
     rel = matrix_a.transpose(-1, -2) @ matrix_b
     trace = rel.diagonal(dim1=-2, dim2=-1).sum(-1)
-    cos = ((trace - 1) / 2).clamp(-1 + 1e-7, 1 - 1e-7)
-    return torch.acos(cos)
+    skew = torch.stack([rel[..., 2, 1] - rel[..., 1, 2], rel[..., 0, 2] - rel[..., 2, 0],
+                        rel[..., 1, 0] - rel[..., 0, 1]], dim=-1)
+    return torch.atan2(skew.norm(dim=-1), trace - 1)
 
 
 def yaw_matrix(yaw: Tensor) -> Tensor:
