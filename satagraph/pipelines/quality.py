@@ -178,21 +178,29 @@ def stride(canonical: Motion, tracks: Optional[Dict[str, np.ndarray]] = None
     return float(np.mean(spread) / leg_length(canonical))
 
 
+#: Zero-padding factor of :func:`cadence`'s spectrum: its frequencies
+#: :data:`CADENCE_PAD` times finer than one cycle per clip.
+CADENCE_PAD = 16
+
+
 def cadence(canonical: Motion, tracks: Optional[Dict[str, np.ndarray]] = None
             ) -> Optional[float]:
     """The gait's frequency in Hz: the median over limb ends of the
     dominant frequency of each :func:`limb_tracks` fore-aft track
-    (Hann-windowed spectrum, the constant left out). A walk's limbs swing
-    once a stride, so a glide with no gait reads low. ``None`` for a
-    skeleton without limb ends or a motion of fewer than 4 frames."""
+    (Hann-windowed spectrum zero-padded :data:`CADENCE_PAD` times, the
+    constant left out, so that a 1.5 Hz swing over 3 s reads 1.5, not the
+    nearest multiple of 1/3 Hz). A walk's limbs swing once a stride, so a
+    glide with no gait reads low. ``None`` for a skeleton without limb
+    ends or a motion of fewer than 4 frames."""
     tracks = limb_tracks(canonical) if tracks is None else tracks
     if not tracks or canonical.num_frames < 4:
         return None
     peaks = []
+    size = CADENCE_PAD * canonical.num_frames
     for track in tracks.values():
         track = track - track.mean()
-        spectrum = np.abs(np.fft.rfft(track * np.hanning(len(track))))
-        freqs = np.fft.rfftfreq(len(track), 1.0 / canonical.fps)
+        spectrum = np.abs(np.fft.rfft(track * np.hanning(len(track)), size))
+        freqs = np.fft.rfftfreq(size, 1.0 / canonical.fps)
         peaks.append(freqs[1:][np.argmax(spectrum[1:])])
     return float(np.median(peaks))
 
@@ -431,7 +439,8 @@ def retarget_quality(source: Motion, output: Motion,
 
 
 __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
-           "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "cadence",
+           "mean_correlation", "step_correlation", "leg_length", "root_travel", "stride", "CADENCE_PAD",
+           "cadence",
            "ground_height", "contact", "foot_slide", "hover", "head_index", "upright_fraction",
            "trunk_bend", "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",

@@ -222,6 +222,17 @@ def test_cadence_reads_the_gait_frequency(species):
     assert cadence(walk.slice(0, 3)) is None
 
 
+
+@pytest.mark.parametrize("hz", [0.9, 1.5, 2.2])
+def test_cadence_reads_a_known_swing_between_the_spectrum_bins(hz):
+    """Limb tracks swinging at a known rate over 3 s at 30 fps: the
+    cadence is that rate within 0.02 Hz (it read the nearest multiple of
+    1/3 Hz: 1.0, 1.667 and 2.333)."""
+    walk = _walk("biped")
+    t = np.arange(walk.num_frames) / walk.fps
+    tracks = {limb: 0.2 * np.sin(2 * np.pi * hz * t + 0.3) for limb in LIMBS}
+    assert cadence(walk, tracks) == pytest.approx(hz, abs=0.02)
+
 @pytest.mark.parametrize("species", ["biped", "quadruped"])
 def test_heading_gap_tells_a_walk_from_a_side_step_and_a_crab(species):
     """A zoo walk travels the way its hips face (under a degree), the zoo's
