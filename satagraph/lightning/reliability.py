@@ -19,7 +19,6 @@ r"""Training that cannot end green with a broken model, and exact resume.
 from __future__ import annotations
 
 import contextlib
-import errno
 import os
 import random
 import re
@@ -37,7 +36,8 @@ from lightning.pytorch.callbacks import Checkpoint
 from lightning.pytorch.utilities.exceptions import SIGTERMException
 
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
-from satagraph.utils.files import append_whole, is_temp_file, keep_copy
+from satagraph.utils.files import (append_whole, is_temp_file, keep_copy, lock_fd,
+                                   names_fd)
 
 #: Names of the resume checkpoints in ``<run>/checkpoints``.
 LAST, PREVIOUS, DAMAGED = "last.ckpt", "last.prev.ckpt", "last.damaged.ckpt"
@@ -538,65 +538,60 @@ def _holder(lock: Path) -> str:
     return "unknown"
 
 
-#: The byte of ``.lock`` that Windows locks: past the holder's line, which
-#: another process reads to name it (Windows locks are not advisory).
-_LOCKED_BYTE = 1 << 20
-
-
-def _lock(fd: int, take: bool = True) -> bool:
-    """Take (without waiting) or release the run lock on :obj:`fd`: an
-    advisory ``flock`` on POSIX, a one-byte ``msvcrt`` lock on Windows (no
-    ``fcntl`` there); the system releases either when the process ends,
-    even by ``kill -9``. Returns ``False`` where another holds it."""
-    try:
-        import fcntl
-    except ImportError:  # Windows
-        import msvcrt
-        os.lseek(fd, _LOCKED_BYTE, os.SEEK_SET)
-        try:
-            msvcrt.locking(fd, msvcrt.LK_NBLCK if take else msvcrt.LK_UNLCK, 1)
-        except OSError as err:
-            if err.errno not in (errno.EACCES, errno.EDEADLOCK):
-                raise
-            return False
-        finally:
-            os.lseek(fd, 0, os.SEEK_SET)
-        return True
-    try:
-        fcntl.flock(fd, (fcntl.LOCK_EX | fcntl.LOCK_NB) if take else fcntl.LOCK_UN)
-    except BlockingIOError:
-        return False
-    return True
-
-
 @contextlib.contextmanager
 def run_lock(run_dir: Path, flag: str = "output_dir") -> Iterator[Path]:
-    """Hold ``<run_dir>/.lock`` (see :func:`_lock`: released by the system
-    when the process ends, even by ``kill -9``) while training (a sweep:
-    while it trains its configs; :obj:`flag` names the folder's setting).
+    """Hold ``<run_dir>/.lock`` (see :func:`~satagraph.utils.files.lock_fd`:
+    released by the system when the process ends, even by ``kill -9``) while
+    training (a sweep: while it trains its configs; :obj:`flag` names the
+    folder's setting).
 
     Raises:
         RunLockedError: Another live process holds it.
     """
-    made = [d for d in (run_dir, *run_dir.parents) if not d.exists()]  # deepest first
-    run_dir.mkdir(parents=True, exist_ok=True)
     lock = run_dir / ".lock"
-    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-    held = False
+    fd, made = _take_lock(run_dir, flag)
     try:
-        if not _lock(fd):
-            raise RunLockedError(
-                f"{run_dir}: {flag} is in use by another live run ({_holder(lock)}); "
-                f"wait for it or choose another {flag}") from None
-        held = True
         os.ftruncate(fd, 0)
         os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
         yield lock
     finally:
-        if held and made:
+        if made:
             _drop_if_empty(made, lock)
-        if held:
-            _lock(fd, take=False)
+        lock_fd(fd, take=False)
+        os.close(fd)
+
+
+def _take_lock(run_dir: Path, flag: str) -> Tuple[int, List[Path]]:
+    """Open and lock ``<run_dir>/.lock``, making the folders it needs; again
+    where the file was removed or replaced between the open and the lock
+    (:func:`_drop_if_empty` of the run that held it): a lock on a removed
+    file keeps no other run out.
+
+    Returns:
+        The descriptor, holding the lock, and the folders made (deepest first).
+
+    Raises:
+        RunLockedError: Another live process holds it.
+    """
+    lock = run_dir / ".lock"
+    while True:
+        made = [d for d in (run_dir, *run_dir.parents) if not d.exists()]  # deepest first
+        run_dir.mkdir(parents=True, exist_ok=True)
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except FileNotFoundError:  # its folder removed meanwhile
+            continue
+        try:
+            if not lock_fd(fd):
+                raise RunLockedError(
+                    f"{run_dir}: {flag} is in use by another live run ({_holder(lock)}); "
+                    f"wait for it or choose another {flag}")
+        except BaseException:
+            os.close(fd)
+            raise
+        if names_fd(lock, fd):
+            return fd, made
+        lock_fd(fd, take=False)
         os.close(fd)
 
 

@@ -10,6 +10,7 @@ r"""Safe file handling shared by every reader and writer.
   that folder (:func:`sweep_stale_temps`; those of this machine and
   process-id namespace only).
 - :func:`append_whole` appends a record to a log whole or not at all.
+- :func:`lock_fd` keeps another process out (of a run's folder).
 - :func:`check_output_path` checks an output path before any work is done.
 - :func:`check_input_file` refuses what is not a regular file (FIFOs,
   devices, sockets, directories: reading them hangs or never ends) and
@@ -18,6 +19,7 @@ r"""Safe file handling shared by every reader and writer.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import os
 import re
@@ -357,6 +359,49 @@ def append_whole(path: PathLike, data: bytes, create_parent: bool = False) -> No
         os.close(fd)
 
 
+#: The byte of a lock file that Windows locks: past the holder's line that
+#: a run lock writes, which another process reads to name it (Windows locks
+#: are not advisory).
+_LOCKED_BYTE = 1 << 20
+
+
+def lock_fd(fd: int, take: bool = True) -> bool:
+    """Take (without waiting) or release an exclusive lock on :obj:`fd`: an
+    advisory ``flock`` on POSIX, a one-byte ``msvcrt`` lock on Windows (no
+    ``fcntl`` there); the system releases either when the process ends,
+    even by ``kill -9``. Returns ``False`` where another holds it."""
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+        os.lseek(fd, _LOCKED_BYTE, os.SEEK_SET)
+        try:
+            msvcrt.locking(fd, msvcrt.LK_NBLCK if take else msvcrt.LK_UNLCK, 1)
+        except OSError as err:
+            if err.errno not in (errno.EACCES, errno.EDEADLOCK):
+                raise
+            return False
+        finally:
+            os.lseek(fd, 0, os.SEEK_SET)
+        return True
+    try:
+        fcntl.flock(fd, (fcntl.LOCK_EX | fcntl.LOCK_NB) if take else fcntl.LOCK_UN)
+    except BlockingIOError:
+        return False
+    return True
+
+
+def names_fd(path: PathLike, fd: int) -> bool:
+    """Whether :obj:`path` still names the file open as :obj:`fd`: a lock
+    taken on a file that another process removed (or replaced) since it
+    was opened keeps no one out, since the next process opens a new one."""
+    try:
+        return os.path.samestat(os.fstat(fd), os.stat(path))
+    except FileNotFoundError:
+        return False
+
+
 __all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
            "check_output_path", "atomic_write", "atomic_write_text", "atomic_write_bytes",
-           "atomic_path", "keep_copy", "append_whole", "sweep_stale_temps", "is_temp_file"]
+           "atomic_path", "keep_copy", "append_whole", "sweep_stale_temps", "is_temp_file",
+           "lock_fd", "names_fd"]

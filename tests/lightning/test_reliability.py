@@ -2,6 +2,7 @@
 ``kill -9``, safe loading, one live run per output folder."""
 from __future__ import annotations
 
+import contextlib
 import copy
 import errno
 import os
@@ -23,6 +24,7 @@ from satagraph.cli import main
 from satagraph.experiment.config import load_config
 from satagraph.datasets.zoo import write_zoo
 from satagraph.io.checkpoint import CheckpointError, load_checkpoint
+from satagraph.lightning import reliability
 from satagraph.lightning.reliability import (LAST, PREVIOUS, RunLockedError,
                                              TrainingStopped, read_loss_log,
                                              resume_checkpoint, run_lock)
@@ -376,6 +378,31 @@ def test_a_run_that_made_nothing_leaves_no_folder(tmp_path: Path) -> None:
     with run_lock(kept):
         pass
     assert kept.is_dir()
+
+
+def test_a_lock_removed_between_open_and_lock_is_taken_anew(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run refused before its first step removes ``.lock`` and the folder
+    it made; a second run that had opened ``.lock`` just before then locked
+    the removed file, and a third made a new ``.lock`` and took the folder
+    too: two runs each held it."""
+    made = tmp_path / "runs" / "tiny"
+    first = contextlib.ExitStack()
+    first.enter_context(run_lock(made))
+    taken, ended = reliability.lock_fd, []
+
+    def first_ends_meanwhile(fd: int, take: bool = True) -> bool:
+        if take and not ended:  # the second run has .lock open
+            ended.append(first.close())  # drops .lock and runs/, then releases
+        return taken(fd, take)
+    monkeypatch.setattr(reliability, "lock_fd", first_ends_meanwhile)
+    with run_lock(made) as lock:
+        assert ended
+        with pytest.raises(RunLockedError, match=f"pid {os.getpid()}"):
+            with run_lock(made):  # the third
+                pass
+        assert lock.is_file()
+    assert not (tmp_path / "runs").exists()  # the folders it made again go again
 
 
 class _Payload:
