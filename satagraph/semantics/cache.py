@@ -5,8 +5,8 @@ and a ``[N, D]`` float32 tensor. The directory is the ``cache_dir``
 argument, else the ``SATAGRAPH_CACHE`` environment variable, else
 ``~/.cache/satagraph/embeddings``. Files are written atomically (temporary
 file + :func:`os.replace`), merged with whatever another process wrote in the
-meantime; an unreadable or malformed file is ignored with a warning and
-rebuilt; an unwritable directory only costs a warning. Loaded tables are kept
+meantime under a lock file (:func:`lock_path`); an unreadable or malformed
+file is ignored with a warning and rebuilt; an unwritable directory only costs a warning. Loaded tables are kept
 in memory and reused while the file on disk is unchanged.
 """
 from __future__ import annotations
@@ -25,6 +25,7 @@ from torch import Tensor
 from satagraph.io.checkpoint import save_checkpoint
 from satagraph.semantics.encoders import TextEncoder
 from satagraph.utils.cache import cache_moved, cache_root
+from satagraph.utils.files import file_lock
 
 PathLike = Union[str, "os.PathLike[str]"]
 FORMAT = "satagraph-embeddings"
@@ -52,6 +53,12 @@ def cache_file(cache_dir: PathLike, encoder_id: str) -> Path:
     safe = re.sub(r"[^A-Za-z0-9._-]+", "_", encoder_id)[:60]
     digest = hashlib.blake2b(encoder_id.encode(), digest_size=6).hexdigest()
     return Path(cache_dir) / f"{safe}-{digest}.pt"
+
+
+def lock_path(path: Path) -> Path:
+    """The lock file a writer of the cache file :obj:`path` holds while it
+    merges and writes (``.<name>.lock``, removed after)."""
+    return path.with_name(f".{path.name}.lock")
 
 
 @dataclass
@@ -150,23 +157,32 @@ class EmbeddingCache:
 
     def _store(self, path: Path, encoder: TextEncoder, table: _Table,
                texts: List[str], emb: Tensor) -> _Table:
-        """Merge new rows with the file on disk and write it atomically."""
-        if _stamp(path) != table.stamp:  # someone else wrote meanwhile
-            table = _read_table(path, encoder.id, encoder.out_channels)
-        new = [i for i, t in enumerate(texts) if t not in table.rows]
-        table.add([texts[i] for i in new], emb[new])
-        payload = {"format": FORMAT, "encoder_id": encoder.id,
-                   "texts": table.texts, "embeddings": table.emb}
+        """Merge new rows with the file on disk and write it atomically,
+        holding its lock file (:func:`lock_path`): a write of another process
+        between a merge and its write was replaced, its new rows lost."""
         try:  # a full disk is an OSError there, costing the cache alone
-            save_checkpoint(payload, path)
-            table.stamp = _stamp(path)
+            with file_lock(lock_path(path), create_parent=True):
+                if _stamp(path) != table.stamp:  # someone else wrote meanwhile
+                    table = _read_table(path, encoder.id, encoder.out_channels)
+                _add_new(table, texts, emb)
+                save_checkpoint({"format": FORMAT, "encoder_id": encoder.id,
+                                 "texts": table.texts, "embeddings": table.emb}, path)
+                table.stamp = _stamp(path)
         except OSError as err:
             warnings.warn(f"cannot write embedding cache {path} "
                           f"({err}); continuing without it", RuntimeWarning,
                           stacklevel=3)
+            _add_new(table, texts, emb)
             table.stamp = None
         _MEMORY[path] = table
         return table
+
+
+def _add_new(table: _Table, texts: List[str], emb: Tensor) -> None:
+    """Add the rows of :obj:`texts` that :obj:`table` lacks."""
+    new = [i for i, t in enumerate(texts) if t not in table.rows]
+    if new:
+        table.add([texts[i] for i in new], emb[new])
 
 
 def clear_memory() -> None:

@@ -10,7 +10,8 @@ r"""Safe file handling shared by every reader and writer.
   that folder (:func:`sweep_stale_temps`; those of this machine and
   process-id namespace only).
 - :func:`append_whole` appends a record to a log whole or not at all.
-- :func:`lock_fd` keeps another process out (of a run's folder).
+- :func:`lock_fd` and :func:`file_lock` keep another process out (of a
+  run's folder, of a cache's read-merge-write).
 - :func:`check_output_path` checks an output path before any work is done.
 - :func:`check_input_file` refuses what is not a regular file (FIFOs,
   devices, sockets, directories: reading them hangs or never ends) and
@@ -27,6 +28,7 @@ import secrets
 import shutil
 import socket
 import stat
+import time
 from pathlib import Path
 from typing import IO, Any, Callable, Iterator, Optional, Union
 
@@ -401,7 +403,47 @@ def names_fd(path: PathLike, fd: int) -> bool:
         return False
 
 
+@contextlib.contextmanager
+def file_lock(path: PathLike, create_parent: bool = False,
+              timeout: float = 60.0) -> Iterator[None]:
+    """Hold an exclusive lock on the file :obj:`path` (made for it, removed
+    after it) for the block, waiting while another process holds it: for a
+    read-merge-write that two processes must not interleave.
+
+    Args:
+        path: The lock file.
+        create_parent: Create a missing parent folder.
+        timeout: Seconds to wait for another holder.
+
+    Raises:
+        OSError: The lock file cannot be made; :class:`TimeoutError` where
+            another process held it :obj:`timeout` seconds; naming :obj:`path`.
+    """
+    path, deadline = os.fspath(path), time.monotonic() + timeout
+    if create_parent:
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        while not lock_fd(fd):
+            if time.monotonic() > deadline:
+                os.close(fd)
+                raise TimeoutError(errno.ETIMEDOUT, f"held by another process for "
+                                   f"{timeout:g} s", path)
+            time.sleep(0.005)
+        if names_fd(path, fd):
+            break
+        lock_fd(fd, take=False)  # another holder removed it meanwhile: a new one
+        os.close(fd)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):  # while held: a waiter then tries anew
+            os.unlink(path)
+        lock_fd(fd, take=False)
+        os.close(fd)
+
+
 __all__ = ["InputFileError", "OutputPathError", "MAX_INPUT_BYTES", "check_input_file",
            "check_output_path", "atomic_write", "atomic_write_text", "atomic_write_bytes",
            "atomic_path", "keep_copy", "append_whole", "sweep_stale_temps", "is_temp_file",
-           "lock_fd", "names_fd"]
+           "lock_fd", "names_fd", "file_lock"]

@@ -3,6 +3,7 @@ and X_t of skeletons."""
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import subprocess
 import sys
@@ -19,6 +20,7 @@ from satagraph.semantics import (EmbeddingCache, OfflineTextEncoder,
                                  T5TextEncoder, TextEncoder, clear_memory,
                                  default_cache_dir, describe_joints,
                                  embed_skeleton, embed_texts)
+from satagraph.semantics import cache as cache_mod
 from satagraph.semantics.cache import cache_file
 from satagraph.utils.cache import ENV_VAR
 
@@ -201,6 +203,36 @@ def test_cache_merges_concurrent_writers(tmp_path):
     EmbeddingCache(tmp_path).embed(c, ["one", "two"])
     assert c.calls == []
 
+
+
+def _embed_in_a_fresh_process(folder: Path, texts: List[str]) -> None:
+    clear_memory()
+    EmbeddingCache(folder).embed(CountingEncoder(), texts)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="forks the other writer")
+def test_a_write_between_a_merge_and_its_write_is_kept(tmp_path, monkeypatch):
+    """Another process that wrote between a process's merge and its write
+    was replaced, its rows lost (two processes adding 200 texts each kept
+    230 of the 400); the merge and the write hold the lock file."""
+    saved, others = cache_mod.save_checkpoint, []
+
+    def another_writes_meanwhile(payload, path):
+        if not others:  # once, and not in the other process
+            others.append(multiprocessing.get_context("fork").Process(
+                target=_embed_in_a_fresh_process, args=(tmp_path, ["two"])))
+            others[0].start()
+            others[0].join(timeout=0.5)  # it ends at once unless it waits for the lock
+        saved(payload, path)
+    monkeypatch.setattr(cache_mod, "save_checkpoint", another_writes_meanwhile)
+    EmbeddingCache(tmp_path).embed(CountingEncoder(), ["one"])
+    others[0].join(timeout=30.0)
+    assert others[0].exitcode == 0
+    clear_memory()
+    c = CountingEncoder()
+    EmbeddingCache(tmp_path).embed(c, ["one", "two"])
+    assert c.calls == []
+    assert [p.name for p in tmp_path.iterdir()] == [cache_file(tmp_path, c.id).name]
 
 # -------------------------------------------------------------- skeletons
 def test_embed_skeleton_rows_follow_descriptions(tmp_path):
