@@ -453,19 +453,33 @@ def smooth_decoded(q: torch.Tensor, r: torch.Tensor, sigma: float,
 
 def write_all(motions: Sequence[Motion], paths: Sequence[str]) -> None:
     """Write every motion (each atomically); on a failure, the files this
-    call wrote are removed again, so that no partial set is left."""
+    call wrote are removed again, so that no partial set is left, where
+    they are still the ones it wrote (another run may have written one
+    since)."""
     from satagraph.io import write_bvh
-    written: List[str] = []
+    written: List[Tuple[str, os.stat_result]] = []
     try:
         for motion, path in zip(motions, paths):
             existed = os.path.exists(path)
             write_bvh(motion, path)
             if not existed:
-                written.append(path)
+                written.append((path, os.stat(path)))
     except BaseException:
-        for path in written:
-            Path(path).unlink(missing_ok=True)
+        for path, mine in written:
+            if _same_write(path, mine):
+                Path(path).unlink(missing_ok=True)
         raise
+
+
+def _same_write(path: str, mine: os.stat_result) -> bool:
+    """Whether :obj:`path` is still the file whose :func:`os.stat` was
+    :obj:`mine` (an atomic write of another run is another file)."""
+    try:
+        now = os.stat(path)
+    except FileNotFoundError:
+        return False
+    return os.path.samestat(now, mine) and (now.st_mtime_ns, now.st_size) == (
+        mine.st_mtime_ns, mine.st_size)
 
 
 __all__ = ["SECONDS_RANGE", "check_seconds", "GenerationSettings", "RigInputs", "rig_inputs",

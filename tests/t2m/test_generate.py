@@ -641,3 +641,28 @@ def test_a_rig_s_inputs_made_once_generate_what_its_motion_generates(t2m_ckpt, z
         kept = G.generate_on(module, TEXT, rig, 1.0, seed, settings)
         np.testing.assert_array_equal(kept.rotations, alone.rotations)
         np.testing.assert_array_equal(kept.translations, alone.translations)
+
+
+def test_a_failed_set_keeps_what_another_run_wrote_since(tiny_motion, random_motion, tmp_path,
+                                                         monkeypatch):
+    """A generate whose second file failed removed its first, even where
+    another run (the same OUT) had written that file since: it removes its
+    own files alone."""
+    import satagraph.io
+    from satagraph.pipelines.generate import write_all
+    first, second = str(tmp_path / "a.bvh"), str(tmp_path / "b.bvh")
+    write = satagraph.io.write_bvh
+    other = random_motion(tiny_motion.skeleton, num_frames=5, seed=1)
+
+    def another_run_meanwhile(motion, path, *args, **kwargs):
+        if path == second:
+            write(other, first)  # the other run's file, written over this one's
+            raise OSError(28, "No space left on device", second)
+        write(motion, path, *args, **kwargs)
+    monkeypatch.setattr(satagraph.io, "write_bvh", another_run_meanwhile)
+    with pytest.raises(OSError, match="No space left"):
+        write_all([tiny_motion, tiny_motion], [first, second])
+    assert read_bvh(first).num_frames == 5 and not Path(second).exists()
+    with pytest.raises(OSError, match="No space left"):  # nobody else wrote: no partial set
+        write_all([tiny_motion, tiny_motion], [str(tmp_path / "c.bvh"), second])
+    assert not (tmp_path / "c.bvh").exists()
