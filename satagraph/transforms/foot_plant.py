@@ -123,24 +123,33 @@ def planted_track(track: np.ndarray, stance: np.ndarray, blend: int = BLEND_FRAM
     horizontal position over the stance, the height as decoded less
     :obj:`drop` (per frame: how far its lowest joint is above the floor;
     ``None``: as decoded), faded in over :obj:`blend` frames before and
-    out after it.
+    out after it by a smoothstep (no jolt where a fade begins or ends).
+    Between two stances closer than two fades, both pulls are averaged by
+    their weights, so the target glides from one stance's position to the
+    next (it jumped where one stance's fade gave way to the other's).
 
     Shapes:
         - **track**: :math:`(T, 3)`, **stance**, **drop**: :math:`(T,)`
         - **output**: :math:`(T, 3)`
     """
     frames = np.arange(len(track))
-    weight = np.zeros(len(track))
-    lock = track.copy()
+    pull, total = np.zeros_like(track), np.zeros(len(track))
+    held = []
     for start, stop in _runs(stance):
         gap = np.maximum(np.maximum(start - frames, frames - (stop - 1)), 0)
-        w = np.clip(1.0 - gap / (blend + 1.0), 0.0, 1.0)
-        take = w > weight
-        weight[take] = w[take]
-        lock[np.ix_(take, [0, 2])] = track[start:stop][:, [0, 2]].mean(axis=0)
+        ramp = np.clip(1.0 - gap / (blend + 1.0), 0.0, 1.0)
+        weight = ramp * ramp * (3.0 - 2.0 * ramp)
+        lock = track.copy()
+        lock[:, [0, 2]] = track[start:stop][:, [0, 2]].mean(axis=0)
         if drop is not None:
-            lock[take, 1] = track[take, 1] - drop[take]
-    return track + weight[:, None] * (lock - track)
+            lock[:, 1] = track[:, 1] - drop
+        pull += weight[:, None] * (lock - track)
+        total += weight
+        held.append((start, stop, lock))
+    out = track + pull / np.maximum(total, 1.0)[:, None]
+    for start, stop, lock in held:  # a stance holds its own position alone
+        out[start:stop] = lock[start:stop]
+    return out
 
 
 def stance_drop(gaps: np.ndarray, frames: int = DROP_FRAMES) -> np.ndarray:

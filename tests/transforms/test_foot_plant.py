@@ -147,6 +147,24 @@ def test_planted_track_holds_the_mean_and_fades():
     assert 0.0 < np.linalg.norm(out[half] - track[half]) < np.linalg.norm(mean - track[half][[0, 2]])
 
 
+def test_planted_track_glides_between_close_stances():
+    """Two stances closer than two fades: the target jumped 64 % of the way
+    from one stance's position to the next in one frame, where one fade
+    gave way to the other (a pop on every quick step of a generated walk);
+    it glides now, and each stance still holds its own mean."""
+    frames = 30
+    track = np.stack([np.linspace(0, 3, frames), np.zeros(frames), np.zeros(frames)], -1)
+    stance = np.zeros(frames, dtype=bool)
+    stance[5:11] = stance[15:21] = True
+    out = planted_track(track, stance)[:, 0]
+    first, second = track[5:11, 0].mean(), track[15:21, 0].mean()
+    np.testing.assert_allclose(out[5:11], first)
+    np.testing.assert_allclose(out[15:21], second)
+    even = (second - first) / (15 - 10)  # the distance spread over the frames between
+    assert np.abs(np.diff(out)).max() < 1.6 * even  # before: 3.2 times
+    assert np.abs(np.diff(out, 2)).max() < even  # before: 2.6 times
+
+
 def test_reach_keeps_bones_and_base_and_reaches():
     gen = np.random.default_rng(0)
     chain = np.cumsum(gen.normal(size=(5, 4, 3)) * 0.3, axis=1)
