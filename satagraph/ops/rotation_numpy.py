@@ -116,3 +116,45 @@ def mean_rotation_numpy(rotations: np.ndarray) -> np.ndarray:
     u, _, vt = np.linalg.svd(np.asarray(rotations, dtype=np.float64).mean(axis=0))
     u[..., :, -1] *= np.sign(np.linalg.det(u @ vt))[..., None]
     return u @ vt
+
+
+def matrix_to_quaternion_numpy(matrix: np.ndarray) -> np.ndarray:
+    r"""Rotation matrices to unit quaternions ``(x, y, z, w)``: the values
+    of :func:`~satagraph.ops.rotation.matrix_to_quaternion` (roma's
+    :func:`roma.rotmat_to_unitquat`, Markley's method) to the bit, the same
+    operations in the same order, without its interleaved stack of sixteen
+    strided columns (most of its time on a long take).
+
+    Shapes:
+        - **matrix**: :math:`(*, 3, 3)`
+        - **output**: :math:`(*, 4)`
+    """
+    (a11, a21, a31, a12, a22, a32, a13, a23, a33) = matrix.reshape(-1, 9).T  # A = R^T
+    x = np.stack([1 + a11 - a22 - a33, a12 + a21, a13 + a31, a23 - a32,
+                  a21 + a12, 1 + a22 - a33 - a11, a23 + a32, a31 - a13,
+                  a31 + a13, a32 + a23, 1 + a33 - a11 - a22, a12 - a21,
+                  a23 - a32, a31 - a13, a12 - a21, 1 + a11 + a22 + a33]).reshape(4, 4, -1)
+    best = np.argmax(x[[0, 1, 2, 3], [0, 1, 2, 3]], axis=0)  # the largest 4 q_i^2
+    x_i = np.take_along_axis(x, best[None, None], axis=0)[0]
+    sq = x_i * x_i  # summed in order, as torch.norm sums four entries
+    quat = x_i / np.sqrt(((sq[0] + sq[1]) + sq[2]) + sq[3])
+    return quat.T.reshape(matrix.shape[:-2] + (4,))
+
+
+def quaternion_to_matrix_numpy(quaternion: np.ndarray) -> np.ndarray:
+    r"""Unit quaternions ``(x, y, z, w)`` to rotation matrices: the values
+    of :func:`~satagraph.ops.rotation.quaternion_to_matrix` (roma's
+    :func:`roma.unitquat_to_rotmat`) to the bit, the same operations in the
+    same order.
+
+    Shapes:
+        - **quaternion**: :math:`(*, 4)`
+        - **output**: :math:`(*, 3, 3)`
+    """
+    x, y, z, w = np.moveaxis(quaternion, -1, 0)
+    x2, y2, z2, w2 = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    return np.stack((x2 - y2 - z2 + w2, 2 * (xy - zw), 2 * (xz + yw),
+                     2 * (xy + zw), - x2 + y2 - z2 + w2, 2 * (yz - xw),
+                     2 * (xz - yw), 2 * (yz + xw), - x2 - y2 + z2 + w2),
+                    axis=-1).reshape(quaternion.shape[:-1] + (3, 3))

@@ -8,7 +8,9 @@ import numpy as np
 
 from satagraph.transforms.rig_reading import axis_vector
 from satagraph.motion import CanonicalTransform, Motion, RigSettings, require_motion
-from satagraph.ops.rotation_numpy import rotation_between_numpy, yaw_of
+from satagraph.ops.rotation_numpy import (matrix_to_quaternion_numpy,
+                                          quaternion_to_matrix_numpy,
+                                          rotation_between_numpy, yaw_of)
 from satagraph.sides import side_pairs
 from satagraph.skeleton import Skeleton
 
@@ -261,8 +263,7 @@ def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
     """
     import torch  # only here: reading a rig (evidence, inspect) stays torch-free
 
-    from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
-                                        quaternion_to_matrix)
+    from satagraph.ops.rotation import quaternion_slerp
 
     if num_frames < 1 or motion.num_frames < 1:
         raise ValueError(f"cannot resample {motion.num_frames} frames to {num_frames}")
@@ -273,9 +274,11 @@ def resample_frames(motion: Motion, fps: float, num_frames: int) -> Motion:
     lo = np.minimum(np.floor(times).astype(np.int64), max(last - 1, 0))
     hi = np.minimum(lo + 1, last)
     w = times - lo
-    quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
+    used, pick = np.unique(np.concatenate([lo, hi]), return_inverse=True)  # only these
+    quat = torch.from_numpy(matrix_to_quaternion_numpy(motion.rotations[used]))
     weight = torch.from_numpy(w)[:, None].expand(num_frames, motion.num_joints)
-    rot = quaternion_to_matrix(quaternion_slerp(quat[lo], quat[hi], weight)).numpy()
+    slerp = quaternion_slerp(quat[pick[:num_frames]], quat[pick[num_frames:]], weight)
+    rot = quaternion_to_matrix_numpy(slerp.numpy())
     t0, t1 = motion.translations[lo], motion.translations[hi]
     trans = t0 + w[:, None, None] * (t1 - t0)
     return motion.with_(rotations=rot, translations=trans, fps=float(fps))

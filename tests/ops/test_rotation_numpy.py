@@ -8,7 +8,8 @@ import torch
 
 from satagraph.motion import CanonicalTransform
 from satagraph.ops.rotation import axis_angle_matrix, yaw_matrix
-from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy, mean_rotation_numpy,
+from satagraph.ops.rotation_numpy import (axis_angle_matrix_numpy, matrix_to_quaternion_numpy,
+                                          mean_rotation_numpy, quaternion_to_matrix_numpy,
                                           rotation_about_numpy, rotation_between_numpy,
                                           yaw_matrix_numpy, yaw_of)
 
@@ -110,3 +111,34 @@ def test_mean_rotation_is_a_batched_rotation_and_turns_with_its_inputs():
     np.testing.assert_allclose(np.linalg.det(mean), 1.0, atol=1e-12)
     a, b = rotation_about_numpy(np.array([0.0, 0.6, 0.8]), 0.7), yaw_matrix_numpy(2.0)
     np.testing.assert_allclose(mean_rotation_numpy(a @ rots @ b), a @ mean @ b, atol=1e-12)
+
+
+def _awkward_rotations() -> np.ndarray:
+    """Seeded random rotations with the awkward ones: identity, half
+    turns about each axis (every branch of Markley's method), slightly
+    non-orthonormal matrices."""
+    import roma
+    torch.manual_seed(0)
+    random = roma.random_rotmat(4092, dtype=torch.float64).numpy()
+    half = np.stack([np.diag(d) for d in ([1.0, -1, -1], [-1.0, 1, -1], [-1.0, -1, 1])])
+    noisy = random[:64] + 1e-6 * np.random.default_rng(0).normal(size=(64, 3, 3))
+    return np.concatenate([np.eye(3)[None], half, random, noisy])
+
+
+def test_matrix_to_quaternion_numpy_is_roma_to_the_bit():
+    import roma
+    matrix = _awkward_rotations()
+    expected = roma.rotmat_to_unitquat(torch.from_numpy(matrix)).numpy()
+    assert np.array_equal(matrix_to_quaternion_numpy(matrix), expected)
+    grid = matrix.reshape(-1, 4, 3, 3)  # leading shape kept, strided input read right
+    assert np.array_equal(matrix_to_quaternion_numpy(grid), expected.reshape(-1, 4, 4))
+    assert np.array_equal(matrix_to_quaternion_numpy(matrix[::3]), expected[::3])
+
+
+def test_quaternion_to_matrix_numpy_is_roma_to_the_bit():
+    import roma
+    quat = roma.rotmat_to_unitquat(torch.from_numpy(_awkward_rotations())).numpy()
+    expected = roma.unitquat_to_rotmat(torch.from_numpy(quat)).numpy()
+    assert np.array_equal(quaternion_to_matrix_numpy(quat), expected)
+    assert np.array_equal(quaternion_to_matrix_numpy(quat.reshape(-1, 4, 4)),
+                          expected.reshape(-1, 4, 3, 3))

@@ -328,3 +328,29 @@ def test_a_one_frame_rig_whose_hips_have_no_position_channels_writes_the_travel(
                                atol=1e-4 * size)
     hips = back.global_positions()[:, 1]
     assert np.linalg.norm(hips[-1] - hips[0]) > 0.5 * size
+
+
+def _slerp_of_every_frame(motion, fps: float, num_frames: int) -> np.ndarray:
+    """The rotations resample_frames gave before it converted in numpy, and
+    only the frames it reads: every frame through roma, torch's slerp."""
+    import torch
+    from satagraph.ops.rotation import (matrix_to_quaternion, quaternion_slerp,
+                                        quaternion_to_matrix)
+    last = motion.num_frames - 1
+    times = np.minimum(np.arange(num_frames) * (motion.fps / fps), last)
+    lo = np.minimum(np.floor(times).astype(np.int64), max(last - 1, 0))
+    hi = np.minimum(lo + 1, last)
+    quat = matrix_to_quaternion(torch.from_numpy(motion.rotations))
+    weight = torch.from_numpy(times - lo)[:, None].expand(num_frames, motion.num_joints)
+    return quaternion_to_matrix(quaternion_slerp(quat[lo], quat[hi], weight)).numpy()
+
+
+@pytest.mark.parametrize("fps, extra", [(30, 0), (30, 3), (47, 0), (240, 0)])
+def test_resample_frames_gives_the_old_values_to_the_bit(read_real, fps, extra):
+    """Down (every 4th frame read), odd and up rates, frames held past the
+    end: the same rotations as converting every frame through roma."""
+    from satagraph.transforms.canonical import resample_frames
+    clip = read_real("cmu/01_01.bvh").slice(0, 90)  # 120 fps
+    count = int(np.floor((clip.num_frames - 1) * fps / clip.fps + 1e-9)) + 1 + extra
+    out = resample_frames(clip, fps, count)
+    np.testing.assert_array_equal(out.rotations, _slerp_of_every_frame(clip, fps, count))
