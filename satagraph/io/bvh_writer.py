@@ -9,7 +9,8 @@ import torch
 
 from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
-from satagraph.ops.rotation import matrix_to_euler
+from satagraph.ops.rotation import unit_quaternion_to_euler
+from satagraph.ops.rotation_numpy import matrix_to_quaternion_numpy
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -121,7 +122,8 @@ def _euler_radians(rotations: np.ndarray, joints: List[int], order: str) -> np.n
     out = np.empty((len(rotations), len(joints), 3))
     for start in range(0, len(rotations), EULER_FRAMES):
         part = slice(start, start + EULER_FRAMES)
-        out[part] = matrix_to_euler(torch.from_numpy(rotations[part][:, joints]), order).numpy()
+        quat = matrix_to_quaternion_numpy(rotations[part][:, joints])  # matrix_to_euler's
+        out[part] = unit_quaternion_to_euler(torch.from_numpy(quat), order).numpy()
     return out
 
 

@@ -10,7 +10,7 @@ _ROTATION = (
     "axis_angle_matrix", "euler_to_matrix", "euler_to_quaternion", "geodesic_angle",
     "matrix_to_euler", "matrix_to_quaternion", "matrix_to_rotation_6d",
     "quaternion_slerp", "quaternion_to_euler", "quaternion_to_matrix",
-    "rotation_6d_to_matrix", "yaw_matrix")
+    "rotation_6d_to_matrix", "unit_quaternion_to_euler", "yaw_matrix")
 _ROTATION_NUMPY = ("axis_angle_matrix_numpy", "matrix_to_quaternion_numpy",
                    "quaternion_to_matrix_numpy", "yaw_matrix_numpy", "yaw_of")
 _TEMPORAL = ("to_temporal_streams", "from_temporal_streams")

@@ -66,6 +66,20 @@ def matrix_to_euler(matrix: Tensor, order: str) -> Tensor:
     return roma.rotmat_to_euler(order, matrix)
 
 
+def unit_quaternion_to_euler(quaternion: Tensor, order: str) -> Tensor:
+    r"""Unit quaternions ``(x, y, z, w)`` to intrinsic Euler angles
+    (radians) in BVH order, directly: :func:`matrix_to_euler` of a matrix
+    is this of its :func:`matrix_to_quaternion` (the same values to the
+    bit: roma converts so), where :func:`quaternion_to_euler` goes through
+    a matrix again.
+
+    Shapes:
+        - **quaternion**: :math:`(*, 4)`
+        - **output**: :math:`(*, 3)`
+    """
+    return roma.unitquat_to_euler(_check_order(order), quaternion)
+
+
 def matrix_to_quaternion(matrix: Tensor) -> Tensor:
     r"""Rotation matrices to unit quaternions ``(x, y, z, w)``.
 

@@ -390,3 +390,19 @@ def test_euler_angles_in_chunks_are_the_whole_takes(read_real, monkeypatch) -> N
 def _yaw(angle: float) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def test_euler_angles_are_matrix_to_euler_to_the_bit(read_real) -> None:
+    """The writer's angles (numpy quaternions, then roma's quaternion to
+    Euler) are those of matrix_to_euler on the matrices, on two rigs and
+    rotation orders (CMU's ZYX, the dog's ZXY)."""
+    import torch
+    from satagraph.ops.rotation import matrix_to_euler
+    for path in ("cmu/01_01.bvh", "dog/D1_001_KAN01_001.bvh"):
+        motion = read_real(path).slice(0, 300)
+        orders = motion.skeleton.rotation_orders
+        for order in sorted({o for o in orders if o}):
+            joints = [j for j, o in enumerate(orders) if o == order]
+            expected = matrix_to_euler(torch.from_numpy(motion.rotations[:, joints]), order)
+            np.testing.assert_array_equal(
+                bvh_writer._euler_radians(motion.rotations, joints, order), expected.numpy())
