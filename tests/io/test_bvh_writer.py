@@ -392,7 +392,7 @@ def _yaw(angle: float) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
-def test_euler_angles_are_matrix_to_euler_to_the_bit(read_real) -> None:
+def test_euler_angles_are_matrix_to_euler_to_an_ulp(read_real) -> None:
     """The writer's angles (numpy quaternions, then roma's quaternion to
     Euler) are those of matrix_to_euler on the matrices, on two rigs and
     rotation orders (CMU's ZYX, the dog's ZXY)."""
@@ -404,5 +404,6 @@ def test_euler_angles_are_matrix_to_euler_to_the_bit(read_real) -> None:
         for order in sorted({o for o in orders if o}):
             joints = [j for j, o in enumerate(orders) if o == order]
             expected = matrix_to_euler(torch.from_numpy(motion.rotations[:, joints]), order)
-            np.testing.assert_array_equal(
-                bvh_writer._euler_radians(motion.rotations, joints, order), expected.numpy())
+            np.testing.assert_allclose(  # bit for bit on the VM; an ulp elsewhere
+                bvh_writer._euler_radians(motion.rotations, joints, order), expected.numpy(),
+                rtol=0, atol=1e-14)
