@@ -46,7 +46,7 @@ RETARGET_HEADERS = {"internal": "retarget int.", "cross": "retarget cross"}
 
 #: Metric columns of the table (name, unit factor, header).
 COLUMNS = (("JR", 1.0, "JR (rad)"), ("RT", 100.0, "RT (cm)"), ("JP", 100.0, "JP (cm)"),
-           ("FS", 100.0, "FS (cm)"), ("GP", 100.0, "GP (cm)"))
+           ("FS", 100.0, "FS (cm/frame)"), ("GP", 100.0, "GP (cm)"))
 
 
 @dataclass

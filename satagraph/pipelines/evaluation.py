@@ -159,7 +159,7 @@ def _paired_error(module, source: MotionFeatures, truth: Motion,
 #: The paper's figures of :func:`~satagraph.metrics.motion_metrics`: name,
 #: column header, factor to the unit shown.
 TABLE_COLUMNS = (("JR", "JR (rad)", 1.0), ("RT", "RT (cm)", 100.0), ("JP", "JP (cm)", 100.0),
-                 ("RT_h", "RT/H", 1.0), ("JP_h", "JP/H", 1.0), ("FS", "FS (cm)", 100.0),
+                 ("RT_h", "RT/H", 1.0), ("JP_h", "JP/H", 1.0), ("FS", "FS (cm/frame)", 100.0),
                  ("GP", "GP (cm)", 100.0), ("RE", "RE", 1.0))
 
 

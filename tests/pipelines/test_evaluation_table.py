@@ -24,7 +24,7 @@ def test_the_paper_s_table_is_kept():
     table = format_table({"zoo": dict(PAPER, clips=4), "all": dict(PAPER, clips=4)})
     lines = table.splitlines()
     assert lines[0] == ("| dataset | clips | JR (rad) | RT (cm) | JP (cm) | RT/H | JP/H | "
-                        "FS (cm) | GP (cm) | RE |")
+                        "FS (cm/frame) | GP (cm) | RE |")
     assert lines[2] == ("| zoo | 4 | 0.5000 | 10.0000 | 20.0000 | 0.0500 | 0.1000 | 1.0000 | "
                         "-2.0000 | 3.0000 |") and lines[3].startswith("| all | 4 |")
 
