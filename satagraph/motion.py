@@ -14,6 +14,10 @@ from satagraph.skeleton import Skeleton
 #: 0.4 m/s for a 1.75 m human (see :func:`ground_contacts`).
 CONTACT_HEIGHT = 0.05 / 1.75
 CONTACT_SPEED = 0.4 / 1.75
+#: Foot-sliding height threshold as a fraction of the height: SAME's 3 cm
+#: for a 1.75 m character (FS, :func:`~satagraph.metrics.foot_sliding`, and
+#: the motion descriptor's sliding channel).
+SLIDE_HEIGHT = 0.03 / 1.75
 
 
 @dataclass

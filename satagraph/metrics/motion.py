@@ -22,10 +22,8 @@ import torch
 from torch import Tensor
 from torch_geometric.utils import scatter
 
+from satagraph.motion import SLIDE_HEIGHT
 from satagraph.ops.rotation import geodesic_angle
-
-#: SAME's foot-sliding height threshold (3 cm) for a 1.75 m character.
-SLIDE_HEIGHT = 0.03 / 1.75
 
 
 def _per_clip(value: Tensor, clip: Tensor, num_clips: int) -> Tensor:

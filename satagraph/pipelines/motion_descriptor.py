@@ -28,7 +28,7 @@ from typing import List, Optional, Sequence, Tuple
 import numpy as np
 
 from satagraph.data.features import MotionFeatures, motion_to_features
-from satagraph.motion import Motion
+from satagraph.motion import SLIDE_HEIGHT, Motion
 from satagraph.semantics.limbs import LIMBS, limb_end_index
 from satagraph.skeleton import Skeleton
 from satagraph.transforms.canonical import FLOOR_PERCENTILE, canonicalize
@@ -44,9 +44,6 @@ POOLS: List[str] = ["mean", "std", "q10", "q90", "first", "middle", "last"]
 DESCRIPTOR_DIM = len(POOLS) * len(FRAME_CHANNELS) + len(LIMBS)
 #: Standard gravity (m/s^2), for Froude-normalised speed.
 GRAVITY = 9.81
-#: Foot-sliding height threshold as a fraction of the height (SAME's 3 cm
-#: for a 1.75 m character, as :data:`satagraph.metrics.SLIDE_HEIGHT`).
-SLIDE_HEIGHT = 0.03 / 1.75
 
 
 def _chain_length(skeleton: Skeleton, joint: int) -> float:
