@@ -145,10 +145,10 @@ def planted_track(track: np.ndarray, stance: np.ndarray, blend: int = BLEND_FRAM
             lock[:, 1] = track[:, 1] - drop
         pull += weight[:, None] * (lock - track)
         total += weight
-        held.append((start, stop, lock))
+        held.append((start, stop, lock[start:stop].copy()))  # not a take-long array each
     out = track + pull / np.maximum(total, 1.0)[:, None]
     for start, stop, lock in held:  # a stance holds its own position alone
-        out[start:stop] = lock[start:stop]
+        out[start:stop] = lock
     return out
 
 
