@@ -76,3 +76,20 @@ def test_readme_snippets_run(tmp_path, monkeypatch, capsys):
             assert main(argv) == 0, (number, argv, capsys.readouterr().err)
     assert Path("runs/my_module/checkpoints/last.ckpt").is_file()
     assert json.loads(Path("crab_tags.json").read_text())
+
+
+def _anchor(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation dropped,
+    spaces as hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.lower()).replace(" ", "-")
+
+
+def test_readme_contents_list_every_section():
+    """The contents list at the top links every ``##``/``###`` heading
+    outside code blocks, in order, by its anchor (a section added without
+    its line, or renamed, fails)."""
+    text = re.sub(r"```.*?```", "", README.read_text(), flags=re.S)
+    headings = re.findall(r"^#{2,3} (.+)$", text, flags=re.M)
+    listed = re.findall(r"^ *- \[(.+)\]\(#([\w\-]+)\)$", text, flags=re.M)
+    assert [title for title, _ in listed] == headings
+    assert [anchor for _, anchor in listed] == [_anchor(h) for h in headings]
