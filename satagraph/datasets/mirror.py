@@ -34,10 +34,12 @@ MIRROR_WORDS: Dict[str, str] = {
     "anti-clockwise": "clockwise", "counter clockwise": "clockwise",
     "anti clockwise": "clockwise",
 }
-# Longest first, so that "counter clockwise" wins over its "clockwise".
+# Longest first, so that "counter clockwise" wins over its "clockwise". A
+# word ends at anything but a letter or digit: an underscore, as in a
+# sidecar's "left_hand", separates words as a hyphen does.
 _PATTERN = re.compile(
-    r"(?<!\w)(" + "|".join(re.escape(w) for w in sorted(
-        MIRROR_WORDS, key=len, reverse=True)) + r")(?![\w])",
+    r"(?<![^\W_])(" + "|".join(re.escape(w) for w in sorted(
+        MIRROR_WORDS, key=len, reverse=True)) + r")(?![^\W_])",
     re.IGNORECASE)
 
 

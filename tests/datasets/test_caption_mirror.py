@@ -13,6 +13,7 @@ CANONICAL = [
     "someone spins clockwise, then counterclockwise",
     "walks leftwards along the rightmost wall, leftward then rightwards",
     "a left-handed throw to the far-right",
+    "raises the left_hand, then RIGHT_FOOT",
     "nothing sided here: bright copyright leftover wrights",
     "",
 ]
@@ -30,7 +31,8 @@ def test_mirror_swaps_whole_words_keeping_case():
     assert mirror_text(CANONICAL[3]) == \
         "walks rightwards along the leftmost wall, rightward then leftwards"
     assert mirror_text(CANONICAL[4]) == "a right-handed throw to the far-left"
-    assert mirror_text(CANONICAL[5]) == CANONICAL[5]  # no word boundary, no swap
+    assert mirror_text(CANONICAL[5]) == "raises the right_hand, then LEFT_FOOT"
+    assert mirror_text(CANONICAL[6]) == CANONICAL[6]  # no word boundary, no swap
     assert mirror_text("Clockwise") == "Counterclockwise"
 
 
