@@ -192,9 +192,10 @@ def _numpy(value) -> np.ndarray:
 def remap_evidence(evidence: Optional[JointEvidence], source_names: Sequence[str],
                    skeleton) -> Optional[JointEvidence]:
     """Carry a file's evidence over to an augmented copy of its skeleton by
-    joint name (augmentation keeps names; a mirrored joint keeps its own
-    data). An inserted joint takes the facts of its nearest named child (or
-    parent).
+    joint name (augmentation keeps names: a mirrored ``LeftFoot`` carries
+    the reflected data of ``RightFoot`` and keeps ``LeftFoot``'s evidence,
+    which describes the same kind of joint on the side it now lies). An
+    inserted joint takes the facts of its nearest named child (or parent).
 
     Args:
         evidence: Evidence of the source skeleton (``None``: none).
