@@ -38,6 +38,7 @@ import numpy as np
 
 from satagraph.motion import Motion, RigSettings
 from satagraph.sides import side_of
+from satagraph.skeleton import Skeleton
 
 UP_AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 
@@ -368,8 +369,12 @@ def _limb_sides(names: List[str], word: re.Pattern) -> int:
 def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:
     r"""A human body plan: a head, hands and feet on both sides, nothing a
     human lacks (tail, wings, beak, paws, ...), and an upright pose (the
-    hips, the first joint with three or more children, between 30% and 75%
-    of the height).
+    hips between 30% and 75% of the height).
+
+    The head and the hips are read as :func:`~satagraph.semantics.describe_joints`
+    reads them (names and hierarchy only): the head is a joint named so or
+    the top of the spine (Rigify's ``DEF-spine.006``), the hips the joint
+    where the legs meet (Daz Genesis's ``pelvis`` beside ``abdomenLower``).
 
     Shapes:
         - **pose_up**: :math:`(J,)` heights of the joints in a pose.
@@ -377,18 +382,43 @@ def looks_human(motion: Motion, pose_up: np.ndarray) -> bool:
     names = english_names(motion)
     if any(_NOT_HUMAN.search(n) for n in names):
         return False
-    if not any(_TOP.search(n) for n in names):
+    if not (any(_TOP.search(n) for n in names) or _has_head(motion.skeleton)):
         return False
     hands = _limb_sides(names, re.compile(r"hand|wrist", re.I))
     feet = _limb_sides(names, re.compile(r"foot|ankle|toe", re.I))
     if hands < 2 or feet < 2:
         return False
-    hubs = [j for j, c in enumerate(motion.skeleton.children) if len(c) >= 3]
     low, high = float(pose_up.min()), float(pose_up.max())
     frac = (pose_up - low) / max(high - low, 1e-12)
     hands = [j for j, n in enumerate(names) if re.search(r"hand|wrist", n, re.I)]
     # hips half way up, hands off the ground (a quadruped's front paws are on it)
-    return 0.3 <= frac[hubs[0] if hubs else 0] <= 0.75 and frac[hands].min() > 0.2
+    return 0.3 <= frac[_hips(motion.skeleton)] <= 0.75 and frac[hands].min() > 0.2
+
+
+def _has_head(skeleton: Skeleton) -> bool:
+    """Whether :func:`~satagraph.semantics.describe_joints` (names and
+    hierarchy) finds a head: the top of a spine without a head name."""
+    from satagraph.semantics import describe_joints
+    from satagraph.semantics.rules import TRUNK_TEXT
+    return TRUNK_TEXT["head"] in describe_joints(skeleton)
+
+
+def _hips(skeleton: Skeleton) -> int:
+    """Where the legs meet: the deepest joint above both hind limb ends
+    (:func:`~satagraph.semantics.limb_ends`), else the root."""
+    from satagraph.semantics import limb_ends
+    ends = limb_ends(skeleton)
+    if "left hind" not in ends or "right hind" not in ends:
+        return 0
+    above = set()
+    j = ends["left hind"]
+    while j >= 0:
+        above.add(j)
+        j = int(skeleton.parents[j])
+    j = ends["right hind"]
+    while j not in above:
+        j = int(skeleton.parents[j])
+    return j
 
 
 def _height(motion: Motion, up: np.ndarray) -> Tuple[float, np.ndarray]:

@@ -18,6 +18,9 @@ from satagraph.transforms.rig_reading import (RigReadingWarning, guess_up_axis, 
 from satagraph.datasets.sources import resolve_sources
 from satagraph.datasets.zoo import Dialect, apply_dialect, generate_clip, zoo_rigs
 from satagraph.io import read_bvh, write_bvh
+from satagraph.motion import Motion
+from satagraph.semantics.reference_rigs import build_skeleton
+from satagraph.skeleton import Skeleton
 
 AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 
@@ -127,6 +130,82 @@ def test_an_exporters_units_give_way_to_a_human_height_they_contradict(
         names=[f"mixamorig:{n}" for n in clip.skeleton.names]))
     units = read_rig(apply_dialect(mixamo, Dialect(unit=unit))[0]).units
     assert (units.scale, units.how) == (scale, how)
+
+
+#: Blender Rigify's deform bones for the zoo's Mixamo-style limb names.
+RIGIFY_LIMBS = {"Shoulder": "shoulder", "Arm": "upper_arm", "ForeArm": "forearm",
+                "Hand": "hand", "UpLeg": "thigh", "Leg": "shin", "Foot": "foot", "ToeBase": "toe"}
+#: Daz Genesis 8's bones for the same names (``pelvis`` is inserted under ``hip``).
+DAZ_NAMES = {"Hips": "hip", "Spine": "abdomenLower", "Spine1": "chestUpper", "Neck": "neckLower",
+             "Neck1": "neckUpper", "Head": "head", "Shoulder": "Collar", "Arm": "ShldrBend",
+             "ForeArm": "ForearmBend", "Hand": "Hand", "UpLeg": "ThighBend", "Leg": "Shin",
+             "Foot": "Foot", "ToeBase": "Toe"}
+
+
+def _renamed(motion, rename):
+    """:obj:`motion` with each name through :obj:`rename` (end sites keep ``_end``)."""
+    names = [rename(n[:-4]) + "_end" if n.endswith("_end") else rename(n)
+             for n in motion.skeleton.names]
+    return motion.with_(skeleton=motion.skeleton.replace(names=names))
+
+
+def _rigify(motion):
+    """Rigify's names: the trunk ``DEF-spine`` .. ``DEF-spine.00k`` (the last
+    one the head, no joint named so), limbs ``DEF-upper_arm.L`` ..."""
+    trunk = [n for n in motion.skeleton.names if n[:4] not in ("Left", "Righ") and
+             not n.endswith("_end")]
+    spine = {n: f"DEF-spine.{k:03d}" if k else "DEF-spine" for k, n in enumerate(trunk)}
+    return _renamed(motion, lambda n: spine.get(n) or "DEF-{}.{}".format(
+        RIGIFY_LIMBS[n.replace("Left", "").replace("Right", "")], n[0]))
+
+
+def _daz(motion):
+    """Daz Genesis's names and hips: ``hip`` carries ``abdomenLower`` and
+    ``pelvis``, which carries both thighs (no joint with three children
+    below the chest)."""
+    skel = motion.skeleton
+    src = [0, 0] + list(range(1, skel.num_joints))  # joint 1 is the new pelvis
+    parents = [-1, 0] + [1 if "UpLeg" in skel.names[j] else int(skel.parents[j]) + 1
+                         for j in range(1, skel.num_joints)]
+    offsets, rot, trans = skel.offsets[src], motion.rotations[:, src], motion.translations[:, src]
+    offsets[1], rot[:, 1], trans[:, 1] = 0.0, np.eye(3), 0.0
+    names = [skel.names[k] for k in src]
+    names[1] = "pelvis"
+    daz = Skeleton(names=names, parents=np.array(parents), offsets=offsets,
+                   channels=[skel.channels[k] for k in src], end_site=skel.end_site[src])
+    side = {"Left": "l", "Right": "r"}
+    return _renamed(motion.with_(skeleton=daz, rotations=rot, translations=trans),
+                    lambda n: n if n == "pelvis" else DAZ_NAMES.get(n) or next(
+                        s + DAZ_NAMES[n[len(w):]] for w, s in side.items() if n.startswith(w)))
+
+
+@pytest.mark.parametrize("unit, scale", [("cm", 0.01), ("m", 1.0), ("in", 0.0254)])
+def test_rigify_and_daz_humans_are_read_as_humans(unit: str, scale: float) -> None:
+    """A Rigify rig (no joint named head: ``DEF-spine.006`` is it) and a Daz
+    Genesis rig (``hip`` with two children, ``pelvis`` and ``abdomenLower``)
+    were "not a human": in cm or inches they kept the file's units (168
+    units tall read as 168 m)."""
+    clip = _clip("biped")
+    daz = _daz(clip)
+    assert np.allclose(daz.global_positions()[:, 2:], clip.global_positions()[:, 1:])
+    for rig in (_rigify(clip), daz):
+        units = read_rig(apply_dialect(rig, Dialect(up_axis="+Z", unit=unit))[0]).units
+        assert (units.how, units.scale) == ("human", scale), units.summary()
+
+
+def test_a_rigify_quadruped_bird_or_chain_is_no_human() -> None:
+    """Reading the head and hips as the semantic reading does makes no
+    quadruped (front paws on the ground), bird or bare chain a human."""
+    dog = _rigify(generate_clip(zoo_rigs(["quadruped"], seed=3)[3], "walk", frames=60, seed=5))
+    assert "DEF-spine.005" in dog.skeleton.names and "DEF-hand.L" in dog.skeleton.names
+    chain = build_skeleton([("DEF-spine", None, (0.0, 90.0, 0.0)),
+                            ("DEF-spine.001", "DEF-spine", (0.0, 40.0, 0.0)),
+                            ("DEF-spine.002", "DEF-spine.001", (0.0, 40.0, 0.0))])
+    still = Motion(chain, np.zeros((0, 3, 3, 3)), np.zeros((0, 3, 3)))
+    for body in (apply_dialect(dog, Dialect(unit="cm"))[0],
+                 apply_dialect(_clip("fowl"), Dialect(unit="cm"))[0], still):
+        units = read_rig(body).units
+        assert units.kept, units.summary()
 
 
 def test_real_files_keep_their_readings(read_real) -> None:
