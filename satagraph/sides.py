@@ -9,7 +9,10 @@ and letter/digit boundaries (``mixamorig:LeftUpLeg`` -> ``mixamorig``,
 between digits) carry no side. A piece marks a side when
 
 - it is a side word (:data:`SIDE_WORDS`: ``L``, ``Lt``, ``Left``, ``r``,
-  ``rgt``, ...), or contains ``left`` / ``right`` (``lefthand``);
+  ``rgt``, ...), or contains ``left`` / ``right`` (``lefthand``), or
+  starts with a side word glued to body words, as the lexicon splits glued
+  words (CMU ASF's ``lfemur``, ``rclavicle``; not ``label``, ``lower``,
+  ``rib``);
 - failing any such piece, it is a quadruped leg code (:data:`LEG_CODES`:
   ``FL``, ``HR``, ``BL``, ...; ``Fr`` next to a side word is *front* only).
 
@@ -28,6 +31,7 @@ Example::
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 from typing import Callable, Dict, Iterable, Iterator, List, Optional, Tuple
 
 #: Side words (lower case) and the side they name. Every word has its
@@ -92,10 +96,26 @@ def side_markers(name: str) -> List[Marker]:
         elif low in LEG_CODES:
             codes.append((start, start + len(piece), low))
         else:
-            words += [(start + m.start(), start + m.end(), m.group().lower())
-                      for m in _GLUED.finditer(piece)]
+            glued = [(start + m.start(), start + m.end(), m.group().lower())
+                     for m in _GLUED.finditer(piece)]
+            side = None if glued else _glued_side(low)
+            words += glued or ([(start, start + len(side), side)] if side else [])
     words += [(m.start(), m.end(), m.group()) for m in _CHARACTERS.finditer(name)]
     return sorted(words) or codes
+
+
+@lru_cache(maxsize=4096)
+def _glued_side(piece: str) -> Optional[str]:
+    """The side word a lower-case piece starts with when the rest is body
+    words, in the piece and in its mirror image, split as the lexicon
+    splits glued words (``"lfemur"`` -> ``"l"``; ``"label"``, ``"lower"``,
+    ``"lear"`` (``"rear"``) -> ``None``)."""
+    from satagraph.semantics.lexicon import _segment  # the lexicon imports this module
+    side = _segment(piece)[0]
+    if side not in SIDE_WORDS or side == piece:
+        return None
+    other = MIRROR_WORDS[side]
+    return side if _segment(other + piece[len(side):])[0] == other else None
 
 
 def side_of_words(words: Iterable[str]) -> Optional[str]:

@@ -39,6 +39,16 @@ TABLE = [
     ("Ladder", None, "Ladder"), ("Rib", None, "Rib"),
     ("RL_BoneRoot", None, "RL_BoneRoot"),  # once: augment swapped to LL_
     ("Tail_09__f8R", None, "Tail_09__f8R"), ("spine_01_a1b2c3", None, "spine_01_a1b2c3"),
+    # CMU ASF names as converters write them: a side letter glued to the bone
+    ("lfemur", "left", "rfemur"), ("rclavicle", "right", "lclavicle"),
+    ("ltibia", "left", "rtibia"), ("lhumerus", "left", "rhumerus"), ("lhand", "left", "rhand"),
+    ("rfoot", "right", "lfoot"), ("ltoes", "left", "rtoes"), ("lhipjoint", "left", "rhipjoint"),
+    ("rthumb", "right", "lthumb"), ("lradius", "left", "rradius"), ("rwrist", "right", "lwrist"),
+    ("lupperarm", "left", "rupperarm"), ("Lhand_end", "left", "Rhand_end"),
+    *((word, None, word) for word in (
+        "lowerback", "upperback", "lowerneck", "label", "lower", "length", "rib", "radius",
+        "leg", "root", "rear", "ring", "lips", "lid", "reference", "roll", "rotation", "rump",
+        "lace", "release", "rest", "lung", "ribs", "rigging", "lumbar", "leaf")),
 ]
 
 
@@ -93,6 +103,15 @@ def test_pairs_follow_the_rule():
     mmd = ["センター", "左足", "右足", "左ひざ", "右ひざ", "上半身"]
     assert lateral_pairs(mmd) == ([1, 3], [2, 4])
     assert list(mirror_pairs_of(mmd)) == [0, 2, 1, 4, 3, 5]
+
+
+def test_glued_cmu_asf_sides_pair_and_mirror():
+    """``lfemur`` / ``rfemur`` (CMU ASF names) had no side: mirroring left
+    the legs in place and the rig had no left/right pairs to face by."""
+    names = ["root", "lhipjoint", "lfemur", "ltibia", "rhipjoint", "rfemur", "rtibia",
+             "lowerback", "lclavicle", "lhumerus", "rclavicle", "rhumerus"]
+    assert lateral_pairs(names) == ([1, 2, 3, 8, 9], [4, 5, 6, 10, 11])
+    assert list(mirror_pairs_of(names)) == [0, 4, 5, 6, 1, 2, 3, 7, 10, 11, 8, 9]
 
 
 def mirror_pairs_of(names):
