@@ -31,7 +31,9 @@ The rules follow the SATA prompt (paper Figure 6) without a language model:
   ``Finger_01`` .. ``03`` off the spine) is ranked by position; six or more
   legs are *leg pairs* numbered front to back (``"left front limb upper
   segment, first leg pair"``, then ``middle`` ..., the last pair ``hind``);
-  claws / pincers, antennae, eye stalks, fangs, fins, beaks are named.
+  claws / pincers, antennae, eye stalks, fangs, fins, beaks are named;
+  limbs named as wings beside other front limbs (a dragon's) are ``"wing
+  limb"`` segments, a bird's wings its front limbs.
 * **Evidence** (optional, :mod:`.evidence`): a chain whose end bears weight
   is a leg wherever it hangs, hind unless the weight-bearing chains form a
   front and a back group; a laterally spread chain that never bears weight
@@ -58,11 +60,15 @@ GLOSSES = {
     "front": ("clavicle / shoulder blade", "upper arm", "forearm",
               "hand / front paw", "fingers / front paw digits"),
     "hind": ("hip bone", "thigh", "shin / calf", "foot / hind paw", "toes"),
+    "wing": ("wing shoulder blade", "wing upper arm", "wing forearm",
+             "wing hand", "wing fingers"),
 }
 TIP_GLOSSES = {
     "front": ("shoulder", "elbow", "wrist", "hand / front paw tip",
               "fingertip"),
     "hind": ("hip joint", "knee", "ankle", "foot / hind paw tip", "toe tip"),
+    "wing": ("wing shoulder", "wing elbow", "wing wrist", "wing hand tip",
+             "wing fingertip"),
 }
 DIGIT_GLOSSES = {
     "front": {"first": "thumb", "second": "index finger",
@@ -72,6 +78,7 @@ DIGIT_GLOSSES = {
              "third": "middle toe", "fourth": "fourth toe",
              "fifth": "little toe"},
 }
+DIGIT_GLOSSES["wing"] = {k: f"wing {v}" for k, v in DIGIT_GLOSSES["front"].items()}
 TRUNK_TEXT = {
     "root": "skeleton root (ground reference of the whole body)",
     "pelvis": "pelvis, hips root (center of motion)",
@@ -104,7 +111,7 @@ PART_TEXT = {"jaw": "lower jaw", "tongue": "tongue segment",
 HELPER_TEXT = {"twist": "twist helper", "ik": "inverse kinematics helper",
                "helper": "helper"}
 DIGITIGRADE_GLOSS = {"hind": "tarsometatarsus / hock / horse link",
-                     "front": "metacarpus / cannon"}
+                     "front": "metacarpus / cannon", "wing": "wing metacarpus"}
 DIGITIGRADE_TIP = "ankle / fetlock"
 #: Glosses of arthropod legs and claws, per rank (girdle .. digit).
 PAIR_GLOSSES = ("coxa / hip", "femur / thigh", "tibia / shin",
@@ -463,6 +470,21 @@ def _upper_trunk_roles(states: List[_State], tree: _Tree,
         states[j].trunk = "head" if j == trunk[-1] else "neck"
 
 
+def _wings_beside_front_limbs(states: List[_State], tree: _Tree,
+                              chains: List[_Chain]) -> None:
+    """Limbs named as wings on a body that has other front limbs too (a
+    dragon's wings beside its forelegs) are *wing* limbs, not a second pair
+    of front limbs; a bird's wings are its front limbs and stay so."""
+    limbs = {c.root: [j for j in _subtree(c.root, tree) if states[j].kind == "limb"]
+             for c in chains if c.real and c.family != "claw"}
+    wings = {r for r, joints in limbs.items() if any(states[j].info.wing for j in joints)}
+    if not any(states[r].front_hind == "front" for r in set(limbs) - wings):
+        return
+    for r in wings:
+        for j in limbs[r]:
+            states[j].front_hind = "wing"
+
+
 def _definite_below(states: List[_State], tree: _Tree) -> List[float]:
     """Smallest definite limb rank strictly below each joint, in its limb."""
     inf = float("inf")
@@ -786,4 +808,5 @@ def describe_structure(names: Tuple[str, ...], parents: Tuple[int, ...],
     _positional_ranks(states, tree)
     _number_leg_pairs(states, tree, chains)
     _upper_trunk_roles(states, tree, trunk)
+    _wings_beside_front_limbs(states, tree, chains)
     return _Describer(states, tree).run()

@@ -9,7 +9,7 @@ from typing import Dict, List, Sequence, Tuple
 import pytest
 
 from satagraph import Skeleton
-from satagraph.semantics import describe_joints
+from satagraph.semantics import describe_joints, limb_ends
 from satagraph.semantics.reference_rigs import build_skeleton, rest_evidence
 from satagraph.sides import side_of, swap_side
 
@@ -183,3 +183,42 @@ def test_max_biped_fore_twist_is_a_forearm_twist_helper() -> None:
             for twist in ("ForeTwist", "ForeTwist1"):
                 assert table[f"Bip01 {s} {twist}"] == f"{side} front limb lower segment twist helper"
             assert table[f"Bip01 {s} Hand"] == f"{side} front limb terminal segment (hand / front paw)"
+
+
+#: A dragon's wing off the same spine joint as its forelegs.
+DRAGON_WING_LEFT: List[Row] = [
+    ("Wing_L_01", "Spine_02", (0.1, 0.1, 0.05)), ("Wing_L_02", "Wing_L_01", (0.4, 0.05, 0.0)),
+    ("Wing_L_03", "Wing_L_02", (0.4, 0.05, 0.0)), ("Wing_L_04", "Wing_L_03", (0.4, 0.05, 0.0)),
+    ("Wing_L_04_end", "Wing_L_04", (0.3, 0.0, -0.1))]
+
+
+def test_a_dragon_s_wings_are_not_a_second_pair_of_forelegs() -> None:
+    """Four legs and two wings: ``Wing_L_01`` read "left front limb upper
+    segment (upper arm)", the very text of ``FrontLeg_Upper_L``, so the
+    embedding could not tell the wings from the forelegs."""
+    left = QUADRUPED_LEFT + DRAGON_WING_LEFT
+    rows = QUADRUPED_TRUNK + left + mirrored(left)
+    skeleton = build_skeleton(rows)
+    for table in readings(rows):
+        for s, side in (("L", "left"), ("R", "right")):
+            wing = [table[f"Wing_{s}_0{k}"] for k in range(1, 5)] + [table[f"Wing_{s}_04_end"]]
+            assert wing == [f"{side} wing limb upper segment (wing upper arm)",
+                            f"{side} wing limb lower segment (wing forearm)",
+                            f"{side} wing limb terminal segment (wing hand)",
+                            f"{side} wing limb digit segment (wing fingers)",
+                            f"{side} wing limb digit tip (wing fingertip)"]
+            assert table[f"FrontLeg_Upper_{s}"] == f"{side} front limb upper segment (upper arm)"
+            legs = {table[n] for n, _, _ in rows if n.startswith("FrontLeg")}
+            assert legs.isdisjoint(wing)
+    ends = limb_ends(skeleton)
+    assert skeleton.names[ends["left front"]] == "FrontLeg_Foot_L"
+
+
+def test_a_bird_s_wings_stay_its_front_limbs() -> None:
+    """Without forelegs beside them, wings are the front limbs (a bird's
+    wing reads as a human's arm)."""
+    hind = [r for r in QUADRUPED_LEFT if r[0].startswith("HindLeg")]
+    left = hind + DRAGON_WING_LEFT
+    for table in readings(QUADRUPED_TRUNK + left + mirrored(left)):
+        assert table["Wing_L_01"] == "left front limb upper segment (upper arm)"
+        assert table["Wing_R_03"] == "right front limb terminal segment (hand / front paw)"
