@@ -43,7 +43,9 @@ def register_text_encoder(prefix: str, builder: Callable[[str], TextEncoder]) ->
     A checkpoint keeps the spec and the encoder's :attr:`~.encoders.TextEncoder.id`
     and width (:func:`text_encoder_state`), so the code that registers it
     must run before such a checkpoint is loaded: import it first, or name
-    its file in ``SATAGRAPH_PLUGINS`` for the command line.
+    its file in ``SATAGRAPH_PLUGINS``, which :func:`build_text_encoder`
+    imports on a prefix it does not know (from Python as on the command
+    line, as a config's ``module:`` and ``model.local_conv`` are found).
 
     Example::
 
@@ -95,7 +97,9 @@ def build_text_encoder(spec: Union[str, TextEncoder]) -> TextEncoder:
 
     Raises:
         ValueError: An unknown spec (one line: the known ones, and how to
-            register one).
+            register one), after the plugins ``SATAGRAPH_PLUGINS`` names
+            are imported (:func:`~satagraph.experiment.registry.import_user_plugins`),
+            or a plugin that does not import.
         FileNotFoundError: A path that holds no model (message names it).
     """
     if isinstance(spec, TextEncoder):
@@ -109,6 +113,9 @@ def build_text_encoder(spec: Union[str, TextEncoder]) -> TextEncoder:
             raise ValueError(f"text encoder {text!r}: 'offline:D' needs an integer "
                              "width D")
         return OfflineTextEncoder(int(rest))
+    if sep and kind not in TEXT_ENCODERS and rest:  # one's own, registered in a plugin
+        from satagraph.experiment.registry import import_user_plugins
+        import_user_plugins()
     if sep and kind in TEXT_ENCODERS and rest:
         return TEXT_ENCODERS[kind](rest)
     raise ValueError(f"unknown text encoder {text!r}: {spec_help()}")

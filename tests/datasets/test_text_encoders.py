@@ -251,3 +251,33 @@ def test_an_encoder_of_one_s_own_is_a_spec_once_registered(monkeypatch):
     for taken in ("bag_t", "glove", "offline", "a:b", " "):
         with pytest.raises(ValueError, match="text encoder"):
             register_text_encoder(taken, Bag)
+
+
+def test_an_encoder_registered_in_a_plugin_is_found_from_python(tmp_path, monkeypatch):
+    """``bag:v1`` in a config (``data.semantic_encoder``, a checkpoint's)
+    was unknown from Python until the code registering it was imported by
+    hand, though ``SATAGRAPH_PLUGINS`` named it, as it finds a config's
+    ``module:`` and ``model.local_conv``; a plugin that does not import is
+    one line naming it."""
+    from satagraph.data.datamodule import semantic_embedder
+    from satagraph.experiment import registry
+    from satagraph.semantics import factory
+    monkeypatch.setattr(factory, "TEXT_ENCODERS", dict(factory.TEXT_ENCODERS))
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    plugin = tmp_path / "my_encoders.py"
+    plugin.write_text("import torch\n"
+                      "from satagraph.semantics import TextEncoder, register_text_encoder\n"
+                      "class Bag(TextEncoder):\n"
+                      "    def __init__(self, arg):\n"
+                      "        self._id, self._dim = f'bag:{arg}', 3\n"
+                      "    def encode(self, texts):\n"
+                      "        return torch.ones(len(texts), 3)\n"
+                      "register_text_encoder('bag_plugin_t', Bag)\n")
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", str(plugin))
+    enc = build_text_encoder("bag_plugin_t:v1")
+    assert type(enc).__name__ == "Bag" and enc.id == "bag:v1" and enc.out_channels == 3
+    assert semantic_embedder("bag_plugin_t:v2").encoder.id == "bag:v2"
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", "no_such_encoders_here")
+    with pytest.raises(ValueError, match="^SATAGRAPH_PLUGINS: cannot import "
+                       "'no_such_encoders_here'"):
+        build_text_encoder("other_t:v1")
