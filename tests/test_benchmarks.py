@@ -642,3 +642,12 @@ def test_inference_stages_counts_each_stage_s_own_time(tmp_path, capsys):
     printed = capsys.readouterr()
     assert printed.out == "" and printed.err.count("\n") == 1
     assert printed.err.startswith(f"inference_stages.py: {tmp_path}: no manifest.tsv there")
+
+
+def test_retarget_many_says_in_one_line_that_it_needs_the_real_files(tmp_path, capsys):
+    import retarget_many
+    assert retarget_many.main(["--data", str(tmp_path), "--out", str(tmp_path / "r")]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == "" and printed.err.count("\n") == 1
+    assert printed.err.startswith(f"retarget_many.py: {tmp_path}: no manifest.tsv there")
+    assert not (tmp_path / "r.md").exists()

@@ -518,7 +518,7 @@ def run_retarget(args) -> int:
     target = _read(args, "target")
     check_skeleton(target, args.target)  # once, also for a folder of sources
     if Path(args.source).is_dir():
-        memos: dict = {}  # the target canonicalised and featured once, not per file
+        memos: dict = {}  # a Retargeter per model: the target's work done once, not per file
         return run_over_folder(args.source, args.output, lambda src, out: _retarget_file(
             args, src, target, out, models, memos), "retargeted", args.traceback,
             args.skip_existing)
@@ -531,22 +531,34 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict,
                    memos: Optional[dict] = None) -> str:
     """Retarget one file; with :obj:`memos` (a dict kept across the files of
     a folder), what is computed of the target alone is computed once
-    (:class:`~satagraph.pipelines.inference.RigMemo`)."""
+    (:func:`_retargeter`)."""
     from satagraph.cli.arguments import read_with_rig
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     source = read_with_rig(source_path, args)
     module, embed = _load(args, [source, target], [source_path, args.target], models)
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
-    from satagraph.pipelines.inference import RigMemo, retarget_motion
-    memo = None if memos is None else memos.setdefault("target", RigMemo())
-    out = retarget_motion(module, source, target, embed, args.window, args.overlap,
-                         rest=args.rest, ground=args.ground, plant=args.plant,
-                         settle=args.settle, still=args.still, mirror=args.mirror,
-                         two_rests=args.two_rests, memo=memo)
+    out = _retargeter(args, module, embed, target, memos)(source)
     write_bvh(out, output)
     return (f"wrote {output}: {out.num_frames} frames of {source_path} on the "
             f"{out.skeleton.describe()} of {args.target}")
+
+
+def _retargeter(args, module, embed, target, memos: Optional[dict] = None):
+    """The :class:`~satagraph.pipelines.inference.Retargeter` of
+    :obj:`module` onto :obj:`target` with the command's options; with
+    :obj:`memos`, made once per model (``--ckpt auto`` may choose two), all
+    sharing one :class:`~satagraph.pipelines.inference.RigMemo`."""
+    from satagraph.pipelines.inference import Retargeter, RigMemo
+    if memos is not None and module in memos:
+        return memos[module]
+    retarget = Retargeter(module, target, embed, args.window, args.overlap, rest=args.rest,
+                          ground=args.ground, plant=args.plant, settle=args.settle,
+                          still=args.still, mirror=args.mirror, two_rests=args.two_rests,
+                          memo=None if memos is None else memos.setdefault("target", RigMemo()))
+    if memos is not None:
+        memos[module] = retarget
+    return retarget
 
 
 def run_eval(args) -> int:
