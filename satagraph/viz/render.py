@@ -180,6 +180,9 @@ class _Scene:
         limits = ([_limits([t], frames, [half]) for t, (_, half) in zip(tracks, aims)] if fit
                   else [_limits(tracks, frames, [half for _, half in aims])] * len(tracks))
         self.limits = limits
+        # a still panel's floor never moves: computed once, drawn into the background
+        self.floors = [_ground(low, high, aim[0]) if (aim == aim[0]).all() else None
+                       for aim, (low, high) in zip(self.aims, limits)]
         self.artists = [self._panel(i, t, low, high, elev, azim)
                         for i, (t, (low, high)) in enumerate(zip(tracks, limits))]
         self.label = self.figure.text(0.01, 0.01, "", fontsize=8,
@@ -213,7 +216,10 @@ class _Scene:
         ax.set_box_aspect((1, 1, tall), zoom=panel_zoom(tall))
         ax.view_init(elev=elev, azim=azim)
         ax.set_axis_off()
-        floor, = ax.plot([], [], [], color="#bbbbbb", lw=0.6, animated=True)
+        still = self.floors[i]
+        floor, = ax.plot([], [], [], color="#bbbbbb", lw=0.6, animated=still is None)
+        if still is not None:
+            floor.set_data_3d(still[:, 0], still[:, 2], still[:, 1])
         bones = {side: ax.plot([], [], [], color=color, lw=2, animated=True)[0]
                  for side, color in SIDE_COLORS.items()}
         joints, = ax.plot([], [], [], ls="", marker="o", ms=2.5,
@@ -230,15 +236,17 @@ class _Scene:
                 zip(self.tracks, self.artists)):
             t = min(frame, len(track.positions) - 1)
             pos = self.shown(i, t)
-            grid = _ground(*self.limits[i], self.aims[i][t])
-            floor.set_data_3d(grid[:, 0], grid[:, 2], grid[:, 1])
+            if self.floors[i] is None:  # a panel that follows its figure: the floor scrolls
+                grid = _ground(*self.limits[i], self.aims[i][t])
+                floor.set_data_3d(grid[:, 0], grid[:, 2], grid[:, 1])
+                ax.draw_artist(floor)
             for side, artist in bones.items():
                 seg = _segments(pos, track.parents, self.children[i][side])
                 artist.set_data_3d(seg[:, 0], seg[:, 2], seg[:, 1])
             joints.set_data_3d(pos[:, 0], pos[:, 2], pos[:, 1])
             hit = pos[track.contacts[t]]
             touch.set_data_3d(hit[:, 0], hit[:, 2], hit[:, 1])
-            for artist in (floor, *bones.values(), joints, touch):
+            for artist in (*bones.values(), joints, touch):
                 ax.draw_artist(artist)
         self.label.set_text(f"frame {frame + 1}/{self.frames}{self.note}")
         self.figure.draw_artist(self.label)
