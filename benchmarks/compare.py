@@ -106,7 +106,7 @@ def table1(rows: Sequence[SweepRow]) -> str:
     """Metrics per evaluation dataset (test split, then zero-shot)."""
     groups = sorted({g for r in rows for g in r.metrics},
                     key=lambda g: (g.startswith(HELD_OUT_LABEL), g == "all", g))
-    head = ["data", "model", "clips"] + [h for _, _, h in COLUMNS]
+    head = ["data", "model", "clips"] + [c.heading for c in COLUMNS]
     lines = ["| " + " | ".join(head) + " |", "|---|---" + "|---:" * (len(head) - 2) + "|"]
     for group in groups:
         if group.startswith(HELD_OUT_LABEL + ":"):
@@ -117,7 +117,7 @@ def table1(rows: Sequence[SweepRow]) -> str:
                 continue
             label = "all (test)" if group == "all" else group
             cells = [label, r.name, str(m["clips"])]
-            cells += [f"{m[n] * f:.4f}" for n, f, _ in COLUMNS]
+            cells += [c.cell(m[c.name]) for c in COLUMNS]
             lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -32,6 +32,7 @@ from torch.utils.data import DataLoader
 
 from satagraph.experiment.config import dotted_settings, load_config
 from satagraph.experiment.schema import resolve_data
+from satagraph.pipelines.metric_columns import METRIC_COLUMNS, MetricColumn
 from satagraph.utils.files import atomic_write_text
 
 #: Steps the "train loss" column averages (see :class:`~satagraph.lightning.TrailingLoss`).
@@ -44,9 +45,9 @@ SPLITS = ("val", "test")
 #: Retargeting columns of the table (setting: header), as the SATA paper's Table 4.
 RETARGET_HEADERS = {"internal": "retarget int.", "cross": "retarget cross"}
 
-#: Metric columns of the table (name, unit factor, header).
-COLUMNS = (("JR", 1.0, "JR (rad)"), ("RT", 100.0, "RT (cm)"), ("JP", 100.0, "JP (cm)"),
-           ("FS", 100.0, "FS (cm/frame)"), ("GP", 100.0, "GP (cm)"))
+#: Metric columns of the table: the paper's Table 4 ones of ``satagraph eval``'s
+#: (:data:`~satagraph.pipelines.metric_columns.METRIC_COLUMNS`).
+COLUMNS = tuple(c for c in METRIC_COLUMNS if c.name in ("JR", "RT", "JP", "FS", "GP"))
 
 
 @dataclass
@@ -540,9 +541,8 @@ def budget_words(budget_minutes: float, steps: Optional[int] = None) -> str:
     return f"{steps} steps" if steps is not None else f"{budget_minutes:g} min"
 
 
-def _metric(row: SweepRow, group: str, name: str, factor: float) -> str:
-    value = (row.metrics.get(group) or {}).get(name)
-    return "-" if value is None else f"{value * factor:.4f}"
+def _metric(row: SweepRow, group: str, column: MetricColumn) -> str:
+    return column.cell((row.metrics.get(group) or {}).get(column.name))
 
 
 def _averaged(row: SweepRow) -> str:
@@ -567,7 +567,7 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
     row's split."""
     settings = [s for s in RETARGET_HEADERS if any(s in r.retarget for r in rows)]
     head = ["config", "params (M)", "steps", "train (min)", "train loss"]
-    head += [h for _, _, h in COLUMNS]
+    head += [c.heading for c in COLUMNS]
     head += [RETARGET_HEADERS[s] for s in settings]
     lines = ["| " + " | ".join(head) + " |", "|---" + "|---:" * (len(head) - 1) + "|"]
     for r in rows:
@@ -576,7 +576,7 @@ def format_sweep(rows: Sequence[SweepRow], group: str = "all") -> str:
             continue
         cells = [r.name, f"{r.params / 1e6:.3g}", str(r.steps), f"{r.seconds / 60:.2f}",
                  _train_loss(r)]
-        cells += [_metric(r, group, n, f) for n, f, _ in COLUMNS]
+        cells += [_metric(r, group, c) for c in COLUMNS]
         for setting in settings:
             label = r.split if group == "all" else f"{r.split}:{group}"
             value = r.retarget.get(setting, {}).get(label)

@@ -12,6 +12,7 @@ from satagraph.transforms.canonical import canonicalize
 from satagraph.data.features import (MotionFeatures, features_to_motion,
                                      motion_to_features)
 from satagraph.datasets.sources import MotionFile
+from satagraph.pipelines.metric_columns import METRIC_COLUMNS, MetricColumn
 from satagraph.pipelines.inference import facing_smooth_of, transfer
 from satagraph.motion import Motion
 
@@ -157,10 +158,8 @@ def _paired_error(module, source: MotionFeatures, truth: Motion,
 
 
 #: The paper's figures of :func:`~satagraph.metrics.motion_metrics`: name,
-#: column header, factor to the unit shown.
-TABLE_COLUMNS = (("JR", "JR (rad)", 1.0), ("RT", "RT (cm)", 100.0), ("JP", "JP (cm)", 100.0),
-                 ("RT_h", "RT/H", 1.0), ("JP_h", "JP/H", 1.0), ("FS", "FS (cm/frame)", 100.0),
-                 ("GP", "GP (cm)", 100.0), ("RE", "RE", 1.0))
+#: column header, factor to the unit shown (one definition with the sweep's).
+TABLE_COLUMNS = METRIC_COLUMNS
 
 
 def format_table(results: Dict[str, Dict[str, float]]) -> str:
@@ -169,14 +168,14 @@ def format_table(results: Dict[str, Dict[str, float]]) -> str:
     JP, FS, GP in cm), then a subclass's own by name (it had none, and a
     module without the paper's was a ``KeyError``)."""
     names = {n for r in results.values() for n in r if n != "clips"}
-    known = {key for key, _, _ in TABLE_COLUMNS}
-    cols = [c for c in TABLE_COLUMNS if c[0] in names] + [(n, n, 1.0)
-                                                          for n in sorted(names - known)]
-    lines = ["| dataset | clips | " + " | ".join(h for _, h, _ in cols) + " |",
+    known = {c.name for c in TABLE_COLUMNS}
+    cols = [c for c in TABLE_COLUMNS if c.name in names] + [MetricColumn(n, n)
+                                                            for n in sorted(names - known)]
+    lines = ["| dataset | clips | " + " | ".join(c.heading for c in cols) + " |",
              "|---" * (len(cols) + 2) + "|"]
     for name in sorted(results, key=lambda g: (g == "all", g)):
         r = results[name]
-        vals = [f"{r[k] * f:.4f}" if k in r else "-" for k, _, f in cols]
+        vals = [c.cell(r.get(c.name)) for c in cols]
         lines.append(f"| {name} | {r['clips']} | " + " | ".join(vals) + " |")
     return "\n".join(lines)
 
