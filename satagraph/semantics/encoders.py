@@ -20,7 +20,7 @@ import os
 import re
 from functools import lru_cache
 from pathlib import Path
-from typing import Dict, List, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Sequence, Tuple, Union
 
 import numpy as np
 import torch
@@ -255,8 +255,7 @@ class T5TextEncoder(TextEncoder):
         config = json.loads((self.path / "config.json").read_text())
         self._dim = int(config.get("d_model", 0))
         self._id = f"t5:{self.path.name}:{_folder_fingerprint(self.path)}"
-        self.device = torch.device(device) if device is not None else \
-            torch.device("cuda" if torch.cuda.is_available() else "cpu")
+        self.device = default_device(device)
         self.batch_size, self.max_length = int(batch_size), int(max_length)
         self._model = self._tokenizer = None
 
@@ -268,20 +267,12 @@ class T5TextEncoder(TextEncoder):
         """
         if self._model is not None:
             return self
-        from transformers import AutoTokenizer, T5EncoderModel
-        try:
-            tokenizer = AutoTokenizer.from_pretrained(
-                str(self.path), local_files_only=True)
-            model = T5EncoderModel.from_pretrained(
-                str(self.path), local_files_only=True)
-        except (OSError, ValueError) as err:
-            raise FileNotFoundError(
+        from transformers import T5EncoderModel
+        self._model, self._tokenizer = load_frozen(
+            T5EncoderModel, self.path, self.device, lambda err: FileNotFoundError(
                 f"T5TextEncoder: cannot load a T5 model and tokenizer from "
-                f"{self.path}: {err}. {T5_HELP}") from err
-        model.requires_grad_(False)
-        self._model = model.eval().to(self.device)
-        self._tokenizer = tokenizer
-        self._dim = int(model.config.d_model)
+                f"{self.path}: {err}. {T5_HELP}"))
+        self._dim = int(self._model.config.d_model)
         return self
 
     @torch.inference_mode()
@@ -289,6 +280,35 @@ class T5TextEncoder(TextEncoder):
         self.load()
         return encode_mean_pooled(self._model, self._tokenizer, texts, self._dim,
                                   self.device, self.batch_size, self.max_length)
+
+
+def default_device(device: Union[str, torch.device, None]) -> torch.device:
+    """Where a ``transformers`` encoder runs: :obj:`device`, else CUDA when
+    available, else the CPU."""
+    return torch.device(device) if device is not None else \
+        torch.device("cuda" if torch.cuda.is_available() else "cpu")
+
+
+def load_frozen(model_class: type, path: Path, device: torch.device,
+                error: Callable[[Exception], Exception]) -> Tuple[torch.nn.Module, object]:
+    r"""``(model, tokenizer)`` of a ``transformers`` folder, read from local
+    files only; the model in eval mode, gradients off, on :obj:`device`.
+
+    Args:
+        model_class: The ``transformers`` class (``from_pretrained``).
+        path: The folder.
+        device: Where the model runs.
+        error: The encoder's own error for what ``from_pretrained`` raised
+            (``OSError`` or ``ValueError``).
+    """
+    from transformers import AutoTokenizer
+    try:
+        tokenizer = AutoTokenizer.from_pretrained(str(path), local_files_only=True)
+        model = model_class.from_pretrained(str(path), local_files_only=True)
+    except (OSError, ValueError) as err:
+        raise error(err) from err
+    model.requires_grad_(False)
+    return model.eval().to(device), tokenizer
 
 
 def mean_pool(hidden: Tensor, mask: Tensor) -> Tensor:

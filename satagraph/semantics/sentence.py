@@ -12,8 +12,8 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from satagraph.semantics.encoders import (PathLike, TextEncoder,
-                                          _folder_fingerprint,
-                                          encode_mean_pooled)
+                                          _folder_fingerprint, default_device,
+                                          encode_mean_pooled, load_frozen)
 
 SENTENCE_HELP = (
     "satagraph never downloads models. Get a sentence-transformers folder "
@@ -91,8 +91,7 @@ class SentenceEncoder(TextEncoder):
         _check_pooling(self.path)
         self._dim = int(json.loads(config.read_text()).get("hidden_size", 0))
         self._id = f"sentence:{self.path.name}:{_folder_fingerprint(self.model_path)}"
-        self.device = torch.device(device) if device is not None else \
-            torch.device("cuda" if torch.cuda.is_available() else "cpu")
+        self.device = default_device(device)
         self.batch_size, self.max_length = int(batch_size), int(max_length)
         self._model: Optional[torch.nn.Module] = None
         self._tokenizer = None
@@ -105,21 +104,16 @@ class SentenceEncoder(TextEncoder):
         """
         if self._model is not None:
             return self
-        from transformers import AutoModel, AutoTokenizer
-        try:
-            tokenizer = AutoTokenizer.from_pretrained(str(self.model_path),
-                                                      local_files_only=True)
-            model = AutoModel.from_pretrained(str(self.model_path), local_files_only=True)
-        except (OSError, ValueError) as err:
-            first = (str(err).strip() or type(err).__name__).splitlines()[0]
-            raise FileNotFoundError(f"SentenceEncoder: cannot load a model and tokenizer "
-                                    f"from {self.model_path}: {first}. {SENTENCE_HELP}"
-                                    ) from err
-        model.requires_grad_(False)
-        self._model = model.eval().to(self.device)
-        self._tokenizer = tokenizer
-        self._dim = int(model.config.hidden_size)
+        from transformers import AutoModel
+        self._model, self._tokenizer = load_frozen(
+            AutoModel, self.model_path, self.device, self._load_error)
+        self._dim = int(self._model.config.hidden_size)
         return self
+
+    def _load_error(self, err: Exception) -> FileNotFoundError:
+        first = (str(err).strip() or type(err).__name__).splitlines()[0]
+        return FileNotFoundError(f"SentenceEncoder: cannot load a model and tokenizer "
+                                 f"from {self.model_path}: {first}. {SENTENCE_HELP}")
 
     @torch.inference_mode()
     def encode(self, texts: Sequence[str]) -> Tensor:
