@@ -23,6 +23,7 @@ from __future__ import annotations
 from typing import Callable, Dict, List, Optional, Union
 
 from satagraph.data.clip import MotionClip
+from satagraph.utils.registry import register_name
 
 WindowTransform = Callable[[MotionClip], MotionClip]
 _TRANSFORMS: Dict[str, WindowTransform] = {}
@@ -40,10 +41,9 @@ def register_window_transform(name: str, transform: WindowTransform) -> None:
         ValueError: The name is taken or empty.
     """
     key = str(name).strip()
-    if not key or key in _TRANSFORMS:
-        raise ValueError(f"window transform {name!r}: "
-                         f"{'registered already' if key else 'an empty name'}; pick another")
-    _TRANSFORMS[key] = transform
+    if not key:
+        raise ValueError(f"window transform {name!r}: an empty name; pick another")
+    register_name(_TRANSFORMS, key, transform, "window transform")
 
 
 def window_transform(spec: Union[None, str, WindowTransform]) -> Optional[WindowTransform]:

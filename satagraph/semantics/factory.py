@@ -21,6 +21,7 @@ from satagraph.semantics.encoders import (OfflineTextEncoder, T5TextEncoder,
                                           TextEncoder)
 from satagraph.semantics.glove import GloVeEncoder
 from satagraph.semantics.sentence import SentenceEncoder
+from satagraph.utils.registry import register_name
 
 #: Spec prefix -> encoder class built from the rest of the spec (a path):
 #: the built-in ones and those :func:`register_text_encoder` adds.
@@ -69,9 +70,7 @@ def register_text_encoder(prefix: str, builder: Callable[[str], TextEncoder]) ->
     key = str(prefix).strip()
     if not key or ":" in key:
         raise ValueError(f"text encoder prefix {prefix!r}: a name without ':' is expected")
-    if key == "offline" or key in TEXT_ENCODERS:
-        raise ValueError(f"text encoder {key!r} is registered already; pick another name")
-    TEXT_ENCODERS[key] = builder
+    register_name(TEXT_ENCODERS, key, builder, "text encoder", reserved=("offline",))
 
 
 def spec_help() -> str:

@@ -10,6 +10,9 @@ from torch import nn
 from torch_geometric.nn import (MLP, GATConv, GATv2Conv, GCNConv, GINConv, GINEConv,
                                 MessagePassing, TransformerConv)
 
+from satagraph.utils.registry import register_name
+
+
 def _edge_mlp(channels: int, act: str) -> nn.Module:
     """The two-layer MLP of GIN(E) (paper section 4.1: two layers, ReLU)."""
     return MLP([channels, channels, channels], act=act, norm=None)
@@ -68,10 +71,7 @@ def register_local_conv(name: str, builder: Callable[..., MessagePassing]) -> No
     Raises:
         ValueError: The name is taken.
     """
-    key = str(name).lower()
-    if key in _BUILDERS or key in NO_CONV:
-        raise ValueError(f"local conv {name!r} is registered already; pick another name")
-    _BUILDERS[key] = builder
+    register_name(_BUILDERS, str(name).lower(), builder, "local conv", reserved=NO_CONV)
 
 
 def local_conv_names() -> Tuple[str, ...]:
