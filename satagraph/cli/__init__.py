@@ -530,7 +530,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     before, shown = warnings.formatwarning, warnings.showwarning
     if not args.traceback:
         warnings.formatwarning = _format_warning
-    warnings.showwarning = _once(shown)
+    warnings.showwarning = _once(shown, one_line=not args.traceback)
     try:
         with warnings.catch_warnings(), _escaped_output(), terminate_as_interrupt():
             if getattr(args, "scale_free", False):
@@ -603,16 +603,21 @@ def _missing_module(err: ModuleNotFoundError) -> str:
     return f"this command needs the Python package {name!r}, which is not installed: {how}"
 
 
-def _once(show):
+def _once(show, one_line: bool = False):
     """:func:`warnings.showwarning` that shows each warning line once per
     command (a file's rig is read again at each step that canonicalises
-    it)."""
+    it), :obj:`one_line` as :func:`_format_warning` writes it: Lightning
+    replaces :func:`warnings.formatwarning` when it is imported (after the
+    command began) with one that put ``FILE:LINE:`` before every warning
+    raised in a path holding "lightning" (``satagraph/lightning/`` too)."""
     seen = set()
 
     def show_once(message, category, filename, lineno, file=None, line=None):
         key = (category, str(message))
         if key not in seen:
             seen.add(key)
+            if one_line:
+                warnings.formatwarning = _format_warning
             show(message, category, filename, lineno, file, line)
     return show_once
 

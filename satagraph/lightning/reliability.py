@@ -85,7 +85,8 @@ class NonFiniteGuard(L.Callback):
         mode (str): ``"stop"`` raises :class:`TrainingStopped` before the
             weights change; ``"skip"`` clears the gradients of that batch
             (the optimizer leaves the weights as they are) and counts it in
-            :attr:`skipped`, and raises :class:`TrainingStopped` where as
+            :attr:`skipped` (its step in :attr:`skipped_steps`; one line at the
+            end of training names them), and raises :class:`TrainingStopped` where as
             many batches in a row as an epoch has (2 to
             :data:`MAX_SKIPPED_IN_A_ROW`) were skipped: a model that gives
             no finite loss any more has diverged, and skipping on ended the
@@ -98,6 +99,8 @@ class NonFiniteGuard(L.Callback):
             raise ValueError(f"nonfinite must be one of {NONFINITE_MODES}, got {mode!r}")
         self.mode, self.last_checkpoint = mode, last_checkpoint
         self.skipped = 0
+        #: The steps whose update ``mode="skip"`` left out.
+        self.skipped_steps: List[int] = []
         self._in_a_row = 0
         self._files: List[str] = []
         self._bad_loss: Optional[float] = None
@@ -127,6 +130,7 @@ class NonFiniteGuard(L.Callback):
         for p in params:
             p.grad = None
         self.skipped += 1
+        self.skipped_steps.append(trainer.global_step)
         self._in_a_row += 1
         if self._in_a_row >= _skip_limit(trainer):
             raise self._diverged(trainer)
@@ -153,9 +157,18 @@ class NonFiniteGuard(L.Callback):
             "(a lower optim.lr may keep it finite)")
 
     def on_train_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
-        if self.skipped:
-            warnings.warn(f"nonfinite=skip: skipped {self.skipped} batch(es) with a "
-                          "non-finite loss or gradient", stacklevel=2)
+        if self.skipped and trainer.is_global_zero:  # every process skipped the same steps
+            # raised here, not in Lightning's caller: a filter of Lightning's warnings
+            # (module="lightning") hid it
+            warnings.warn(_skipped_note(self.skipped_steps))
+
+
+def _skipped_note(steps: List[int], shown: int = 10) -> str:
+    """The one line that says which steps ``nonfinite=skip`` left out (at
+    most :obj:`shown` named)."""
+    named = ", ".join(map(str, steps[:shown])) + (", ..." if len(steps) > shown else "")
+    return (f"nonfinite=skip: skipped the weight update of {len(steps)} batch(es) with a "
+            f"non-finite loss or gradient, at step(s) {named}")
 
 
 def _skip_limit(trainer: L.Trainer) -> int:

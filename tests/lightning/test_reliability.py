@@ -166,7 +166,7 @@ def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
     poison.update({"from": 99, "at": (1, 3)})
     cfg = dict(copy.deepcopy(tiny_config), nonfinite="skip")
     cfg["output_dir"] += "-skip"
-    with pytest.warns(UserWarning, match="skipped 2 batch"):
+    with pytest.warns(UserWarning, match=r"weight update of 2 batch\(es\).*step\(s\) 1, 3$"):
         module, _, trainer, _ = train(cfg, max_steps=4)
     assert all(torch.isfinite(p).all() for p in module.parameters())
 
@@ -194,6 +194,39 @@ def test_skip_stops_a_run_that_gives_no_finite_loss_any_more(
         train(cfg)
     ckpt = load_checkpoint(Path(cfg["output_dir"]) / "checkpoints" / LAST)
     assert ckpt["global_step"] == 2
+
+
+def test_skip_says_in_one_line_which_steps_it_skipped(
+        config_overrides: List[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``satagraph train ... nonfinite=skip`` ends with one
+    ``satagraph: warning:`` line naming the skipped steps; Lightning,
+    imported after the command began, had replaced the warning format, so
+    it came out as ``.../lightning/pytorch/trainer/call.py:228: ...``."""
+    import warnings
+
+    from lightning.fabric.utilities.warnings import _custom_format_warning
+    from satagraph.lightning.autoencoder import MotionAutoencoderModule
+    original = MotionAutoencoderModule.compute_losses
+
+    def poisoned(self, out, batch):
+        warnings.formatwarning = _custom_format_warning  # Lightning's import, mid-command
+        losses = original(self, out, batch)
+        if self.global_step == 1:
+            losses["loss"] = losses["loss"] * float("nan")
+        return losses
+
+    shown: List[str] = []
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        shown.append(warnings.formatwarning(message, category, filename, lineno, line))
+
+    monkeypatch.setattr(MotionAutoencoderModule, "compute_losses", poisoned)
+    monkeypatch.setattr(warnings, "showwarning", show)
+    assert main(["train", "tiny", *config_overrides, "nonfinite=skip", "trainer.max_epochs=1",
+                 "trainer.limit_val_batches=0", f"output_dir={tmp_path / 'run'}"]) == 0
+    skipped = [line for line in shown if "nonfinite=skip" in line]
+    assert skipped == ["satagraph: warning: nonfinite=skip: skipped the weight update of 1 "
+                       "batch(es) with a non-finite loss or gradient, at step(s) 1\n"]
 
 
 def test_cli_train_exit_code_when_stopped(tiny_config: Dict[str, Any], tmp_path: Path,
