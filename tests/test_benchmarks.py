@@ -651,3 +651,22 @@ def test_retarget_many_says_in_one_line_that_it_needs_the_real_files(tmp_path, c
     assert printed.out == "" and printed.err.count("\n") == 1
     assert printed.err.startswith(f"retarget_many.py: {tmp_path}: no manifest.tsv there")
     assert not (tmp_path / "r.md").exists()
+
+
+def test_resume_benchmark_draws_the_same_kill_points_unless_told(tmp_path, monkeypatch):
+    """``benchmarks/resume.py`` without ``--seed`` kills at the same steps
+    each time (it drew them unseeded: no two tables alike)."""
+    import resume
+    seeds = []
+
+    def run(root, kills, count, every, epochs, seed):
+        seeds.append(seed)
+        return "| killed |\n"
+
+    monkeypatch.setattr(resume, "run", run)
+    for _ in range(2):
+        assert resume.main(["--out", str(tmp_path / "resume.md")]) == 0
+    assert seeds == [resume.DEFAULT_SEED] * 2
+    points = resume.kill_points(36, 5, 3, seeds[0])
+    assert points == resume.kill_points(36, 5, 3, seeds[1]) == sorted(set(points))
+    assert all(5 < k < 35 for k in points)
