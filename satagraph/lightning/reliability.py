@@ -227,8 +227,9 @@ class ResumeCheckpoint(Checkpoint):
     those of a run never stopped, where Lightning 2.6 alone would count the
     cut epoch as finished or skip the next one
     (:meth:`on_load_checkpoint`). A Ctrl-C or SIGTERM writes ``last.ckpt``
-    at the last training step that ended (:meth:`on_exception`), so that
-    ``--resume`` goes on from there.
+    at the last training step that ended (:meth:`on_exception`), also in
+    the validation that follows it, so that ``--resume`` goes on from
+    there.
 
     Args:
         dirpath (str): The checkpoint folder.
@@ -349,17 +350,19 @@ class ResumeCheckpoint(Checkpoint):
         Lightning stops at the end of the batch it falls in): write
         ``last.ckpt`` at the last training step that ended, as an
         every-N-steps save there would have (its random states, its loop
-        counts), so that ``--resume`` goes on from it. Nothing is
+        counts), so that ``--resume`` goes on from it; in the validation
+        of a training run, the resumed run validates again, whole
+        (:func:`_before_validation`). Nothing is
         written where that checkpoint is already ``last.ckpt``, or where the
-        stop fell in validation or between an optimizer step and the end of
-        its batch (the weights may be half updated), or in a distributed
+        stop fell in the sanity check or between an optimizer step and the
+        end of its batch (the weights may be half updated), or in a distributed
         run (its other processes would not join the save); nor for other
         errors (a non-finite loss keeps the last good checkpoint). A save
         that fails is a warning: the interrupt goes on, and ``last.ckpt``
         stays the one before (writes are atomic)."""
         if (not isinstance(exception, (KeyboardInterrupt, SIGTERMException))
-                or not self._unsaved
-                or self._stepping or not trainer.training or trainer.world_size > 1):
+                or not self._unsaved or self._stepping or trainer.world_size > 1
+                or not (trainer.training or _validating_in_fit(trainer))):
             return
         self._interrupting = True
         try:
@@ -375,7 +378,9 @@ class ResumeCheckpoint(Checkpoint):
 
     def on_save_checkpoint(self, trainer: L.Trainer, pl_module: L.LightningModule,
                            checkpoint: Dict[str, Any]) -> None:
-        if self._interrupting:
+        if self._interrupting and _validating_in_fit(trainer):
+            _before_validation(checkpoint)
+        elif self._interrupting:
             _as_batch_end(checkpoint)
 
     def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
@@ -414,6 +419,30 @@ def _as_batch_end(checkpoint: Dict[str, Any]) -> None:
     state = loop.get("epoch_loop.state_dict") or {}
     if "_batches_that_stepped" in state:  # counted at that batch's end
         state["_batches_that_stepped"] -= 1
+
+
+def _validating_in_fit(trainer: L.Trainer) -> bool:
+    """Whether :meth:`~lightning.pytorch.Trainer.fit` is validating (its
+    sanity check aside: no step has ended)."""
+    return (trainer.validating and not trainer.sanity_checking
+            and trainer.state.fn == "fit")
+
+
+def _before_validation(checkpoint: Dict[str, Any]) -> None:
+    """The validation counts of a checkpoint written at a Ctrl-C in the
+    validation of a training run as those of one cut in its first batch:
+    Lightning 2.6 resumes such a run by validating again, from the first
+    batch, before the next training batch (its losses of the batches done
+    are not in the checkpoint), and the loss of every step and every
+    epoch's validation is that of a run never stopped (counted as at the end
+    of the training batch before, the epoch's validation was skipped). The
+    training counts stay as they are (the last batch done)."""
+    loop = checkpoint["loops"]["fit_loop"]
+    val = loop["epoch_loop.val_loop.batch_progress"]
+    for key in ("ready", "started", "processed", "completed"):
+        val["total"][key] -= val["current"][key] - (key in ("ready", "started"))
+        val["current"][key] = int(key in ("ready", "started"))
+    val["is_last_batch"] = False
 
 
 def _reopen_cut_epoch(checkpoint: Dict[str, Any]) -> None:

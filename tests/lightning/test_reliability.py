@@ -693,8 +693,9 @@ def test_skipped_files_are_listed_and_the_list_goes_once_they_read(
 class _InterruptAt(L.Callback):
     """Ctrl-C at step :obj:`step`: as the next batch starts (``start``), in
     its backward pass (``backward``: its forward pass has drawn its
-    dropout) or at the end of the epoch that step ends (``epoch_end``,
-    before the epoch-end save); :obj:`then` runs first."""
+    dropout), in the validation after it (``validation``) or at the end of
+    the epoch that step ends (``epoch_end``, before the epoch-end save);
+    :obj:`then` runs first."""
 
     def __init__(self, step: int, where: str = "backward", then: Any = None) -> None:
         self.step, self.where, self.then = step, where, then
@@ -707,6 +708,10 @@ class _InterruptAt(L.Callback):
 
     def on_train_epoch_end(self, trainer: L.Trainer, *args: Any) -> None:
         self._stop(trainer, "epoch_end")
+
+    def on_validation_batch_start(self, trainer: L.Trainer, *args: Any) -> None:
+        if not trainer.sanity_checking:
+            self._stop(trainer, "validation")
 
     def _stop(self, trainer: L.Trainer, where: str) -> None:
         if where == self.where and trainer.global_step == self.step:
@@ -725,19 +730,24 @@ def _interruptible(cfg: Dict[str, Any]) -> Dict[str, Any]:
     return cfg
 
 
-@pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4)])
+@pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4),
+                                         pytest.param("validation", 4, marks=pytest.mark.slow)])
 def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
         tiny_config: Dict[str, Any], tmp_path: Path, where: str, step: int) -> None:
     """Ctrl-C as step 4 starts or inside it writes ``last.ckpt`` at step 3
-    (its optimizer state too), at the second epoch's end at step 4; the
-    first epoch's at step 2 is kept as ``last.prev.ckpt``; ``--resume``
-    goes on from there with the losses of a run never stopped (the
-    interrupted step's dropout is drawn again)."""
+    (its optimizer state too), at the second epoch's end or in its
+    validation at step 4 (in validation it wrote none: ``--resume`` trained
+    steps 3 and 4 again); the first epoch's at step 2 is kept as
+    ``last.prev.ckpt``; ``--resume`` goes on from there with the losses of
+    a run never stopped (the interrupted step's dropout is drawn again),
+    validating every epoch (an interrupted validation again, whole)."""
     reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
+    reference["checkpoint"]["keep_every_epoch"] = True
     train(reference)
     full = read_loss_log(tmp_path / "a" / "losses.tsv")
     assert max(full) == 6
     cfg = _interruptible(tiny_config)
+    cfg["checkpoint"]["keep_every_epoch"] = True
     folder = Path(cfg["output_dir"]) / "checkpoints"
     with pytest.raises(KeyboardInterrupt) as stop:
         train(cfg, callbacks=[_InterruptAt(step, where)])
@@ -751,6 +761,13 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
     _, _, trainer, _ = train(cfg, resume=True)
     assert trainer.global_step == 6
     assert read_loss_log(Path(cfg["output_dir"]) / "losses.tsv") == full
+    scores = [{p.name: float(load_checkpoint(p)["callbacks"][next(
+        k for k in load_checkpoint(p)["callbacks"] if k.startswith("ModelCheckpoint"))]
+        ["current_score"]) for p in (run / "checkpoints").glob("epoch=*.ckpt")}
+        for run in (tmp_path / "a", Path(cfg["output_dir"]))]
+    assert len(scores[0]) == 3
+    if where != "epoch_end":  # that one stops before the epoch's checkpoint is kept
+        assert scores[1] == scores[0]
 
 
 class _TerminateAt(L.Callback):
