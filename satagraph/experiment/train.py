@@ -609,6 +609,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         if init_from:
             init_weights(module, init_from, init_normalizer, payload)
         _record_config(cfg, run_dir)  # once nothing refuses the run
+        _record_data_files(dm, run_dir)
         trainer = build_trainer(cfg, run_dir, resume=last is not None, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
         # set up (its datasets hold the semantic embedder, a closure); each worker
@@ -776,6 +777,56 @@ def _record_config(cfg: Dict[str, Any], run_dir: Path) -> None:
     from omegaconf import OmegaConf
     atomic_write_text(run_dir / "config.yaml", OmegaConf.to_yaml(OmegaConf.create(cfg)),
                       create_parent=True)
+
+
+#: The files a run started on, ``split<TAB>path`` a line, in its folder.
+DATA_FILES = "data_files.txt"
+
+
+def _data_files(dm) -> Optional[set]:
+    """``(split, path)`` of every file the splits of a data module read
+    (an endless zoo's windows aside), or ``None`` where its datasets name
+    no files (a registered module's own data module)."""
+    datasets = getattr(dm, "datasets", None) or {}
+    if not datasets or not all(hasattr(ds, "files") for ds in datasets.values()):
+        return None
+    return {(split, str(getattr(f, "path", f))) for split, ds in datasets.items()
+            for f in ds.files}
+
+
+def _record_data_files(dm, run_dir: Path) -> None:
+    """Write the files a run starts on to ``<run>/data_files.txt``; a
+    resumed run keeps it and says in one line how many were added to and
+    removed from its data since (it went on silently): it trains on the
+    files there now, each in its split (a folder's by file name, a
+    manifest's by its column), with the normaliser of its first start,
+    which its checkpoint holds (the one fitted on the files there now is
+    not used: the model learnt its features in the first one's units)."""
+    now, path = _data_files(dm), run_dir / DATA_FILES
+    if now is None:
+        return
+    if not path.is_file():  # the first start (or a run of before the record)
+        atomic_write_text(path, "".join(f"{s}\t{f}\n" for s, f in sorted(now)),
+                          create_parent=True)
+        return
+    before = {tuple(line.split("\t", 1)) for line in path.read_text().splitlines() if line}
+    added, removed = now - before, before - now
+    if added or removed:
+        warnings.warn(_changed_data_note(added, removed, path), stacklevel=3)
+
+
+def _changed_data_note(added: set, removed: set, record: Path) -> str:
+    """The line of a resume whose data changed: how many files, per split."""
+    def change(split: str) -> str:
+        counts = [(sign, sum(s == split for s, _ in files))
+                  for sign, files in (("+", added), ("-", removed))]
+        return f"{split} " + " ".join(f"{sign}{n}" for sign, n in counts if n)
+
+    per = ", ".join(change(split) for split in sorted({s for s, _ in added | removed}))
+    return (f"--resume: {len(added)} file(s) added to and {len(removed)} removed from the "
+            f"data since the run started ({per}; its files: {record}); it goes on with the "
+            "files there now, each in its split, and keeps the normaliser of its first start "
+            "(in its checkpoint; not refitted to them)")
 
 
 def _record_skipped(dm: MotionDataModule, run_dir: Path) -> None:

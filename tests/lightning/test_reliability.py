@@ -832,3 +832,44 @@ def test_a_ctrl_c_save_that_fails_leaves_nothing_to_resume_from(
     assert [p.name for p in folder.iterdir() if p.name == LAST or is_temp_file(p.name)] == []
     with pytest.raises(FileNotFoundError, match="no checkpoint"):
         resume_checkpoint(folder)
+
+
+@pytest.mark.slow
+def test_resume_says_how_the_data_folder_changed_and_keeps_its_normaliser(
+        tmp_path: Path) -> None:
+    """``--resume`` after files were added to and removed from the data
+    folder went on silently: one line now says how many, per split, and
+    the run keeps the normaliser of its first start (its checkpoint's), not
+    the one the data module fits to the files there now."""
+    write_zoo(tmp_path / "zoo", species=["biped", "quadruped"], clips=3, frames=40)
+    data = tmp_path / "data"
+    data.mkdir()
+    for bvh in sorted((tmp_path / "zoo" / "biped").glob("*.bvh")):
+        (data / bvh.name).write_bytes(bvh.read_bytes())
+    cfg = load_config("tiny", [f"data.sources=[{data}]", f"data.cache_dir={tmp_path / 'c'}",
+                               "data.window=16", "data.stride=16", "data.max_files=null",
+                               "logger.name=none", "trainer.progress=false",
+                               "trainer.enable_model_summary=false", "trainer.max_epochs=1",
+                               "trainer.limit_train_batches=1", "trainer.limit_val_batches=0",
+                               "trainer.num_sanity_val_steps=0", "threads=1",
+                               f"output_dir={tmp_path / 'run'}"])
+    _, _, _, run_dir = train(cfg)
+    started = load_checkpoint(run_dir / "checkpoints" / LAST)["state_dict"]
+    record = (run_dir / "data_files.txt").read_text()
+    biped = sorted(data.glob("*.bvh"))
+    assert sorted(line.split("\t")[1] for line in record.splitlines()) == list(map(str, biped))
+    (data / biped[0].name).unlink()
+    for bvh in sorted((tmp_path / "zoo" / "quadruped").glob("*.bvh")):
+        (data / bvh.name).write_bytes(bvh.read_bytes())
+    cfg["trainer"]["max_epochs"] = 2
+    with pytest.warns(UserWarning) as said:
+        module, dm, _, _ = train(cfg, resume=True)
+    lines = [str(w.message) for w in said if str(w.message).startswith("--resume:")]
+    assert len(lines) == 1 and lines[0].startswith(
+        "--resume: 12 file(s) added to and 1 removed from the data since the run started (")
+    assert "keeps the normaliser of its first start" in lines[0]
+    assert (run_dir / "data_files.txt").read_text() == record
+    for name in ("dynamic_mean", "dynamic_std"):
+        kept = getattr(module.normalizer, name)
+        assert torch.equal(kept, started[f"normalizer.{name}"])
+        assert not torch.equal(kept, getattr(dm.normalizer, name))
