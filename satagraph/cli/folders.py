@@ -4,9 +4,12 @@
 output folder; a file that fails gets one line on stderr and the run goes
 on, and no output file is left for it (BVH writes are atomic). With
 ``--skip-existing``, the files whose result is already there, whole, are
-left out (:func:`complete_output`): a folder run that was stopped goes on."""
+left out (:func:`complete_output`): a folder run that was stopped goes on;
+each file is claimed while it is made (:func:`claimed_output`), so that
+two runs into one folder share the files rather than each making all."""
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
@@ -14,7 +17,7 @@ from pathlib import Path
 from typing import Callable, List, Optional, Sequence, Tuple, TypeVar, Union
 
 from satagraph.datasets.sources import bvh_files
-from satagraph.utils.files import sweep_stale_temps
+from satagraph.utils.files import file_lock, sweep_stale_temps
 
 PathLike = Union[str, Path]
 Item, Result = TypeVar("Item"), TypeVar("Result")
@@ -71,12 +74,30 @@ def complete_output(path: PathLike) -> bool:
     return Path(path).is_file() and written_by_satagraph(str(path))
 
 
+def claimed_output(path: PathLike, make: Callable[[], str]) -> Optional[str]:
+    """:obj:`make` the output :obj:`path` while holding its claim
+    (``.<name>.claim`` beside it, locked, removed after; the system releases
+    the lock of a killed run), and its summary line; ``None``, with nothing
+    made, where another live run holds the claim (it is making that output)
+    or the output is whole by now (another run made it since this one
+    began). Two ``--skip-existing`` runs into one folder decided at their
+    start what to leave out, so each made every file."""
+    path = Path(path)
+    with contextlib.ExitStack() as held:
+        try:
+            held.enter_context(file_lock(path.parent / f".{path.name}.claim", timeout=0))
+        except TimeoutError:
+            return None
+        return None if complete_output(path) else make()
+
+
 def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str], str],
                     verb: str, traceback: bool = False, skip_existing: bool = False) -> int:
     """Run :obj:`one` (input path, output path -> a one-line summary) on
     every BVH file below :obj:`source`, writing below :obj:`output`; with
     :obj:`skip_existing`, not on those whose output is already whole
-    (:func:`complete_output`), which the summary counts.
+    (:func:`complete_output`), nor on those another live run makes or has
+    made since (:func:`claimed_output`), which the summary counts.
 
     Returns:
         int: 0 when every file went through, 2 when any failed (each said
@@ -100,23 +121,30 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
         for folder in {(output / p.relative_to(source)).parent for p in files}:
             sweep_stale_temps(folder)  # what the stopped run's killed writes left
 
-    def write(path: Path) -> None:
+    def write(path: Path) -> bool:
         out = output / path.relative_to(source)
         out.parent.mkdir(parents=True, exist_ok=True)
-        print(one(str(path), str(out)))
+        if not skip_existing:
+            print(one(str(path), str(out)))
+            return True
+        line = claimed_output(out, lambda: one(str(path), str(out)))
+        print(line or f"{out}: skipped, another run makes it or has made it (--skip-existing)")
+        return line is not None
 
-    _, failed = each_kept(todo, write, failure_line, traceback)
-    done = len(todo) - len(failed)
-    print(f"{verb} {done} of {len(files)} files into {output} in "
-          f"{time.perf_counter() - start:.1f} s" + _skipped(len(files) - len(todo))
+    made, failed = each_kept(todo, write, failure_line, traceback)
+    elsewhere = made.count(False)
+    print(f"{verb} {len(made) - elsewhere} of {len(files)} files into {output} in "
+          f"{time.perf_counter() - start:.1f} s" + _skipped(len(files) - len(todo), elsewhere)
           + _failed(failed))
     return 2 if failed else 0
 
 
-def _skipped(count: int) -> str:
-    """The part of the summary line for the files ``--skip-existing`` left out."""
-    return f"; {count} skipped, their results already there (--skip-existing)" \
-        if count else ""
+def _skipped(count: int, elsewhere: int = 0) -> str:
+    """The part of the summary line for the files ``--skip-existing`` left
+    out: :obj:`count` there at the start, :obj:`elsewhere` made by another run."""
+    parts = [f"{count} skipped, their results already there"] if count else []
+    parts += [f"{elsewhere} made by another run"] if elsewhere else []
+    return f"; {', '.join(parts)} (--skip-existing)" if parts else ""
 
 
 def _check_output_folder(output: Path) -> None:
@@ -147,4 +175,4 @@ def _failed(failed: List[Path], shown: int = 10) -> str:
 
 
 __all__ = ["input_files", "failure_line", "each_kept", "complete_output",
-           "run_over_folder"]
+           "claimed_output", "run_over_folder"]

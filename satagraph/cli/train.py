@@ -30,8 +30,9 @@ def _in_out(p: argparse.ArgumentParser, dest: str, metavar: str) -> None:
     p.add_argument("--skip-existing", action="store_true",
                    help="leave out every file whose result is already in OUT, whole (one "
                    "satagraph wrote to the end; a write that was stopped leaves none), so "
-                   "that a folder run that was interrupted goes on; the summary counts "
-                   "them. It trusts those results: ones written with another --ckpt or "
+                   "that a folder run that was interrupted goes on, and (for a folder) "
+                   "every file that another such run into OUT makes, so that two share "
+                   "the work; the summary counts them. It trusts those results: ones written with another --ckpt or "
                    "other options are kept as they are (delete them, or leave the flag "
                    "out, to redo them)")
 

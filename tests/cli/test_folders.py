@@ -144,6 +144,41 @@ def test_skip_existing_goes_on_with_a_stopped_folder_run(folder: Path, tmp_path:
     assert (out / "walk.bvh").stat().st_ino == kept
 
 
+def test_skip_existing_leaves_what_another_run_makes_to_it(tmp_path: Path, capsys) -> None:
+    """Two ``--skip-existing`` runs into one folder each decided at their
+    start what to leave out, so each made every file: now a file whose
+    claim another live run holds (it is making it), or whose result that
+    run wrote since this one began, is left out at its turn and counted."""
+    from satagraph.cli.folders import complete_output, run_over_folder
+    from satagraph.utils.files import atomic_write_text, file_lock
+    src, out = tmp_path / "in", tmp_path / "out"
+    src.mkdir()
+    out.mkdir()
+    for name in ("a", "b", "c"):
+        (src / f"{name}.bvh").write_text("x")
+    made = []
+
+    def result(path: Path) -> None:  # a whole result: its closing declaration line
+        atomic_write_text(path, "HIERARCHY\n# satagraph: up_axis=+Y\n")
+
+    def one(source: str, output: str) -> str:
+        made.append(Path(source).name)
+        result(Path(output))
+        if Path(source).name == "a.bvh":  # meanwhile the other run finishes c.bvh
+            result(out / "c.bvh")
+        return f"wrote {output}"
+
+    with file_lock(out / ".b.bvh.claim", timeout=0):  # the other run makes b.bvh
+        assert run_over_folder(src, out, one, "made", skip_existing=True) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert made == ["a.bvh"] and complete_output(out / "c.bvh")
+    assert f"{out / 'b.bvh'}: skipped, another run makes it or has made it " \
+        "(--skip-existing)" in printed
+    assert printed[-1].startswith("made 1 of 3 files into") and printed[-1].endswith(
+        "; 2 made by another run (--skip-existing)")
+    assert sorted(p.name for p in out.iterdir()) == ["a.bvh", "c.bvh"]  # no claim left
+
+
 @pytest.mark.parametrize("case", ["file", "bvh-name", "empty"])
 def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: Path,
                                                         capsys, case: str) -> None:
