@@ -240,7 +240,7 @@ def add_convert_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
         "motion to +Y up, facing +Z, root at the origin, metres (and "
         "folds an extra root joint above the hips into them, still or "
         "travelling) and the output declares "
-        "itself canonical on a last comment line, so that satagraph never "
+        "itself canonical in a comment on its HIERARCHY line, so that satagraph never "
         "re-guesses its up axis or units. The output is replaced "
         "atomically, so IN and OUT may be the same file.",
         epilog="example: satagraph convert in.bvh out.bvh --fps 30 --canonical")

@@ -65,13 +65,20 @@ def each_kept(items: Sequence[Item], work: Callable[[Item], Result],
 
 def complete_output(path: PathLike) -> bool:
     """Whether :obj:`path` is a whole result of an earlier run: a file that
-    satagraph wrote to the end (its closing declaration line is there). BVH
+    satagraph wrote (its declaration is there) and that reads whole. BVH
     writes are atomic, so a write that a kill cut short left its temporary
     file (:func:`~satagraph.utils.files.is_temp_file`) beside this path,
-    never a part of it; a file cut short otherwise (a copy) lacks the line.
+    never a part of it; a file cut short otherwise (a copy) lacks frames.
     How it was made (checkpoint, options) is not checked."""
+    from satagraph.io import BVHError, read_bvh
     from satagraph.io.bvh_reader import written_by_satagraph
-    return Path(path).is_file() and written_by_satagraph(str(path))
+    if not (Path(path).is_file() and written_by_satagraph(str(path))):
+        return False
+    try:
+        read_bvh(path)
+    except BVHError:
+        return False
+    return True
 
 
 def claimed_output(path: PathLike, make: Callable[[], str]) -> Optional[str]:

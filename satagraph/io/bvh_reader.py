@@ -226,27 +226,36 @@ def _unique(name: str, names: set) -> str:
     return out
 
 
+_SAYS = (r"#[ \t]*satagraph:[ \t]*(?:canonical[ \t]+)?"
+         r"up_axis=([+-][XYZ])(?:[ \t]+scale=(\S+))?[ \t]*")
 #: A trailing ``# satagraph: [canonical] up_axis=AXIS [scale=S]`` line: the
 #: file declares how it is to be read (written by ``satagraph convert
 #: --canonical``, and by retarget / reconstruct in the target's own frame;
-#: no ``scale`` where the units are the file's own, undecided).
-_DECLARATION = re.compile(r"(?:\r?\n|\r)[ \t]*#[ \t]*satagraph:[ \t]*(?:canonical[ \t]+)?"
-                          r"up_axis=([+-][XYZ])(?:[ \t]+scale=(\S+))?[ \t]*(?:\r?\n|\r)?\s*\Z")
+#: no ``scale`` where the units are the file's own, undecided). Files of
+#: this version say it on the ``HIERARCHY`` line (:data:`_HEAD_DECLARATION`).
+_DECLARATION = re.compile(r"(?:\r?\n|\r)[ \t]*" + _SAYS + r"(?:\r?\n|\r)?\s*\Z")
+#: The declaration as written now, after ``HIERARCHY`` on its line: Blender's
+#: importer reads every line after ``Frame Time`` as a frame (a trailing
+#: comment failed its import), and readers skip the rest of that line.
+_HEAD_DECLARATION = re.compile(r"\A\s*HIERARCHY[ \t]+" + _SAYS + r"(?:\r?\n|\r)", re.I)
 _MOTION = re.compile(r"^[ \t]*MOTION[ \t]*\r?$", re.M | re.I)
 
 
 def written_by_satagraph(path: str) -> bool:
-    """Whether a file ends with the declaration line satagraph writes
-    (:data:`_DECLARATION`): a result of ``retarget``, ``reconstruct``,
-    ``generate`` or ``convert --canonical``, not someone's capture."""
+    """Whether a file holds the declaration satagraph writes
+    (:data:`_HEAD_DECLARATION`, or :data:`_DECLARATION` at its end): a
+    result of ``retarget``, ``reconstruct``, ``generate`` or ``convert
+    --canonical``, not someone's capture."""
     try:
         with open(path, "rb") as handle:
+            head = handle.read(4096).decode("utf-8", errors="replace")
             handle.seek(0, os.SEEK_END)
             handle.seek(max(handle.tell() - 4096, 0))
             tail = handle.read().decode("utf-8", errors="replace")
     except OSError:
         return False
-    return _DECLARATION.search(tail) is not None
+    return (_HEAD_DECLARATION.match(head.lstrip("\ufeff")) is not None
+            or _DECLARATION.search(tail) is not None)
 
 
 def _next_line(text: str, pos: int) -> Tuple[str, int]:
@@ -520,25 +529,35 @@ def read_bvh(path: PathLike) -> Motion:
 
 def _declaration(path: str, text: str) -> Tuple[str, Optional[RigSettings]]:
     """The text without a trailing satagraph declaration, and the settings
-    it declares (``None`` without one). Only the last non-blank line can
-    be one: the search starts at the line break before it (a whole-text
-    search costs more than parsing the frames)."""
+    declared on the ``HIERARCHY`` line or on that trailing line (``None``
+    without either). Only the last non-blank line can be a trailing one:
+    the search starts at the line break before it (a whole-text search
+    costs more than parsing the frames)."""
+    head = _HEAD_DECLARATION.match(text)
+    if head is not None:  # the header parser reads no further than HIERARCHY on it
+        return text, _declared(path, head, text[:head.start(1)].count("\n") + 1)
     end = len(text.rstrip())
     start = max(text.rfind("\n", 0, end), text.rfind("\r", 0, end))
     match = _DECLARATION.search(text, max(start - 1, 0)) if start >= 0 else None
     if match is None:
         return text, None
+    line = text[:match.start()].count("\n") + 2
+    return text[:match.start()] + "\n", _declared(path, match, line)
+
+
+def _declared(path: str, match: "re.Match[str]", line: int) -> RigSettings:
+    """The settings of a declaration :obj:`match` (on line :obj:`line`):
+    its up axis and scale, if it gives one."""
     if match.group(2) is None:
-        return text[:match.start()] + "\n", RigSettings(match.group(1), None, declared=True)
+        return RigSettings(match.group(1), None, declared=True)
     try:
         scale = float(match.group(2))
     except ValueError:
         scale = float("nan")
     if not (math.isfinite(scale) and scale > 0):
-        line = text[:match.start()].count("\n") + 2
         raise BVHError(path, line, f"bad scale in the satagraph declaration: "
                        f"{match.group(2)!r}")
-    return text[:match.start()] + "\n", RigSettings(match.group(1), scale, declared=True)
+    return RigSettings(match.group(1), scale, declared=True)
 
 
 _BOM = b"\xef\xbb\xbf"

@@ -172,18 +172,21 @@ def channel_values(motion: Motion) -> np.ndarray:
 
 
 def declaration(motion: Motion) -> str:
-    """The trailing line by which a file declares how it is to be read
-    (empty where nothing is declared): ``canonical up_axis=+Y scale=1`` for
-    a canonical motion, the up axis and units of the rig it was put on for
-    a retargeted or reconstructed one (no scale where the units are the
-    file's own). Readers of this package then never re-guess them; other
-    readers stop after the declared frames."""
+    """The comment by which a file declares how it is to be read, written
+    after ``HIERARCHY`` on its line (empty where nothing is declared):
+    ``canonical up_axis=+Y scale=1`` for a canonical motion, the up axis
+    and units of the rig it was put on for a retargeted or reconstructed
+    one (no scale where the units are the file's own). Readers of this
+    package then never re-guess them; other readers (Blender's, bvhio)
+    look no further than ``HIERARCHY`` on that line, where a line after
+    the frames failed Blender's import, which reads every line to the end
+    as a frame."""
     rig = motion.rig
     if rig is None or not rig.declared or rig.up_axis is None:
         return ""
     scale = "" if rig.scale is None else f" scale={float(rig.scale):g}"
     canonical = "canonical " if rig.up_axis == "+Y" and scale == " scale=1" else ""
-    return f"# satagraph: {canonical}up_axis={rig.up_axis}{scale}\n"
+    return f"# satagraph: {canonical}up_axis={rig.up_axis}{scale}"
 
 
 def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
@@ -213,6 +216,7 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     exact = values is motion.raw_channels
     _check_finite(motion, values, path)
     header = _hierarchy(motion)
+    header[0] = f"{header[0]} {declaration(motion)}".rstrip()
     header += ["MOTION", f"Frames: {motion.num_frames}",
                f"Frame Time: {1.0 / motion.fps:.10g}"]
 
@@ -220,6 +224,5 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
         f.write("\n".join(header) + "\n")
         if values.size:
             np.savetxt(f, values, fmt=EXACT if exact else f"%.{max(precision, 6)}f")
-        f.write(declaration(motion))
 
     atomic_write(path, write, newline="\n")

@@ -61,8 +61,8 @@ def test_results_on_a_rig_are_read_as_that_rig_was(
     out = retarget_motion(module, source, with_rig(crab, "-X", "in"), embed, window=16)
     assert out.rig == RigSettings("-X", 0.0254, declared=True)
     write_bvh(out, tmp_path / "out.bvh")
-    assert (tmp_path / "out.bvh").read_text().splitlines()[-1] == \
-        "# satagraph: up_axis=-X scale=0.0254"
+    assert (tmp_path / "out.bvh").read_text().splitlines()[0] == \
+        "HIERARCHY # satagraph: up_axis=-X scale=0.0254"
     bird = read_bvh(_write(tmp_path / "bird.bvh", "fowl", Dialect(unit=28.0)))
     out = retarget_motion(module, source, with_rig(bird, "+Y"), embed, window=16)
     assert out.rig == RigSettings("+Y", None, declared=True)  # units stay undecided

@@ -420,7 +420,7 @@ def test_units_and_up_axes_per_skeleton(t2m_ckpt, zoo_skeletons, tmp_path, capsy
     out = tmp_path / "walk.bvh"
     assert _generate(t2m_ckpt, skeletons, out, "--seconds", "1", "--up-axis", "+Z",
                      "--units", "cm,m") == 0
-    tails = [Path(p).read_text().rstrip().splitlines()[-1]
+    tails = [Path(p).read_text().splitlines()[0]
              for p in output_paths(str(out), [str(s) for s in skeletons])]
     assert "up_axis=+Z" in tails[0] and "scale=0.01" in tails[0]
     assert "up_axis=+Z" in tails[1] and "scale=1" in tails[1]

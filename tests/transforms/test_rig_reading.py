@@ -239,8 +239,8 @@ def test_canonical_files_declare_themselves_and_are_never_reguessed(
     src, out = _crab_file(tmp_path), tmp_path / "canon.bvh"
     assert main(["convert", str(src), str(out), "--canonical", "--up-axis=-Z",
                  "--units", "cm"]) == 0
-    assert out.read_text().splitlines()[-1] == \
-        "# satagraph: canonical up_axis=+Y scale=1"
+    assert out.read_text().splitlines()[0] == \
+        "HIERARCHY # satagraph: canonical up_axis=+Y scale=1"
     motion = read_bvh(out)
     assert motion.rig.declared and motion.rig.up_axis == "+Y"
 

@@ -1,0 +1,53 @@
+"""What other BVH readers need of the files satagraph writes (Blender's
+importer, bvhio), and what other exporters write that satagraph reads;
+``benchmarks/interop.py`` checks the same against Blender itself."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from satagraph.io import read_bvh, write_bvh
+from satagraph.io.bvh_reader import written_by_satagraph
+from satagraph.motion import Motion, RigSettings
+
+
+def _frame_lines(text: str) -> list:
+    """The lines after ``Frame Time:`` as Blender's importer takes them:
+    every non-blank line to the end of the file is a frame."""
+    lines = [line.split() for line in text.splitlines() if line.split()]
+    start = next(i for i, line in enumerate(lines) if line[:2] == ["Frame", "Time:"])
+    return lines[start + 1:]
+
+
+def test_a_declared_file_has_nothing_after_its_frames(tiny_motion: Motion,
+                                                      tmp_path: Path) -> None:
+    """The declaration of a retargeted or canonical file is on the
+    ``HIERARCHY`` line: after the frames, Blender's importer read it as a
+    frame and failed (``could not convert string to float: '#'``)."""
+    out = tmp_path / "out.bvh"
+    write_bvh(tiny_motion.with_(rig=RigSettings("-Z", 0.01, declared=True)), out)
+    text = out.read_text()
+    assert text.splitlines()[0] == "HIERARCHY # satagraph: up_axis=-Z scale=0.01"
+    frames = _frame_lines(text)
+    assert len(frames) == tiny_motion.num_frames
+    width = tiny_motion.skeleton.num_channels
+    assert all(len(line) == width and np.isfinite(np.array(line, dtype=float)).all()
+               for line in frames)
+    again = read_bvh(out)
+    assert again.rig == RigSettings("-Z", 0.01, declared=True) and written_by_satagraph(str(out))
+    np.testing.assert_allclose(again.global_positions(), tiny_motion.global_positions(),
+                               atol=1e-5)
+
+
+def test_a_file_of_an_earlier_version_keeps_its_trailing_declaration(
+        tiny_motion: Motion, tmp_path: Path) -> None:
+    """Files written before the declaration moved to the ``HIERARCHY``
+    line still declare how they are read; a file without one declares
+    nothing."""
+    out = tmp_path / "old.bvh"
+    write_bvh(tiny_motion, out)
+    assert read_bvh(out).rig is None and not written_by_satagraph(str(out))
+    out.write_text(out.read_text() + "# satagraph: canonical up_axis=+Y scale=1\n")
+    assert read_bvh(out).rig == RigSettings("+Y", 1.0, declared=True)
+    assert written_by_satagraph(str(out))
