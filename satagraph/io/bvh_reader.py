@@ -132,9 +132,9 @@ class _HeaderParser:
             self._open_joint(lineno, line[len(keyword):].strip(), upper)
         elif upper == "END":
             rest = line[len(keyword):].strip()
-            if not rest.lower().startswith("site"):
+            if not rest.lower().startswith("site") or rest[4:5].strip().strip("{"):
                 raise self.error(lineno, f"expected 'End Site', found {line!r}")
-            self._open_joint(lineno, None, "END", tail=rest[4:].strip())
+            self._open_joint(lineno, None, "END", tail=_end_site_tail(rest[4:]))
         elif upper == "OFFSET":
             self._offset(lineno, line.split()[1:])
         elif upper == "CHANNELS":
@@ -216,6 +216,14 @@ class _HeaderParser:
         if joint.end_site:
             raise self.error(lineno, "an End Site cannot have CHANNELS")
         joint.channels = _parse_channels(self.path, lineno, tokens)
+
+
+def _end_site_tail(tail: str) -> str:
+    """What follows ``End Site`` on its line without the name some
+    exporters give it there (``End Site Head_end``), which Blender's
+    importer ignores too: the End Site keeps its made-up name."""
+    tail = tail.strip()
+    return "{" if tail.endswith("{") else ""
 
 
 def _unique(name: str, names: set) -> str:

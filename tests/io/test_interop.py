@@ -6,8 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
-from satagraph.io import read_bvh, write_bvh
+from satagraph.io import BVHError, read_bvh, write_bvh
 from satagraph.io.bvh_reader import written_by_satagraph
 from satagraph.motion import Motion, RigSettings
 
@@ -51,3 +52,37 @@ def test_a_file_of_an_earlier_version_keeps_its_trailing_declaration(
     out.write_text(out.read_text() + "# satagraph: canonical up_axis=+Y scale=1\n")
     assert read_bvh(out).rig == RigSettings("+Y", 1.0, declared=True)
     assert written_by_satagraph(str(out))
+
+
+#: Another exporter's file: tabs and CRLF, ``Xrotation Yrotation Zrotation``
+#: on every joint, 6 channels on a joint below the root, a leaf without an
+#: End Site, a named End Site, a short frame time, blank lines at the end.
+DIALECT = ["HIERARCHY", "ROOT Hips", "{", "\tOFFSET 0 0 0",
+           "\tCHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation",
+           "\tJOINT Spine", "\t{", "\t\tOFFSET 0 10 0",
+           "\t\tCHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation",
+           "\t\tJOINT Head", "\t\t{", "\t\t\tOFFSET 0 5 0",
+           "\t\t\tCHANNELS 3 Xrotation Yrotation Zrotation",
+           "\t\t\tEnd Site Head_end", "\t\t\t{", "\t\t\t\tOFFSET 0 3 0", "\t\t\t}", "\t\t}",
+           "\t}", "\tJOINT Leg", "\t{", "\t\tOFFSET 2 -8 0",
+           "\t\tCHANNELS 3 Xrotation Yrotation Zrotation", "\t}", "}", "MOTION",
+           "Frames: 2", "Frame Time: 0.0333333",
+           "1 2 3 0 0 0\t0 10 0 0 0 0\t0 0 0\t0 0 0",
+           "0 0 0 0 0 90\t0 12 0 0 0 0\t90 0 0\t0 0 0", "", "", ""]
+
+
+def test_another_exporters_dialect_reads_as_blender_reads_it(tmp_path: Path) -> None:
+    """The file above reads with the positions Blender's importer gives
+    (a named End Site was refused: ``unexpected 'Head_end'``); a keyword
+    that only begins with ``Site`` is still an error."""
+    path = tmp_path / "dialect.bvh"
+    path.write_bytes("\r\n".join(DIALECT).encode())
+    motion = read_bvh(path)
+    assert motion.skeleton.names == ["Hips", "Spine", "Head", "Head_end", "Leg"]
+    assert (motion.num_frames, motion.fps) == (2, 30.0)
+    want = [[[1, 2, 3], [1, 12, 3], [1, 17, 3], [1, 20, 3], [3, -6, 3]],
+            [[0, 0, 0], [-12, 0, 0], [-17, 0, 0], [-17, 0, 3], [8, 2, 0]]]
+    np.testing.assert_allclose(motion.global_positions(), want, atol=1e-9)
+    path.write_text("\n".join(DIALECT).replace("End Site Head_end", "End Sites"))
+    with pytest.raises(BVHError, match=r"dialect\.bvh:14: expected 'End Site'"):
+        read_bvh(path)
