@@ -670,3 +670,23 @@ def test_resume_benchmark_draws_the_same_kill_points_unless_told(tmp_path, monke
     points = resume.kill_points(36, 5, 3, seeds[0])
     assert points == resume.kill_points(36, 5, 3, seeds[1]) == sorted(set(points))
     assert all(5 < k < 35 for k in points)
+
+
+def test_interop_needs_blender_and_says_so(monkeypatch, capsys) -> None:
+    """Without Blender, benchmarks/interop.py says in one line what it
+    needs and exits 0; its comparison of two readings gives the largest
+    joint distance as a fraction of the character's size, by joint name."""
+    import interop
+    monkeypatch.setattr(interop.shutil, "which", lambda name: None)
+    assert interop.main([]) == 0
+    out = capsys.readouterr().out
+    assert out.count("\n") == 1 and "needs Blender" in out
+    pos = np.zeros((2, 2, 3))
+    pos[:, 1, 1] = 2.0  # a joint 2 above the root: size 2
+    ref = {"names": ["Hips", "Left_Head"], "frames": 2, "fps": 24.0, "positions": pos}
+    other = dict(ref, names=["Left_Head", "Hips"], positions=pos[:, ::-1].copy(),
+                 fps=1 / 0.041667)
+    other["positions"][1, 0, 0] = 0.002  # Left_Head off by 1e-3 of the size
+    assert interop.compare(ref, other) == {"same_header": True, "error": pytest.approx(1e-3)}
+    assert interop.compare(ref, dict(other, frames=3))["same_header"] is False
+    assert interop.blender_name("Left Head") == "Left_Head"
