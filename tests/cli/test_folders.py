@@ -158,8 +158,11 @@ def test_skip_existing_leaves_what_another_run_makes_to_it(tmp_path: Path, capsy
         (src / f"{name}.bvh").write_text("x")
     made = []
 
-    def result(path: Path) -> None:  # a whole result: its closing declaration line
-        atomic_write_text(path, "HIERARCHY\n# satagraph: up_axis=+Y\n")
+    def result(path: Path) -> None:  # a whole result: declared, and it reads
+        atomic_write_text(path, "HIERARCHY # satagraph: up_axis=+Y\nROOT Hips\n{\n"
+                          "OFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n"
+                          "End Site\n{\nOFFSET 0 1 0\n}\n}\nMOTION\nFrames: 1\n"
+                          "Frame Time: 0.0333333\n0 0 0\n")
 
     def one(source: str, output: str) -> str:
         made.append(Path(source).name)
