@@ -609,7 +609,7 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         if init_from:
             init_weights(module, init_from, init_normalizer, payload)
         _record_config(cfg, run_dir)  # once nothing refuses the run
-        _record_data_files(dm, run_dir)
+        _record_data_files(dm, run_dir, resumed=last is not None)
         trainer = build_trainer(cfg, run_dir, resume=last is not None, **trainer_overrides)
         # Spawned workers get the data module pickled: hand them one that is not
         # set up (its datasets hold the semantic embedder, a closure); each worker
@@ -794,8 +794,9 @@ def _data_files(dm) -> Optional[set]:
             for f in ds.files}
 
 
-def _record_data_files(dm, run_dir: Path) -> None:
-    """Write the files a run starts on to ``<run>/data_files.txt``; a
+def _record_data_files(dm, run_dir: Path, resumed: bool) -> None:
+    """Write the files a run starts on to ``<run>/data_files.txt`` (also
+    over the record of a run stopped before its first checkpoint); a
     resumed run keeps it and says in one line how many were added to and
     removed from its data since (it went on silently): it trains on the
     files there now, each in its split (a folder's by file name, a
@@ -805,7 +806,7 @@ def _record_data_files(dm, run_dir: Path) -> None:
     now, path = _data_files(dm), run_dir / DATA_FILES
     if now is None:
         return
-    if not path.is_file():  # the first start (or a run of before the record)
+    if not resumed or not path.is_file():  # the first start (or a run of before the record)
         atomic_write_text(path, "".join(f"{s}\t{f}\n" for s, f in sorted(now)),
                           create_parent=True)
         return

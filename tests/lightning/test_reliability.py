@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Any, Dict, List
 
@@ -873,3 +874,26 @@ def test_resume_says_how_the_data_folder_changed_and_keeps_its_normaliser(
         kept = getattr(module.normalizer, name)
         assert torch.equal(kept, started[f"normalizer.{name}"])
         assert not torch.equal(kept, getattr(dm.normalizer, name))
+
+
+def test_a_new_start_after_a_run_that_saved_nothing_records_its_own_files(
+        tiny_config: Dict[str, Any]) -> None:
+    """A run stopped before its first checkpoint (Ctrl-C as its first step
+    starts) left ``data_files.txt``; a new run in that folder (no
+    ``--resume``: nothing to resume) on other files said ``--resume: ...``
+    and kept the stopped run's list, which a later ``--resume``
+    compared with: a new start writes its own."""
+    cfg = _interruptible(tiny_config)
+    cfg["trainer"]["max_epochs"] = 1
+    with pytest.raises(KeyboardInterrupt):
+        train(cfg, callbacks=[_InterruptAt(0, "start")])
+    record = Path(cfg["output_dir"]) / train_mod.DATA_FILES
+    first = record.read_text()
+    cfg["data"]["max_files"] = 1
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        _, dm, _, _ = train(cfg)
+    assert not [w for w in said if str(w.message).startswith("--resume:")]
+    now = record.read_text()
+    assert now != first
+    assert now == "".join(f"{s}\t{f}\n" for s, f in sorted(train_mod._data_files(dm)))
