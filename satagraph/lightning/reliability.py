@@ -334,10 +334,11 @@ class ResumeCheckpoint(Checkpoint):
         if self.every_seconds is not None:
             late = time.monotonic() - self._last_time >= self.every_seconds
             due = due or bool(trainer.strategy.broadcast(late, src=0))
+        self._step_rng = rng_states()  # also of a step saved here: see on_exception
         if due:
             self.save(trainer)
         else:
-            self._unsaved, self._step_rng = True, rng_states()
+            self._unsaved = True
         self._stepping = False
 
     def on_before_optimizer_step(self, trainer: L.Trainer, pl_module: L.LightningModule,
@@ -353,7 +354,9 @@ class ResumeCheckpoint(Checkpoint):
         counts), so that ``--resume`` goes on from it; in the validation
         of a training run, the resumed run validates again, whole
         (:func:`_before_validation`). Nothing is
-        written where that checkpoint is already ``last.ckpt``, or where the
+        written where that checkpoint is already ``last.ckpt`` (but in the
+        validation after a step saved at its batch's end: that save resumes
+        past the validation), or where the
         stop fell in the sanity check or between an optimizer step and the
         end of its batch (the weights may be half updated), or in a distributed
         run (its other processes would not join the save); nor for other
@@ -361,7 +364,8 @@ class ResumeCheckpoint(Checkpoint):
         that fails is a warning: the interrupt goes on, and ``last.ckpt``
         stays the one before (writes are atomic)."""
         if (not isinstance(exception, (KeyboardInterrupt, SIGTERMException))
-                or not self._unsaved or self._stepping or trainer.world_size > 1
+                or not (self._unsaved or self._saved_step_validating(trainer))
+                or self._stepping or trainer.world_size > 1
                 or not (trainer.training or _validating_in_fit(trainer))):
             return
         self._interrupting = True
@@ -375,6 +379,13 @@ class ResumeCheckpoint(Checkpoint):
         finally:
             self._interrupting = False
         self.interrupted_step = trainer.global_step
+
+    def _saved_step_validating(self, trainer: L.Trainer) -> bool:
+        """Whether the validation of a training run follows a step that this
+        run saved at its batch's end (``every_n_steps`` or ``every_minutes``
+        due at the step before an epoch's validation): Lightning resumes
+        that save after the validation, which it skips."""
+        return _validating_in_fit(trainer) and self._saved_step == trainer.global_step
 
     def on_save_checkpoint(self, trainer: L.Trainer, pl_module: L.LightningModule,
                            checkpoint: Dict[str, Any]) -> None:

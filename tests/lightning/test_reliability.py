@@ -771,6 +771,36 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
         assert scores[1] == scores[0]
 
 
+@pytest.mark.slow
+def test_ctrl_c_in_validation_after_a_step_save_resumes_with_that_validation(
+        tiny_config: Dict[str, Any], tmp_path: Path) -> None:
+    """``checkpoint.every_n_steps`` due at an epoch's last step: Ctrl-C in
+    the validation after it wrote nothing (that step was saved), and
+    ``--resume`` from that batch-end save skipped the epoch's validation
+    (no ``epoch=1`` checkpoint, no val_loss); it now writes ``last.ckpt``
+    again, to validate again, as where that step was not saved."""
+    def run(name: str) -> Dict[str, Any]:
+        cfg = _interruptible(dict(tiny_config, output_dir=str(tmp_path / name)))
+        cfg["checkpoint"].update(keep_every_epoch=True, every_n_steps=2)
+        return cfg
+
+    def scores(folder: Path) -> Dict[str, float]:
+        return {p.name: float(next(v["current_score"] for k, v in load_checkpoint(p)[
+            "callbacks"].items() if k.startswith("ModelCheckpoint")))
+            for p in (folder / "checkpoints").glob("epoch=*.ckpt")}
+
+    train(run("a"))
+    cfg = run("b")
+    with pytest.raises(KeyboardInterrupt) as stop:
+        train(cfg, callbacks=[_InterruptAt(4, "validation")])
+    assert stop.value.args == (4,)
+    train(cfg, resume=True)
+    assert read_loss_log(tmp_path / "b" / "losses.tsv") == \
+        read_loss_log(tmp_path / "a" / "losses.tsv")
+    assert len(scores(tmp_path / "a")) == 3
+    assert scores(tmp_path / "b") == scores(tmp_path / "a")
+
+
 class _TerminateAt(L.Callback):
     """A real SIGTERM to this process as the batch after step :obj:`step`
     starts (what a cluster sends before it kills a job)."""
