@@ -9,6 +9,7 @@ import torch
 
 from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
+from satagraph.skeleton import Skeleton
 from satagraph.ops.rotation import unit_quaternion_to_euler
 from satagraph.ops.rotation_numpy import matrix_to_quaternion_numpy
 
@@ -58,6 +59,18 @@ def _hierarchy(motion: Motion) -> List[str]:
         stack.append((j, depth, True))
         stack.extend((c, depth + 1, False) for c in reversed(children[j]))
     return lines
+
+
+def _file_order(skeleton: Skeleton) -> List[int]:
+    """The joints in the order :func:`_hierarchy` writes them (depth-first,
+    children in joint order): a skeleton's topological order need not be
+    it (a joint inserted after its siblings' subtrees)."""
+    children, order, stack = skeleton.children, [], [0]
+    while stack:
+        j = stack.pop()
+        order.append(j)
+        stack.extend(reversed(children[j]))
+    return order
 
 
 def _check_finite(motion: Motion, values: np.ndarray, path: str) -> None:
@@ -215,6 +228,11 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     values = channel_values(motion)
     exact = values is motion.raw_channels
     _check_finite(motion, values, path)
+    skel = motion.skeleton
+    order = _file_order(skel) if skel.num_joints else []
+    if order != sorted(order):  # the columns in the order the joints are written
+        spans = np.split(np.arange(values.shape[1]), np.cumsum([len(c) for c in skel.channels]))
+        values = values[:, np.concatenate([spans[j] for j in order])]
     header = _hierarchy(motion)
     header[0] = f"{header[0]} {declaration(motion)}".rstrip()
     header += ["MOTION", f"Frames: {motion.num_frames}",

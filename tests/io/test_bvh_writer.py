@@ -128,6 +128,26 @@ def test_position_channels_in_any_order(tmp_path, random_motion):
     np.testing.assert_allclose(again.rotations, motion.rotations, atol=1e-6)
 
 
+def test_a_joint_listed_after_its_siblings_subtree_keeps_its_motion(tmp_path, random_motion):
+    """A skeleton in topological but not depth-first order (a Daz ``pelvis``
+    inserted under ``hip`` after ``abdomen``'s subtree): each joint's
+    channels are written in its own block's place, not in joint order (the
+    file's motion was scrambled: joints 134 cm off on a renamed Bandai clip)."""
+    chans = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
+    skel = Skeleton(names=["hip", "abdomen", "pelvis", "chest", "thigh"],
+                    parents=np.array([-1, 0, 0, 1, 2]),
+                    offsets=np.array([[0, 90, 0], [0, 10, 0], [0, 0, 0], [0, 20, 0],
+                                      [10, -5, 0]], dtype=float),
+                    channels=[chans, chans[3:], chans, chans[3:], chans[3:]],
+                    end_site=np.zeros(5, dtype=bool))
+    motion = random_motion(skel, num_frames=6, seed=4)
+    write_bvh(motion, tmp_path / "daz.bvh")
+    again = read_bvh(tmp_path / "daz.bvh")
+    assert again.skeleton.names == ["hip", "abdomen", "chest", "pelvis", "thigh"]
+    np.testing.assert_allclose(again.global_positions()[:, [0, 1, 3, 2, 4]],
+                               motion.global_positions(), atol=1e-6)
+
+
 def test_odd_names_roundtrip(tiny_skeleton, random_motion, tmp_path,
                              assert_same_hierarchy):
     names = list(tiny_skeleton.names)
