@@ -160,7 +160,8 @@ def import_user_plugins() -> None:
     names (once per process).
 
     Raises:
-        ValueError: One line naming a plugin that does not import.
+        ValueError: One line naming a plugin that does not import (not
+            found, or its own code fails: a syntax error, an exception).
     """
     for spec in (s.strip() for s in os.environ.get(PLUGIN_VARIABLE, "").split(",")):
         if not spec or spec in _IMPORTED_PLUGINS:
@@ -179,6 +180,9 @@ def import_user_plugins() -> None:
                 importlib.import_module(spec)
         except ImportError as err:
             raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} ({err})") from None
+        except Exception as err:  # its own code failed: a typo, a raise (--traceback: where)
+            raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} "
+                             f"({type(err).__name__}: {err})") from err
 
 
 def _inherited_keys(cls: type) -> tuple:

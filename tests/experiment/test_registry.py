@@ -2,6 +2,7 @@
 their own sections, a data module and data schema per module."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any, List
 
@@ -206,6 +207,29 @@ def test_the_command_line_finds_modules_named_in_the_plugin_variable(
     monkeypatch.setenv("SATAGRAPH_PLUGINS", "no_such_module_here")
     with pytest.raises(ValueError, match="SATAGRAPH_PLUGINS: cannot import 'no_such_module_here'"):
         module_entry("another_unknown")
+
+
+def test_a_plugin_whose_own_code_fails_is_one_line_naming_it(tmp_path, monkeypatch, capsys):
+    """A plugin file with a syntax error or a raise at import was a Python
+    traceback (18 lines from ``satagraph generate``, exit code 1); it is the
+    one line of a plugin that does not import, with what failed."""
+    from satagraph.cli import main
+    from satagraph.experiment import registry
+    broken, raising = tmp_path / "broken.py", tmp_path / "raising.py"
+    broken.write_text("def broken(:\n")
+    raising.write_text("raise RuntimeError('needs a GPU')\n")
+    for plugin, why in ((broken, r"SyntaxError: invalid syntax"),
+                        (raising, r"RuntimeError: needs a GPU")):
+        monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+        monkeypatch.setenv("SATAGRAPH_PLUGINS", str(plugin))
+        with pytest.raises(ValueError, match=rf"^SATAGRAPH_PLUGINS: cannot import "
+                           rf"'{re.escape(str(plugin))}' \({why}"):
+            registry.import_user_plugins()
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    assert main(["inspect", str(tmp_path)]) == 2  # the plugins come first
+    err = capsys.readouterr().err
+    assert err == f"satagraph: error: SATAGRAPH_PLUGINS: cannot import '{raising}' " \
+                  "(RuntimeError: needs a GPU)\n"
 
 
 def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
