@@ -98,6 +98,16 @@ def claimed_output(path: PathLike, make: Callable[[], str]) -> Optional[str]:
         return None if complete_output(path) else make()
 
 
+def sweep_stale_claims(folder: PathLike) -> None:
+    """Remove the claims (:func:`claimed_output`) in :obj:`folder` that no
+    live run holds: a killed run's, which no later run removes where it
+    leaves that output out or makes it without ``--skip-existing``."""
+    for claim in Path(folder).glob(".*.claim"):
+        with contextlib.suppress(TimeoutError, OSError):  # a live run's: kept
+            with file_lock(claim, timeout=0):
+                pass  # taken: removed on release
+
+
 def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str], str],
                     verb: str, traceback: bool = False, skip_existing: bool = False) -> int:
     """Run :obj:`one` (input path, output path -> a one-line summary) on
@@ -125,7 +135,9 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
     todo = files
     if skip_existing:
         todo = [p for p in files if not complete_output(output / p.relative_to(source))]
-        for folder in {(output / p.relative_to(source)).parent for p in files}:
+    for folder in {(output / p.relative_to(source)).parent for p in files}:
+        sweep_stale_claims(folder)  # what a killed --skip-existing run left
+        if skip_existing:
             sweep_stale_temps(folder)  # what the stopped run's killed writes left
 
     def write(path: Path) -> bool:
@@ -182,4 +194,4 @@ def _failed(failed: List[Path], shown: int = 10) -> str:
 
 
 __all__ = ["input_files", "failure_line", "each_kept", "complete_output",
-           "claimed_output", "run_over_folder"]
+           "claimed_output", "sweep_stale_claims", "run_over_folder"]

@@ -182,6 +182,31 @@ def test_skip_existing_leaves_what_another_run_makes_to_it(tmp_path: Path, capsy
     assert sorted(p.name for p in out.iterdir()) == ["a.bvh", "c.bvh"]  # no claim left
 
 
+def test_a_killed_run_s_claims_are_swept_by_any_later_run(tmp_path: Path, capsys) -> None:
+    """A ``--skip-existing`` run killed (``kill -9``) while it made a file left
+    ``.NAME.claim`` beside it, which a later run without the flag (or one
+    that found that output whole) never removed; a live run's claim stays."""
+    from satagraph.cli.folders import run_over_folder
+    from satagraph.utils.files import file_lock
+    src, out = tmp_path / "in", tmp_path / "out"
+    (src / "deep").mkdir(parents=True)
+    (out / "deep").mkdir(parents=True)
+    for rel in ("a.bvh", "deep/b.bvh"):
+        (src / rel).write_text("x")
+    (out / ".a.bvh.claim").write_text("")  # a killed run's: no lock held
+    (out / "deep" / ".b.bvh.claim").write_text("")
+
+    def one(source: str, output: str) -> str:
+        Path(output).write_text("made")
+        return f"wrote {output}"
+
+    with file_lock(out / ".live.bvh.claim", timeout=0):  # another run, live
+        assert run_over_folder(src, out, one, "made") == 0
+        assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == [
+            ".live.bvh.claim", "a.bvh", "deep", "deep/b.bvh"]
+    assert "made 2 of 2 files" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("case", ["file", "bvh-name", "empty"])
 def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: Path,
                                                         capsys, case: str) -> None:
