@@ -810,10 +810,28 @@ def _record_data_files(dm, run_dir: Path, resumed: bool) -> None:
         atomic_write_text(path, "".join(f"{s}\t{f}\n" for s, f in sorted(now)),
                           create_parent=True)
         return
-    before = {tuple(line.split("\t", 1)) for line in path.read_text().splitlines() if line}
+    before = _read_data_files(path)
     added, removed = now - before, before - now
     if added or removed:
         warnings.warn(_changed_data_note(added, removed, path), stacklevel=3)
+
+
+def _read_data_files(path: Path) -> set:
+    """The ``(split, path)`` pairs of a run's :data:`DATA_FILES`.
+
+    Raises:
+        ValueError: A line that is not ``split<TAB>path`` (one line naming
+            the file and the line).
+    """
+    pairs = set()
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line:
+            continue
+        if "\t" not in line:
+            raise ValueError(f"{path}:{number}: not 'split<TAB>path' as the run wrote it; "
+                             "delete the file to record the files there now")
+        pairs.add(tuple(line.split("\t", 1)))
+    return pairs
 
 
 def _changed_data_note(added: set, removed: set, record: Path) -> str:

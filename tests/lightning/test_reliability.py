@@ -865,6 +865,24 @@ def test_a_ctrl_c_save_that_fails_leaves_nothing_to_resume_from(
         resume_checkpoint(folder)
 
 
+def test_a_damaged_data_files_record_is_one_line_naming_it(tmp_path: Path) -> None:
+    """A ``data_files.txt`` line without its tab (edited by hand) stopped
+    ``--resume`` with ``not enough values to unpack (expected 2, got 1)``;
+    it is one line naming the file and line, and saying what to do."""
+    from types import SimpleNamespace
+    from satagraph.experiment.train import _record_data_files
+    files = [SimpleNamespace(path=str(tmp_path / n)) for n in ("a.bvh", "b.bvh")]
+    dm = SimpleNamespace(datasets={"train": SimpleNamespace(files=files[:1]),
+                                   "val": SimpleNamespace(files=files[1:])})
+    _record_data_files(dm, tmp_path)
+    record = tmp_path / "data_files.txt"
+    assert record.read_text() == f"train\t{files[0].path}\nval\t{files[1].path}\n"
+    _record_data_files(dm, tmp_path)  # a resume with the same files: nothing said
+    record.write_text(f"train\t{files[0].path}\nval {files[1].path}\n")
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(record))}:2: not 'split<TAB>path'"):
+        _record_data_files(dm, tmp_path)
+
+
 @pytest.mark.slow
 def test_resume_says_how_the_data_folder_changed_and_keeps_its_normaliser(
         tmp_path: Path) -> None:
