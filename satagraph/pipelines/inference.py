@@ -340,7 +340,7 @@ class Retargeter:
     a rest pose with its static features: :class:`RigMemo`) is computed
     for the first source only. ``satagraph retarget SRC_DIR`` runs through
     one (``benchmarks/retarget_many.py``: ten Bandai clips onto the dog's
-    1531-frame clip in 0.81 of the CPU time of one :func:`retarget_motion`
+    1531-frame clip in 0.60 of the CPU time of one :func:`retarget_motion`
     per clip).
 
     Args:
