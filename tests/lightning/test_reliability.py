@@ -874,13 +874,13 @@ def test_a_damaged_data_files_record_is_one_line_naming_it(tmp_path: Path) -> No
     files = [SimpleNamespace(path=str(tmp_path / n)) for n in ("a.bvh", "b.bvh")]
     dm = SimpleNamespace(datasets={"train": SimpleNamespace(files=files[:1]),
                                    "val": SimpleNamespace(files=files[1:])})
-    _record_data_files(dm, tmp_path)
+    _record_data_files(dm, tmp_path, resumed=False)
     record = tmp_path / "data_files.txt"
     assert record.read_text() == f"train\t{files[0].path}\nval\t{files[1].path}\n"
-    _record_data_files(dm, tmp_path)  # a resume with the same files: nothing said
+    _record_data_files(dm, tmp_path, resumed=True)  # the same files: nothing said
     record.write_text(f"train\t{files[0].path}\nval {files[1].path}\n")
     with pytest.raises(ValueError, match=rf"^{re.escape(str(record))}:2: not 'split<TAB>path'"):
-        _record_data_files(dm, tmp_path)
+        _record_data_files(dm, tmp_path, resumed=True)
 
 
 @pytest.mark.slow
