@@ -21,7 +21,7 @@ The pipeline of SATA (paper section 3.2, appendix C.3), offline:
 Example::
 
     from satagraph.io import read_bvh
-    from satagraph.semantics import describe_joints, embed_skeleton
+    from satagraph.semantics import describe_joints, embed_skeleton, evidence_from_motion
 
     motion = read_bvh("walk.bvh")
     describe_joints(motion.skeleton)   # ["pelvis, hips root ...", ...]
