@@ -20,7 +20,7 @@ Example::
 
     captions_for("../shared/data/bandai/dataset-1_walk_not-confident_001.bvh",
                  count=3, seed=0)
-    # [Caption(text='a person walks forward timidly', ...), ...]
+    # [Caption(text='someone walks forward without confidence', ...), ...]
     clips = captioned_clips("../shared/data/manifest.tsv", split="train")
 """
 from __future__ import annotations
