@@ -20,7 +20,7 @@ Example::
 
     motion = generate_clip(rig, "walk")
     zup_cm = export_dialect(motion, up_axis="+Z", scale=0.01)  # cm, Z up
-    odd = apply_dialect(motion, Dialect("-X", "in", "crouched", "tag"), seed=3)
+    odd, scale = apply_dialect(motion, Dialect("-X", "in", "crouched", "tag"), seed=3)
 """
 from __future__ import annotations
 
