@@ -32,7 +32,7 @@ manifest (``up_axis``, ``scale``, ``height_m``, ...).
 
 Example::
 
-    from satagraph.datasets.zoo import write_zoo
+    from satagraph.datasets.zoo import Dialect, write_zoo
     rows = write_zoo("zoo", species=["quadruped", "snake"], clips=3, seed=1)
     rows = write_zoo("zoo_zup", species=["crab"], dialects=[Dialect("+Z", "cm")])
 """
