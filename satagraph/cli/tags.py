@@ -5,7 +5,7 @@ Examples::
     satagraph tags walk.bvh                        # table of descriptions
     satagraph tags walk.bvh --names-only           # names and hierarchy only
     satagraph tags walk.bvh --json                 # the same as JSON
-    satagraph tags walk.bvh --anchor Bone.003=tail base --dictionary d.json
+    satagraph tags walk.bvh --anchor "Bone.003=tail base" --dictionary d.json
     satagraph tags walk.bvh --prompt --out prompt.txt
     satagraph tags walk.bvh --prompt --reference-vocab vocab.json
     satagraph tags walk.bvh --import answer.json --out dict.json
