@@ -357,7 +357,7 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--minutes", type=positive_float, default=None,
                         help="training time in minutes (default: the "
                         "config's, 4)")
-    parser.add_argument("--data", nargs="+", default=None, metavar="PATH",
+    parser.add_argument("--data", nargs="+", action="extend", default=None, metavar="PATH",
                         help="train on these BVH folders / manifests instead "
                         "of the zoo (a folder without a manifest.tsv is split "
                         "80/10/10 by file name; NAME=PATH names its dataset)")

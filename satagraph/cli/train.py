@@ -122,7 +122,9 @@ def add_train_parsers(sub) -> None:
                    "checkpoints/last.ckpt), builtin or builtin-wide")
     p.add_argument("--split", default="test", choices=["train", "val", "test"],
                    help="which split of the data to score (default: test)")
-    p.add_argument("--data", nargs="*", help="sources (default: the training sources)")
+    p.add_argument("--data", nargs="*", action="extend",
+                   help="sources (default: the training sources; repeat it, as train's "
+                   "--data, or list several)")
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON")
     p.add_argument("--max-batches", type=int, default=None,
                    help="evaluate at most this many batches (default: the whole split)")
