@@ -206,6 +206,7 @@ def add_train_parsers(sub) -> None:
                    help="a captioned BVH folder or manifest to draw from, in place of the "
                    "config's data.sources (repeat it for several; NAME=PATH names its "
                    "dataset); train on the bank with the same --data")
+    _data_rig(p)
     p.set_defaults(func=run_code_bank)
 
 
@@ -351,7 +352,7 @@ def run_code_bank(args) -> int:
     from satagraph.utils.files import check_output_path
     check_swap_share(args.swap_rigs)
     check_device(args.device)
-    cfg = load_config(args.config, list(args.overrides))
+    cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
     if args.data:
         cfg["data"]["sources"] = list(args.data)
     cfg = check_config(cfg)

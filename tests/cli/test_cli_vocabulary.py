@@ -31,3 +31,33 @@ def test_listed_data_still_reads(parser, command):
     """The list form those two commands had (``--data A B``) is kept."""
     assert parse_args(parser, [*command, "--data", "a", "b"]).data == ["a", "b"]
     assert parse_args(parser, command).data is None
+
+
+class _Stop(Exception):
+    """Raised by a stand-in once the command's config is known."""
+
+
+@pytest.mark.parametrize("command", [
+    ["train", "t2m_tiny"],
+    ["code-bank", "t2m_tiny", "bank.safetensors", "--windows", "4"],
+])
+def test_data_rig_options_reach_the_config(monkeypatch, command):
+    """``--up-axis`` / ``--units`` of the data read the same on every
+    command whose ``--data`` reads BVH folders: code-bank, told to draw
+    from ``train --data``'s folders, had no way to say their units
+    (``unrecognized arguments: --units cm``)."""
+    import satagraph.experiment.config as config
+    from satagraph.cli import main
+
+    seen = {}
+    load = config.load_config
+
+    def capture(name, overrides=()):
+        seen.update(load(name, overrides)["data"]["preprocessing"])
+        raise _Stop
+
+    monkeypatch.setattr(config, "load_config", capture)
+    with pytest.raises(_Stop):
+        main([*command, "--data", "mocap", "--up-axis", "z", "--units", "cm"])
+    assert seen["up_axis"] == "+Z"
+    assert seen["scale"] == pytest.approx(0.01)
