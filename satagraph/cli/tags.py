@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 from typing import List, Optional, Sequence
 
-from satagraph.utils.files import atomic_write_text
+from satagraph.utils.files import OutputPathError, atomic_write_text, check_output_path
 from satagraph.skeleton import Skeleton
 
 
@@ -135,6 +135,8 @@ def _run(args: argparse.Namespace) -> int:
         raise SemanticsError("--reference-vocab needs --prompt")
     if args.import_answer and args.out is None:
         raise SemanticsError("--import needs --out DICT.json")
+    if args.out is not None:  # before any work, said as every command says it
+        check_output_path(args.out, create_parent=True)
     from satagraph.cli.arguments import read_with_rig
     motion = read_with_rig(str(args.file), args)
     skeleton = motion.skeleton
@@ -168,10 +170,11 @@ def run_tags(args: argparse.Namespace) -> int:
     """
     from satagraph.semantics import SemanticsError  # torch: only here
     from satagraph.io import BVHError
+    from satagraph.cli import _message
     try:
         return _run(args)
-    except (SemanticsError, BVHError, OSError) as err:
-        message = str(err).splitlines()[0] if str(err) else repr(err)
+    except (SemanticsError, BVHError, OSError, OutputPathError) as err:
+        message = _message(err).splitlines()[0] if str(err) else repr(err)
         print(f"satagraph: error: {message}", file=sys.stderr)
         return 2
 

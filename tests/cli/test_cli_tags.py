@@ -161,3 +161,19 @@ def test_errors_are_one_line_exit_2(bvh, tmp_path, capsys, extra, needle):
 def test_missing_bvh_exit_2(tmp_path, capsys):
     code, _, err = run(capsys, tmp_path / "none.bvh")
     assert code == 2 and "none.bvh" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("where", ["folder", "under a file"])
+def test_unwritable_out_said_as_convert_says_it(bvh, tmp_path, capsys, where):
+    """``--out`` that cannot be written is one line in the words every
+    command uses for its output (it was ``[Errno 21] Is a directory: '...'``,
+    after the descriptions were computed), as ``convert`` says it."""
+    from satagraph.cli import main as satagraph
+    target = tmp_path / "out" if where == "folder" else tmp_path / "file" / "x.txt"
+    (tmp_path / "out").mkdir()
+    (tmp_path / "file").write_text("not a folder")
+    code, _, err = run(capsys, bvh, "--out", target)
+    assert code == 2
+    assert satagraph(["convert", str(bvh), str(target)]) == 2
+    assert err.splitlines() == capsys.readouterr().err.splitlines()
+    assert err.startswith(f"satagraph: error: cannot write {target}: ")
