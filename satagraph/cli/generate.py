@@ -221,7 +221,8 @@ def prompt_stem(index: int, text: str) -> str:
 
 def _settings(args):
     """The :class:`~satagraph.pipelines.generate.GenerationSettings` of the
-    options (a ``--guide`` / ``--residual-guide`` it does not know refused),
+    options (a ``--guide`` / ``--residual-guide`` it does not know refused,
+    a number it refuses said as its option: ``--draw-guidance must be ...``),
     with torch on ``--threads`` threads."""
     import torch
     from satagraph.nn.generators.sampling import check_guide
@@ -229,11 +230,15 @@ def _settings(args):
     for guide in (args.guide, args.residual_guide):
         check_guide(guide)
     torch.set_num_threads(args.threads)
-    return GenerationSettings(steps=args.steps, guidance=args.guidance,
-                              ground=args.ground, plant=args.plant,
-                              residual_window=args.residual_window, window=args.window,
-                              guide=args.guide, draw_guidance=args.draw_guidance,
-                              residual_guide=args.residual_guide)
+    try:
+        return GenerationSettings(steps=args.steps, guidance=args.guidance,
+                                  ground=args.ground, plant=args.plant,
+                                  residual_window=args.residual_window, window=args.window,
+                                  guide=args.guide, draw_guidance=args.draw_guidance,
+                                  residual_guide=args.residual_guide)
+    except ValueError as err:  # "draw_guidance must be ...": the field, named as its option
+        field, said = str(err).split(" ", 1)
+        raise ValueError(f"--{field.replace('_', '-')} {said}") from None
 
 
 def run_generate(args) -> int:

@@ -159,9 +159,9 @@ def test_an_empty_text_generates_for_the_skeleton_alone(t2m_ckpt, zoo_skeletons,
 
 @pytest.mark.parametrize("flag,value,said", [
     ("--threads", "0", "--threads must be at least 1"),
-    ("--steps", "0", "steps must be at least 1"),
-    ("--guidance", "nan", "guidance must be a finite number >= 0, got nan"),
-    ("--draw-guidance", "-1", "draw_guidance must be a finite number >= 0"),
+    ("--steps", "0", "error: --steps must be at least 1"),  # the option, as --threads
+    ("--guidance", "nan", "error: --guidance must be a finite number >= 0, got nan"),
+    ("--draw-guidance", "-1", "error: --draw-guidance must be a finite number >= 0"),
     ("--guide", "greedy", "unknown guide 'greedy'"),
 ])
 def test_bad_numbers_are_one_line(t2m_ckpt, zoo_skeletons, tmp_path, capsys, flag, value, said):
