@@ -56,7 +56,7 @@ def add_tags_parser(subparsers: "argparse._SubParsersAction"
                            "store it as a dictionary (needs --out)")
     p.add_argument("--reference-vocab", type=Path, metavar="V.json",
                    help="with --prompt: reference vocabulary (alignment mode)")
-    p.add_argument("--out", type=Path, metavar="FILE",
+    p.add_argument("--out", "--output", type=Path, metavar="FILE",
                    help="output file (prompt, dictionary, or table/JSON)")
     p.add_argument("--dictionary", type=Path, metavar="D.json",
                    help="JSON raw name -> description overrides")

@@ -177,3 +177,12 @@ def test_unwritable_out_said_as_convert_says_it(bvh, tmp_path, capsys, where):
     assert satagraph(["convert", str(bvh), str(target)]) == 2
     assert err.splitlines() == capsys.readouterr().err.splitlines()
     assert err.startswith(f"satagraph: error: cannot write {target}: ")
+
+
+def test_output_spelled_as_demo_and_sweep_spell_it(bvh, tmp_path, capsys):
+    """``--output`` (demo's and sweep's spelling) writes what ``--out``
+    writes (it was ``unrecognized arguments: --output``)."""
+    short, long = tmp_path / "out.txt", tmp_path / "output.txt"
+    assert run(capsys, bvh, "--out", short)[0] == 0
+    assert run(capsys, bvh, "--output", long)[0] == 0
+    assert long.read_text() == short.read_text() != ""
