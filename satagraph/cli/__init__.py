@@ -30,7 +30,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tupl
 
 from satagraph import __version__
 from satagraph.cli.arguments import (add_rig_arguments, positive_float, positive_int,
-                                     read_with_rig, seed)
+                                     read_with_rig, rig_overrides, seed)
 from satagraph.io import BVHError
 from satagraph.memory import retain_freed_memory
 from satagraph.motion import Motion
@@ -310,7 +310,8 @@ def run_demo(args: argparse.Namespace) -> int:
     options = DemoOptions(
         output=args.output or "demo_output", minutes=args.minutes, data=args.data,
         species=args.species, clips=args.clips, frames=args.frames, seed=args.seed,
-        config=args.config, overrides=list(args.overrides), from_scratch=args.from_scratch)
+        config=args.config, overrides=list(args.overrides) + rig_overrides(args),
+        from_scratch=args.from_scratch)
     try:
         result = run_full_demo(options)
     except RunLockedError as err:  # another demo writes there
@@ -378,6 +379,8 @@ def add_demo_parser(subparsers: Subparsers) -> argparse.ArgumentParser:
                         help="zoo and bone-scaling seed (default: 0)")
     parser.add_argument("--json", action="store_true",
                         help="print the summary as JSON")
+    add_rig_arguments(parser, what="every --data file without its own setting (a "
+                      "manifest's up_axis / scale column), as train reads them")
     parser.set_defaults(func=run_demo)
     return parser
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from typing import Optional, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -97,6 +97,18 @@ def add_rig_arguments(parser: argparse.ArgumentParser, prefix: str = "",
 #: What ``--units`` help adds for a command whose output is the same in any units.
 SCALE_FREE_NOTE = ("; this command's output is the same in any units (the model reads a "
                    "body in its own heights), so units it cannot decide are not warned about")
+
+
+def rig_overrides(args: argparse.Namespace) -> List[str]:
+    """``--up-axis`` / ``--units`` of a command that reads its data through a
+    training config (``train``, ``code-bank``, ``demo``) as
+    ``data.preprocessing`` overrides."""
+    out = []
+    if args.up_axis:
+        out.append(f"data.preprocessing.up_axis={args.up_axis}")
+    if args.units:
+        out.append(f"data.preprocessing.scale={args.units}")
+    return out
 
 
 def check_per_input(args: argparse.Namespace, count: int, prefix: str = "") -> None:
@@ -218,7 +230,7 @@ def one_of(choices, what: str = "value"):
 
 __all__ = ["positive_float", "positive_int", "up_axis", "units", "add_rig_arguments",
            "check_per_input", "read_with_rig", "ListThenFolder", "Folder",
-           "one_of", "seed"]
+           "one_of", "seed", "rig_overrides"]
 
 
 def add_plant_argument(parser: argparse.ArgumentParser, default: bool = False) -> None:

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any, Callable, List, Optional, Sequence
 
 from satagraph.cli.arguments import (add_device_argument, check_device, positive_float,
-                                     positive_int)
+                                     positive_int, rig_overrides)
 from satagraph.cli.folders import run_over_folder
 from satagraph.transforms.rest import REST_MODES
 
@@ -258,16 +258,6 @@ def _data_rig(p) -> None:
          "up_axis / scale column or a data.sources entry's up_axis / units)")
 
 
-def _rig_overrides(args) -> List[str]:
-    """``--up-axis`` / ``--units`` as ``data.preprocessing`` overrides."""
-    out = []
-    if args.up_axis:
-        out.append(f"data.preprocessing.up_axis={args.up_axis}")
-    if args.units:
-        out.append(f"data.preprocessing.scale={args.units}")
-    return out
-
-
 def run_train(args) -> int:
     """Train; exit code 1 (one line on stderr) when a non-finite loss or
     gradient stopped the run, or another run holds the output folder."""
@@ -276,7 +266,7 @@ def run_train(args) -> int:
     from satagraph.experiment.train import last_checkpoint, train
     if args.init_normalizer != "data" and not args.init_from:
         raise ValueError("--init-normalizer goes with --init-from CKPT")
-    cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
+    cfg = load_config(args.config, list(args.overrides) + rig_overrides(args))
     if args.data:
         cfg["data"]["sources"] = list(args.data)
     start = time.time()
@@ -352,7 +342,7 @@ def run_code_bank(args) -> int:
     from satagraph.utils.files import check_output_path
     check_swap_share(args.swap_rigs)
     check_device(args.device)
-    cfg = load_config(args.config, list(args.overrides) + _rig_overrides(args))
+    cfg = load_config(args.config, list(args.overrides) + rig_overrides(args))
     if args.data:
         cfg["data"]["sources"] = list(args.data)
     cfg = check_config(cfg)

@@ -61,3 +61,23 @@ def test_data_rig_options_reach_the_config(monkeypatch, command):
         main([*command, "--data", "mocap", "--up-axis", "z", "--units", "cm"])
     assert seen["up_axis"] == "+Z"
     assert seen["scale"] == pytest.approx(0.01)
+
+
+def test_demo_data_read_in_the_units_given(monkeypatch, tmp_path):
+    """``demo --data FOLDER --units cm --up-axis z`` trains on the folder
+    read as ``train --data FOLDER --units cm --up-axis z`` reads it (demo
+    had neither option: ``unrecognized arguments``)."""
+    import satagraph.experiment.demo as demo
+    from satagraph.cli import main
+
+    seen = []
+    monkeypatch.setattr(demo, "run_demo", lambda options: seen.append(options) or _stop())
+    with pytest.raises(_Stop):
+        main(["demo", "--data", "mocap", "--units", "cm", "--up-axis", "z", "data.batch_size=2"])
+    cfg = demo.demo_config(seen[0], ["mocap"], tmp_path / "run")
+    prep = cfg["data"]["preprocessing"]
+    assert (prep["up_axis"], prep["scale"], cfg["data"]["batch_size"]) == ("+Z", 0.01, 2)
+
+
+def _stop():
+    raise _Stop
