@@ -449,17 +449,41 @@ def _format_warning(message, category, filename, lineno, line=None) -> str:
 #: would take for an option.
 _AXIS_OPTIONS = ("--up-axis", "--target-up-axis")
 _NEGATIVE_AXIS = re.compile(r"^-[XYZxyz](,.*)?$")
+#: List options of axes (``zoo --up-axes +Y -Z``), and what one of their values reads as.
+_AXIS_LIST_OPTIONS = ("--up-axes",)
+_AXIS_VALUE = re.compile(r"^([+-]|neg|pos)?[XYZ](,.*)?$", re.IGNORECASE)
 
 
 def _glued_axes(argv: Sequence[str]) -> List[str]:
-    """``--up-axis -Y`` as ``--up-axis=-Y``: argparse alone reads ``-Y`` as
-    an option and says the value is missing."""
+    """``--up-axis -Y`` as ``--up-axis=-Y``, and ``--up-axes +Y -Z`` as
+    ``--up-axes=+Y,-Z``: argparse alone reads ``-Y`` as an option and says
+    the value is missing."""
     out: List[str] = []
     for arg in argv:
         if out and out[-1] in _AXIS_OPTIONS and _NEGATIVE_AXIS.match(arg):
             out[-1] = f"{out[-1]}={arg}"
         else:
             out.append(arg)
+    return _glued_axis_lists(out)
+
+
+def _glued_axis_lists(argv: List[str]) -> List[str]:
+    """The values after an option of :data:`_AXIS_LIST_OPTIONS` glued to it as
+    one comma list where one of them begins with a minus."""
+    out: List[str] = []
+    i = 0
+    while i < len(argv):
+        out.append(argv[i])
+        j = i + 1
+        if argv[i] in _AXIS_LIST_OPTIONS:
+            while j < len(argv) and _AXIS_VALUE.match(argv[j]):
+                j += 1
+            values = argv[i + 1:j]
+            if any(v.startswith("-") for v in values):
+                out[-1] = f"{argv[i]}={','.join(values)}"
+            else:
+                out += values
+        i = j
     return out
 
 

@@ -29,8 +29,8 @@ _ALL_KIND_NAMES = tuple(dict.fromkeys(k for kinds in ALL_KINDS.values() for k in
 
 def _axes(text: str) -> List[str]:
     """Up axes from ``+Z``, ``Z``, ``negX`` or a comma list ``+Z,-X``
-    (``-X`` alone on the command line reads as an option: write
-    ``--up-axes=-X`` or ``negX``)."""
+    (``--up-axes +Z -X`` reaches it as ``+Z,-X``:
+    :func:`~satagraph.cli._glued_axes`)."""
     out = []
     for item in text.split(","):
         word = item.strip().upper()
@@ -109,8 +109,8 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
     d = p.add_argument_group("exporter dialects")
     d.add_argument("--up-axes", nargs="+", type=_axes, default=[["+Y"]],
                    metavar="AXIS", help=f"up axes to write ({', '.join(UP_AXES)}; a "
-                   "proper rotation of the whole motion; default: +Y). A leading "
-                   "minus reads as an option: write --up-axes=+Z,-X or negX")
+                   "proper rotation of the whole motion; default: +Y), as --up-axis "
+                   "takes them: --up-axes +Z -X, --up-axes=+Z,-X or negX")
     d.add_argument("--units", nargs="+", type=_unit, default=["m"], metavar="UNIT",
                    help=f"units to write: {', '.join(UNITS)}, or a number N for an "
                    "arbitrary unit in which the character is N units tall (default: m)")

@@ -81,3 +81,19 @@ def test_demo_data_read_in_the_units_given(monkeypatch, tmp_path):
 
 def _stop():
     raise _Stop
+
+
+@pytest.mark.parametrize("axes", [["-Z"], ["+Y", "-Z"], ["-Z", "negX", "+y"], ["-Z,+X"]])
+def test_zoo_up_axes_take_a_minus_as_up_axis_does(parser, axes):
+    """``zoo --up-axes -Z`` reads as ``inspect --up-axis -Z`` does (it was
+    ``argument --up-axes: expected at least one argument``, and ``--up-axes
+    +Y -Z`` ``unrecognized arguments: -Z``), the folder after it kept."""
+    from satagraph.cli.zoo import _axes, _flat
+    args = parse_args(parser, ["zoo", "--up-axes", *axes, "out", "--units", "cm"])
+    assert _flat(args.up_axes) == _axes(",".join(axes))
+    assert (args.out_dir, args.units) == ("out", ["cm"])
+
+
+def test_axis_lists_without_a_minus_left_to_argparse(parser):
+    args = parse_args(parser, ["zoo", "out", "--up-axes", "+Y", "Z"])
+    assert args.up_axes == [["+Y"], ["+Z"]] and args.out_dir == "out"
