@@ -3,7 +3,9 @@
 back-quoted ones of its description and option help) and of the CLI
 modules' ``Examples::`` blocks parse, and the cheap docstring examples run
 on stand-in files, the values their comments claim (``expr  # 'value'``)
-included. README snippets are tests/test_readme.py's."""
+included (the runs are marked slow: ``make test-slow``; the parses and the
+check that every example is run or excused are not). README snippets are
+tests/test_readme.py's."""
 from __future__ import annotations
 
 import argparse
@@ -194,6 +196,7 @@ def test_every_docstring_example_is_run_or_excused():
     assert found == set(RUN) | set(NOT_RUN), found ^ (set(RUN) | set(NOT_RUN))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", sorted(RUN))
 def test_docstring_example_runs(key, stand_ins):
     (code,) = docstring_examples()[key]
@@ -222,6 +225,7 @@ def test_doctest_examples(fn):
     assert runner.summarize(verbose=False).failed == 0
 
 
+@pytest.mark.slow
 def test_retargeter_doctest(stand_ins):
     """The :class:`~satagraph.pipelines.Retargeter` example, with the
     walk as the dog and two source paths."""
@@ -275,6 +279,7 @@ def test_cli_docstring_examples_parse(key):
         assert args.command == argv[0] and args.func is not None
 
 
+@pytest.mark.slow
 def test_cheap_help_examples_run(stand_ins, capsys):
     """The help examples of :data:`RUN_HELP` run on stand-in files (a
     cache ``--dir`` outside the temporary folder is not touched)."""
