@@ -14,7 +14,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Callable, List, Optional, Sequence, Tuple, TypeVar, Union
+from typing import Callable, Iterable, List, Optional, Sequence, Tuple, TypeVar, Union
 
 from satagraph.datasets.sources import bvh_files
 from satagraph.utils.files import file_lock, sweep_stale_temps
@@ -92,17 +92,25 @@ def claimed_output(path: PathLike, make: Callable[[], str]) -> Optional[str]:
     path = Path(path)
     with contextlib.ExitStack() as held:
         try:
-            held.enter_context(file_lock(path.parent / f".{path.name}.claim", timeout=0))
+            held.enter_context(file_lock(_claim(path), timeout=0))
         except TimeoutError:
             return None
         return None if complete_output(path) else make()
 
 
-def sweep_stale_claims(folder: PathLike) -> None:
-    """Remove the claims (:func:`claimed_output`) in :obj:`folder` that no
+def _claim(path: Path) -> Path:
+    """The claim file of the output :obj:`path`: ``.<name>.claim`` beside it."""
+    return path.parent / f".{path.name}.claim"
+
+
+def sweep_stale_claims(outputs: Iterable[Path]) -> None:
+    """Remove the claims (:func:`claimed_output`) of :obj:`outputs` that no
     live run holds: a killed run's, which no later run removes where it
-    leaves that output out or makes it without ``--skip-existing``."""
-    for claim in Path(folder).glob(".*.claim"):
+    leaves that output out or makes it without ``--skip-existing``. Only
+    these outputs' claims: another file named ``.*.claim`` is not one."""
+    for claim in map(_claim, outputs):
+        if not claim.is_file():  # none: none made by the lock either
+            continue
         with contextlib.suppress(TimeoutError, OSError):  # a live run's: kept
             with file_lock(claim, timeout=0):
                 pass  # taken: removed on release
@@ -135,9 +143,9 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
     todo = files
     if skip_existing:
         todo = [p for p in files if not complete_output(output / p.relative_to(source))]
-    for folder in {(output / p.relative_to(source)).parent for p in files}:
-        sweep_stale_claims(folder)  # what a killed --skip-existing run left
-        if skip_existing:
+    sweep_stale_claims(output / p.relative_to(source) for p in files)  # a killed run's
+    if skip_existing:
+        for folder in {(output / p.relative_to(source)).parent for p in files}:
             sweep_stale_temps(folder)  # what the stopped run's killed writes left
 
     def write(path: Path) -> bool:

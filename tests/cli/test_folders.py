@@ -207,6 +207,30 @@ def test_a_killed_run_s_claims_are_swept_by_any_later_run(tmp_path: Path, capsys
     assert "made 2 of 2 files" in capsys.readouterr().out
 
 
+def test_the_claim_sweep_removes_only_the_claims_of_its_own_outputs(tmp_path: Path,
+                                                                   capsys) -> None:
+    """The sweep of a killed run's claims removed every ``.*.claim`` in the
+    output folder, a user's ``.notes.claim`` among them; it removes the
+    claims of the outputs the run makes and nothing else."""
+    from satagraph.cli.folders import run_over_folder
+    src, out = tmp_path / "in", tmp_path / "out"
+    src.mkdir()
+    out.mkdir()
+    (src / "a.bvh").write_text("x")
+    (out / ".a.bvh.claim").write_text("")  # a killed run's
+    (out / ".notes.claim").write_text("mine")  # the user's
+    (out / ".b.bvh.claim").write_text("")  # of an output this run does not make
+
+    def one(source: str, output: str) -> str:
+        Path(output).write_text("made")
+        return f"wrote {output}"
+
+    assert run_over_folder(src, out, one, "made") == 0
+    assert sorted(p.name for p in out.iterdir()) == [".b.bvh.claim", ".notes.claim", "a.bvh"]
+    assert (out / ".notes.claim").read_text() == "mine"
+    capsys.readouterr()
+
+
 @pytest.mark.parametrize("case", ["file", "bvh-name", "empty"])
 def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: Path,
                                                         capsys, case: str) -> None:
