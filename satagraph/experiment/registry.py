@@ -157,7 +157,8 @@ _IMPORTED_PLUGINS: set = set()
 
 def import_user_plugins() -> None:
     """Import each module or ``.py`` file that :data:`PLUGIN_VARIABLE`
-    names (once per process).
+    names (once per process; one that failed is tried again on the next
+    call, as a notebook calls after fixing it).
 
     Raises:
         ValueError: One line naming a plugin that does not import (not
@@ -179,8 +180,10 @@ def import_user_plugins() -> None:
             else:
                 importlib.import_module(spec)
         except ImportError as err:
+            _IMPORTED_PLUGINS.discard(spec)
             raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} ({err})") from None
         except Exception as err:  # its own code failed: a typo, a raise (--traceback: where)
+            _IMPORTED_PLUGINS.discard(spec)
             raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} "
                              f"({type(err).__name__}: {err})") from err
 

@@ -232,6 +232,22 @@ def test_a_plugin_whose_own_code_fails_is_one_line_naming_it(tmp_path, monkeypat
                   "(RuntimeError: needs a GPU)\n"
 
 
+def test_a_plugin_that_failed_is_imported_once_fixed(tmp_path, monkeypatch):
+    """A plugin that failed to import was marked imported all the same: a
+    notebook that fixed it and called again went on without it (its modules
+    then ``unknown``, said to be named in ``SATAGRAPH_PLUGINS``, which they are)."""
+    from satagraph.experiment import registry
+    plugin, marker = tmp_path / "mine.py", tmp_path / "imported"
+    plugin.write_text("def broken(:\n")
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", str(plugin))
+    with pytest.raises(ValueError, match="SyntaxError"):
+        registry.import_user_plugins()
+    plugin.write_text(f"open({str(marker)!r}, 'w').close()\n")  # fixed
+    registry.import_user_plugins()
+    assert marker.is_file()
+
+
 def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     """A subclass with a constructor argument of its own came back from
     ``load_module`` (what ``eval``, ``reconstruct``, ``retarget`` and
