@@ -820,16 +820,22 @@ def _read_data_files(path: Path) -> set:
     """The ``(split, path)`` pairs of a run's :data:`DATA_FILES`.
 
     Raises:
-        ValueError: A line that is not ``split<TAB>path`` (one line naming
-            the file and the line).
+        ValueError: A line that is not ``split<TAB>path``, or text that is
+            not the UTF-8 the run wrote (one line naming the file).
     """
+    redo = "delete the file to record the files there now"
+    try:
+        text = path.read_text(encoding="utf-8")  # as written, whatever the locale's
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path}: not UTF-8 as the run wrote it (byte {err.start}); "
+                         f"{redo}") from None
     pairs = set()
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
+    for number, line in enumerate(text.splitlines(), start=1):
         if not line:
             continue
         if "\t" not in line:
             raise ValueError(f"{path}:{number}: not 'split<TAB>path' as the run wrote it; "
-                             "delete the file to record the files there now")
+                             f"{redo}")
         pairs.add(tuple(line.split("\t", 1)))
     return pairs
 

@@ -883,6 +883,39 @@ def test_a_damaged_data_files_record_is_one_line_naming_it(tmp_path: Path) -> No
         _record_data_files(dm, tmp_path, resumed=True)
 
 
+def test_a_data_files_record_not_utf8_is_one_line_naming_it(tmp_path: Path) -> None:
+    """A ``data_files.txt`` saved in another encoding (edited by hand) stopped
+    ``--resume`` with ``'utf-8' codec can't decode byte 0xe4``, no file named."""
+    from types import SimpleNamespace
+    from satagraph.experiment.train import _record_data_files
+    dm = SimpleNamespace(datasets={"train": SimpleNamespace(files=[
+        SimpleNamespace(path=str(tmp_path / "a.bvh"))])})
+    record = tmp_path / "data_files.txt"
+    record.write_bytes(f"train\t{tmp_path}/Bewegung_\xe4.bvh\n".encode("latin-1"))
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(record))}: not UTF-8 .* delete"):
+        _record_data_files(dm, tmp_path, resumed=True)
+
+
+@pytest.mark.slow
+def test_a_non_ascii_data_path_resumes_under_any_locale(tmp_path: Path) -> None:
+    """The record is written in UTF-8 and was read in the locale's encoding:
+    a resume of a run on ``Bewegung_ä.bvh`` under an ASCII locale stopped with
+    ``'ascii' codec can't decode byte 0xc3`` (in cp1252, Windows', it said
+    the data had changed)."""
+    code = ("import sys, warnings; from pathlib import Path; from types import SimpleNamespace; "
+            "from satagraph.experiment.train import _record_data_files; "
+            "warnings.simplefilter('error'); run = Path(sys.argv[1]); "
+            "dm = SimpleNamespace(datasets={'train': SimpleNamespace(files=["
+            "SimpleNamespace(path=str(run / 'Bewegung_\\xe4.bvh'))])}); "
+            "_record_data_files(dm, run, resumed=False); _record_data_files(dm, run, resumed=True)")
+    env = dict(os.environ, LC_ALL="C", PYTHONCOERCECLOCALE="0", PYTHONUTF8="0")
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path)], env=env,
+                          cwd=Path(__file__).resolve().parents[2], capture_output=True,
+                          text=True, timeout=120)
+    assert (done.returncode, done.stderr) == (0, "")
+    assert "Bewegung_\xe4.bvh" in (tmp_path / "data_files.txt").read_text(encoding="utf-8")
+
+
 @pytest.mark.slow
 def test_resume_says_how_the_data_folder_changed_and_keeps_its_normaliser(
         tmp_path: Path) -> None:
