@@ -27,14 +27,19 @@ NAME = st.text(st.sampled_from("abcXYZ019-.:äé脚"), min_size=1, max_size=8)
 
 
 @st.composite
-def skeletons(draw, max_joints: int = 8) -> Skeleton:
+def skeletons(draw, max_joints: int = 8, depth_first: bool = True) -> Skeleton:
     """A random tree in depth-first order (the order of a BVH file: each
-    joint's parent is the previous joint or one of its ancestors), names,
+    joint's parent is the previous joint or one of its ancestors), or with
+    :obj:`depth_first` false in any order that lists a parent before its
+    children (a joint inserted after its siblings' subtrees), names,
     offsets, channel layouts of every rotation order, end sites at some
     leaves."""
     num = draw(st.integers(1, max_joints))
     parents = [-1]
     for j in range(1, num):
+        if not depth_first:
+            parents.append(draw(st.integers(0, j - 1)))
+            continue
         chain = [j - 1]
         while parents[chain[-1]] >= 0:
             chain.append(parents[chain[-1]])
@@ -65,8 +70,8 @@ def skeletons(draw, max_joints: int = 8) -> Skeleton:
 
 
 @st.composite
-def motions(draw) -> Motion:
-    skel = draw(skeletons())
+def motions(draw, depth_first: bool = True) -> Motion:
+    skel = draw(skeletons(depth_first=depth_first))
     frames = draw(st.integers(0, 4))
     num = skel.num_joints
     gen = np.random.default_rng(draw(st.integers(0, 2 ** 32 - 1)))
@@ -97,6 +102,26 @@ def test_write_read_round_trip(motion: Motion, tmp_path: Path) -> None:
     np.testing.assert_allclose(b.offsets, a.offsets, atol=1e-5)
     assert back.num_frames == motion.num_frames
     np.testing.assert_allclose(back.global_positions(), motion.global_positions(),
+                               atol=1e-3)
+
+
+@FAST
+@given(motion=motions(depth_first=False))
+def test_any_parent_first_order_round_trips(motion: Motion, tmp_path: Path) -> None:
+    """A skeleton whose joints list each parent first but not depth-first
+    is written in the file's depth-first order with each joint's own
+    channels (write_bvh once put each joint's columns in another joint's
+    block): read back, every joint has its parent, offset and positions."""
+    path = tmp_path / "clip.bvh"
+    write_bvh(motion, path)
+    back = read_bvh(path)
+    a, b = motion.skeleton, back.skeleton
+    assert sorted(b.names) == sorted(a.names)
+    perm = np.array([a.names.index(n) for n in b.names])  # back's joint k is a's perm[k]
+    np.testing.assert_array_equal(a.parents[perm[1:]], perm[b.parents[1:]])
+    assert [a.channels[j] for j in perm] == b.channels
+    np.testing.assert_allclose(b.offsets, a.offsets[perm], atol=1e-5)
+    np.testing.assert_allclose(back.global_positions(), motion.global_positions()[:, perm],
                                atol=1e-3)
 
 
