@@ -179,13 +179,12 @@ def import_user_plugins() -> None:
                 loader.loader.exec_module(module)
             else:
                 importlib.import_module(spec)
-        except ImportError as err:
+        except Exception as err:  # not found, or its own code failed (--traceback: where)
             _IMPORTED_PLUGINS.discard(spec)
-            raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} ({err})") from None
-        except Exception as err:  # its own code failed: a typo, a raise (--traceback: where)
-            _IMPORTED_PLUGINS.discard(spec)
-            raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} "
-                             f"({type(err).__name__}: {err})") from err
+            missing = isinstance(err, ImportError)
+            said = err if missing else f"{type(err).__name__}: {err}"
+            raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} ({said})") \
+                from (None if missing else err)
 
 
 def _inherited_keys(cls: type) -> tuple:

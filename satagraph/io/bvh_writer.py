@@ -2,14 +2,13 @@
 from __future__ import annotations
 
 import os
-from typing import Dict, List, Union
+from typing import Dict, List, Tuple, Union
 
 import numpy as np
 import torch
 
 from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
-from satagraph.skeleton import Skeleton
 from satagraph.ops.rotation import unit_quaternion_to_euler
 from satagraph.ops.rotation_numpy import matrix_to_quaternion_numpy
 
@@ -32,12 +31,14 @@ def _fmt(values: np.ndarray, tiny: float = 0.0) -> str:
                                                unique=True, min_digits=6) for v in values)
 
 
-def _hierarchy(motion: Motion) -> List[str]:
+def _hierarchy(motion: Motion) -> Tuple[List[str], List[int]]:
     """The HIERARCHY lines, by an explicit depth-first walk (no recursion:
-    any depth)."""
+    any depth), and the joints in the order they are written: a skeleton's
+    own order need only list parents first (a joint inserted after its
+    siblings' subtrees), and the MOTION columns follow this one."""
     skel = motion.skeleton
     tiny = 1e-12 * float(np.abs(skel.offsets).max(initial=0.0))  # arithmetic's zero
-    lines = ["HIERARCHY"]
+    lines, order = ["HIERARCHY"], []
     children = skel.children
     stack = [(0, 0, False)]  # (joint, depth, closing)
     while stack:
@@ -46,6 +47,7 @@ def _hierarchy(motion: Motion) -> List[str]:
         if closing:
             lines.append(f"{pad}}}")
             continue
+        order.append(j)
         if skel.end_site[j] and not children[j] and not skel.channels[j]:
             lines.extend([f"{pad}End Site", f"{pad}{{",
                           f"{pad}  OFFSET {_fmt(skel.offsets[j], tiny)}", f"{pad}}}"])
@@ -58,19 +60,7 @@ def _hierarchy(motion: Motion) -> List[str]:
                          + " ".join(skel.channels[j]))
         stack.append((j, depth, True))
         stack.extend((c, depth + 1, False) for c in reversed(children[j]))
-    return lines
-
-
-def _file_order(skeleton: Skeleton) -> List[int]:
-    """The joints in the order :func:`_hierarchy` writes them (depth-first,
-    children in joint order): a skeleton's topological order need not be
-    it (a joint inserted after its siblings' subtrees)."""
-    children, order, stack = skeleton.children, [], [0]
-    while stack:
-        j = stack.pop()
-        order.append(j)
-        stack.extend(reversed(children[j]))
-    return order
+    return lines, order
 
 
 def _check_finite(motion: Motion, values: np.ndarray, path: str) -> None:
@@ -228,12 +218,11 @@ def write_bvh(motion: Motion, path: PathLike, precision: int = 6) -> None:
     values = channel_values(motion)
     exact = values is motion.raw_channels
     _check_finite(motion, values, path)
-    skel = motion.skeleton
-    order = _file_order(skel) if skel.num_joints else []
+    header, order = _hierarchy(motion)
     if order != sorted(order):  # the columns in the order the joints are written
-        spans = np.split(np.arange(values.shape[1]), np.cumsum([len(c) for c in skel.channels]))
+        channels = motion.skeleton.channels
+        spans = np.split(np.arange(values.shape[1]), np.cumsum([len(c) for c in channels]))
         values = values[:, np.concatenate([spans[j] for j in order])]
-    header = _hierarchy(motion)
     header[0] = f"{header[0]} {declaration(motion)}".rstrip()
     header += ["MOTION", f"Frames: {motion.num_frames}",
                f"Frame Time: {1.0 / motion.fps:.10g}"]
