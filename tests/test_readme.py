@@ -93,3 +93,12 @@ def test_readme_contents_list_every_section():
     listed = re.findall(r"^ *- \[(.+)\]\(#([\w\-]+)\)$", text, flags=re.M)
     assert [title for title, _ in listed] == headings
     assert [anchor for _, anchor in listed] == [_anchor(h) for h in headings]
+
+
+def test_readme_speaks_no_working_session_jargon():
+    """The README says what is and where its evidence is, not which of the
+    team's working sessions ("stop 57", "since stop 64") or tracker issues
+    ("issue 16's targets") made it so: a user knows neither. Line breaks
+    count as spaces (a wrapped "stop\\n69" is caught too)."""
+    text = " ".join(README.read_text().split())
+    assert re.findall(r"\b(?:stop|issue)[ -]\d+", text, flags=re.I) == []
