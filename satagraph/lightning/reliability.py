@@ -85,8 +85,9 @@ class NonFiniteGuard(L.Callback):
         mode (str): ``"stop"`` raises :class:`TrainingStopped` before the
             weights change; ``"skip"`` clears the gradients of that batch
             (the optimizer leaves the weights as they are) and counts it in
-            :attr:`skipped` (its step in :attr:`skipped_steps`; one line at the
-            end of training names them), and raises :class:`TrainingStopped` where as
+            :attr:`skipped` (its step in :attr:`skipped_steps`, numbered as
+            ``losses.tsv`` numbers it; one line at the end of training names
+            them), and raises :class:`TrainingStopped` where as
             many batches in a row as an epoch has (2 to
             :data:`MAX_SKIPPED_IN_A_ROW`) were skipped: a model that gives
             no finite loss any more has diverged, and skipping on ended the
@@ -99,7 +100,8 @@ class NonFiniteGuard(L.Callback):
             raise ValueError(f"nonfinite must be one of {NONFINITE_MODES}, got {mode!r}")
         self.mode, self.last_checkpoint = mode, last_checkpoint
         self.skipped = 0
-        #: The steps whose update ``mode="skip"`` left out.
+        #: The steps whose update ``mode="skip"`` left out, from 1 as
+        #: :class:`LossLog` numbers them (the ``global_step`` after the step).
         self.skipped_steps: List[int] = []
         self._in_a_row = 0
         self._files: List[str] = []
@@ -130,7 +132,7 @@ class NonFiniteGuard(L.Callback):
         for p in params:
             p.grad = None
         self.skipped += 1
-        self.skipped_steps.append(trainer.global_step)
+        self.skipped_steps.append(trainer.global_step + 1)  # counted after this batch
         self._in_a_row += 1
         if self._in_a_row >= _skip_limit(trainer):
             raise self._diverged(trainer)
@@ -168,7 +170,7 @@ def _skipped_note(steps: List[int], shown: int = 10) -> str:
     most :obj:`shown` named)."""
     named = ", ".join(map(str, steps[:shown])) + (", ..." if len(steps) > shown else "")
     return (f"nonfinite=skip: skipped the weight update of {len(steps)} batch(es) with a "
-            f"non-finite loss or gradient, at step(s) {named}")
+            f"non-finite loss or gradient, at step(s) {named} (as losses.tsv numbers them)")
 
 
 def _skip_limit(trainer: L.Trainer) -> int:

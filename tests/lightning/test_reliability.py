@@ -167,7 +167,7 @@ def test_nonfinite_loss_stops_naming_files_and_keeps_the_checkpoint(
     poison.update({"from": 99, "at": (1, 3)})
     cfg = dict(copy.deepcopy(tiny_config), nonfinite="skip")
     cfg["output_dir"] += "-skip"
-    with pytest.warns(UserWarning, match=r"weight update of 2 batch\(es\).*step\(s\) 1, 3$"):
+    with pytest.warns(UserWarning, match=r"weight update of 2 batch\(es\).*step\(s\) 2, 4 \("):
         module, _, trainer, _ = train(cfg, max_steps=4)
     assert all(torch.isfinite(p).all() for p in module.parameters())
 
@@ -227,7 +227,8 @@ def test_skip_says_in_one_line_which_steps_it_skipped(
                  "trainer.limit_val_batches=0", f"output_dir={tmp_path / 'run'}"]) == 0
     skipped = [line for line in shown if "nonfinite=skip" in line]
     assert skipped == ["satagraph: warning: nonfinite=skip: skipped the weight update of 1 "
-                       "batch(es) with a non-finite loss or gradient, at step(s) 1\n"]
+                       "batch(es) with a non-finite loss or gradient, at step(s) 2 (as losses.tsv "
+                       "numbers them)\n"]
 
 
 def test_cli_train_exit_code_when_stopped(tiny_config: Dict[str, Any], tmp_path: Path,
@@ -978,3 +979,29 @@ def test_a_new_start_after_a_run_that_saved_nothing_records_its_own_files(
     now = record.read_text()
     assert now != first
     assert now == "".join(f"{s}\t{f}\n" for s, f in sorted(train_mod._data_files(dm)))
+
+
+def test_skip_names_the_skipped_steps_as_the_loss_log_does(
+        tiny_config: Dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+    """The line of ``nonfinite=skip`` named a skipped batch by Lightning's
+    ``global_step`` before its update (from 0), which ``losses.tsv`` numbers
+    one more (from 1): the step it names is the line of its non-finite loss."""
+    from satagraph.lightning.autoencoder import MotionAutoencoderModule
+    original = MotionAutoencoderModule.compute_losses
+
+    def poisoned(self, out, batch):
+        losses = original(self, out, batch)
+        if self.global_step == 2:  # the third batch
+            losses["loss"] = losses["loss"] * float("nan")
+        return losses
+
+    monkeypatch.setattr(MotionAutoencoderModule, "compute_losses", poisoned)
+    cfg = dict(_interruptible(tiny_config), nonfinite="skip")
+    cfg["trainer"]["max_epochs"] = 2
+    with pytest.warns(UserWarning, match=r"nonfinite=skip: .* 1 batch\(es\).*") as said:
+        train(cfg)
+    line = next(str(w.message) for w in said if "nonfinite=skip" in str(w.message))
+    step = int(re.search(r"at step\(s\) (\d+)", line).group(1))
+    losses = read_loss_log(Path(cfg["output_dir"]) / "losses.tsv")
+    assert sorted(losses) == [1, 2, 3, 4]
+    assert [s for s, loss in losses.items() if loss != loss] == [step] == [3]
