@@ -618,6 +618,11 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
         with warnings.catch_warnings():
             # the sampler resumes mid-epoch itself (ResumeCheckpoint)
             warnings.filterwarnings("ignore", message=".*dataloader is not resumable")
+            # Lightning 2.6's loaders build torch's deprecated LeafSpec (torch 2.13), once
+            # per fit and validation: a line of every run that no user can act on
+            warnings.filterwarnings("ignore", message=r"`isinstance\(treespec, LeafSpec\)`",
+                                    category=FutureWarning,
+                                    module=r"lightning\.pytorch\.utilities\._pytree")
             _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
 

@@ -1005,3 +1005,20 @@ def test_skip_names_the_skipped_steps_as_the_loss_log_does(
     losses = read_loss_log(Path(cfg["output_dir"]) / "losses.tsv")
     assert sorted(losses) == [1, 2, 3, 4]
     assert [s for s, loss in losses.items() if loss != loss] == [step] == [3]
+
+
+def test_training_shows_no_third_party_leafspec_warning(tiny_config: Dict[str, Any]) -> None:
+    """Every run printed ``satagraph: warning: `isinstance(treespec, LeafSpec)`
+    is deprecated ...``: Lightning's loaders build torch's deprecated
+    ``LeafSpec``; that one warning is silenced where ``fit`` runs, no other."""
+    cfg = _interruptible(tiny_config)
+    cfg["trainer"]["max_epochs"] = 1
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        train(cfg)
+    assert not [w for w in said if "LeafSpec" in str(w.message)]
+    with warnings.catch_warnings(record=True) as said:  # the filter ends with the run
+        warnings.simplefilter("always")
+        from lightning.pytorch.utilities._pytree import _tree_flatten
+        _tree_flatten([1])
+    assert [w.category for w in said if "LeafSpec" in str(w.message)] == [FutureWarning]
