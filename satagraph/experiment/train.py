@@ -807,11 +807,17 @@ def _record_data_files(dm, run_dir: Path, resumed: bool) -> None:
     files there now, each in its split (a folder's by file name, a
     manifest's by its column), with the normaliser of its first start,
     which its checkpoint holds (the one fitted on the files there now is
-    not used: the model learnt its features in the first one's units)."""
+    not used: the model learnt its features in the first one's units). A
+    resumed run without the record (deleted, or a run of before it) says in
+    one line that it cannot tell, and records the files there now."""
     now, path = _data_files(dm), run_dir / DATA_FILES
     if now is None:
         return
     if not resumed or not path.is_file():  # the first start (or a run of before the record)
+        if resumed:
+            warnings.warn(f"--resume: no {path}: whether the data changed since the run "
+                          "started cannot be checked; it goes on with the files there now "
+                          "and records them", stacklevel=3)
         atomic_write_text(path, "".join(f"{s}\t{f}\n" for s, f in sorted(now)),
                           create_parent=True)
         return

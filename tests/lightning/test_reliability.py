@@ -1022,3 +1022,24 @@ def test_training_shows_no_third_party_leafspec_warning(tiny_config: Dict[str, A
         from lightning.pytorch.utilities._pytree import _tree_flatten
         _tree_flatten([1])
     assert [w.category for w in said if "LeafSpec" in str(w.message)] == [FutureWarning]
+
+
+def test_a_resume_without_its_data_files_record_says_it_cannot_check(tmp_path: Path) -> None:
+    """``--resume`` after ``data_files.txt`` was deleted wrote the files
+    there now without a word, so it could not tell whether the data had
+    changed; it says so in one line, goes on and records them."""
+    from types import SimpleNamespace
+    from satagraph.experiment.train import _record_data_files
+    dm = SimpleNamespace(datasets={"train": SimpleNamespace(files=[
+        SimpleNamespace(path=str(tmp_path / "a.bvh"))])})
+    record = tmp_path / "data_files.txt"
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        _record_data_files(dm, tmp_path, resumed=False)  # a first start: nothing to say
+        assert said == []
+        record.unlink()
+        _record_data_files(dm, tmp_path, resumed=True)
+    assert [str(w.message) for w in said] == [
+        f"--resume: no {record}: whether the data changed since the run started cannot be "
+        "checked; it goes on with the files there now and records them"]
+    assert record.read_text() == f"train\t{tmp_path / 'a.bvh'}\n"
