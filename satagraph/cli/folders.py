@@ -122,7 +122,9 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
     every BVH file below :obj:`source`, writing below :obj:`output`; with
     :obj:`skip_existing`, not on those whose output is already whole
     (:func:`complete_output`), nor on those another live run makes or has
-    made since (:func:`claimed_output`), which the summary counts.
+    made since (:func:`claimed_output`), which the summary counts as they
+    are at its end: whole, or not (that run is still making them, or
+    failed on them).
 
     Returns:
         int: 0 when every file went through, 2 when any failed (each said
@@ -148,29 +150,35 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
         for folder in {(output / p.relative_to(source)).parent for p in files}:
             sweep_stale_temps(folder)  # what the stopped run's killed writes left
 
-    def write(path: Path) -> bool:
+    def write(path: Path) -> Optional[Path]:
+        """Make one output; the output left to another run, or ``None``."""
         out = output / path.relative_to(source)
         out.parent.mkdir(parents=True, exist_ok=True)
         if not skip_existing:
             print(one(str(path), str(out)))
-            return True
+            return None
         line = claimed_output(out, lambda: one(str(path), str(out)))
         print(line or f"{out}: skipped, another run makes it or has made it (--skip-existing)")
-        return line is not None
+        return None if line is not None else out
 
     made, failed = each_kept(todo, write, failure_line, traceback)
-    elsewhere = made.count(False)
-    print(f"{verb} {len(made) - elsewhere} of {len(files)} files into {output} in "
-          f"{time.perf_counter() - start:.1f} s" + _skipped(len(files) - len(todo), elsewhere)
-          + _failed(failed))
+    left = [out for out in made if out is not None]
+    whole = sum(map(complete_output, left))  # at the end: that run may fail on one
+    print(f"{verb} {len(made) - len(left)} of {len(files)} files into {output} in "
+          f"{time.perf_counter() - start:.1f} s"
+          + _skipped(len(files) - len(todo), whole, len(left) - whole) + _failed(failed))
     return 2 if failed else 0
 
 
-def _skipped(count: int, elsewhere: int = 0) -> str:
+def _skipped(count: int, elsewhere: int = 0, missing: int = 0) -> str:
     """The part of the summary line for the files ``--skip-existing`` left
-    out: :obj:`count` there at the start, :obj:`elsewhere` made by another run."""
+    out: :obj:`count` there at the start, :obj:`elsewhere` made by another run
+    (whole at the end), :obj:`missing` left to another run and not whole at
+    the end."""
     parts = [f"{count} skipped, their results already there"] if count else []
     parts += [f"{elsewhere} made by another run"] if elsewhere else []
+    parts += [f"{missing} left to another run, not whole at the end (it failed on them "
+              "or is still making them)"] if missing else []
     return f"; {', '.join(parts)} (--skip-existing)" if parts else ""
 
 

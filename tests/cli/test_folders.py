@@ -148,7 +148,9 @@ def test_skip_existing_leaves_what_another_run_makes_to_it(tmp_path: Path, capsy
     """Two ``--skip-existing`` runs into one folder each decided at their
     start what to leave out, so each made every file: now a file whose
     claim another live run holds (it is making it), or whose result that
-    run wrote since this one began, is left out at its turn and counted."""
+    run wrote since this one began, is left out at its turn and counted, as
+    it is at the end: b.bvh, whose run never wrote it (it failed), was
+    counted as 'made by another run' too."""
     from satagraph.cli.folders import complete_output, run_over_folder
     from satagraph.utils.files import atomic_write_text, file_lock
     src, out = tmp_path / "in", tmp_path / "out"
@@ -178,7 +180,8 @@ def test_skip_existing_leaves_what_another_run_makes_to_it(tmp_path: Path, capsy
     assert f"{out / 'b.bvh'}: skipped, another run makes it or has made it " \
         "(--skip-existing)" in printed
     assert printed[-1].startswith("made 1 of 3 files into") and printed[-1].endswith(
-        "; 2 made by another run (--skip-existing)")
+        "; 1 made by another run, 1 left to another run, not whole at the end (it failed "
+        "on them or is still making them) (--skip-existing)")
     assert sorted(p.name for p in out.iterdir()) == ["a.bvh", "c.bvh"]  # no claim left
 
 
