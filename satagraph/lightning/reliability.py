@@ -355,23 +355,30 @@ class ResumeCheckpoint(Checkpoint):
         every-N-steps save there would have (its random states, its loop
         counts), so that ``--resume`` goes on from it; in the validation
         of a training run, the resumed run validates again, whole
-        (:func:`_before_validation`). Nothing is
+        (:func:`_before_validation`); at an epoch's end (its validation
+        done), the epoch checkpoints that Lightning had not written yet
+        (``checkpoint.keep_every_epoch``'s, the best one's) are written
+        first, as the end of that epoch would have (the resumed run goes on
+        with the next epoch: :func:`_keep_epoch_checkpoints`). Nothing is
         written where that checkpoint is already ``last.ckpt`` (but in the
         validation after a step saved at its batch's end: that save resumes
-        past the validation), or where the
+        past the validation; nor at an epoch's end), or where the
         stop fell in the sanity check or between an optimizer step and the
         end of its batch (the weights may be half updated), or in a distributed
         run (its other processes would not join the save); nor for other
         errors (a non-finite loss keeps the last good checkpoint). A save
         that fails is a warning: the interrupt goes on, and ``last.ckpt``
         stays the one before (writes are atomic)."""
+        ending = _ending_epoch(trainer)
         if (not isinstance(exception, (KeyboardInterrupt, SIGTERMException))
-                or not (self._unsaved or self._saved_step_validating(trainer))
+                or not (self._unsaved or self._saved_step_validating(trainer) or ending)
                 or self._stepping or trainer.world_size > 1
                 or not (trainer.training or _validating_in_fit(trainer))):
             return
         self._interrupting = True
         try:
+            if ending:
+                _keep_epoch_checkpoints(trainer, pl_module)
             self.save(trainer)
         except Exception as err:  # the interrupt is what the user asked for
             warnings.warn(f"interrupted: could not write {self.last_path} "
@@ -432,6 +439,26 @@ def _as_batch_end(checkpoint: Dict[str, Any]) -> None:
     state = loop.get("epoch_loop.state_dict") or {}
     if "_batches_that_stepped" in state:  # counted at that batch's end
         state["_batches_that_stepped"] -= 1
+
+
+def _ending_epoch(trainer: L.Trainer) -> bool:
+    """Whether the training loop is in an epoch's end hooks (its batches
+    and validation done, the epoch not counted as completed yet)."""
+    progress = trainer.fit_loop.epoch_progress.current
+    return trainer.training and progress.processed > progress.completed
+
+
+def _keep_epoch_checkpoints(trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+    """Run the epoch-end save of every
+    :class:`~lightning.pytorch.callbacks.ModelCheckpoint` (Lightning calls
+    the checkpoint callbacks last): an interrupt in an earlier epoch-end
+    hook stopped them, and a run resumed from that epoch's end never
+    wrote that epoch's checkpoint. One that saved at this step already
+    leaves it as it is."""
+    from lightning.pytorch.callbacks import ModelCheckpoint
+    for callback in trainer.checkpoint_callbacks:
+        if isinstance(callback, ModelCheckpoint):
+            callback.on_train_epoch_end(trainer, pl_module)
 
 
 def _validating_in_fit(trainer: L.Trainer) -> bool:
