@@ -223,7 +223,8 @@ class ResumeCheckpoint(Checkpoint):
     Its state in the checkpoint holds every random state (restored at the
     first training batch after a resume) and the position of the run
     (epoch, batches done in it, step), which the training sampler resumes
-    from. A run stopped inside an epoch (``max_time``, ``max_steps``,
+    from, and the sums of the epoch's training averages so far
+    (:func:`epoch_logs`, put back as the resumed run starts). A run stopped inside an epoch (``max_time``, ``max_steps``,
     ``should_stop``) resumes with that epoch's remaining batches, and one
     bounded by ``max_steps`` goes on past an epoch's end: the losses are
     those of a run never stopped, where Lightning 2.6 alone would count the
@@ -257,6 +258,7 @@ class ResumeCheckpoint(Checkpoint):
         self._stepping = False  # from an optimizer step to the end of its batch
         self._interrupting = False
         self._step_rng: Optional[Dict[str, Any]] = None  # at the last step's end
+        self._step_logs: List[Dict[str, Any]] = []  # the epoch's sums then (epoch_logs)
         self.saves = 0
         #: The step of the checkpoint a Ctrl-C wrote (``None``: none).
         self.interrupted_step: Optional[int] = None
@@ -281,9 +283,11 @@ class ResumeCheckpoint(Checkpoint):
         epoch = trainer.current_epoch if trainer is not None else 0
         step = trainer.global_step if trainer is not None else 0
         total = trainer.num_training_batches if trainer is not None else float("inf")
+        ending = trainer is not None and _ending_epoch(trainer)  # the next epoch starts anew
         return {"epoch": epoch, "batches": self._batches_done, "step": step,
                 "epoch_done": self._batches_done >= total,
-                "rng": self._step_rng if self._interrupting else rng_states()}
+                "rng": self._step_rng if self._interrupting else rng_states(),
+                "epoch_logs": [] if ending else self._step_logs}
 
     @property
     def resume_position(self) -> Optional[Dict[str, Any]]:
@@ -314,6 +318,8 @@ class ResumeCheckpoint(Checkpoint):
     def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if self._max_steps is not None:
             trainer.fit_loop.epoch_loop.max_steps, self._max_steps = self._max_steps, None
+        if self._pending is not None:  # before a validation that the resume runs first
+            restore_epoch_logs(trainer, self._pending.get("epoch_logs") or [])
 
     def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
         self._trainer = trainer
@@ -337,6 +343,7 @@ class ResumeCheckpoint(Checkpoint):
             late = time.monotonic() - self._last_time >= self.every_seconds
             due = due or bool(trainer.strategy.broadcast(late, src=0))
         self._step_rng = rng_states()  # also of a step saved here: see on_exception
+        self._step_logs = epoch_logs(trainer)
         if due:
             self.save(trainer)
         else:
@@ -439,6 +446,62 @@ def _as_batch_end(checkpoint: Dict[str, Any]) -> None:
     state = loop.get("epoch_loop.state_dict") or {}
     if "_batches_that_stepped" in state:  # counted at that batch's end
         state["_batches_that_stepped"] -= 1
+
+
+#: The hook whose ``self.log`` sums :func:`epoch_logs` keeps.
+_STEP_FX = "training_step"
+
+
+def epoch_logs(trainer: L.Trainer) -> List[Dict[str, Any]]:
+    """What the training metrics logged with ``on_epoch=True`` (``self.log``
+    in ``training_step``) have summed in this epoch so far, in a form that
+    loads with ``weights_only=True``: Lightning keeps them out of its
+    checkpoints, so a run resumed inside an epoch, or before its
+    validation, logged that epoch's averages over the resumed batches
+    alone, or none (:func:`restore_epoch_logs`). None in a distributed run
+    (each process sums its own)."""
+    results = trainer.fit_loop.epoch_loop._results
+    if trainer.world_size > 1 or results is None:
+        return []
+    logs = []
+    for metric in results.values():
+        meta = metric.meta
+        if (meta.fx != _STEP_FX or not (metric.is_tensor and meta.on_epoch)
+                or meta.enable_graph or meta.sync.group):
+            continue
+        logs.append({"fx": meta.fx, "name": meta.name, "prog_bar": meta.prog_bar,
+                     "logger": meta.logger, "on_step": meta.on_step,
+                     "reduce_fx": meta.reduce_fx.__name__,
+                     "add_dataloader_idx": meta.add_dataloader_idx,
+                     "metric_attribute": meta.metric_attribute, "sync_dist": meta.sync.should,
+                     "rank_zero_only": meta.sync.rank_zero_only,
+                     "value": metric.value.detach().cpu().clone(),
+                     "batch_size": (metric.cumulated_batch_size.detach().cpu().clone()
+                                    if meta.is_mean_reduction else None)})
+    return logs
+
+
+def restore_epoch_logs(trainer: L.Trainer, logs: List[Dict[str, Any]]) -> None:
+    """Put back the sums :func:`epoch_logs` kept, as the same ``self.log``
+    calls would have left them: the epoch's averages are those of a run
+    never stopped. Lightning clears a hook's sums at its first ``self.log``
+    of a run but where that hook logged last (an epoch's first batch
+    starts anew: the sums are of the batches before, here)."""
+    results = trainer.fit_loop.epoch_loop._results
+    device = trainer.strategy.root_device
+    for log in logs:
+        log = dict(log)
+        value, count = log.pop("value"), log.pop("batch_size")
+        fx, name, sync = log.pop("fx"), log.pop("name"), log.pop("sync_dist")
+        results.log(fx, name, value.new_zeros((), device=device), on_epoch=True,
+                    sync_dist=sync, sync_dist_fn=trainer.strategy.reduce, batch_size=1, **log)
+        metric = results[f"{fx}.{name}"]
+        metric.value = value.to(device)
+        if count is not None:
+            metric.cumulated_batch_size = count.to(device)
+        metric._forward_cache = None  # no step value: the resumed steps log their own
+    if logs:
+        trainer._logger_connector._current_fx = _STEP_FX
 
 
 def _ending_epoch(trainer: L.Trainer) -> bool:

@@ -732,6 +732,41 @@ def _interruptible(cfg: Dict[str, Any]) -> Dict[str, Any]:
     return cfg
 
 
+def _train_averages(run: Path) -> Dict[str, Dict[str, str]]:
+    """``{epoch: {name: value}}`` of the training epoch averages
+    (``train*_epoch``) in every CSV log of a run (a resumed run writes its
+    own ``version_N``)."""
+    import csv
+    found: Dict[str, Dict[str, str]] = {}
+    for log in sorted(run.glob("logs/version_*/metrics.csv")):
+        with open(log, newline="") as f:
+            for row in csv.DictReader(f):
+                found.setdefault(row["epoch"], {}).update(
+                    {k: v for k, v in row.items() if k.startswith("train") and
+                     k.endswith("_epoch") and v})
+    return {epoch: names for epoch, names in found.items() if names}
+
+
+def test_ctrl_c_in_validation_keeps_that_epoch_s_training_averages(
+        tiny_config: Dict[str, Any], tmp_path: Path) -> None:
+    """Ctrl-C in epoch 0's validation: the resumed run validated again and
+    logged its ``val/*`` rows, but not ``train_loss_epoch`` and the other
+    training averages of epoch 0 (Lightning keeps their sums out of the
+    checkpoint); they are logged, as a run never stopped logs them."""
+    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
+    reference["trainer"]["max_epochs"] = 1
+    train(reference)
+    expected = _train_averages(tmp_path / "a")
+    assert list(expected) == ["0"] and "train_loss_epoch" in expected["0"]
+    cfg = _interruptible(tiny_config)
+    cfg["trainer"]["max_epochs"] = 1
+    with pytest.raises(KeyboardInterrupt):
+        train(cfg, callbacks=[_InterruptAt(2, "validation")])
+    assert _train_averages(Path(cfg["output_dir"])) == {}
+    train(cfg, resume=True)
+    assert _train_averages(Path(cfg["output_dir"])) == expected
+
+
 @pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4),
                                          pytest.param("validation", 4, marks=pytest.mark.slow)])
 def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
@@ -769,6 +804,8 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
         for run in (tmp_path / "a", Path(cfg["output_dir"]))]
     assert len(scores[0]) == 3
     assert scores[1] == scores[0]  # at the epoch's end: its epoch=1 checkpoint was never kept
+    if where != "epoch_end":  # inside epoch 1: its averages were of the resumed batches alone
+        assert _train_averages(Path(cfg["output_dir"])) == _train_averages(tmp_path / "a")
 
 
 @pytest.mark.slow
