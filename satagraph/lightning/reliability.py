@@ -365,8 +365,9 @@ class ResumeCheckpoint(Checkpoint):
         (:func:`_before_validation`); at an epoch's end (its validation
         done), the epoch checkpoints that Lightning had not written yet
         (``checkpoint.keep_every_epoch``'s, the best one's) are written
-        first, as the end of that epoch would have (the resumed run goes on
-        with the next epoch: :func:`_keep_epoch_checkpoints`). Nothing is
+        first and its training averages logged, as the end of that epoch
+        would have (the resumed run goes on with the next epoch:
+        :func:`_keep_epoch_checkpoints`, :func:`_log_epoch_averages`). Nothing is
         written where that checkpoint is already ``last.ckpt`` (but in the
         validation after a step saved at its batch's end: that save resumes
         past the validation; nor at an epoch's end), or where the
@@ -395,6 +396,8 @@ class ResumeCheckpoint(Checkpoint):
         finally:
             self._interrupting = False
         self.interrupted_step = trainer.global_step
+        if ending:
+            _log_epoch_averages(trainer)
 
     def _saved_step_validating(self, trainer: L.Trainer) -> bool:
         """Whether the validation of a training run follows a step that this
@@ -522,6 +525,22 @@ def _keep_epoch_checkpoints(trainer: L.Trainer, pl_module: L.LightningModule) ->
     for callback in trainer.checkpoint_callbacks:
         if isinstance(callback, ModelCheckpoint):
             callback.on_train_epoch_end(trainer, pl_module)
+
+
+def _log_epoch_averages(trainer: L.Trainer) -> None:
+    """Log the epoch's training averages (``train_loss_epoch``, ...) as
+    Lightning logs them after the epoch-end hooks, which an interrupt in
+    one of them stopped: a run resumed from that epoch's end goes on with
+    the next, so no run logged them. A log that fails is a warning."""
+    loop = trainer.fit_loop.epoch_loop
+    loop._batches_that_stepped -= 1  # the step of the epoch's last batch, as Lightning's
+    try:
+        trainer._logger_connector.update_train_epoch_metrics()
+    except Exception as err:  # the interrupt is what the user asked for
+        warnings.warn(f"interrupted: could not log epoch {trainer.current_epoch}'s training "
+                      f"averages ({' '.join(str(err).split())})", stacklevel=2)
+    finally:
+        loop._batches_that_stepped += 1
 
 
 def _validating_in_fit(trainer: L.Trainer) -> bool:
