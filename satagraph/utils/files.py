@@ -114,7 +114,10 @@ def check_output_path(path: PathLike, create_parent: bool = False) -> Path:
 
     Args:
         path: The output file.
-        create_parent: Create a missing parent folder (else it must exist).
+        create_parent: A missing parent folder will be created by the write
+            (else it must exist): the nearest folder above it must be
+            writable. Nothing is created here, so that a command refused
+            after this check leaves no empty folder behind.
 
     Returns:
         Path: The path.
@@ -136,12 +139,8 @@ def check_output_path(path: PathLike, create_parent: bool = False) -> Path:
         raise OutputPathError(f"cannot write {path}: it is {_kind(st.st_mode)}; give a "
                               "file path")
     parent = path.parent if str(path.parent) else Path(".")
-    if create_parent and not parent.exists():
-        try:
-            parent.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise OutputPathError(f"cannot write {path}: cannot create its folder: "
-                                  f"{err.strerror or err}") from None
+    while create_parent and not parent.exists() and parent != parent.parent:
+        parent = parent.parent  # the folder the write creates the missing ones in
     if not parent.is_dir():
         raise OutputPathError(f"cannot write {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):

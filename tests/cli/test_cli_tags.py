@@ -163,6 +163,17 @@ def test_missing_bvh_exit_2(tmp_path, capsys):
     assert code == 2 and "none.bvh" in err and err.count("\n") == 1
 
 
+def test_refused_command_leaves_no_output_folder(bvh, tmp_path, capsys):
+    """``--out NEW/x.txt`` with a missing input is refused and leaves no
+    empty ``NEW`` behind (the output check made it before the input was
+    read); a command that writes makes it."""
+    code, _, err = run(capsys, tmp_path / "none.bvh", "--out", tmp_path / "new" / "x.txt")
+    assert code == 2 and "none.bvh" in err
+    assert not (tmp_path / "new").exists()
+    assert run(capsys, bvh, "--out", tmp_path / "new" / "deeper" / "x.txt")[0] == 0
+    assert (tmp_path / "new" / "deeper" / "x.txt").read_text().split()[:2] == ["#", "joint"]
+
+
 @pytest.mark.parametrize("where", ["folder", "under a file"])
 def test_unwritable_out_said_as_convert_says_it(bvh, tmp_path, capsys, where):
     """``--out`` that cannot be written is one line in the words every

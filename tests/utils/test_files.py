@@ -148,7 +148,11 @@ def test_check_output_path(tmp_path: Path) -> None:
         check_output_path(tmp_path)
     with pytest.raises(OutputPathError, match="does not exist"):
         check_output_path(tmp_path / "missing" / "out.bvh")
-    assert check_output_path(tmp_path / "new" / "out.bvh", create_parent=True)
+    assert check_output_path(tmp_path / "new" / "deeper" / "out.bvh", create_parent=True)
+    assert not (tmp_path / "new").exists()  # made by the write: a refused command made none
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OutputPathError, match="Not a directory"):
+        check_output_path(tmp_path / "file" / "new" / "out.bvh", create_parent=True)
     ro = tmp_path / "ro"
     ro.mkdir()
     ro.chmod(0o500)
