@@ -331,8 +331,13 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     Raises:
         RunLockedError: Another live demo writes to the same output folder
             (it held the run whose checkpoints a second one removed).
+        FileNotFoundError: A source of :attr:`DemoOptions.data` is missing;
+            said before anything is written (the zoo was, and left behind).
     """
+    from satagraph.datasets.sources import resolve_sources
     from satagraph.lightning.reliability import run_lock
+    if options.data:
+        resolve_sources(options.data)
     with run_lock(Path(options.output), "--output"):
         return _run_demo(options, stream)
 

@@ -162,6 +162,17 @@ def test_a_second_demo_into_one_folder_is_refused_before_any_step(capsys, tmp_pa
     assert len(err.splitlines()) == 1 and not (tmp_path / "zoo").exists()
 
 
+def test_a_missing_data_folder_is_refused_before_any_step(capsys, tmp_path):
+    """``demo --data MISSING`` wrote the zoo into a new ``--output`` folder,
+    then failed on the missing source, leaving the folder behind."""
+    out = tmp_path / "new"
+    code = main(["demo", "--output", str(out), "--data", str(tmp_path / "missing"), *SMALL])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err == (f"satagraph: error: motion source not found: "
+                                 f"{tmp_path / 'missing'}; " + err.split("; ", 1)[1])
+    assert len(err.splitlines()) == 1 and not out.exists()
+
+
 def test_builtin_fine_tune_keeps_the_builtin_facing_features(demo_weights, tmp_path):
     """The fine-tune featurises the zoo as the built-in weights were
     trained (``data.preprocessing.facing_smooth``), so ``--init-from``
