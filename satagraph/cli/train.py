@@ -464,12 +464,23 @@ def run_reconstruct(args) -> int:
     check_device(args.device)  # before any file is read
     _check_windows(args)  # once, also for a folder of sources
     if Path(args.input).is_dir():
+        _check_ckpt(args)  # once: not as a failure of every file, into a new folder
         return run_over_folder(args.input, args.output,
                                lambda src, out: _reconstruct_file(args, src, out, models),
                                "reconstructed", args.traceback, args.skip_existing)
     if not _skip(args, args.output):
         print(_reconstruct_file(args, args.input, args.output, models))
     return 0
+
+
+def _check_ckpt(args) -> None:
+    """Refuse a ``--ckpt`` file that cannot be read before a folder's files
+    are read (``auto`` is checked once it is chosen, :func:`_load`; a single
+    file is read first, before torch loads)."""
+    from satagraph.io.weights import check_weights
+    from satagraph.pipelines.builtin_choice import AUTO
+    if args.ckpt != AUTO:
+        check_weights(args.ckpt)
 
 
 def _check_windows(args) -> None:
@@ -512,6 +523,7 @@ def run_retarget(args) -> int:
     target = _read(args, "target")
     check_skeleton(target, args.target)  # once, also for a folder of sources
     if Path(args.source).is_dir():
+        _check_ckpt(args)  # once: not as a failure of every file, into a new folder
         memos: dict = {}  # a Retargeter per model: the target's work done once, not per file
         return run_over_folder(args.source, args.output, lambda src, out: _retarget_file(
             args, src, target, out, models, memos), "retargeted", args.traceback,

@@ -251,6 +251,19 @@ def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: 
     assert ("no .bvh files" if case == "empty" else "not a folder") in err
 
 
+@pytest.mark.parametrize("command", ["retarget", "reconstruct"])
+def test_a_missing_ckpt_is_refused_once_before_the_folder_is_made(
+        folder: Path, tmp_path: Path, capsys, command: str) -> None:
+    """``--ckpt MISSING`` over a folder was said once per file, into a new
+    output folder left behind empty."""
+    out = tmp_path / "new"
+    target = ["--target", str(folder / "target.bvh")] if command == "retarget" else []
+    assert main([command, str(folder), *target, str(out), "--ckpt", "none.ckpt"]) == 2
+    assert capsys.readouterr().err == ("satagraph: error: none.ckpt: cannot read checkpoint "
+                                       "or weights file: No such file or directory\n")
+    assert not out.exists()
+
+
 def test_the_summary_names_ten_failures_at_most(tmp_path: Path, capsys) -> None:
     from satagraph.cli.folders import run_over_folder
 
