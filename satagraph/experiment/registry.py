@@ -162,7 +162,8 @@ def import_user_plugins() -> None:
 
     Raises:
         ValueError: One line naming a plugin that does not import (not
-            found, or its own code fails: a syntax error, an exception).
+            found, or its own code fails: a syntax error, an exception,
+            ``sys.exit()``) and the first line of its error.
     """
     for spec in (s.strip() for s in os.environ.get(PLUGIN_VARIABLE, "").split(",")):
         if not spec or spec in _IMPORTED_PLUGINS:
@@ -179,10 +180,11 @@ def import_user_plugins() -> None:
                 loader.loader.exec_module(module)
             else:
                 importlib.import_module(spec)
-        except Exception as err:  # not found, or its own code failed (--traceback: where)
-            _IMPORTED_PLUGINS.discard(spec)
+        except (Exception, SystemExit) as err:  # not found, or its own code failed
+            _IMPORTED_PLUGINS.discard(spec)  # (--traceback: where)
             missing = isinstance(err, ImportError)
-            said = err if missing else f"{type(err).__name__}: {err}"
+            first = next(iter(str(err).splitlines()), "")  # one line, also of sys.exit()
+            said = first if missing else ": ".join(filter(None, (type(err).__name__, first)))
             raise ValueError(f"{PLUGIN_VARIABLE}: cannot import {spec!r} ({said})") \
                 from (None if missing else err)
 

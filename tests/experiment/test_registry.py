@@ -232,6 +232,26 @@ def test_a_plugin_whose_own_code_fails_is_one_line_naming_it(tmp_path, monkeypat
                   "(RuntimeError: needs a GPU)\n"
 
 
+@pytest.mark.parametrize("code, why", [
+    ("raise SystemExit('no GPU here')", "SystemExit: no GPU here"),
+    ("import sys\nsys.exit(3)", "SystemExit: 3"),
+    ("raise RuntimeError('needs a GPU\\nsee the README')", "RuntimeError: needs a GPU"),
+    ("raise RuntimeError()", "RuntimeError")])
+def test_a_plugin_s_exit_or_long_error_is_one_line(tmp_path, monkeypatch, capsys, code, why):
+    """A plugin calling ``sys.exit()`` ended the command with its code and
+    no line naming it (``no GPU here``, exit code 1); an error of several
+    lines was printed whole."""
+    from satagraph.cli import main
+    from satagraph.experiment import registry
+    plugin = tmp_path / "mine.py"
+    plugin.write_text(code + "\n")
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    monkeypatch.setenv("SATAGRAPH_PLUGINS", str(plugin))
+    assert main(["inspect", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == (f"satagraph: error: SATAGRAPH_PLUGINS: cannot import "
+                                       f"'{plugin}' ({why})\n")
+
+
 def test_a_plugin_that_failed_is_imported_once_fixed(tmp_path, monkeypatch):
     """A plugin that failed to import was marked imported all the same: a
     notebook that fixed it and called again went on without it (its modules
