@@ -5,8 +5,8 @@ from __future__ import annotations
 import os
 from dataclasses import replace
 from functools import partial
-from typing import (Any, Callable, Dict, Hashable, List, Optional, Sequence, Tuple, TypeVar,
-                    Union, overload)
+from typing import (Any, Callable, Dict, Hashable, Iterable, List, Optional, Sequence, Tuple,
+                    TypeVar, Union, overload)
 
 import numpy as np
 import torch
@@ -22,8 +22,9 @@ from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.mirror_average import (average_readings, mirror_back, mirror_canonical,
                                                  place_reading)
 from satagraph.transforms.still_root import hold_still_source, settle_root
-from satagraph.transforms.ground import (STANDING_SHARE, ground_retarget, stands,  # noqa: F401
-                                         standing_frame, standing_frames)
+from satagraph.transforms.ground import (STANDING_SHARE, ground_level,  # noqa: F401
+                                         ground_retarget, stands, standing_frame,
+                                         standing_frames)
 from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
@@ -124,8 +125,8 @@ def decoding_target(feats: MotionFeatures) -> MotionFeatures:
 @torch.no_grad()
 def transfer(module, source: MotionFeatures, target: MotionFeatures,
              semantic: Optional[Callable] = None, window: Optional[int] = None,
-             overlap: Optional[int] = None,
-             batch_size: int = 16) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+             overlap: Optional[int] = None, batch_size: int = 16,
+             memo: Optional["RigMemo"] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Encode :obj:`source` window by window and decode onto :obj:`target`'s
     skeleton. Returns physical ``q [T, J_t, 6]``, ``r [T, 4]`` and contact
     probabilities ``c [T, J_t]`` for every source frame. The module is run
@@ -143,6 +144,8 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
         window (int, optional): Frames per window.
         overlap (int, optional): Frames two windows share, blended.
         batch_size (int): Windows decoded at once.
+        memo (RigMemo, optional): Keeps :obj:`target`'s semantic embedding
+            across calls (:class:`RigMemo`).
 
     Returns:
         (np.ndarray, np.ndarray, np.ndarray): ``q``, ``r`` and ``c``.
@@ -157,19 +160,19 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
     was_training = module.training
     module.eval()
     try:
-        return _transfer(module, source, target, semantic, window, overlap, batch_size)
+        return _transfer(module, source, target, semantic, window, overlap, batch_size, memo)
     finally:
         module.train(was_training)
 
 
 def _transfer(module, source: MotionFeatures, target: MotionFeatures,
-              semantic: Optional[Callable], window: int, overlap: int,
-              batch_size: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+              semantic: Optional[Callable], window: int, overlap: int, batch_size: int,
+              memo: Optional["RigMemo"] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The window loop of :func:`transfer`: each batch's windows are
     written into the take's outputs as they are decoded, cross-faded where
     they overlap (:func:`cross_fade`; no batch outlives its step)."""
     sem_s = _embed(semantic, source)
-    sem_t = _embed(semantic, target)
+    sem_t = _target_embedding(memo, semantic, target)
     plan = window_plan(source.num_frames, window, overlap)
     num = target.skeleton.num_joints
     q, r, c = (np.empty((source.num_frames, num, 6)), np.empty((source.num_frames, 4)),
@@ -218,9 +221,22 @@ def _embed(semantic: Optional[Callable], feats: MotionFeatures) -> Optional[torc
     return call_semantic(semantic, feats.skeleton, evidence_from_features(feats))
 
 
+def _target_embedding(memo: Optional["RigMemo"], semantic: Optional[Callable],
+                      target: MotionFeatures) -> Optional[torch.Tensor]:
+    """:func:`_embed` of a target's features, kept in :obj:`memo` per
+    embedder (computed each time for one that cannot be a key)."""
+    key = ("embedding", semantic)
+    try:
+        hash(key)
+    except TypeError:  # an unhashable embedder object
+        return _embed(semantic, target)
+    return _kept(memo, target, key, lambda: _embed(semantic, target))
+
+
 class RigMemo:
     r"""What a retarget computes of its target rig alone (canonicalised, its
-    mirror image, shown in a rest pose with its static features), kept for
+    mirror image, shown in a rest pose with its static features and their
+    semantic embedding, its ground level), kept for
     the next source retargeted onto the same rig: a folder of sources
     (``satagraph retarget SRC_DIR``, a :class:`Retargeter`) computes it
     once, not once per file (what that saves: :class:`Retargeter`). Each
@@ -363,9 +379,10 @@ class Retargeter:
             :obj:`target` object may share one).
 
     Returns:
-        Called on a :class:`~satagraph.motion.Motion`, its retarget; on a
-        list or tuple of them, the list of their retargets (every source
-        checked before the first is retargeted).
+        Called on a :class:`~satagraph.motion.Motion`, its retarget; on any
+        iterable of them (a list, a generator reading files), the list of
+        their retargets (every source checked before the first is
+        retargeted).
 
     Example:
         >>> from satagraph.experiment.train import load_module
@@ -395,23 +412,31 @@ class Retargeter:
     def __call__(self, source: Motion) -> Motion: ...
 
     @overload
-    def __call__(self, source: Sequence[Motion]) -> List[Motion]: ...
+    def __call__(self, source: Iterable[Motion]) -> List[Motion]: ...
 
-    def __call__(self, source: Union[Motion, Sequence[Motion]]
+    def __call__(self, source: Union[Motion, Iterable[Motion]]
                  ) -> Union[Motion, List[Motion]]:
-        if isinstance(source, Motion) or not isinstance(source, (list, tuple)):
+        if isinstance(source, (Motion, str, bytes, os.PathLike)) or \
+                not isinstance(source, Iterable):
             return self.one(source)
-        fps = getattr(self.module, "fps", None)
-        for i, each in enumerate(source):  # all refused before any is retargeted
+        sources, fps = list(source), getattr(self.module, "fps", None)
+        for i, each in enumerate(sources):  # all refused before any is retargeted
             check_motion(require_motion(each, f"sources[{i}]"), each.source or f"sources[{i}]",
                          fps=fps)
-        return [self.one(each) for each in source]
+        return [self._retarget(each) for each in sources]
 
     def one(self, source: Motion) -> Motion:
         """:func:`retarget_motion` of :obj:`source` with this retargeter's
-        model, target, settings and memo."""
-        return retarget_motion(self.module, source, self.target, memo=self.memo,
-                               **self.options)
+        model, target, settings and memo (the model and target checked once,
+        when it was made)."""
+        check_motion(require_motion(source, "source"), fps=getattr(self.module, "fps", None))
+        return self._retarget(source)
+
+    def _retarget(self, source: Motion) -> Motion:
+        """:func:`retarget_motion` of a checked :obj:`source`."""
+        _, canon = retarget_canonical(self.module, source, self.target, memo=self.memo,
+                                      **self.options)
+        return from_canonical(canon, source)
 
 
 def check_inputs(module, source: Motion, target: Optional[Motion] = None) -> None:
@@ -536,7 +561,10 @@ def retarget_canonical(module, source: Motion, target: Motion,
     src_canon, out, c = averaged_reading(reading, source, target, rest, mirror, two_rests, memo)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
-    out = ground_retarget(out, src_canon, target) if ground else out
+    if ground:
+        level = (_kept(memo, target, "ground", partial(ground_level, target))
+                 if target.num_frames else None)
+        out = ground_retarget(out, src_canon, target, level)
     return src_canon, plant_feet(out) if plant else out
 
 
@@ -552,7 +580,7 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     features (:func:`target_features`) across calls."""
     src_canon, src = source_features(source, rest, facing_smooth_of(module))
     tgt, undo = _kept(memo, target, ("shown", rest), lambda: target_features(target, rest))
-    q, r, c = transfer(module, src, tgt, semantic, window, overlap)
+    q, r, c = transfer(module, src, tgt, semantic, window, overlap, memo=memo)
     del src  # the source's per-frame features: the take's largest arrays, read
     out = features_to_motion(replace(tgt, q=q, r=r, fps=fps, transform=target.transform),
                              use_positions=False)

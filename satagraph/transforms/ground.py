@@ -99,7 +99,8 @@ def ground_like(motion: Motion, reference: Motion) -> Motion:
     return ground_at(motion, ground_level(reference))
 
 
-def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
+def ground_retarget(motion: Motion, source: Motion, target: Motion,
+                    level: Optional[float] = None) -> Motion:
     r"""A retarget stood on the floor as the target character stands in its
     own clip: :func:`ground_at` the :func:`ground_level` of :obj:`target`
     where it has frames, else of :obj:`source`, read over the frames in
@@ -120,12 +121,17 @@ def ground_retarget(motion: Motion, source: Motion, target: Motion) -> Motion:
         source (Motion): The canonical source it was decoded from.
         target (Motion): The canonical target clip (its skeleton and, where
             it has frames, how it stands).
+        level (float, optional): :obj:`target`'s :func:`ground_level` where
+            it was read before (one target, many sources); used only where
+            :obj:`target` has frames.
     """
     reference = target if target.num_frames else source
     if not motion.num_frames or not reference.num_frames:
         return motion
+    if level is None or reference is not target:
+        level = ground_level(reference)
     frames = ground_frames(source) if source.num_frames == motion.num_frames else None
-    return lift_above_floor(ground_at(motion, ground_level(reference), frames))
+    return lift_above_floor(ground_at(motion, level, frames))
 
 
 def ground_frames(source: Motion) -> Optional[np.ndarray]:

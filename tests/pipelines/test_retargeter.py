@@ -5,6 +5,8 @@ wrong inputs refused in one line before any work."""
 from __future__ import annotations
 
 import copy
+from collections import Counter
+from functools import partial
 from pathlib import Path
 from typing import Callable, List
 
@@ -61,6 +63,24 @@ def test_zoo_clips_come_out_as_retarget_motion_writes_them_the_target_read_once(
         alone + alone[:1])
 
 
+def test_a_generator_of_sources_and_the_target_s_work_done_once(
+        model, walks: List[Motion], dog: Motion, tmp_path: Path, monkeypatch) -> None:
+    """A generator (clips streamed from disk) was refused (``source:
+    expected a satagraph Motion, got generator``); the target was checked,
+    and its ground level and semantic embedding computed, at every clip."""
+    alone = [written(retarget_motion(model, walk, dog, model.embed), tmp_path / f"a{i}.bvh")
+             for i, walk in enumerate(walks)]
+    calls: Counter = Counter()
+    for name in ("check_target", "ground_level", "_embed"):
+        monkeypatch.setattr(inference, name, partial(
+            lambda name, run, *args: calls.update([name]) or run(*args), name,
+            getattr(inference, name)))
+    onto_dog = Retargeter(model, dog, model.embed)
+    outs = onto_dog(walk for walk in walks + walks)
+    assert calls == {"check_target": 1, "ground_level": 1, "_embed": 1 + 4}  # + each source
+    assert [written(out, tmp_path / f"b{i}.bvh") for i, out in enumerate(outs)] == alone * 2
+
+
 @pytest.mark.parametrize("source, target", [
     ("bandai/dataset-1_dash_normal_001.bvh", "dog/D1_010_KAN01_002.bvh"),
     ("cmu/depressed_18_000.bvh", "ccbase/006_01.bvh")])
@@ -96,7 +116,7 @@ def test_wrong_inputs_are_refused_in_one_line_before_any_retarget(
     onto_dog = Retargeter(model, dog)
     with pytest.raises(TypeError, match="source: expected a satagraph Motion, got str"):
         onto_dog("walk.bvh")
-    monkeypatch.setattr(inference, "retarget_motion", lambda *a, **kw: pytest.fail("ran"))
+    monkeypatch.setattr(inference, "retarget_canonical", lambda *a, **kw: pytest.fail("ran"))
     with pytest.raises(TypeError) as error:
         onto_dog([walks[0], "walk.bvh"])
     assert one_line_error(error).startswith("sources[1]: expected a satagraph Motion, got str")
