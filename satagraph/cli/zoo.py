@@ -107,11 +107,12 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
                    "(default: every kind but the gestures; e.g. --species biped "
                    "--kinds bow wave, --species quadruped --kinds sit lie)")
     d = p.add_argument_group("exporter dialects")
-    d.add_argument("--up-axes", nargs="+", type=_axes, default=[["+Y"]],
+    d.add_argument("--up-axes", nargs="+", action=ListThenFolder, read=_axes, default=[["+Y"]],
                    metavar="AXIS", help=f"up axes to write ({', '.join(UP_AXES)}; a "
                    "proper rotation of the whole motion; default: +Y), as --up-axis "
                    "takes them: --up-axes +Z -X, --up-axes=+Z,-X or negX")
-    d.add_argument("--units", nargs="+", type=_unit, default=["m"], metavar="UNIT",
+    d.add_argument("--units", nargs="+", action=ListThenFolder, read=_unit, default=["m"],
+                   metavar="UNIT",
                    help=f"units to write: {', '.join(UNITS)}, or a number N for an "
                    "arbitrary unit in which the character is N units tall (default: m)")
     d.add_argument("--rest-poses", nargs="+", action=ListThenFolder,

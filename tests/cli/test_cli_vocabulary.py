@@ -94,6 +94,19 @@ def test_zoo_up_axes_take_a_minus_as_up_axis_does(parser, axes):
     assert (args.out_dir, args.units) == ("out", ["cm"])
 
 
+@pytest.mark.parametrize("argv, axes, units", [
+    (["--up-axes", "-Z", "--units", "cm", "out"], ["-Z"], ["cm"]),
+    (["--units", "cm", "28", "out"], ["+Y"], ["cm", "28"]),
+    (["--up-axes", "+Y", "Z", "out"], ["+Y", "+Z"], ["m"])])
+def test_zoo_axes_and_units_leave_the_folder_after_them(parser, argv, axes, units):
+    """``zoo --up-axes -Z --units cm out`` took ``out`` for a unit (``argument
+    --units: unit must be one of [...], got 'out'``), as ``--species`` no
+    longer takes a folder after it for a species."""
+    from satagraph.cli.zoo import _flat
+    args = parse_args(parser, ["zoo", *argv])
+    assert (args.out_dir, _flat(args.up_axes), args.units) == ("out", axes, units)
+
+
 def test_axis_lists_without_a_minus_left_to_argparse(parser):
     args = parse_args(parser, ["zoo", "out", "--up-axes", "+Y", "Z"])
     assert args.up_axes == [["+Y"], ["+Z"]] and args.out_dir == "out"
