@@ -226,7 +226,7 @@ def _settings(args):
     with torch on ``--threads`` threads."""
     import torch
     from satagraph.nn.generators.sampling import check_guide
-    from satagraph.pipelines.generate import GenerationSettings
+    from satagraph.pipelines.generate import GenerationSettings, SettingError
     for guide in (args.guide, args.residual_guide):
         check_guide(guide)
     torch.set_num_threads(args.threads)
@@ -236,9 +236,8 @@ def _settings(args):
                                   residual_window=args.residual_window, window=args.window,
                                   guide=args.guide, draw_guidance=args.draw_guidance,
                                   residual_guide=args.residual_guide)
-    except ValueError as err:  # "draw_guidance must be ...": the field, named as its option
-        field, said = str(err).split(" ", 1)
-        raise ValueError(f"--{field.replace('_', '-')} {said}") from None
+    except SettingError as err:  # "draw_guidance must be ...": the field, named as its option
+        raise ValueError(f"--{err.field.replace('_', '-')} {err.problem}") from None
 
 
 def run_generate(args) -> int:

@@ -55,6 +55,24 @@ _NON_NEGATIVE = ("guidance", "residual_guidance", "temperature", "residual_tempe
                  "residual_window", "window", "draw_guidance")
 
 
+class SettingError(ValueError):
+    """A :class:`GenerationSettings` number no sampling has a meaning for:
+    ``"guidance must be a finite number >= 0, got nan"``.
+
+    Args:
+        field (str): The setting's field.
+        problem (str): What is wrong with it, after the field's name.
+    """
+
+    def __init__(self, field: str, problem: str) -> None:
+        self.field, self.problem = field, problem
+        super().__init__(f"{field} {problem}")
+
+    def __reduce__(self):
+        """Pickled with its two arguments, as :class:`~satagraph.io.BVHError`."""
+        return type(self), (self.field, self.problem)
+
+
 @dataclass(frozen=True)
 class GenerationSettings:
     """How to sample: decoding steps and guidance of the masked transformer
@@ -153,13 +171,13 @@ class GenerationSettings:
         ``torch.multinomial``); the guides' names are the sampler's to check."""
         for name in ("steps", "rerank") + (("layers",) if self.layers is not None else ()):
             if int(getattr(self, name)) < 1:
-                raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
+                raise SettingError(name, f"must be at least 1, got {getattr(self, name)}")
         for name in _NON_NEGATIVE:
             value = getattr(self, name)
             if value is not None and not (np.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+                raise SettingError(name, f"must be a finite number >= 0, got {value}")
         if not 0 < self.topk_ratio <= 1:
-            raise ValueError(f"topk_ratio must be in (0, 1], got {self.topk_ratio}")
+            raise SettingError("topk_ratio", f"must be in (0, 1], got {self.topk_ratio}")
 
     @property
     def residual_draw(self) -> str:
@@ -482,5 +500,6 @@ def _same_write(path: str, mine: os.stat_result) -> bool:
         mine.st_mtime_ns, mine.st_size)
 
 
-__all__ = ["SECONDS_RANGE", "check_seconds", "GenerationSettings", "RigInputs", "rig_inputs",
-           "load_generator", "generate_on", "RAW_DECODING", "decode_on", "output_paths", "write_all"]
+__all__ = ["SECONDS_RANGE", "check_seconds", "SettingError", "GenerationSettings", "RigInputs",
+           "rig_inputs", "load_generator", "generate_on", "RAW_DECODING", "decode_on",
+           "output_paths", "write_all"]

@@ -182,6 +182,22 @@ def test_settings_refuse_what_no_sampling_means():
             GenerationSettings(**bad)
 
 
+def test_a_refused_setting_carries_its_field():
+    """``generate`` named the option by parsing the field out of the start
+    of the message; the error carries it (and survives a worker's pickle)."""
+    import pickle
+    from satagraph.pipelines.generate import SettingError
+    for bad in (dict(draw_guidance=-1.0), dict(residual_window=float("nan")), dict(steps=0),
+                dict(topk_ratio=0.0)):
+        with pytest.raises(SettingError) as error:
+            GenerationSettings(**bad)
+        (field, value), = bad.items()
+        assert error.value.field == field and str(error.value) == (
+            f"{field} {error.value.problem}") and f"got {value}" in error.value.problem
+        copy = pickle.loads(pickle.dumps(error.value))
+        assert (copy.field, str(copy)) == (field, str(error.value))
+
+
 def test_an_exported_weights_file_generates_like_its_checkpoint(t2m_ckpt, zoo_skeletons,
                                                                  tmp_path):
     """`export-weights` of a text-to-motion run (frozen autoencoder inside)
