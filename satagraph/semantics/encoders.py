@@ -269,9 +269,9 @@ class T5TextEncoder(TextEncoder):
             return self
         from transformers import T5EncoderModel
         self._model, self._tokenizer = load_frozen(
-            T5EncoderModel, self.path, self.device, lambda err: FileNotFoundError(
+            T5EncoderModel, self.path, self.device, lambda said: FileNotFoundError(
                 f"T5TextEncoder: cannot load a T5 model and tokenizer from "
-                f"{self.path}: {err}. {T5_HELP}"))
+                f"{self.path}: {said}. {T5_HELP}"))
         self._dim = int(self._model.config.d_model)
         return self
 
@@ -290,7 +290,7 @@ def default_device(device: Union[str, torch.device, None]) -> torch.device:
 
 
 def load_frozen(model_class: type, path: Path, device: torch.device,
-                error: Callable[[Exception], Exception]) -> Tuple[torch.nn.Module, object]:
+                error: Callable[[str], Exception]) -> Tuple[torch.nn.Module, object]:
     r"""``(model, tokenizer)`` of a ``transformers`` folder, read from local
     files only; the model in eval mode, gradients off, on :obj:`device`.
 
@@ -298,15 +298,17 @@ def load_frozen(model_class: type, path: Path, device: torch.device,
         model_class: The ``transformers`` class (``from_pretrained``).
         path: The folder.
         device: Where the model runs.
-        error: The encoder's own error for what ``from_pretrained`` raised
-            (``OSError`` or ``ValueError``).
+        error: The encoder's own error, given the first line of what
+            ``from_pretrained`` raised (``OSError`` or ``ValueError``; its
+            messages run over several lines), without its closing period.
     """
     from transformers import AutoTokenizer
     try:
         tokenizer = AutoTokenizer.from_pretrained(str(path), local_files_only=True)
         model = model_class.from_pretrained(str(path), local_files_only=True)
     except (OSError, ValueError) as err:
-        raise error(err) from err
+        first = (str(err).strip() or type(err).__name__).splitlines()[0]
+        raise error(first.rstrip(".")) from err
     model.requires_grad_(False)
     return model.eval().to(device), tokenizer
 

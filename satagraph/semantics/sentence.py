@@ -110,10 +110,9 @@ class SentenceEncoder(TextEncoder):
         self._dim = int(self._model.config.hidden_size)
         return self
 
-    def _load_error(self, err: Exception) -> FileNotFoundError:
-        first = (str(err).strip() or type(err).__name__).splitlines()[0]
+    def _load_error(self, said: str) -> FileNotFoundError:
         return FileNotFoundError(f"SentenceEncoder: cannot load a model and tokenizer "
-                                 f"from {self.model_path}: {first}. {SENTENCE_HELP}")
+                                 f"from {self.model_path}: {said}. {SENTENCE_HELP}")
 
     @torch.inference_mode()
     def encode(self, texts: Sequence[str]) -> Tensor:

@@ -99,6 +99,27 @@ def test_sentence_encoder_pools_and_normalises(tiny_minilm):
     assert not any(p.requires_grad for p in enc._model.parameters())
 
 
+@pytest.mark.parametrize("encoder, config", [
+    (T5TextEncoder, {"model_type": "t5", "d_model": 8}),
+    (SentenceEncoder, {"model_type": "bert", "hidden_size": 8})])
+def test_both_encoders_say_the_first_line_of_a_load_error(tmp_path, monkeypatch, encoder,
+                                                           config):
+    """transformers' load errors run over several lines: the T5 encoder
+    carried them whole, the sentence encoder their first line."""
+    transformers = pytest.importorskip("transformers")
+
+    def refuse(*args, **kwargs):
+        raise OSError("Can't load tokenizer for 'x'.\nIf you were trying to load it from "
+                      "'https://huggingface.co/models', make sure ...\nOtherwise, ...")
+    monkeypatch.setattr(transformers.AutoTokenizer, "from_pretrained", refuse)
+    (tmp_path / "config.json").write_text(json.dumps(config))
+    with pytest.raises(FileNotFoundError) as err:
+        encoder(tmp_path).load()
+    assert str(err.value).startswith(f"{encoder.__name__}: cannot load a ")
+    assert f"{tmp_path}: Can't load tokenizer for 'x'. satagraph never downloads" in str(
+        err.value) and "\n" not in str(err.value)
+
+
 def test_sentence_encoder_errors_name_the_path(tiny_minilm, tmp_path):
     with pytest.raises(FileNotFoundError) as err:
         build_text_encoder(f"sentence:{tmp_path / 'no-such-model'}")
