@@ -331,22 +331,30 @@ def run_demo(options: DemoOptions, stream: TextIO = sys.stdout) -> DemoResult:
     Raises:
         RunLockedError: Another live demo writes to the same output folder
             (it held the run whose checkpoints a second one removed).
-        FileNotFoundError: A source of :attr:`DemoOptions.data` is missing;
-            said before anything is written (the zoo was, and left behind).
+        FileNotFoundError: A source of :attr:`DemoOptions.data` is missing.
+        ValueError: The training config or an override is refused.
+
+    Both said before anything is written (the zoo, the retargets and their
+    rendering were, and left behind).
     """
     from satagraph.datasets.sources import resolve_sources
     from satagraph.lightning.reliability import run_lock
     if options.data:
         resolve_sources(options.data)
-    with run_lock(Path(options.output), "--output"):
-        return _run_demo(options, stream)
+    out = Path(options.output)
+    builtin = None if options.from_scratch or options.data else builtin_module()
+    cfg = demo_config(options, options.data or [str(out / "zoo" / "manifest.tsv")],
+                      out / "run", None if builtin is None else builtin.hparams)
+    with run_lock(out, "--output"):
+        return _run_demo(options, stream, builtin, cfg)
 
 
-def _run_demo(options: DemoOptions, stream: TextIO) -> DemoResult:
-    """:func:`run_demo`'s steps, under its lock."""
+def _run_demo(options: DemoOptions, stream: TextIO, builtin, cfg: Dict[str, Any]
+              ) -> DemoResult:
+    """:func:`run_demo`'s steps, under its lock, with the built-in model
+    (``None``: trained from scratch) and the training config."""
     out = Path(options.output)
     result = DemoResult(str(out))
-    builtin = None if options.from_scratch or options.data else builtin_module()
     progress = _Progress(result, 4 if builtin is None else 5, stream)
     zoo = out / "zoo"
     with progress.step("zoo", f"writing the procedural zoo to {zoo}") as step:
@@ -355,16 +363,13 @@ def _run_demo(options: DemoOptions, stream: TextIO) -> DemoResult:
         step.note = (f"{len(rows)} BVH clips of {len({r['skeleton'] for r in rows})} "
                      f"skeletons ({', '.join(dict.fromkeys(r['species'] for r in rows))})")
     clips = pick_clips(rows, zoo)
-    sources = options.data or [str(zoo / "manifest.tsv")]
     if builtin is not None:
         _retarget_step(progress, "retarget", "with the built-in model", builtin, clips,
                        out / "retarget", options.seed)
         _render_step(progress, result, out)
-    cfg = demo_config(options, sources, out / "run",
-                      None if builtin is None else builtin.hparams)
     what = ("fine-tuning the built-in model" if builtin is not None else
             f"training {cfg['name']} from scratch")
-    with progress.step("train", f"{what} on {', '.join(sources)} "
+    with progress.step("train", f"{what} on {', '.join(cfg['data']['sources'])} "
                        f"(at most {_budget(cfg)})") as step:
         module, trainer = train_demo(cfg, None if builtin is None else "builtin")
         from satagraph.experiment.train import last_checkpoint

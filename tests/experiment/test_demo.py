@@ -173,6 +173,19 @@ def test_a_missing_data_folder_is_refused_before_any_step(capsys, tmp_path):
     assert len(err.splitlines()) == 1 and not out.exists()
 
 
+@pytest.mark.parametrize("argv, said", [
+    (["nosuch.key=1"], "unknown config key 'nosuch'"),
+    (["--config", "nosuch"], "config 'nosuch' not found")])
+def test_a_refused_config_is_said_before_any_step(capsys, tmp_path, argv, said):
+    """A bad override or config was refused after the zoo, the built-in
+    model's retargets and their rendering were written into ``--output``."""
+    out = tmp_path / "new"
+    assert main(["demo", "--output", str(out), *argv, *SMALL]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"satagraph: error: {said}") and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
 def test_builtin_fine_tune_keeps_the_builtin_facing_features(demo_weights, tmp_path):
     """The fine-tune featurises the zoo as the built-in weights were
     trained (``data.preprocessing.facing_smooth``), so ``--init-from``
