@@ -14,12 +14,15 @@ canonical frame at 30 fps), scored without a ground truth by
   relative to the root, in leg lengths, over the source's
   (:func:`~satagraph.quality.stride`); a retarget that travels as far as
   its source on a shorter stride skates.
-- **posture** (diagnostic): the correlation over joints of each joint's
-  median height above the root, retarget against the target rig's own clip
-  (:func:`~satagraph.pipelines.quality.posture`): 1.00 for the real humans
-  here, 0.82-1.00 between the zoo's plans; a leg pointing up, as onto a
-  rest the model misread (Reallusion's, before it was re-rested), gave
-  0.37 while steps and travel read +0.98 and 0.97.
+- **posture** (diagnostic): how near each joint's median height above the
+  root rides to the target rig's own clip's, 1 minus the squared gaps over
+  that clip's spread of heights
+  (:func:`~satagraph.pipelines.quality.posture`): 0.99-1.00 for the real
+  humans here; a leg pointing up, as onto a rest the model misread
+  (Reallusion's, before it was re-rested), gives -0.59 while steps and
+  travel read +0.98 and 0.97, and a quadruped carrying its forepaws off
+  the floor as a human carries its hands 0.75-0.85 (a correlation over
+  joints, the column before, read those 0.37 and 0.95-0.97).
 - **ground**: median lowest-joint height, % of the character's height.
   Target |ground| <= 3 %. Retargets are grounded by default
   (:func:`~satagraph.transforms.ground.ground_retarget`: one vertical shift

@@ -24,7 +24,8 @@ computed the same way on the source and on the output:
   it faces (0 for a walk, 90 for a side-step); a retarget should keep the
   source's (``sideways``: the difference).
 * :func:`posture`: whether each joint rides as high above the root as in
-  the target character's own clip (the correlation over joints).
+  the target character's own clip (1 minus the squared gaps over the
+  reference's spread).
 * :func:`turn_rate`: how fast the body's facing turns over the clip, in
   degrees per second (2-3 for the zoo's forward walks and runs).
 * :func:`pace_drift`: how much faster the root moves over the clip's last
@@ -365,20 +366,27 @@ def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     """How the joints of a motion are carried against how the same rig
     carries them where it stands in :obj:`reference` (its own clip,
     :func:`~satagraph.transforms.ground.standing_frames`: a dog's clip
-    that lies most of the time still shows how it stands): the Pearson
-    correlation, over joints, of each joint's median height above the root
-    (``None`` for rigs that differ or a body without height to compare):
-    near 1 where each joint rides where the character's own clip has it
-    (0.82-1.00 for the built-in model's retargets between the zoo's plans
-    and real rigs); a retarget with one leg pointing up read 0.37."""
+    that lies most of the time still shows how it stands): one minus the
+    squared gaps, over joints, between each joint's median height above the
+    root in the two, over the spread of the reference's heights about their
+    mean (``None`` for rigs that differ or a reference without height to
+    compare). 1 where each joint rides where the character's own clip has
+    it (0.99-1.00 for the built-in model's retargets onto real humans), less
+    the further any rides from there, below 0 for a retarget with one leg
+    pointing up (-0.59), 0.75-0.85 for a quadruped carrying its forepaws a
+    quarter of its height off the floor, as a human carries its hands. (A
+    correlation over joints read those 0.37 and 0.95-0.97: it forgives any
+    scale and offset of the heights, and the spine's long spread outweighs
+    two legs.)"""
     if canonical.skeleton.names != reference.skeleton.names:
         return None
     ref = reference.global_positions()
     standing = stands(ref, reference.skeleton, reference.fps)
     a, b = _carried(canonical.global_positions()), _carried(ref[standing])
-    if a.std() < 1e-9 or b.std() < 1e-9:
+    spread = float(((b - b.mean()) ** 2).sum())
+    if spread < 1e-18:
         return None
-    return float(np.corrcoef(a, b)[0, 1])
+    return float(1.0 - ((a - b) ** 2).sum() / spread)
 
 
 def _carried(positions: np.ndarray) -> np.ndarray:

@@ -397,7 +397,7 @@ def test_retarget_onto_a_rig_whose_bones_all_point_up(read_real: Callable[[str],
                                                       ) -> None:
     """Reallusion's CC_Base rig (ccbase) rests with every bone up, legs
     included. Read as the file has it, the built-in model walked a human
-    onto it with one leg pointing up (posture 0.37 from a CMU walk: each
+    onto it with one leg pointing up (posture -0.59 from a CMU walk: each
     joint's height above the root against the rig's own clip); ``rest="auto"`` re-rests it
     on its mean standing pose and the retarget carries it as its own clip
     does, in step."""
