@@ -11,7 +11,11 @@ run, a candidate passes if:
 2. no other group's median JP (zoo biped, quadruped, bird, fowl, Bandai)
    rises more than 5 % above the base's;
 3. the retargets: no row's mean steps fall by more than 0.03, no row
-   loses travel share in band, and no row's lowest posture falls below 0.9.
+   loses travel share in band, and no row's lowest posture falls below 0.9,
+   or, on a row where the base's is below 0.9 already, by more than 0.03
+   below the base's (PRETRAIN.md section 54: ``posture`` is no longer a
+   correlation, and the base reads 0.75-0.85 on its human -> quadruped
+   rows).
 
 Of those that pass, the one with the lowest dog median is chosen.
 
@@ -49,8 +53,9 @@ AIM = "dog (not test)"
 KEPT = ("zoo biped", "zoo quadruped", "zoo bird", "zoo fowl", "bandai (val)")
 #: Part 1's least gain, part 2's largest loss (shares of the base's median).
 GAIN, LOSS = 0.05, 0.05
-#: Part 3: largest fall in mean steps, lowest posture.
-STEPS_DROP, POSTURE = 0.03, 0.9
+#: Part 3: largest fall in mean steps, lowest posture, and its largest
+#: fall where the base's is below that already.
+STEPS_DROP, POSTURE, POSTURE_DROP = 0.03, 0.9, 0.03
 #: How the retarget rows whose source stands still are named (``pretrained_val.py``
 #: names them with it).
 STILL = "still source:"
@@ -107,8 +112,9 @@ def failures(results: Dict, candidate: str, base: str = "builtin",
         if got["travel_ok"] < was["travel_ok"] - 1e-9:
             out.append(f"part 3: {row} travel in band {got['travel_ok']:.0%} against "
                        f"{was['travel_ok']:.0%}")
-        if got["posture"] < POSTURE:
-            out.append(f"part 3: {row} lowest posture {got['posture']:.2f}")
+        if got["posture"] < min(POSTURE, was["posture"] - POSTURE_DROP):
+            out.append(f"part 3: {row} lowest posture {got['posture']:.2f} against "
+                       f"{was['posture']:.2f}")
     return out
 
 

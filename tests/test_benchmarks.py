@@ -368,6 +368,30 @@ def test_pretrained_rule_gives_section_31s_verdict_from_its_stored_table():
     assert [f[:7] for f in pretrained_rule.failures(results, "same")] == ["part 1:"]
 
 
+def test_pretrained_rule_posture_is_judged_against_the_base_below_its_floor():
+    """Part 3's posture: below 0.9 fails where the base holds 0.9 or more;
+    on a row where the base is below 0.9 already (the human -> quadruped
+    rows since posture stopped being a correlation), only a fall of more
+    than 0.03 below the base's fails."""
+    import json
+    import pretrained_rule
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "pretrained_val_sitlie.json").read_text())
+    for part in ("reconstruction", "retarget"):
+        results[part] = {name: json.loads(json.dumps(results[part]["builtin"]))
+                         for name in ("builtin", "same")}
+    base, same = results["retarget"]["builtin"], results["retarget"]["same"]
+    high, low = list(base)[:2]
+    base[high]["posture"], same[high]["posture"] = 0.95, 0.89
+    base[low]["posture"], same[low]["posture"] = 0.80, 0.78
+
+    def posture_fails():
+        return [f for f in pretrained_rule.failures(results, "same") if "posture" in f]
+    assert posture_fails() == [f"part 3: {high} lowest posture 0.89 against 0.95"]
+    same[high]["posture"], same[low]["posture"] = 0.91, 0.76
+    assert posture_fails() == [f"part 3: {low} lowest posture 0.76 against 0.80"]
+
+
 def test_pretrained_rule_paired_compares_each_clip_with_itself():
     """``--paired``: a candidate 10 % worse on every clip fails part 2 even
     where the group's median does not move, one worse on a single clip of
