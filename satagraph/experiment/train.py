@@ -898,7 +898,7 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     Raises:
         CheckpointError: The file is not a satagraph model checkpoint or
             weights file, is damaged, or holds non-finite weights; its
-            ``model.local_conv`` is not registered here
+            ``meta.module`` or ``model.local_conv`` is not registered here
             (:func:`check_registered_conv`); or ``"builtin"`` and none ship
             (one line naming it).
     """
@@ -920,7 +920,7 @@ def load_module(ckpt: str = "builtin", map_location: str = "cpu"):
     except ValueError as err:  # a subclass registered in code this process has not run
         raise CheckpointError(f"{ckpt}: a {name!r} model, which is not registered here: "
                               "import the code that registers it (register_module) first "
-                              f"({' '.join(str(err).split())[:160]})") from None
+                              f"({' '.join(str(err).split())})") from None
     sections = ModuleSections(**{k: hparams[k] for k in ("model", "loss", "optim", "fps",
                                                          "meta") if hparams.get(k) is not None},
                               extra=class_arguments(entry.cls, hparams))

@@ -295,6 +295,30 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     assert loaded.z_weight == 0.7 and loaded.hparams["z_weight"] == 0.7
 
 
+def test_a_checkpoint_of_an_unregistered_module_says_the_plugin_variable_whole(
+        tmp_path, monkeypatch):
+    """The line for a checkpoint whose module nothing here registered was
+    cut at 160 characters of the registry's message, in the middle of its
+    hint: '... in SATAGRAPH_PLUGINS, e.g. SATAGRAPH_PL)'."""
+    from satagraph.experiment import registry
+    from satagraph.experiment.train import load_module
+    from satagraph.io.checkpoint import CheckpointError
+    from satagraph.lightning import SATAVAEModule
+    module = SATAVAEModule(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
+                                latent_channels=8, semantic_channels=0),
+                           meta={"window": 32, "module": "never_registered_t"})
+    module.normalizer.fitted.fill_(True)
+    path = save_module_checkpoint(module, tmp_path / "theirs.ckpt")
+    monkeypatch.setattr(registry, "_IMPORTED_PLUGINS", set())
+    monkeypatch.delenv("SATAGRAPH_PLUGINS", raising=False)
+    with pytest.raises(CheckpointError) as err:
+        load_module(str(path))
+    assert str(err.value).startswith(f"{path}: a 'never_registered_t' model, which is not "
+                                     "registered here")
+    assert str(err.value).endswith("e.g. SATAGRAPH_PLUGINS=my_models))")
+    assert "\n" not in str(err.value)
+
+
 def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
     """A module of one's own built without ``meta.module`` (by its
     constructor, trained with one's own Trainer) was read as the built-in
