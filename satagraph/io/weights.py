@@ -6,8 +6,9 @@ float32) and, in the safetensors metadata (JSON strings), everything needed
 to rebuild the module offline:
 
 - ``format``: :data:`FORMAT`, ``format_version``: :data:`FORMAT_VERSION`,
-- ``hyper_parameters``: ``{model, loss, optim, fps, meta}`` (plain
-  containers; what :func:`satagraph.experiment.train.load_module` rebuilds from),
+- ``hyper_parameters``: ``{model, loss, optim, fps, meta}`` and a
+  subclass's own constructor arguments (plain containers; what
+  :func:`satagraph.experiment.train.load_module` rebuilds from),
 - ``module``, ``semantic_encoder``, ``fps``, ``window``, ``dtype``,
 - ``training_data``: what the model was trained on (free text or a
   description), ``provenance``: how (command, minutes, machine, ...).
@@ -21,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import warnings
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
@@ -230,10 +232,19 @@ def _plain(value: Any, where: str) -> Any:
 
 def module_hyper_parameters(module: torch.nn.Module) -> Dict[str, Any]:
     """The ``{model, loss, optim, fps, meta}`` hyperparameters a module was
-    built from, as plain containers."""
+    built from, and a subclass's own constructor arguments (what
+    :func:`~satagraph.experiment.train.load_module` passes back to it), as
+    plain containers; an argument that is no plain value is left out with a
+    warning."""
     hparams = dict(getattr(module, "hparams", {}) or {})
-    return _plain({k: hparams[k] for k in _HPARAM_KEYS if k in hparams},
-                  "hyper_parameters")
+    out = _plain({k: hparams[k] for k in _HPARAM_KEYS if k in hparams}, "hyper_parameters")
+    for key in sorted(set(hparams) - set(_HPARAM_KEYS)):
+        try:
+            out[key] = _plain(hparams[key], f"hyper_parameters.{key}")
+        except TypeError as err:
+            warnings.warn(f"{err}: left out (loaded back, the module takes its default)",
+                          stacklevel=2)
+    return out
 
 
 def weights_payload(module: torch.nn.Module, half: bool = False,

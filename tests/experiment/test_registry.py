@@ -293,6 +293,17 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     loaded = load_module(str(path))
     assert type(loaded) is Weighted
     assert loaded.z_weight == 0.7 and loaded.hparams["z_weight"] == 0.7
+    # a weights file keeps them too: ``export-weights`` wrote only the five
+    # sections, and the file loaded back with z_weight 0.1, silently
+    from satagraph.io.weights import read_weights_metadata, save_weights
+    save_weights(module, tmp_path / "weighted.safetensors")
+    assert read_weights_metadata(tmp_path / "weighted.safetensors")[
+        "hyper_parameters"]["z_weight"] == 0.7
+    assert load_module(str(tmp_path / "weighted.safetensors")).z_weight == 0.7
+    module.hparams["fn"] = print  # no weights file holds it: said, left out
+    with pytest.warns(UserWarning, match=r"^hyper_parameters.fn: builtin_function_or_method "
+                      "is not a plain value: left out"):
+        save_weights(module, tmp_path / "fn.safetensors")
 
 
 def test_a_checkpoint_of_an_unregistered_module_says_the_plugin_variable_whole(
