@@ -198,6 +198,32 @@ def test_a_registered_local_conv_is_a_layer_name(batch, monkeypatch):
         assert_finite_grads(block)
 
 
+def test_a_registered_local_conv_of_another_width_is_refused(monkeypatch):
+    """A registered layer concatenating its heads (``GATConv(channels,
+    channels, heads=heads)``) was a bare 'The size of tensor a (64) must
+    match the size of tensor b (32)' traceback from the block's residual sum
+    at the first batch (``satagraph train``: exit code 1, after the data was
+    read); it is one line naming the layer when the model is built. The probe
+    draws no random numbers and leaves the layer in training mode."""
+    from torch_geometric.nn import GATConv
+    from satagraph.nn.layers import local_conv
+    monkeypatch.setattr(local_conv, "_BUILDERS", dict(local_conv._BUILDERS))
+    register_local_conv("wide_t", lambda channels, heads, edge_dim, act:
+                        GATConv(channels, channels, heads=heads, edge_dim=edge_dim))
+    with pytest.raises(ValueError, match=r"^local conv 'wide_t' maps 16 channels per node "
+                       r"to 32: its register_local_conv builder must return"):
+        SpatioTemporalBlock(16, heads=2, ff_channels=32, local_conv="wide_t")
+    register_local_conv("gat_t", lambda channels, heads, edge_dim, act:
+                        GATConv(channels, channels // heads, heads=heads,
+                                edge_dim=edge_dim, dropout=0.5))
+    torch.manual_seed(0)
+    conv = build_local_conv("gat_t", 16, heads=2, edge_dim=16)
+    after = torch.rand(3)
+    torch.manual_seed(0)
+    GATConv(16, 8, heads=2, edge_dim=16, dropout=0.5)
+    assert torch.equal(torch.rand(3), after) and conv.training
+
+
 @pytest.mark.parametrize("local_conv", ["gine", None])
 @pytest.mark.parametrize("attention", [True, False])
 @pytest.mark.parametrize("temporal", [True, False])

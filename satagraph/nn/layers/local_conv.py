@@ -6,6 +6,7 @@ from __future__ import annotations
 import inspect
 from typing import Callable, Dict, Optional, Tuple
 
+import torch
 from torch import nn
 from torch_geometric.nn import (MLP, GATConv, GATv2Conv, GCNConv, GINConv, GINEConv,
                                 MessagePassing, TransformerConv)
@@ -101,9 +102,46 @@ def build_local_conv(name: Optional[str], channels: int, heads: int = 4,
     Returns:
         The layer, or ``None``. Use :func:`accepts_edge_attr` to know whether
         it takes ``edge_attr``.
+
+    Raises:
+        ValueError: No layer has that name, or a registered layer's output
+            is not :obj:`channels` wide.
     """
     key = check_local_conv(name)
-    return None if key is None else _BUILDERS[key](channels, heads, edge_dim, act)
+    if key is None:
+        return None
+    conv = _BUILDERS[key](channels, heads, edge_dim, act)
+    if key not in LOCAL_CONVS:
+        _check_width(key, conv, channels, edge_dim)
+    return conv
+
+
+def _check_width(name: str, conv: nn.Module, channels: int, edge_dim: Optional[int]) -> None:
+    """Refuse a registered layer that does not map :obj:`channels` to
+    :obj:`channels`, probed once on a two-joint frame graph (in evaluation
+    mode, the random state kept): one of another width, such as a
+    ``GATConv(channels, channels, heads=heads)`` concatenating its heads,
+    was a bare size mismatch in the block's residual sum at the first batch.
+    A layer that cannot run on the probe is left to its first batch."""
+    x, edge_index = torch.zeros(2, channels), torch.tensor([[0, 1], [1, 0]])
+    args = (x, edge_index)
+    if edge_dim and accepts_edge_attr(conv):
+        args += (torch.zeros(2, edge_dim),)
+    training = conv.training
+    try:
+        with torch.no_grad(), torch.random.fork_rng(devices=[]):
+            out = conv.eval()(*args)
+    except Exception:  # noqa: BLE001 - only the width is judged here
+        return
+    finally:
+        conv.train(training)
+    shape = tuple(out.shape) if isinstance(out, torch.Tensor) else None
+    if shape != (2, channels):
+        got = shape[1] if shape and len(shape) == 2 else shape or type(out).__name__
+        raise ValueError(f"local conv {name!r} maps {channels} channels per node to {got}: "
+                         "its register_local_conv builder must return a layer whose output "
+                         "is channels wide (heads * (channels // heads) for one that "
+                         "concatenates its heads)")
 
 
 def check_local_conv(name: Optional[str]) -> Optional[str]:
