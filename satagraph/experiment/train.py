@@ -623,6 +623,10 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             warnings.filterwarnings("ignore", message=r"`isinstance\(treespec, LeafSpec\)`",
                                     category=FutureWarning,
                                     module=r"lightning\.pytorch\.utilities\._pytree")
+            # a run stopped before its first validation (sweep --steps shorter than an
+            # epoch) has no best epoch yet: Lightning said so naming every logged key
+            warnings.filterwarnings("ignore", message=r"`ModelCheckpoint\(monitor=.* could not "
+                                    "find the monitored key")
             _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
 

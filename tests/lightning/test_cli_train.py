@@ -335,3 +335,15 @@ def test_the_epochs_a_run_trained_are_counted_from_its_steps() -> None:
     assert _epochs_done(SimpleNamespace(**dict(vars(run), global_step=46))) == "2 epochs"
     assert _epochs_done(SimpleNamespace(**dict(vars(run), num_training_batches=float("inf")))) \
         == "epoch 2"
+
+
+def test_a_run_stopped_before_its_first_validation_is_not_warned_of_val_loss(
+        tiny_config: Dict[str, Any], recwarn: pytest.WarningsRecorder) -> None:
+    """A run that ends within its first epoch (``trainer.max_steps``, ``sweep
+    --steps`` shorter than an epoch) has no best epoch to keep: Lightning's
+    best checkpoint warned that it could not find ``val_loss``, naming every
+    logged key (about 2,000 characters, once per sweep row)."""
+    cfg = dict(tiny_config, logger={"name": "none"})
+    _, _, trainer, run_dir = train(cfg, max_steps=1, limit_train_batches=2)
+    assert trainer.global_step == 1 and (run_dir / "checkpoints" / "last.ckpt").is_file()
+    assert not [w for w in recwarn if "monitored key" in str(w.message)]
