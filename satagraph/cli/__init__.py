@@ -491,8 +491,8 @@ def parse_args(parser: argparse.ArgumentParser,
                argv: Optional[Sequence[str]] = None) -> argparse.Namespace:
     """Parse :obj:`argv`, taking ``key=value`` overrides wherever they stand
     (also after an option such as ``--init-from CKPT``, where argparse alone
-    would reject them), and a command's ``files`` (``render``) also after
-    its options."""
+    would reject them), and a command's ``files`` (``render``) or ``items``
+    (``sweep``'s configs and overrides) also after its options."""
     argv = _glued_axes(sys.argv[1:] if argv is None else argv)
     if "--traceback" in argv[1:]:  # also after the command's name
         argv = ["--traceback"] + [a for a in argv if a != "--traceback"]
@@ -501,9 +501,10 @@ def parse_args(parser: argparse.ArgumentParser,
     if hasattr(args, "overrides") and overrides:
         args.overrides = list(args.overrides or []) + overrides
         extra = [a for a in extra if a not in overrides]
-    if extra and isinstance(getattr(args, "files", None), list) and \
-            not any(a.startswith("-") for a in extra):
-        args.files += extra  # `render A.bvh --units cm B.bvh OUT.gif`: files after an option
+    rest = next((getattr(args, key) for key in ("files", "items")
+                 if isinstance(getattr(args, key, None), list)), None)
+    if extra and rest is not None and not any(a.startswith("-") for a in extra):
+        rest += extra  # `render A.bvh --units cm B.bvh OUT.gif`: files after an option
         extra = []
     if extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")

@@ -47,7 +47,7 @@ def add_sweep_parser(sub: "argparse._SubParsersAction") -> argparse.ArgumentPars
         "own model, losses, optimiser and trainer settings: the table lists every "
         "setting the rows differ in. Every config is checked before any trains; one "
         "that fails while training is a row saying why, and the others go on (exit "
-        "code 2). Options come first: satagraph sweep --budget 10 sata_vae gnn_gin "
+        "code 2). For example: satagraph sweep --budget 10 sata_vae gnn_gin "
         "ablation_no_gnn data.batch_size=8")
     p.add_argument("items", nargs="+", metavar="CONFIG|key=value",
                    help="config names or paths, and dotted overrides for all")

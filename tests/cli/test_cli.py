@@ -459,6 +459,20 @@ def test_overrides_may_follow_options():
         parse_args(parser, ["inspect", "f.bvh", "a=1"])
 
 
+def test_sweep_items_may_follow_options():
+    """``satagraph sweep tiny gnn_gat --steps 2 data.batch_size=4`` was
+    'unrecognized arguments: data.batch_size=4' (a config after an option
+    likewise), where ``train`` takes overrides wherever they stand."""
+    from satagraph.cli import build_parser, parse_args
+    parser = build_parser()
+    args = parse_args(parser, ["sweep", "tiny", "--steps", "2", "gnn_gat", "--output", "o",
+                               "data.batch_size=4"])
+    assert args.items == ["tiny", "gnn_gat", "data.batch_size=4"] and args.steps == 2
+    assert args.output == "o"
+    with pytest.raises(SystemExit):
+        parse_args(parser, ["sweep", "tiny", "--steps", "2", "--stray"])
+
+
 def test_each_warning_line_is_shown_once_per_command():
     """A file's rig is read again at every step that canonicalises it; the
     command shows each of its warnings once (other lines still pass)."""
