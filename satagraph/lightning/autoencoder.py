@@ -134,7 +134,12 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
             "SATARVQModule, the built-in 'vae' and 'rvq')")
 
     def build_loss(self, **weights: float) -> nn.Module:
-        """The loss; weights from the config."""
+        """The loss (:attr:`criterion`); weights from the config's ``loss``
+        section. :meth:`compute_losses` calls it as ``criterion(out, batch,
+        normalizer)`` for a dict of named terms and their weighted sum under
+        ``"loss"``, and reads the ``retarget`` and ``retarget_root`` weights
+        from its ``weights`` dict, where it has one
+        (:class:`~satagraph.losses.MotionLoss`, the default)."""
         from satagraph.losses import MotionLoss
         return MotionLoss(**weights)
 
