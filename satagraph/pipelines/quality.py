@@ -26,6 +26,9 @@ computed the same way on the source and on the output:
 * :func:`posture`: whether each joint rides as high above the root as in
   the target character's own clip (1 minus the squared gaps over the
   reference's spread).
+* :func:`lands`: whether each limb the target character stands on in its
+  own clip comes down to the floor as often (the least share over those
+  limbs).
 * :func:`turn_rate`: how fast the body's facing turns over the clip, in
   degrees per second (2-3 for the zoo's forward walks and runs).
 * :func:`pace_drift`: how much faster the root moves over the clip's last
@@ -395,6 +398,66 @@ def _carried(positions: np.ndarray) -> np.ndarray:
     return np.median(positions[..., 1] - positions[:, :1, 1], axis=0)
 
 
+#: How near the floor (y = 0), in character heights, a limb's lowest point
+#: comes where it lands (:func:`landing_shares`) ...
+LANDING_HEIGHT = 0.05
+#: ... and the share of its standing frames in which the reference lands a
+#: limb for :func:`lands` to read that limb.
+LANDS_SHARE = 0.5
+
+
+def landing_shares(canonical: Motion, frames: Optional[np.ndarray] = None,
+                   positions: Optional[np.ndarray] = None) -> Dict[str, float]:
+    r"""Per limb end the skeleton has (:func:`~satagraph.semantics.limb_ends`,
+    the limbs of :func:`limb_tracks`), the share of frames (of :obj:`frames`
+    only, where given) in which the limb's lowest point (its end and the
+    joints below it) is within :data:`LANDING_HEIGHT` character heights of
+    the floor (y = 0); from the global :obj:`positions` where the caller
+    has them.
+
+    Shapes:
+        - **frames**: :math:`(F,)` frame indices
+        - **positions**: :math:`(T, J, 3)`
+    """
+    pos = canonical.global_positions() if positions is None else positions
+    height = character_height(canonical.skeleton, pos)
+    shown = pos if frames is None else pos[frames]
+    if not len(shown):
+        return {}
+    return {limb: float((shown[:, canonical.skeleton.subtree(j), 1].min(axis=1)
+                         < LANDING_HEIGHT * height).mean())
+            for limb, j in limb_ends(canonical.skeleton).items()}
+
+
+def lands(canonical: Motion, reference: Motion) -> Optional[float]:
+    """Whether a motion puts down the limbs its character stands on: over
+    the limbs that :obj:`reference` (the character's own clip, canonical)
+    lands in at least :data:`LANDS_SHARE` of its standing frames
+    (:func:`~satagraph.transforms.ground.stands`), the least ratio of the
+    motion's :func:`landing_shares` over its own standing frames (a
+    retarget of a dog that sits is not asked to stand) to the
+    reference's, capped at 1 (``None`` where the reference lands no limb
+    that often). 1 where every limb comes down as often as in the
+    character's own clip; 0 where one never does: the built-in model's
+    human -> dog and zoo biped -> quadruped retargets walk on their hind
+    legs with the forepaws held up like hands, never within 5 % of the
+    height of the floor, while the dog's clip lands all four paws in
+    90-97 % of its standing frames (``ground`` passes them, the hind paws
+    being down, and :func:`posture` reads 0.75-0.85)."""
+    own, got = (_standing_shares(m) for m in (reference, canonical))
+    ratios = [min(got[limb] / share, 1.0) for limb, share in own.items()
+              if share >= LANDS_SHARE and limb in got]
+    return float(min(ratios)) if ratios else None
+
+
+def _standing_shares(canonical: Motion) -> Dict[str, float]:
+    """:func:`landing_shares` over the frames in which a canonical motion
+    stands (:func:`~satagraph.transforms.ground.stands`)."""
+    pos = canonical.global_positions()
+    standing = np.flatnonzero(stands(pos, canonical.skeleton, canonical.fps))
+    return landing_shares(canonical, standing, pos)
+
+
 def retarget_quality(source: Motion, output: Motion,
                      keys: Sequence[str] = ("steps", "travel", "ground", "upright"),
                      target: Optional[Motion] = None) -> Dict[str, Optional[float]]:
@@ -405,7 +468,7 @@ def retarget_quality(source: Motion, output: Motion,
         output (Motion): Its retarget, canonical, same frame rate and frames.
         keys: Which numbers.
         target (Motion, optional): The target rig's own clip, canonical
-            (for ``posture``).
+            (for ``posture`` and ``lands``).
 
     Returns:
         dict: ``steps`` (:func:`step_correlation`), ``travel`` (the output's
@@ -419,7 +482,8 @@ def retarget_quality(source: Motion, output: Motion,
         :func:`stride` over the source's; ``None`` where the source swings
         its limbs less than :data:`MIN_STRIDE`), and ``posture`` (:func:`posture`
         of the output against :obj:`target`, the target rig's own canonical
-        clip; ``None`` without one).
+        clip; ``None`` without one) and ``lands`` (:func:`lands` of the
+        output against :obj:`target`; ``None`` without one).
     """
     out: Dict[str, Optional[float]] = {}
     if "steps" in keys or "stride" in keys:  # both read the limb tracks
@@ -443,6 +507,8 @@ def retarget_quality(source: Motion, output: Motion,
         out["sideways"] = _sideways(source, output)
     if "posture" in keys:
         out["posture"] = None if target is None else posture(output, target)
+    if "lands" in keys:
+        out["lands"] = None if target is None else lands(output, target)
     return out
 
 
@@ -452,4 +518,4 @@ __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "ground_height", "contact", "foot_slide", "hover", "head_index", "upright_fraction",
            "trunk_bend", "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
-           "retarget_quality"]
+           "LANDING_HEIGHT", "LANDS_SHARE", "landing_shares", "lands", "retarget_quality"]

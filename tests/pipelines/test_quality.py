@@ -10,7 +10,7 @@ from satagraph.data.features import motion_to_features
 from satagraph.semantics import LIMBS, limb_ends
 from satagraph.datasets.zoo.endless import EndlessZoo
 from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, forward_tracks,
-                                         hover, joint_raise, trunk_bend,
+                                         hover, joint_raise, trunk_bend, landing_shares, lands,
                                          ground_height, heading_gap,
                                          head_index, leg_length, limb_tracks, mean_correlation,
                                          most_active, pace_drift, posture, retarget_quality,
@@ -123,6 +123,58 @@ def test_posture_tells_forepaws_carried_off_the_floor():
     assert lift > 0.25 * walk.height()
     assert posture(walk, walk) == pytest.approx(1.0)
     assert posture(lifted, walk) < 0.9
+
+
+def _forelegs_up(walk, degrees: float = 65.0):
+    """:obj:`walk` with both forelegs swung :obj:`degrees` at the upper leg
+    (the paws carried as a human carries its hands)."""
+    from satagraph.ops.rotation_numpy import rotation_about_numpy
+    ends = limb_ends(walk.skeleton)
+    rotations = walk.rotations.copy()
+    for limb in ("left front", "right front"):
+        upper = walk.skeleton.parents[walk.skeleton.parents[ends[limb]]]
+        rotations[:, upper] = rotations[:, upper] @ rotation_about_numpy(
+            np.array([1.0, 0.0, 0.0]), np.radians(degrees))
+    return walk.with_(rotations=rotations)
+
+
+def test_lands_tells_forepaws_that_never_come_down():
+    """A zoo quadruped walk against itself lands every paw as often (1.0);
+    with its forelegs swung up the forepaws never come within 5 % of its
+    height of the floor (0.0 on those limbs, the hind paws' shares kept),
+    so lands reads 0 while the ground row, read off the lowest joint, still
+    passes it. A biped's hands, never down in its own clip, are not read."""
+    walk = _walk("quadruped")
+    own = landing_shares(walk)
+    assert set(own) == set(LIMBS) and min(own.values()) > 0.8
+    assert lands(walk, walk) == pytest.approx(1.0)
+    lifted = _forelegs_up(walk)
+    shares = landing_shares(lifted)
+    assert shares["left front"] == shares["right front"] == 0.0
+    assert shares["left hind"] == own["left hind"] and shares["right hind"] == own["right hind"]
+    assert lands(lifted, walk) == 0.0
+    assert abs(ground_height(lifted)) < 0.03
+    biped = _walk("biped")
+    assert landing_shares(biped)["left front"] == 0.0
+    assert lands(biped, biped) == pytest.approx(1.0)
+    assert lands(walk, _walk("snake")) is None  # no limb to land
+
+
+def test_lands_on_the_real_dog_and_a_human(read_real):
+    """The dog's walk lands all four paws in 90-97 % of its standing frames
+    and reads 1.0 against itself, 0 with its forelegs swung up; a Bandai
+    human walk, measured against the dog's clip as a retarget onto it is,
+    never puts its hands down (0), and against its own clip reads 1.0."""
+    from satagraph.transforms.ground import standing_frames
+    from satagraph.transforms.rig_reading import with_rig
+    dog = canonicalize(with_rig(read_real("dog/D1_001_KAN01_001.bvh"), scale="cm"), fps=30.0)
+    shares = landing_shares(dog, standing_frames(dog))
+    assert all(0.85 < v < 0.99 for v in shares.values()), shares
+    assert lands(dog, dog) == pytest.approx(1.0)
+    assert lands(_forelegs_up(dog), dog) < 0.05
+    human = canonicalize(read_real("bandai/dataset-1_walk_sad_001.bvh"), fps=30.0)
+    assert lands(human, human) == pytest.approx(1.0)
+    assert lands(human, dog) == 0.0
 
 
 def test_posture_reads_a_dog_that_lies_most_of_its_clip_where_it_stands(read_real):
