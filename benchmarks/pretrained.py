@@ -23,6 +23,15 @@ canonical frame at 30 fps), scored without a ground truth by
   travel read +0.98 and 0.97, and a quadruped carrying its forepaws off
   the floor as a human carries its hands 0.75-0.85 (a correlation over
   joints, the column before, read those 0.37 and 0.95-0.97).
+- **lands** (diagnostic): whether the retarget puts down the limbs the
+  target character stands on in its own clip
+  (:func:`~satagraph.pipelines.quality.lands`): per limb the target's
+  clip brings within 5 % of its height of the floor in at least half of
+  its standing frames, the share of the retarget's frames in which that
+  limb's lowest point is as low, over the clip's own share, capped at 1;
+  the least over those limbs ("-" where the clip lands no limb that
+  often). 0 for a quadruped carrying its forepaws as a human carries
+  its hands, whose hind paws pass the ground column.
 - **ground**: median lowest-joint height, % of the character's height.
   Target |ground| <= 3 %. Retargets are grounded by default
   (:func:`~satagraph.transforms.ground.ground_retarget`: one vertical shift
@@ -108,7 +117,7 @@ TRAIN_SPECIES = ["biped", "quadruped", "bird", "hexapod", "snake", "fowl", "crab
 HOLDOUT = ["longtail", "spider/palps"]
 #: What each retarget row measures (foot sliding reported, no target).
 QUALITY = ("steps", "travel", "stride", "ground", "upright", "slide", "hover", "sideways",
-           "posture")
+           "posture", "lands")
 TARGETS = {"steps_zoo": 0.8, "steps_real": 0.7, "travel": (0.8, 1.25), "ground": 0.03,
            "upright": 0.95, "jp_zoo": 0.05, "jp_real": 0.08}
 
@@ -352,15 +361,16 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
              "this machine.", "",
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
              "| travel ratio (0.8-1.25) | stride ratio (diagnostic) "
-             "| posture (diagnostic) | ground, % height (<= 3) "
+             "| posture (diagnostic) | lands (diagnostic) | ground, % height (<= 3) "
              "| decoder's ground (--no-ground) | upright (>= 95%) "
              "| source upright | foot slide, H/s (source) | hover, % height (source) "
              "| sideways, deg | all targets met |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows["retarget"]:
         lines.append(f"| {r['group']} | {r['case']} | {r['source']} | {r['target']} "
                      f"| {r['steps']:+.2f} | {r['travel']:.2f} | {_ratio(r.get('stride'))} "
-                     f"| {_ratio(r.get('posture'))} | {100 * r['ground']:+.1f} "
+                     f"| {_ratio(r.get('posture'))} | {_ratio(r.get('lands'))} "
+                     f"| {100 * r['ground']:+.1f} "
                      f"| {100 * r['decoder_ground']:+.1f} | {_pct(r['upright'])} | {_pct(r['source_upright'])} "
                      f"| {_slide(r)} | {_hover(r)} | {_degrees(r.get('sideways'))} | {_ok(r)} |")
     lines += ["", "| group | reconstruction | JP, % height (<= 5 zoo, 8 real) | met "

@@ -235,9 +235,10 @@ def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
     """Mean steps, the share of travel ratios within 0.8-1.25, the
     median of ``sideways`` (degrees off the source's heading gap,
     :func:`~satagraph.pipelines.quality.heading_gap`), of the stride
-    ratio (:func:`~satagraph.pipelines.quality.stride`) and the lowest
+    ratio (:func:`~satagraph.pipelines.quality.stride`), the lowest
     posture (:func:`~satagraph.pipelines.quality.posture` against the
-    target's own clip) and the median ``gap`` between the retarget's and
+    target's own clip) and lands (:func:`~satagraph.pipelines.quality.lands`,
+    likewise) and the median ``gap`` between the retarget's and
     the source's :func:`displacement` (leg lengths) per pair name."""
     got: Dict[str, List[dict]] = {}
     for name, source, target in pairs:
@@ -245,7 +246,7 @@ def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
                                       settle=settle, still=still, mirror=mirror)
         own = canonicalize(target, fps=float(module.fps))
         quality = retarget_quality(src, out, ("steps", "travel", "sideways", "stride",
-                                              "posture"), target=own)
+                                              "posture", "lands"), target=own)
         quality["gap"] = float(np.linalg.norm(displacement(out) - displacement(src)))
         got.setdefault(name, []).append(quality)
     return {name: dict(n=len(v), steps=float(np.mean([q["steps"] for q in v])),
@@ -254,6 +255,7 @@ def retarget_scores(module, pairs: List[Tuple[str, Motion, Motion]],
                        sideways=_median([q["sideways"] for q in v]),
                        stride=_median([q["stride"] for q in v]),
                        posture=_lowest([q["posture"] for q in v]),
+                       lands=_lowest([q["lands"] for q in v]),
                        gap=float(np.median([q["gap"] for q in v])))
             for name, v in got.items()}
 
@@ -343,7 +345,7 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
     if retargets:
         lines += ["", "Retargets: mean steps, median travel ratio (share within 0.8-1.25), "
                   "median degrees sideways of the source's heading, median stride ratio, "
-                  "lowest posture, median gap between the retarget's and the source's "
+                  "lowest posture, lowest lands, median gap between the retarget's and the source's "
                   "displacement (leg lengths).", "",
                   "| retarget | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
                   "|---|---:|" + "---:|" * len(names)]
@@ -352,6 +354,7 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
                      + ("" if r.get("sideways") is None else f", {r['sideways']:.0f} deg")
                      + ("" if r.get("stride") is None else f", stride {r['stride']:.2f}")
                      + ("" if r.get("posture") is None else f", posture {r['posture']:.2f}")
+                     + ("" if r.get("lands") is None else f", lands {r['lands']:.2f}")
                      + ("" if r.get("gap") is None else f", gap {r['gap']:.2f}")
                      for r in (retargets[k][pair] for k in names)]
             lines.append(f"| {pair} | {retargets[names[0]][pair]['n']} | " + " | ".join(cells)

@@ -309,6 +309,32 @@ def test_pretrained_heading_free_pose_error_leaves_out_the_facing_drift(tiny_mot
     assert pretrained.joint_error(motion, changed, heading=True) > 0.01
 
 
+def test_pretrained_retarget_rows_give_the_lands_column():
+    """The retarget table gives ``lands`` beside posture (a human -> dog
+    retarget whose forepaws never come down reads 0.00 where posture reads
+    0.80), "-" in results measured before it; pretrained_val's retarget
+    cell gives the lowest lands of a pair."""
+    import pretrained
+    import pretrained_val
+    row = dict(group="real, never trained", case="bandai human -> dog", source="a.bvh",
+               target="dog/b.bvh", steps=0.88, travel=0.85, stride=0.56, posture=0.8,
+               lands=0.0, ground=0.018, decoder_ground=-0.18, upright=1.0,
+               source_upright=1.0, slide=0.5, source_slide=0.11, hover=0.026,
+               source_hover=0.0, sideways=4.0)
+    header = "| posture (diagnostic) | lands (diagnostic) | ground, % height (<= 3) |"
+    text = pretrained.table({"retarget": [row], "reconstruction": []}, "builtin", 1.0)
+    assert header in text
+    assert "| +0.88 | 0.85 | 0.56 | 0.80 | 0.00 | +1.8 | -18.0 |" in text
+    del row["lands"]
+    text = pretrained.table({"retarget": [row], "reconstruction": []}, "builtin", 1.0)
+    assert "| 0.56 | 0.80 | - | +1.8 |" in text
+    rt = {"a.ckpt": {"bandai -> dog": dict(n=2, steps=0.9, travel=0.88, travel_ok=0.5,
+                                           posture=0.8, lands=0.25)}}
+    s = pretrained_val.summarise([dict(jp=0.1, pose=0.05, local=0.02, drift=None)])
+    text = pretrained_val.table({"a.ckpt": {"zoo biped": s}}, 1.0, rt)
+    assert "| bandai -> dog | 2 | +0.90, 0.88 (50%), posture 0.80, lands 0.25 |" in text
+
+
 def test_pretrained_val_summary_gives_drift_only_where_most_clips_have_one():
     import pretrained_val
     clips = [dict(jp=0.1, pose=0.05, local=0.02, drift=10.0),
