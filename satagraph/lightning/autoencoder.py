@@ -19,6 +19,8 @@ from satagraph.ops.motion_batch import batch_global_motion
 
 DEFAULT_OPTIM: Dict[str, Any] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
                                  "floor": 0.01, "frozen": ()}
+#: The cross-skeleton loss terms of :meth:`MotionAutoencoderModule.retarget_losses`.
+RETARGET_TERMS = ("retarget", "retarget_root", "retarget_carriage")
 
 
 def lr_factor(epoch: int, warmup_epochs: int, decay: float, floor: float) -> float:
@@ -85,8 +87,8 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         if self._retarget_weight() > 0 and rate != 1:
             raise ValueError(f"loss.retarget needs one latent per frame (decoded onto "
                              f"another skeleton's frames); {type(self.model).__name__} "
-                             f"has one per {rate} frames: set loss.retarget and "
-                             "loss.retarget_root to 0")
+                             f"has one per {rate} frames: set loss.retarget, "
+                             "loss.retarget_root and loss.retarget_carriage to 0")
 
     # -------------------------------------------------------- semantics
     def embed(self, skeleton, evidence=None) -> Tensor:
@@ -266,10 +268,10 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
     # ----------------------------------------------------------- steps
     def compute_losses(self, out: Dict[str, Tensor], batch) -> Dict[str, Tensor]:
         """Named loss terms and their weighted sum under ``"loss"``; with a
-        ``retarget`` or ``retarget_root`` weight, also the cross-skeleton
+        weight on any of :data:`RETARGET_TERMS`, also the cross-skeleton
         terms of :meth:`retarget_losses` of ``out["z"]``."""
         losses = self.criterion(out, batch, self.normalizer)
-        weights = {k: self._loss_weight(k) for k in ("retarget", "retarget_root")}
+        weights = {k: self._loss_weight(k) for k in RETARGET_TERMS}
         if any(w > 0 for w in weights.values()) and "z" in out:
             terms = self.retarget_losses(out["z"], batch)
             for name, weight in weights.items():
@@ -285,7 +287,7 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
 
     def _retarget_weight(self) -> float:
         """The largest weight of the cross-skeleton terms (0: none is on)."""
-        return max(self._loss_weight("retarget"), self._loss_weight("retarget_root"))
+        return max(self._loss_weight(k) for k in RETARGET_TERMS)
 
     def retarget_loss(self, z: Tensor, batch) -> Optional[Tensor]:
         """The limb term of :meth:`retarget_losses` (``None`` when every
@@ -298,7 +300,9 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         decoded onto another skeleton of the batch must move the limb ends
         like the source (``retarget``:
         :func:`~satagraph.losses.limb_velocity_loss`) and carry the root
-        like it (``retarget_root``: :func:`~satagraph.losses.root_transfer_loss`).
+        like it (``retarget_root``: :func:`~satagraph.losses.root_transfer_loss`),
+        and carry each joint as the partner's own clip carries it
+        (``retarget_carriage``: :func:`~satagraph.losses.carriage_loss`).
         Partners come with the batch (``batch.pairing``, collated by
         :class:`~satagraph.data.pairing.PartnerCollate`), else are drawn here
         from a generator seeded with the global step
@@ -306,7 +310,8 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         clip of the batch has the same skeleton."""
         from torch_geometric.utils import scatter
         from satagraph.data.pairing import pairing_to, partner_batch
-        from satagraph.losses import facing_positions, limb_velocity_loss, root_transfer_loss
+        from satagraph.losses import (carriage_loss, facing_positions, limb_velocity_loss,
+                                      root_transfer_loss)
         pairing = getattr(batch, "pairing", None)
         if pairing is None:
             gen = torch.Generator().manual_seed(int(self.global_step))
@@ -327,7 +332,9 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
                     batch.root[pairing.frames], pred["r"],
                     batch.heights("frame")[pairing.frames], pairing.target.heights("frame"),
                     low_source[pairing.frames], low_target, batch.legs("frame")[pairing.frames],
-                    pairing.target.legs("frame"))}
+                    pairing.target.legs("frame")),
+                "retarget_carriage": carriage_loss(pos, source_x, pairing.target, batch,
+                                                   pairing.partners)}
 
     def _step(self, batch, stage: str) -> Tensor:
         out = self(batch)

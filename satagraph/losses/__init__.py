@@ -77,18 +77,26 @@ term                    weight  definition
                                 heights per second and the lowest joint's
                                 height over the character's, as the source's
                                 (:func:`root_transfer_loss`)
+``retarget_carriage``   0       the carriage of the same cross-skeleton
+                                decoding (off by default): each joint's
+                                height above the root, averaged over the
+                                window, in the partner's heights, as the
+                                partner's own clip carries it
+                                (:func:`carriage_loss`)
 ======================  ======  ==============================================
 """
 from satagraph.losses.motion_loss import DEFAULT_WEIGHTS, MotionLoss
 from satagraph.losses.positions import (POSITION_SCALE, facing_positions, position_scale,
                                         time_difference, to_global)
-from satagraph.losses.terms import (amplitude_loss, contact_loss, foot_sliding_loss,
+from satagraph.losses.terms import (amplitude_loss, carriage_loss, carried_heights,
+                                    contact_loss, foot_sliding_loss,
                                     limb_end_streams, limb_velocity_loss,
                                     penetration_loss, root_transfer_loss, rotation_loss,
                                     smoothness_loss, stance_loss, velocity_loss)
 
 __all__ = ["DEFAULT_WEIGHTS", "MotionLoss", "POSITION_SCALE", "facing_positions",
-           "position_scale", "time_difference", "to_global", "amplitude_loss", "contact_loss",
+           "position_scale", "time_difference", "to_global", "amplitude_loss", "carriage_loss",
+           "carried_heights", "contact_loss",
            "limb_end_streams",
            "foot_sliding_loss", "limb_velocity_loss", "penetration_loss", "root_transfer_loss",
            "rotation_loss", "smoothness_loss", "stance_loss", "velocity_loss"]

@@ -18,7 +18,8 @@ DEFAULT_WEIGHTS: Dict[str, float] = {
     "rotation": 5.0, "position": 0.01, "global_position": 0.0, "velocity": 1.0,
     "root": 10.0, "contact": 1.0,
     "foot_sliding": 6.0, "penetration": 0.1, "smoothness": 0.015, "kl": 1e-4,
-    "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0, "stance": 0.0,
+    "commit": 0.02, "retarget": 0.0, "retarget_root": 0.0,
+    "retarget_carriage": 0.0, "stance": 0.0,
     "amplitude": 0.0, "limb_amplitude": 0.0,
 }
 

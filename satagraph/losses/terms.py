@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Optional
 
+import torch
 import torch.nn.functional as F
 from torch import Tensor
 
@@ -101,6 +102,62 @@ def root_transfer_loss(r_source: Tensor, r_target: Tensor, h_source: Tensor,
     low = (LOWEST_SCALE * (low_target / h_target - low_source.to(low_target.dtype) / h_source)
            ).pow(2)
     return (turn + speed + low).mean()
+
+
+def carried_heights(pos: Tensor, batch) -> Tensor:
+    r"""Every stream's (clip joint's) height above its frame's root,
+    averaged over the clip's frames, in heights of its clip's character
+    (how a body carries its joints; the mean that
+    :func:`~satagraph.pipelines.quality.posture` reads as a median).
+
+    Shapes:
+        - **pos**: :math:`(N, 3)` facing-frame (or global) positions
+        - **output**: :math:`(S,)`
+    """
+    from torch_geometric.utils import scatter
+    above = pos[:, 1] - pos[batch.root_node[batch.batch], 1]
+    return scatter(above / batch.heights("node").to(pos.dtype), batch.node_stream, 0,
+                   int(batch.num_streams), "mean")
+
+
+def carriage_loss(pos_target: Tensor, pos_partner: Tensor, target, partner,
+                  partners: Tensor) -> Tensor:
+    r"""Unpaired cross-skeleton carriage term: a motion decoded onto another
+    skeleton carries each joint as high above the root, on average over
+    the window, as that skeleton's own clip does (:func:`carried_heights`),
+    both in the partner's heights: the squared gap averaged over each
+    pair's joints, then over the pairs. The limb and root terms
+    (:func:`limb_velocity_loss`, :func:`root_transfer_loss`) see the
+    source's motion only, so without this a human's upright carriage is
+    copied onto a quadruped (walking on its hind legs, forepaws up).
+    Every frame of the partner's clip counts, standing or not.
+
+    Args:
+        pos_target (Tensor): Positions of the motion decoded on the partner
+            skeletons (:func:`facing_positions`), nodes of :obj:`target`.
+        pos_partner (Tensor): The partners' own positions (the ``x``
+            features), nodes of :obj:`partner`.
+        target (FrameBatch): The partner skeletons' frame graphs
+            (``Pairing.target``).
+        partner (FrameBatch): The batch holding the partners' own clips.
+        partners (Tensor): Each :obj:`target` clip's partner clip in
+            :obj:`partner` (``Pairing.partners``).
+
+    Shapes:
+        - **pos_target**: :math:`(N', 3)`, **pos_partner**: :math:`(N, 3)`
+        - **partners**: :math:`(B',)`
+        - **output**: scalar
+    """
+    from torch_geometric.utils import scatter
+    pred = carried_heights(pos_target, target)
+    true = carried_heights(pos_partner.to(pos_target.dtype), partner)
+    first_t = target.clip_num_joints.cumsum(0) - target.clip_num_joints
+    first_p = partner.clip_num_joints.cumsum(0) - partner.clip_num_joints
+    clip = target.stream_clip
+    stream = torch.arange(clip.numel(), device=clip.device)
+    same = stream - first_t[clip] + first_p[partners[clip]]
+    gap = (pred - true[same]).pow(2)
+    return scatter(gap, clip, 0, partners.numel(), "mean").mean()
 
 
 def contact_loss(c_logits: Tensor, c_true: Tensor) -> Tensor:
@@ -227,6 +284,7 @@ def smoothness_loss(pos_pred: Tensor, batch, pos_true: Optional[Tensor] = None,
     return _masked_mean(diff.pow(2).sum(-1), valid)
 
 
-__all__ = ["rotation_loss", "velocity_loss", "limb_velocity_loss", "contact_loss",
+__all__ = ["rotation_loss", "velocity_loss", "limb_velocity_loss", "carried_heights",
+           "carriage_loss", "contact_loss",
            "foot_sliding_loss", "amplitude_loss", "spread_error", "stream_mean",
            "limb_end_streams", "penetration_loss", "smoothness_loss"]

@@ -3,6 +3,7 @@ skeletons of the batch, the limb-end velocity loss, and its place in the
 LightningModule's losses (real bandai and dog windows)."""
 from __future__ import annotations
 
+import pytest
 import torch
 
 from satagraph.data.collate import collate_clips
@@ -214,3 +215,45 @@ def test_module_adds_the_root_term_with_gradients_to_the_decoder(build_tiny_modu
     losses["retarget_root"].backward()
     grads = [p.grad for p in module.model.decoder.parameters() if p.grad is not None]
     assert grads and any(g.abs().sum() > 0 for g in grads)
+
+
+def test_module_logs_the_carriage_term_with_gradients_to_the_decoder(build_tiny_module,
+                                                                     datamodule):
+    """``retarget_carriage`` alone switches the cross-skeleton decoding on
+    (partners collated for it too); the step logs it and adds it weighted."""
+    module = build_tiny_module("vae")
+    batch = _mixed_batch(datamodule)
+    _, plain, losses = _losses_with(module, batch, "retarget_carriage", 4.0)
+    assert module._retarget_weight() == 4.0
+    assert "retarget" not in losses and "retarget_root" not in losses
+    assert losses["retarget_carriage"] > 0
+    assert torch.allclose(losses["loss"], plain["loss"] + 4.0 * losses["retarget_carriage"])
+    logged = {}
+    module.log_dict = lambda terms, **kwargs: logged.update(terms)
+    module.log = lambda name, value, **kwargs: logged.update({name: value})
+    module._step(batch, "train")
+    assert logged["train/retarget_carriage"] > 0
+    losses["retarget_carriage"].backward()
+    grads = [p.grad for p in module.model.decoder.parameters() if p.grad is not None]
+    assert grads and any(g.abs().sum() > 0 for g in grads)
+
+
+def test_carriage_loss_is_zero_for_each_partners_own_window(datamodule):
+    """Real windows (Bandai and the dog, equal lengths): positions on the
+    partners' rigs that are the partners' own windows carry as they do (0); every
+    joint but the root raised by a tenth of the height reads 0.01 of each
+    rig's non-root share."""
+    from satagraph.losses import carriage_loss
+    batch = _mixed_batch(datamodule)
+    assert len(set(batch.clip_num_frames.tolist())) == 1
+    pairing = partner_batch(batch, torch.Generator().manual_seed(4))
+    x = batch.x[:, DYNAMIC_LAYOUT["x"]]
+    own = torch.cat([x[batch.node_clip == p] for p in pairing.partners.tolist()])
+    assert carriage_loss(own, x, pairing.target, batch, pairing.partners) < 1e-10
+    # every joint but the root a tenth of the partner's height higher above it
+    raised = own + 0.1 * pairing.target.heights("node")[:, None] * torch.tensor([0, 1.0, 0])
+    raised[pairing.target.root_node] = own[pairing.target.root_node]
+    joints = pairing.target.clip_num_joints.double()
+    expected = (0.01 * (joints - 1) / joints).mean()
+    loss = carriage_loss(raised, x, pairing.target, batch, pairing.partners)
+    assert loss.item() == pytest.approx(expected.item(), rel=1e-4)
