@@ -239,3 +239,13 @@ def test_a_config_is_read_again_when_one_of_its_files_changes(tmp_path):
     assert load_config(str(top))["data"]["window"] == 40
     base.write_text(base.read_text() + "\nthreads: 3\n")
     assert load_config(str(top))["threads"] == 3
+
+
+def test_carriage_finetune_adds_only_the_carriage_term_to_builtins_last_stage():
+    base = load_config("pretrain_zoo_lie")
+    stage = load_config("finetune_builtin_carriage")
+    assert stage["loss"] == dict(base["loss"], retarget_carriage=1.5)
+    assert stage["model"] == base["model"]
+    assert stage["data"]["sources"] == base["data"]["sources"]
+    assert stage["data"]["preprocessing"]["facing_smooth"] == 0.25
+    assert stage["checkpoint"]["keep_every_epoch"]
