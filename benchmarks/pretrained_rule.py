@@ -35,7 +35,14 @@ move (+0.02 to +0.10 for every checkpoint measured), where what those rows
 check is that the retarget stays (travel, posture). Added in section 35
 after its measurement, and said so there.
 
-    .venv/bin/python benchmarks/pretrained_rule.py benchmarks/results/pretrained_val.json [--paired]
+With ``--aim carriage`` (PRETRAIN.md section 54, registered before its
+candidates are measured) part 1 asks instead that the lowest posture of
+each row of :data:`CARRIAGE_ROWS` (a human's walk onto a quadruped, whose
+forepaws the base holds up like hands) rise by at least 0.05 over the
+base's; the dog joins part 2's groups, and the passing candidate with the
+largest smaller of those two gains is chosen.
+
+    .venv/bin/python benchmarks/pretrained_rule.py benchmarks/results/pretrained_val.json [--paired] [--aim carriage]
 """
 from __future__ import annotations
 
@@ -56,6 +63,9 @@ GAIN, LOSS = 0.05, 0.05
 #: Part 3: largest fall in mean steps, lowest posture, and its largest
 #: fall where the base's is below that already.
 STEPS_DROP, POSTURE, POSTURE_DROP = 0.03, 0.9, 0.03
+#: ``--aim carriage``: the retarget rows whose lowest posture must rise,
+#: and by how much.
+CARRIAGE_ROWS, CARRIAGE_GAIN = ("zoo biped -> quadruped", "bandai -> dog"), 0.05
 #: How the retarget rows whose source stands still are named (``pretrained_val.py``
 #: names them with it).
 STILL = "still source:"
@@ -75,15 +85,31 @@ def paired_ratio(candidate: Dict, base: Dict, key: str = "jp_clips") -> float:
     return float(np.median(a / b))
 
 
+def posture_gain(results: Dict, candidate: str, base: str = "builtin") -> float:
+    """``--aim carriage``'s score: the smaller rise of the lowest posture
+    over the base's on the rows of :data:`CARRIAGE_ROWS`."""
+    got, was = results["retarget"][candidate], results["retarget"][base]
+    return min(got[row]["posture"] - was[row]["posture"] for row in CARRIAGE_ROWS)
+
+
 def failures(results: Dict, candidate: str, base: str = "builtin",
-             paired: bool = False, still_steps: bool = True) -> List[str]:
+             paired: bool = False, still_steps: bool = True,
+             aim: str = "dog") -> List[str]:
     """The parts of the rule :obj:`candidate` breaks, one line each
     (empty: it passes); :obj:`paired`: parts 1 and 2 clip by clip;
     :obj:`still_steps` ``False``: part 3 leaves out the steps of the rows
-    whose source stands still."""
+    whose source stands still; :obj:`aim` ``"carriage"``: part 1 on the
+    postures of :data:`CARRIAGE_ROWS`, the dog in part 2."""
     rec, bas = results["reconstruction"][candidate], results["reconstruction"][base]
     out = []
-    if paired:
+    kept = KEPT
+    if aim == "carriage":
+        kept = KEPT + (AIM,)
+        got, was = results["retarget"][candidate], results["retarget"][base]
+        out += [f"part 1: {row} lowest posture {got[row]['posture']:.2f} against "
+                f"{was[row]['posture']:.2f}" for row in CARRIAGE_ROWS
+                if got[row]["posture"] < was[row]["posture"] + CARRIAGE_GAIN]
+    elif paired:
         ratio = paired_ratio(rec[AIM], bas[AIM], "pose_clips")
         if ratio > 1 - GAIN:
             out.append(f"part 1: {AIM} paired pose ratio {ratio - 1:+.1%} over "
@@ -93,7 +119,7 @@ def failures(results: Dict, candidate: str, base: str = "builtin",
         out.append(f"part 1: {AIM} JP {100 * rec[AIM]['median']:.1f}, pose "
                    f"{100 * rec[AIM]['pose']:.1f} against {100 * bas[AIM]['median']:.1f}, "
                    f"{100 * bas[AIM]['pose']:.1f}")
-    for group in KEPT:
+    for group in kept:
         if paired:
             ratio = paired_ratio(rec[group], bas[group])
             line = (f"part 2: {group} paired JP ratio {ratio - 1:+.1%} over "
@@ -127,11 +153,14 @@ def aim_score(candidate: Dict, base: Dict, paired: bool) -> float:
 
 
 def verdict(results: Dict, base: str = "builtin", paired: bool = False,
-            still_steps: bool = True) -> Tuple[Dict[str, List[str]], Optional[str]]:
+            still_steps: bool = True,
+            aim: str = "dog") -> Tuple[Dict[str, List[str]], Optional[str]]:
     """Every candidate's failures and the chosen one (``None``: the base stays)."""
     rec = results["reconstruction"]
-    fails = {c: failures(results, c, base, paired, still_steps) for c in rec if c != base}
+    fails = {c: failures(results, c, base, paired, still_steps, aim) for c in rec if c != base}
     passing = [c for c, f in fails.items() if not f]
+    if aim == "carriage":
+        return fails, max(passing, key=lambda c: posture_gain(results, c, base), default=None)
     chosen = min(passing, key=lambda c: aim_score(rec[c], rec[base], paired), default=None)
     return fails, chosen
 
@@ -148,10 +177,15 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help="part 3 leaves out the steps of still-source rows (a source "
                              "that stands has no steps; PRETRAIN.md section 35's amendment, "
                              "written after that section's measurement)")
+    parser.add_argument("--aim", choices=("dog", "carriage"), default="dog",
+                        help="what part 1 asks a candidate to gain: the dog's error (the "
+                             "default), or the posture of a human's walk onto a quadruped "
+                             "(PRETRAIN.md section 54)")
     args = parser.parse_args(argv)
     results = json.loads(args.results.read_text())
     try:
-        fails, chosen = verdict(results, args.base, args.paired, not args.no_still_steps)
+        fails, chosen = verdict(results, args.base, args.paired, not args.no_still_steps,
+                                args.aim)
     except ValueError as err:
         print(f"{args.results}: {err}", file=sys.stderr)
         return 2
@@ -159,7 +193,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     for candidate, lines in fails.items():
         dog = (f"paired pose ratio {aim_score(rec[candidate], rec[args.base], True):.3f}"
                if args.paired else f"{100 * rec[candidate][AIM]['median']:.1f}")
-        print(f"{candidate}: {'passes' if not lines else 'fails'} ({AIM} {dog})")
+        score = (f"posture gain {posture_gain(results, candidate, args.base):+.2f}"
+                 if args.aim == "carriage" else f"{AIM} {dog}")
+        print(f"{candidate}: {'passes' if not lines else 'fails'} ({score})")
         for line in lines:
             print(f"    {line}")
     print(f"chosen: {chosen}" if chosen else f"chosen: none ({args.base} stays)")

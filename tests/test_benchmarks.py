@@ -418,6 +418,37 @@ def test_pretrained_rule_posture_is_judged_against_the_base_below_its_floor():
     assert posture_fails() == [f"part 3: {low} lowest posture 0.76 against 0.80"]
 
 
+def test_pretrained_rule_carriage_aim_asks_the_quadruped_rows_postures_up() -> None:
+    """``--aim carriage``: part 1 asks each of the two human -> quadruped
+    rows' lowest posture 0.05 over the base's (the dog's error is kept
+    in part 2 instead of being the aim), and the passing candidate whose
+    smaller gain is largest is chosen."""
+    import json
+    import pretrained_rule
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "pretrained_val_sitlie.json").read_text())
+    for part in ("reconstruction", "retarget"):
+        results[part] = {name: json.loads(json.dumps(results[part]["builtin"]))
+                         for name in ("builtin", "small", "large")}
+    ret = results["retarget"]
+    for row in pretrained_rule.CARRIAGE_ROWS:
+        ret["builtin"][row]["posture"] = 0.80
+    ret["small"]["zoo biped -> quadruped"]["posture"] = 0.90
+    ret["small"]["bandai -> dog"]["posture"] = 0.86
+    ret["large"]["zoo biped -> quadruped"]["posture"] = 0.87
+    ret["large"]["bandai -> dog"]["posture"] = 0.84
+    fails, chosen = pretrained_rule.verdict(results, aim="carriage")
+    assert fails == {"small": [], "large": ["part 1: bandai -> dog lowest posture 0.84 "
+                                            "against 0.80"]} and chosen == "small"
+    ret["large"]["bandai -> dog"]["posture"] = 0.88  # its smaller gain 0.07 > 0.06
+    assert pretrained_rule.verdict(results, aim="carriage") == ({"small": [], "large": []},
+                                                                "large")
+    dog = results["reconstruction"]["large"][pretrained_rule.AIM]
+    dog["median"] *= 1.2  # the dog is kept, not aimed at
+    assert pretrained_rule.failures(results, "large", aim="carriage")[0].startswith(
+        "part 2: dog (not test) JP")
+
+
 def test_pretrained_rule_paired_compares_each_clip_with_itself():
     """``--paired``: a candidate 10 % worse on every clip fails part 2 even
     where the group's median does not move, one worse on a single clip of
