@@ -250,13 +250,14 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
         position error of the rescaled human against it, relative to the
         height (see :func:`pose_error`), and per target the
         :func:`~satagraph.pipelines.quality.retarget_quality` of its retarget, its
-        stride included (with the source's own root travel,
-        ``source_travel``, in leg lengths).
+        stride and ``lands`` (against the target's own clip) included (with
+        the source's own root travel, ``source_travel``, in leg lengths).
     """
     from satagraph.transforms.augment import scale_bones
     from satagraph.pipelines.inference import from_canonical, retarget_canonical
     from satagraph.io import read_bvh, write_bvh
     from satagraph.pipelines.quality import retarget_quality, root_travel
+    from satagraph.transforms.canonical import canonicalize
 
     source = read_bvh(clips["source"])
     human = scale_bones(source, 0.7, 1.3, seed=seed)
@@ -269,8 +270,9 @@ def retarget_demo(module, embed, clips: Dict[str, Path], folder: Path, window: i
     qualities: Dict[str, Dict] = {}
     for title, target in targets:
         src, canon = retarget_canonical(module, source, target, embed, window, window // 4)
+        own = canonicalize(target, fps=src.fps)
         quality = retarget_quality(src, canon, ("steps", "travel", "stride", "ground",
-                                                "upright"))
+                                                "upright", "lands"), target=own)
         qualities[title.split(":")[0]] = dict(quality, source_travel=root_travel(src))
         stem = title.split(": ")[1] + ("_rescaled" if title.startswith("rescaled") else "")
         panels.append(Panel(title, from_canonical(canon, source),
@@ -287,9 +289,11 @@ def quality_note(qualities: Dict[str, Dict], error: float) -> str:
     (1 = every limb in step, 0 = chance or still), its root travel against
     the source's (1.00 = as far, in leg lengths) and its stride against the
     source's (how far the limb ends swing; where it is shorter than the
-    travel, the feet skate)."""
+    travel, the feet skate) and how often the limbs the target's own clip
+    stands on are down (``lands``: 1.00 as often, 0 a limb held up)."""
     parts = [f"{name} steps {q['steps']:+.2f} travel {q['travel']:.2f}x"
              + ("" if q.get("stride") is None else f" stride {q['stride']:.2f}x")
+             + ("" if q.get("lands") is None else f" down {q['lands']:.2f}")
              for name, q in qualities.items()]
     return ("; ".join(parts) + f"; rescaled human joint error {100 * error:.1f}% of "
             "its height vs the bone-scaled ground truth")
@@ -445,7 +449,9 @@ def format_summary(result: DemoResult) -> str:
                      "(+1 in step, 0 chance or standing still); travel: root distance in leg "
                      "lengths against the source's (1.00x = as far); stride: how far the limb "
                      "ends swing fore and aft against the source's (a stride shorter than the "
-                     "travel: the feet skate)")
+                     "travel: the feet skate); down: how often the limbs the target's own clip "
+                     "stands on are on the floor, against that clip (1.00 as often; 0: a limb "
+                     "held up, as a quadruped's forepaws carried like a human's hands)")
     return "\n".join(lines)
 
 

@@ -73,7 +73,10 @@ def test_builtin_model_retargets_first_then_fine_tunes(demo_builtin, capsys):
         for quality in step["quality"].values():
             assert -1.0 <= quality["steps"] <= 1.0 and quality["travel"] >= 0.0
             assert quality["stride"] > 0.0
+            assert quality["lands"] is None or 0.0 <= quality["lands"] <= 1.0
+        assert quality["lands"] is not None  # the rescaled human's feet, against its own walk
         assert "steps" in step["note"] and "travel" in step["note"] and "stride" in step["note"]
+        assert " down " in step["note"]
     tuned = torch.load(out / "run" / "checkpoints" / "last.ckpt", weights_only=True)
     base = load_weights(weights)
     assert tuned["hyper_parameters"]["model"] == base["hyper_parameters"]["model"]
