@@ -52,7 +52,14 @@ def test_basic_properties(tiny_skeleton):
                                     "ZYX", "ZXY", ""]
     assert np.flatnonzero(skel.has_position_channels).tolist() == [0, 4]
     assert skel.num_channels == 6 + 3 + 3 + 6 + 3 + 3 + 3
-    assert "joints=10" in repr(skel) and "end_sites=3" in repr(skel)
+    assert repr(skel) == "Skeleton(joints=10, end_sites=3, root='Hips')"
+
+
+def test_a_root_with_one_child_is_no_leaf():
+    # 0 - 1 - 2: only joint 1 names the root as its parent
+    skel = Skeleton(list("abc"), np.array([-1, 0, 1]), np.zeros((3, 3)))
+    assert skel.is_leaf.tolist() == [False, False, True]
+    assert np.diag(skel.relation_types).tolist() == [REL_SELF, REL_SELF, REL_END_EFFECTOR]
 
 
 def test_depth_and_reverse_depth(tiny_skeleton):
