@@ -310,6 +310,19 @@ def test_error_brace_without_joint(tmp_path):
     expect_error(write(tmp_path, lines), 2, "unbalanced braces")
 
 
+@pytest.mark.parametrize("line", ["OFFSET 0 0 0", "CHANNELS 3 Zrotation Xrotation Yrotation"])
+def test_error_outside_any_joint(tmp_path, line):
+    lines = BASE[:1] + [line] + BASE[1:]  # before the ROOT
+    expect_error(write(tmp_path, lines), 2, f"{line.split()[0]} outside of any joint")
+
+
+@pytest.mark.parametrize("scale", ["0", "-1", "nan", "x"])
+def test_error_bad_declared_scale(tmp_path, scale):
+    says = f"# satagraph: up_axis=+Y scale={scale}"
+    expect_error(write(tmp_path, replace(1, f"HIERARCHY {says}")), 1, "bad scale", scale)
+    expect_error(write(tmp_path, BASE + [says]), len(BASE) + 1, "bad scale", scale)
+
+
 @pytest.mark.parametrize("content", [b"", b"   \n\t\n", b"\r\n"])
 def test_error_empty_file(tmp_path, content):
     path = tmp_path / "empty.bvh"

@@ -223,6 +223,6 @@ def test_geodesic_angle_is_exact_near_zero_in_float32():
 def test_reader_numpy_euler_matches_torch(order):
     from satagraph.io.bvh_reader import _euler_to_matrix
     from satagraph.ops.rotation import euler_to_matrix
-    angles = np.random.default_rng(1).uniform(-math.pi, math.pi, size=(50, 3))
+    angles = np.random.default_rng(1).uniform(-math.pi, math.pi, size=(5, 10, 3))  # (*, 3)
     want = euler_to_matrix(torch.from_numpy(angles), order).numpy()
     np.testing.assert_allclose(_euler_to_matrix(angles, order), want, atol=1e-12)
