@@ -139,6 +139,21 @@ def test_writer_refuses_non_finite_values(tmp_path: Path) -> None:
     assert [p.name for p in tmp_path.iterdir()] == ["nan.bvh"]
 
 
+def test_writer_refuses_a_non_finite_offset_or_frame_rate(tmp_path: Path) -> None:
+    motion = _chain(4)
+    offsets = motion.skeleton.offsets.copy()
+    offsets[2, 1] = offsets[3, 0] = np.inf  # one axis of joint 2, then joint 3
+    broken = Motion(motion.skeleton.replace(offsets=offsets), motion.rotations,
+                    motion.translations, fps=30.0)
+    with pytest.raises(ValueError, match=r"off.bvh: refusing to write non-finite values: "
+                                         r"OFFSET of joint 'j2'$"):
+        write_bvh(broken, tmp_path / "off.bvh")
+    endless = Motion(motion.skeleton, motion.rotations, motion.translations, fps=np.inf)
+    with pytest.raises(ValueError, match=r"fps.bvh: refusing to write a frame rate of inf$"):
+        write_bvh(endless, tmp_path / "fps.bvh")
+    assert list(tmp_path.iterdir()) == []
+
+
 def _write(path: Path, data: bytes) -> Path:
     path.write_bytes(data)
     return path
