@@ -327,3 +327,12 @@ def test_frame_batch_is_built_from_clips_not_frame_graphs(clips):
         FrameBatch.from_data_list(frame_graphs(clips))
     batch = collate_clips(clips)
     assert len(batch.index_select([0, 1])) == 2 and batch.get_example(0).num_nodes > 0
+
+
+def test_height_and_leg_default_where_a_clip_does_not_say():
+    clips = make_clips(SPECS[:2])  # their meta holds an id only
+    clips[1].meta["height"] = 1.6  # its leg: half of that
+    clips[2].meta.update(height=1.6, leg=0.7)
+    batch = collate_clips(clips)
+    assert batch.clip_height.tolist() == pytest.approx([1.0, 1.6, 1.6])
+    assert batch.clip_leg.tolist() == pytest.approx([0.5, 0.8, 0.7])
