@@ -74,6 +74,19 @@ def test_joint_rotation_error(batch):
                                rtol=0, atol=ANGLE_ATOL)
 
 
+def test_joint_rotation_error_of_clips_with_few_inner_joints():
+    # a lone root (no inner joint: 0, not 0 / 0) and a 2-joint chain of one
+    # frame (one inner node: its angle itself)
+    batch = collate_clips([_clip([-1], 2, 1.0), _clip([-1, 0], 1, 1.0)])
+    true = torch.eye(3, dtype=torch.float64).repeat(4, 1, 1)
+    pred = true.clone()
+    pred[0] = pred[1] = rot_y(1.0)  # the lone root's two frames: leaves, ignored
+    pred[2] = rot_y(0.3)  # the chain's root
+    got = joint_rotation_error(pred, true, batch)
+    torch.testing.assert_close(got, torch.tensor([0.0, 0.3], dtype=got.dtype),
+                               rtol=0, atol=ANGLE_ATOL)
+
+
 def _positions():
     """True positions (anything) and predictions off by hand-picked steps."""
     true = torch.arange(36, dtype=torch.float).reshape(12, 3)
