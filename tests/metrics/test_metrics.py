@@ -141,6 +141,16 @@ def test_foot_sliding(batch):
                                torch.tensor([1 / 12, 0.05]))
 
 
+def test_foot_sliding_of_short_clips():
+    # a lone root on the ground (weight 1) slides 0.3 between its two frames:
+    # one moving node, so 0.3, not 0.15; a one-frame chain has no moving
+    # node: 0, not 0 / 0
+    batch = collate_clips([_clip([-1], 2, 1.0), _clip([-1, 0], 1, 1.0)])
+    pos = torch.zeros(4, 3)
+    pos[1] = torch.tensor([0.3, 0.0, 0.0])
+    torch.testing.assert_close(foot_sliding(pos, batch), torch.tensor([0.3, 0.0]))
+
+
 def test_ground_penetration(batch):
     # A: nothing below 0; B: -0.2 on 3 of 6 nodes -> -0.1
     torch.testing.assert_close(ground_penetration(_contact_positions(), batch),
