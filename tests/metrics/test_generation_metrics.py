@@ -6,7 +6,7 @@ import pytest
 
 from satagraph.metrics.generation import (diversity, distribution_metrics, fid, kid,
                                           matching_score, multimodality, r_precision,
-                                          replicate)
+                                          replicate, subsample)
 
 
 def test_r_precision_perfect_and_shuffled():
@@ -51,6 +51,7 @@ def test_matching_score_and_diversity():
     text = np.zeros((4, 2))
     motion = np.array([[3.0, 4.0]] * 4)
     assert matching_score(text, motion) == 5.0
+    assert matching_score(text + [1.0, 2.0], motion + [1.0, 2.0]) == 5.0  # a shift of both
     two = np.array([[0.0, 0.0], [3.0, 4.0]])
     assert diversity(two, pairs=50) == 5.0
     assert multimodality([two, two * 2], pairs=10) == 7.5
@@ -72,10 +73,29 @@ def test_kid_is_unbiased_and_grows_with_shift():
     assert kid(rng.normal(size=(50, 4)), rng.normal(size=(50, 4)) + 1.0) > 0.1
 
 
+def test_kid_hand_value():
+    # D = 1, k(x, y) = (x y + 1)^3. real {0, 1}: off-diagonal k(0, 1) = 1
+    # twice, / (2 * 1) -> 1. fake {0, 2, -1}: k(0, 2) = k(0, -1) = 1,
+    # k(2, -1) = -1, twice each, / (3 * 2) -> 1/3. Cross: row 0 gives 1, 1, 1;
+    # row 1 gives 1, 27, 0 -> mean 31/6. KID = 1 + 1/3 - 31/3 = -9.
+    assert kid(np.array([[0.0], [1.0]]), np.array([[0.0], [2.0], [-1.0]])) == pytest.approx(-9.0)
+
+
 def test_replicate_and_distribution_metrics():
     mean, half = replicate(lambda rng: 1.0, times=5)
     assert (mean, half) == (1.0, 0.0)
+    values = iter([0.0, 1.0, 0.0, 1.0])  # mean 1/2, std 1/2: 1.96 * 0.5 / sqrt(4)
+    assert replicate(lambda rng: next(values), times=4) == pytest.approx((0.5, 0.49))
     rng = np.random.default_rng(1)
     out = distribution_metrics(rng.normal(size=(100, 3)), rng.normal(size=(100, 3)) + 3,
                                times=3, size=64)
     assert out["fid"][0] > 20 and out["kid"][0] > 0.5 and out["fid"][1] >= 0
+
+
+def test_subsample_draws_distinct_rows_or_keeps_all():
+    x = np.arange(10.0)[:, None]
+    rng = np.random.default_rng(0)
+    part = subsample(x, 4, rng)
+    assert part.shape == (4, 1) and len(set(part[:, 0])) == 4 and set(part[:, 0]) <= set(x[:, 0])
+    for size in (10, 20):  # as many rows or fewer: all of them, in their order
+        np.testing.assert_array_equal(subsample(x, size, rng), x)
