@@ -401,3 +401,60 @@ def test_pace_drift_reads_a_steady_walk_and_one_that_speeds_up(species):
     still = walk.translations.copy()
     still[:, 0, [0, 2]] = still[:1, 0, [0, 2]]
     assert pace_drift(walk.with_(translations=still)) is None
+
+
+def _pitched(motion, degrees: float):
+    """:obj:`motion` frozen in its first pose, its root pitched forward
+    about +X from 0 to :obj:`degrees` along the clip."""
+    tilt = np.radians(np.linspace(0.0, degrees, motion.num_frames))
+    c, s = np.cos(tilt), np.sin(tilt)
+    pitch = np.zeros((len(tilt), 3, 3))
+    pitch[:, 0, 0], pitch[:, 1, 1], pitch[:, 1, 2] = 1.0, c, -s
+    pitch[:, 2, 1], pitch[:, 2, 2] = s, c
+    rotations = np.repeat(motion.rotations[:1], motion.num_frames, 0)
+    rotations[:, 0] = pitch @ rotations[:, 0]
+    return motion.with_(rotations=rotations, raw_channels=None,
+                        translations=np.repeat(motion.translations[:1], motion.num_frames, 0))
+
+
+def _nameless(motion):
+    """:obj:`motion` with joints no name describes: no head, no limb ends."""
+    names = [f"j{j}" for j in range(motion.skeleton.num_joints)]
+    return motion.with_(skeleton=motion.skeleton.replace(names=names), raw_channels=None)
+
+
+def test_travel_and_pace_drift_follow_the_root_alone():
+    """A body whose root slides 2 leg lengths along +Z at a steady pace
+    while it pitches forward to 60 degrees (its spine sweeping ahead, more
+    at first) travels 2 leg lengths with no pace drift."""
+    rocking = _pitched(_walk("biped"), 60.0)
+    leg = leg_length(rocking)
+    translations = rocking.translations.copy()
+    translations[:, 0, 2] += np.linspace(0.0, 2.0 * leg, rocking.num_frames)
+    moved = rocking.with_(translations=translations)
+    assert root_travel(moved) == pytest.approx(2.0)
+    assert pace_drift(moved) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_heading_gap_reads_travel_in_leg_lengths():
+    """The walk scaled 2.5 times with its root path cut to 0.45 leg lengths
+    of net travel has no heading to read; cut to 0.55 it reads the walk's."""
+    walk = _walk("biped")
+    big = walk.with_(skeleton=walk.skeleton.replace(offsets=walk.skeleton.offsets * 2.5),
+                     translations=walk.translations * 2.5)
+    translations = big.translations.copy()
+    start = translations[:1, 0, [0, 2]]
+    net = np.linalg.norm(translations[-1, 0, [0, 2]] - start) / leg_length(big)
+    for legs, gap in ((0.45, None), (0.55, pytest.approx(heading_gap(walk), abs=1e-6))):
+        translations[:, 0, [0, 2]] = start + (big.translations[:, 0, [0, 2]] - start) * (legs / net)
+        assert heading_gap(big.with_(translations=translations)) == gap
+
+
+def test_trunk_bend_and_most_active_of_a_body_without_names():
+    """Without a head, trunk_bend follows the first frame's highest joint:
+    the tipped body still reads its 40 degrees; without limb ends,
+    most_active is the clip's start."""
+    walk = _nameless(_walk("biped"))
+    assert head_index(walk) is None and limb_tracks(walk) == {}
+    assert trunk_bend(_pitched(walk, 40.0)) == pytest.approx(40.0, abs=1e-6)
+    np.testing.assert_array_equal(most_active(walk, 40).rotations, walk.rotations[:40])
