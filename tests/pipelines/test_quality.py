@@ -458,3 +458,11 @@ def test_trunk_bend_and_most_active_of_a_body_without_names():
     assert head_index(walk) is None and limb_tracks(walk) == {}
     assert trunk_bend(_pitched(walk, 40.0)) == pytest.approx(40.0, abs=1e-6)
     np.testing.assert_array_equal(most_active(walk, 40).rotations, walk.rotations[:40])
+
+
+def test_travel_ratio_of_a_short_clip_as_its_own_retarget():
+    """A third of a second of the walk travels under a leg length: as its
+    own retarget its travel ratio is still 1."""
+    short = _walk("biped").slice(0, 10)
+    assert 0.1 < root_travel(short) < 1.0
+    assert retarget_quality(short, short, ("travel",)) == {"travel": pytest.approx(1.0)}
