@@ -424,16 +424,17 @@ def _nameless(motion):
 
 
 def test_travel_and_pace_drift_follow_the_root_alone():
-    """A body whose root slides 2 leg lengths along +Z at a steady pace
-    while it pitches forward to 60 degrees (its spine sweeping ahead, more
-    at first) travels 2 leg lengths with no pace drift."""
+    """A body whose root slides 2 leg lengths along +X or (0.6, 0, 0.8) at
+    a steady pace while it pitches forward to 60 degrees (its spine
+    sweeping ahead, more at first) travels 2 leg lengths with no pace drift."""
     rocking = _pitched(_walk("biped"), 60.0)
     leg = leg_length(rocking)
-    translations = rocking.translations.copy()
-    translations[:, 0, 2] += np.linspace(0.0, 2.0 * leg, rocking.num_frames)
-    moved = rocking.with_(translations=translations)
-    assert root_travel(moved) == pytest.approx(2.0)
-    assert pace_drift(moved) == pytest.approx(0.0, abs=1e-9)
+    for way in ([1.0, 0.0, 0.0], [0.6, 0.0, 0.8]):
+        translations = rocking.translations.copy()
+        translations[:, 0] += np.linspace(0.0, 2.0 * leg, rocking.num_frames)[:, None] * way
+        moved = rocking.with_(translations=translations)
+        assert root_travel(moved) == pytest.approx(2.0)
+        assert pace_drift(moved) == pytest.approx(0.0, abs=1e-9)
 
 
 def test_heading_gap_reads_travel_in_leg_lengths():
