@@ -467,3 +467,15 @@ def test_travel_ratio_of_a_short_clip_as_its_own_retarget():
     short = _walk("biped").slice(0, 10)
     assert 0.1 < root_travel(short) < 1.0
     assert retarget_quality(short, short, ("travel",)) == {"travel": pytest.approx(1.0)}
+
+
+def test_joint_raise_is_in_heights_and_mean_correlation_counts_still_limbs():
+    """A walk scaled to a quarter (0.48 m tall) raises its joints by as many
+    of its heights; a still limb counts 0 in the mean, no limb gives nan."""
+    walk = _walk("biped")
+    small = walk.with_(skeleton=walk.skeleton.replace(offsets=walk.skeleton.offsets * 0.25),
+                       translations=walk.translations * 0.25)
+    assert small.height() < 0.5
+    assert joint_raise(small) == pytest.approx(joint_raise(walk)) and joint_raise(walk) > 0.01
+    assert mean_correlation({"a": float("nan"), "b": 0.5}) == 0.25
+    assert np.isnan(mean_correlation({}))
