@@ -479,3 +479,21 @@ def test_joint_raise_is_in_heights_and_mean_correlation_counts_still_limbs():
     assert joint_raise(small) == pytest.approx(joint_raise(walk)) and joint_raise(walk) > 0.01
     assert mean_correlation({"a": float("nan"), "b": 0.5}) == 0.25
     assert np.isnan(mean_correlation({}))
+
+
+@pytest.mark.parametrize("species", ["biped", "quadruped"])
+def test_sideways_reads_the_turn_across_half_a_turn(species):
+    """The zoo's side walk (about 50 degrees off its facing) with its root
+    path turned 150 degrees further the same way: its heading gap wraps
+    past 180 degrees and sideways still reads 150."""
+    from satagraph.ops.rotation_numpy import yaw_matrix_numpy
+    side = _walk(species, "side")
+    turn = 150.0 * np.sign(heading_gap(side))
+    translations = side.translations.copy()
+    start = translations[:1, 0]
+    translations[:, 0] = (translations[:, 0] - start) @ yaw_matrix_numpy(np.radians(turn)).T + start
+    turned = side.with_(translations=translations)
+    assert abs(heading_gap(side) + turn) > 180.0
+    assert heading_gap(turned) == pytest.approx(heading_gap(side) + turn - 360.0 * np.sign(turn),
+                                                abs=1e-6)
+    assert retarget_quality(side, turned, ("sideways",))["sideways"] == pytest.approx(150.0, abs=1e-6)
