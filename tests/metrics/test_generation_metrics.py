@@ -45,6 +45,13 @@ def test_r_precision_ties_rank_in_random_order():
     motion = text.copy()
     motion[1] = [0.9]
     np.testing.assert_allclose(r_precision(text, motion, top_k=3) * 32, [30.5, 31.5, 32.0])
+    # motion 0 (at 0) ties texts 0 (at 1) and 1 (at -1): 1/2, 1, 1; motion 1
+    # (at 10) has text 0 nearer than its own and ties with none: 0, 1, 1 (the
+    # ties are a motion's, not a text's: text 1 is as near as their own to both)
+    text = np.array([[1.0], [-1.0]] + [[100.0 + i] for i in range(30)])
+    motion = text.copy()
+    motion[0], motion[1] = [0.0], [10.0]
+    np.testing.assert_allclose(r_precision(text, motion, top_k=3) * 32, [30.5, 32.0, 32.0])
 
 
 def test_matching_score_and_diversity():
@@ -54,6 +61,7 @@ def test_matching_score_and_diversity():
     assert matching_score(text + [1.0, 2.0], motion + [1.0, 2.0]) == 5.0  # a shift of both
     two = np.array([[0.0, 0.0], [3.0, 4.0]])
     assert diversity(two, pairs=50) == 5.0
+    assert diversity(two + 1.0, pairs=50) == 5.0
     assert multimodality([two, two * 2], pairs=10) == 7.5
 
 
