@@ -379,6 +379,19 @@ def test_a_motion_edited_after_reading_is_written_as_it_now_is(tmp_path):
                                still.rotations, atol=1e-6)
 
 
+def test_an_edit_under_a_radian_is_written(tmp_path):
+    """A thousandth of a radian about +Y on the spine (a smoothing pass's
+    size of change) is no longer the file's values: it is written."""
+    (tmp_path / "in.bvh").write_text(TEXT)
+    motion = read_bvh(tmp_path / "in.bvh")
+    c, s = np.cos(1e-3), np.sin(1e-3)
+    motion.rotations[:, 1] = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ motion.rotations[:, 1]
+    assert not bvh_writer.raw_channels_hold(motion)
+    write_bvh(motion, tmp_path / "edited.bvh")
+    np.testing.assert_allclose(read_bvh(tmp_path / "edited.bvh").rotations, motion.rotations,
+                               atol=1e-7)
+
+
 def test_a_tiny_frame_time_is_written_as_it_reads(tiny_motion, tmp_path):
     """``Frame Time`` keeps ten significant digits: 1e-10 s is not written as
     0, which no reader takes."""
