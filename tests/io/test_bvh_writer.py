@@ -392,6 +392,18 @@ def test_an_edit_under_a_radian_is_written(tmp_path):
                                atol=1e-7)
 
 
+def test_joints_are_indented_by_depth_and_a_slow_frame_rate_is_kept(tmp_path):
+    """Two spaces a level (ROOT, JOINT, End Site and their lines), and a
+    motion of half a frame a second is written at that rate."""
+    (tmp_path / "in.bvh").write_text(TEXT)
+    motion = read_bvh(tmp_path / "in.bvh").with_(fps=0.5)
+    write_bvh(motion, tmp_path / "out.bvh")
+    head = (tmp_path / "out.bvh").read_text().split("MOTION")[0].splitlines()
+    assert [len(line) - len(line.lstrip()) for line in head] == [
+        0, 0, 0, 2, 2, 2, 2, 4, 4, 4, 4, 6, 4, 2, 0]
+    assert read_bvh(tmp_path / "out.bvh").fps == 0.5
+
+
 def test_a_tiny_frame_time_is_written_as_it_reads(tiny_motion, tmp_path):
     """``Frame Time`` keeps ten significant digits: 1e-10 s is not written as
     0, which no reader takes."""
