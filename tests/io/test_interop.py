@@ -41,6 +41,20 @@ def test_a_declared_file_has_nothing_after_its_frames(tiny_motion: Motion,
                                atol=1e-5)
 
 
+@pytest.mark.parametrize("rig, says", [
+    (RigSettings("+Y", 1.0, declared=True), "canonical up_axis=+Y scale=1"),
+    (RigSettings("+Y", 0.01, declared=True), "up_axis=+Y scale=0.01"),
+    (RigSettings("+Z", 1.0, declared=True), "up_axis=+Z scale=1"),
+    (RigSettings("+Y", None, declared=True), "up_axis=+Y"),
+    (RigSettings("+Y", 1.0), None)])
+def test_the_declaration_says_canonical_for_y_up_metres_only(tiny_motion: Motion, tmp_path: Path,
+                                                            rig: RigSettings, says) -> None:
+    out = tmp_path / "out.bvh"
+    write_bvh(tiny_motion.with_(rig=rig), out)
+    first = out.read_text().splitlines()[0]
+    assert first == ("HIERARCHY" if says is None else f"HIERARCHY # satagraph: {says}")
+
+
 def test_a_file_of_an_earlier_version_keeps_its_trailing_declaration(
         tiny_motion: Motion, tmp_path: Path) -> None:
     """Files written before the declaration moved to the ``HIERARCHY``
