@@ -45,6 +45,8 @@ TABLE = [
     ("rfoot", "right", "lfoot"), ("ltoes", "left", "rtoes"), ("lhipjoint", "left", "rhipjoint"),
     ("rthumb", "right", "lthumb"), ("lradius", "left", "rradius"), ("rwrist", "right", "lwrist"),
     ("lupperarm", "left", "rupperarm"), ("Lhand_end", "left", "Rhand_end"),
+    # a side word glued after the bone
+    ("upperarmleft", "left", "upperarmright"), ("Bip01_footright", "right", "Bip01_footleft"),
     *((word, None, word) for word in (
         "lowerback", "upperback", "lowerneck", "label", "lower", "length", "rib", "radius",
         "leg", "root", "rear", "ring", "lips", "lid", "reference", "roll", "rotation", "rump",
