@@ -95,7 +95,7 @@ from satagraph.pipelines.generate import (GenerationSettings, decode_on,  # noqa
                                           rig_inputs)
 from satagraph.nn.generators.sampling import GUIDES  # noqa: E402
 from satagraph.pipelines.inference import facing_smooth_of  # noqa: E402
-from satagraph.pipelines.quality import heading_gap, pace_drift, turn_rate  # noqa: E402
+from satagraph.pipelines.quality import heading_gap, lands, pace_drift, turn_rate  # noqa: E402
 from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E402
                                                    describe_features, froude_speed,
                                                    leg_length)
@@ -574,6 +574,8 @@ def direction_ok(label: str, travel: np.ndarray) -> bool:
 
 #: Actions that travel the way the body faces (:func:`sideways` is read on them).
 FORWARD = ("walk", "run", "dash")
+#: The probe actions that travel (``lands`` is read over them).
+TRAVELLING = tuple(DIRECTIONS) + FORWARD[1:]
 
 
 def _forward_median(labels: Sequence[str], values: Optional[Sequence[float]],
@@ -747,21 +749,29 @@ def skeleton_probes(module, targets: Dict[str, Tuple[str, Motion]], seeds: int,
                     seconds: float = 4.0, settings: Optional[GenerationSettings] = None
                     ) -> List[Dict[str, object]]:
     """The generator's probes per skeleton: every probe prompt, :obj:`seeds`
-    seeds, :obj:`seconds` long."""
+    seeds, :obj:`seconds` long, and over the prompts that travel
+    (:data:`TRAVELLING`) the median ``lands`` of their motions against the
+    target's own clip (:func:`~satagraph.pipelines.quality.lands`: 0 where a
+    limb that clip stands on never comes down, a dog's forepaws carried
+    like hands)."""
     settings = settings or GenerationSettings()
     rows = []
     for name, (subject, target) in targets.items():
-        labels, travels, froudes, gaps, turns, drifts = [], [], [], [], [], []
+        labels, travels, froudes, gaps, turns, drifts, down = [], [], [], [], [], [], []
+        own = canonicalize(target, fps=FPS)
         for prompt, label in PROBE_PROMPTS:
             for seed in range(seeds):
-                motion = generate_on(module, prompt.format(subject), target, seconds, seed,
-                                     settings)
-                it = measure(motion_to_features(canonicalize(motion, fps=FPS)), [], label,
-                             name, name)
+                motion = canonicalize(generate_on(module, prompt.format(subject), target,
+                                                  seconds, seed, settings), fps=FPS)
+                it = measure(motion_to_features(motion), [], label, name, name)
                 labels.append(label), travels.append(it.travel), froudes.append(it.froude)
                 gaps.append(it.sideways), turns.append(it.turn), drifts.append(it.drift)
-        rows.append({"skeleton": name, "subject": subject,
-                     "probes": probes(labels, travels, froudes, gaps, turns, drifts)})
+                down.append(lands(motion, own) if label in TRAVELLING else None)
+        found = probes(labels, travels, froudes, gaps, turns, drifts)
+        kept = [d for d in down if d is not None]
+        if kept:  # the target's own clip stands on some limb in half its frames
+            found["lands"] = (float(np.median(kept)), len(kept))
+        rows.append({"skeleton": name, "subject": subject, "probes": found})
     return rows
 
 
@@ -830,6 +840,8 @@ def probe_cell(p: Dict[str, object]) -> str:
         parts.append(f"turn {p['turn'][0]:.1f} deg/s (n={p['turn'][1]}{left})")
     if "drift" in p:
         parts.append(f"pace drift {p['drift'][0]:+.0%} (n={p['drift'][1]})")
+    if "lands" in p:
+        parts.append(f"down {p['lands'][0]:.2f} (n={p['lands'][1]})")
     return "; ".join(parts)
 
 

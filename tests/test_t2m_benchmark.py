@@ -274,3 +274,19 @@ def test_data_refuses_a_rig_the_evaluator_cannot_read(tmp_path, monkeypatch, cap
                          "rig (3 joints; it reads motion by the ends of the legs and arms its "
                          "joint names show, see satagraph tags), so it cannot score it: leave "
                          "it out or name its joints")
+
+
+
+def test_skeleton_probes_read_whether_the_limbs_come_down(monkeypatch):
+    """``lands`` per skeleton: a generator that gives back the target's own
+    walk for every prompt reads 1.00 over the six travelling prompts; one
+    that gives it back with the forelegs swung up (the forepaws never
+    within 5 % of the height of the floor) reads 0.00; the cell says so."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent / "pipelines"))
+    from test_quality import _forelegs_up, _walk
+    walk = _walk("quadruped")
+    for given, down in ((walk, 1.0), (_forelegs_up(walk), 0.0)):
+        monkeypatch.setattr(t2m, "generate_on", lambda *args, given=given: given)
+        rows = t2m.skeleton_probes(None, {"zoo quadruped": ("a quadruped", walk)}, seeds=1)
+        assert rows[0]["probes"]["lands"] == (pytest.approx(down), 6)
+        assert f"down {down:.2f} (n=6)" in t2m.probe_cell(rows[0]["probes"])

@@ -1,0 +1,61 @@
+"""Do generated animals put their limbs down? (issue 19; PRETRAIN.md section 54)
+
+``benchmarks/t2m.py``'s per-skeleton probes alone, without its evaluator:
+every probe prompt on every skeleton of the test table (the zoo's biped,
+quadruped, bird and hexapod test rigs, a Bandai test rig, CMU ``01_01`` and
+the dog), :data:`t2m.PROBE_SEEDS` seeds, 4 s each, with the default
+sampling, and their ``down`` (``lands`` against the skeleton's own clip,
+median over the travelling prompts: 1 where every limb the clip stands on
+comes down as often, 0 where one never does: a quadruped's forepaws
+carried like a human's hands).
+
+    .venv/bin/python benchmarks/t2m_lands.py [--ckpt builtin] [--seeds 6] [--out PATH]
+
+Writes ``benchmarks/results/t2m_lands.md`` (and ``.json``).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import List, Optional
+
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import t2m  # noqa: E402
+from results_io import missing_data, write_results  # noqa: E402
+
+OUT = Path(__file__).resolve().parent / "results" / "t2m_lands"
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ckpt", default="builtin", help="a t2m checkpoint (default: builtin)")
+    parser.add_argument("--seeds", type=int, default=t2m.PROBE_SEEDS)
+    parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
+    args = parser.parse_args(argv)
+    line = missing_data("t2m_lands.py")
+    if line:
+        print(line, file=sys.stderr)
+        return 2
+    torch.manual_seed(0)
+    start = time.perf_counter()
+    _, test = t2m.real_items(False, 0, "test")
+    targets = t2m.skeleton_targets(test, False)
+    rows = t2m.skeleton_probes(t2m.load_generator(args.ckpt), targets, args.seeds)
+    lines = ["| skeleton | prompts' subject | probes |", "|---|---|---|"]
+    lines += [f"| {r['skeleton']} | {r['subject']} | {t2m.probe_cell(r['probes'])} |"
+              for r in rows]
+    text = (f"`python benchmarks/t2m_lands.py --ckpt {args.ckpt} --seeds {args.seeds}` "
+            f"({time.perf_counter() - start:.0f} s)\n\n" + "\n".join(lines) + "\n")
+    print(text)
+    write_results(args.out, "Generated limbs that come down (t2m.py's skeleton probes)",
+                  text, {"ckpt": args.ckpt, "seeds": args.seeds, "rows": rows})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
