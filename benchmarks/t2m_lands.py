@@ -32,7 +32,8 @@ OUT = Path(__file__).resolve().parent / "results" / "t2m_lands"
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ckpt", default="builtin", help="a t2m checkpoint (default: builtin)")
     parser.add_argument("--seeds", type=int, default=t2m.PROBE_SEEDS)
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
