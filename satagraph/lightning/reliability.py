@@ -284,9 +284,11 @@ class ResumeCheckpoint(Checkpoint):
         epoch = trainer.current_epoch if trainer is not None else 0
         step = trainer.global_step if trainer is not None else 0
         total = trainer.num_training_batches if trainer is not None else float("inf")
-        ending = trainer is not None and _ending_epoch(trainer)  # the next epoch starts anew
+        done = self._batches_done >= total
+        # the next epoch starts anew; one cut short (max_steps, max_time) goes on
+        ending = done and trainer is not None and _ending_epoch(trainer)
         return {"epoch": epoch, "batches": self._batches_done, "step": step,
-                "epoch_done": self._batches_done >= total,
+                "epoch_done": done,
                 "rng": self._step_rng if self._interrupting else rng_states(),
                 "epoch_logs": [] if ending else self._step_logs}
 

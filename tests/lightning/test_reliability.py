@@ -767,6 +767,27 @@ def test_ctrl_c_in_validation_keeps_that_epoch_s_training_averages(
     assert _train_averages(Path(cfg["output_dir"])) == expected
 
 
+@pytest.mark.parametrize("stop, every", [(3, None), (1, 1)])
+def test_run_cut_inside_an_epoch_keeps_that_epoch_s_training_averages(
+        tiny_config: Dict[str, Any], tmp_path: Path, stop: int, every: Any) -> None:
+    """A run stopped by ``trainer.max_steps`` inside an epoch ends it (its
+    end hooks run, ``last.ckpt`` written there) but ``--resume`` goes on
+    with its remaining batches: that epoch's ``train_loss_epoch`` and other
+    averages are those of a run never stopped, not of the resumed batches
+    alone (epoch 1 read 3028.9 for 2718.2 at ``max_steps=3``)."""
+    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
+    train(reference)
+    expected = _train_averages(tmp_path / "a")
+    assert list(expected) == ["0", "1", "2"]
+    cfg = _interruptible(tiny_config)
+    cfg["checkpoint"]["every_n_steps"] = every
+    cut = copy.deepcopy(cfg)
+    cut["trainer"]["max_steps"] = stop
+    train(cut)
+    train(cfg, resume=True)
+    assert _train_averages(Path(cfg["output_dir"])) == expected
+
+
 @pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4),
                                          pytest.param("validation", 4, marks=pytest.mark.slow)])
 def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
