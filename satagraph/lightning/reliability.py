@@ -224,7 +224,7 @@ class ResumeCheckpoint(Checkpoint):
     first training batch after a resume) and the position of the run
     (epoch, batches done in it, step), which the training sampler resumes
     from, and the sums of the epoch's training averages so far
-    (:func:`epoch_logs`, put back as the resumed run starts). A run
+    (:func:`epoch_logs`, put back in the resumed run: :func:`add_epoch_logs`). A run
     stopped inside an epoch (``max_time``, ``max_steps``, ``should_stop``)
     resumes with that epoch's remaining batches, and one
     bounded by ``max_steps`` goes on past an epoch's end: the losses are
@@ -260,6 +260,7 @@ class ResumeCheckpoint(Checkpoint):
         self._interrupting = False
         self._step_rng: Optional[Dict[str, Any]] = None  # at the last step's end
         self._step_logs: List[Dict[str, Any]] = []  # the epoch's sums then (epoch_logs)
+        self._carried: List[Dict[str, Any]] = []  # added after the first resumed batch
         self.saves = 0
         #: The step of the checkpoint a Ctrl-C wrote (``None``: none).
         self.interrupted_step: Optional[int] = None
@@ -321,7 +322,7 @@ class ResumeCheckpoint(Checkpoint):
     def on_train_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
         if self._max_steps is not None:
             trainer.fit_loop.epoch_loop.max_steps, self._max_steps = self._max_steps, None
-        if self._pending is not None:  # before a validation that the resume runs first
+        if self._pending is not None and self._pending["epoch_done"]:  # its end comes first
             restore_epoch_logs(trainer, self._pending.get("epoch_logs") or [])
 
     def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
@@ -336,6 +337,11 @@ class ResumeCheckpoint(Checkpoint):
                              batch: Any, batch_idx: int) -> None:
         if self._pending is not None:
             set_rng_states(self._pending["rng"])
+            logs = self._pending.get("epoch_logs") or []
+            if self._pending["epoch_done"]:  # logged at that epoch's end: this one logs anew
+                _forget_epoch_logs(trainer, logs)
+            else:  # added to this batch's own logs (the module's arguments may have changed)
+                self._carried = self._step_logs = logs
             self._pending = None
 
     def on_train_batch_end(self, trainer: L.Trainer, pl_module: L.LightningModule,
@@ -346,6 +352,9 @@ class ResumeCheckpoint(Checkpoint):
             late = time.monotonic() - self._last_time >= self.every_seconds
             due = due or bool(trainer.strategy.broadcast(late, src=0))
         self._step_rng = rng_states()  # also of a step saved here: see on_exception
+        if self._carried:
+            add_epoch_logs(trainer, self._carried)
+            self._carried = []
         self._step_logs = epoch_logs(trainer)
         if due:
             self.save(trainer)
@@ -464,8 +473,8 @@ def epoch_logs(trainer: L.Trainer) -> List[Dict[str, Any]]:
     loads with ``weights_only=True``: Lightning keeps them out of its
     checkpoints, so a run resumed inside an epoch, or before its
     validation, logged that epoch's averages over the resumed batches
-    alone, or none (:func:`restore_epoch_logs`). None in a distributed run
-    (each process sums its own)."""
+    alone, or none (:func:`restore_epoch_logs`, :func:`add_epoch_logs`).
+    None in a distributed run (each process sums its own)."""
     results = trainer.fit_loop.epoch_loop._results
     if trainer.world_size > 1 or results is None:
         return []
@@ -508,6 +517,40 @@ def restore_epoch_logs(trainer: L.Trainer, logs: List[Dict[str, Any]]) -> None:
         metric._forward_cache = None  # no step value: the resumed steps log their own
     if logs:
         trainer._logger_connector._current_fx = _STEP_FX
+
+
+def add_epoch_logs(trainer: L.Trainer, logs: List[Dict[str, Any]]) -> None:
+    """Add the sums :func:`epoch_logs` kept to those of the same metrics
+    that the first batch of a run resumed inside that epoch has logged: the
+    epoch's averages are those of a run never stopped, whatever else of
+    ``self.log``'s arguments (``prog_bar``, ...) changed since (Lightning
+    refuses a metric logged again with other arguments). One that batch did
+    not log is put back as it was (:func:`restore_epoch_logs`); one reduced
+    otherwise now is left out."""
+    results = trainer.fit_loop.epoch_loop._results
+    logged = [f"{log['fx']}.{log['name']}" in results for log in logs]
+    restore_epoch_logs(trainer, [log for log, was in zip(logs, logged) if not was])
+    for log in (log for log, was in zip(logs, logged) if was):
+        metric = results[f"{log['fx']}.{log['name']}"]
+        if not metric.is_tensor or metric.meta.reduce_fx.__name__ != log["reduce_fx"]:
+            continue
+        value = log["value"].to(metric.value)
+        if metric.meta.is_max_reduction or metric.meta.is_min_reduction:
+            metric.value = metric.meta.reduce_fx(torch.stack([metric.value, value]))
+        else:
+            metric.value = metric.value + value
+        if metric.meta.is_mean_reduction and log["batch_size"] is not None:
+            metric.cumulated_batch_size = (metric.cumulated_batch_size
+                                           + log["batch_size"].to(metric.cumulated_batch_size))
+
+
+def _forget_epoch_logs(trainer: L.Trainer, logs: List[Dict[str, Any]]) -> None:
+    """Drop the metrics :func:`restore_epoch_logs` put back for an epoch's
+    end once it is logged: the next epoch's ``self.log`` registers them
+    with its own arguments."""
+    results = trainer.fit_loop.epoch_loop._results
+    for log in logs:
+        results.pop(f"{log['fx']}.{log['name']}", None)
 
 
 def _ending_epoch(trainer: L.Trainer) -> bool:

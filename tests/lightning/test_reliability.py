@@ -788,6 +788,31 @@ def test_run_cut_inside_an_epoch_keeps_that_epoch_s_training_averages(
     assert _train_averages(Path(cfg["output_dir"])) == expected
 
 
+@pytest.mark.parametrize("where, step", [("start", 3), ("validation", 2)])
+def test_resume_keeps_the_epoch_s_averages_of_metrics_logged_with_other_arguments(
+        tiny_config: Dict[str, Any], tmp_path: Path, where: str, step: int) -> None:
+    """A checkpoint whose training metrics were logged with other
+    ``self.log`` arguments (``prog_bar`` here: a module or satagraph changed
+    since) stopped ``--resume`` at its first step with Lightning's 'You
+    called self.log(train/rotation, ...) twice in training_step with
+    different arguments'; the averages are those of a run never stopped."""
+    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
+    train(reference)
+    expected = _train_averages(tmp_path / "a")
+    cfg = _interruptible(tiny_config)
+    with pytest.raises(KeyboardInterrupt):
+        train(cfg, callbacks=[_InterruptAt(step, where)])
+    last = Path(cfg["output_dir"]) / "checkpoints" / LAST
+    ckpt = torch.load(last, weights_only=False)
+    logs = ckpt["callbacks"]["ResumeCheckpoint"]["epoch_logs"]
+    assert logs
+    for log in logs:
+        log["prog_bar"] = not log["prog_bar"]
+    torch.save(ckpt, last)
+    train(cfg, resume=True)
+    assert _train_averages(Path(cfg["output_dir"])) == expected
+
+
 @pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4),
                                          pytest.param("validation", 4, marks=pytest.mark.slow)])
 def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
