@@ -437,7 +437,7 @@ def lands(canonical: Motion, reference: Motion) -> Optional[float]:
     motion's :func:`landing_shares` over its own standing frames (a
     retarget of a dog that sits is not asked to stand) to the
     reference's, capped at 1 (``None`` where the reference lands no limb
-    that often). 1 where every limb comes down as often as in the
+    that often, or either has no frames). 1 where every limb comes down as often as in the
     character's own clip (the built-in model's retargets onto Bandai's
     human, a zoo biped, bird and Reallusion's rig read 0.94-1.00); 0 where
     one never does: its human -> dog and zoo biped -> quadruped retargets
@@ -455,7 +455,10 @@ def lands(canonical: Motion, reference: Motion) -> Optional[float]:
 
 def _standing_shares(canonical: Motion) -> Dict[str, float]:
     """:func:`landing_shares` over the frames in which a canonical motion
-    stands (:func:`~satagraph.transforms.ground.stands`)."""
+    stands (:func:`~satagraph.transforms.ground.stands`; none without
+    frames)."""
+    if not canonical.num_frames:
+        return {}
     pos = canonical.global_positions()
     standing = np.flatnonzero(stands(pos, canonical.skeleton, canonical.fps))
     return landing_shares(canonical, standing, pos)

@@ -497,3 +497,16 @@ def test_sideways_reads_the_turn_across_half_a_turn(species):
     assert heading_gap(turned) == pytest.approx(heading_gap(side) + turn - 360.0 * np.sign(turn),
                                                 abs=1e-6)
     assert retarget_quality(side, turned, ("sideways",))["sideways"] == pytest.approx(150.0, abs=1e-6)
+
+
+def test_lands_of_a_clip_without_frames_is_none():
+    """A target rig read without frames (a zero-frame BVH retargets onto
+    its rest) has no standing frames to read: lands is ``None`` either way
+    round, as for a clip that lands no limb, not numpy's 'cannot extend
+    empty axis' from the standing test."""
+    walk = _walk("quadruped")
+    empty = walk.slice(0, 0)
+    assert empty.num_frames == 0
+    assert lands(walk, empty) is None
+    assert lands(empty, walk) is None
+    assert retarget_quality(walk, walk, ("lands",), target=empty) == {"lands": None}
