@@ -352,10 +352,11 @@ class Retargeter:
     call is :func:`retarget_motion` of its source onto :obj:`target` with
     the settings given here (the output the same to the bit), and what is
     computed of the target alone (canonicalised, its mirror image, shown in
-    a rest pose with its static features: :class:`RigMemo`) is computed
-    for the first source only. ``satagraph retarget SRC_DIR`` runs through
-    one (``benchmarks/retarget_many.py``: ten Bandai clips onto the dog's
-    1531-frame clip in 0.60 of the CPU time of one :func:`retarget_motion`
+    a rest pose with its static features and their semantic embedding, its
+    ground level: :class:`RigMemo`) is computed for the first source only.
+    ``satagraph retarget SRC_DIR`` runs through one
+    (``benchmarks/retarget_many.py``: ten Bandai clips onto the dog's
+    1531-frame clip in 0.58 of the CPU time of one :func:`retarget_motion`
     per clip).
 
     Args:
