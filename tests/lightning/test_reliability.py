@@ -767,6 +767,7 @@ def test_ctrl_c_in_validation_keeps_that_epoch_s_training_averages(
     assert _train_averages(Path(cfg["output_dir"])) == expected
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stop, every", [(3, None), (1, 1)])
 def test_run_cut_inside_an_epoch_keeps_that_epoch_s_training_averages(
         tiny_config: Dict[str, Any], tmp_path: Path, stop: int, every: Any) -> None:
@@ -788,6 +789,7 @@ def test_run_cut_inside_an_epoch_keeps_that_epoch_s_training_averages(
     assert _train_averages(Path(cfg["output_dir"])) == expected
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where, step", [("start", 3), ("validation", 2)])
 def test_resume_keeps_the_epoch_s_averages_of_metrics_logged_with_other_arguments(
         tiny_config: Dict[str, Any], tmp_path: Path, where: str, step: int) -> None:
