@@ -282,8 +282,7 @@ def test_skeleton_probes_read_whether_the_limbs_come_down(monkeypatch):
     walk for every prompt reads 1.00 over the six travelling prompts; one
     that gives it back with the forelegs swung up (the forepaws never
     within 5 % of the height of the floor) reads 0.00; the cell says so."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent / "pipelines"))
-    from test_quality import _forelegs_up, _walk
+    from tests.pipelines.test_quality import _forelegs_up, _walk
     walk = _walk("quadruped")
     for given, down in ((walk, 1.0), (_forelegs_up(walk), 0.0)):
         monkeypatch.setattr(t2m, "generate_on", lambda *args, given=given: given)

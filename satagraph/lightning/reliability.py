@@ -224,9 +224,9 @@ class ResumeCheckpoint(Checkpoint):
     first training batch after a resume) and the position of the run
     (epoch, batches done in it, step), which the training sampler resumes
     from, and the sums of the epoch's training averages so far
-    (:func:`epoch_logs`, put back in the resumed run: :func:`add_epoch_logs`). A run
-    stopped inside an epoch (``max_time``, ``max_steps``, ``should_stop``)
-    resumes with that epoch's remaining batches, and one
+    (:func:`epoch_logs`, put back in the resumed run: :func:`add_epoch_logs`).
+    A run stopped inside an epoch (``max_time``, ``max_steps``,
+    ``should_stop``) resumes with that epoch's remaining batches, and one
     bounded by ``max_steps`` goes on past an epoch's end: the losses are
     those of a run never stopped, where Lightning 2.6 alone would count the
     cut epoch as finished or skip the next one

@@ -383,8 +383,7 @@ def posture(canonical: Motion, reference: Motion) -> Optional[float]:
     two legs.)"""
     if canonical.skeleton.names != reference.skeleton.names:
         return None
-    ref = reference.global_positions()
-    standing = stands(ref, reference.skeleton, reference.fps)
+    ref, standing = _standing(reference)
     a, b = _carried(canonical.global_positions()), _carried(ref[standing])
     spread = float(((b - b.mean()) ** 2).sum())
     if spread < 1e-18:
@@ -437,8 +436,8 @@ def lands(canonical: Motion, reference: Motion) -> Optional[float]:
     motion's :func:`landing_shares` over its own standing frames (a
     retarget of a dog that sits is not asked to stand) to the
     reference's, capped at 1 (``None`` where the reference lands no limb
-    that often, or either has no frames). 1 where every limb comes down as often as in the
-    character's own clip (the built-in model's retargets onto Bandai's
+    that often, or either has no frames). 1 where every limb comes down as
+    often as in the character's own clip (the built-in model's retargets onto Bandai's
     human, a zoo biped, bird and Reallusion's rig read 0.94-1.00); 0 where
     one never does: its human -> dog and zoo biped -> quadruped retargets
     walk on their hind legs with the forepaws held up like hands, never
@@ -459,9 +458,21 @@ def _standing_shares(canonical: Motion) -> Dict[str, float]:
     frames)."""
     if not canonical.num_frames:
         return {}
+    pos, standing = _standing(canonical)
+    return landing_shares(canonical, np.flatnonzero(standing), pos)
+
+
+def _standing(canonical: Motion) -> Tuple[np.ndarray, np.ndarray]:
+    """The global positions of a canonical motion and the mask of its
+    frames in which it stands (:func:`~satagraph.transforms.ground.stands`),
+    which :func:`posture` and :func:`lands` read the character's own clip
+    over.
+
+    Shapes:
+        - **output**: :math:`(T, J, 3)` and :math:`(T,)`
+    """
     pos = canonical.global_positions()
-    standing = np.flatnonzero(stands(pos, canonical.skeleton, canonical.fps))
-    return landing_shares(canonical, standing, pos)
+    return pos, stands(pos, canonical.skeleton, canonical.fps)
 
 
 def retarget_quality(source: Motion, output: Motion,

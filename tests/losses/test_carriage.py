@@ -17,21 +17,12 @@ from __future__ import annotations
 import pytest
 import torch
 
-from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.losses import carriage_loss, carried_heights
+from tests.metrics.test_metrics import _clip
 
 A, B = [-1, 0, 1], [-1, 0]
 PARTNERS = torch.tensor([1, 0])
-
-
-def _clip(parents, frames: int, height: float) -> MotionClip:
-    joints = len(parents)
-    return MotionClip(
-        dynamic=torch.zeros(frames, joints, 1), root=torch.zeros(frames, 4),
-        static=torch.zeros(joints, 6), semantic=torch.zeros(joints, 0),
-        parents=torch.tensor(parents), edge_attr=torch.zeros(2 * (joints - 1), 2),
-        meta={"height": height})
 
 
 def _positions(heights) -> torch.Tensor:
