@@ -100,7 +100,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from results_io import SHARED_DATA, missing_data, write_results  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 from satagraph.datasets.zoo.endless import EndlessZoo  # noqa: E402
-from satagraph.pipelines.inference import (REST_MODES, reconstruct_canonical,  # noqa: E402
+from satagraph.pipelines.inference import (CARRIAGE_MODES, REST_MODES, reconstruct_canonical,  # noqa: E402
                                            retarget_canonical)
 from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E402
 from satagraph.io import read_bvh  # noqa: E402
@@ -260,10 +260,12 @@ def _named(case: str, model: str, ckpt: str) -> str:
     return f"{case} [{model}]" if ckpt == AUTO and model != "builtin" else case
 
 
-def retarget_row(module, source: Motion, target: Motion, rest: str = "auto") -> dict:
+def retarget_row(module, source: Motion, target: Motion, rest: str = "auto",
+                 carriage: str = "auto") -> dict:
     """The quality of one retarget (grounded as the CLI's), with the
     source's own upright share and slide and the decoder's own ground."""
-    src, raw = retarget_canonical(module, source, target, module.embed, rest=rest, ground=False)
+    src, raw = retarget_canonical(module, source, target, module.embed, rest=rest, ground=False,
+                                  carriage=carriage)
     tgt = canonicalize(target, fps=float(module.fps))
     quality = retarget_quality(src, ground_retarget(raw, src, tgt), QUALITY, target=tgt)
     own = retarget_quality(src, src, ("upright", "slide", "hover"))
@@ -289,7 +291,7 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
 
 
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
-            ckpt: str = "builtin") -> Dict[str, List[dict]]:
+            ckpt: str = "builtin", carriage: str = "auto") -> Dict[str, List[dict]]:
     """Every retarget and reconstruction row, each read by ``pick``'s model."""
     rows: Dict[str, List[dict]] = {"retarget": [], "reconstruction": []}
     for group, case, load in retarget_cases():
@@ -297,7 +299,7 @@ def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = 
         module, model = pick([source, target])
         rows["retarget"].append(dict(group=group, case=_named(case, model, ckpt), source=sname,
                                      target=tname, model=model,
-                                     **retarget_row(module, source, target, rest)))
+                                     **retarget_row(module, source, target, rest, carriage)))
     for group, case, load in recon_cases():
         motion = load()
         module, model = pick([motion])
@@ -360,9 +362,10 @@ def _bend(row: dict) -> str:
     return f"{row['bend']:.0f} ({row['source_bend']:.0f})"
 
 
-def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto") -> str:
-    lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose; {seconds:.0f} s on "
-             "this machine.", "",
+def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto",
+          carriage: str = "auto") -> str:
+    lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose, retargets carried "
+             f"as their characters: {carriage}; {seconds:.0f} s on this machine.", "",
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
              "| travel ratio (0.8-1.25) | stride ratio (diagnostic) "
              "| posture (diagnostic) | lands (diagnostic) | ground, % height (<= 3) "
@@ -404,11 +407,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--rest", choices=REST_MODES, default="auto",
                         help="the rest pose every skeleton is shown to the model in "
                              "(retarget_canonical's rest; default auto)")
+    parser.add_argument("--carriage", choices=CARRIAGE_MODES, default="auto",
+                        help="when a retarget is carried as its target character "
+                             "(retarget_canonical's carriage; default auto)")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"results path without suffix (default {OUT.relative_to(ROOT)}, "
-                             "with -file or -first-frame for the other --rest modes)")
+                             "with -file or -first-frame for the other --rest modes and "
+                             "-carriage-MODE for the other --carriage modes)")
     args = parser.parse_args(argv)
     out = args.out or (OUT if args.rest == "auto" else OUT.with_name(f"{OUT.name}-{args.rest}"))
+    if args.out is None and args.carriage != "auto":
+        out = out.with_name(f"{out.name}-carriage-{args.carriage}")
     missing = missing_data("pretrained.py", DATA)
     if missing:
         print(missing, file=sys.stderr)
@@ -417,11 +426,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     pick = model_picker(args.ckpt)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows = measure(pick, args.rest, args.ckpt)
-    text = table(rows, args.ckpt, time.perf_counter() - start, args.rest)
+        rows = measure(pick, args.rest, args.ckpt, args.carriage)
+    text = table(rows, args.ckpt, time.perf_counter() - start, args.rest, args.carriage)
     print(text)
     write_results(out, "The built-in model (benchmarks/pretrained.py)", text,
-                  dict(rows, ckpt=args.ckpt, rest=args.rest))
+                  dict(rows, ckpt=args.ckpt, rest=args.rest, carriage=args.carriage))
     return 0
 
 

@@ -22,6 +22,7 @@ from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.mirror_average import (average_readings, mirror_back, mirror_canonical,
                                                  place_reading)
 from satagraph.transforms.still_root import hold_still_source, settle_root
+from satagraph.transforms.carriage import carry_like, mean_carriage
 from satagraph.transforms.ground import (STANDING_SHARE, ground_level,  # noqa: F401
                                          ground_retarget, stands, standing_frame,
                                          standing_frames)
@@ -33,6 +34,7 @@ from satagraph.data.validate import (check_features, check_motion, check_windows
                                      default_windows)
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion, require_motion
+from satagraph.pipelines.quality import lands_against, standing_shares
 
 Kept = TypeVar("Kept")
 
@@ -270,7 +272,7 @@ def retarget_motion(module, source: Motion, target: Motion,
                     overlap: Optional[int] = None, fps: Optional[float] = None,
                     rest: str = "auto", ground: bool = True, plant: bool = False,
                     settle: bool = False, still: bool = True, mirror: bool = False,
-                    two_rests: Union[bool, str] = False,
+                    two_rests: Union[bool, str] = False, carriage: str = "auto",
                     memo: Optional[RigMemo] = None) -> Motion:
     r"""Retarget :obj:`source` onto :obj:`target`'s skeleton (any species).
 
@@ -337,13 +339,21 @@ def retarget_motion(module, source: Motion, target: Motion,
             average the readings (:func:`averaged_reading`; twice the
             model's time, four times with :obj:`mirror`); :data:`UNMIRRORED`:
             only for a rig without a mirror image.
+        carriage (str): ``"auto"`` (default) carries the retarget as the
+            target character carries itself in :obj:`target`'s frames
+            wherever it never puts down a limb the character stands on
+            there (:func:`carried_retarget`: a human's walk onto a
+            quadruped held its forepaws up like hands); ``"always"``
+            wherever :obj:`target` has frames; ``"never"`` keeps the
+            decoder's carriage (:data:`CARRIAGE_MODES`).
         memo (RigMemo, optional): What is computed of :obj:`target` alone,
             kept across calls onto the same target (a folder of sources);
             the output is the same with or without it.
     """
     check_inputs(module, source, target)
     _, canon = retarget_canonical(module, source, target, semantic, window, overlap, fps,
-                                  rest, ground, plant, settle, still, mirror, two_rests, memo)
+                                  rest, ground, plant, settle, still, mirror, two_rests,
+                                  carriage, memo)
     return from_canonical(canon, source)
 
 
@@ -375,6 +385,7 @@ class Retargeter:
         still (bool): As in :func:`retarget_motion`.
         mirror (bool): As in :func:`retarget_motion`.
         two_rests (bool or str): As in :func:`retarget_motion`.
+        carriage (str): As in :func:`retarget_motion`.
         memo (RigMemo, optional): Where the target's work is kept (default:
             a new one; retargeters of several models onto the same
             :obj:`target` object may share one).
@@ -399,14 +410,14 @@ class Retargeter:
                  fps: Optional[float] = None, rest: str = "auto", ground: bool = True,
                  plant: bool = False, settle: bool = False, still: bool = True,
                  mirror: bool = False, two_rests: Union[bool, str] = False,
-                 memo: Optional[RigMemo] = None) -> None:
+                 carriage: str = "auto", memo: Optional[RigMemo] = None) -> None:
         check_module(module)
         check_target(target)
-        check_settings(module, window, overlap, rest, two_rests)
+        check_settings(module, window, overlap, rest, two_rests, carriage)
         self.module, self.target = module, target
         self.options = dict(semantic=semantic, window=window, overlap=overlap, fps=fps,
                             rest=rest, ground=ground, plant=plant, settle=settle, still=still,
-                            mirror=mirror, two_rests=two_rests)
+                            mirror=mirror, two_rests=two_rests, carriage=carriage)
         self.memo = RigMemo() if memo is None else memo
 
     @overload
@@ -488,10 +499,11 @@ def check_target(target: Motion) -> None:
 
 
 def check_settings(module, window: Optional[int], overlap: Optional[int], rest: str,
-                   two_rests: Union[bool, str]) -> None:
+                   two_rests: Union[bool, str], carriage: str = "auto") -> None:
     """:func:`retarget_motion`'s settings, refused in one line before any
     work: a rest mode of :data:`REST_MODES`, a ``two_rests`` of
-    :func:`averaged_reading` and windows that plan frames.
+    :func:`averaged_reading`, a ``carriage`` of :data:`CARRIAGE_MODES` and
+    windows that plan frames.
 
     Raises:
         ValueError: One line naming the setting.
@@ -499,6 +511,8 @@ def check_settings(module, window: Optional[int], overlap: Optional[int], rest: 
     if rest not in REST_MODES:
         raise ValueError(f"rest must be one of {list(REST_MODES)}, got {rest!r}")
     check_two_rests(two_rests)
+    if carriage not in CARRIAGE_MODES:
+        raise ValueError(f"carriage must be one of {list(CARRIAGE_MODES)}, got {carriage!r}")
     check_windows(*default_windows(module, window, overlap))
 
 
@@ -539,7 +553,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        rest: str = "auto", ground: bool = True,
                        plant: bool = False, settle: bool = False,
                        still: bool = True, mirror: bool = False,
-                       two_rests: Union[bool, str] = False,
+                       two_rests: Union[bool, str] = False, carriage: str = "auto",
                        memo: Optional[RigMemo] = None) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
@@ -549,9 +563,11 @@ def retarget_canonical(module, source: Motion, target: Motion,
     :mod:`satagraph.pipelines.quality` measures. With :obj:`mirror` and
     :obj:`two_rests`, the decoding is averaged with that of both rigs'
     mirror images and of both rigs in a second rest pose
-    (:func:`averaged_reading`). :obj:`memo` keeps what is computed of the
-    target alone across calls (:class:`RigMemo`)."""
-    check_settings(module, window, overlap, rest, two_rests)
+    (:func:`averaged_reading`), then carried as the target character
+    (:func:`carried_retarget`; never for a reconstruction). :obj:`memo`
+    keeps what is computed of the target alone across calls
+    (:class:`RigMemo`)."""
+    check_settings(module, window, overlap, rest, two_rests, carriage)
     fps = fps or float(getattr(module, "fps", 30.0))
     same = target is source  # a reconstruction: canonicalized and mirrored once
     memo = None if same else memo
@@ -562,11 +578,47 @@ def retarget_canonical(module, source: Motion, target: Motion,
     src_canon, out, c = averaged_reading(reading, source, target, rest, mirror, two_rests, memo)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
+    level = (_kept(memo, target, "ground", partial(ground_level, target))
+             if target.num_frames else None)
+    out = out if same else carried_retarget(out, src_canon, target, level, carriage, memo)
     if ground:
-        level = (_kept(memo, target, "ground", partial(ground_level, target))
-                 if target.num_frames else None)
         out = ground_retarget(out, src_canon, target, level)
     return src_canon, plant_feet(out) if plant else out
+
+
+#: ``carriage`` values of :func:`retarget_motion` (:func:`carried_retarget`).
+CARRIAGE_MODES = ("auto", "always", "never")
+#: ``carriage="auto"`` carries a retarget whose
+#: :func:`~satagraph.pipelines.quality.lands` is below this.
+CARRIAGE_LANDS = 0.5
+
+
+def carried_retarget(out: Motion, source: Motion, target: Motion, level: Optional[float],
+                     carriage: str = "auto", memo: Optional[RigMemo] = None) -> Motion:
+    r"""A canonical retarget of :obj:`source` carried as the target
+    character carries itself in its own clip :obj:`target` (both
+    canonical; :func:`~satagraph.transforms.carriage.carry_like`), as
+    :obj:`carriage` asks: ``"auto"`` where the retarget, grounded
+    (:func:`~satagraph.transforms.ground.ground_retarget` at the
+    character's ground :obj:`level`), never puts down a limb the character
+    stands on in that clip (:func:`~satagraph.pipelines.quality.lands`
+    below :data:`CARRIAGE_LANDS`: the built-in model's human walks onto
+    the dog and a zoo quadruped read 0.00, their forepaws held up like
+    hands, its retargets onto humans 0.94-1.00), so that a retarget that
+    lands its limbs keeps its source's carriage (a stooped walk stays
+    stooped) and one that does not stand is not asked to; ``"always"``;
+    ``"never"``. A target without frames shows no carriage: the retarget
+    is kept. The result is not grounded. :obj:`memo` keeps the character's
+    carriage and landing shares (:class:`RigMemo`)."""
+    if carriage == "never" or not target.num_frames:
+        return out
+    own, shares = _kept(memo, target, "carriage",
+                        lambda: (mean_carriage(target), standing_shares(target)))
+    if carriage == "auto":
+        landing = lands_against(ground_retarget(out, source, target, level), shares)
+        if landing is None or landing >= CARRIAGE_LANDS:
+            return out
+    return carry_like(out, own)
 
 
 def read_once(module, semantic: Optional[Callable], window: Optional[int],

@@ -446,13 +446,19 @@ def lands(canonical: Motion, reference: Motion) -> Optional[float]:
     the hind paws being down, and :func:`posture` reads 0.75-0.85); onto
     the held-out longtail plan 0.10-0.27; ``None`` against CMU's 01_01,
     whose jumps put its feet down in a quarter of its standing frames."""
-    own, got = (_standing_shares(m) for m in (reference, canonical))
+    return lands_against(canonical, standing_shares(reference))
+
+
+def lands_against(canonical: Motion, own: Dict[str, float]) -> Optional[float]:
+    """:func:`lands` against the character's own :func:`standing_shares`
+    :obj:`own`, computed once for many motions of one character."""
+    got = standing_shares(canonical)
     ratios = [min(got[limb] / share, 1.0) for limb, share in own.items()
               if share >= LANDS_SHARE and limb in got]
     return float(min(ratios)) if ratios else None
 
 
-def _standing_shares(canonical: Motion) -> Dict[str, float]:
+def standing_shares(canonical: Motion) -> Dict[str, float]:
     """:func:`landing_shares` over the frames in which a canonical motion
     stands (:func:`~satagraph.transforms.ground.stands`; none without
     frames)."""
@@ -535,4 +541,5 @@ __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "ground_height", "contact", "foot_slide", "hover", "head_index", "upright_fraction",
            "trunk_bend", "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
-           "LANDING_HEIGHT", "LANDS_SHARE", "landing_shares", "lands", "retarget_quality"]
+           "LANDING_HEIGHT", "LANDS_SHARE", "landing_shares", "lands", "lands_against",
+           "standing_shares", "retarget_quality"]
