@@ -280,6 +280,20 @@ def add_two_rests_argument(parser: argparse.ArgumentParser, default) -> None:
                         f"default: {said})")
 
 
+def add_carriage_argument(parser: argparse.ArgumentParser) -> None:
+    """``--carriage {auto,always,never}``: carry a retarget as the target
+    character carries itself in the target file's frames
+    (:func:`~satagraph.pipelines.inference.carried_retarget`)."""
+    from satagraph.transforms.carriage import CARRIAGE_MODES
+    parser.add_argument("--carriage", choices=CARRIAGE_MODES, default="auto",
+                        help="carry the output as the target character carries itself in "
+                        "TARGET.bvh's frames (each joint's mean pose taken from them, the "
+                        "decoded swings kept): auto where the output never puts down a limb "
+                        "the character stands on there (a human's walk onto a quadruped "
+                        "held the forepaws up like hands), always, or never (the decoder's "
+                        "carriage); default: auto")
+
+
 def add_still_argument(parser: argparse.ArgumentParser) -> None:
     """``--still/--no-still``: keep a retarget's root still wherever its
     source's root stands still

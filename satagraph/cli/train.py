@@ -51,7 +51,7 @@ def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
     from satagraph.cli.arguments import (add_mirror_argument, add_plant_argument,
                                          add_settle_argument, add_still_argument,
-                                         add_two_rests_argument)
+                                         add_two_rests_argument, add_carriage_argument)
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config, one of the named "
                        "configs shipped with satagraph (a name it does not know lists them) "
@@ -104,9 +104,11 @@ def add_train_parsers(sub) -> None:
     add_still_argument(p)
     add_mirror_argument(p, default=False)
     add_two_rests_argument(p, default=False)
+    add_carriage_argument(p)
     p.add_argument("--target", required=True, metavar="TARGET.bvh",
-                   help="the skeleton to put the motion on (its motion is not read); OUT "
-                   "is written on its rig: joints, channels, rest offsets, axes and units")
+                   help="the skeleton to put the motion on; its frames, where it has any, "
+                   "show how the character stands (--ground, --carriage); OUT is written "
+                   "on its rig: joints, channels, rest offsets, axes and units")
     _in_out(p, "source", "SOURCE")
     _rig(p, what="SOURCE.bvh", scale_free=True)
     _rig(p, "target", "TARGET.bvh", scale_free=True)
@@ -561,7 +563,7 @@ def _retargeter(args, module, embed, target, memos: Optional[dict] = None):
     retarget = Retargeter(module, target, embed, args.window, args.overlap, rest=args.rest,
                           ground=args.ground, plant=args.plant, settle=args.settle,
                           still=args.still, mirror=args.mirror, two_rests=args.two_rests,
-                          memo=None if memos is None else memos.setdefault("target", RigMemo()))
+                          carriage=args.carriage, memo=None if memos is None else memos.setdefault("target", RigMemo()))
     if memos is not None:
         memos[module] = retarget
     return retarget

@@ -22,7 +22,7 @@ from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.mirror_average import (average_readings, mirror_back, mirror_canonical,
                                                  place_reading)
 from satagraph.transforms.still_root import hold_still_source, settle_root
-from satagraph.transforms.carriage import carry_like, mean_carriage
+from satagraph.transforms.carriage import CARRIAGE_MODES, carry_like, mean_carriage  # noqa: F401
 from satagraph.transforms.ground import (STANDING_SHARE, ground_level,  # noqa: F401
                                          ground_retarget, stands, standing_frame,
                                          standing_frames)
@@ -586,8 +586,6 @@ def retarget_canonical(module, source: Motion, target: Motion,
     return src_canon, plant_feet(out) if plant else out
 
 
-#: ``carriage`` values of :func:`retarget_motion` (:func:`carried_retarget`).
-CARRIAGE_MODES = ("auto", "always", "never")
 #: ``carriage="auto"`` carries a retarget whose
 #: :func:`~satagraph.pipelines.quality.lands` is below this.
 CARRIAGE_LANDS = 0.5

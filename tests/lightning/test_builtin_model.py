@@ -407,3 +407,33 @@ def test_eval_reads_skeletons_in_the_rest_reconstruct_shows_them(
                      "train", "--max-batches", "1", "--rest", rest, "--json", str(out)]) == 0
         figures[rest] = json.loads(out.read_text())["all"]["JP_h"]
     assert figures["auto"] < 0.1 < figures["file"]
+
+
+@pytest.mark.parametrize("rigs", [(0, 0), (0, 2)])
+def test_a_walk_onto_a_quadruped_puts_its_forepaws_down(tmp_path: Path,
+                                                        rigs: tuple) -> None:
+    """The built-in model decodes a zoo biped's walk onto a zoo quadruped
+    with the forepaws held up like hands (``--carriage never``: lands 0.00
+    and 0.03 against the quadruped's own clip). By default the retarget is
+    carried as the quadruped's clip carries itself: the forepaws come down
+    (0.77 and 1.00), the limbs as much in step with the source's and the
+    travel the same."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io import write_bvh
+    from satagraph.pipelines.quality import retarget_quality
+    from satagraph.transforms import canonicalize
+
+    source, target = tmp_path / "biped.bvh", tmp_path / "quad.bvh"
+    write_bvh(generate_clip(zoo_rigs(["biped"])[rigs[0]], "walk", frames=90, seed=3), source)
+    write_bvh(generate_clip(zoo_rigs(["quadruped"])[rigs[1]], "walk", frames=60, seed=4), target)
+    own, src = canonicalize(read_bvh(target), fps=30.0), canonicalize(read_bvh(source), fps=30.0)
+    quality = {}
+    for flags in ([], ["--carriage", "never"]):
+        out = tmp_path / f"out{len(flags)}.bvh"
+        assert main(["retarget", str(source), "--target", str(target), *flags, str(out)]) == 0
+        quality[bool(flags)] = retarget_quality(src, canonicalize(read_bvh(out), fps=30.0),
+                                                ("steps", "travel", "lands"), target=own)
+    carried, decoded = quality[False], quality[True]
+    assert decoded["lands"] < 0.05 and carried["lands"] > 0.7
+    assert carried["steps"] == pytest.approx(decoded["steps"], abs=0.02) and carried["steps"] > 0.95
+    assert carried["travel"] == pytest.approx(decoded["travel"], rel=0.02)

@@ -400,7 +400,9 @@ def test_retarget_onto_a_rig_whose_bones_all_point_up(read_real: Callable[[str],
     onto it with one leg pointing up (posture -0.59 from a CMU walk: each
     joint's height above the root against the rig's own clip); ``rest="auto"`` re-rests it
     on its mean standing pose and the retarget carries it as its own clip
-    does, in step."""
+    does, in step. Read as the file has it but carried as its character
+    (``carriage="auto"``, the default: the leg up never lands), it walks
+    as the rig's own clip stands too."""
     from satagraph.experiment.train import load_module
     from satagraph.pipelines.inference import is_line_rest, retarget_canonical
     from satagraph.pipelines.quality import most_active, posture, retarget_quality
@@ -412,8 +414,11 @@ def test_retarget_onto_a_rig_whose_bones_all_point_up(read_real: Callable[[str],
     src, out = retarget_canonical(module, walk, target, module.embed)
     quality = retarget_quality(src, out, ("steps", "posture"), target=own)
     assert quality["posture"] > 0.95 and quality["steps"] > 0.7
-    _, read_as_is = retarget_canonical(module, walk, target, module.embed, rest="file")
+    _, read_as_is = retarget_canonical(module, walk, target, module.embed, rest="file",
+                                       carriage="never")
     assert posture(read_as_is, own) < 0.6
+    _, carried = retarget_canonical(module, walk, target, module.embed, rest="file")
+    assert posture(carried, own) > 0.95
 
 
 def test_auto_rest_re_rests_captured_poses_but_not_designed_rests(

@@ -1,0 +1,66 @@
+"""When a retarget is carried as its character (``carriage``): never, where
+it already lands its limbs, where the target shows no frames, a
+reconstruction; and where a limb it stands on never comes down, or always.
+Bad settings are refused in one line."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satagraph.pipelines.inference import RigMemo, carried_retarget, check_settings
+from satagraph.pipelines.quality import lands
+from satagraph.transforms.ground import ground_level
+from tests.pipelines.test_quality import _forelegs_up, _walk
+
+
+@pytest.fixture(scope="module")
+def walk():
+    return _walk("quadruped")
+
+
+def _carried(out, target, mode: str, memo=None):
+    level = ground_level(target) if target.num_frames else None
+    return carried_retarget(out, out, target, level, mode, memo)
+
+
+def test_never_and_a_retarget_that_lands_its_limbs_are_kept(walk) -> None:
+    lifted = _forelegs_up(walk)
+    assert _carried(lifted, walk, "never") is lifted
+    assert _carried(walk, walk, "auto") is walk  # lands 1.0
+    assert _carried(lifted, walk.slice(0, 0), "auto") is lifted  # no frames, no carriage
+    assert _carried(lifted, walk.slice(0, 0), "always") is lifted
+
+
+def test_auto_carries_a_retarget_whose_forepaws_never_come_down(walk) -> None:
+    """Forelegs swung up 65 degrees (lands 0): carried, the paws land as
+    the character's own clip lands them; the memo keeps the character's
+    carriage, and the output is the same with or without it."""
+    lifted = _forelegs_up(walk)
+    memo = RigMemo()
+    carried = _carried(lifted, walk, "auto", memo)
+    assert carried is not lifted and lands(carried, walk) > 0.9
+    assert (id(walk), "carriage") in memo.kept
+    again = _carried(lifted, walk, "auto", memo)
+    np.testing.assert_array_equal(again.rotations, carried.rotations)
+
+
+def test_always_carries_even_a_retarget_that_lands(walk) -> None:
+    """Forelegs swung up only 10 degrees still land (auto keeps them);
+    ``always`` turns every joint's mean rotation back to the clip's own."""
+    from satagraph.transforms.carriage import mean_carriage
+    slightly = _forelegs_up(walk, 10.0)
+    assert lands(slightly, walk) > 0.5
+    assert _carried(slightly, walk, "auto") is slightly
+    turned = _carried(slightly, walk, "always")
+    assert np.abs(mean_carriage(slightly) - mean_carriage(walk)).max() > 0.1
+    np.testing.assert_allclose(mean_carriage(turned), mean_carriage(walk), atol=1e-9)
+
+
+def test_a_carriage_setting_that_is_none_of_the_modes_is_refused() -> None:
+    class Module:
+        window, fps = 64, 30.0
+        meta = {"window": 64}
+
+    with pytest.raises(ValueError, match=r"carriage must be one of \['auto', 'always', "
+                                         r"'never'\], got 'sometimes'"):
+        check_settings(Module(), 64, 16, "auto", False, "sometimes")

@@ -1,0 +1,97 @@
+"""A motion carried as its character carries itself: the root's tilt without
+its heading, the mean carriage, forepaws held up brought down with their
+swing and heading kept, travel in leg lengths kept, and bad inputs."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from satagraph.ops.rotation_numpy import rotation_about_numpy, yaw_matrix_numpy
+from satagraph.pipelines.quality import lands, posture, root_travel, step_correlation
+from satagraph.transforms.carriage import (carried_frames, carry_like, mean_carriage, tilts,
+                                           twist_yaw)
+from tests.pipelines.test_quality import _forelegs_up, _pitched, _walk
+
+X = np.array([1.0, 0.0, 0.0])
+
+
+def test_twist_yaw_reads_the_turn_and_tilts_keep_the_lean():
+    """A turn about +Y by psi after a lean about +X: the turn read back is
+    psi, for any psi in (-pi, pi), and the tilt is the lean itself."""
+    yaw = np.linspace(-3.0, 3.0, 13)
+    lean = rotation_about_numpy(X, np.radians(25.0))
+    rotations = yaw_matrix_numpy(yaw) @ lean
+    np.testing.assert_allclose(twist_yaw(rotations), yaw, atol=1e-9)
+    np.testing.assert_allclose(tilts(rotations), np.broadcast_to(lean, (13, 3, 3)), atol=1e-9)
+    np.testing.assert_allclose(twist_yaw(np.eye(3)), 0.0, atol=1e-12)
+
+
+def test_a_motion_carried_as_itself_is_unchanged():
+    """The carriage of a walk's own clip turns nothing: every rotation and
+    translation kept."""
+    walk = _walk("quadruped")
+    carried = carry_like(walk, mean_carriage(walk))
+    np.testing.assert_allclose(carried.rotations, walk.rotations, atol=1e-9)
+    np.testing.assert_allclose(carried.translations, walk.translations, atol=1e-9)
+
+
+def test_forepaws_held_up_come_down_with_their_swing_kept():
+    """A zoo quadruped walk with both forelegs swung 65 degrees up never
+    puts its forepaws down (lands 0); carried as the walk's own clip, it
+    lands them as the clip does and rides at its joint heights, its limbs
+    still in step with the walk and the hind legs untouched."""
+    walk = _walk("quadruped")
+    lifted = _forelegs_up(walk)
+    assert lands(lifted, walk) == 0.0
+    carried = carry_like(lifted, mean_carriage(walk))
+    assert lands(carried, walk) > 0.9
+    assert posture(carried, walk) > 0.99 > 0.9 > posture(lifted, walk)
+    assert step_correlation(walk, carried) > 0.95
+    hind = [j for j, name in enumerate(walk.skeleton.names) if "Hind" in name]
+    assert len(hind) == 12
+    np.testing.assert_allclose(carried.rotations[:, hind], lifted.rotations[:, hind], atol=1e-9)
+
+
+def test_the_heading_is_kept_and_the_lean_taken_from_the_reference():
+    """A biped whose root pitches forward from 0 to 60 degrees while it
+    turns about +Y, carried as its unpitched clip: per frame the turn about
+    +Y is the motion's own, the mean lean the reference's (its swing about
+    that mean kept)."""
+    walk = _walk("biped")
+    pitched = _pitched(walk, 60.0)
+    turned = pitched.rotations.copy()
+    turned[:, 0] = yaw_matrix_numpy(np.linspace(0.0, 1.5, walk.num_frames)) @ turned[:, 0]
+    turning = pitched.with_(rotations=turned)
+    carried = carry_like(turning, mean_carriage(walk))
+    np.testing.assert_allclose(twist_yaw(carried.rotations[:, 0]),
+                               twist_yaw(turning.rotations[:, 0]), atol=1e-9)
+    lean = np.einsum("tii->t", np.swapaxes(tilts(carried.rotations[:, 0]), -1, -2)
+                     @ mean_carriage(walk)[0])
+    assert abs(np.degrees(np.arccos(np.clip((lean.mean() - 1) / 2, -1, 1)))) < 20.0
+
+
+def test_the_root_travels_as_many_leg_lengths_as_before():
+    """Carried with its forelegs down, the quadruped's hips ride higher,
+    so its leg is longer: the root's path is scaled with it, and the travel
+    in leg lengths is the lifted walk's."""
+    walk = _walk("quadruped")
+    lifted = _forelegs_up(walk, 80.0)
+    carried = carry_like(lifted, mean_carriage(walk))
+    assert root_travel(carried) == pytest.approx(root_travel(lifted), rel=1e-6)
+    np.testing.assert_allclose(carried.translations[0, 0], lifted.translations[0, 0])
+
+
+def test_carried_frames_are_the_standing_ones_or_all():
+    """A walk stands in every frame; a clip too short to hold a stance is
+    read whole."""
+    walk = _walk("quadruped")
+    np.testing.assert_array_equal(carried_frames(walk), np.arange(walk.num_frames))
+    assert len(carried_frames(walk.slice(0, 5))) == 5
+
+
+def test_bad_inputs_are_refused_in_one_line():
+    walk = _walk("quadruped")
+    with pytest.raises(ValueError, match=r"carriage of \d+ joints is \[\d+, 3, 3\], got \[2, 3, 3\]"):
+        carry_like(walk, np.broadcast_to(np.eye(3), (2, 3, 3)))
+    with pytest.raises(ValueError, match="without frames"):
+        mean_carriage(walk.slice(0, 0))
