@@ -21,6 +21,12 @@ styles giant and sad):
   through the generator's frozen SATA-RVQ; a generation for the caption on
   the test clip's rig, given the test clip's length (stated in the table).
 
+These rows decode with ``carriage="never"`` whatever ``--carriage`` says
+(:func:`scored`): the only frames of a test rig here are the test clip's
+own, and carrying a motion as its character would take its mean pose from
+the very clip it is scored against. The per-skeleton probes, whose
+skeletons' clips are no prompt's answer, decode as ``generate`` does.
+
 Metrics (:mod:`satagraph.metrics.generation`): R@1/2/3 in pools of 32 and
 FID / KID, each with a 95% half-width over replications; matching score,
 diversity, multimodality (generator: 2 seeds per text, first 16 texts). Kinematic probes
@@ -631,12 +637,20 @@ def probes(labels: Sequence[str], travels: Sequence[np.ndarray],
     return out
 
 
+def scored(settings: Optional[GenerationSettings]) -> GenerationSettings:
+    """:obj:`settings` (default: ``generate``'s) for the rows scored
+    against their test clips: never carried as the character
+    (``carriage="never"``), whose only frames here are the test clip's own."""
+    return replace(settings or GenerationSettings(), carriage="never")
+
+
 def generated_items(module, items: Sequence[Item], seeds: int,
                     settings: Optional[GenerationSettings] = None) -> List[List[Item]]:
     """Per seed, one generation per test item on its own rig, of its length
     (the ground-truth length is given), with the sampling :obj:`settings`
-    (default: :class:`~satagraph.pipelines.generate.GenerationSettings`)."""
-    settings = settings or GenerationSettings()
+    (default: :class:`~satagraph.pipelines.generate.GenerationSettings`),
+    never carried as the character (:func:`scored`)."""
+    settings = scored(settings)
     out = []
     for seed in range(seeds):
         row = []
@@ -653,8 +667,9 @@ def transfer(module, source: Motion, target: Motion,
     """:obj:`source` through the generator's frozen SATA-RVQ: its codes on
     its own rig, decoded on :obj:`target`'s rig as :obj:`settings` decode
     generated motion (:func:`~satagraph.pipelines.generate.decode_on`;
-    canonical features); both in the RVQ's training windows."""
-    settings = settings or GenerationSettings()
+    canonical features), never carried as the character (:func:`scored`);
+    both in the RVQ's training windows."""
+    settings = scored(settings)
     with torch.no_grad():
         rig = rig_inputs(module, source)
         feats = motion_to_features(rig.shown, facing_smooth=facing_smooth_of(module))
@@ -1002,7 +1017,8 @@ def sampling(args: argparse.Namespace) -> Optional[GenerationSettings]:
                                            "smooth", "output_smooth", "root_smooth", "plant",
                                            "choice_temperature",
                                            "spread", "rest", "residual_window", "guide",
-                                           "draw_guidance", "residual_guide", "rerank")
+                                           "draw_guidance", "residual_guide", "rerank",
+                                           "carriage")
              if getattr(args, k, None) is not None}
     if "decoding_steps" in given:
         given["steps"] = given.pop("decoding_steps")
@@ -1045,6 +1061,10 @@ def main(argv=None) -> int:
                         help="layer-0 draws per prompt, the one the text explains best "
                              "kept (GenerationSettings.rerank; default: generate's, "
                              f"{GenerationSettings.rerank})")
+    parser.add_argument("--carriage", choices=("auto", "always", "never"), default=None,
+                        help="whether the per-skeleton probes' motions are carried as their "
+                             "characters (GenerationSettings.carriage; default: generate's, "
+                             f"{GenerationSettings.carriage}); the scored rows never are")
     parser.add_argument("--temperature", type=float, default=None)
     parser.add_argument("--topk-ratio", type=float, default=None)
     parser.add_argument("--residual-temperature", type=float, default=None)

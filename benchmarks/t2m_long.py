@@ -100,7 +100,7 @@ def evaluate(args: argparse.Namespace) -> Dict:
     model = t2m.train_evaluator(train, encode, steps, args.seed)
     recogniser = t2m.train_recogniser(train, steps, args.seed)
     module = load_generator(args.ckpt)
-    settings = GenerationSettings()
+    settings = t2m.scored(GenerationSettings())  # scored against the test clips: not carried
     own = t2m.generated_items(module, test, 1, settings)[0]
     ways = {"whole clip (--window 0)": replace(settings, window=0.0),
             "in windows (default)": settings}

@@ -40,8 +40,8 @@ def _window(text: str) -> float:
 
 def add_generate_parser(sub) -> None:
     """Register ``generate`` on an argparse subparsers object."""
-    from satagraph.cli.arguments import (add_device_argument, add_plant_argument,
-                                         add_rig_arguments, seed)
+    from satagraph.cli.arguments import (add_carriage_argument, add_device_argument,
+                                         add_plant_argument, add_rig_arguments, seed)
     p = sub.add_parser(
         "generate", help="generate a motion from text on any skeleton",
         description="Generate a motion for a text prompt on the skeleton of TARGET.bvh "
@@ -110,6 +110,7 @@ def add_generate_parser(sub) -> None:
                    "joint at the floor, then each frame that would sink raised onto it "
                    "(--no-ground keeps the decoder's root height; default: on)")
     add_plant_argument(p, default=True)
+    add_carriage_argument(p, "the skeleton files'")
     add_device_argument(p, "the generator")
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "
@@ -235,7 +236,7 @@ def _settings(args):
                                   ground=args.ground, plant=args.plant,
                                   residual_window=args.residual_window, window=args.window,
                                   guide=args.guide, draw_guidance=args.draw_guidance,
-                                  residual_guide=args.residual_guide)
+                                  residual_guide=args.residual_guide, carriage=args.carriage)
     except SettingError as err:  # "draw_guidance must be ...": the field, named as its option
         raise ValueError(f"--{err.field.replace('_', '-')} {err.problem}") from None
 

@@ -342,7 +342,7 @@ def retarget_motion(module, source: Motion, target: Motion,
         carriage (str): ``"auto"`` (default) carries the retarget as the
             target character carries itself in :obj:`target`'s frames
             wherever it never puts down a limb the character stands on
-            there (:func:`carried_retarget`: a human's walk onto a
+            there (:func:`carried_as_character`: a human's walk onto a
             quadruped held its forepaws up like hands); ``"always"``
             wherever :obj:`target` has frames; ``"never"`` keeps the
             decoder's carriage (:data:`CARRIAGE_MODES`).
@@ -564,7 +564,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     :obj:`two_rests`, the decoding is averaged with that of both rigs'
     mirror images and of both rigs in a second rest pose
     (:func:`averaged_reading`), then carried as the target character
-    (:func:`carried_retarget`; never for a reconstruction). :obj:`memo`
+    (:func:`carried_as_character`; never for a reconstruction). :obj:`memo`
     keeps what is computed of the target alone across calls
     (:class:`RigMemo`)."""
     check_settings(module, window, overlap, rest, two_rests, carriage)
@@ -580,7 +580,9 @@ def retarget_canonical(module, source: Motion, target: Motion,
     out = hold_still_source(out, src_canon) if still else out
     level = (_kept(memo, target, "ground", partial(ground_level, target))
              if target.num_frames else None)
-    out = out if same else carried_retarget(out, src_canon, target, level, carriage, memo)
+    if not same:  # a retarget: carried as the target character, checked as grounded
+        out = carried_as_character(out, target, carriage, lambda m: ground_retarget(
+            m, src_canon, target, level), memo)
     if ground:
         out = ground_retarget(out, src_canon, target, level)
     return src_canon, plant_feet(out) if plant else out
@@ -591,32 +593,32 @@ def retarget_canonical(module, source: Motion, target: Motion,
 CARRIAGE_LANDS = 0.5
 
 
-def carried_retarget(out: Motion, source: Motion, target: Motion, level: Optional[float],
-                     carriage: str = "auto", memo: Optional[RigMemo] = None) -> Motion:
-    r"""A canonical retarget of :obj:`source` carried as the target
-    character carries itself in its own clip :obj:`target` (both
-    canonical; :func:`~satagraph.transforms.carriage.carry_like`), as
-    :obj:`carriage` asks: ``"auto"`` where the retarget, grounded
-    (:func:`~satagraph.transforms.ground.ground_retarget` at the
-    character's ground :obj:`level`), never puts down a limb the character
-    stands on in that clip (:func:`~satagraph.pipelines.quality.lands`
+def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
+                         grounded: Optional[Callable[[Motion], Motion]] = None,
+                         memo: Optional[RigMemo] = None) -> Motion:
+    r"""A canonical motion decoded onto a character, carried as the
+    character carries itself in its own clip :obj:`own` (canonical, on the
+    same rig; :func:`~satagraph.transforms.carriage.carry_like`), as
+    :obj:`carriage` asks: ``"auto"`` where the motion, put on the floor by
+    :obj:`grounded` (default: as it is), never puts down a limb the
+    character stands on in :obj:`own` (:func:`~satagraph.pipelines.quality.lands`
     below :data:`CARRIAGE_LANDS`: the built-in model's human walks onto
     the dog and a zoo quadruped read 0.00, their forepaws held up like
-    hands, its retargets onto humans 0.94-1.00), so that a retarget that
-    lands its limbs keeps its source's carriage (a stooped walk stays
-    stooped) and one that does not stand is not asked to; ``"always"``;
-    ``"never"``. A target without frames shows no carriage: the retarget
-    is kept. The result is not grounded. :obj:`memo` keeps the character's
-    carriage and landing shares (:class:`RigMemo`)."""
-    if carriage == "never" or not target.num_frames:
+    hands, its retargets onto humans 0.94-1.00), so that a motion that
+    lands its limbs keeps its carriage (a stooped walk stays stooped) and
+    one that does not stand is not asked to; ``"always"``; ``"never"``.
+    A character without frames shows no carriage: the motion is kept. The
+    result is not grounded. :obj:`memo` keeps the character's carriage and
+    landing shares (:class:`RigMemo`)."""
+    if carriage == "never" or not own.num_frames:
         return out
-    own, shares = _kept(memo, target, "carriage",
-                        lambda: (mean_carriage(target), standing_shares(target)))
+    reference, shares = _kept(memo, own, "carriage",
+                              lambda: (mean_carriage(own), standing_shares(own)))
     if carriage == "auto":
-        landing = lands_against(ground_retarget(out, source, target, level), shares)
+        landing = lands_against(out if grounded is None else grounded(out), shares)
         if landing is None or landing >= CARRIAGE_LANDS:
             return out
-    return carry_like(out, own)
+    return carry_like(out, reference)
 
 
 def read_once(module, semantic: Optional[Callable], window: Optional[int],

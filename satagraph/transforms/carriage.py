@@ -18,7 +18,7 @@ kept frame by frame. Swings, their phases and the root's heading are the
 decoder's; where the limbs hang from is the character's. The root's path
 is scaled so that the body covers as many of its own leg lengths as
 decoded. Which retargets are carried so is the pipeline's choice
-(:func:`~satagraph.pipelines.inference.carried_retarget`).
+(:func:`~satagraph.pipelines.inference.carried_as_character`).
 """
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ from satagraph.ops.rotation_numpy import mean_rotation_numpy, yaw_matrix_numpy
 from satagraph.transforms.ground import standing_frames
 
 #: ``carriage`` settings of the retarget pipeline
-#: (:func:`~satagraph.pipelines.inference.carried_retarget`): ``"auto"``
+#: (:func:`~satagraph.pipelines.inference.carried_as_character`): ``"auto"``
 #: carries a retarget that never puts down a limb its character stands on,
 #: ``"always"`` every retarget onto a target with frames, ``"never"`` none.
 CARRIAGE_MODES = ("auto", "always", "never")

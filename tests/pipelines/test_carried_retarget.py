@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.pipelines.inference import RigMemo, carried_retarget, check_settings
+from satagraph.pipelines.inference import RigMemo, carried_as_character, check_settings
 from satagraph.pipelines.quality import lands
-from satagraph.transforms.ground import ground_level
+from satagraph.transforms.ground import ground_level, ground_retarget
 from tests.pipelines.test_quality import _forelegs_up, _walk
 
 
@@ -19,8 +19,11 @@ def walk():
 
 
 def _carried(out, target, mode: str, memo=None):
+    """:obj:`out` carried as :obj:`target`'s character, checked on the
+    floor as a retarget is (:func:`ground_retarget` at the target's level)."""
     level = ground_level(target) if target.num_frames else None
-    return carried_retarget(out, out, target, level, mode, memo)
+    return carried_as_character(out, target, mode,
+                                lambda m: ground_retarget(m, out, target, level), memo)
 
 
 def test_never_and_a_retarget_that_lands_its_limbs_are_kept(walk) -> None:
