@@ -725,11 +725,12 @@ SUBJECTS = {"biped": "a person", "quadruped": "a quadruped", "bird": "a bird",
             "hexapod": "an insect", "human": "a person", "dog": "a four-legged animal"}
 
 
-def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, Motion]]:
-    """One target per skeleton: the first zoo test rig of every body plan,
-    the first bandai test rig, the first of every other rig (``--data``), and
-    cmu 01_01 and a dog clip from the manifest (name -> (subject, canonical
-    motion))."""
+def skeleton_targets(test: Sequence[Item], quick: bool,
+                     split: str = "test") -> Dict[str, Tuple[str, Motion]]:
+    """One target per skeleton: the first zoo rig of :obj:`test` (the
+    test or validation items) of every body plan, the first bandai rig, the
+    first of every other rig (``--data``), and cmu 01_01 and a dog clip of
+    the manifest's :obj:`split` (name -> (subject, canonical motion))."""
     out: Dict[str, Tuple[str, Motion]] = {}
     for it in test:
         key = (f"zoo {it.skeleton}" if it.group == "zoo"
@@ -741,7 +742,7 @@ def skeleton_targets(test: Sequence[Item], quick: bool) -> Dict[str, Tuple[str, 
     files = read_manifest(MANIFEST)
     for name, subject, dataset in (("cmu 01_01", "a person", "cmu"), ("dog", SUBJECTS["dog"],
                                                                         "dog")):
-        motion = manifest_motion(files, dataset, "test")
+        motion = manifest_motion(files, dataset, split)
         if motion is not None:
             out[name] = (subject, motion)
     return out
