@@ -417,7 +417,8 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs,
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
     motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
                           rig.undo, rig.canon.skeleton)
-    motion = carried_as_character(motion, rig.canon, settings.carriage, _on_floor, rig.memo)
+    motion = carried_as_character(motion, rig.canon, settings.carriage, _on_floor, rig.memo,
+                                  paced=False)  # no source to keep travel with: T2M.md 93
     if settings.ground:
         motion = _on_floor(motion)
     if settings.plant:

@@ -595,7 +595,7 @@ CARRIAGE_LANDS = 0.5
 
 def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
                          grounded: Optional[Callable[[Motion], Motion]] = None,
-                         memo: Optional[RigMemo] = None) -> Motion:
+                         memo: Optional[RigMemo] = None, paced: bool = True) -> Motion:
     r"""A canonical motion decoded onto a character, carried as the
     character carries itself in its own clip :obj:`own` (canonical, on the
     same rig; :func:`~satagraph.transforms.carriage.carry_like`), as
@@ -608,8 +608,9 @@ def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
     lands its limbs keeps its carriage (a stooped walk stays stooped) and
     one that does not stand is not asked to; ``"always"``; ``"never"``.
     A character without frames shows no carriage: the motion is kept. The
-    result is not grounded. :obj:`memo` keeps the character's carriage and
-    landing shares (:class:`RigMemo`)."""
+    result is not grounded; its root path is scaled with its leg length
+    where :obj:`paced` (a retarget: ``carry_like``'s). :obj:`memo` keeps the
+    character's carriage and landing shares (:class:`RigMemo`)."""
     if carriage == "never" or not own.num_frames:
         return out
     reference, shares = _kept(memo, own, "carriage",
@@ -618,7 +619,7 @@ def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
         landing = lands_against(out if grounded is None else grounded(out), shares)
         if landing is None or landing >= CARRIAGE_LANDS:
             return out
-    return carry_like(out, reference)
+    return carry_like(out, reference, paced)
 
 
 def read_once(module, semantic: Optional[Callable], window: Optional[int],

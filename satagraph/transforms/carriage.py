@@ -15,9 +15,9 @@ motion's standing frames becomes its mean over the frames in which the
 character's own clip stands (:func:`mean_carriage`); the root's tilt (its
 rotation less its turn about +Y, :func:`tilts`) is turned so, its heading
 kept frame by frame. Swings, their phases and the root's heading are the
-decoder's; where the limbs hang from is the character's. The root's path
-is scaled so that the body covers as many of its own leg lengths as
-decoded. Which retargets are carried so is the pipeline's choice
+decoder's; where the limbs hang from is the character's. A retarget's
+root path is scaled so that the body covers as many of its own leg lengths
+as decoded; a generated motion's is kept. Which retargets are carried so is the pipeline's choice
 (:func:`~satagraph.pipelines.inference.carried_as_character`).
 """
 from __future__ import annotations
@@ -90,16 +90,18 @@ def mean_carriage(motion: Motion) -> np.ndarray:
     return mean
 
 
-def carry_like(motion: Motion, reference: np.ndarray) -> Motion:
+def carry_like(motion: Motion, reference: np.ndarray, paced: bool = True) -> Motion:
     r""":obj:`motion` (canonical) carried as the :func:`mean_carriage`
     :obj:`reference` of its character's own clip: each joint's local
     rotation turned by the one constant that takes the motion's own
     carriage to :obj:`reference` (the root's tilt so, its heading kept per
     frame: the turned tilt's own turn about +Y, a few hundredths of a degree
-    from two leans, is taken off), and the root's horizontal path about its first frame scaled by
-    the ratio of the leg lengths after and before
-    (:func:`~satagraph.motion.leg_length`). Heights are not set again:
-    ground the result (:func:`~satagraph.transforms.ground.ground_retarget`).
+    from two leans, is taken off), and, with :obj:`paced` (a retarget,
+    whose travel is matched in leg lengths), the root's horizontal path
+    about its first frame scaled by the ratio of the leg lengths after and
+    before (:func:`~satagraph.motion.leg_length`); without, the path is
+    kept. Heights are not set again: ground the result
+    (:func:`~satagraph.transforms.ground.ground_retarget`).
 
     Shapes:
         - **reference**: :math:`(J, 3, 3)`
@@ -116,7 +118,7 @@ def carry_like(motion: Motion, reference: np.ndarray) -> Motion:
     root = motion.rotations[:, 0]
     rot[:, 0] = yaw_matrix_numpy(twist_yaw(root)) @ tilts(turn[0] @ tilts(root))
     carried = motion.with_(rotations=rot)
-    return _paced(carried, _leg(carried) / _leg(motion))
+    return _paced(carried, _leg(carried) / _leg(motion)) if paced else carried
 
 
 def _leg(motion: Motion) -> float:
