@@ -280,19 +280,18 @@ def add_two_rests_argument(parser: argparse.ArgumentParser, default) -> None:
                         f"default: {said})")
 
 
-def add_carriage_argument(parser: argparse.ArgumentParser, what: str = "TARGET.bvh's",
-                          default: str = "auto", note: str = "") -> None:
+def add_carriage_argument(parser: argparse.ArgumentParser, what: str = "TARGET.bvh's") -> None:
     """``--carriage {auto,always,never}``: carry the output as its
     character carries itself in :obj:`what` frames
     (:func:`~satagraph.pipelines.inference.carried_as_character`)."""
     from satagraph.transforms.carriage import CARRIAGE_MODES
-    parser.add_argument("--carriage", choices=CARRIAGE_MODES, default=default,
+    parser.add_argument("--carriage", choices=CARRIAGE_MODES, default="auto",
                         help=f"carry the output as its character carries itself in {what} "
                         "frames (each joint's mean pose taken from them, the decoded swings "
                         "kept): auto where the output never puts down a limb the character "
                         "stands on there (a human's walk decoded onto a quadruped held the "
                         "forepaws up like hands), always, or never (the decoder's carriage); "
-                        f"default: {default}{note}")
+                        "default: auto")
 
 
 def add_still_argument(parser: argparse.ArgumentParser) -> None:

@@ -110,9 +110,7 @@ def add_generate_parser(sub) -> None:
                    "joint at the floor, then each frame that would sink raised onto it "
                    "(--no-ground keeps the decoder's root height; default: on)")
     add_plant_argument(p, default=True)
-    add_carriage_argument(p, "the skeleton files'", default="never",
-                          note=" (auto brings a generated dog's forepaws down, but made its "
-                          "dashes slower than its runs)")
+    add_carriage_argument(p, "the skeleton files'")
     add_device_argument(p, "the generator")
     p.add_argument("--threads", type=int, default=1,
                    help="CPU threads (default 1: the generators are small, and extra "

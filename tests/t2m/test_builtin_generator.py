@@ -114,6 +114,37 @@ def test_generate_plants_the_feet_by_default(tmp_path: Path) -> None:
     assert hover(planted) < 0.5 * hover(decoded)
 
 
+def test_generate_carries_a_quadruped_as_its_own_clip_does(tmp_path: Path) -> None:
+    """The built-in generator decodes "a quadruped walks forward" onto a
+    zoo quadruped of a test seed with the forepaws held up (``--carriage
+    never``: ``lands`` 0.11 against the rig's own walk, a forepaw down in
+    a tenth as many frames); by default it is carried as that walk carries itself, the paws
+    come down, and the root's horizontal path is the decoded one
+    (``experiments/T2M.md`` sections 92-93). A carriage no mode names is
+    refused in one line."""
+    from satagraph.datasets.zoo import generate_clip, zoo_rigs
+    from satagraph.io import write_bvh
+    from satagraph.pipelines.generate import GenerationSettings, SettingError
+    from satagraph.pipelines.quality import lands
+    from satagraph.transforms.canonical import canonicalize
+    rig = tmp_path / "quadruped.bvh"
+    write_bvh(generate_clip(zoo_rigs(["quadruped"], seed=911)[0], frames=60, seed=1), rig)
+    own = canonicalize(read_bvh(rig), fps=30.0)
+    motions = {}
+    for flags in ((), ("--carriage", "never")):
+        out = tmp_path / f"out{len(flags)}.bvh"
+        assert main(["generate", "--text", "a quadruped walks forward", "--seconds", "3",
+                     "--skeleton", str(rig), *flags, str(out)]) == 0
+        motions[flags] = read_bvh(out)
+    carried, decoded = motions[()], motions[("--carriage", "never")]
+    assert lands(canonicalize(decoded, fps=30.0), own) < 0.2  # 0.11
+    assert lands(canonicalize(carried, fps=30.0), own) > 0.8  # 0.88
+    np.testing.assert_allclose(carried.translations[:, 0, [0, 2]],  # the file's own frame
+                               decoded.translations[:, 0, [0, 2]], atol=1e-4 * decoded.height())
+    with pytest.raises(SettingError, match="carriage must be one of"):
+        GenerationSettings(carriage="sometimes")
+
+
 @pytest.mark.slow
 def test_residual_window_holds_the_pace_of_a_four_second_walk(tmp_path):
     """The built-in generator's four-second walks speed up along the clip
