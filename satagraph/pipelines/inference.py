@@ -579,7 +579,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
     level = (_kept(memo, target, "ground", partial(ground_level, target))
-             if target.num_frames else None)
+             if target.num_frames and (ground or not same) else None)
     if not same:  # a retarget: carried as the target character, checked as grounded
         out = carried_as_character(out, target, carriage, lambda m: ground_retarget(
             m, src_canon, target, level), memo)
