@@ -124,6 +124,15 @@ def _median(values: Sequence[Optional[float]]) -> str:
     return f"{np.median(kept):.2f}" if kept else "-"
 
 
+def _mean(values: Sequence[float]) -> str:
+    return f"{np.mean(values):+.2f}"
+
+
+def _band(values: Sequence[float]) -> str:
+    """The share of travel ratios within 0.8-1.25."""
+    return f"{np.mean([0.8 <= v <= 1.25 for v in values]):.0%}"
+
+
 def table(got: Dict[str, Dict[str, List[dict]]], seconds: float) -> str:
     lines = [f"Built-in model (`auto`), `carriage` never -> auto; {seconds:.0f} s.", "",
              "| group | pairs | carried | lands (median) | steps (mean) | travel in 0.8-1.25 "
@@ -135,11 +144,9 @@ def table(got: Dict[str, Dict[str, List[dict]]], seconds: float) -> str:
         def pair(key: str, how) -> str:
             return f"{how([q[key] for q in never])} -> {how([q[key] for q in auto])}"
 
-        band = lambda v: f"{np.mean([0.8 <= x <= 1.25 for x in v]):.0%}"  # noqa: E731
-        mean = lambda v: f"{np.mean(v):+.2f}"  # noqa: E731
         lines.append(f"| {group} | {len(never)} | {sum(q['carried'] for q in auto)} "
-                     f"| {pair('lands', _median)} | {pair('steps', mean)} "
-                     f"| {pair('travel', band)} | {pair('posture', _median)} "
+                     f"| {pair('lands', _median)} | {pair('steps', _mean)} "
+                     f"| {pair('travel', _band)} | {pair('posture', _median)} "
                      f"| {pair('slide', _median)} |")
     return "\n".join(lines) + "\n"
 
