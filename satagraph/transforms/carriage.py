@@ -40,15 +40,16 @@ MIN_STANDING = 8
 
 def twist_yaw(rotations: np.ndarray) -> np.ndarray:
     r"""The turn about +Y of each rotation (its twist about the vertical,
-    as a swing-twist split reads it), in radians.
+    as a swing-twist split reads it), in radians: :math:`\pm\pi` for a
+    body heading back along -Z, undefined only for one upside down.
 
     Shapes:
         - **rotations**: :math:`(*, 3, 3)`, **output**: :math:`(*)`
     """
-    # the quaternion's w and y, both times 4w >= 0
-    w = 1.0 + rotations[..., 0, 0] + rotations[..., 1, 1] + rotations[..., 2, 2]
-    y = rotations[..., 0, 2] - rotations[..., 2, 0]
-    return 2.0 * np.arctan2(y, np.maximum(w, 0.0))
+    # 4wy and 2(w^2 - y^2) of the quaternion: the angle 2 atan2(y, w), read
+    # without dividing by w (a half turn, w = 0, is no 0/0)
+    return np.arctan2(rotations[..., 0, 2] - rotations[..., 2, 0],
+                      rotations[..., 0, 0] + rotations[..., 2, 2])
 
 
 def tilts(rotations: np.ndarray) -> np.ndarray:

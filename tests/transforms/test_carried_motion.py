@@ -26,6 +26,22 @@ def test_twist_yaw_reads_the_turn_and_tilts_keep_the_lean():
     np.testing.assert_allclose(twist_yaw(np.eye(3)), 0.0, atol=1e-12)
 
 
+def test_a_half_turn_is_read_as_one():
+    """A body heading back along -Z (a turn of pi about +Y) after a lean:
+    the turn read back is pi and the tilt the lean. Read as the quaternion's
+    2 atan2(y, w) with w clipped at 0, the exact half turn read 0 after
+    each of these 64 leans, and ``yaw_matrix_numpy(pi)`` 56 degrees off
+    after 3 of them."""
+    rng = np.random.default_rng(0)
+    axes = rng.normal(size=(64, 3)) * [1.0, 0.0, 1.0]
+    leans = rotation_about_numpy(axes / np.linalg.norm(axes, axis=-1, keepdims=True),
+                                 rng.uniform(0.0, 1.0, 64))
+    for half in (np.diag([-1.0, 1.0, -1.0]), yaw_matrix_numpy(np.pi)):
+        rotations = half @ leans
+        np.testing.assert_allclose(np.cos(twist_yaw(rotations)), -1.0, atol=1e-12)
+        np.testing.assert_allclose(tilts(rotations), leans, atol=1e-9)
+
+
 def test_a_motion_carried_as_itself_is_unchanged():
     """The carriage of a walk's own clip turns nothing: every rotation and
     translation kept."""
