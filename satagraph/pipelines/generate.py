@@ -385,9 +385,10 @@ def _all_layers(codes: torch.Tensor, num_quantizers: int) -> torch.Tensor:
     return torch.cat([codes, codes.new_full((codes.size(0), missing), -1)], dim=-1)
 
 
-#: Codes decoded as the decoder gives them: no smoothing, no grounding, no
-#: planting (:func:`decode_on`'s default).
-RAW_DECODING = GenerationSettings(smooth=0.0, root_smooth=0.0, ground=False, plant=False)
+#: Codes decoded as the decoder gives them: no smoothing, no carriage, no
+#: grounding, no planting (:func:`decode_on`'s default).
+RAW_DECODING = GenerationSettings(smooth=0.0, root_smooth=0.0, ground=False, plant=False,
+                                  carriage="never")
 
 
 def decode_on(module, codes: torch.Tensor, rig: RigInputs,

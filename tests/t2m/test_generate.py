@@ -682,3 +682,20 @@ def test_a_failed_set_keeps_what_another_run_wrote_since(tiny_motion, random_mot
     with pytest.raises(OSError, match="No space left"):  # nobody else wrote: no partial set
         write_all([tiny_motion, tiny_motion], [str(tmp_path / "c.bvh"), second])
     assert not (tmp_path / "c.bvh").exists()
+
+
+def test_raw_decoding_is_the_decoder_s_own_carriage(t2m_ckpt, zoo_skeletons):
+    """:data:`RAW_DECODING` (``decode_on``'s default) decodes codes as the
+    decoder gives them: not carried as the skeleton file's character, which
+    ``carriage="always"`` would do (every joint turned to the clip's mean)."""
+    from dataclasses import replace
+    from satagraph.pipelines import generate as G
+    module = G.load_generator(str(t2m_ckpt))
+    rig = G.rig_inputs(module, read_bvh(str(zoo_skeletons["quadruped"])))
+    codes = torch.randint(0, 16, (20, module.num_quantizers),
+                          generator=torch.Generator().manual_seed(0))
+    raw = G.decode_on(module, codes, rig)
+    decoded = {mode: G.decode_on(module, codes, rig, replace(G.RAW_DECODING, carriage=mode))
+               for mode in ("never", "always")}
+    np.testing.assert_array_equal(raw.rotations, decoded["never"].rotations)
+    assert np.abs(raw.rotations - decoded["always"].rotations).max() > 1e-3
