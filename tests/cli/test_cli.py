@@ -258,6 +258,19 @@ def test_error_unwritable_output(capsys, tiny_file, tmp_path):
     assert_one_line_error(err, "cannot write")
 
 
+@pytest.mark.parametrize("command", [["retarget", "--target", "t.bvh", "s.bvh"],
+                                     ["generate", "--text", "a walk", "--skeleton", "t.bvh"]])
+def test_a_carriage_no_mode_names_is_refused_before_any_file_is_read(capsys, tmp_path,
+                                                                       command):
+    with pytest.raises(SystemExit) as info:
+        main([*command, "--carriage", "sometimes", str(tmp_path / "o.bvh")])
+    assert info.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == (
+        f"satagraph {command[0]}: error: argument --carriage: invalid choice: 'sometimes' "
+        "(choose from 'auto', 'always', 'never')")
+    assert not (tmp_path / "o.bvh").exists()
+
+
 def test_traceback_flag_reraises(tmp_path):
     with pytest.raises(BVHError):
         main(["--traceback", "inspect", str(tmp_path / "missing.bvh")])

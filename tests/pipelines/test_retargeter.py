@@ -10,6 +10,7 @@ from functools import partial
 from pathlib import Path
 from typing import Callable, List
 
+import numpy as np
 import pytest
 
 from satagraph.datasets.zoo import generate_clip, zoo_rigs
@@ -143,3 +144,29 @@ def test_a_folder_run_of_the_command_line_keeps_one_retargeter_per_model(model, 
     assert other is not first and other.memo is first.memo is memos["target"]
     assert first.options["plant"] and first.target is dog
     assert _retargeter(args, model, model.embed, dog).memo is not first.memo
+
+
+def test_the_carriage_is_passed_through_and_a_reconstruction_never_carried(
+        model, walks: List[Motion], dog: Motion, tmp_path: Path) -> None:
+    """``Retargeter(carriage=...)`` and ``retarget --carriage`` retarget as
+    :func:`retarget_motion` does with that setting (``always`` turns every
+    joint's mean to the quadruped clip's own, ``never`` keeps the
+    decoder's); a reconstruction (the target the source itself) is never
+    carried."""
+    from satagraph.cli import build_parser, parse_args
+    from satagraph.cli.train import _retargeter
+    from satagraph.pipelines.inference import retarget_canonical
+    walk = walks[0]
+    got = {mode: written(Retargeter(model, dog, carriage=mode)(walk), tmp_path / f"{mode}.bvh")
+           for mode in ("never", "always")}
+    assert got["never"] != got["always"]
+    for mode, expected in got.items():
+        assert written(retarget_motion(model, walk, dog, carriage=mode),
+                       tmp_path / f"alone_{mode}.bvh") == expected
+        args = parse_args(build_parser(), ["retarget", "in", "--target", "dog.bvh", "out",
+                                           "--carriage", mode])
+        assert _retargeter(args, model, None, dog).options["carriage"] == mode
+    kept, carried = (retarget_canonical(model, walk, walk, carriage=mode)[1]
+                     for mode in ("never", "always"))
+    np.testing.assert_array_equal(carried.rotations, kept.rotations)
+    np.testing.assert_array_equal(carried.translations, kept.translations)
