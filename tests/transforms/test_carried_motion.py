@@ -98,11 +98,15 @@ def test_the_root_travels_as_many_leg_lengths_as_before():
 
 
 def test_carried_frames_are_the_standing_ones_or_all():
-    """A walk stands in every frame; a clip too short to hold a stance is
-    read whole."""
+    """A walk that lies on its side in frames 30-59 is read in the other
+    60; a clip in which it stands in fewer than ``MIN_STANDING`` frames (5
+    of 15) is read whole."""
     walk = _walk("quadruped")
-    np.testing.assert_array_equal(carried_frames(walk), np.arange(walk.num_frames))
-    assert len(carried_frames(walk.slice(0, 5))) == 5
+    rot = walk.rotations.copy()
+    rot[30:60, 0] = rotation_about_numpy(np.array([0.0, 0.0, 1.0]), np.pi / 2) @ rot[30:60, 0]
+    lying = walk.with_(rotations=rot)
+    np.testing.assert_array_equal(carried_frames(lying), np.r_[0:30, 60:walk.num_frames])
+    np.testing.assert_array_equal(carried_frames(lying.slice(25, 40)), np.arange(15))
 
 
 def test_bad_inputs_are_refused_in_one_line():
