@@ -144,8 +144,8 @@ class GenerationSettings:
     :func:`~satagraph.pipelines.inference.carried_as_character`:
     ``"auto"``, the default, where it never puts down a limb the character
     stands on there: on the test skeletons the dog's and a zoo quadruped's
-    forepaws come down, ``down`` 0.00 -> 0.92 and 0.86, every speed and
-    direction probe the same to the digit, ``experiments/T2M.md`` sections
+    forepaws come down, ``down`` 0.00 -> 0.92 and 0.86, direction and
+    walk / run / dash speeds the same to the digit, ``experiments/T2M.md`` sections
     92-93; ``"always"``; ``"never"``, the decoder's carriage). The defaults, the masked
     transformer among candidates and the residual one from its guided
     logits, read R@3 0.818 against 0.775, FID 0.201 against 0.252 and
