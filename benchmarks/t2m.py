@@ -108,6 +108,7 @@ from satagraph.pipelines.motion_descriptor import (contact_quality,  # noqa: E40
 from satagraph.semantics import build_text_encoder  # noqa: E402
 from satagraph.semantics.limbs import limb_end_index  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
+from satagraph.transforms.carriage import CARRIAGE_MODES  # noqa: E402
 from satagraph.transforms.rest import REST_MODES  # noqa: E402
 from satagraph.utils.files import atomic_write_text  # noqa: E402
 from results_io import SHARED_DATA  # noqa: E402
@@ -1080,7 +1081,7 @@ def main(argv=None) -> int:
                         help="layer-0 draws per prompt, the one the text explains best "
                              "kept (GenerationSettings.rerank; default: generate's, "
                              f"{GenerationSettings.rerank})")
-    parser.add_argument("--carriage", choices=("auto", "always", "never"), default=None,
+    parser.add_argument("--carriage", choices=CARRIAGE_MODES, default=None,
                         help="whether the per-skeleton probes' motions are carried as their "
                              "characters (GenerationSettings.carriage; default: generate's, "
                              f"{GenerationSettings.carriage}); the scored rows never are")

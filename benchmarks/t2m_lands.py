@@ -41,7 +41,7 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help="the skeletons: the test table's (default) or, to choose "
                              "settings on, the zoo's validation rigs, a Bandai validation "
                              "rig and the dog's first validation clip")
-    parser.add_argument("--carriage", choices=("auto", "always", "never"), default=None,
+    parser.add_argument("--carriage", choices=t2m.CARRIAGE_MODES, default=None,
                         help="GenerationSettings.carriage (default: generate's)")
     parser.add_argument("--out", type=Path, default=OUT, help="results path without suffix")
     args = parser.parse_args(argv)

@@ -49,9 +49,9 @@ def _skip(args, output: str) -> bool:
 
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
-    from satagraph.cli.arguments import (add_mirror_argument, add_plant_argument,
-                                         add_settle_argument, add_still_argument,
-                                         add_two_rests_argument, add_carriage_argument)
+    from satagraph.cli.arguments import (add_carriage_argument, add_mirror_argument,
+                                         add_plant_argument, add_settle_argument,
+                                         add_still_argument, add_two_rests_argument)
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config, one of the named "
                        "configs shipped with satagraph (a name it does not know lists them) "
@@ -563,7 +563,8 @@ def _retargeter(args, module, embed, target, memos: Optional[dict] = None):
     retarget = Retargeter(module, target, embed, args.window, args.overlap, rest=args.rest,
                           ground=args.ground, plant=args.plant, settle=args.settle,
                           still=args.still, mirror=args.mirror, two_rests=args.two_rests,
-                          carriage=args.carriage, memo=None if memos is None else memos.setdefault("target", RigMemo()))
+                          carriage=args.carriage,
+                          memo=None if memos is None else memos.setdefault("target", RigMemo()))
     if memos is not None:
         memos[module] = retarget
     return retarget
