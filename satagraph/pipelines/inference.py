@@ -238,7 +238,8 @@ def _target_embedding(memo: Optional["RigMemo"], semantic: Optional[Callable],
 class RigMemo:
     r"""What a retarget computes of its target rig alone (canonicalised, its
     mirror image, shown in a rest pose with its static features and their
-    semantic embedding, its ground level), kept for
+    semantic embedding, its ground level, how its character carries
+    itself), kept for
     the next source retargeted onto the same rig: a folder of sources
     (``satagraph retarget SRC_DIR``, a :class:`Retargeter`) computes it
     once, not once per file (what that saves: :class:`Retargeter`). Each

@@ -72,13 +72,14 @@ def test_a_generator_of_sources_and_the_target_s_work_done_once(
     alone = [written(retarget_motion(model, walk, dog, model.embed), tmp_path / f"a{i}.bvh")
              for i, walk in enumerate(walks)]
     calls: Counter = Counter()
-    for name in ("check_target", "ground_level", "_embed"):
+    for name in ("check_target", "ground_level", "mean_carriage", "_embed"):
         monkeypatch.setattr(inference, name, partial(
             lambda name, run, *args: calls.update([name]) or run(*args), name,
             getattr(inference, name)))
     onto_dog = Retargeter(model, dog, model.embed)
     outs = onto_dog(walk for walk in walks + walks)
-    assert calls == {"check_target": 1, "ground_level": 1, "_embed": 1 + 4}  # + each source
+    assert calls == {"check_target": 1, "ground_level": 1, "mean_carriage": 1,
+                     "_embed": 1 + 4}  # + each source
     assert [written(out, tmp_path / f"b{i}.bvh") for i, out in enumerate(outs)] == alone * 2
 
 
