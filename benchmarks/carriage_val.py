@@ -48,8 +48,8 @@ from results_io import SHARED_DATA, write_results  # noqa: E402
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import retarget_canonical  # noqa: E402
-from satagraph.pipelines.quality import (LANDS_SHARE, most_active, retarget_quality,  # noqa: E402
-                                         standing_shares)
+from satagraph.pipelines.quality import (most_active, retarget_quality,  # noqa: E402
+                                         standing_shares, stood_on)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "results" / "carriage_val"
@@ -82,9 +82,7 @@ def standing_dogs() -> List[Motion]:
     against: some paw down in half their standing frames or more."""
     out = []
     for rel in manifest_paths("dog", lambda split: split != "test"):
-        own = canonicalize(real_file(rel), fps=30.0)
-        shares = standing_shares(own)
-        if shares and max(shares.values()) >= LANDS_SHARE:
+        if stood_on(standing_shares(canonicalize(real_file(rel), fps=30.0))):
             out.append(real_file(rel))
     return out
 

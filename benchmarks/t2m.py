@@ -752,17 +752,15 @@ def skeleton_targets(test: Sequence[Item], quick: bool,
 
 def standing_dog(files, split: str) -> Optional[Motion]:
     """The first dog clip of the manifest's :obj:`split` that ``down`` can
-    be read against: some paw down in at least
-    :data:`~satagraph.pipelines.quality.LANDS_SHARE` of its standing frames
-    (the first validation clip sits or lies, and shows none;
-    ``experiments/T2M.md`` section 93)."""
-    from satagraph.pipelines.quality import LANDS_SHARE, standing_shares
+    be read against: some paw it stands on
+    (:func:`~satagraph.pipelines.quality.stood_on`; the first validation
+    clip sits or lies, and shows none; ``experiments/T2M.md`` section 93)."""
+    from satagraph.pipelines.quality import standing_shares, stood_on
     for f in files:
         if f.dataset != "dog" or f.split != split:
             continue
         motion = manifest_motion([f], "dog", split)
-        shares = standing_shares(motion) if motion is not None else {}
-        if shares and max(shares.values()) >= LANDS_SHARE:
+        if motion is not None and stood_on(standing_shares(motion)):
             return motion
     return None
 

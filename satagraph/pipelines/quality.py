@@ -41,7 +41,7 @@ its retarget.
 """
 from __future__ import annotations
 
-from typing import Dict, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -453,9 +453,17 @@ def lands_against(canonical: Motion, own: Dict[str, float]) -> Optional[float]:
     """:func:`lands` against the character's own :func:`standing_shares`
     :obj:`own`, computed once for many motions of one character."""
     got = standing_shares(canonical)
-    ratios = [min(got[limb] / share, 1.0) for limb, share in own.items()
-              if share >= LANDS_SHARE and limb in got]
+    ratios = [min(got[limb] / own[limb], 1.0) for limb in stood_on(own) if limb in got]
     return float(min(ratios)) if ratios else None
+
+
+def stood_on(own: Dict[str, float]) -> List[str]:
+    """The limbs a character stands on in its own clip, whose
+    :func:`standing_shares` are :obj:`own`: those down in at least
+    :data:`LANDS_SHARE` of its standing frames, which :func:`lands` reads
+    (none: a clip in which it sits or lies, which ``lands`` cannot be read
+    against)."""
+    return [limb for limb, share in own.items() if share >= LANDS_SHARE]
 
 
 def standing_shares(canonical: Motion) -> Dict[str, float]:
@@ -542,4 +550,4 @@ __all__ = ["LAG", "facing_axis", "forward_tracks", "limb_tracks", "correlate",
            "trunk_bend", "joint_raise", "most_active",
            "HEADING_TRAVEL", "heading_gap", "TURN_EDGE", "turn_rate", "posture",
            "LANDING_HEIGHT", "LANDS_SHARE", "landing_shares", "lands", "lands_against",
-           "standing_shares", "retarget_quality"]
+           "stood_on", "standing_shares", "retarget_quality"]

@@ -16,7 +16,7 @@ from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, for
                                          most_active, pace_drift, posture, retarget_quality,
                                          root_travel,
                                          step_correlation, stride, turn_rate, upright_fraction,
-                                         cadence)
+                                         cadence, standing_shares, stood_on)
 
 
 def _walk(species: str, kind: str = "walk", frames: int = 90):
@@ -158,6 +158,14 @@ def test_lands_tells_forepaws_that_never_come_down():
     assert landing_shares(biped)["left front"] == 0.0
     assert lands(biped, biped) == pytest.approx(1.0)
     assert lands(walk, _walk("snake")) is None  # no limb to land
+
+
+def test_the_limbs_a_character_stands_on_are_those_lands_reads():
+    """A quadruped stands on its four paws, a biped on its feet (its hands
+    never down), a snake on none (``lands`` reads ``None`` against it)."""
+    assert set(stood_on(standing_shares(_walk("quadruped")))) == set(LIMBS)
+    assert set(stood_on(standing_shares(_walk("biped")))) == {"left hind", "right hind"}
+    assert stood_on(standing_shares(_walk("snake"))) == []
 
 
 def test_lands_on_the_real_dog_and_a_human(read_real):
