@@ -615,7 +615,7 @@ def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
     if carriage == "never" or not own.num_frames:
         return out
     reference, shares = _kept(memo, own, "carriage",
-                              lambda: (mean_carriage(own), standing_shares(own)))
+                              lambda: (mean_carriage(own), standing_shares(own, own_floor=True)))
     if carriage == "auto":
         landing = lands_against(out if grounded is None else grounded(out), shares)
         if landing is None or landing >= CARRIAGE_LANDS:

@@ -67,3 +67,15 @@ def test_a_carriage_setting_that_is_none_of_the_modes_is_refused() -> None:
     with pytest.raises(ValueError, match=r"carriage must be one of \['auto', 'always', "
                                          r"'never'\], got 'sometimes'"):
         check_settings(Module(), 64, 16, "auto", False, "sometimes")
+
+
+def test_auto_reads_a_target_clip_from_the_floor_it_stands_on(walk) -> None:
+    """A target clip whose lowest point is no paw's (the dog's clips that
+    lie with the tail tip on the floor, the paws 4-11 cm above it where
+    they stand): raised 6 % of its height, its paws still land where it
+    stands, and forepaws held up are carried down as onto the clip itself."""
+    from satagraph.transforms.ground import raise_root
+    lifted = _forelegs_up(walk)
+    raised = raise_root(walk, 0.06 * walk.height())
+    carried = _carried(lifted, raised, "auto")
+    assert carried is not lifted and lands(carried, walk) > 0.9

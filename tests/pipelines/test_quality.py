@@ -185,6 +185,26 @@ def test_lands_on_the_real_dog_and_a_human(read_real):
     assert lands(human, dog) == 0.0
 
 
+def test_lands_reads_the_reference_from_the_floor_it_stands_on(read_real):
+    """A character's own clip whose lowest point is no paw's: the dog of
+    ``D1_058`` stands on all four in 721 of its 1090 frames, the paws 5-6
+    cm above the tail tip it lies on, which set the clip's floor; read from
+    y = 0 no paw came down and ``lands`` said nothing (None) of any
+    retarget onto it. Read from the floor of its standing frames, its paws
+    land (1.0 against itself) and forepaws held up read 0; a zoo walk
+    raised 6 % of its height alike."""
+    from satagraph.transforms.ground import raise_root, standing_frames
+    from satagraph.transforms.rig_reading import with_rig
+    walk = _walk("quadruped")
+    raised = raise_root(walk, 0.06 * walk.height())
+    assert lands(walk, raised) == pytest.approx(1.0)
+    assert lands(_forelegs_up(walk), raised) == 0.0
+    dog = canonicalize(with_rig(read_real("dog/D1_058_KAN01_001.bvh"), scale="cm"), fps=30.0)
+    assert max(landing_shares(dog, standing_frames(dog)).values()) == 0.0  # from y = 0
+    assert lands(dog, dog) == pytest.approx(1.0)
+    assert lands(_forelegs_up(dog), dog) < 0.05
+
+
 def test_posture_reads_a_dog_that_lies_most_of_its_clip_where_it_stands(read_real):
     """This dog lies on its side for most of its clip: measured against
     every frame, its own standing frames would read as a poor posture
