@@ -472,3 +472,22 @@ def test_a_line_rest_without_frames_is_no_body_to_retarget_onto(
         check_shown_body(rig)
     check_shown_body(bandai)
     check_shown_body(read_real("cmu/01_01.bvh").slice(0, 0))  # a designed rest: a body
+
+
+def test_a_line_rest_shown_only_at_rest_is_no_body_to_retarget_onto(
+        read_real: Callable[[str], Motion]) -> None:
+    """The dog's rig exported in one frame at its rest (every rotation the
+    identity): a Bandai walk onto it walked on its hind legs (steps +0.45)
+    and, carried as that frame, lay flat (+0.06); it shows no more body
+    than the rig without frames and is refused alike. A frame of the
+    dog's clip, or a designed rest at rest, is a body."""
+    from satagraph.data.validate import MotionValidationError
+    from satagraph.pipelines.inference import check_shown_body
+    dog = read_real("dog/D1_001_KAN01_001.bvh").slice(0, 1)
+    at_rest = dog.with_(rotations=np.broadcast_to(np.eye(3), dog.rotations.shape).copy())
+    with pytest.raises(MotionValidationError, match=r"^\S*D1_001_KAN01_001.bvh: a rig shown "
+                                                    "only at rest whose rest pose is a line"):
+        check_shown_body(at_rest)
+    check_shown_body(dog)
+    cmu = read_real("cmu/01_01.bvh").slice(0, 1)
+    check_shown_body(cmu.with_(rotations=np.broadcast_to(np.eye(3), cmu.rotations.shape).copy()))
