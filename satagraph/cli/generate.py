@@ -126,14 +126,17 @@ def add_generate_parser(sub) -> None:
 
 
 def _targets(args) -> list:
-    """The skeleton files, read and checked (one line naming a bad file)."""
+    """The skeleton files, read and checked (one line naming a bad file;
+    one that shows no body, as ``retarget --target`` refuses it:
+    :func:`~satagraph.data.validate.check_shown_body`)."""
     from satagraph.cli.arguments import check_per_input, read_with_rig
-    from satagraph.data.validate import check_skeleton, check_writable
+    from satagraph.data.validate import check_shown_body, check_skeleton, check_writable
     check_per_input(args, len(args.skeleton))
     out = []
     for i, path in enumerate(args.skeleton):
         motion = read_with_rig(path, args, index=i)
         check_skeleton(motion, path)
+        check_shown_body(motion)
         check_writable(motion, path)
         out.append(motion)
     return out

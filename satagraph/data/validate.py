@@ -233,7 +233,28 @@ def check_features(feats, path: str) -> None:
             raise _error(path, f"non-finite features ({name}) after preprocessing")
 
 
+def check_shown_body(target: Motion) -> None:
+    """A target without frames, or whose every frame is its rest pose (a
+    rig exported at rest), whose rest is a line
+    (:func:`~satagraph.transforms.rest.is_line_rest`) shows the model no body: no pose to stand it in, no up axis to read
+    (Bandai's rig without its frames came out 77 cm tall for 131, hovering
+    24 cm, or lying along -Z and 34 cm under the floor; a Bandai walk onto
+    the dog's rig in one frame at rest walked on its hind legs, steps
+    +0.45, and carried as that frame lay flat, steps +0.06).
+
+    Raises:
+        MotionValidationError: One line naming the target.
+    """
+    from satagraph.transforms.rest import is_line_rest
+    if is_line_rest(target.skeleton) and np.allclose(target.rotations, np.eye(3)):
+        shown = "shown only at rest" if target.num_frames else "without frames"
+        raise MotionValidationError(
+            f"{target.source or '<target>'}: a rig {shown} whose rest pose is a line "
+            "(every bone along one axis, as Bandai's and the dog's files write it) shows no "
+            "body to put a motion on: give a clip of it (a file with frames that pose it)")
+
+
 __all__ = ["MotionValidationError", "MotionLimits", "DEFAULT_LIMITS", "check_motion",
-           "check_writable",
+           "check_writable", "check_shown_body",
            "check_timing", "check_resample", "check_skeleton", "check_values", "check_features",
            "skeleton_size", "default_windows", "check_windows"]

@@ -30,8 +30,8 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
-from satagraph.data.validate import (check_features, check_motion, check_windows,
-                                     default_windows)
+from satagraph.data.validate import (check_features, check_motion, check_shown_body,  # noqa: F401
+                                     check_windows, default_windows)
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion, require_motion
 from satagraph.pipelines.quality import lands_against, standing_shares
@@ -521,27 +521,6 @@ def check_two_rests(two_rests: Union[bool, str]) -> None:
     """``two_rests`` is ``True``, ``False`` or :data:`UNMIRRORED` (one line)."""
     if two_rests not in (False, True, UNMIRRORED):
         raise ValueError(f"two_rests must be True, False or {UNMIRRORED!r}, got {two_rests!r}")
-
-
-def check_shown_body(target: Motion) -> None:
-    """A target without frames, or whose every frame is its rest pose (a
-    rig exported at rest), whose rest is a line (:func:`is_line_rest`)
-    shows the model no body: no pose to stand it in, no up axis to read
-    (Bandai's rig without its frames came out 77 cm tall for 131, hovering
-    24 cm, or lying along -Z and 34 cm under the floor; a Bandai walk onto
-    the dog's rig in one frame at rest walked on its hind legs, steps
-    +0.45, and carried as that frame lay flat, steps +0.06).
-
-    Raises:
-        MotionValidationError: One line naming the target.
-    """
-    from satagraph.data.validate import MotionValidationError
-    if is_line_rest(target.skeleton) and np.allclose(target.rotations, np.eye(3)):
-        shown = "shown only at rest" if target.num_frames else "without frames"
-        raise MotionValidationError(
-            f"{target.source or '<target>'}: a rig {shown} whose rest pose is a line "
-            "(every bone along one axis, as Bandai's and the dog's files write it) shows no "
-            "body to retarget onto: give a clip of it (a file with frames that pose it)")
 
 
 def from_canonical(canon: Motion, source: Motion) -> Motion:

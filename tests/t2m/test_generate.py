@@ -97,6 +97,23 @@ def _error(capsys) -> str:
     return err[0]
 
 
+@pytest.mark.skipif(data_dir() is None, reason="../shared/data not found: the real "
+                    "dog file is needed")
+@pytest.mark.parametrize("frames", [0, 1])
+def test_a_line_rest_that_shows_no_body_is_refused(tmp_path, capsys, frames):
+    """The dog's rig without frames, or in one frame at rest: ``retarget``
+    refused the first; ``generate`` tumbled a walk on it, or (carried as
+    that frame) laid it flat. Refused in one line naming the file, before
+    any model loads."""
+    from satagraph.io import write_bvh
+    dog = read_bvh(data_dir() / "dog" / "D1_001_KAN01_001.bvh").slice(0, frames)
+    rig = tmp_path / "rig.bvh"
+    write_bvh(dog.with_(rotations=np.broadcast_to(np.eye(3), dog.rotations.shape).copy()), rig)
+    assert main(["generate", "--text", "a dog walks forward", "--skeleton", str(rig),
+                 "--units", "cm", str(tmp_path / "out.bvh")]) == 2
+    assert f"{rig}: a rig " in _error(capsys) and not (tmp_path / "out.bvh").exists()
+
+
 def test_missing_checkpoint_is_one_line(zoo_skeletons, tmp_path, capsys):
     out = tmp_path / "x.bvh"
     assert _generate(tmp_path / "none.ckpt", [zoo_skeletons["biped"]], out) == 2
