@@ -78,11 +78,13 @@ def zoo_pairs(per_pair: int) -> List[Pair]:
 
 
 def standing_dogs() -> List[Motion]:
-    """The dog's clips outside its test split that ``down`` can be read
-    against: some paw down in half their standing frames or more."""
+    """The dog's clips outside its test split that ``lands`` can be read
+    against: some paw down in half their standing frames or more, from the
+    floor they stand on (:func:`~satagraph.pipelines.quality.lands`)."""
     out = []
     for rel in manifest_paths("dog", lambda split: split != "test"):
-        if stood_on(standing_shares(canonicalize(real_file(rel), fps=30.0))):
+        own = canonicalize(real_file(rel), fps=30.0)
+        if stood_on(standing_shares(own, own_floor=True)):
             out.append(real_file(rel))
     return out
 

@@ -753,8 +753,11 @@ def skeleton_targets(test: Sequence[Item], quick: bool,
 def standing_dog(files, split: str) -> Optional[Motion]:
     """The first dog clip of the manifest's :obj:`split` that ``down`` can
     be read against: some paw it stands on
-    (:func:`~satagraph.pipelines.quality.stood_on`; the first validation
-    clip sits or lies, and shows none; ``experiments/T2M.md`` section 93)."""
+    (:func:`~satagraph.pipelines.quality.stood_on`), read from its lowest
+    point (y = 0), as when ``experiments/T2M.md`` section 93 chose its
+    validation dog (``D1_009_KAN01_001``; ``lands`` now reads each clip
+    from the floor it stands on, and would take the first validation
+    clip, ``D1_031``)."""
     from satagraph.pipelines.quality import standing_shares, stood_on
     for f in files:
         if f.dataset != "dog" or f.split != split:
