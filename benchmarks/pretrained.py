@@ -26,16 +26,18 @@ canonical frame at 30 fps), scored without a ground truth by
 - **lands** (diagnostic): whether the retarget puts down the limbs the
   target character stands on in its own clip
   (:func:`~satagraph.pipelines.quality.lands`): per limb the target's
-  clip brings within 5 % of its height of the floor in at least half of
-  its standing frames, the share of the retarget's frames in which that
-  limb's lowest point is as low, over the clip's own share, capped at 1;
-  the least over those limbs ("-" where the clip lands no limb that
-  often: CMU's 01_01, mostly jumps). 1.00 where the retarget lands
+  clip brings within 5 % of its height of the floor it stands on in at
+  least half of its standing frames, the share of the retarget's frames in
+  which that limb's lowest point is as low, over the clip's own share,
+  capped at 1; the least over those limbs ("-" where the clip lands no
+  limb that often). 1.00 where the retarget lands
   its limbs as that clip does, 0.94-1.00 onto the humans, zoo biped and
-  bird here; 0.00 for the human -> dog and biped -> quadruped rows, which
-  carry the forepaws as a human carries its hands while the hind paws
-  pass the ground column (the dog's clip lands all four paws in 90-97 %
-  of its standing frames).
+  bird here; 0.00 for the human -> dog and biped -> quadruped rows as the
+  decoder gives them (``--carriage never``), which carry the forepaws as
+  a human carries its hands while the hind paws pass the ground column
+  (the dog's clip lands all four paws in 90-97 % of its standing frames),
+  0.79 and 1.00 carried as their characters (``--carriage auto``, the
+  default and this table's).
 - **ground**: median lowest-joint height, % of the character's height.
   Target |ground| <= 3 %. Retargets are grounded by default
   (:func:`~satagraph.transforms.ground.ground_retarget`: one vertical shift
