@@ -237,8 +237,9 @@ def check_shown_body(target: Motion) -> None:
     """A target without frames, or whose every frame is its rest pose (a
     rig exported at rest), whose rest is a line
     (:func:`~satagraph.transforms.rest.is_line_rest`) shows the model no
-    body: no pose to stand it in, no up axis to read (Bandai's rig without its frames came out 77 cm tall for 131, hovering
-    24 cm, or lying along -Z and 34 cm under the floor; a Bandai walk onto
+    body: no pose to stand it in, no up axis to read (Bandai's rig without
+    its frames came out 77 cm tall for 131, hovering 24 cm, or lying along
+    -Z and 34 cm under the floor; a Bandai walk onto
     the dog's rig in one frame at rest walked on its hind legs, steps
     +0.45, and carried as that frame lay flat, steps +0.06).
 
