@@ -44,9 +44,9 @@ from satagraph.data.collate import collate_clips
 from satagraph.data.features import MotionFeatures, features_to_motion
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.pipelines.inference import (RigMemo, carried_as_character, cross_fade,
-                                           default_windows, restore_rest, shown_rest,
-                                           static_features, target_clip, window_codes,
-                                           window_plan)
+                                           default_windows, once_per_motion, restore_rest,
+                                           shown_rest, static_features, target_clip,
+                                           window_codes, window_plan)
 from satagraph.io.checkpoint import CheckpointError
 from satagraph.motion import Motion, require_motion
 
@@ -419,10 +419,11 @@ def decode_on(module, codes: torch.Tensor, rig: RigInputs,
     done = replace(rig.feats, q=q, r=r, fps=module.fps, transform=rig.canon.transform)
     motion = restore_rest(features_to_motion(done, q=q, r=r, use_positions=False),
                           rig.undo, rig.canon.skeleton)
-    motion = carried_as_character(motion, rig.canon, settings.carriage, _on_floor, rig.memo,
+    on_floor = once_per_motion(_on_floor)  # the gate's reading reused where it keeps the motion
+    motion = carried_as_character(motion, rig.canon, settings.carriage, on_floor, rig.memo,
                                   paced=False)  # no source to keep travel with: T2M.md 93
     if settings.ground:
-        motion = _on_floor(motion)
+        motion = on_floor(motion)
     if settings.plant:
         motion = plant_feet(motion)
     return decanonicalize(motion, rig.canon.transform, fps=module.fps)

@@ -564,12 +564,25 @@ def retarget_canonical(module, source: Motion, target: Motion,
     out = hold_still_source(out, src_canon) if still else out
     level = (_kept(memo, target, "ground", partial(ground_level, target))
              if target.num_frames and (ground or not same) else None)
+    grounded = once_per_motion(lambda m: ground_retarget(m, src_canon, target, level))
     if not same:  # a retarget: carried as the target character, checked as grounded
-        out = carried_as_character(out, target, carriage, lambda m: ground_retarget(
-            m, src_canon, target, level), memo)
-    if ground:
-        out = ground_retarget(out, src_canon, target, level)
+        out = carried_as_character(out, target, carriage, grounded, memo)
+    if ground:  # the gate's grounded reading where it kept the motion
+        out = grounded(out)
     return src_canon, plant_feet(out) if plant else out
+
+
+def once_per_motion(fn: Callable[[Motion], Motion]) -> Callable[[Motion], Motion]:
+    """:obj:`fn`, giving its last result again when called on the same
+    motion object: a motion grounded to be checked by
+    :func:`carried_as_character` and kept by it is not grounded twice."""
+    last: List[Any] = [None, None]
+
+    def call(motion: Motion) -> Motion:
+        if last[0] is not motion:
+            last[0], last[1] = motion, fn(motion)
+        return last[1]
+    return call
 
 
 #: ``carriage="auto"`` carries a retarget whose
