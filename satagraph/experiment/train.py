@@ -4,6 +4,7 @@ from __future__ import annotations
 import contextlib
 import inspect
 import json
+import logging
 import os
 import re
 import signal
@@ -344,9 +345,35 @@ def build_trainer(cfg: Dict[str, Any], run_dir: Path, resume: bool = False,
         callbacks.append(RichProgressBar())
     plugins = list(opts.pop("plugins", None) or []) + [SafeCheckpointIO()]
     logger = own["logger"] if "logger" in own else build_logger(cfg, run_dir, resume)
-    return L.Trainer(logger=logger,
-                     default_root_dir=own.get("default_root_dir", str(run_dir)),
-                     callbacks=callbacks, plugins=plugins, **opts)
+    with _without_tips():
+        return L.Trainer(logger=logger,
+                         default_root_dir=own.get("default_root_dir", str(run_dir)),
+                         callbacks=callbacks, plugins=plugins, **opts)
+
+
+#: Where Lightning 2.6 says its info lines, among them a tip advertising a
+#: cloud logger at every trainer's construction.
+LIGHTNING_INFO = "lightning.pytorch.utilities.rank_zero"
+
+
+class _NoTips(logging.Filter):
+    """Drops Lightning's "Tip" lines (a cloud logging service advertised
+    to every run), keeping its other info lines."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "Tip:" not in str(record.msg)
+
+
+@contextlib.contextmanager
+def _without_tips():
+    """Lightning's :class:`_NoTips` filter on its info logger while a
+    trainer is built."""
+    log, tips = logging.getLogger(LIGHTNING_INFO), _NoTips()
+    log.addFilter(tips)
+    try:
+        yield
+    finally:
+        log.removeFilter(tips)
 
 
 def weight_average(decay: float) -> L.Callback:
@@ -627,6 +654,9 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             # epoch) has no best epoch yet: Lightning said so naming every logged key
             warnings.filterwarnings("ignore", message=r"`ModelCheckpoint\(monitor=.* could not "
                                     "find the monitored key")
+            if last is not None:  # a resume's own folder, which it expects full
+                warnings.filterwarnings("ignore", message="Checkpoint directory .* exists and "
+                                        "is not empty")
             _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
 
