@@ -322,6 +322,15 @@ def module_entry(name: str) -> ModuleEntry:
     return _REGISTRY[name]
 
 
+def registered_name(cls: type) -> Optional[str]:
+    """The one name :obj:`cls` is registered under (the built-in modules
+    registered first), or ``None`` where it is registered under none or
+    several: what a module built by hand records as its ``meta.module``."""
+    _load_builtins()
+    names = [name for name, entry in _REGISTRY.items() if entry.cls is cls]
+    return names[0] if len(names) == 1 else None
+
+
 def registered_names() -> list:
     """Every name a config's ``module:`` may take."""
     return sorted(set(_REGISTRY) | set(PLUGINS))

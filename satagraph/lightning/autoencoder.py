@@ -79,6 +79,7 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         self.optim = dict(DEFAULT_OPTIM, **(optim or {}))
         self.fps = fps
         self.meta = dict(meta or {})
+        self._name_module()
         self.normalizer = FeatureNormalizer()
         self.model = self.build_model(**model)
         self.criterion = self.build_loss(**(loss or {}))
@@ -89,6 +90,19 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
                              f"another skeleton's frames); {type(self.model).__name__} "
                              f"has one per {rate} frames: set loss.retarget, "
                              "loss.retarget_root and loss.retarget_carriage to 0")
+
+    def _name_module(self) -> None:
+        """``meta["module"]`` of a module built by hand (a config's build
+        names it): the name its class is registered under
+        (:func:`~satagraph.experiment.registry.registered_name`), so that
+        :func:`~satagraph.experiment.train.load_module` builds its class
+        again, a subclass's own arguments included; none where the class is
+        registered under no one name."""
+        from satagraph.experiment.registry import registered_name
+        name = None if "module" in self.meta else registered_name(type(self))
+        if name is not None:
+            self.meta["module"] = name
+            self.hparams["meta"] = self.meta
 
     # -------------------------------------------------------- semantics
     def embed(self, skeleton, evidence=None) -> Tensor:

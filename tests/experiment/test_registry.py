@@ -3,6 +3,7 @@ their own sections, a data module and data schema per module."""
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass
 from typing import Any, List
 
@@ -336,32 +337,48 @@ def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
     'vae': refused as 'weights do not fit the 'vae' model its
     hyperparameters describe (Error(s) in loading state_dict for
     SATAVAEModule:)', though they describe none, or, where its weights fit,
-    loaded as a SATAVAEModule without a word."""
+    loaded as a SATAVAEModule without a word. A class registered under one
+    name now records it when built by hand, and loads as itself."""
     from satagraph.experiment.train import load_module
     from satagraph.io.checkpoint import CheckpointError
     from satagraph.lightning import MotionAutoencoderModule, SATAVAEModule
     from satagraph.nn import SATA
 
-    @register_module("test_own_rvq")
     class OwnRVQ(MotionAutoencoderModule):
         def build_model(self, **kwargs):
             return SATA(**dict(kwargs, bottleneck="rvq"))
 
-    names.append("test_own_rvq")
-    module = OwnRVQ(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
-                         latent_channels=8, semantic_channels=0, codebook_size=8,
-                         num_quantizers=2), meta={"window": 32})
-    module.normalizer.fitted.fill_(True)
+    model = dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1, latent_channels=8,
+                 semantic_channels=0, codebook_size=8, num_quantizers=2)
     path = tmp_path / "own.ckpt"
+    module = OwnRVQ(model, meta={"window": 32})  # registered under no name
+    assert "module" not in module.hparams["meta"]
+    module.normalizer.fitted.fill_(True)
     save_module_checkpoint(module, path)
     with pytest.raises(CheckpointError, match=r"name no module \(meta.module\).*Missing key"):
         load_module(str(path))
-    # a VAE of one's own fits the built-in 'vae': it loads as one, no longer unsaid
-    module = SATAVAEModule(dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1,
-                                latent_channels=8, semantic_channels=0), meta={"window": 32})
+    register_module("test_own_rvq", OwnRVQ)
+    names.append("test_own_rvq")
+    module = OwnRVQ(model, meta={"window": 32})
+    assert module.hparams["meta"] == {"window": 32, "module": "test_own_rvq"}
+    module.normalizer.fitted.fill_(True)
+    save_module_checkpoint(module, path)
+    assert type(load_module(str(path))) is OwnRVQ
+    # a VAE of an unregistered class fits the built-in 'vae': it loads as one, said
+    vae = dict(hidden_channels=16, heads=2, ff_channels=16, num_blocks=1, latent_channels=8,
+               semantic_channels=0)
+    module = type("OwnVAE", (SATAVAEModule,), {})(vae, meta={"window": 32})
     module.normalizer.fitted.fill_(True)
     save_module_checkpoint(module, path)
     with pytest.warns(UserWarning, match="name no module .*read as the built-in 'vae'"):
+        assert type(load_module(str(path))) is SATAVAEModule
+    # the built-in class built by hand names itself: no warning
+    module = SATAVAEModule(vae, meta={"window": 32})
+    assert module.hparams["meta"]["module"] == "vae"
+    module.normalizer.fitted.fill_(True)
+    save_module_checkpoint(module, path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         assert type(load_module(str(path))) is SATAVAEModule
 
 
