@@ -771,3 +771,29 @@ def test_interop_needs_blender_and_says_so(monkeypatch, capsys) -> None:
     assert interop.compare(ref, other) == {"same_header": True, "error": pytest.approx(1e-3)}
     assert interop.compare(ref, dict(other, frames=3))["same_header"] is False
     assert interop.blender_name("Left Head") == "Left_Head"
+
+
+def test_demo_record_tables_a_demo_summary_and_refuses_one_without_retargets(tmp_path, capsys):
+    """The README's demo table comes from a committed record of the run
+    (``benchmarks/results/demo.md``), not from figures copied by hand."""
+    import json
+    import demo_record
+    quality = {"steps": 0.9904, "travel": 0.9458, "stride": 0.7001, "lands": 0.78125}
+    summary = {"seconds": 251.2, "steps": [
+        {"name": "retarget", "quality": {"quadruped": quality,
+                                         "bird": dict(quality, steps=-0.25, lands=None)}},
+        {"name": "train", "seconds": 242.6, "note": "13 epochs, 341 steps"},
+        {"name": "fine-tuned", "quality": {"quadruped": dict(quality, travel=1.2)}}]}
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps(summary))
+    assert demo_record.main([str(path), "--out", str(tmp_path / "demo")]) == 0
+    text = (tmp_path / "demo.md").read_text()
+    assert "| biped -> quadruped | +0.99 | 0.95x | 0.70x | 0.78 | +0.99 | 1.20x | 0.70x | 0.78 |" in text
+    assert "| biped -> bird | -0.25 | 0.95x | 0.70x | - | - | - | - | - |" in text
+    assert "251 s in all; training: 13 epochs, 341 steps (243 s)" in text
+    assert json.loads((tmp_path / "demo.json").read_text()) == summary
+    path.write_text(json.dumps({"seconds": 1.0, "steps": [{"name": "zoo"}]}))
+    capsys.readouterr()
+    assert demo_record.main([str(path), "--out", str(tmp_path / "quick")]) == 2
+    assert "no 'retarget' step" in capsys.readouterr().err
+    assert not (tmp_path / "quick.md").exists()
