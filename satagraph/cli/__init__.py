@@ -203,7 +203,12 @@ def run_convert(args: argparse.Namespace) -> int:
     if (args.up_axis or args.units) and not args.canonical:
         raise CommandError("--up-axis and --units need --canonical")
     check_output_path(args.output)
-    from satagraph.data.validate import check_resample, check_skeleton, check_writable
+    from satagraph.data.validate import (DEFAULT_LIMITS, check_resample, check_skeleton,
+                                         check_writable)
+    low, high = DEFAULT_LIMITS.min_fps, DEFAULT_LIMITS.max_fps
+    if args.fps is not None and not low <= args.fps <= high:  # else written, then refused
+        raise CommandError(f"--fps {args.fps:g}: satagraph reads {low:g} to {high:g} fps; "
+                           "a file at this rate would be refused by its other commands")
     motion = read_with_rig(args.input, args)
     check_writable(motion, args.input)
     if args.canonical or args.fps:  # resampling: bounded memory, a sane skeleton

@@ -218,6 +218,16 @@ def test_convert_bad_options(capsys, tiny_file, tmp_path, argv):
     assert "error" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("fps", ["0.5", "2000"])
+def test_convert_refuses_a_rate_the_other_commands_refuse(capsys, tiny_file, tmp_path, fps):
+    out = tmp_path / "o.bvh"
+    code, _, err = run(capsys, "convert", str(tiny_file), str(out), "--fps", fps)
+    assert code == 2 and not out.exists()
+    assert_one_line_error(err, f"--fps {fps}", "1 to 1000 fps")
+    assert main(["convert", str(tiny_file), str(out), "--fps", "1000"]) == 0
+    assert read_bvh(out).fps == 1000.0
+
+
 # ------------------------------------------------------------------- errors
 def assert_one_line_error(err: str, *words: str) -> None:
     lines = err.strip().splitlines()
