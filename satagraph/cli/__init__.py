@@ -442,7 +442,22 @@ def build_parser() -> argparse.ArgumentParser:
 def _message(err: BaseException) -> str:
     if isinstance(err, OSError) and err.filename is not None:
         return f"{err.filename}: {err.strerror or err}"
-    return str(err)
+    return _out_of_memory(err) or str(err)
+
+
+#: How torch's CPU allocator says that it failed (a RuntimeError, not a MemoryError).
+_CPU_ALLOCATION = re.compile(r"can't allocate memory: you tried to allocate (\d+) bytes")
+
+
+def _out_of_memory(err: BaseException) -> Optional[str]:
+    """One line for an allocation that failed (Python's :class:`MemoryError`,
+    torch's on the CPU or a GPU), ``None`` for any other error."""
+    asked = _CPU_ALLOCATION.search(str(err))
+    if asked:
+        return f"out of memory: {int(asked.group(1)) / 2 ** 30:.1f} GiB asked for at once"
+    if isinstance(err, MemoryError) or type(err).__name__ == "OutOfMemoryError":
+        return f"out of memory: {' '.join(str(err).split()[:12]) or type(err).__name__}"
+    return None
 
 
 def _format_warning(message, category, filename, lineno, line=None) -> str:
@@ -585,6 +600,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if args.traceback:
             raise
         print(f"{PROG}: error: {_missing_module(err)}", file=sys.stderr)
+        return 2
+    except (MemoryError, RuntimeError) as err:  # a --window of thousands of frames
+        if args.traceback or _out_of_memory(err) is None:
+            raise
+        hint = " (a shorter --window needs less)" if hasattr(args, "window") else ""
+        print(f"{PROG}: error: {_out_of_memory(err)}{hint}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         if args.traceback:

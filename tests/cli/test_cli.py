@@ -238,6 +238,29 @@ def assert_one_line_error(err: str, *words: str) -> None:
         assert word in lines[0], lines[0]
 
 
+def allocate_too_much(args):
+    torch.empty(2 ** 58, dtype=torch.uint8)  # torch's CPU allocator refuses it at once
+
+
+def test_out_of_memory_is_one_line(capsys, monkeypatch, tiny_file, tmp_path):
+    import satagraph.cli.train as train
+    monkeypatch.setattr(train, "run_reconstruct", allocate_too_much)
+    code, out, err = run(capsys, "reconstruct", str(tiny_file), str(tmp_path / "o.bvh"),
+                         "--window", "100000")
+    assert code == 2 and out == ""
+    assert_one_line_error(err, "out of memory: 268435456.0 GiB asked for at once",
+                          "--window")
+    from satagraph.cli.folders import failure_line
+    with pytest.raises(RuntimeError) as info:
+        allocate_too_much(None)
+    assert failure_line("a.bvh", info.value) == (
+        "a.bvh: out of memory: 268435456.0 GiB asked for at once")
+    monkeypatch.setattr(train, "run_reconstruct",
+                        lambda args: torch.zeros(2, 3) @ torch.zeros(2, 3))
+    with pytest.raises(RuntimeError, match="cannot be multiplied"):  # not memory: raised
+        main(["reconstruct", str(tiny_file), str(tmp_path / "o.bvh")])
+
+
 def test_error_missing_file(capsys, tmp_path):
     missing = tmp_path / "missing.bvh"
     for argv in (["inspect", str(missing)],
