@@ -28,10 +28,16 @@ def input_files(source: PathLike, output: Optional[PathLike] = None) -> List[Pat
     :obj:`output` (results are never read as inputs).
 
     Raises:
-        ValueError: None is left.
+        ValueError: None is left (one line, naming :obj:`output` where every
+            file is below it: ``satagraph reconstruct takes takes``).
     """
     inside = None if output is None else Path(output).resolve()
-    files = [p for p in bvh_files(source) if inside is None or inside not in p.resolve().parents]
+    found = bvh_files(source)
+    files = [p for p in found if inside is None or inside not in p.resolve().parents]
+    if found and not files:
+        raise ValueError(f"{source}: its {len(found)} .bvh file(s) are all below the output "
+                         f"folder {output}, whose files are never read as inputs: write the "
+                         "results to another folder")
     if not files:
         raise ValueError(f"{source}: no .bvh files in this folder or below it")
     return files

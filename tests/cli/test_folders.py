@@ -251,6 +251,21 @@ def test_folder_runs_refuse_what_cannot_be_a_folder_job(folder: Path, tmp_path: 
     assert ("no .bvh files" if case == "empty" else "not a folder") in err
 
 
+@pytest.mark.parametrize("out", [".", ".."])
+def test_a_folder_whose_files_are_all_below_the_output_says_so(folder: Path, tmp_path: Path,
+                                                              capsys, out: str) -> None:
+    """``satagraph reconstruct takes takes`` (or into a folder above it) was
+    told that the folder held no .bvh files."""
+    source = tmp_path / "takes"
+    source.mkdir()
+    (source / "a.bvh").write_bytes((folder / "target.bvh").read_bytes())
+    assert main(["reconstruct", str(source), str(source / out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"its 1 .bvh file(s) are all below the output folder {source / out}" in err
+    assert sorted(p.name for p in source.iterdir()) == ["a.bvh"]
+
+
 @pytest.mark.parametrize("command", ["retarget", "reconstruct"])
 def test_a_missing_ckpt_is_refused_once_before_the_folder_is_made(
         folder: Path, tmp_path: Path, capsys, command: str) -> None:
