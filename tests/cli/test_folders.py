@@ -279,6 +279,28 @@ def test_a_missing_ckpt_is_refused_once_before_the_folder_is_made(
     assert not out.exists()
 
 
+@pytest.mark.parametrize("command", ["retarget", "reconstruct"])
+def test_a_source_without_a_skeleton_is_refused_before_a_model_is_chosen(
+        folder: Path, tmp_path: Path, capsys, monkeypatch, command: str) -> None:
+    """A one-joint source was given a model first (``--ckpt auto``: "using
+    the built-in model builtin-wide (no limbs)", seconds of loading), then
+    refused."""
+    import satagraph.experiment.train as experiment
+
+    def no_model(*args, **kwargs):
+        raise AssertionError("a model was loaded for a file that is refused")
+
+    monkeypatch.setattr(experiment, "load_module", no_model)
+    one = tmp_path / "one.bvh"
+    one.write_text("HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition "
+                   "Zposition\n}\nMOTION\nFrames: 2\nFrame Time: 0.033\n0 0 0\n1 1 1\n")
+    target = ["--target", str(folder / "target.bvh")] if command == "retarget" else []
+    assert main([command, str(one), *target, str(tmp_path / "out.bvh")]) == 2
+    assert capsys.readouterr().err == (f"satagraph: error: {one}: a skeleton needs at least "
+                                       "two joints\n")
+    assert not (tmp_path / "out.bvh").exists()
+
+
 def test_the_summary_names_ten_failures_at_most(tmp_path: Path, capsys) -> None:
     from satagraph.cli.folders import run_over_folder
 
