@@ -6,10 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.ops.rotation_numpy import rotation_about_numpy, yaw_matrix_numpy
+from satagraph.ops.rotation_numpy import (mean_rotation_numpy, rotation_about_numpy,
+                                          yaw_matrix_numpy)
 from satagraph.pipelines.quality import lands, posture, root_travel, step_correlation
-from satagraph.transforms.carriage import (carried_frames, carry_like, mean_carriage, tilts,
-                                           twist_yaw)
+from satagraph.transforms.carriage import (MIN_STANDING, carried_frames, carry_like,
+                                           mean_carriage, tilts, twist_yaw)
+from satagraph.transforms.ground import standing_frames
 from tests.pipelines.test_quality import _forelegs_up, _pitched, _walk
 
 X = np.array([1.0, 0.0, 0.0])
@@ -97,16 +99,70 @@ def test_the_root_travels_as_many_leg_lengths_as_before():
     np.testing.assert_allclose(carried.translations[0, 0], lifted.translations[0, 0])
 
 
+def _lying(walk, frames: slice = slice(30, 60)):
+    """:obj:`walk` rolled onto its side (a quarter turn about +Z at the
+    root) in :obj:`frames`."""
+    rot = walk.rotations.copy()
+    rot[frames, 0] = rotation_about_numpy(np.array([0.0, 0.0, 1.0]), np.pi / 2) @ rot[frames, 0]
+    return walk.with_(rotations=rot)
+
+
 def test_carried_frames_are_the_standing_ones_or_all():
     """A walk that lies on its side in frames 30-59 is read in the other
     60; a clip in which it stands in fewer than ``MIN_STANDING`` frames (5
     of 15) is read whole."""
     walk = _walk("quadruped")
-    rot = walk.rotations.copy()
-    rot[30:60, 0] = rotation_about_numpy(np.array([0.0, 0.0, 1.0]), np.pi / 2) @ rot[30:60, 0]
-    lying = walk.with_(rotations=rot)
+    lying = _lying(walk)
     np.testing.assert_array_equal(carried_frames(lying), np.r_[0:30, 60:walk.num_frames])
     np.testing.assert_array_equal(carried_frames(lying.slice(25, 40)), np.arange(15))
+
+
+def test_a_clip_standing_in_min_standing_frames_is_read_there():
+    """The edge of ``MIN_STANDING`` (8): a clip standing in exactly 8 of
+    its 23 frames is read in those 8; one standing in 7 of 22, whole."""
+    lying = _lying(_walk("quadruped"))
+    eight, seven = lying.slice(22, 45), lying.slice(23, 45)
+    assert len(standing_frames(eight)) == MIN_STANDING == len(standing_frames(seven)) + 1
+    np.testing.assert_array_equal(carried_frames(eight), np.arange(MIN_STANDING))
+    np.testing.assert_array_equal(carried_frames(seven), np.arange(22))
+
+
+def test_what_a_clip_does_lying_down_is_no_part_of_its_carriage():
+    """A walk lying in frames 30-59, its forelegs swung 80 degrees up
+    there or not: the same carriage, each joint's below the root the mean
+    of its 60 standing frames."""
+    walk = _walk("quadruped")
+    lying = _lying(walk)
+    rot = lying.rotations.copy()
+    rot[30:60] = _forelegs_up(lying, 80.0).rotations[30:60]
+    kicking = lying.with_(rotations=rot)
+    standing = np.r_[0:30, 60:walk.num_frames]
+    np.testing.assert_array_equal(carried_frames(kicking), standing)
+    np.testing.assert_allclose(mean_carriage(kicking), mean_carriage(lying), atol=1e-9)
+    np.testing.assert_allclose(mean_carriage(lying)[1:],
+                               mean_rotation_numpy(walk.rotations[standing, 1:]), atol=1e-9)
+
+
+def test_the_path_is_scaled_about_its_first_frame_and_heights_kept():
+    """Started 3 m along +X and 2 m along -Z, a carried walk's root path is
+    the one it takes from the origin, moved along: scaled about its first
+    frame, not about the origin. The root's heights stay the decoded ones
+    (grounding sets them), and unpaced the whole path is kept."""
+    walk = _walk("quadruped")
+    lifted = _forelegs_up(walk, 80.0)
+    trans = lifted.translations.copy()
+    trans[:, 0] += [3.0, 0.0, -2.0]
+    away = lifted.with_(translations=trans)
+    reference = mean_carriage(walk)
+    carried, moved = carry_like(lifted, reference), carry_like(away, reference)
+    path = [np.linalg.norm(m.translations[-1, 0, [0, 2]] - m.translations[0, 0, [0, 2]])
+            for m in (carried, lifted)]
+    assert path[0] / path[1] - 1.0 > 1e-4  # scaled up: the leg is longer carried
+    np.testing.assert_allclose(moved.translations[:, 0],
+                               carried.translations[:, 0] + [3.0, 0.0, -2.0], atol=1e-9)
+    np.testing.assert_array_equal(carried.translations[:, 0, 1], lifted.translations[:, 0, 1])
+    np.testing.assert_array_equal(carry_like(away, reference, paced=False).translations,
+                                  away.translations)
 
 
 def test_bad_inputs_are_refused_in_one_line():
