@@ -7,7 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from satagraph.pipelines.inference import RigMemo, carried_as_character, check_settings
+from satagraph.pipelines import inference
+from satagraph.pipelines.inference import (CARRIAGE_LANDS, RigMemo, carried_as_character,
+                                           check_settings, once_per_motion)
 from satagraph.pipelines.quality import lands
 from satagraph.transforms.ground import ground_level, ground_retarget
 from tests.pipelines.test_quality import _forelegs_up, _walk
@@ -79,3 +81,39 @@ def test_auto_reads_a_target_clip_from_the_floor_it_stands_on(walk) -> None:
     raised = raise_root(walk, 0.06 * walk.height())
     carried = _carried(lifted, raised, "auto")
     assert carried is not lifted and lands(carried, walk) > 0.9
+
+
+@pytest.mark.parametrize("degrees, carried", [(15.0, False), (35.0, True)])
+def test_auto_carries_only_a_retarget_landing_less_than_half_as_often(walk, degrees: float,
+                                                                       carried: bool) -> None:
+    """Forelegs swung up 15 degrees still land their paws 0.73 as often as
+    the clip does (kept); swung up 35 degrees, 0.35 as often (carried)."""
+    lifted = _forelegs_up(walk, degrees)
+    assert lands(lifted, walk) == pytest.approx(0.35 if carried else 0.73, abs=0.01)
+    assert (_carried(lifted, walk, "auto") is not lifted) == carried
+
+
+@pytest.mark.parametrize("landing, carried", [(CARRIAGE_LANDS, False),
+                                              (np.nextafter(CARRIAGE_LANDS, 0.0), True),
+                                              (None, False), (0.0, True)])
+def test_auto_carries_below_carriage_lands_and_never_where_lands_says_nothing(
+        walk, monkeypatch, landing, carried: bool) -> None:
+    """The gate's edge: a retarget that ``lands`` exactly
+    ``CARRIAGE_LANDS`` is kept, one a hair below carried; one ``lands``
+    cannot read (``None``: its character stands on no limb in the clip) is
+    not asked to stand."""
+    monkeypatch.setattr(inference, "lands_against", lambda motion, own: landing)
+    lifted = _forelegs_up(walk)
+    assert (_carried(lifted, walk, "auto") is not lifted) == carried
+
+
+def test_once_per_motion_gives_its_last_result_again_for_the_same_motion(walk) -> None:
+    """Called again on the same motion object, the wrapped function is not
+    run again; on another motion it is, and only its last result is kept."""
+    runs = []
+    first5 = once_per_motion(lambda m: runs.append(m) or m.slice(0, 5))
+    short = first5(walk)
+    assert first5(walk) is short and runs == [walk]
+    other = walk.slice(0, 10)
+    assert first5(other).num_frames == 5 and runs == [walk, other]
+    assert first5(walk) is not short and len(runs) == 3
