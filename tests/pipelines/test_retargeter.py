@@ -171,3 +171,29 @@ def test_the_carriage_is_passed_through_and_a_reconstruction_never_carried(
                      for mode in ("never", "always"))
     np.testing.assert_array_equal(carried.rotations, kept.rotations)
     np.testing.assert_array_equal(carried.translations, kept.translations)
+
+
+@pytest.mark.parametrize("landing, grounds", [(1.0, 1), (0.0, 2)])
+def test_the_gate_reads_the_retarget_grounded_and_a_kept_one_is_that_reading(
+        model, walks: List[Motion], dog: Motion, monkeypatch, landing: float,
+        grounds: int) -> None:
+    """``carriage="auto"`` reads ``lands`` of the retarget as it is
+    grounded; where it keeps it (lands 1.0), that grounded reading is the
+    output, not grounded again; where it carries it (lands 0.0), the
+    carried motion is grounded once more. With ``ground=False`` the gate
+    still reads it as grounded at the target's level (the output is not)."""
+    seen, calls = [], Counter()
+    monkeypatch.setattr(inference, "lands_against",
+                        lambda motion, own: seen.append(motion) or landing)
+    ground_retarget = inference.ground_retarget
+    monkeypatch.setattr(inference, "ground_retarget",
+                        lambda *args: calls.update(["ground"]) or ground_retarget(*args))
+    _, out = inference.retarget_canonical(model, walks[0], dog, model.embed)
+    assert len(seen) == 1 and calls["ground"] == grounds
+    assert (seen[0] is out) == (grounds == 1)
+    read, seen[:] = [], []  # ground=False: the output not grounded, the gate's reading is
+    monkeypatch.setattr(inference, "ground_retarget",
+                        lambda *args: read.append(args) or ground_retarget(*args))
+    _, kept = inference.retarget_canonical(model, walks[0], dog, model.embed, ground=False)
+    (_, _, target, level), = read
+    assert level == inference.ground_level(target) and seen[0] is not kept
