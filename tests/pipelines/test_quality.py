@@ -168,6 +168,31 @@ def test_the_limbs_a_character_stands_on_are_those_lands_reads():
     assert stood_on(standing_shares(_walk("snake"))) == []
 
 
+def test_stood_on_reads_limbs_down_in_half_the_standing_frames_or_more():
+    """``LANDS_SHARE`` (0.5) on its edge: a limb down in exactly half of
+    the standing frames is stood on, one down in 0.49 of them not."""
+    shares = {"left front": 0.5, "right front": 0.49, "left hind": 1.0, "right hind": 0.0}
+    assert stood_on(shares) == ["left front", "left hind"]
+
+
+def test_a_motion_reads_from_the_floor_it_stands_on_and_lands_at_most_1():
+    """A zoo walk raised 6 % of its height: read from y = 0 (the default)
+    no paw is down; from the floor it stands on, each is down as often as
+    in the walk, and, as a retarget hovering so, it lands as the walk
+    (1.0). Against a clip whose left forepaw is down in 0.51 of its
+    standing frames (forelegs swung up 20 degrees), the walk's, down in
+    0.83, lands 1.6 times as often: capped at 1."""
+    from satagraph.transforms.ground import raise_root
+    walk = _walk("quadruped")
+    raised = raise_root(walk, 0.06 * walk.height())
+    assert set(standing_shares(raised).values()) == {0.0}
+    assert standing_shares(raised, own_floor=True) == pytest.approx(standing_shares(walk))
+    assert lands(raised, walk) == pytest.approx(1.0)
+    half = _forelegs_up(walk, 20.0)
+    assert standing_shares(walk)["left front"] > 1.6 * standing_shares(half)["left front"] > 0.8
+    assert lands(walk, half) == 1.0
+
+
 def test_lands_on_the_real_dog_and_a_human(read_real):
     """The dog's walk lands all four paws in 90-97 % of its standing frames
     and reads 1.0 against itself, 0 with its forelegs swung up; a Bandai
