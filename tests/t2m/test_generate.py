@@ -4,6 +4,7 @@ one-line errors without partial output."""
 from __future__ import annotations
 
 import socket
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -716,3 +717,37 @@ def test_raw_decoding_is_the_decoder_s_own_carriage(t2m_ckpt, zoo_skeletons):
                for mode in ("never", "always")}
     np.testing.assert_array_equal(raw.rotations, decoded["never"].rotations)
     assert np.abs(raw.rotations - decoded["always"].rotations).max() > 1e-3
+
+
+def test_the_carriage_gate_in_decode_on(t2m_ckpt, zoo_skeletons, monkeypatch):
+    """With ``lands`` stubbed to 0.0, generation's default settings carry
+    the motion as ``always`` does and :data:`RAW_DECODING` as ``never``;
+    the gate reads the motion as ``ground`` puts it on the floor, and
+    where it keeps it (``lands`` 1.0) that reading is the output, not put
+    on the floor again; the rig's carriage is computed once for all."""
+    from dataclasses import replace
+    from satagraph.pipelines import generate as G
+    from satagraph.pipelines import inference
+    module = G.load_generator(str(t2m_ckpt))
+    rig = G.rig_inputs(module, read_bvh(str(zoo_skeletons["quadruped"])))
+    codes = torch.randint(0, 16, (20, module.num_quantizers),
+                          generator=torch.Generator().manual_seed(0))
+    landing, seen, calls = [0.0], [], Counter()
+    monkeypatch.setattr(inference, "lands_against",
+                        lambda motion, own: seen.append(motion) or landing[0])
+    mean_carriage, on_floor = inference.mean_carriage, G._on_floor
+    monkeypatch.setattr(inference, "mean_carriage",
+                        lambda m: calls.update(["carriage"]) or mean_carriage(m))
+    monkeypatch.setattr(G, "_on_floor", lambda m: calls.update(["floor"]) or on_floor(m))
+    default = G.GenerationSettings(smooth=0.0, root_smooth=0.0, ground=False, plant=False)
+    always = G.decode_on(module, codes, rig, replace(G.RAW_DECODING, carriage="always"))
+    never = G.decode_on(module, codes, rig, replace(G.RAW_DECODING, carriage="never"))
+    np.testing.assert_array_equal(G.decode_on(module, codes, rig, default).rotations,
+                                  always.rotations)
+    np.testing.assert_array_equal(G.decode_on(module, codes, rig).rotations, never.rotations)
+    assert calls == {"carriage": 1, "floor": 1}  # the default's gate, on the floor
+    landing[0], seen[:] = 1.0, []
+    G.decode_on(module, codes, rig, replace(G.RAW_DECODING, carriage="auto", ground=True))
+    assert calls == {"carriage": 1, "floor": 2} and len(seen) == 1
+    lowest = seen[0].global_positions()[..., 1].min(axis=1)
+    assert abs(lowest.min()) < 1e-9  # on the floor, none of its frames under it
