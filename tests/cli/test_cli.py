@@ -304,6 +304,19 @@ def test_a_carriage_no_mode_names_is_refused_before_any_file_is_read(capsys, tmp
     assert not (tmp_path / "o.bvh").exists()
 
 
+@pytest.mark.parametrize("frames", [0, 1])
+def test_retarget_refuses_a_line_rest_that_shows_no_body(capsys, shared_data, tmp_path, frames):
+    """The dog's rig without frames, or in one frame at rest, shows no
+    body (``check_shown_body``): ``retarget`` refuses both in one line
+    naming the file, as ``generate`` does, and writes nothing."""
+    dog = read_bvh(shared_data / "dog" / "D1_001_KAN01_001.bvh").slice(0, frames)
+    rig, out = tmp_path / "rig.bvh", tmp_path / "out.bvh"
+    write_bvh(dog.with_(rotations=np.broadcast_to(np.eye(3), dog.rotations.shape).copy()), rig)
+    code, _, err = run(capsys, "retarget", str(shared_data / BANDAI), "--target", str(rig),
+                       "--target-units", "cm", str(out))
+    assert code == 2 and not out.exists()
+    assert_one_line_error(err.strip().splitlines()[-1], f"{rig}: a rig ", "shows no body")
+
 def test_traceback_flag_reraises(tmp_path):
     with pytest.raises(BVHError):
         main(["--traceback", "inspect", str(tmp_path / "missing.bvh")])
