@@ -2,6 +2,9 @@
 root travel, ground contact, uprightness), on real clips and zoo walks."""
 from __future__ import annotations
 
+import copy
+from functools import lru_cache
+
 import numpy as np
 import pytest
 
@@ -21,7 +24,13 @@ from satagraph.pipelines.quality import (correlate, facing_axis, foot_slide, for
 
 def _walk(species: str, kind: str = "walk", frames: int = 90):
     """The first test-stream endless-zoo sample of a species and clip kind,
-    canonical at 30 fps."""
+    canonical at 30 fps (a copy: the tests may change it)."""
+    return copy.deepcopy(_first_sample(species, kind, frames))
+
+
+@lru_cache(maxsize=None)
+def _first_sample(species: str, kind: str, frames: int):
+    """:func:`_walk`, drawn once a worker (up to 64 zoo clips each)."""
     zoo = EndlessZoo(species=[species], noise=0.0)
     for index in range(64):
         sample = zoo.sample(0, index, frames, "test")
