@@ -649,12 +649,18 @@ def test_retarget_sanity_without_the_shared_data_says_so_in_one_line(tmp_path, m
 
 
 def test_cli_start_writes_its_table_to_out_and_leaves_the_committed_one(tmp_path):
-    # a quick check (--repeat 1) overwrote benchmarks/results/cli_start.md
+    # a quick check (--repeat 1) overwrote benchmarks/results/cli_start.md;
+    # --file spares the `satagraph demo --quick` process writing its walk
+    # (test_cli.py runs that command)
     import cli_start
+    from satagraph.data.examples import example_motion
+    from satagraph.io import write_bvh
+    write_bvh(example_motion(), tmp_path / "walk.bvh")
     before = cli_start.OUT.read_bytes()
     cli_start.main(["--repeat", "1", "--out", str(tmp_path / "c.md"),
-                    "--command", "retarget --help"])
+                    "--file", str(tmp_path / "walk.bvh"), "--command", "retarget --help"])
     assert "satagraph --help" in (tmp_path / "c.md").read_text()
+    assert "| satagraph inspect walk.bvh |" in (tmp_path / "c.md").read_text()
     assert "| satagraph retarget --help |" in (tmp_path / "c.md").read_text()
     assert cli_start.OUT.read_bytes() == before
 
