@@ -732,6 +732,19 @@ def _interruptible(cfg: Dict[str, Any]) -> Dict[str, Any]:
     return cfg
 
 
+@pytest.fixture(scope="module")
+def reference_run(_base_config: Dict[str, Any],
+                  tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The folder of an :func:`_interruptible` run never stopped, every
+    epoch's checkpoint kept: what the Ctrl-C and SIGTERM tests resume
+    towards, trained once a module (read only)."""
+    cfg = _interruptible(dict(_base_config,
+                              output_dir=str(tmp_path_factory.mktemp("reference") / "a")))
+    cfg["checkpoint"]["keep_every_epoch"] = True
+    train(cfg)
+    return Path(cfg["output_dir"])
+
+
 def _train_averages(run: Path) -> Dict[str, Dict[str, str]]:
     """``{epoch: {name: value}}`` of the training epoch averages
     (``train*_epoch``) in every CSV log of a run (a resumed run writes its
@@ -818,7 +831,7 @@ def test_resume_keeps_the_epoch_s_averages_of_metrics_logged_with_other_argument
 @pytest.mark.parametrize("where, step", [("start", 3), ("backward", 3), ("epoch_end", 4),
                                          pytest.param("validation", 4, marks=pytest.mark.slow)])
 def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
-        tiny_config: Dict[str, Any], tmp_path: Path, where: str, step: int) -> None:
+        tiny_config: Dict[str, Any], reference_run: Path, where: str, step: int) -> None:
     """Ctrl-C as step 4 starts or inside it writes ``last.ckpt`` at step 3
     (its optimizer state too), at the second epoch's end or in its
     validation at step 4 (in validation it wrote none: ``--resume`` trained
@@ -826,10 +839,7 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
     ``last.prev.ckpt``; ``--resume`` goes on from there with the losses of
     a run never stopped (the interrupted step's dropout is drawn again),
     validating every epoch (an interrupted validation again, whole)."""
-    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
-    reference["checkpoint"]["keep_every_epoch"] = True
-    train(reference)
-    full = read_loss_log(tmp_path / "a" / "losses.tsv")
+    full = read_loss_log(reference_run / "losses.tsv")
     assert max(full) == 6
     cfg = _interruptible(tiny_config)
     cfg["checkpoint"]["keep_every_epoch"] = True
@@ -849,11 +859,11 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
     scores = [{p.name: float(load_checkpoint(p)["callbacks"][next(
         k for k in load_checkpoint(p)["callbacks"] if k.startswith("ModelCheckpoint"))]
         ["current_score"]) for p in (run / "checkpoints").glob("epoch=*.ckpt")}
-        for run in (tmp_path / "a", Path(cfg["output_dir"]))]
+        for run in (reference_run, Path(cfg["output_dir"]))]
     assert len(scores[0]) == 3
     assert scores[1] == scores[0]  # at the epoch's end: its epoch=1 checkpoint was never kept
     # inside epoch 1 they were of the resumed batches alone; at its end, in no log
-    assert _train_averages(Path(cfg["output_dir"])) == _train_averages(tmp_path / "a")
+    assert _train_averages(Path(cfg["output_dir"])) == _train_averages(reference_run)
 
 
 @pytest.mark.slow
@@ -899,14 +909,12 @@ class _TerminateAt(L.Callback):
 
 
 def test_sigterm_saves_where_it_stopped_and_resume_goes_on_from_there(
-        tiny_config: Dict[str, Any], tmp_path: Path) -> None:
+        tiny_config: Dict[str, Any], reference_run: Path) -> None:
     """SIGTERM in step 3 (Lightning stops at that batch's end) writes
     ``last.ckpt`` at step 3, as Ctrl-C does: it kept the epoch-end one of
     step 2, so the steps since were trained again; ``--resume`` goes on
     with the losses of a run never stopped."""
-    reference = _interruptible(dict(tiny_config, output_dir=str(tmp_path / "a")))
-    train(reference)
-    full = read_loss_log(tmp_path / "a" / "losses.tsv")
+    full = read_loss_log(reference_run / "losses.tsv")
     cfg = _interruptible(tiny_config)
     folder = Path(cfg["output_dir"]) / "checkpoints"
     with pytest.raises(KeyboardInterrupt) as stop:
