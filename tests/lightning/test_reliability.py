@@ -745,6 +745,14 @@ def reference_run(_base_config: Dict[str, Any],
     return Path(cfg["output_dir"])
 
 
+def _epoch_scores(run: Path) -> Dict[str, float]:
+    """``{file name: monitored score}`` of a run's ``epoch=*.ckpt`` files
+    (each file read once)."""
+    return {p.name: float(next(v["current_score"] for k, v in load_checkpoint(p)[
+        "callbacks"].items() if k.startswith("ModelCheckpoint")))
+        for p in (run / "checkpoints").glob("epoch=*.ckpt")}
+
+
 def _train_averages(run: Path) -> Dict[str, Dict[str, str]]:
     """``{epoch: {name: value}}`` of the training epoch averages
     (``train*_epoch``) in every CSV log of a run (a resumed run writes its
@@ -856,10 +864,7 @@ def test_ctrl_c_saves_where_it_stopped_and_resume_goes_on_from_there(
     _, _, trainer, _ = train(cfg, resume=True)
     assert trainer.global_step == 6
     assert read_loss_log(Path(cfg["output_dir"]) / "losses.tsv") == full
-    scores = [{p.name: float(load_checkpoint(p)["callbacks"][next(
-        k for k in load_checkpoint(p)["callbacks"] if k.startswith("ModelCheckpoint"))]
-        ["current_score"]) for p in (run / "checkpoints").glob("epoch=*.ckpt")}
-        for run in (reference_run, Path(cfg["output_dir"]))]
+    scores = [_epoch_scores(run) for run in (reference_run, Path(cfg["output_dir"]))]
     assert len(scores[0]) == 3
     assert scores[1] == scores[0]  # at the epoch's end: its epoch=1 checkpoint was never kept
     # inside epoch 1 they were of the resumed batches alone; at its end, in no log
@@ -879,11 +884,6 @@ def test_ctrl_c_in_validation_after_a_step_save_resumes_with_that_validation(
         cfg["checkpoint"].update(keep_every_epoch=True, every_n_steps=2)
         return cfg
 
-    def scores(folder: Path) -> Dict[str, float]:
-        return {p.name: float(next(v["current_score"] for k, v in load_checkpoint(p)[
-            "callbacks"].items() if k.startswith("ModelCheckpoint")))
-            for p in (folder / "checkpoints").glob("epoch=*.ckpt")}
-
     train(run("a"))
     cfg = run("b")
     with pytest.raises(KeyboardInterrupt) as stop:
@@ -892,8 +892,8 @@ def test_ctrl_c_in_validation_after_a_step_save_resumes_with_that_validation(
     train(cfg, resume=True)
     assert read_loss_log(tmp_path / "b" / "losses.tsv") == \
         read_loss_log(tmp_path / "a" / "losses.tsv")
-    assert len(scores(tmp_path / "a")) == 3
-    assert scores(tmp_path / "b") == scores(tmp_path / "a")
+    assert len(_epoch_scores(tmp_path / "a")) == 3
+    assert _epoch_scores(tmp_path / "b") == _epoch_scores(tmp_path / "a")
 
 
 class _TerminateAt(L.Callback):
