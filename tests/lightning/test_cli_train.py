@@ -240,13 +240,21 @@ def test_wandb_that_does_not_import_is_one_line_before_any_data(tmp_path, monkey
     assert not (tmp_path / "run").exists()
 
 
-def test_eval_scores_a_manifest_of_test_files_only(config_overrides: List[str],
+@pytest.fixture(scope="module")
+def trained_run(config_overrides: List[str], tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A run folder of :func:`_train_args` trained by ``satagraph train``,
+    once a module, for the tests that only read it (``eval``)."""
+    run = tmp_path_factory.mktemp("trained") / "run"
+    assert main(_train_args(config_overrides, run)) == 0
+    return run
+
+
+def test_eval_scores_a_manifest_of_test_files_only(trained_run: Path,
                                                    small_manifest: Path, tmp_path: Path,
                                                    capsys: pytest.CaptureFixture) -> None:
     """A trained model carries its statistics: ``eval --data`` needs no
     training files beside the ones it scores."""
-    run = tmp_path / "run"
-    assert main(_train_args(config_overrides, run)) == 0
+    run = trained_run
     rows = small_manifest.read_text().splitlines()
     only_test = tmp_path / "test_only.tsv"
     only_test.write_text("\n".join([rows[0]] + [r for r in rows[1:] if r.endswith("\ttest")]))
@@ -257,13 +265,12 @@ def test_eval_scores_a_manifest_of_test_files_only(config_overrides: List[str],
 
 
 def test_eval_of_one_split_is_not_stopped_by_a_bad_file_of_another(
-        config_overrides: List[str], small_manifest: Path, tmp_path: Path,
+        trained_run: Path, small_manifest: Path, tmp_path: Path,
         capsys: pytest.CaptureFixture) -> None:
     """``eval --split test`` read every split: a broken training file failed
     it in one line that said to set ``data.on_error=skip``, which ``eval``
     cannot set."""
-    run = tmp_path / "run"
-    assert main(_train_args(config_overrides, run)) == 0
+    run = trained_run
     broken = tmp_path / "broken.bvh"
     broken.write_text("HIERARCHY\nROOT Hips\n{\n")
     rows = small_manifest.read_text().splitlines()
