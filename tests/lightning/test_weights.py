@@ -199,11 +199,19 @@ def _train_args(config_overrides: List[str], run: Path, *extra: str) -> List[str
             "trainer.limit_val_batches=0", *extra]
 
 
-def test_export_weights_command_and_init_from(config_overrides: List[str], zoo_clip: Motion,
-                                              tmp_path: Path,
-                                              capsys: pytest.CaptureFixture) -> None:
-    run = tmp_path / "run"
+@pytest.fixture(scope="module")
+def trained_run(config_overrides: List[str], tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A run folder of :func:`_train_args` trained by ``satagraph train``,
+    once a module, for the tests that only read it."""
+    run = tmp_path_factory.mktemp("trained") / "run"
     assert main(_train_args(config_overrides, run)) == 0
+    return run
+
+
+def test_export_weights_command_and_init_from(config_overrides: List[str], trained_run: Path,
+                                              zoo_clip: Motion, tmp_path: Path,
+                                              capsys: pytest.CaptureFixture) -> None:
+    run = trained_run
     out = tmp_path / "w.safetensors"
     assert main(["--traceback", "export-weights", str(run), str(out), "--half",
                  "--minutes", "0.5", "--machine", "2-core CPU", "--command", "pytest"]) == 0
@@ -267,14 +275,12 @@ def test_builtin_notice_points_to_what_an_installed_package_has(kind: str, name:
 
 
 def test_init_normalizer_keeps_the_checkpoints_or_refits(config_overrides: List[str],
-                                                         tmp_path: Path,
+                                                         trained_run: Path, tmp_path: Path,
                                                          capsys: pytest.CaptureFixture) -> None:
     """``--init-normalizer checkpoint`` starts from the checkpoint's feature
     statistics (here made unlike the data's), the default refits them on
     the config's data; without ``--init-from`` the flag is refused."""
-    run = tmp_path / "run"
-    assert main(_train_args(config_overrides, run)) == 0
-    module = load_module(str(run / "checkpoints" / "last.ckpt"))
+    module = load_module(str(trained_run / "checkpoints" / "last.ckpt"))
     fitted = {k: v.clone() for k, v in module.state_dict().items() if k.startswith("normalizer.")}
     with torch.no_grad():
         module.normalizer.static_std.mul_(2.0)
