@@ -632,19 +632,29 @@ def test_a_run_that_ends_while_another_starts_is_not_replaced(
     assert (run_dir / "checkpoints" / LAST).read_bytes() == b"the first run's"
 
 
+@pytest.fixture(scope="module")
+def one_step_run(_base_config: Dict[str, Any],
+                 tmp_path_factory: pytest.TempPathFactory) -> Dict[str, Any]:
+    """The config of a one-epoch, one-batch run, trained once a module for
+    the resumes refused before they touch it."""
+    cfg = copy.deepcopy(_base_config)
+    cfg["output_dir"] = str(tmp_path_factory.mktemp("one_step") / "run")
+    cfg["trainer"].update(max_epochs=1, limit_train_batches=1)
+    train(cfg)
+    return cfg
+
+
 @pytest.mark.parametrize("change, said", [
     ({"model": {"hidden_channels": 48}}, "model.hidden_channels=32 (here 48)"),
     ({"data": {"sources": ["elsewhere"]}}, "data.sources="),
     # the optimiser resumed with its own learning rate while W&B logged the new one
     ({"optim": {"lr": 0.0005}}, "(here 0.0005: a resume keeps the optimiser's own state)"),
 ])
-def test_resume_with_another_model_or_data_is_refused(tiny_config: Dict[str, Any],
+def test_resume_with_another_model_or_data_is_refused(one_step_run: Dict[str, Any],
                                                       change: Dict[str, Any], said: str) -> None:
     """``--resume`` with other model settings (a 133-line size mismatch) or
     other data (silently re-recorded): one line, the run untouched."""
-    cfg = copy.deepcopy(tiny_config)
-    cfg["trainer"].update(max_epochs=1, limit_train_batches=1)
-    _, _, _, run_dir = train(cfg)
+    cfg, run_dir = one_step_run, Path(one_step_run["output_dir"])
     before = (run_dir / "checkpoints" / LAST).read_bytes()
     other = copy.deepcopy(cfg)
     for section, values in change.items():
