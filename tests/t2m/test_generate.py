@@ -162,7 +162,7 @@ def test_an_empty_text_generates_for_the_skeleton_alone(t2m_ckpt, zoo_skeletons,
     """No text: a motion for the skeleton alone, which the text changes (a
     barely trained model may agree with itself on some seeds: any of four
     must differ; strong guidance makes the text's share of the logits
-    count)."""
+    count; the seeds after the first that differs would not change that)."""
     differ = []
     for seed in range(4):
         out, text = tmp_path / f"none{seed}.bvh", tmp_path / f"text{seed}.bvh"
@@ -172,6 +172,8 @@ def test_an_empty_text_generates_for_the_skeleton_alone(t2m_ckpt, zoo_skeletons,
         assert main(argv + ["--text", TEXT, str(text)]) == 0
         _same_rig(out, zoo_skeletons["bird"])
         differ.append(out.read_bytes() != text.read_bytes())
+        if differ[-1]:
+            break
     assert any(differ)
 
 
