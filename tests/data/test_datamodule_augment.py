@@ -22,10 +22,12 @@ def zoo(tmp_path_factory) -> Path:
     return out / "manifest.tsv"
 
 
-def datamodule(zoo: Path, tmp_path: Path, augment=None, seed: int = 0,
+def datamodule(zoo: Path, augment=None, seed: int = 0,
                window: int = 16) -> MotionDataModule:
+    """A set-up data module of the zoo, its features cached beside it (one
+    cache a module: each file is preprocessed once)."""
     dm = MotionDataModule(str(zoo), window=window, stride=window, batch_size=8,
-                          semantic_encoder="offline", cache_dir=str(tmp_path / "cache"),
+                          semantic_encoder="offline", cache_dir=str(zoo.parent / "cache"),
                           augment=augment, seed=seed)
     dm.setup("fit")
     return dm
@@ -56,16 +58,16 @@ def test_config_section():
         WindowAugment.from_config({"low": 1.2, "high": 0.8})
 
 
-def test_off_by_default(zoo, tmp_path):
-    dm = datamodule(zoo, tmp_path)
+def test_off_by_default(zoo):
+    dm = datamodule(zoo)
     assert dm.augment is None
     assert not dm.train_dataloader().sampler.keys  # plain indices
 
 
-def test_no_op_augmentation_is_lossless(zoo, tmp_path):
+def test_no_op_augmentation_is_lossless(zoo):
     """All probabilities 0: the window goes through motion and back
     unchanged, including the velocities of its first frame."""
-    dm = datamodule(zoo, tmp_path, augment={"scale": 0.0, "mirror": 0.0})
+    dm = datamodule(zoo, augment={"scale": 0.0, "mirror": 0.0})
     ds = dm.datasets["train"]
     for idx in (0, 1, 2):  # starts 0, 16, 32 of the first file
         raw, aug = ds[idx], ds[(0, idx)]
@@ -75,10 +77,10 @@ def test_no_op_augmentation_is_lossless(zoo, tmp_path):
                                        atol=1e-4, rtol=1e-4)
 
 
-def test_mirror_reflects_the_window(zoo, tmp_path):
+def test_mirror_reflects_the_window(zoo):
     """Mirroring reflects positions in the facing frame and swaps the data
     of left and right joints; the turning rate and sideways speed flip."""
-    dm = datamodule(zoo, tmp_path, augment={"scale": 0.0, "mirror": 1.0})
+    dm = datamodule(zoo, augment={"scale": 0.0, "mirror": 1.0})
     ds = dm.datasets["train"]
     idx = len(ds) - 1  # a quadruped (its root frame is not aligned with +Z)
     raw, aug = ds[idx], ds[(0, idx)]
@@ -90,10 +92,10 @@ def test_mirror_reflects_the_window(zoo, tmp_path):
     torch.testing.assert_close(aug.root[:, 2:], raw.root[:, 2:], atol=1e-4, rtol=1e-4)
 
 
-def test_training_batches_are_augmented(zoo, tmp_path):
+def test_training_batches_are_augmented(zoo):
     """Training batches hold skeletons of other joint counts and
     proportions than their source files', with finite features."""
-    dm = datamodule(zoo, tmp_path, augment=ALL_OPS)
+    dm = datamodule(zoo, augment=ALL_OPS)
     ds = dm.datasets["train"]
     statics = {f.path: torch.from_numpy(s.static).float()
                for f, s in zip(ds.files, ds.features)}
@@ -116,8 +118,8 @@ def test_training_batches_are_augmented(zoo, tmp_path):
     assert clips == 24 and joints_changed > 0 and proportions_changed > 0
 
 
-def test_augmented_skeletons_differ_from_sources(zoo, tmp_path):
-    dm = datamodule(zoo, tmp_path, augment={"scale": 1.0, "mirror": 0.0})
+def test_augmented_skeletons_differ_from_sources(zoo):
+    dm = datamodule(zoo, augment={"scale": 1.0, "mirror": 0.0})
     ds = dm.datasets["train"]
     for idx in range(0, len(ds), 5):
         raw, aug = ds[idx], ds[(0, idx)]
@@ -127,9 +129,9 @@ def test_augmented_skeletons_differ_from_sources(zoo, tmp_path):
         assert aug.dynamic.shape == raw.dynamic.shape
 
 
-def test_val_and_test_untouched(zoo, tmp_path):
-    plain = datamodule(zoo, tmp_path)
-    aug = datamodule(zoo, tmp_path, augment=ALL_OPS)
+def test_val_and_test_untouched(zoo):
+    plain = datamodule(zoo)
+    aug = datamodule(zoo, augment=ALL_OPS)
     for split in ("val", "test"):
         assert aug.datasets[split].augment is None
         loaders = plain._loader(split, False), aug._loader(split, False)
@@ -140,20 +142,20 @@ def test_val_and_test_untouched(zoo, tmp_path):
     torch.testing.assert_close(plain.normalizer.dynamic_std, aug.normalizer.dynamic_std)
 
 
-def test_deterministic_given_seed(zoo, tmp_path):
+def test_deterministic_given_seed(zoo):
     def first(dm: MotionDataModule, epoch: int):
         loader = dm.train_dataloader()
         loader.sampler.set_epoch(epoch)
         return batches(loader, 1)[0]
 
-    a = first(datamodule(zoo, tmp_path, augment=ALL_OPS, seed=3), 0)
-    b = first(datamodule(zoo, tmp_path, augment=ALL_OPS, seed=3), 0)
+    a = first(datamodule(zoo, augment=ALL_OPS, seed=3), 0)
+    b = first(datamodule(zoo, augment=ALL_OPS, seed=3), 0)
     assert a.clip_num_joints.tolist() == b.clip_num_joints.tolist()
     torch.testing.assert_close(a.x, b.x)
     torch.testing.assert_close(a.joint_static, b.joint_static)
     # Same window, another epoch or seed: another skeleton.
-    ds = datamodule(zoo, tmp_path, augment={"scale": 1.0}, seed=3).datasets["train"]
+    ds = datamodule(zoo, augment={"scale": 1.0}, seed=3).datasets["train"]
     assert not torch.allclose(ds[(0, 4)].static, ds[(1, 4)].static)
-    other = datamodule(zoo, tmp_path, augment={"scale": 1.0}, seed=4).datasets["train"]
+    other = datamodule(zoo, augment={"scale": 1.0}, seed=4).datasets["train"]
     assert not torch.allclose(ds[(0, 4)].static, other[(0, 4)].static)
     torch.testing.assert_close(ds[(2, 4)].static, ds[(2, 4)].static)
