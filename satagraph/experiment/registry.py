@@ -243,12 +243,22 @@ def class_arguments(cls: Optional[type], hparams: Dict[str, Any]) -> Dict[str, A
     """The hyperparameters beyond the five sections that :obj:`cls`'s
     constructor takes (all of them when it takes ``**kwargs``; none for a
     builder function, :obj:`cls` ``None``), as Lightning's
-    ``load_from_checkpoint`` passes them."""
+    ``load_from_checkpoint`` passes them; a list where the constructor's
+    default is a tuple is a tuple again (:func:`_tuple_defaults`)."""
     if cls is None:
         return {}
     named, takes_any = own_arguments(cls)
-    return {k: v for k, v in hparams.items()
-            if k not in SECTION_NAMES and (takes_any or k in named)}
+    tuples = _tuple_defaults(cls)
+    return {k: tuple(v) if k in tuples and isinstance(v, list) else v
+            for k, v in hparams.items() if k not in SECTION_NAMES and (takes_any or k in named)}
+
+
+def _tuple_defaults(cls: type) -> set:
+    """The constructor arguments of :obj:`cls` whose default is a tuple: a
+    weights file keeps hyperparameters as JSON, whose lists they are read
+    back as (:func:`class_arguments` makes them tuples again)."""
+    params = inspect.signature(cls.__init__).parameters.values()
+    return {p.name for p in params if isinstance(p.default, tuple)}
 
 
 def class_builder(cls: type) -> Builder:

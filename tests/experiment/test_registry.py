@@ -280,14 +280,14 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     @register_module("test_extra")
     class Weighted(SATAVAEModule):
         def __init__(self, model, loss=None, optim=None, fps=30.0, meta=None,
-                     z_weight: float = 0.1) -> None:
+                     z_weight: float = 0.1, taps: tuple = (1,)) -> None:
             super().__init__(model, loss, optim, fps, meta)
-            self.z_weight = z_weight
+            self.z_weight, self.taps = z_weight, taps
 
     names.append("test_extra")
     built = build_module(load_config("tiny", ["module=test_extra", "model.semantic_channels=0"]))
     module = Weighted(**{k: built.hparams[k] for k in ("model", "loss", "optim", "fps",
-                                                       "meta")}, z_weight=0.7)
+                                                       "meta")}, z_weight=0.7, taps=(2, 3))
     module.normalizer.fitted.fill_(True)
     path = tmp_path / "weighted.ckpt"
     save_module_checkpoint(module, path)
@@ -300,7 +300,10 @@ def test_load_module_keeps_a_subclass_s_own_hyperparameters(names, tmp_path):
     save_weights(module, tmp_path / "weighted.safetensors")
     assert read_weights_metadata(tmp_path / "weighted.safetensors")[
         "hyper_parameters"]["z_weight"] == 0.7
-    assert load_module(str(tmp_path / "weighted.safetensors")).z_weight == 0.7
+    from_file = load_module(str(tmp_path / "weighted.safetensors"))
+    # JSON has no tuples: the file's [2, 3] is the tuple the constructor defaults to again
+    assert from_file.z_weight == 0.7 and from_file.taps == (2, 3)
+    assert load_module(str(path)).taps == (2, 3)
     module.hparams["fn"] = print  # no weights file holds it: said, left out
     with pytest.warns(UserWarning, match=r"^hyper_parameters.fn: builtin_function_or_method "
                       "is not a plain value: left out"):
