@@ -329,6 +329,9 @@ def collate_clips(clips: List[MotionClip]) -> FrameBatch:
     Returns:
         FrameBatch: see :class:`FrameBatch` for the attributes.
     """
+    if isinstance(clips, MotionClip):  # a loader with batch_size=None hands each over alone
+        raise TypeError("collate_clips: a list of clips, not one MotionClip (ClipLoader("
+                        "batch_size=None) hands over each item as it is: batch_size=1)")
     if not clips:
         raise ValueError("collate_clips: no clips")
     for i, clip in enumerate(clips):

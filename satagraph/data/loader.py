@@ -1,7 +1,7 @@
 r"""A data loader of motion clips, as PyG's ``DataLoader`` is of graphs."""
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Optional
 
 from torch.utils.data import DataLoader, Dataset
 
@@ -27,7 +27,8 @@ class ClipLoader(DataLoader):
     Args:
         dataset (Dataset): Clips (a :class:`~satagraph.data.MotionDataset`,
             a list of :class:`~satagraph.data.MotionClip`, ...).
-        batch_size (int): Clips per batch. (default: :obj:`1`)
+        batch_size (int, optional): Clips per batch (:obj:`None`: each item
+            of :obj:`dataset` is already a list of clips). (default: :obj:`1`)
         shuffle (bool): Draw the clips in a new order every epoch.
             (default: :obj:`False`)
         **kwargs: Other arguments of :class:`torch.utils.data.DataLoader`
@@ -39,7 +40,7 @@ class ClipLoader(DataLoader):
             batching is :class:`torch.utils.data.DataLoader`).
     """
 
-    def __init__(self, dataset: Dataset, batch_size: int = 1, shuffle: bool = False,
+    def __init__(self, dataset: Dataset, batch_size: Optional[int] = 1, shuffle: bool = False,
                  **kwargs: Any) -> None:
         if "collate_fn" in kwargs:
             raise TypeError("ClipLoader: collate_fn is collate_clips; for a batching of your "

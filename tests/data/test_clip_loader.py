@@ -41,3 +41,15 @@ def test_pyg_s_loader_refuses_clips_and_ours_refuses_another_collate():
         next(iter(PyGDataLoader(make_clips(), batch_size=2)))
     with pytest.raises(TypeError, match="^ClipLoader: collate_fn is collate_clips"):
         ClipLoader(make_clips(), collate_fn=list)
+
+
+def test_without_batch_size_each_item_is_a_list_of_clips():
+    """``batch_size=None`` hands each item over as it is: a list of clips
+    is one batch; a clip alone is refused in one line, not "'MotionClip'
+    object is not iterable"."""
+    clips = make_clips()
+    lists = [clips[:2], clips[2:]]
+    batches = list(ClipLoader(lists, batch_size=None))
+    assert [b.meta for b in batches] == [collate_clips(c).meta for c in lists]
+    with pytest.raises(TypeError, match=r"^collate_clips: a list of clips, not one MotionClip"):
+        next(iter(ClipLoader(clips, batch_size=None)))
