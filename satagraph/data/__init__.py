@@ -16,6 +16,6 @@ _EXPORTS = {**dict.fromkeys(_FEATURES, "satagraph.data.features"),
             "CaptionDataModule": "satagraph.data.caption_datamodule",
             "register_window_transform": "satagraph.data.window_transform"}
 __all__ = ["MotionClip", "FrameGraph", "FrameBatch", "collate_clips", "ClipLoader",
-           "FeatureNormalizer", "MotionDataset", "MotionDataModule", "CaptionDataModule", "register_window_transform",
-           *_FEATURES]
+           "FeatureNormalizer", "MotionDataset", "MotionDataModule", "CaptionDataModule",
+           "register_window_transform", *_FEATURES]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -317,6 +317,7 @@ def test_retarget_refuses_a_line_rest_that_shows_no_body(capsys, shared_data, tm
     assert code == 2 and not out.exists()
     assert_one_line_error(err.strip().splitlines()[-1], f"{rig}: a rig ", "shows no body")
 
+
 def test_traceback_flag_reraises(tmp_path):
     with pytest.raises(BVHError):
         main(["--traceback", "inspect", str(tmp_path / "missing.bvh")])
