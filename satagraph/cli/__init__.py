@@ -447,6 +447,9 @@ def _message(err: BaseException) -> str:
 
 #: How torch's CPU allocator says that it failed (a RuntimeError, not a MemoryError).
 _CPU_ALLOCATION = re.compile(r"can't allocate memory: you tried to allocate (\d+) bytes")
+#: How torch's GPU allocators (CUDA, MPS) say the size that failed, in a
+#: message of several sentences about the device's memory.
+_GPU_ALLOCATION = re.compile(r"Tried to allocate ([\d.]+ (?:[KMGT]i?B|bytes))")
 
 
 def _out_of_memory(err: BaseException) -> Optional[str]:
@@ -456,6 +459,9 @@ def _out_of_memory(err: BaseException) -> Optional[str]:
     if asked:
         return f"out of memory: {int(asked.group(1)) / 2 ** 30:.1f} GiB asked for at once"
     if isinstance(err, MemoryError) or type(err).__name__ == "OutOfMemoryError":
+        asked = _GPU_ALLOCATION.search(str(err))
+        if asked:
+            return f"out of memory on the GPU: {asked.group(1)} asked for at once"
         return f"out of memory: {' '.join(str(err).split()[:12]) or type(err).__name__}"
     return None
 

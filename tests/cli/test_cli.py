@@ -261,6 +261,30 @@ def test_out_of_memory_is_one_line(capsys, monkeypatch, tiny_file, tmp_path):
         main(["reconstruct", str(tiny_file), str(tmp_path / "o.bvh")])
 
 
+@pytest.mark.parametrize("said, asked", [
+    ("CUDA out of memory. Tried to allocate 20.00 GiB. GPU 0 has a total capacity of 139.81 "
+     "GiB of which 3.06 GiB is free. Including non-PyTorch memory, this process has 136.74 GiB "
+     "memory in use.", "20.00 GiB"),
+    ("MPS backend out of memory (MPS allocated: 17.60 GB, other allocations: 1.20 GB, max "
+     "allowed: 18.13 GB). Tried to allocate 256.00 MB on private pool.", "256.00 MB")],
+    ids=["cuda", "mps"])
+def test_out_of_memory_on_a_gpu_says_what_was_asked_for(capsys, monkeypatch, tiny_file,
+                                                        tmp_path, said, asked):
+    """torch's GPU allocators say the size in a paragraph about the
+    device's memory: the line was its first twelve words, cut mid-sentence
+    ('... GPU 0 has')."""
+    import satagraph.cli.train as train
+
+    def fail(args):
+        raise torch.OutOfMemoryError(said)
+
+    monkeypatch.setattr(train, "run_reconstruct", fail)
+    code, out, err = run(capsys, "reconstruct", str(tiny_file), str(tmp_path / "o.bvh"))
+    assert code == 2 and out == ""
+    assert err == (f"satagraph: error: out of memory on the GPU: {asked} asked for at once "
+                   "(a shorter --window needs less)\n")
+
+
 def test_error_missing_file(capsys, tmp_path):
     missing = tmp_path / "missing.bvh"
     for argv in (["inspect", str(missing)],
