@@ -654,9 +654,10 @@ def train(cfg: Dict[str, Any], resume: bool = False, init_from: Optional[str] = 
             # epoch) has no best epoch yet: Lightning said so naming every logged key
             warnings.filterwarnings("ignore", message=r"`ModelCheckpoint\(monitor=.* could not "
                                     "find the monitored key")
-            if last is not None:  # a resume's own folder, which it expects full
-                warnings.filterwarnings("ignore", message="Checkpoint directory .* exists and "
-                                        "is not empty")
+            if last is not None:  # a resume's own folder, which it expects full (only it)
+                own = re.escape(os.path.realpath(run_dir / "checkpoints"))
+                warnings.filterwarnings("ignore", message=f"Checkpoint directory {own} exists "
+                                        "and is not empty")
             _fit_interruptibly(trainer, module, fit_dm, last)
     return module, dm, trainer, run_dir
 

@@ -7,6 +7,7 @@ import warnings
 from pathlib import Path
 
 import pytest
+from lightning.pytorch.callbacks import ModelCheckpoint
 
 from satagraph.datasets.zoo import write_zoo
 from satagraph.experiment.config import load_config
@@ -31,10 +32,15 @@ def test_a_resume_is_not_warned_of_its_own_checkpoints(tmp_path: Path,
         train(_config(tmp_path, 1))
         with warnings.catch_warnings(record=True) as seen:
             warnings.simplefilter("always")
-            _, _, trainer, _ = train(_config(tmp_path, 2), resume=True)
+            mine = tmp_path / "mine"  # a checkpoint folder of one's own, not empty: said
+            mine.mkdir()
+            (mine / "other.ckpt").write_bytes(b"")
+            _, _, trainer, _ = train(_config(tmp_path, 2), resume=True,
+                                     callbacks=[ModelCheckpoint(dirpath=str(mine))])
     assert trainer.global_step == 2  # it did go on, from the first run's step
     said = [str(w.message) for w in seen]
-    assert not [m for m in said if "exists and is not empty" in m], said
+    assert [m for m in said if "exists and is not empty" in m] == [
+        f"Checkpoint directory {mine.resolve()} exists and is not empty."], said
     infos = [r.getMessage() for r in caplog.records if r.name == LIGHTNING_INFO]
     assert any("GPU available" in m for m in infos)  # Lightning's own lines stay
     assert not [m for m in infos if "litlogger" in m], infos
