@@ -41,11 +41,17 @@ def demo_table(summary: Dict) -> str:
     stride and down from the built-in model, then after the fine-tune.
 
     Raises:
-        ValueError: If the summary lacks the built-in model's retargets.
+        ValueError: If the summary lacks the built-in model's retargets
+            (none, or the retargets of a model trained from scratch).
     """
+    names = [step["name"] for step in summary.get("steps", [])]
     steps = {step["name"]: step for step in summary.get("steps", [])}
     if "retarget" not in steps:
-        raise ValueError("demo_record: the summary has no 'retarget' step (a --quick run?)")
+        raise ValueError("demo_record: the summary has no 'retarget' step (not one that "
+                         "`satagraph demo` wrote?)")
+    if "train" in steps and names.index("train") < names.index("retarget"):
+        raise ValueError("demo_record: the summary's retargets are of a model trained from "
+                         "scratch (demo --from-scratch or --data), not of the built-in one")
     tuned = steps.get("fine-tuned", {}).get("quality", {})
     lines = ["| demo retarget | steps (built-in) | travel | stride | down | steps (after the "
              "fine-tune) | travel | stride | down |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]

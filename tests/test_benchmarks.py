@@ -803,3 +803,9 @@ def test_demo_record_tables_a_demo_summary_and_refuses_one_without_retargets(tmp
     assert demo_record.main([str(path), "--out", str(tmp_path / "quick")]) == 2
     assert "no 'retarget' step" in capsys.readouterr().err
     assert not (tmp_path / "quick.md").exists()
+    # demo --from-scratch (or --data): its one 'retarget' step is the trained model's, after it
+    scratch = [summary["steps"][1], dict(summary["steps"][0])]
+    path.write_text(json.dumps(dict(summary, steps=scratch)))
+    assert demo_record.main([str(path), "--out", str(tmp_path / "scratch")]) == 2
+    assert "a model trained from scratch" in capsys.readouterr().err
+    assert not (tmp_path / "scratch.md").exists()
