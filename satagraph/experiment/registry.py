@@ -362,7 +362,7 @@ def build_registered(name: str, sections: ModuleSections):
 
 
 __all__ = ["ModuleSections", "ModuleEntry", "Builder", "PLUGINS", "PLUGIN_VARIABLE",
-           "import_user_plugins", "register_module",
+           "import_user_plugins", "register_module", "registered_name",
            "unregister_module", "module_entry", "module_class", "registered_names",
            "build_registered", "class_arguments", "class_builder", "own_arguments",
            "check_arguments"]

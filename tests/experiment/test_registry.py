@@ -334,6 +334,30 @@ def test_a_checkpoint_of_an_unregistered_module_says_the_plugin_variable_whole(
     assert "\n" not in str(err.value)
 
 
+def test_registered_name_is_the_class_s_one_name_or_none(names):
+    """The name a class is registered under: not its parent's (a subclass
+    registered under none), none for a class registered under two names
+    or only built by a builder function; exported with the registry."""
+    from satagraph.experiment import registry
+    from satagraph.lightning import SATARVQModule, SATAVAEModule
+
+    class Own(SATAVAEModule):
+        pass
+
+    assert "registered_name" in registry.__all__
+    assert registry.registered_name(SATAVAEModule) == "vae"
+    assert registry.registered_name(Own) is None
+    register_module("test_own_once", Own)
+    names.append("test_own_once")
+    assert registry.registered_name(Own) == "test_own_once"
+    register_module("test_own_twice", Own)
+    names.append("test_own_twice")
+    assert registry.registered_name(Own) is None
+    register_module("test_rvq_builder", lambda sections: SATARVQModule(**sections.kwargs()))
+    names.append("test_rvq_builder")
+    assert registry.registered_name(SATARVQModule) == "rvq"
+
+
 def test_load_module_says_a_checkpoint_names_no_module(names, tmp_path):
     """A module of one's own built without ``meta.module`` (by its
     constructor, trained with one's own Trainer) was read as the built-in
