@@ -86,8 +86,16 @@ def side_markers(name: str) -> List[Marker]:
 
     Returns:
         list[tuple[int, int, str]]: Start, end and lower-case side word
-        (``"l"``, ``"left"``, ``"fr"``, ...) of each marker.
+        (``"l"``, ``"left"``, ``"fr"``, ...) of each marker (a new list
+        each call: the markers are cached per name).
     """
+    return list(_side_markers(name))
+
+
+@lru_cache(maxsize=16384)
+def _side_markers(name: str) -> Tuple[Marker, ...]:
+    """:func:`side_markers`, cached on the name (every rig read, mirror
+    and canonicalisation asks again for the same names)."""
     words, codes = [], []
     for start, piece in _pieces(name):
         low = piece.lower()
@@ -101,7 +109,7 @@ def side_markers(name: str) -> List[Marker]:
             side = None if glued else _glued_side(low)
             words += glued or ([(start, start + len(side), side)] if side else [])
     words += [(m.start(), m.end(), m.group()) for m in _CHARACTERS.finditer(name)]
-    return sorted(words) or codes
+    return tuple(sorted(words) or codes)
 
 
 @lru_cache(maxsize=4096)
@@ -132,7 +140,7 @@ def side_of(name: str) -> Optional[str]:
     """``"left"``, ``"right"`` or ``None``: the side of a joint name
     (``"mixamorig:LeftUpLeg"``, ``"thigh.L"``, ``"HipL"`` -> ``"left"``;
     ``"Hips"``, ``"Ladder"`` -> ``None``)."""
-    return side_of_words(word for _, _, word in side_markers(name))
+    return side_of_words(word for _, _, word in _side_markers(name))
 
 
 def _mirror_case(text: str) -> str:
@@ -148,7 +156,7 @@ def swap_side(name: str) -> str:
     ``"thigh.R"``, ``"FL_Foot"`` -> ``"FR_Foot"``); names without a side
     come back unchanged."""
     out, pos = [], 0
-    for start, end, _ in side_markers(name):
+    for start, end, _ in _side_markers(name):
         out += [name[pos:start], _mirror_case(name[start:end])]
         pos = end
     return "".join(out) + name[pos:]

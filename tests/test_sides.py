@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from satagraph.sides import side_of, side_pairs, swap_side
+from satagraph.sides import _side_markers, side_markers, side_of, side_pairs, swap_side
 from satagraph.semantics.lexicon import parse_name
 from satagraph.transforms.augment import mirror_pairs
 from satagraph.transforms.canonical import lateral_pairs
@@ -60,6 +60,23 @@ def test_side_of_and_swap_side(name, side, other):
     assert swap_side(name) == other
     assert swap_side(other) == name
     assert side_of(other) == {"left": "right", "right": "left", None: None}[side]
+
+
+def test_side_markers_are_cached_and_returned_as_new_lists():
+    """Every mirror, canonicalisation and rig read asks again for the same
+    names: the markers are cached (bounded), equal to a fresh reading, and
+    a caller that edits the list it got does not change the next answer."""
+    names = [name for name, _, _ in TABLE]
+    fresh = [list(_side_markers.__wrapped__(n)) for n in names]
+    assert [side_markers(n) for n in names] == fresh
+    hits = _side_markers.cache_info().hits
+    got = side_markers("Bip01 L Thigh")
+    assert got == [(6, 7, "l")] and _side_markers.cache_info().hits == hits + 1
+    got.append((0, 1, "r"))
+    got[0] = (0, 0, "right")
+    assert side_markers("Bip01 L Thigh") == [(6, 7, "l")]
+    assert swap_side("Bip01 L Thigh") == "Bip01 R Thigh"
+    assert _side_markers.cache_info().maxsize == 16384
 
 
 @pytest.mark.parametrize("name,side,other", TABLE)
