@@ -395,10 +395,12 @@ def is_noise_token(token: str, suffix: bool = False) -> bool:
     return len(token) <= 4 and bool(_ODD_CASE.search(token)) and not real
 
 
+@lru_cache(maxsize=16384)
 def drop_noise_tokens(name: str) -> str:
     """Remove the tokens of a raw name that are not words (see
     :func:`is_noise_token`), each with the separator before it; namespaces
-    and rig prefixes are kept for :func:`strip_prefixes`.
+    and rig prefixes are kept for :func:`strip_prefixes` (cached; depends
+    only on the name).
 
     Args:
         name: A raw joint name.

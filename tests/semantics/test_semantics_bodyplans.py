@@ -265,6 +265,18 @@ def test_noise_tokens(name, clean):
     assert drop_noise_tokens(name) == clean
 
 
+def test_noise_tokens_are_cached_per_name():
+    """Every mirror and rig read asks again for the same names: the second
+    call is a cache hit, equal to a fresh reading; the cache is bounded."""
+    names = ["Tail_01__x7Q", "Foot_a1b2c3", "Bip01__lg2", "LeftHandIndex1", "Toe0__abc_end"]
+    first = [drop_noise_tokens(n) for n in names]
+    hits = drop_noise_tokens.cache_info().hits
+    assert [drop_noise_tokens(n) for n in names] == first
+    assert drop_noise_tokens.cache_info().hits == hits + len(names)
+    assert first == [drop_noise_tokens.__wrapped__(n) for n in names]
+    assert drop_noise_tokens.cache_info().maxsize == 16384
+
+
 def test_noise_never_becomes_a_side_or_a_word():
     assert is_noise_token("x7L") and is_noise_token("r4T") and is_noise_token("v12")
     assert not is_noise_token("L") and not is_noise_token("Finger0Nub")
