@@ -134,7 +134,8 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
 
     Returns:
         int: 0 when every file went through, 2 when any failed (each said
-        on stderr as it failed, and listed at the end).
+        on stderr as it failed, and listed at the end). A Ctrl-C says on
+        stderr how many files went through before it, and is raised on.
 
     Raises:
         ValueError: :obj:`output` is a file or named as one (``.bvh``), or
@@ -167,7 +168,19 @@ def run_over_folder(source: PathLike, output: PathLike, one: Callable[[str, str]
         print(line or f"{out}: skipped, another run makes it or has made it (--skip-existing)")
         return None if line is not None else out
 
-    made, failed = each_kept(todo, write, failure_line, traceback)
+    done: List[Path] = []
+
+    def counted(path: Path) -> Optional[Path]:
+        kept = write(path)
+        done.append(path)
+        return kept
+
+    try:
+        made, failed = each_kept(todo, counted, failure_line, traceback)
+    except KeyboardInterrupt:  # said, then the command's own interrupted line
+        print(f"{verb} {len(done)} of {len(files)} files into {output} before the interrupt "
+              "(--skip-existing goes on with the rest)", file=sys.stderr)
+        raise
     left = [out for out in made if out is not None]
     whole = sum(map(complete_output, left))  # at the end: that run may fail on one
     print(f"{verb} {len(made) - len(left)} of {len(files)} files into {output} in "

@@ -389,3 +389,25 @@ def test_inspect_a_folder_s_flags_win_over_its_manifest(tmp_path: Path, capsys) 
     assert main(["inspect", str(folder), "--json", "--units", "0.5"]) == 0
     for info in json.loads(capsys.readouterr().out):  # the manifest's axis where no flag
         assert (info["rig"]["up_axis"], info["rig"]["scale"]) == ("+Z", pytest.approx(0.5))
+
+
+def test_an_interrupted_folder_run_says_how_far_it_went(tmp_path: Path, capsys) -> None:
+    """A Ctrl-C in a folder run said only 'interrupted (outputs are written
+    whole or not at all)', not how many files were done."""
+    from satagraph.cli.folders import run_over_folder
+    src = tmp_path / "in"
+    src.mkdir()
+    for i in range(5):
+        (src / f"{i}.bvh").write_text("x")
+
+    def one(source: str, output: str) -> str:
+        if source.endswith("3.bvh"):
+            raise KeyboardInterrupt
+        Path(output).write_text("made")
+        return f"wrote {output}"
+
+    with pytest.raises(KeyboardInterrupt):
+        run_over_folder(src, tmp_path / "out", one, "made")
+    printed = capsys.readouterr()
+    assert f"made 3 of 5 files into {tmp_path / 'out'} before the interrupt" in printed.err
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.bvh")) == ["0.bvh", "1.bvh", "2.bvh"]
