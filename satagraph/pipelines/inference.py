@@ -22,7 +22,7 @@ from satagraph.transforms.foot_plant import plant_feet
 from satagraph.transforms.mirror_average import (average_readings, mirror_back, mirror_canonical,
                                                  place_reading)
 from satagraph.transforms.still_root import hold_still_source, settle_root
-from satagraph.transforms.carriage import CARRIAGE_MODES, carry_like, mean_carriage  # noqa: F401
+from satagraph.transforms.carriage import CARRIAGE_MODES, carry_like, mean_carriage
 from satagraph.transforms.ground import (STANDING_SHARE, ground_level,  # noqa: F401
                                          ground_retarget, stands, standing_frame,
                                          standing_frames)
@@ -30,7 +30,7 @@ from satagraph.data.clip import MotionClip
 from satagraph.data.collate import collate_clips
 from satagraph.data.dataset import data_facing_smooth, window_starts
 from satagraph.data.features import DYNAMIC_CHANNELS, MotionFeatures, features_to_motion, motion_to_features
-from satagraph.data.validate import (check_features, check_motion, check_shown_body,  # noqa: F401
+from satagraph.data.validate import (check_features, check_motion, check_shown_body,
                                      check_windows, default_windows)
 from satagraph.semantics.evidence import call_semantic, evidence_from_features
 from satagraph.motion import Motion, require_motion
