@@ -1,4 +1,4 @@
 """``python -m satagraph``: the command line."""
-from satagraph.cli import main
+from satagraph.cli import run
 
-raise SystemExit(main())
+run()

@@ -503,11 +503,11 @@ def _check_windows(args) -> None:
 
 def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
     from satagraph.cli.arguments import read_with_rig
-    from satagraph.data.validate import check_skeleton
+    from satagraph.data.validate import check_motion
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     motion = read_with_rig(source, args)
-    check_skeleton(motion, source)  # before a model is chosen for it (auto) and loaded
+    check_motion(motion, source)  # before a model is chosen for it (auto) and loaded
     module, embed = _load(args, [motion], [source], models)
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
     from satagraph.pipelines.inference import reconstruct_motion
@@ -543,11 +543,11 @@ def _retarget_file(args, source_path: str, target, output: str, models: dict,
     a folder), what is computed of the target alone is computed once
     (:func:`_retargeter`)."""
     from satagraph.cli.arguments import read_with_rig
-    from satagraph.data.validate import check_skeleton
+    from satagraph.data.validate import check_motion
     from satagraph.utils.files import check_output_path
     check_output_path(output)
     source = read_with_rig(source_path, args)
-    check_skeleton(source, source_path)  # before a model is chosen for it (auto) and loaded
+    check_motion(source, source_path)  # before a model is chosen for it (auto) and loaded
     module, embed = _load(args, [source, target], [source_path, args.target], models)
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
     out = _retargeter(args, module, embed, target, memos)(source)

@@ -432,7 +432,7 @@ def test_example_motion_is_plausible():
 # --------------------------------------------------------------- help, plugins
 @pytest.mark.parametrize("command, words", [
     ("inspect", ["up axis", "--json"]),
-    ("convert", ["--fps", "--canonical", "atomically"]),
+    ("convert", ["--fps", "(1 to 1000)", "--canonical", "atomically"]),
     ("demo", ["built-in", "--output"]),
 ])
 def test_subcommand_help(capsys, command, words):

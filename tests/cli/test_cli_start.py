@@ -113,9 +113,13 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
     from satagraph.data.examples import example_motion
     from satagraph.io import write_bvh
     rig, out, gone = tmp_path / "walk.bvh", str(tmp_path / "out.bvh"), str(tmp_path / "no.bvh")
+    pose = tmp_path / "pose.bvh"  # one frame: a target, never a source
     write_bvh(example_motion(), rig)
-    rig, unwritable = str(rig), str(tmp_path / "no_folder" / "out.bvh")
+    write_bvh(example_motion(num_frames=1), pose)
+    rig, unwritable, pose = str(rig), str(tmp_path / "no_folder" / "out.bvh"), str(pose)
     argvs = [("retarget", gone, "--target", rig, out),
+             ("retarget", pose, "--target", rig, out),
+             ("reconstruct", pose, out),
              ("retarget", rig, "--target", rig, unwritable),
              ("retarget", rig, "--target", rig, out, "--window", "-3"),
              ("reconstruct", gone, out),
@@ -128,10 +132,11 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
              ("generate", "--text", "a walk", "--skeleton", rig, out, "--ckpt", gone)]
     heavy, stderr = _probe(argvs, code=2)
     assert heavy[:-2] == [[]] * (len(argvs) - 2)
+    assert "pose.bvh: 1 frame(s): at least 2 are needed" in stderr
     assert heavy[-2:] == [["torch"]] * 2  # the weights file's reader, not the model's code
     said = [line for line in stderr.splitlines() if "error:" in line]
     assert [line.split("error: ")[1].split(":")[0] for line in said] == [
-        gone, f"cannot write {unwritable}", "--window -3", gone,
+        gone, pose, pose, f"cannot write {unwritable}", "--window -3", gone,
         "--window 8 --overlap 8", gone, f"cannot write {unwritable}",
         "argument --seconds", "--overlap -1", gone, gone]
     assert not Path(out).exists()
@@ -145,3 +150,21 @@ def test_lazy_exports_still_work():
     assert "read_bvh" in dir(satagraph.io)
     with pytest.raises(AttributeError):
         satagraph.io.no_such_name  # noqa: B018
+
+
+def test_console_command_exits_with_main_code_and_runs_exit_handlers(tmp_path):
+    """``satagraph`` (``satagraph.cli:run``) exits with :func:`main`'s code,
+    its output flushed and ``atexit`` handlers run, though the final
+    collection is skipped."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    script = ("import atexit, sys; atexit.register(lambda: print('handler ran')); "
+              "sys.argv = ['satagraph'] + sys.argv[1:]; from satagraph.cli import run; run()")
+    done = subprocess.run([sys.executable, "-c", script, "--version"], cwd=ROOT, env=env,
+                          capture_output=True, text=True)
+    assert done.returncode == 0
+    assert done.stdout.startswith("satagraph ") and done.stdout.endswith("handler ran\n")
+    gone = str(tmp_path / "gone.bvh")
+    failed = subprocess.run([sys.executable, "-m", "satagraph", "inspect", gone], cwd=ROOT,
+                            env=env, capture_output=True, text=True)
+    assert failed.returncode == 2 and gone in failed.stderr
+    assert "satagraph = satagraph.cli:run" in (ROOT / "setup.cfg").read_text()
