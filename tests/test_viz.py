@@ -180,6 +180,16 @@ def test_a_missing_optional_package_is_one_line_before_any_work(tmp_path, capsys
     assert "satagraph[viz]" in capsys.readouterr().err and not (tmp_path / "g.bvh").exists()
 
 
+def test_progress_is_called_as_each_frame_is_drawn(tmp_path, motions):
+    """A long take's render said nothing until it ended (51 s of a dog's
+    clip: a minute of silence); ``progress(drawn, total)`` now counts the
+    animation's frames as they are drawn (the sheet's six are not counted)."""
+    calls = []
+    count = render(motions, tmp_path / "p.gif", fps=10, max_frames=4, panel_px=64,
+                   sheet=tmp_path / "p.png", progress=lambda *a: calls.append(a))
+    assert count == 4 and calls == [(1, 4), (2, 4), (3, 4), (4, 4)]
+
+
 def test_cli_render(tmp_path, capsys):
     bvh = tmp_path / "walk.bvh"
     write_bvh(example_motion(num_frames=8), bvh)

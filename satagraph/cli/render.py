@@ -16,6 +16,7 @@ import sys
 import time
 from typing import List, Sequence
 
+from satagraph.cli.progress import ProgressLine
 from satagraph.motion import Motion
 
 OUTPUTS = (".gif", ".mp4")
@@ -124,8 +125,13 @@ def run_render(args: argparse.Namespace) -> int:
     fit = args.fit if args.raw else own_scales(read, titles, args.fit)
     motions = [_shown(motion, args.raw) for motion in read]
     start = time.perf_counter()
-    count = render(motions, output, titles=titles, fps=args.fps,
-                   max_frames=args.max_frames, sheet=args.png, fit=fit)
+    progress = ProgressLine(sys.stderr, "frames drawn")
+    try:
+        count = render(motions, output, titles=titles, fps=args.fps,
+                       max_frames=args.max_frames, sheet=args.png, fit=fit,
+                       progress=progress)
+    finally:
+        progress.end()  # before an error too
     extra = f" and {args.png}" if args.png else ""
     print(f"wrote {output}{extra}: {len(motions)} panel(s), {count} frames "
           f"in {time.perf_counter() - start:.1f} s")

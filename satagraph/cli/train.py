@@ -7,11 +7,12 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable, List, Optional, Sequence
+from typing import List, Optional, Sequence
 
 from satagraph.cli.arguments import (add_device_argument, check_device, positive_float,
                                      positive_int, rig_overrides)
 from satagraph.cli.folders import run_over_folder
+from satagraph.cli.progress import ProgressLine
 from satagraph.transforms.rest import REST_MODES
 
 
@@ -385,36 +386,6 @@ def run_code_bank(args) -> int:
     print(f"{said}wrote {len(bank)} windows ({bank.codes.size(0)} frames) of {cfg['name']} "
           f"to {args.output} in {time.time() - start:.0f} s", file=sys.stderr)
     return 130 if interrupted else 0
-
-
-class ProgressLine:
-    """A count and the seconds since it started, on :obj:`stream`: one line
-    redrawn in place on a terminal, a line of its own every
-    :obj:`every` seconds elsewhere (a log file read the redrawn line as one
-    run-on line: ``16 windows, 0 s22 windows, 0 s...``)."""
-
-    def __init__(self, stream: Any, what: str, every: float = 30.0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
-        self.stream, self.what, self.every, self.clock = stream, what, every, clock
-        self.start = self.last = clock()
-        self.live = bool(getattr(stream, "isatty", lambda: False)())
-        self.drawn = False
-
-    def __call__(self, count: int) -> None:
-        now = self.clock()
-        text = f"{count} {self.what}, {now - self.start:.0f} s"
-        if self.live:
-            print(f"\r{text}", end="", file=self.stream, flush=True)
-            self.drawn = True
-        elif now - self.last >= self.every:
-            print(text, file=self.stream, flush=True)
-            self.last = now
-
-    def end(self) -> None:
-        """End a redrawn line (nothing to end elsewhere)."""
-        if self.drawn:
-            print(file=self.stream)
-            self.drawn = False
 
 
 def motion_autoencoder(module, name: str, scored: bool = False):

@@ -23,7 +23,7 @@ import itertools
 import math
 import os
 from dataclasses import dataclass
-from typing import Iterable, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Callable, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -433,6 +433,15 @@ def save_sheet(frames: Sequence[np.ndarray], path: PathLike,
     _atomic(path, lambda tmp: Image.fromarray(sheet).save(tmp, format="PNG"))
 
 
+def _reported(frames: Iterable[np.ndarray], total: int,
+              progress: Optional[Callable[[int, int], None]]) -> Iterator[np.ndarray]:
+    """:obj:`frames`, ``progress(drawn, total)`` called as each is drawn."""
+    for drawn, frame in enumerate(frames, 1):
+        if progress is not None:
+            progress(drawn, total)
+        yield frame
+
+
 def _atomic(path: PathLike, write) -> None:
     """Run ``write(tmp)`` on a temporary file beside :obj:`path`, then move
     it into place (:func:`satagraph.utils.files.atomic_path`)."""
@@ -499,7 +508,7 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
            titles: Optional[Sequence[str]] = None, fps: Optional[float] = None,
            max_frames: Optional[int] = None, sheet: Optional[PathLike] = None,
            panel_px: int = 320, elev: float = 15.0, azim: float = -60.0,
-           fit: bool = False) -> int:
+           fit: bool = False, progress: Optional[Callable[[int, int], None]] = None) -> int:
     r"""Render motions side by side to a GIF or MP4 and/or a PNG sheet.
 
     Args:
@@ -519,6 +528,10 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
         azim (float): Camera azimuth (degrees).
         fit (bool): Scale each panel to its own motion (see
             :func:`render_frames`).
+        progress (callable, optional): Called as ``progress(drawn, total)``
+            after each animation frame is drawn (a long take draws about 50
+            frames a second on a 2-core CPU: ``satagraph render`` shows the
+            count with :class:`~satagraph.cli.progress.ProgressLine`).
 
     Returns:
         int: The number of animation frames.
@@ -537,7 +550,8 @@ def render(motions: Union[Motion, Sequence[Motion]], path: Optional[PathLike] = 
     kwargs = dict(titles=titles, max_frames=max_frames, panel_px=panel_px,
                   elev=elev, azim=azim, fit=fit)
     if path is not None:  # frames drawn as they are written, never all held
-        (save_gif if ext == ".gif" else save_mp4)(render_frames(motions, **kwargs), path, fps)
+        frames = _reported(render_frames(motions, **kwargs), count, progress)
+        (save_gif if ext == ".gif" else save_mp4)(frames, path, fps)
     if sheet is not None:
         picks = sheet_frames(count)
         save_sheet(list(render_frames(motions, frames=picks, **kwargs)), sheet,

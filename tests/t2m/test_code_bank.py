@@ -301,7 +301,7 @@ def test_progress_is_a_line_in_place_on_a_terminal_and_lines_in_a_log():
     s...``): a log now gets a line of its own every 30 s, a terminal keeps
     the line redrawn in place."""
     import io
-    from satagraph.cli.train import ProgressLine
+    from satagraph.cli.progress import ProgressLine
     now = [0.0]
     log = io.StringIO()
     line = ProgressLine(log, "windows", every=30.0, clock=lambda: now[0])
