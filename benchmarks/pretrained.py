@@ -277,9 +277,11 @@ def retarget_row(module, source: Motion, target: Motion, rest: str = "auto",
     return quality
 
 
-def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
-    """The joint errors, steps, stride and slide of one reconstruction."""
-    src, raw = reconstruct_canonical(module, clip, module.embed, rest=rest, ground=False)
+def reconstruction_row(module, clip: Motion, rest: str = "auto", refine: int = 0) -> dict:
+    """The joint errors, steps, stride and slide of one reconstruction
+    (:obj:`refine`: ``reconstruct --refine``'s steps)."""
+    src, raw = reconstruct_canonical(module, clip, module.embed, rest=rest, ground=False,
+                                     refine=refine)
     same_rig = retarget_quality(src, raw, ("steps", "stride"))
     grounded = ground_like(raw, src)
     (slide, hovering), (source_slide, source_hover) = contact(grounded), contact(src)
@@ -293,8 +295,10 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto") -> dict:
 
 
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
-            ckpt: str = "builtin", carriage: str = "auto") -> Dict[str, List[dict]]:
-    """Every retarget and reconstruction row, each read by ``pick``'s model."""
+            ckpt: str = "builtin", carriage: str = "auto",
+            refine: int = 0) -> Dict[str, List[dict]]:
+    """Every retarget and reconstruction row, each read by ``pick``'s model
+    (:obj:`refine` steps fitting the reconstructions' latents)."""
     rows: Dict[str, List[dict]] = {"retarget": [], "reconstruction": []}
     for group, case, load in retarget_cases():
         source, sname, target, tname = load()
@@ -309,7 +313,7 @@ def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = 
             "held") else recon_window(motion)
         rows["reconstruction"].append(dict(group=group, case=_named(case, model, ckpt),
                                            model=model,
-                                           **reconstruction_row(module, clip, rest)))
+                                           **reconstruction_row(module, clip, rest, refine)))
     return rows
 
 
@@ -365,9 +369,11 @@ def _bend(row: dict) -> str:
 
 
 def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto",
-          carriage: str = "auto") -> str:
+          carriage: str = "auto", refine: int = 0) -> str:
+    fitted = (f", reconstructions' latents fitted to their clips by {refine} steps "
+              f"(--refine {refine}; retargets as the encoder reads them)" if refine else "")
     lines = [f"Model `{ckpt}`, skeletons shown in the {rest} rest pose, retargets carried "
-             f"as their characters: {carriage}; {seconds:.0f} s on this machine.", "",
+             f"as their characters: {carriage}{fitted}; {seconds:.0f} s on this machine.", "",
              "| group | retarget | source | target | steps (>= 0.8 zoo, 0.7 real) "
              "| travel ratio (0.8-1.25) | stride ratio (diagnostic) "
              "| posture (diagnostic) | lands (diagnostic) | ground, % height (<= 3) "
@@ -412,14 +418,23 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--carriage", choices=CARRIAGE_MODES, default="auto",
                         help="when a retarget is carried as its target character "
                              "(retarget_canonical's carriage; default auto)")
+    parser.add_argument("--refine", type=int, default=0, metavar="STEPS",
+                        help="fit each reconstruction's latents to its clip by STEPS steps "
+                             "(reconstruct --refine; default 0: the encoder's latent, what "
+                             "the targets are read on)")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"results path without suffix (default {OUT.relative_to(ROOT)}, "
-                             "with -file or -first-frame for the other --rest modes and "
-                             "-carriage-MODE for the other --carriage modes)")
+                             "with -file or -first-frame for the other --rest modes, "
+                             "-carriage-MODE for the other --carriage modes and -refine-STEPS "
+                             "with --refine)")
     args = parser.parse_args(argv)
+    if args.refine < 0:
+        parser.error(f"--refine must be 0 or more, got {args.refine}")
     out = args.out or (OUT if args.rest == "auto" else OUT.with_name(f"{OUT.name}-{args.rest}"))
     if args.out is None and args.carriage != "auto":
         out = out.with_name(f"{out.name}-carriage-{args.carriage}")
+    if args.out is None and args.refine:
+        out = out.with_name(f"{out.name}-refine-{args.refine}")
     missing = missing_data("pretrained.py", DATA)
     if missing:
         print(missing, file=sys.stderr)
@@ -428,11 +443,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     pick = model_picker(args.ckpt)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows = measure(pick, args.rest, args.ckpt, args.carriage)
-    text = table(rows, args.ckpt, time.perf_counter() - start, args.rest, args.carriage)
+        rows = measure(pick, args.rest, args.ckpt, args.carriage, args.refine)
+    text = table(rows, args.ckpt, time.perf_counter() - start, args.rest, args.carriage,
+                 args.refine)
     print(text)
     write_results(out, "The built-in model (benchmarks/pretrained.py)", text,
-                  dict(rows, ckpt=args.ckpt, rest=args.rest, carriage=args.carriage))
+                  dict(rows, ckpt=args.ckpt, rest=args.rest, carriage=args.carriage,
+                       refine=args.refine))
     return 0
 
 

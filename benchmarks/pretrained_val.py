@@ -285,13 +285,14 @@ def _facing(positions: np.ndarray, names: Sequence[str]) -> Optional[np.ndarray]
 
 
 def measure(module, motion: Motion, plant: bool = False, settle: bool = False,
-            mirror: bool = False) -> dict:
+            mirror: bool = False, refine: int = 0) -> dict:
     """JP, root-relative JP (fractions of the height), facing drift and the
     stride ratio (:func:`~satagraph.pipelines.quality.stride`, output over
     source); read in one rest pose (``two_rests=False``), as every rule
-    that used it was measured."""
+    that used it was measured; :obj:`refine` steps fit each latent first."""
     src, out = reconstruct_canonical(module, motion, module.embed, ground=False, plant=plant,
-                                     settle=settle, mirror=mirror, two_rests=False)
+                                     settle=settle, mirror=mirror, two_rests=False,
+                                     refine=refine)
     n = min(src.num_frames, out.num_frames)
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
@@ -385,6 +386,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="average each decoding with its mirror image's "
                              "(retarget_canonical's mirror); both: each checkpoint twice, "
                              "the second column named '+mirror'")
+    parser.add_argument("--refine", type=int, default=0, metavar="STEPS",
+                        help="reconstructions: fit each window's latent to the clip by "
+                             "STEPS steps first (reconstruct --refine; retargets are read "
+                             "as the encoder reads them); columns named '+refine STEPS'")
     args = parser.parse_args(argv)
     missing = missing_data("pretrained_val.py", DATA, "the real groups")
     if missing:
@@ -393,6 +398,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     start = time.perf_counter()
     if args.zoo_per_plan < 1:
         parser.error(f"--zoo-per-plan must be at least 1, got {args.zoo_per_plan}")
+    if args.refine < 0:
+        parser.error(f"--refine must be 0 or more, got {args.refine}")
     clips = zoo_clips(args.zoo_per_plan) + zoo_kind_clips() + real_clips() + lowered_clips()
     pairs = retarget_pairs() + still_pairs()
     summary: Dict[str, Dict[str, dict]] = {}
@@ -406,11 +413,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 groups: Dict[str, List[dict]] = {}
                 for group, _, motion in clips:  # reconstructions: never ``still``
                     groups.setdefault(group, []).append(
-                        measure(module, motion, args.plant, settle, mirror))
+                        measure(module, motion, args.plant, settle, mirror, args.refine))
                 for still in SETTINGS[args.still]:
                     name = ckpt + (" +settle" if settle and args.settle == "both" else "") \
                         + (" +mirror" if mirror and args.mirror == "both" else "") \
-                        + (" +still" if still and args.still == "both" else "")
+                        + (" +still" if still and args.still == "both" else "") \
+                        + (f" +refine {args.refine}" if args.refine else "")
                     summary[name] = {g: summarise(v) for g, v in groups.items()}
                     retargets[name] = retarget_scores(module, pairs, args.plant, settle, still,
                                                       mirror)

@@ -51,8 +51,9 @@ def _skip(args, output: str) -> bool:
 def add_train_parsers(sub) -> None:
     """Register the model subcommands on an argparse subparsers object."""
     from satagraph.cli.arguments import (add_carriage_argument, add_mirror_argument,
-                                         add_plant_argument, add_settle_argument,
-                                         add_still_argument, add_two_rests_argument)
+                                         add_plant_argument, add_refine_argument,
+                                         add_settle_argument, add_still_argument,
+                                         add_two_rests_argument)
     p = sub.add_parser("train", help="train a model from a config",
                        description="Train from an omegaconf YAML config, one of the named "
                        "configs shipped with satagraph (a name it does not know lists them) "
@@ -88,6 +89,7 @@ def add_train_parsers(sub) -> None:
     _common(p)
     _ground(p, default=False)
     add_settle_argument(p)
+    add_refine_argument(p)
     add_mirror_argument(p, default=True)
     add_two_rests_argument(p, default="unmirrored")
     _in_out(p, "input", "IN")
@@ -483,7 +485,8 @@ def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
     from satagraph.pipelines.inference import reconstruct_motion
     out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
-                             args.ground, args.settle, args.mirror, args.two_rests)
+                             args.ground, args.settle, args.mirror, args.two_rests,
+                             args.refine)
     write_bvh(out, output)
     return f"wrote {output}: {out.num_frames} frames, {out.num_joints} joints"
 

@@ -19,6 +19,8 @@ from satagraph.ops.motion_batch import batch_global_motion
 
 DEFAULT_OPTIM: Dict[str, Any] = {"lr": 1e-4, "warmup_epochs": 30, "decay": 0.99,
                                  "floor": 0.01, "frozen": ()}
+#: The learning rate of :meth:`MotionAutoencoderModule.refine_latent`.
+REFINE_LR = 0.05
 #: The cross-skeleton loss terms of :meth:`MotionAutoencoderModule.retarget_losses`.
 RETARGET_TERMS = ("retarget", "retarget_root", "retarget_carriage")
 
@@ -167,14 +169,53 @@ class MotionAutoencoderModule(PerDatasetFigures, L.LightningModule):
         """Normalised predictions on the target skeletons' frame graphs."""
         return self.model.decode(z, target)
 
-    def forward(self, batch, target=None) -> Dict[str, Tensor]:
+    def forward(self, batch, target=None, refine: int = 0) -> Dict[str, Tensor]:
         """Encode :obj:`batch`, decode on :obj:`target` (default: itself).
-        Both are physical batches; predictions come back physical."""
+        Both are physical batches; predictions come back physical. With
+        :obj:`refine` steps, the latent is first fitted to :obj:`batch`
+        (:meth:`refine_latent`)."""
         source = self.normalize_batch(batch)
         normed = source if target is None else self.normalize_batch(target)
         enc = self.encode(source)
+        if refine:
+            enc = dict(enc, z=self.refine_latent(enc, source, batch, refine))
         out = dict(enc, **self.decode(enc["z"], normed))
         return self.denormalize_output(out, batch if target is None else target)
+
+    def refine_latent(self, enc: Dict[str, Tensor], source, batch, steps: int,
+                      lr: float = REFINE_LR) -> Tensor:
+        r"""The encoder's latent fitted to its input: :obj:`steps` Adam
+        steps of rate :obj:`lr` on the latent alone (the weights frozen,
+        none of their gradients kept) lowering :attr:`criterion`, the
+        training loss, of :obj:`batch` decoded from it on its own skeleton.
+        The latent then says more of the input than the encoder read from
+        it (``experiments/PRETRAIN.md`` section 56: on rigs never trained
+        on, the dog's error fell to a fifth); an RVQ's quantised latent is
+        no longer made of its codes.
+
+        Args:
+            enc (dict): :meth:`encode`'s output for :obj:`source`.
+            source: The normalised batch (:meth:`normalize_batch`).
+            batch: The same batch, physical (what the loss compares with).
+            steps (int): Adam steps.
+            lr (float): Their learning rate.
+
+        Returns:
+            Tensor: The fitted latent, detached.
+
+        Shapes:
+            - **enc["z"]**, **output**: :math:`(G, D)`
+        """
+        enc = {k: v.detach() if torch.is_tensor(v) else v for k, v in enc.items()}
+        z = enc["z"].clone().requires_grad_(True)
+        optimizer = torch.optim.Adam([z], lr=lr)
+        with torch.enable_grad():
+            for _ in range(steps):
+                out = self.denormalize_output(dict(enc, z=z, **self.decode(z, source)), batch)
+                loss = self.criterion(out, batch, self.normalizer)["loss"]
+                (z.grad,) = torch.autograd.grad(loss, [z])
+                optimizer.step()
+        return z.detach()
 
     # --------------------------------------------------- normalisation
     def setup(self, stage: str) -> None:

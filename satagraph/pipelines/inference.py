@@ -128,7 +128,8 @@ def decoding_target(feats: MotionFeatures) -> MotionFeatures:
 def transfer(module, source: MotionFeatures, target: MotionFeatures,
              semantic: Optional[Callable] = None, window: Optional[int] = None,
              overlap: Optional[int] = None, batch_size: int = 16,
-             memo: Optional["RigMemo"] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+             memo: Optional["RigMemo"] = None, refine: int = 0
+             ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Encode :obj:`source` window by window and decode onto :obj:`target`'s
     skeleton. Returns physical ``q [T, J_t, 6]``, ``r [T, 4]`` and contact
     probabilities ``c [T, J_t]`` for every source frame. The module is run
@@ -148,6 +149,9 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
         batch_size (int): Windows decoded at once.
         memo (RigMemo, optional): Keeps :obj:`target`'s semantic embedding
             across calls (:class:`RigMemo`).
+        refine (int): Steps that fit each window's latent to the source
+            before it is decoded (``module.refine_latent``; 0: the
+            encoder's latent).
 
     Returns:
         (np.ndarray, np.ndarray, np.ndarray): ``q``, ``r`` and ``c``.
@@ -162,14 +166,16 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
     was_training = module.training
     module.eval()
     try:
-        return _transfer(module, source, target, semantic, window, overlap, batch_size, memo)
+        return _transfer(module, source, target, semantic, window, overlap, batch_size, memo,
+                         refine)
     finally:
         module.train(was_training)
 
 
 def _transfer(module, source: MotionFeatures, target: MotionFeatures,
               semantic: Optional[Callable], window: int, overlap: int, batch_size: int,
-              memo: Optional["RigMemo"] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+              memo: Optional["RigMemo"] = None, refine: int = 0
+              ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The window loop of :func:`transfer`: each batch's windows are
     written into the take's outputs as they are decoded, cross-faded where
     they overlap (:func:`cross_fade`; no batch outlives its step)."""
@@ -185,7 +191,7 @@ def _transfer(module, source: MotionFeatures, target: MotionFeatures,
         chunk = plan[i:i + batch_size]
         src = collate_clips([source.to_clip(a, b, sem_s) for a, b, _ in chunk]).to(device)
         tgt = collate_clips([target_clip(target, b - a, sem_t) for a, b, _ in chunk]).to(device)
-        out = module(src, tgt)
+        out = module(src, tgt, refine=refine) if refine else module(src, tgt)
         decoded = (out["q"].view(-1, num, 6).cpu().double(), out["r"].cpu().double(),
                    torch.sigmoid(out["c"]).view(-1, num).cpu().double())  # any dtype: bf16 too
         offset = 0
@@ -500,11 +506,13 @@ def check_target(target: Motion) -> None:
 
 
 def check_settings(module, window: Optional[int], overlap: Optional[int], rest: str,
-                   two_rests: Union[bool, str], carriage: str = "auto") -> None:
+                   two_rests: Union[bool, str], carriage: str = "auto",
+                   refine: int = 0) -> None:
     """:func:`retarget_motion`'s settings, refused in one line before any
     work: a rest mode of :data:`REST_MODES`, a ``two_rests`` of
-    :func:`averaged_reading`, a ``carriage`` of :data:`CARRIAGE_MODES` and
-    windows that plan frames.
+    :func:`averaged_reading`, a ``carriage`` of :data:`CARRIAGE_MODES`,
+    windows that plan frames and a whole number of :obj:`refine` steps,
+    0 or more, for a module that refines (``refine_latent``).
 
     Raises:
         ValueError: One line naming the setting.
@@ -515,6 +523,11 @@ def check_settings(module, window: Optional[int], overlap: Optional[int], rest: 
     if carriage not in CARRIAGE_MODES:
         raise ValueError(f"carriage must be one of {list(CARRIAGE_MODES)}, got {carriage!r}")
     check_windows(*default_windows(module, window, overlap))
+    if isinstance(refine, bool) or not isinstance(refine, int) or refine < 0:
+        raise ValueError(f"refine is a whole number of steps, 0 or more, got {refine!r}")
+    if refine and not hasattr(module, "refine_latent"):
+        raise ValueError(f"refine: a {type(module).__name__} cannot fit its latent "
+                         "(it has no refine_latent)")
 
 
 def check_two_rests(two_rests: Union[bool, str]) -> None:
@@ -538,7 +551,8 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        plant: bool = False, settle: bool = False,
                        still: bool = True, mirror: bool = False,
                        two_rests: Union[bool, str] = False, carriage: str = "auto",
-                       memo: Optional[RigMemo] = None) -> Tuple[Motion, Motion]:
+                       memo: Optional[RigMemo] = None, refine: int = 0
+                       ) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
     its retarget, whose :attr:`~Motion.transform` is the target's (what
@@ -550,15 +564,17 @@ def retarget_canonical(module, source: Motion, target: Motion,
     (:func:`averaged_reading`), then carried as the target character
     (:func:`carried_as_character`; never for a reconstruction). :obj:`memo`
     keeps what is computed of the target alone across calls
-    (:class:`RigMemo`)."""
-    check_settings(module, window, overlap, rest, two_rests, carriage)
+    (:class:`RigMemo`); :obj:`refine` steps fit each latent to the source
+    first (:func:`transfer`)."""
+    check_settings(module, window, overlap, rest, two_rests, carriage, refine)
     fps = fps or float(getattr(module, "fps", 30.0))
     same = target is source  # a reconstruction: canonicalized and mirrored once
     memo = None if same else memo
     source = canonicalize(source, fps=fps)
     target = source if same else _kept(memo, target, ("canonical", fps),
                                        lambda: canonicalize(target, fps=fps))
-    reading = partial(read_once, module, semantic, window, overlap, fps, memo=memo)
+    reading = partial(read_once, module, semantic, window, overlap, fps, memo=memo,
+                      refine=refine)
     src_canon, out, c = averaged_reading(reading, source, target, rest, mirror, two_rests, memo)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
@@ -621,7 +637,7 @@ def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
 
 def read_once(module, semantic: Optional[Callable], window: Optional[int],
               overlap: Optional[int], fps: float, rest: str, source: Motion,
-              target: Motion, memo: Optional[RigMemo] = None
+              target: Motion, memo: Optional[RigMemo] = None, refine: int = 0
               ) -> Tuple[Motion, Motion, np.ndarray]:
     """One reading of a canonical source onto a canonical target by
     :obj:`module` (:func:`retarget_canonical`'s settings): the source as
@@ -631,7 +647,7 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     features (:func:`target_features`) across calls."""
     src_canon, src = source_features(source, rest, facing_smooth_of(module))
     tgt, undo = _kept(memo, target, ("shown", rest), lambda: target_features(target, rest))
-    q, r, c = transfer(module, src, tgt, semantic, window, overlap, memo=memo)
+    q, r, c = transfer(module, src, tgt, semantic, window, overlap, memo=memo, refine=refine)
     del src  # the source's per-frame features: the take's largest arrays, read
     out = features_to_motion(replace(tgt, q=q, r=r, fps=fps, transform=target.transform),
                              use_positions=False)
@@ -773,7 +789,7 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
                        window: Optional[int] = None, overlap: Optional[int] = None,
                        rest: str = "auto", ground: bool = False,
                        settle: bool = False, mirror: bool = True,
-                       two_rests: Union[bool, str] = UNMIRRORED) -> Motion:
+                       two_rests: Union[bool, str] = UNMIRRORED, refine: int = 0) -> Motion:
     """Encode and decode a motion on its own skeleton (:obj:`rest`,
     :obj:`ground`, :obj:`settle`, :obj:`mirror` and :obj:`two_rests`: see
     :func:`retarget_motion`; ground
@@ -792,6 +808,14 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
         window (int, optional): Frames per window (default: the module's).
         overlap (int, optional): Frames two windows share.
         rest, ground, settle, mirror, two_rests: See :func:`retarget_motion`.
+        refine (int): Adam steps that fit each window's latent to the input
+            before it is decoded
+            (:meth:`~satagraph.lightning.MotionAutoencoderModule.refine_latent`;
+            ``experiments/PRETRAIN.md`` section 56: 30 steps brought the
+            validation clips' error of rigs never trained on to a third to a
+            fifth, at about 0.1 s a step per 128 frames read on 2 CPU
+            cores); 0, the default, decodes the encoder's latent, what the
+            benchmarks' reconstruction rows measure.
 
     Returns:
         Motion: The decoded motion on the input's own rig, axes and units,
@@ -804,6 +828,6 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     check_inputs(module, motion)
     _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
                                      rest=rest, ground=ground, settle=settle, mirror=mirror,
-                                     two_rests=two_rests)
+                                     two_rests=two_rests, refine=refine)
     return from_canonical(canon, motion)
 
