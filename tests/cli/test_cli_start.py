@@ -128,6 +128,7 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
              ("generate", "--text", "a walk", "--skeleton", rig, unwritable),
              ("generate", "--text", "a walk", "--skeleton", rig, out, "--seconds", "100"),
              ("retarget", rig, "--target", rig, out, "--overlap", "-1"),
+             ("reconstruct", rig, out, "--refine", "-1"),
              ("retarget", rig, "--target", rig, out, "--ckpt", gone),
              ("generate", "--text", "a walk", "--skeleton", rig, out, "--ckpt", gone)]
     heavy, stderr = _probe(argvs, code=2)
@@ -138,7 +139,7 @@ def test_model_commands_refuse_bad_input_before_loading_the_model(tmp_path):
     assert [line.split("error: ")[1].split(":")[0] for line in said] == [
         gone, pose, pose, f"cannot write {unwritable}", "--window -3", gone,
         "--window 8 --overlap 8", gone, f"cannot write {unwritable}",
-        "argument --seconds", "--overlap -1", gone, gone]
+        "argument --seconds", "--overlap -1", "argument --refine", gone, gone]
     assert not Path(out).exists()
 
 
