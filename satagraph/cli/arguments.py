@@ -252,8 +252,8 @@ def add_refine_argument(parser: argparse.ArgumentParser) -> None:
                         help="fit each window's latent to the input by STEPS gradient steps "
                         "through the frozen decoder before decoding it: closer to the input "
                         "on rigs the model never trained on (30 steps: the dog's error a "
-                        "fifth of the encoder's alone), about 0.1 s a step per 128 frames "
-                        "on 2 CPU cores (default: 0, the encoder's latent)")
+                        "fifth of the encoder's alone), at a cost: a 51-s take took 102 s "
+                        "instead of 13 on 2 CPU cores (default: 0, the encoder's latent)")
 
 
 def refine_steps(text: str) -> int:
