@@ -453,6 +453,10 @@ _CPU_ALLOCATION = re.compile(r"can't allocate memory: you tried to allocate (\d+
 #: How torch's GPU allocators (CUDA, MPS) say the size that failed, in a
 #: message of several sentences about the device's memory.
 _GPU_ALLOCATION = re.compile(r"Tried to allocate ([\d.]+ (?:[KMGT]i?B|bytes))")
+#: A RuntimeError of a CUDA library (cuBLAS, cuDNN, a kernel launch) out of
+#: GPU memory: ``CUDA error: out of memory``, then advice about debugging.
+_GPU_LIBRARY_OUT = re.compile(r"CUDA error: out of memory|CUBLAS_STATUS_ALLOC_FAILED|"
+                              r"CUDNN_STATUS_ALLOC_FAILED")
 
 
 def _out_of_memory(err: BaseException) -> Optional[str]:
@@ -466,6 +470,8 @@ def _out_of_memory(err: BaseException) -> Optional[str]:
         if asked:
             return f"out of memory on the GPU: {asked.group(1)} asked for at once"
         return f"out of memory: {' '.join(str(err).split()[:12]) or type(err).__name__}"
+    if _GPU_LIBRARY_OUT.search(str(err)):  # a CUDA library's own allocation, no size said
+        return "out of memory on the GPU (in a CUDA library, which says no size)"
     return None
 
 

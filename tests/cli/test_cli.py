@@ -285,6 +285,33 @@ def test_out_of_memory_on_a_gpu_says_what_was_asked_for(capsys, monkeypatch, tin
                    "(a shorter --window needs less)\n")
 
 
+@pytest.mark.parametrize("said", [
+    "CUDA error: out of memory\nCUDA kernel errors might be asynchronously reported at some "
+    "other API call, so the stacktrace below might be incorrect.",
+    "CUDA error: CUBLAS_STATUS_ALLOC_FAILED when calling `cublasCreate(handle)`"],
+    ids=["kernel", "cublas"])
+def test_out_of_memory_in_a_cuda_library_is_one_line(capsys, monkeypatch, tiny_file, tmp_path,
+                                                     said):
+    """A CUDA library out of memory raises a plain RuntimeError, without
+    the size: it was a traceback; another CUDA error still is one."""
+    import satagraph.cli.train as train
+
+    def failing(message: str):
+        def fail(args):
+            raise RuntimeError(message)
+        return fail
+
+    monkeypatch.setattr(train, "run_reconstruct", failing(said))
+    code, out, err = run(capsys, "reconstruct", str(tiny_file), str(tmp_path / "o.bvh"))
+    assert code == 2 and out == ""
+    assert err == ("satagraph: error: out of memory on the GPU (in a CUDA library, which says "
+                   "no size) (a shorter --window needs less)\n")
+    monkeypatch.setattr(train, "run_reconstruct",
+                        failing("CUDA error: device-side assert triggered"))
+    with pytest.raises(RuntimeError, match="device-side assert"):
+        main(["reconstruct", str(tiny_file), str(tmp_path / "o.bvh")])
+
+
 def test_error_missing_file(capsys, tmp_path):
     missing = tmp_path / "missing.bvh"
     for argv in (["inspect", str(missing)],
