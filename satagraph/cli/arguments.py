@@ -146,12 +146,17 @@ def _pick(value, index: int):
 
 
 def positive_int(text: str) -> int:
+    return _integer_from(text, 1)
+
+
+def _integer_from(text: str, low: int) -> int:
+    """An option's integer, :obj:`low` or more (one line otherwise)."""
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
+    if value < low:
+        raise argparse.ArgumentTypeError(f"must be at least {low}: {text!r}")
     return value
 
 
@@ -258,13 +263,7 @@ def add_refine_argument(parser: argparse.ArgumentParser) -> None:
 
 def refine_steps(text: str) -> int:
     """A ``--refine``: a whole number of steps, 0 or more."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number of steps: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more: {text!r}")
-    return value
+    return _integer_from(text, 0)
 
 
 def add_settle_argument(parser: argparse.ArgumentParser) -> None:
