@@ -258,7 +258,8 @@ def add_refine_argument(parser: argparse.ArgumentParser) -> None:
                         "through the frozen decoder before decoding it: closer to the input "
                         "on rigs the model never trained on (30 steps: the dog's error a "
                         "fifth of the encoder's alone), at a cost: a 51-s take took 102 s "
-                        "instead of 13 on 2 CPU cores (default: 0, the encoder's latent)")
+                        "instead of 13 on 2 CPU cores, its windows counted on stderr as they go "
+                        "(default: 0, the encoder's latent)")
 
 
 def refine_steps(text: str) -> int:

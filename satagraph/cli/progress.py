@@ -26,6 +26,7 @@ class ProgressLine:
         self.start = self.last = clock()
         self.live = bool(getattr(stream, "isatty", lambda: False)())
         self.drawn = False
+        self.count = 0
 
     def __call__(self, count: int, total: Optional[int] = None) -> None:
         now = self.clock()
@@ -37,6 +38,12 @@ class ProgressLine:
         elif now - self.last >= self.every:
             print(text, file=self.stream, flush=True)
             self.last = now
+
+    def add(self, count: int) -> None:
+        """Count :obj:`count` more and show the running count (for work
+        that reports each batch it did, not how far it is)."""
+        self.count += count
+        self(self.count)
 
     def end(self) -> None:
         """End a redrawn line (nothing to end elsewhere)."""

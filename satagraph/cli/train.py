@@ -484,9 +484,14 @@ def _reconstruct_file(args, source: str, output: str, models: dict) -> str:
     module, embed = _load(args, [motion], [source], models)
     from satagraph.io import write_bvh  # torch, PyG: after the files and --ckpt are checked
     from satagraph.pipelines.inference import reconstruct_motion
-    out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
-                             args.ground, args.settle, args.mirror, args.two_rests,
-                             args.refine)
+    line = ProgressLine(sys.stderr, "windows refined") if args.refine else None
+    try:  # a refined long take is minutes: its windows are counted as they go
+        out = reconstruct_motion(module, motion, embed, args.window, args.overlap, args.rest,
+                                 args.ground, args.settle, args.mirror, args.two_rests,
+                                 args.refine, None if line is None else line.add)
+    finally:
+        if line is not None:
+            line.end()
     write_bvh(out, output)
     return f"wrote {output}: {out.num_frames} frames, {out.num_joints} joints"
 

@@ -128,7 +128,8 @@ def decoding_target(feats: MotionFeatures) -> MotionFeatures:
 def transfer(module, source: MotionFeatures, target: MotionFeatures,
              semantic: Optional[Callable] = None, window: Optional[int] = None,
              overlap: Optional[int] = None, batch_size: int = 16,
-             memo: Optional["RigMemo"] = None, refine: int = 0
+             memo: Optional["RigMemo"] = None, refine: int = 0,
+             progress: Optional[Callable[[int], None]] = None
              ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Encode :obj:`source` window by window and decode onto :obj:`target`'s
     skeleton. Returns physical ``q [T, J_t, 6]``, ``r [T, 4]`` and contact
@@ -152,6 +153,9 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
         refine (int): Steps that fit each window's latent to the source
             before it is decoded (``module.refine_latent``; 0: the
             encoder's latent).
+        progress (callable, optional): Called as ``progress(n)`` after
+            each batch with the :math:`n` windows it decoded (what a
+            long refined take reports as it goes).
 
     Returns:
         (np.ndarray, np.ndarray, np.ndarray): ``q``, ``r`` and ``c``.
@@ -167,14 +171,15 @@ def transfer(module, source: MotionFeatures, target: MotionFeatures,
     module.eval()
     try:
         return _transfer(module, source, target, semantic, window, overlap, batch_size, memo,
-                         refine)
+                         refine, progress)
     finally:
         module.train(was_training)
 
 
 def _transfer(module, source: MotionFeatures, target: MotionFeatures,
               semantic: Optional[Callable], window: int, overlap: int, batch_size: int,
-              memo: Optional["RigMemo"] = None, refine: int = 0
+              memo: Optional["RigMemo"] = None, refine: int = 0,
+              progress: Optional[Callable[[int], None]] = None
               ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The window loop of :func:`transfer`: each batch's windows are
     written into the take's outputs as they are decoded, cross-faded where
@@ -199,6 +204,8 @@ def _transfer(module, source: MotionFeatures, target: MotionFeatures,
             for whole, part in zip((q, r, c), decoded):
                 cross_fade(whole, part[offset:offset + b - a].numpy(), a, done)
             done, offset = b, offset + b - a
+        if progress is not None:
+            progress(len(chunk))
     return q, r, c
 
 
@@ -551,7 +558,8 @@ def retarget_canonical(module, source: Motion, target: Motion,
                        plant: bool = False, settle: bool = False,
                        still: bool = True, mirror: bool = False,
                        two_rests: Union[bool, str] = False, carriage: str = "auto",
-                       memo: Optional[RigMemo] = None, refine: int = 0
+                       memo: Optional[RigMemo] = None, refine: int = 0,
+                       progress: Optional[Callable[[int], None]] = None
                        ) -> Tuple[Motion, Motion]:
     r""":func:`retarget_motion` in the model's canonical frame (+Y up,
     metres, floor at 0, the model's frame rate): the canonical source and
@@ -565,7 +573,8 @@ def retarget_canonical(module, source: Motion, target: Motion,
     (:func:`carried_as_character`; never for a reconstruction). :obj:`memo`
     keeps what is computed of the target alone across calls
     (:class:`RigMemo`); :obj:`refine` steps fit each latent to the source
-    first (:func:`transfer`)."""
+    first and :obj:`progress` hears of each batch of windows decoded, in
+    every reading (:func:`transfer`)."""
     check_settings(module, window, overlap, rest, two_rests, carriage, refine)
     fps = fps or float(getattr(module, "fps", 30.0))
     same = target is source  # a reconstruction: canonicalized and mirrored once
@@ -574,7 +583,7 @@ def retarget_canonical(module, source: Motion, target: Motion,
     target = source if same else _kept(memo, target, ("canonical", fps),
                                        lambda: canonicalize(target, fps=fps))
     reading = partial(read_once, module, semantic, window, overlap, fps, memo=memo,
-                      refine=refine)
+                      refine=refine, progress=progress)
     src_canon, out, c = averaged_reading(reading, source, target, rest, mirror, two_rests, memo)
     out = settle_root(out, c) if settle else out
     out = hold_still_source(out, src_canon) if still else out
@@ -637,7 +646,8 @@ def carried_as_character(out: Motion, own: Motion, carriage: str = "auto",
 
 def read_once(module, semantic: Optional[Callable], window: Optional[int],
               overlap: Optional[int], fps: float, rest: str, source: Motion,
-              target: Motion, memo: Optional[RigMemo] = None, refine: int = 0
+              target: Motion, memo: Optional[RigMemo] = None, refine: int = 0,
+              progress: Optional[Callable[[int], None]] = None
               ) -> Tuple[Motion, Motion, np.ndarray]:
     """One reading of a canonical source onto a canonical target by
     :obj:`module` (:func:`retarget_canonical`'s settings): the source as
@@ -647,7 +657,8 @@ def read_once(module, semantic: Optional[Callable], window: Optional[int],
     features (:func:`target_features`) across calls."""
     src_canon, src = source_features(source, rest, facing_smooth_of(module))
     tgt, undo = _kept(memo, target, ("shown", rest), lambda: target_features(target, rest))
-    q, r, c = transfer(module, src, tgt, semantic, window, overlap, memo=memo, refine=refine)
+    q, r, c = transfer(module, src, tgt, semantic, window, overlap, memo=memo, refine=refine,
+                       progress=progress)
     del src  # the source's per-frame features: the take's largest arrays, read
     out = features_to_motion(replace(tgt, q=q, r=r, fps=fps, transform=target.transform),
                              use_positions=False)
@@ -789,7 +800,8 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
                        window: Optional[int] = None, overlap: Optional[int] = None,
                        rest: str = "auto", ground: bool = False,
                        settle: bool = False, mirror: bool = True,
-                       two_rests: Union[bool, str] = UNMIRRORED, refine: int = 0) -> Motion:
+                       two_rests: Union[bool, str] = UNMIRRORED, refine: int = 0,
+                       progress: Optional[Callable[[int], None]] = None) -> Motion:
     """Encode and decode a motion on its own skeleton (:obj:`rest`,
     :obj:`ground`, :obj:`settle`, :obj:`mirror` and :obj:`two_rests`: see
     :func:`retarget_motion`; ground
@@ -816,6 +828,10 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
             fifth, at about 0.1 s a step per 128 frames read on 2 CPU
             cores); 0, the default, decodes the encoder's latent, what the
             benchmarks' reconstruction rows measure.
+        progress (callable, optional): Called as ``progress(n)`` as each
+            batch of :math:`n` windows is decoded, in each reading (the
+            mirror image's too): ``satagraph reconstruct --refine`` counts
+            them on stderr.
 
     Returns:
         Motion: The decoded motion on the input's own rig, axes and units,
@@ -828,6 +844,6 @@ def reconstruct_motion(module, motion: Motion, semantic: Optional[Callable] = No
     check_inputs(module, motion)
     _, canon = reconstruct_canonical(module, motion, semantic, window=window, overlap=overlap,
                                      rest=rest, ground=ground, settle=settle, mirror=mirror,
-                                     two_rests=two_rests, refine=refine)
+                                     two_rests=two_rests, refine=refine, progress=progress)
     return from_canonical(canon, motion)
 

@@ -27,3 +27,15 @@ def test_a_log_gets_a_line_every_so_often_and_nothing_to_end():
         line(drawn, 2571)
     line.end()
     assert log.getvalue() == "900 of 2571 frames drawn, 31 s\n2571 of 2571 frames drawn, 62 s\n"
+
+
+def test_add_keeps_a_running_count_of_what_each_batch_did():
+    term = Terminal()
+    line = ProgressLine(term, "windows refined", clock=lambda: 0.0)
+    for batch in (16, 16, 3):
+        line.add(batch)
+    line.end()
+    assert line.count == 35
+    assert term.getvalue().split("\r")[1:] == ["16 windows refined, 0 s",
+                                               "32 windows refined, 0 s",
+                                               "35 windows refined, 0 s\n"]

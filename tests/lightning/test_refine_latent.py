@@ -89,3 +89,13 @@ def test_a_module_that_cannot_refine_is_refused_by_name() -> None:
     check_settings(Fixed(), 64, 16, "auto", False, refine=0)
     with pytest.raises(ValueError, match="a Fixed cannot fit its latent"):
         check_settings(Fixed(), 64, 16, "auto", False, refine=3)
+
+
+def test_progress_hears_of_every_window_of_every_reading(module, trot) -> None:
+    from satagraph.pipelines.inference import reconstruct_motion, window_plan
+    heard: list = []
+    reconstruct_motion(module, trot, window=16, overlap=4, mirror=True, refine=1,
+                       progress=heard.append)
+    windows = len(window_plan(trot.num_frames, 16, 4))
+    assert windows > 1 and sum(heard) == 2 * windows  # the clip and its mirror image
+    assert all(0 < n <= 16 for n in heard)  # one call a batch of at most 16 windows
