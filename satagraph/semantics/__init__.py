@@ -40,8 +40,8 @@ from satagraph.semantics.evidence import (EvidenceLike, JointEvidence,
                                           evidence_from_features,
                                           evidence_from_motion,
                                           joint_evidence, remap_evidence)
-from satagraph.semantics.limbs import (LIMBS, helper_joints, hip_bones, leg_ends,
-                                        limb_end_index, limb_ends, paired_legs)
+from satagraph.semantics.limbs import (LIMBS, helper_joints, hip_bones, limb_end_index,
+                                        limb_ends, paired_legs)
 from satagraph.semantics.prompt import (build_prompt, import_answer,
                                         load_reference_vocab,
                                         parse_answer)
@@ -189,7 +189,7 @@ __all__ = [
     "import_answer", "load_reference_vocab", "load_dictionary",
     "validate_dictionary", "normalize_anchors", "parse_anchor",
     "write_json_atomic", "SemanticsError", "LIMBS", "limb_ends", "limb_end_index",
-    "leg_ends", "paired_legs", "helper_joints", "hip_bones",
+    "paired_legs", "helper_joints", "hip_bones",
     "JointEvidence", "joint_evidence", "evidence_from_features",
     "evidence_from_motion", "remap_evidence", "call_semantic", "as_evidence",
 ]

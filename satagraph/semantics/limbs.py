@@ -89,25 +89,6 @@ def limb_end_index(skeleton: Skeleton, evidence: EvidenceLike = None) -> List[in
 _PAIRED_LEG_END = re.compile(r"^(left|right) \w+ limb terminal segment, \w+ leg pair")
 
 
-def leg_ends(skeleton: Skeleton, evidence: EvidenceLike = None) -> List[int]:
-    """Terminal joint of every leg, in the skeleton's order: the
-    :func:`limb_ends` of its four limbs and, on an arthropod (legs numbered
-    in pairs, :func:`paired_legs`), the first terminal segment of each
-    numbered leg, its middle pairs' too: six on a hexapod, eight on a
-    spider, where :func:`limb_ends` finds the first and last pairs alone.
-    The same joints as :func:`limb_ends` on a body of four limbs or fewer.
-    What :func:`~satagraph.transforms.foot_plant.plant_feet` holds on the
-    floor."""
-    from satagraph.semantics import describe_joints  # the package imports this module
-    ends, legs = set(limb_ends(skeleton, evidence).values()), set()
-    for j, text in enumerate(describe_joints(skeleton, evidence=evidence)):
-        leg = _PAIRED_LEG_END.match(text)
-        if leg and not _helper(text) and leg.group(0) not in legs:
-            legs.add(leg.group(0))
-            ends.add(j)
-    return sorted(ends)
-
-
 def paired_legs(skeleton: Skeleton, evidence: EvidenceLike = None) -> int:
     """Number of legs numbered in leg pairs (six or more legs: an arthropod),
     ``0`` for a body with four legs or fewer, as

@@ -4,9 +4,9 @@ A decoder unsure of a limb's phase plays its swing short while the root
 travels at the source's speed, so the feet glide over the floor
 (``experiments/T2M.md`` section 17: reconstructed walks whose feet slide
 at 0.8 heights a second, against 0.03 for the real ones). On any
-skeleton, :func:`plant_feet` finds the frames where each leg's end
-(:func:`~satagraph.semantics.leg_ends`: an arthropod's six or eight too)
-stands: the lowest joint below it near the floor, the end slow next to the body (:func:`stance_frames`).
+skeleton, :func:`plant_feet` finds the frames where each limb end
+(:func:`~satagraph.semantics.limb_ends`) stands: the lowest joint below
+it near the floor, the end slow next to the body (:func:`stance_frames`).
 It holds the end at one floor position through each
 such stance (fading in and out over :data:`BLEND_FRAMES`), on the floor
 (the lowest joint of its subtree at the floor's height), and bends the
@@ -29,7 +29,7 @@ import numpy as np
 
 from satagraph.motion import CONTACT_HEIGHT, CONTACT_SPEED, Motion
 from satagraph.ops.rotation_numpy import rotation_between_numpy
-from satagraph.semantics.limbs import helper_joints, hip_bones, leg_ends
+from satagraph.semantics.limbs import helper_joints, hip_bones, limb_ends
 from satagraph.transforms.ground import levels, lift_above_floor, raise_root
 
 #: Most bones above a limb end that :func:`plant_feet` bends.
@@ -225,13 +225,12 @@ def plant_feet(motion: Motion, ends: Optional[Sequence[int]] = None) -> Motion:
     Args:
         motion (Motion): A decoded motion, canonical.
         ends (sequence of int, optional): The limb ends to plant (default:
-            :func:`~satagraph.semantics.leg_ends` of its skeleton: every
-            leg's, an arthropod's middle pairs' too).
+            :func:`~satagraph.semantics.limb_ends` of its skeleton).
     """
     if motion.num_frames < 2:
         return motion
     if ends is None:
-        ends = leg_ends(motion.skeleton)
+        ends = list(limb_ends(motion.skeleton).values())
     skeleton = motion.skeleton
     pos = motion.global_positions()
     floor, height = levels(skeleton, pos)

@@ -249,34 +249,3 @@ def test_stance_drop_carries_between_stances_and_is_zero_without_any():
     np.testing.assert_allclose(stance_drop(np.full(5, np.nan)), 0.0)
     smoothed = stance_drop(np.r_[np.zeros(6), np.ones(6)], frames=5)
     assert smoothed.shape == (12,) and 0 < smoothed[5] < 1 and smoothed[0] == 0 and smoothed[-1] == 1
-
-
-@pytest.mark.parametrize("species", ["hexapod", "spider"])
-def test_an_arthropods_middle_legs_are_held_too(species: str) -> None:
-    """A zoo walk whose root drifts forward 0.15 heights a second faster
-    than its legs carry it: every stance foot glides at that speed. The
-    middle pairs, which the four limb ends leave out, are held as well
-    (before ``leg_ends``: still gliding at 0.15)."""
-    from satagraph.datasets.zoo import generate_clip, zoo_rigs
-    from satagraph.semantics import describe_joints, leg_ends
-    from satagraph.transforms.ground import levels
-    clip = generate_clip(zoo_rigs([species], seed=3)[0], "walk", frames=60, seed=5)
-    height = clip.height()
-    translations = clip.translations.copy()
-    translations[:, 0, 2] += 0.15 * height * np.arange(clip.num_frames) / clip.fps
-    glided = clip.with_(translations=translations)
-    texts = describe_joints(clip.skeleton)
-    middle = [j for j in leg_ends(clip.skeleton) if "middle limb" in texts[j]]
-    assert len(middle) == (2 if species == "hexapod" else 4)
-    before, after = glided.global_positions(), plant_feet(glided).global_positions()
-    floor, h = levels(clip.skeleton, before)
-    for j in middle:
-        low = before[:, clip.skeleton.subtree(j), 1].min(axis=1)
-        stance = stance_frames(before[:, j], low, before[:, 0], clip.fps, h, floor)[1:]
-        assert stance.mean() > 0.3
-
-        def speed(pos: np.ndarray) -> float:
-            steps = np.linalg.norm(np.diff(pos[:, j][:, [0, 2]], axis=0), axis=-1)
-            return float(steps[stance].mean() * clip.fps / h)
-        assert speed(before) == pytest.approx(0.15, abs=0.01)
-        assert speed(after) < 0.03
