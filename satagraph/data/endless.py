@@ -33,7 +33,7 @@ ZOO_ENTRY_DEFAULTS: Dict[str, Any] = {
     "zoo": "endless", "dataset": "zoo-endless", "species": None,
     "holdout_species": [], "windows_per_epoch": 1024, "val_windows": 64,
     "test_windows": 64, "fit_windows": 128, "rests": None, "noise": 0.3, "seed": None,
-    "kinds": None}
+    "kinds": None, "stance_bend": None}
 
 
 def endless_zoo(spec: Mapping[str, Any], fps: float, seed: int) -> EndlessZoo:
@@ -42,7 +42,7 @@ def endless_zoo(spec: Mapping[str, Any], fps: float, seed: int) -> EndlessZoo:
     options = {"rests": spec["rests"]} if spec.get("rests") else {}
     return EndlessZoo(spec["species"], spec["holdout_species"], noise=spec["noise"], fps=fps,
                       seed=seed if spec["seed"] is None else spec["seed"],
-                      kinds=spec["kinds"], **options)
+                      kinds=spec["kinds"], stance_bend=spec["stance_bend"], **options)
 
 
 def is_zoo_entry(source: Any) -> bool:

@@ -23,13 +23,14 @@ Example::
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import List, Optional, Sequence, Tuple
+from dataclasses import dataclass, replace
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
 from satagraph.datasets.zoo.dialects import NOISE_STYLES, REST_POSES, Dialect, apply_dialect
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
+from satagraph.datasets.zoo.rigs import stance_of_bend
 from satagraph.datasets.zoo.species import (_BUILDERS, _BUILDERS_BY_STYLE, SPECIES,
                                             VARIANTS, kinds_of)
 from satagraph.motion import Motion
@@ -101,13 +102,21 @@ class EndlessZoo:
             ``lie`` of quadrupeds); default: each species'
             :data:`~satagraph.datasets.zoo.CLIP_KINDS`. Every drawn and
             held-out species must be able to do at least one of them.
+        stance_bend (dict, optional): Species -> ``(low, high)``: the knee
+            bend, in degrees, at which that species' rigs stand, drawn
+            uniformly per sample (:attr:`~satagraph.datasets.zoo.rigs.ZooRig.stance`;
+            e.g. ``{"biped": (5, 36)}``: upright humans to the zoo's
+            crouch). Drawn apart from every other choice, so a sample keeps
+            its rig, clip, rest and names; species not named keep the
+            zoo's stance (36 degrees).
     """
 
     def __init__(self, species: Optional[Sequence[str]] = None,
                  holdout: Optional[Sequence[str]] = None,
                  rests: Sequence[str] = REST_POSES, noise: float = 0.3,
                  fps: float = 30.0, seed: int = 0,
-                 kinds: Optional[Sequence[str]] = None) -> None:
+                 kinds: Optional[Sequence[str]] = None,
+                 stance_bend: Optional[Mapping[str, Sequence[float]]] = None) -> None:
         self.species = list(DEFAULT_SPECIES if species is None else species)
         self.holdout = list(holdout or [])
         for name in self.species + [h.split("/")[0] for h in self.holdout]:
@@ -132,6 +141,7 @@ class EndlessZoo:
         self.rests, self.noise = list(rests), float(noise)
         self.fps, self.seed = float(fps), int(seed)
         self.kinds = kinds_of(self.species + held_species, kinds, "endless zoo")
+        self.stance_bend = _stance_bends(stance_bend or {})
 
     def plans(self, holdout: bool = False) -> List[str]:
         """``species/variant`` names drawn for training (or held out)."""
@@ -170,6 +180,11 @@ class EndlessZoo:
         build = _BUILDERS_BY_STYLE.get((species, style), _BUILDERS[species])
         name = f"endless-{species}-{style}-{epoch}-{index}"
         rig = build(style, np.random.default_rng(rng.integers(2 ** 63)), name, **options)
+        if species in self.stance_bend:
+            low, high = self.stance_bend[species]
+            own = np.random.default_rng([self.seed, EVAL_STREAMS[stream], int(holdout),
+                                         epoch, index, 1])
+            rig = replace(rig, stance=stance_of_bend(own.uniform(low, high)))
         kinds = self.kinds[species]
         kind = kinds[int(rng.integers(len(kinds)))]
         motion, facts = generate_clip_with_facts(rig, kind, frames=frames, fps=self.fps,
@@ -180,6 +195,21 @@ class EndlessZoo:
         motion, _ = apply_dialect(motion, Dialect(rest=rest, noise=noise),
                                   seed=int(rng.integers(2 ** 31)))
         return ZooSample(motion, species, style, kind, rest, noise, facts)
+
+
+def _stance_bends(spec: Mapping[str, Sequence[float]]) -> Dict[str, Tuple[float, float]]:
+    """``stance_bend`` checked: known species, ``0 <= low <= high < 90``."""
+    out = {}
+    for name, bounds in spec.items():
+        if name not in SPECIES:
+            raise ValueError(f"endless zoo: stance_bend names unknown species {name!r}; "
+                             f"choose from {list(SPECIES)}")
+        low, high = (float(b) for b in bounds)
+        if not 0.0 <= low <= high < 90.0:
+            raise ValueError(f"endless zoo: stance_bend {name}: {list(bounds)} is not a "
+                             "range of knee bends in degrees (0 <= low <= high < 90)")
+        out[name] = (low, high)
+    return out
 
 
 __all__ = ["EVAL_STREAMS", "DEFAULT_SPECIES", "ZooSample", "EndlessZoo"]

@@ -83,6 +83,9 @@ _LIE_FORE, _LIE_HIND = (0.7, 0.95), (0.3, 0.6)
 #: lengths); how far a flat foot turns towards the ground (of the angle
 #: that lays it flat).
 _CLEARANCE, _FLAT = 0.03, 0.9
+#: The most a leg stretches (hip to ankle over its bones): a knee stays
+#: bent by at least 5 degrees, so that it knows which way to fold.
+_STRAIGHT = 0.999
 #: Kinds that lower the body (:func:`_lower`).
 _LOWER_KINDS = ("sit", "lie")
 #: Kinds whose body stays in place.
@@ -556,11 +559,13 @@ def _solve_leg(rig: ZooRig, i: int, hip: np.ndarray, heading: np.ndarray,
 
 
 def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
-                 local: Dict[int, np.ndarray], feet: _Feet, reach: float = 0.97,
-                 crouch: float = 0.95) -> np.ndarray:
-    """Root height per frame: the rest stance (legs at most ``crouch``
+                 local: Dict[int, np.ndarray], feet: _Feet, reach: float = 0.97
+                 ) -> np.ndarray:
+    """Root height per frame: the rest stance (legs at most ``rig.stance``
     extended), lowered wherever a leg would need more than ``reach`` of its
-    length to touch its target."""
+    length (or a little more than its stance) to touch its target."""
+    crouch = min(rig.stance, _STRAIGHT)
+    reach = min(max(reach, rig.stance + 0.004), _STRAIGHT)
     rest = rig.skeleton.rest_positions()
     flat = clip.position * np.array([1.0, 0.0, 1.0])
     _, pos = _pose(rig, flat, root_rot, clip.heading, local)

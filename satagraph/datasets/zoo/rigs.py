@@ -157,6 +157,11 @@ class ZooRig:
         sway (dict): Joint index -> :class:`Sway` for the other joints.
         leg_length (float): Typical leg (or body) length in metres.
         arms (list[int]): Upper-arm joints that can reach (left first).
+        stance (float): How far the legs stretch when the body stands: the
+            hip-to-ankle distance over the leg's two bones (``0.95``, the
+            default, bends a knee of equal bones by 36 degrees; a standing
+            human's 5-15 degrees is 0.99-0.999); walking may stretch them
+            a little further (:func:`stance_of_bend`).
     """
 
     name: str
@@ -166,6 +171,13 @@ class ZooRig:
     sway: Dict[int, Sway] = field(default_factory=dict)
     leg_length: float = 1.0
     arms: List[int] = field(default_factory=list)
+    stance: float = 0.95
+
+
+def stance_of_bend(degrees: float) -> float:
+    r"""The :attr:`ZooRig.stance` at which a leg of two equal bones bends
+    its knee by :obj:`degrees` (0: straight)."""
+    return float(np.cos(np.radians(degrees) / 2.0))
 
 
 class _Builder:
