@@ -108,8 +108,8 @@ from satagraph.transforms.ground import ground_like, ground_retarget  # noqa: E4
 from satagraph.io import read_bvh  # noqa: E402
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
-from satagraph.pipelines.quality import (contact, most_active, retarget_quality,  # noqa: E402
-                                         trunk_bend)
+from satagraph.pipelines.quality import (contact, knee_bend, most_active,  # noqa: E402
+                                         retarget_quality, trunk_bend)
 from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.pipelines.builtin_choice import AUTO, choose_builtin  # noqa: E402
 
@@ -291,7 +291,8 @@ def reconstruction_row(module, clip: Motion, rest: str = "auto", refine: int = 0
                 steps=same_rig["steps"], stride=same_rig["stride"],
                 slide=slide, source_slide=source_slide, hover=hovering,
                 source_hover=source_hover,
-                bend=trunk_bend(raw), source_bend=trunk_bend(src))
+                bend=trunk_bend(raw), source_bend=trunk_bend(src),
+                knee=knee_bend(raw), source_knee=knee_bend(src))
 
 
 def measure(pick: Callable[[Sequence[Motion]], Tuple[object, str]], rest: str = "auto",
@@ -368,6 +369,14 @@ def _bend(row: dict) -> str:
     return f"{row['bend']:.0f} ({row['source_bend']:.0f})"
 
 
+def _knee(row: dict) -> str:
+    """A reconstruction's knee bend beside its source's (blank for rows
+    written before the column existed, or without knees)."""
+    if row.get("knee") is None or row.get("source_knee") is None:
+        return ""
+    return f"{row['knee']:.0f} ({row['source_knee']:.0f})"
+
+
 def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto",
           carriage: str = "auto", refine: int = 0) -> str:
     fitted = (f", reconstructions' latents fitted to their clips by {refine} steps "
@@ -392,15 +401,16 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
               "| JP, grounded (--ground) | root-relative JP | pose alone (also heading-free) "
               "| steps (same rig; diagnostic) | stride ratio (diagnostic) "
               "| foot slide, H/s (source) | hover, % height (source) "
-              "| trunk bend, deg (source; diagnostic) |",
-              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+              "| trunk bend, deg (source; diagnostic) | knee bend, deg (source; diagnostic) |",
+              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows["reconstruction"]:
         limit = TARGETS["jp_zoo" if r["group"].startswith("held") else "jp_real"]
         steps = "-" if r.get("steps") is None else f"{r['steps']:+.2f}"
         lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
                      f"| {'yes' if r['jp'] <= limit else 'no'} | {100 * r['grounded_jp']:.1f} "
                      f"| {100 * r['pose']:.1f} | {_local(r)} | {steps} "
-                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_hover(r)} | {_bend(r)} |")
+                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_hover(r)} | {_bend(r)} "
+                     f"| {_knee(r)} |")
     return "\n".join(lines) + "\n"
 
 

@@ -42,7 +42,14 @@ forepaws the base holds up like hands) rise by at least 0.05 over the
 base's; the dog joins part 2's groups, and the passing candidate with the
 largest smaller of those two gains is chosen.
 
-    .venv/bin/python benchmarks/pretrained_rule.py benchmarks/results/pretrained_val.json [--paired] [--aim carriage]
+With ``--aim human`` (PRETRAIN.md section 58, registered before its
+candidates are measured; needs ``--paired``) part 1 asks Bandai's
+validation clips (a human rig never trained on) for a paired JP ratio of at
+most 0.95; part 2 keeps the zoo groups at 1.05 and the dog's pose error
+(paired) at 1.05; the passing candidate with the lowest Bandai ratio is
+chosen.
+
+    .venv/bin/python benchmarks/pretrained_rule.py benchmarks/results/pretrained_val.json [--paired] [--aim carriage|human]
 """
 from __future__ import annotations
 
@@ -66,6 +73,8 @@ STEPS_DROP, POSTURE, POSTURE_DROP = 0.03, 0.9, 0.03
 #: ``--aim carriage``: the retarget rows whose lowest posture must rise,
 #: and by how much.
 CARRIAGE_ROWS, CARRIAGE_GAIN = ("zoo biped -> quadruped", "bandai -> dog"), 0.05
+#: ``--aim human``: the group whose error must fall (part 1).
+HUMAN = "bandai (val)"
 #: How the retarget rows whose source stands still are named (``pretrained_val.py``
 #: names them with it).
 STILL = "still source:"
@@ -109,6 +118,18 @@ def failures(results: Dict, candidate: str, base: str = "builtin",
         out += [f"part 1: {row} lowest posture {got[row]['posture']:.2f} against "
                 f"{was[row]['posture']:.2f}" for row in CARRIAGE_ROWS
                 if got[row]["posture"] < was[row]["posture"] + CARRIAGE_GAIN]
+    elif aim == "human":
+        if not paired:
+            raise ValueError("pretrained_rule.py --aim human compares clip by clip: add --paired")
+        kept = tuple(g for g in KEPT if g != HUMAN)
+        ratio = paired_ratio(rec[HUMAN], bas[HUMAN])
+        if ratio > 1 - GAIN:
+            out.append(f"part 1: {HUMAN} paired JP ratio {ratio - 1:+.1%} over "
+                       f"{len(rec[HUMAN]['jp_clips'])} clips")
+        dog = paired_ratio(rec[AIM], bas[AIM], "pose_clips")
+        if dog > 1 + LOSS:
+            out.append(f"part 2: {AIM} paired pose ratio {dog - 1:+.1%} over "
+                       f"{len(rec[AIM]['pose_clips'])} clips")
     elif paired:
         ratio = paired_ratio(rec[AIM], bas[AIM], "pose_clips")
         if ratio > 1 - GAIN:
@@ -144,9 +165,12 @@ def failures(results: Dict, candidate: str, base: str = "builtin",
     return out
 
 
-def aim_score(candidate: Dict, base: Dict, paired: bool) -> float:
+def aim_score(candidate: Dict, base: Dict, paired: bool, aim: str = "dog") -> float:
     """What the choice among passing candidates minimises: the dog's
-    paired pose ratio, or unpaired its median JP."""
+    paired pose ratio, or unpaired its median JP; ``aim="human"``: Bandai's
+    paired JP ratio."""
+    if aim == "human":
+        return paired_ratio(candidate[HUMAN], base[HUMAN])
     if paired:
         return paired_ratio(candidate[AIM], base[AIM], "pose_clips")
     return candidate[AIM]["median"]
@@ -161,7 +185,7 @@ def verdict(results: Dict, base: str = "builtin", paired: bool = False,
     passing = [c for c, f in fails.items() if not f]
     if aim == "carriage":
         return fails, max(passing, key=lambda c: posture_gain(results, c, base), default=None)
-    chosen = min(passing, key=lambda c: aim_score(rec[c], rec[base], paired), default=None)
+    chosen = min(passing, key=lambda c: aim_score(rec[c], rec[base], paired, aim), default=None)
     return fails, chosen
 
 
@@ -177,10 +201,11 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help="part 3 leaves out the steps of still-source rows (a source "
                              "that stands has no steps; PRETRAIN.md section 35's amendment, "
                              "written after that section's measurement)")
-    parser.add_argument("--aim", choices=("dog", "carriage"), default="dog",
+    parser.add_argument("--aim", choices=("dog", "carriage", "human"), default="dog",
                         help="what part 1 asks a candidate to gain: the dog's error (the "
-                             "default), or the posture of a human's walk onto a quadruped "
-                             "(PRETRAIN.md section 54)")
+                             "default), the posture of a human's walk onto a quadruped "
+                             "(PRETRAIN.md section 54), or Bandai's error (section 58; "
+                             "with --paired)")
     args = parser.parse_args(argv)
     results = json.loads(args.results.read_text())
     try:
@@ -194,7 +219,10 @@ def main(argv: Optional[List[str]] = None) -> int:
         dog = (f"paired pose ratio {aim_score(rec[candidate], rec[args.base], True):.3f}"
                if args.paired else f"{100 * rec[candidate][AIM]['median']:.1f}")
         score = (f"posture gain {posture_gain(results, candidate, args.base):+.2f}"
-                 if args.aim == "carriage" else f"{AIM} {dog}")
+                 if args.aim == "carriage" else
+                 f"{HUMAN} paired JP ratio "
+                 f"{aim_score(rec[candidate], rec[args.base], True, 'human'):.3f}"
+                 if args.aim == "human" else f"{AIM} {dog}")
         print(f"{candidate}: {'passes' if not lines else 'fails'} ({score})")
         for line in lines:
             print(f"    {line}")

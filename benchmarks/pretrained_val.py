@@ -61,7 +61,8 @@ from satagraph.experiment.train import load_module  # noqa: E402
 from satagraph.motion import Motion  # noqa: E402
 from satagraph.pipelines.inference import (reconstruct_canonical,  # noqa: E402
                                            retarget_canonical)
-from satagraph.pipelines.quality import leg_length, retarget_quality, root_travel  # noqa: E402
+from satagraph.pipelines.quality import (knee_bend, leg_length, retarget_quality,  # noqa: E402
+                                         root_travel)
 from satagraph.transforms.canonical import canonicalize  # noqa: E402
 from satagraph.transforms.rig_reading import with_rig  # noqa: E402
 
@@ -297,10 +298,12 @@ def measure(module, motion: Motion, plant: bool = False, settle: bool = False,
     fa = _facing(src.global_positions()[:n], src.skeleton.names)
     fb = _facing(out.global_positions()[:n], src.skeleton.names)
     drift = None if fa is None or fb is None else float(np.abs((fb - fa) - (fb - fa)[0]).mean())
+    knees = knee_bend(out), knee_bend(src)
     return dict(jp=joint_error(src, out), pose=joint_error(src, out, relative=True),
                 local=joint_error(src, out, heading=True), drift=drift,
                 stride=retarget_quality(src, out, ("stride",))["stride"],
-                path=root_travel(out) - root_travel(src))
+                path=root_travel(out) - root_travel(src),
+                knee=None if None in knees else knees[0] - knees[1])
 
 
 def summarise(values: List[dict]) -> dict:
@@ -312,7 +315,8 @@ def summarise(values: List[dict]) -> dict:
                 local=float(np.median([v["local"] for v in values])),
                 drift=float(np.mean(drift)) if 2 * len(drift) > len(values) else None,
                 stride=_median([v.get("stride") for v in values]),
-                path=_median([v.get("path") for v in values]))
+                path=_median([v.get("path") for v in values]),
+                knee=_median([v.get("knee") for v in values]))
 
 
 def table(summary: Dict[str, Dict[str, dict]], seconds: float,
@@ -324,7 +328,9 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
              "the median root-relative error (pose; in brackets with each frame turned about "
              "+Y onto the source's: the pose alone, without the decoded facing's drift) and the "
              "mean facing drift (degrees) and the median of how much farther the decoded root "
-             "goes on the ground than the source's (path, leg lengths); stride: the median "
+             "goes on the ground than the source's (path, leg lengths) and how much more its "
+             "knees bend (knee, degrees: the median over clips of knee_bend's gap); stride: "
+             "the median "
              "stride ratio (limb ends' fore-aft swing, output over source).", "",
              "| group | n | " + " | ".join(f"`{Path(k).name}`" for k in names) + " |",
              "|---|---:|" + "---:|" * len(names)]
@@ -339,6 +345,8 @@ def table(summary: Dict[str, Dict[str, dict]], seconds: float,
                     cell += f", drift {s['drift']:.0f}"
                 if s.get("path") is not None:
                     cell += f", path {s['path']:+.2f}"
+                if s.get("knee") is not None:
+                    cell += f", knee {s['knee']:+.0f}"
             if s.get("stride") is not None:
                 cell += f", stride {s['stride']:.2f}"
             cells.append(cell)

@@ -488,6 +488,36 @@ def test_pretrained_rule_paired_compares_each_clip_with_itself():
         pretrained_rule.failures(results, "same", paired=True)
 
 
+def test_pretrained_rule_human_aim_asks_bandai_better_and_keeps_the_dog():
+    """``--aim human`` (section 58): part 1 asks Bandai's clips 5 % better
+    clip by clip, the zoo groups stay in part 2 and the dog's pose error is
+    kept there (paired, 1.05); the passing candidate with the lowest Bandai
+    ratio is chosen; without ``--paired`` it is refused."""
+    import json
+    import pretrained_rule
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    results = json.loads((root / "pretrained_val_s35.json").read_text())
+    for part in ("reconstruction", "retarget"):
+        results[part] = {name: json.loads(json.dumps(results[part]["builtin"]))
+                         for name in ("builtin", "small", "large")}
+    rec = results["reconstruction"]
+    bandai = rec["builtin"][pretrained_rule.HUMAN]["jp_clips"]
+    rec["small"][pretrained_rule.HUMAN]["jp_clips"] = [0.94 * v for v in bandai]
+    rec["large"][pretrained_rule.HUMAN]["jp_clips"] = [0.80 * v for v in bandai]
+    dog = rec["builtin"][pretrained_rule.AIM]["pose_clips"]
+    rec["large"][pretrained_rule.AIM]["pose_clips"] = [1.06 * v for v in dog]
+    fails, chosen = pretrained_rule.verdict(results, paired=True, aim="human")
+    assert fails == {"small": [], "large": [
+        f"part 2: dog (not test) paired pose ratio +6.0% over {len(dog)} clips"]}
+    assert chosen == "small"
+    rec["large"][pretrained_rule.AIM]["pose_clips"] = dog
+    assert pretrained_rule.verdict(results, paired=True, aim="human")[1] == "large"
+    assert pretrained_rule.failures(results, "builtin", paired=True, aim="human") == [
+        f"part 1: bandai (val) paired JP ratio +0.0% over {len(bandai)} clips"]
+    with pytest.raises(ValueError, match="add --paired"):
+        pretrained_rule.failures(results, "small", aim="human")
+
+
 def test_pretrained_rule_gives_section_35s_verdicts_from_its_stored_table():
     """Section 35's six epochs all fail the paired rule as registered; with
     the still-source rows' steps left out (the amendment that section

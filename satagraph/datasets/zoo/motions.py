@@ -651,9 +651,17 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     if clip.jump is not None:
         root[:, 1] += lift[0] - lift[1]
     elif idle:
-        root[:, 1] -= 0.01 * length * (1 + np.sin(2 * np.pi * phase))
+        root[:, 1] -= _idle_bob(rig) * length * (1 + np.sin(2 * np.pi * phase))
     rot, pos = _pose(rig, root, root_rot, clip.heading, local, feet)
     return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
+
+
+def _idle_bob(rig: ZooRig) -> float:
+    """Half the depth (leg lengths) by which a standing body breathes up
+    and down: 0.01 at the zoo's stance, less the straighter the legs stand
+    (a body whose knees are nearly straight cannot sink without bending
+    them: sinking 2 % of a leg bends a knee by 23 degrees)."""
+    return 0.01 * min(1.0, (1.0 - rig.stance) / 0.05)
 
 
 def _jump_lift(clip: _Clip, length: float) -> Tuple[np.ndarray, np.ndarray]:
