@@ -580,7 +580,7 @@ def _body_height(rig: ZooRig, clip: _Clip, root_rot: np.ndarray,
         bounds.append(feet.targets[i][:, 1] - pos[:, leg.upper, 1] + vertical)
     height = np.minimum(base, np.min(bounds, axis=0)) if bounds else np.full(
         len(root_rot), base)
-    return _smooth_min(height, int(round(0.1 * clip.fps)))
+    return _smooth_min(height, int(round(0.1 * clip.fps * _slack(rig))))
 
 
 def _smooth_min(x: np.ndarray, width: int) -> np.ndarray:
@@ -651,17 +651,21 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
     if clip.jump is not None:
         root[:, 1] += lift[0] - lift[1]
     elif idle:
-        root[:, 1] -= _idle_bob(rig) * length * (1 + np.sin(2 * np.pi * phase))
+        root[:, 1] -= 0.01 * _slack(rig) * length * (1 + np.sin(2 * np.pi * phase))
     rot, pos = _pose(rig, root, root_rot, clip.heading, local, feet)
     return rot, pos, clip.pad, _legged_facts(rig, kind, clip, frames)
 
 
-def _idle_bob(rig: ZooRig) -> float:
-    """Half the depth (leg lengths) by which a standing body breathes up
-    and down: 0.01 at the zoo's stance, less the straighter the legs stand
-    (a body whose knees are nearly straight cannot sink without bending
-    them: sinking 2 % of a leg bends a knee by 23 degrees)."""
-    return 0.01 * min(1.0, (1.0 - rig.stance) / 0.05)
+def _slack(rig: ZooRig) -> float:
+    """How bent a rig's legs stand, from 1 (the zoo's stance, 0.95) to 0
+    (straight). A standing body breathes up and down by ``0.01 * slack``
+    leg lengths either side of its lowest (a body whose knees are nearly
+    straight cannot sink without bending them: sinking 2 % of a leg bends
+    a knee by 23 degrees), and a walking body's height follows the moving
+    minimum of what its legs reach over ``0.1 * slack`` seconds either
+    side: a straighter-legged walker rises over each planted leg, as
+    people do, instead of staying at its lowest."""
+    return min(1.0, (1.0 - rig.stance) / 0.05)
 
 
 def _jump_lift(clip: _Clip, length: float) -> Tuple[np.ndarray, np.ndarray]:
