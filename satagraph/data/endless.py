@@ -51,7 +51,12 @@ def is_zoo_entry(source: Any) -> bool:
 
 
 def zoo_entry(source: Mapping[str, Any]) -> Dict[str, Any]:
-    """A zoo source entry with its defaults, checked.
+    """A zoo source entry with its defaults, checked. Its keys
+    (:data:`ZOO_ENTRY_DEFAULTS`) are :class:`~satagraph.datasets.zoo.endless.EndlessZoo`'s
+    (``species``, ``holdout_species``, ``rests``, ``noise``, ``seed``,
+    ``kinds``, ``stance_bend``: e.g. ``{biped: [0, 36]}``) and the
+    dataset's (``dataset``, ``windows_per_epoch``, ``val_windows``,
+    ``test_windows``, ``fit_windows``).
 
     Raises:
         ValueError: Unknown keys or an unknown ``zoo`` kind.

@@ -572,3 +572,16 @@ def test_lands_of_a_clip_without_frames_is_none():
     assert lands(walk, empty) is None
     assert lands(empty, walk) is None
     assert retarget_quality(walk, walk, ("lands",), target=empty) == {"lands": None}
+
+
+def test_knee_bend_reads_standing_and_walking_humans(read_real):
+    """A Bandai bow stands on nearly straight knees, a walk bends them
+    about 18 degrees in median; each knee is found by its segments on both
+    human rigs and the dog's hind legs; a snake has none."""
+    from satagraph.pipelines.quality import knee_bend
+    bow = knee_bend(canonicalize(read_real("bandai/dataset-1_bow_normal_001.bvh")))
+    walk = knee_bend(canonicalize(read_real("bandai/dataset-1_walk_normal_002.bvh")))
+    cmu = knee_bend(canonicalize(read_real("cmu/01_01.bvh")))
+    assert 3.0 < bow < 12.0 < walk < 25.0 and 20.0 < cmu < 45.0
+    assert knee_bend(canonicalize(read_real("dog/D1_001_KAN01_001.bvh"))) > 45.0
+    assert knee_bend(_walk("snake")) is None
