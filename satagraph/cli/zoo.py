@@ -106,6 +106,10 @@ def add_zoo_parser(subparsers: "argparse._SubParsersAction"
                    help="clip kinds to cycle through, of those each species can do "
                    "(default: every kind but the gestures; e.g. --species biped "
                    "--kinds bow wave, --species quadruped --kinds sit lie)")
+    p.add_argument("--stance-bend", type=float, default=None, metavar="DEGREES",
+                   help="the knee bend every rig stands at, 0 (upright) to under 90 "
+                   "(default: the zoo's 36; a standing person's is 3-15); a "
+                   "straighter-legged walker rises over each planted leg")
     d = p.add_argument_group("exporter dialects")
     d.add_argument("--up-axes", nargs="+", action=ListThenFolder, read=_axes, default=[["+Y"]],
                    metavar="AXIS", help=f"up axes to write ({', '.join(UP_AXES)}; a "
@@ -142,6 +146,9 @@ def run_zoo(args: argparse.Namespace) -> int:
         raise ValueError(f"zoo: --frames must be at least 2 (a motion needs two frames "
                          f"for its velocities), got {args.frames}")
     start = time.perf_counter()
+    if args.dialect_variants and args.stance_bend is not None:
+        raise ValueError("zoo: --stance-bend is not drawn with --dialect-variants "
+                         "(a dialect benchmark keeps the zoo's stance)")
     if args.dialect_variants:
         axes = _flat(args.up_axes)
         axes = UP_AXES if axes == ["+Y"] else axes
@@ -151,7 +158,8 @@ def run_zoo(args: argparse.Namespace) -> int:
     else:
         rows = write_zoo(args.out_dir, species=args.species, clips=args.clips,
                          seed=args.seed, fps=args.fps, frames=args.frames,
-                         dialects=_dialects(args), kinds=args.kinds)
+                         dialects=_dialects(args), kinds=args.kinds,
+                         stance_bend=args.stance_bend)
     for name in dict.fromkeys(r["species"] for r in rows):
         mine = [r for r in rows if r["species"] == name]
         skeletons = dict.fromkeys(f"{r['skeleton']} ({r['joints']} joints)"

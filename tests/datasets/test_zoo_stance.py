@@ -72,3 +72,23 @@ def test_stance_bend_changes_only_the_named_species_stance():
 def test_stance_bend_refuses_what_it_cannot_draw(spec, match):
     with pytest.raises(ValueError, match=match):
         EndlessZoo(species=["biped"], stance_bend=spec)
+
+
+def test_satagraph_zoo_stance_bend_writes_upright_bipeds(tmp_path, capsys):
+    """``satagraph zoo --stance-bend 8`` writes bipeds that idle on nearly
+    straight knees (the zoo's own: 40); a bend it cannot draw, or one asked
+    of the dialect benchmark, is a one-line error."""
+    from satagraph.cli import main
+    from satagraph.io import read_bvh
+    args = ["zoo", "--species", "biped", "--clips", "1", "--kinds", "idle", "--frames", "30"]
+    assert main(args + ["--stance-bend", "8", str(tmp_path / "up")]) == 0
+    assert main(args + [str(tmp_path / "zoo")]) == 0
+    name = "biped/zoo0-biped-mixamo_idle.bvh"
+    assert knee_bend(read_bvh(tmp_path / "up" / name)) < 14.0
+    assert knee_bend(read_bvh(tmp_path / "zoo" / name)) > 35.0
+    capsys.readouterr()
+    assert main(args + ["--stance-bend", "95", str(tmp_path / "bad")]) == 2
+    assert "stance_bend is a knee bend in degrees" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
+    assert main(["zoo", "--dialect-variants", "--stance-bend", "8", str(tmp_path / "d")]) == 2
+    assert "not drawn with --dialect-variants" in capsys.readouterr().err

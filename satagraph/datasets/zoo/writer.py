@@ -6,6 +6,7 @@ import csv
 import hashlib
 import os
 import zlib
+from dataclasses import replace
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Union
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from satagraph.datasets.zoo.dialects import Dialect, DialectVariant, apply_dialect
 from satagraph.datasets.zoo.motions import ClipFacts, generate_clip_with_facts
-from satagraph.datasets.zoo.rigs import ZooRig
+from satagraph.datasets.zoo.rigs import ZooRig, stance_of_bend
 from satagraph.datasets.zoo.species import kinds_of, zoo_rigs
 from satagraph.utils.files import atomic_write
 from satagraph.motion import Motion
@@ -48,7 +49,8 @@ def _split(rig_index: int, rig_count: int, clip: int, clips: int) -> str:
 def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
               clips: int = 4, seed: int = 0, fps: float = 30.0,
               frames: int = 120, dialects: Optional[Sequence[Dialect]] = None,
-              kinds: Optional[Sequence[str]] = None) -> List[Dict[str, str]]:
+              kinds: Optional[Sequence[str]] = None,
+              stance_bend: Optional[float] = None) -> List[Dict[str, str]]:
     r"""Write the zoo as BVH files under ``out_dir/<species>/`` and a
     ``manifest.tsv`` (columns :data:`MANIFEST_COLUMNS`, the layout of the
     shared data manifest plus the dialect truth :data:`DIALECT_COLUMNS`)
@@ -73,6 +75,9 @@ def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
             species can do (:data:`~satagraph.datasets.zoo.ALL_KINDS`: with
             the bipeds' gestures ``bow`` and ``wave``); every species must
             do one of them.
+        stance_bend (float, optional): The knee bend (degrees) at which
+            every rig stands (:attr:`~satagraph.datasets.zoo.rigs.ZooRig.stance`;
+            default: the zoo's 36; a standing person's 3-15).
 
     Returns:
         list[dict]: The manifest rows.
@@ -82,6 +87,11 @@ def write_zoo(out_dir: PathLike, species: Optional[Sequence[str]] = None,
     dialects = list(dialects or [Dialect()])
     out = Path(out_dir)
     rigs = zoo_rigs(species, seed)
+    if stance_bend is not None:
+        if not 0.0 <= stance_bend < 90.0:  # also NaN
+            raise ValueError(f"write_zoo: stance_bend is a knee bend in degrees, "
+                             f"0 <= it < 90, got {stance_bend:g}")
+        rigs = [replace(rig, stance=stance_of_bend(stance_bend)) for rig in rigs]
     drawn = kinds_of(dict.fromkeys(r.species for r in rigs), kinds, "write_zoo")
     counts = {r.species: sum(q.species == r.species for q in rigs) for r in rigs}
     seen: Dict[str, int] = {}
