@@ -658,10 +658,10 @@ def _legged(rig: ZooRig, kind: str, frames: int, fps: float,
 
 def _slack(rig: ZooRig) -> float:
     """How bent a rig's legs stand, from 1 (the zoo's stance, 0.95) to 0
-    (straight). A standing body breathes up and down by ``0.01 * slack``
-    leg lengths either side of its lowest (a body whose knees are nearly
-    straight cannot sink without bending them: sinking 2 % of a leg bends
-    a knee by 23 degrees), and a walking body's height follows the moving
+    (straight). A standing body sinks by up to ``0.02 * slack`` leg
+    lengths as it breathes (a body whose knees are nearly straight cannot
+    sink without bending them: sinking 2 % of a leg bends a knee by 23
+    degrees), and a walking body's height follows the moving
     minimum of what its legs reach over ``0.1 * slack`` seconds either
     side: a straighter-legged walker rises over each planted leg, as
     people do, instead of staying at its lowest."""
