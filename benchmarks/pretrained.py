@@ -361,20 +361,13 @@ def _hover(row: dict) -> str:
     return f"{100 * row['hover']:.1f} ({100 * row['source_hover']:.1f})"
 
 
-def _bend(row: dict) -> str:
-    """A reconstruction's trunk bend beside its source's (rows written
-    before the column existed: blank)."""
-    if row.get("bend") is None:
+def _beside_source(row: dict, key: str) -> str:
+    """A reconstruction's angle :obj:`key` (``bend``: the trunk's, ``knee``)
+    beside its source's ``source_<key>`` (blank for rows written before the
+    column existed, or a rig without the joints)."""
+    if row.get(key) is None or row.get(f"source_{key}") is None:
         return ""
-    return f"{row['bend']:.0f} ({row['source_bend']:.0f})"
-
-
-def _knee(row: dict) -> str:
-    """A reconstruction's knee bend beside its source's (blank for rows
-    written before the column existed, or without knees)."""
-    if row.get("knee") is None or row.get("source_knee") is None:
-        return ""
-    return f"{row['knee']:.0f} ({row['source_knee']:.0f})"
+    return f"{row[key]:.0f} ({row[f'source_{key}']:.0f})"
 
 
 def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "auto",
@@ -409,8 +402,8 @@ def table(rows: Dict[str, List[dict]], ckpt: str, seconds: float, rest: str = "a
         lines.append(f"| {r['group']} | {r['case']} | {100 * r['jp']:.1f} "
                      f"| {'yes' if r['jp'] <= limit else 'no'} | {100 * r['grounded_jp']:.1f} "
                      f"| {100 * r['pose']:.1f} | {_local(r)} | {steps} "
-                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_hover(r)} | {_bend(r)} "
-                     f"| {_knee(r)} |")
+                     f"| {_ratio(r.get('stride'))} | {_slide(r)} | {_hover(r)} | {_beside_source(r, 'bend')} "
+                     f"| {_beside_source(r, 'knee')} |")
     return "\n".join(lines) + "\n"
 
 

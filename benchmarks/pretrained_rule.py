@@ -189,6 +189,18 @@ def verdict(results: Dict, base: str = "builtin", paired: bool = False,
     return fails, chosen
 
 
+def _score_text(results: Dict, candidate: str, base: str, paired: bool, aim: str) -> str:
+    """What a candidate is chosen by, as the verdict prints it."""
+    rec = results["reconstruction"]
+    if aim == "carriage":
+        return f"posture gain {posture_gain(results, candidate, base):+.2f}"
+    if aim == "human":
+        return f"{HUMAN} paired JP ratio {aim_score(rec[candidate], rec[base], True, aim):.3f}"
+    if paired:
+        return f"{AIM} paired pose ratio {aim_score(rec[candidate], rec[base], True):.3f}"
+    return f"{AIM} {100 * rec[candidate][AIM]['median']:.1f}"
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -216,13 +228,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 2
     rec = results["reconstruction"]
     for candidate, lines in fails.items():
-        dog = (f"paired pose ratio {aim_score(rec[candidate], rec[args.base], True):.3f}"
-               if args.paired else f"{100 * rec[candidate][AIM]['median']:.1f}")
-        score = (f"posture gain {posture_gain(results, candidate, args.base):+.2f}"
-                 if args.aim == "carriage" else
-                 f"{HUMAN} paired JP ratio "
-                 f"{aim_score(rec[candidate], rec[args.base], True, 'human'):.3f}"
-                 if args.aim == "human" else f"{AIM} {dog}")
+        score = _score_text(results, candidate, args.base, args.paired, args.aim)
         print(f"{candidate}: {'passes' if not lines else 'fails'} ({score})")
         for line in lines:
             print(f"    {line}")
